@@ -1,0 +1,56 @@
+"""mechsolve: a declarative solver for planar mechanisms.
+
+Describe a linkage in YAML (or build a :class:`~mechsolve.model.Mechanism` in code), then::
+
+    import mechsolve as ms
+    res = ms.run("mechanisms/crane.yaml")
+    res.point("K").x, res.point("K").vx      # arrays over the sweep
+    res.to_csv("crane.csv")
+
+The pipeline, one module per stage: YAML (:mod:`mechsolve.model.source`) -> validated model
+(:mod:`mechsolve.model`) -> constraint system (:mod:`mechsolve.constraints`) -> structure
+and group solvers (:mod:`mechsolve.structure`, :mod:`mechsolve.groups`) -> sweep
+(:mod:`mechsolve.sweep`) -> results (:mod:`mechsolve.results`) -> writers
+(:mod:`mechsolve.writers`) -> CLI (:mod:`mechsolve.cli`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__version__ = "0.1.0"
+
+_API = {
+    "load": "api",
+    "loads": "api",
+    "solve": "api",
+    "run": "api",
+    "check": "api",
+    "Mechanism": "model",
+    "Link": "model",
+    "PinJoint": "model",
+    "SliderJoint": "model",
+    "Driver": "model",
+    "Limit": "model",
+    "Sweep": "model",
+    "Assembly": "model",
+    "Outputs": "model",
+    "SolverOptions": "model",
+    "Results": "results",
+    "MechsolveError": "errors",
+    "InputError": "errors",
+    "AssemblyError": "errors",
+    "SolverError": "errors",
+}
+
+__all__ = sorted(_API)
+
+
+def __getattr__(name: str) -> Any:
+    # imported lazily so that `mechsolve --help` starts without numpy
+    if name in _API:
+        import importlib
+
+        mod = importlib.import_module(f".{_API[name]}", __name__)
+        return getattr(mod, name)
+    raise AttributeError(f"module 'mechsolve' has no attribute {name!r}")

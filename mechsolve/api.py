@@ -1,0 +1,172 @@
+"""The Python API: load a mechanism, solve its sweep, check it. The CLI only calls these.
+
+>>> import mechsolve as ms
+>>> mech = ms.load("mechanisms/fourbar.yaml")
+>>> res = ms.solve(mech)
+>>> res.point("B").x            # array over the positions of the sweep
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+from .model import Mechanism, PinJoint
+from .model.parse import load, loads
+from .results import Results
+from .structure import grubler
+from .sweep import Analysis, StartAssembly
+from .units import UnitError, parse_quantity
+
+__all__ = ["load", "loads", "solve", "run", "check", "CheckReport", "parse_step"]
+
+
+def parse_step(mech: Mechanism, text: str | float) -> float:
+    """A sweep step from the command line: an angle (``"5 deg"``), a length for a linear
+    driver (``"2 mm"``) or a time (``"0.01 s"``), converted to the driver's coordinate."""
+    from .model import SliderJoint
+
+    linear = mech.driver is not None and isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    kind = "length" if linear else "angle"
+    default = mech.length_unit if linear else "deg"
+    try:
+        val = parse_quantity(text, kind, default)
+    except UnitError:
+        try:
+            val = parse_quantity(text, "time") * abs(mech.driver.speed)
+        except UnitError:
+            raise InputError(
+                f"--step {text!r}: expected {'a length' if linear else 'an angle'} such as "
+                f"{'2 mm' if linear else '5 deg'}, or a time such as '0.01 s'"
+            ) from None
+    if not val > 0:
+        raise InputError(f"--step {text!r}: the step must be positive")
+    return val
+
+
+def solve(
+    mech: Mechanism,
+    *,
+    step: float | None = None,
+    method: str | None = None,
+    velocity: bool | None = None,
+    acceleration: bool | None = None,
+) -> Results:
+    """Solve the mechanism's sweep.
+
+    Parameters
+    ----------
+    mech
+        A validated mechanism (from :func:`load` or built in code and validated).
+    step
+        Override the sweep step (rad, or m for a linear driver).
+    method
+        ``"auto"`` or ``"newton"``; default from the file.
+    velocity, acceleration
+        Override the file's ``outputs.quantities``.
+    """
+    an = Analysis(mech, method)
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0, step=step)
+    vel = mech.outputs.velocity if velocity is None else velocity
+    acc = mech.outputs.acceleration if acceleration is None else acceleration
+    sol = an.solve(u, velocity=vel or bool(acc), acceleration=bool(acc))
+    return Results(an, sol)
+
+
+def run(path: str | Path, variant: str | None = None, **kwargs) -> Results:
+    """Load a mechanism file and solve it: ``run("crane.yaml").point("K").x``."""
+    return solve(load(path, variant), **kwargs)
+
+
+@dataclass
+class CheckReport:
+    """What ``mechsolve check`` reports about a mechanism."""
+
+    mechanism: Mechanism
+    grubler: int
+    jacobian_dof: int
+    n_coordinates: int
+    jacobian_rank: int
+    groups: list[str]
+    branches: list[str]
+    start_u: float
+    start_points: dict[str, tuple[float, float]]
+    analysis: Analysis
+    assembly: StartAssembly
+    notes: list[str] = field(default_factory=list)
+
+    def text(self) -> str:
+        mech = self.mechanism
+        n_rev = sum(isinstance(j, PinJoint) for j in mech.joints)
+        lines = [
+            f"{mech.name}: the file is valid",
+            f"  {len(mech.links)} moving links, {len(mech.joints)} joints "
+            f"({n_rev} revolute, {len(mech.joints) - n_rev} slider)",
+            f"  degrees of freedom: {self.grubler} by Grübler (3*{len(mech.links)} - "
+            f"2*{len(mech.joints)}), {self.jacobian_dof} by the rank of the constraint Jacobian "
+            f"({self.jacobian_rank} of {self.n_coordinates} coordinates)",
+        ]
+        if self.grubler != self.jacobian_dof:
+            lines.append(
+                "  note: the two counts differ: some constraints are redundant (or the start "
+                "position is singular)"
+            )
+        an = self.analysis
+        lines.append(f"  driver: joint {mech.driver.joint}, start at {an.format_u(self.start_u)}")
+        lines.append("  groups, solved in this order:")
+        for k, (g, b) in enumerate(zip(self.groups, self.branches), 1):
+            lines.append(f"    {k}. {g}" + (f": {b}" if b else ""))
+        lines.append(f"  start position ({an.format_u(self.start_u)}), global coordinates [m]:")
+        for p, (x, y) in self.start_points.items():
+            lines.append(f"    {p:>8s}: ({x:.6g}, {y:.6g})")
+        for n in self.notes:
+            lines.append("  " + n)
+        return "\n".join(lines)
+
+
+def check(mech: Mechanism, method: str | None = None) -> CheckReport:
+    """Validate, count degrees of freedom, and assemble the start position."""
+    an = Analysis(mech, method)
+    u0 = an.start_value()
+    asm = an.assemble(u0)
+    st = asm.state
+    from .constraints import ConstraintSystem
+
+    free = ConstraintSystem(mech, with_driver=False)
+    J = free.jacobian(st)[0]
+    if J.size:
+        sv = np.linalg.svd(J, compute_uv=False)
+        rank = int(np.sum(sv > 1e-9 * max(1.0, sv[0])))
+    else:
+        rank = 0
+    branches = []
+    pn = an.joint_point
+    for g, mode, why in zip(an.groups, asm.modes, asm.reasons):
+        text = g.mode_text(st, mode, pn)
+        branches.append(f"{text} ({why})" if text and why else text or why)
+    pts = {}
+    for p, ref in an.points.items():
+        x, y = st.point(ref.body, ref.local)
+        pts[p] = (float(x[0]), float(y[0]))
+    notes = []
+    if not math.isfinite(u0):
+        notes.append("the start position could not be determined")
+    return CheckReport(
+        mech,
+        grubler(mech),
+        free.nq - rank,
+        free.nq,
+        rank,
+        [g.label for g in an.groups],
+        branches,
+        u0,
+        pts,
+        an,
+        asm,
+        notes,
+    )

@@ -1,0 +1,133 @@
+"""The ``mechsolve`` command. Thin: it parses options, calls :mod:`mechsolve.api`, prints.
+
+Heavy modules (numpy, scipy, matplotlib) are imported inside the commands so that
+``mechsolve --help`` starts fast.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+from pathlib import Path
+
+import click
+
+from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, MechsolveError
+
+EXIT_INTERNAL = 4
+
+EPILOG = """\b
+Exit codes:
+  0  success
+  1  completed with warnings: some positions could not be solved
+     (their CSV rows say why); everything else was written
+  2  input error: the file or the command line is wrong
+  3  solver failure: the mechanism cannot be assembled or solved
+  4  internal error (a bug in mechsolve; please report it)
+"""
+
+
+def _fail(exc: BaseException) -> None:
+    if isinstance(exc, MechsolveError):
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(exc.exit_code)
+    if isinstance(exc, (click.exceptions.Exit, click.ClickException, SystemExit)):
+        raise exc
+    if os.environ.get("MECHSOLVE_DEBUG"):
+        traceback.print_exc()
+    else:
+        click.echo(
+            f"internal error: {type(exc).__name__}: {exc}\n"
+            "This is a bug in mechsolve. Set MECHSOLVE_DEBUG=1 to see the traceback.",
+            err=True,
+        )
+    sys.exit(EXIT_INTERNAL)
+
+
+@click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="mechsolve")
+def main() -> None:
+    """Solve planar mechanisms described in YAML files.
+
+    \b
+    mechsolve run mechanisms/crane.yaml      solve the sweep, write CSV and plots
+    mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
+    """
+
+
+@main.command(epilog=EPILOG)
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option(
+    "-o",
+    "--outdir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Output folder (default: a folder named after FILE in the current directory).",
+)
+@click.option("--step", help="Sweep step, e.g. '1 deg', '2 mm' or '0.01 s' (overrides the file).")
+@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@click.option("--no-plots", is_flag=True, help="Write the CSV only.")
+@click.option(
+    "--method",
+    type=click.Choice(["auto", "newton"]),
+    help="auto: closed-form Assur groups where recognised (default); newton: Newton-Raphson "
+    "on the whole constraint system.",
+)
+@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
+    """Solve the sweep of FILE and write results.csv and plots."""
+    try:
+        from . import api
+
+        mech = api.load(file, variant)
+        st = api.parse_step(mech, step) if step is not None else None
+        res = api.solve(mech, step=st, method=method)
+        if outdir is None:
+            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+        outdir.mkdir(parents=True, exist_ok=True)
+        written = [res.to_csv(outdir / "results.csv")]
+        if not no_plots:
+            from .writers.plots import write_plots
+
+            written += write_plots(res, outdir)
+        if not quiet:
+            click.echo(res.summary())
+            click.echo(
+                f"  wrote {len(written)} file(s) to {outdir}/: "
+                + ", ".join(p.name for p in written)
+            )
+        sys.exit(EXIT_WARNINGS if res.failures else EXIT_OK)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        _fail(exc)
+
+
+@main.command(epilog=EPILOG)
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@click.option(
+    "--draw",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Draw the assembled start position to this PNG file.",
+)
+def check(file: Path, variant, draw) -> None:
+    """Validate FILE, report its degrees of freedom and assemble the start position."""
+    try:
+        from . import api
+
+        mech = api.load(file, variant)
+        report = api.check(mech)
+        click.echo(report.text())
+        if draw is not None:
+            from .writers.plots import draw_start
+
+            draw_start(report.analysis, report.assembly.state, draw, f"{mech.name}: start position")
+            click.echo(f"  drew the start position to {draw}")
+        sys.exit(EXIT_OK)
+    except Exception as exc:  # noqa: BLE001
+        _fail(exc)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
+
+__all__ = ["main", "EXIT_INPUT"]

@@ -1,0 +1,83 @@
+"""Errors mechsolve raises for user mistakes and solver failures.
+
+Every error a user can cause derives from :class:`MechsolveError`. The CLI turns
+them into one clear message and an exit code, never a traceback.
+
+Exit codes (also listed in ``mechsolve --help`` and the README):
+
+=====  ==============================================================
+code   meaning
+=====  ==============================================================
+0      success
+1      completed with warnings: some positions could not be solved
+       (their rows are marked in the CSV), the rest was written
+2      input error: the file or the command line is wrong
+3      solver failure: the mechanism cannot be assembled or solved
+=====  ==============================================================
+"""
+
+from __future__ import annotations
+
+EXIT_OK = 0
+EXIT_WARNINGS = 1
+EXIT_INPUT = 2
+EXIT_SOLVER = 3
+
+
+class MechsolveError(Exception):
+    """Base class of every error caused by the user's input or mechanism."""
+
+    exit_code = EXIT_INPUT
+
+
+class InputError(MechsolveError):
+    """A mistake in a mechanism file or in a model built in code.
+
+    Parameters
+    ----------
+    message
+        What is wrong, in plain words.
+    file
+        The file the mistake is in, if any.
+    keypath
+        Where in the file, as dotted keys (``links.crank.points.A``).
+    line
+        The 1-based line number of that key, if known.
+    """
+
+    exit_code = EXIT_INPUT
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | None = None,
+        keypath: str | None = None,
+        line: int | None = None,
+    ) -> None:
+        self.message = message
+        self.file = file
+        self.keypath = keypath
+        self.line = line
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        where = ""
+        if self.file:
+            where = self.file + (f":{self.line}" if self.line else "") + ": "
+        elif self.line:
+            where = f"line {self.line}: "
+        key = f"{self.keypath}: " if self.keypath else ""
+        return f"{where}{key}{self.message}"
+
+
+class AssemblyError(MechsolveError):
+    """The mechanism cannot be closed (assembled) where it must be."""
+
+    exit_code = EXIT_SOLVER
+
+
+class SolverError(MechsolveError):
+    """A solver could not produce a trustworthy answer."""
+
+    exit_code = EXIT_SOLVER

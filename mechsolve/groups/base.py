@@ -1,0 +1,108 @@
+"""The contract every group solver keeps.
+
+A *group* is a set of bodies whose poses follow from bodies solved before it (and from
+the driver). Groups are solved in order; each reads only the rows of the
+:class:`~mechsolve.state.State` of earlier groups and writes only its own bodies' rows.
+
+Contract of a subclass:
+
+``position(st, drive, mode)``
+    Fill ``x, y, th, c, s`` of the group's bodies at all N positions. ``mode`` selects the
+    assembly branch (+1 or -1, a scalar or an array over positions) for groups with
+    ``n_modes == 2``. Return ``(ok, indicator)``: ``ok`` is False where the group cannot
+    close (its rows are then NaN); ``indicator`` in [0, 1] measures how far the group is
+    from a singular (toggle) configuration, 0 being singular.
+``velocity(st, drive)`` / ``acceleration(st, drive)``
+    Fill ``vx, vy, w`` / ``ax, ay, al`` of the group's bodies, given earlier groups'.
+    They solve exactly ``Phi_q qdot = nu`` and ``Phi_q qddot = gamma`` restricted to the
+    group, with explicit formulas where the group is recognised.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..constraints import Constraint
+from ..state import State
+
+
+@dataclass
+class Drive:
+    """The driver coordinate and its first two time derivatives at N positions."""
+
+    u: np.ndarray
+    ud: np.ndarray
+    udd: np.ndarray
+
+    def take(self, idx) -> Drive:
+        return Drive(self.u[idx], self.ud[idx], self.udd[idx])
+
+
+class Group:
+    """Base class; see the module docstring for the contract."""
+
+    kind = "group"
+    n_modes = 1
+
+    def __init__(self, bodies: list[int], constraints: list[Constraint], names: list[str]) -> None:
+        self.bodies = bodies
+        self.constraints = constraints
+        self.body_names = [names[b] for b in bodies]
+        self.label = self.describe()
+
+    def describe(self) -> str:
+        joints = ", ".join(c.name for c in self.constraints)
+        return f"{self.kind} group of {', '.join(self.body_names)} (joints {joints})"
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        raise NotImplementedError
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        raise NotImplementedError
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        raise NotImplementedError
+
+    def mode_text(self, st: State, mode: float, point_names: dict) -> str:
+        """Describe branch ``mode`` in words (for ``mechsolve check``)."""
+        return ""
+
+    def fail_reason(self, st: State, i: int) -> str:
+        """Why the group cannot close at position ``i`` (for messages)."""
+        return "the loop cannot close"
+
+
+def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
+    """Place body ``b`` so that its local vector ``sm - s0`` maps to global ``(gx, gy)``
+    and its local point ``s0`` lies at ``(px, py)``.
+
+    The rotation follows from the two vectors without trigonometry; the angle is then
+    read with ``arctan2``.
+    """
+    ex, ey = sm[0] - s0[0], sm[1] - s0[1]
+    l2 = ex * ex + ey * ey
+    c = (ex * gx + ey * gy) / l2
+    s = (ex * gy - ey * gx) / l2
+    st.c[b] = c
+    st.s[b] = s
+    st.th[b] = np.arctan2(s, c)
+    st.x[b] = px - (c * s0[0] - s * s0[1])
+    st.y[b] = py - (s * s0[0] + c * s0[1])
+
+
+def body_velocity_from_point(st: State, b: int, s0, vpx, vpy, w) -> None:
+    """Body ``b``'s frame velocity from its point ``s0``'s velocity and angular velocity."""
+    rx, ry = st.rotated(b, s0)
+    st.w[b] = w
+    st.vx[b] = vpx + w * ry
+    st.vy[b] = vpy - w * rx
+
+
+def body_acceleration_from_point(st: State, b: int, s0, apx, apy, al) -> None:
+    rx, ry = st.rotated(b, s0)
+    w2 = st.w[b] ** 2
+    st.al[b] = al
+    st.ax[b] = apx + al * ry + w2 * rx
+    st.ay[b] = apy - al * rx + w2 * ry

@@ -1,0 +1,460 @@
+"""Groups solved in closed form: the driver link and the two-link Assur groups (dyads).
+
+Notation: ``P`` and ``Q`` are the outer joints (on bodies already solved), ``M`` the inner
+joint. Vectors are handled as pairs of arrays over positions; ``perp(v) = k x v``.
+Velocities and accelerations solve the group's 2x2 system in the unknown angular
+velocities (accelerations) by projection, which is Cramer's rule written out:
+``omega_1 = (dv . g2) / (g1 x g2)`` for the RRR dyad, and likewise for the others.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..constraints import (
+    AngleDriverConstraint,
+    RevoluteConstraint,
+    SliderConstraint,
+    SliderDriverConstraint,
+)
+from ..state import State
+from .base import (
+    Drive,
+    Group,
+    body_acceleration_from_point,
+    body_velocity_from_point,
+    set_pose_from_vectors,
+)
+
+
+def _local(c: RevoluteConstraint, body: int) -> np.ndarray:
+    return c.sa if c.a == body else c.sb
+
+
+def _other(c, body: int) -> int:
+    return c.b if c.a == body else c.a
+
+
+class DriverLink(Group):
+    """A link pinned to a solved body whose angle the driver sets (class I group)."""
+
+    kind = "driver link"
+
+    def __init__(self, body, pin: RevoluteConstraint, driver: AngleDriverConstraint, names):
+        self.b = body
+        self.pin = pin
+        self.drv = driver
+        self.k = _other(pin, body)  # the body it is pinned to
+        self.sp = _local(pin, body)
+        self.sk = _local(pin, self.k)
+        super().__init__([body], [pin, driver], names)
+
+    def _angle_terms(self, st: State, u, rate: str):
+        d = self.drv
+        if d.b == self.b:  # theta_b = theta_a + u - delta
+            other, sign, off = d.a, 1.0, -d.delta
+        else:  # theta_a = theta_b + delta - u
+            other, sign, off = d.b, -1.0, d.delta
+        return other, sign, off
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        other, sign, off = self._angle_terms(st, drive.u, "pos")
+        st.set_angle(self.b, st.th[other] + sign * drive.u + off)
+        px, py = st.point(self.k, self.sk)
+        rx, ry = st.rotated(self.b, self.sp)
+        st.x[self.b] = px - rx
+        st.y[self.b] = py - ry
+        n = st.n
+        return np.ones(n, bool), np.ones(n)
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        other, sign, _ = self._angle_terms(st, drive.u, "vel")
+        w = st.w[other] + sign * drive.ud
+        vpx, vpy = st.point_velocity(self.k, self.sk)
+        body_velocity_from_point(st, self.b, self.sp, vpx, vpy, w)
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        other, sign, _ = self._angle_terms(st, drive.u, "acc")
+        al = st.al[other] + sign * drive.udd
+        apx, apy = st.point_acceleration(self.k, self.sk)
+        body_acceleration_from_point(st, self.b, self.sp, apx, apy, al)
+
+
+class DrivenSlider(Group):
+    """A block on a solved guide whose displacement the driver sets (linear actuator)."""
+
+    kind = "driven slider"
+
+    def __init__(self, body, slider: SliderConstraint, driver: SliderDriverConstraint, names):
+        self.b = body
+        self.sl = slider
+        super().__init__([body], [slider, driver], names)
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        sl, b, g = self.sl, self.b, self.sl.a
+        st.set_angle(b, st.th[g] + sl.beta)
+        ux, uy = st.rotated(g, sl.u_loc)
+        ox, oy = st.point(g, sl.o)
+        rx, ry = st.rotated(b, sl.sb)
+        st.x[b] = ox + drive.u * ux - rx
+        st.y[b] = oy + drive.u * uy - ry
+        return np.ones(st.n, bool), np.ones(st.n)
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        sl, b, g = self.sl, self.b, self.sl.a
+        ux, uy = st.rotated(g, sl.u_loc)
+        px, py = st.point(b, sl.sb)
+        # velocity of the guide-fixed point under P, plus the sliding velocity
+        vgx, vgy = _carried_velocity(st, g, px, py)
+        wg = st.w[g]
+        vx = vgx + drive.ud * ux
+        vy = vgy + drive.ud * uy
+        body_velocity_from_point(st, b, sl.sb, vx, vy, wg)
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        sl, b, g = self.sl, self.b, self.sl.a
+        ux, uy = st.rotated(g, sl.u_loc)
+        px, py = st.point(b, sl.sb)
+        agx, agy = _carried_acceleration(st, g, px, py)
+        wg = st.w[g]
+        ax = agx + drive.udd * ux + 2 * wg * drive.ud * (-uy)
+        ay = agy + drive.udd * uy + 2 * wg * drive.ud * ux
+        body_acceleration_from_point(st, b, sl.sb, ax, ay, st.al[g])
+
+
+def _carried_velocity(st: State, g: int, px, py):
+    """Velocity of the point of body ``g`` that is at (px, py) now."""
+    w = st.w[g]
+    return st.vx[g] - w * (py - st.y[g]), st.vy[g] + w * (px - st.x[g])
+
+
+def _carried_acceleration(st: State, g: int, px, py):
+    w2 = st.w[g] ** 2
+    al = st.al[g]
+    rx, ry = px - st.x[g], py - st.y[g]
+    return st.ax[g] - al * ry - w2 * rx, st.ay[g] + al * rx - w2 * ry
+
+
+class RRR(Group):
+    """Two links joined at M, each pinned to a solved body (P on link 1, Q on link 2).
+
+    Branch ``mode = +1``: M lies on the left of the directed line P -> Q, where link 1 is
+    the one listed first in the file.
+    """
+
+    kind = "RRR"
+    n_modes = 2
+
+    def __init__(self, b1, b2, j1, j2, j3, names):
+        # j1: b1-known at P, j2: b1-b2 at M, j3: b2-known at Q
+        self.b1, self.b2 = b1, b2
+        self.j1, self.j2, self.j3 = j1, j2, j3
+        self.k1, self.k2 = _other(j1, b1), _other(j3, b2)
+        self.sP1, self.sPk = _local(j1, b1), _local(j1, self.k1)
+        self.sQ2, self.sQk = _local(j3, b2), _local(j3, self.k2)
+        self.sM1, self.sM2 = _local(j2, b1), _local(j2, b2)
+        self.L1 = float(np.hypot(*(self.sM1 - self.sP1)))
+        self.L2 = float(np.hypot(*(self.sM2 - self.sQ2)))
+        super().__init__([b1, b2], [j1, j2, j3], names)
+
+    def describe(self) -> str:
+        return (
+            f"loop {self.j2.name} ({self.body_names[0]} {self.j1.name}-{self.j2.name}, "
+            f"{self.body_names[1]} {self.j2.name}-{self.j3.name})"
+        )
+
+    def ends(self, st: State):
+        px, py = st.point(self.k1, self.sPk)
+        qx, qy = st.point(self.k2, self.sQk)
+        return px, py, qx, qy
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        px, py, qx, qy = self.ends(st)
+        dx, dy = qx - px, qy - py
+        D2 = dx * dx + dy * dy
+        L1, L2 = self.L1, self.L2
+        with np.errstate(invalid="ignore", divide="ignore"):
+            a = (L1 * L1 - L2 * L2 + D2) / (2.0 * D2)  # along P->Q, as a fraction of D
+            h2 = L1 * L1 / D2 - a * a  # (height / D)^2
+            # a toggle position (h = 0) within rounding still closes
+            tol = 1e-12 * max(L1, L2) ** 2 / np.maximum(D2, 1e-300)
+            ok = (h2 >= -tol) & (D2 > 0)
+            h = np.sqrt(np.maximum(h2, 0.0)) * mode
+            mx = px + a * dx - h * dy
+            my = py + a * dy + h * dx
+        mx = np.where(ok, mx, np.nan)
+        my = np.where(ok, my, np.nan)
+        set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, mx - px, my - py)
+        set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, mx - qx, my - qy)
+        # sin of the angle between the two links at M
+        with np.errstate(invalid="ignore"):
+            ind = np.abs(np.sqrt(np.maximum(h2, 0.0)) * D2) / (L1 * L2)
+        return ok, np.where(ok, np.minimum(ind, 1.0), 0.0)
+
+    def _g(self, st: State):
+        g1x, g1y = st.rotated(self.b1, self.sM1 - self.sP1)
+        g2x, g2y = st.rotated(self.b2, self.sM2 - self.sQ2)
+        return g1x, g1y, g2x, g2y
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        g1x, g1y, g2x, g2y = self._g(st)
+        vpx, vpy = st.point_velocity(self.k1, self.sPk)
+        vqx, vqy = st.point_velocity(self.k2, self.sQk)
+        dvx, dvy = vqx - vpx, vqy - vpy
+        cross = g1x * g2y - g1y * g2x
+        w1 = (dvx * g2x + dvy * g2y) / cross
+        w2 = (dvx * g1x + dvy * g1y) / cross
+        body_velocity_from_point(st, self.b1, self.sP1, vpx, vpy, w1)
+        body_velocity_from_point(st, self.b2, self.sQ2, vqx, vqy, w2)
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        g1x, g1y, g2x, g2y = self._g(st)
+        apx, apy = st.point_acceleration(self.k1, self.sPk)
+        aqx, aqy = st.point_acceleration(self.k2, self.sQk)
+        w1s, w2s = st.w[self.b1] ** 2, st.w[self.b2] ** 2
+        dax = aqx - apx - w2s * g2x + w1s * g1x
+        day = aqy - apy - w2s * g2y + w1s * g1y
+        cross = g1x * g2y - g1y * g2x
+        a1 = (dax * g2x + day * g2y) / cross
+        a2 = (dax * g1x + day * g1y) / cross
+        body_acceleration_from_point(st, self.b1, self.sP1, apx, apy, a1)
+        body_acceleration_from_point(st, self.b2, self.sQ2, aqx, aqy, a2)
+
+    def mode_text(self, st: State, mode: float, pn) -> str:
+        side = "left" if mode > 0 else "right"
+        return f"{pn[self.j2]} {side} of {pn[self.j1]} -> {pn[self.j3]}"
+
+    def fail_reason(self, st: State, i: int) -> str:
+        px, py, qx, qy = (v[i] for v in self.ends(st))
+        D = float(np.hypot(qx - px, qy - py))
+        L1, L2 = self.L1, self.L2
+        if D > L1 + L2:
+            why = f"|{self.j1.name}{self.j3.name}| = {D:.6g} m > {L1:.6g} + {L2:.6g} m"
+        else:
+            why = f"|{self.j1.name}{self.j3.name}| = {D:.6g} m < |{L1:.6g} - {L2:.6g}| m"
+        return f"{self.label} cannot close: {why}"
+
+
+class RRP(Group):
+    """A rod pinned at P to a solved body and at M to a block that slides on a line of a
+    solved body (the slider-crank's connecting rod and piston).
+
+    Branch ``mode = +1``: M lies ahead of the foot of P on the guide line (in the line's
+    direction).
+    """
+
+    kind = "RRP"
+    n_modes = 2
+
+    def __init__(self, rod, block, j1, j2, sl: SliderConstraint, names):
+        self.rod, self.blk = rod, block
+        self.j1, self.j2, self.sl = j1, j2, sl
+        self.k1 = _other(j1, rod)
+        self.g = sl.a  # the guide (solved)
+        self.sP1, self.sPk = _local(j1, rod), _local(j1, self.k1)
+        self.sMr, self.sMb = _local(j2, rod), _local(j2, block)
+        self.L = float(np.hypot(*(self.sMr - self.sP1)))
+        super().__init__([rod, block], [j1, j2, sl], names)
+
+    def describe(self) -> str:
+        return (
+            f"loop {self.j2.name} ({self.body_names[0]} {self.j1.name}-{self.j2.name}, "
+            f"{self.body_names[1]} on {self.sl.name})"
+        )
+
+    def _line(self, st: State):
+        """Line traced by M: a point on it and its unit direction (global)."""
+        sl, g = self.sl, self.g
+        ux, uy = st.rotated(g, sl.u_loc)
+        ox, oy = st.point(g, sl.o)
+        # M = O + lambda u + A_block (s_M - s_P): the block keeps the guide's orientation
+        th = st.th[g] + sl.beta
+        c, s = np.cos(th), np.sin(th)
+        wx = self.sMb[0] - sl.sb[0]
+        wy = self.sMb[1] - sl.sb[1]
+        return ox + c * wx - s * wy, oy + s * wx + c * wy, ux, uy, th, c, s
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        px, py = st.point(self.k1, self.sPk)
+        lx, ly, ux, uy, th, c, s = self._line(st)
+        lam_f = (px - lx) * ux + (py - ly) * uy  # foot of P
+        fx, fy = lx + lam_f * ux, ly + lam_f * uy
+        dist2 = (px - fx) ** 2 + (py - fy) ** 2
+        h2 = self.L**2 - dist2
+        ok = h2 >= -1e-12 * self.L**2
+        h = np.sqrt(np.maximum(h2, 0.0)) * mode
+        mx = np.where(ok, fx + h * ux, np.nan)
+        my = np.where(ok, fy + h * uy, np.nan)
+        set_pose_from_vectors(st, self.rod, self.sP1, self.sMr, px, py, mx - px, my - py)
+        b = self.blk
+        st.th[b], st.c[b], st.s[b] = th, c, s
+        st.x[b] = mx - (c * self.sMb[0] - s * self.sMb[1])
+        st.y[b] = my - (s * self.sMb[0] + c * self.sMb[1])
+        ind = np.sqrt(np.maximum(h2, 0.0)) / self.L  # |cos| of the rod to the guide
+        return ok, np.where(ok, ind, 0.0)
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        g = self.g
+        ux, uy = st.rotated(g, self.sl.u_loc)
+        nx, ny = -uy, ux
+        g1x, g1y = st.rotated(self.rod, self.sMr - self.sP1)
+        mx, my = st.point(self.blk, self.sMb)
+        vpx, vpy = st.point_velocity(self.k1, self.sPk)
+        vkx, vky = _carried_velocity(st, g, mx, my)
+        # v_P + w1 perp(g1) = v_k(M) + lamdot u
+        w1 = ((vkx - vpx) * nx + (vky - vpy) * ny) / (g1x * ux + g1y * uy)
+        vmx = vpx - w1 * g1y
+        vmy = vpy + w1 * g1x
+        body_velocity_from_point(st, self.rod, self.sP1, vpx, vpy, w1)
+        body_velocity_from_point(st, self.blk, self.sMb, vmx, vmy, st.w[g])
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        g = self.g
+        ux, uy = st.rotated(g, self.sl.u_loc)
+        nx, ny = -uy, ux
+        g1x, g1y = st.rotated(self.rod, self.sMr - self.sP1)
+        mx, my = st.point(self.blk, self.sMb)
+        vmx, vmy = st.point_velocity(self.blk, self.sMb)
+        vkx, vky = _carried_velocity(st, g, mx, my)
+        lamdot = (vmx - vkx) * ux + (vmy - vky) * uy
+        apx, apy = st.point_acceleration(self.k1, self.sPk)
+        akx, aky = _carried_acceleration(st, g, mx, my)
+        wg = st.w[g]
+        w1s = st.w[self.rod] ** 2
+        # a_P + al1 perp(g1) - w1^2 g1 = a_k(M) + lamddot u + 2 wg lamdot n
+        rx = akx + 2 * wg * lamdot * nx - apx + w1s * g1x
+        ry = aky + 2 * wg * lamdot * ny - apy + w1s * g1y
+        al1 = (rx * nx + ry * ny) / (g1x * ux + g1y * uy)
+        amx = apx - al1 * g1y - w1s * g1x
+        amy = apy + al1 * g1x - w1s * g1y
+        body_acceleration_from_point(st, self.rod, self.sP1, apx, apy, al1)
+        body_acceleration_from_point(st, self.blk, self.sMb, amx, amy, st.al[g])
+
+    def mode_text(self, st: State, mode: float, pn) -> str:
+        where = "ahead of" if mode > 0 else "behind"
+        return f"{pn[self.j2]} {where} the foot of {pn[self.j1]} along {self.sl.name}"
+
+    def fail_reason(self, st: State, i: int) -> str:
+        px, py = (v[i] for v in st.point(self.k1, self.sPk))
+        lx, ly, ux, uy, *_ = (np.atleast_1d(v)[i] if np.ndim(v) else v for v in self._line(st))
+        dist = abs((px - lx) * -uy + (py - ly) * ux)
+        return (
+            f"{self.label} cannot close: {self.j1.name} is {dist:.6g} m from the guide line, "
+            f"farther than the rod length {self.L:.6g} m"
+        )
+
+
+class RPR(Group):
+    """A block pinned at P to a solved body slides along a line of a bar pinned at Q to a
+    solved body (the slotted guide bar of the quick-return shaper).
+
+    Branch ``mode = +1``: for a line through the bar's pivot, the bar's line direction
+    points from Q towards P (the block is on the positive side of the line).
+    """
+
+    kind = "RPR"
+    n_modes = 2
+
+    def __init__(self, block, bar, jp, jq, sl: SliderConstraint, names):
+        self.blk, self.bar = block, bar
+        self.jp, self.jq, self.sl = jp, jq, sl
+        self.kp, self.kq = _other(jp, block), _other(jq, bar)
+        self.sPb, self.sPk = _local(jp, block), _local(jp, self.kp)
+        self.sQb, self.sQk = _local(jq, bar), _local(jq, self.kq)
+        # geometry in the bar's frame: the block's slider point relative to its pin,
+        # expressed in the bar frame (block angle = bar angle + beta, or - beta)
+        if sl.a == bar:  # the line is on the bar, the block carries the point
+            self.beta = sl.beta
+            self.sgn = 1.0
+            cb, sb = np.cos(sl.beta), np.sin(sl.beta)
+            w = sl.sb - self.sPb
+            self.w_loc = np.array([cb * w[0] - sb * w[1], sb * w[0] + cb * w[1]])
+            self.c_loc = sl.o - self.sQb
+        else:  # the line is on the pinned "block" and the point on the "bar": swap roles
+            raise ValueError("RPR with the line on the pinned block is solved generically")
+        self.u_loc = sl.u_loc
+        self.n_loc = np.array([-sl.u_loc[1], sl.u_loc[0]])
+        self.e = float(self.n_loc @ (self.c_loc - self.w_loc))
+        super().__init__([block, bar], [jp, jq, sl], names)
+
+    def describe(self) -> str:
+        return (
+            f"loop {self.sl.name} ({self.body_names[0]} at {self.jp.name} sliding on "
+            f"{self.body_names[1]} pivoted at {self.jq.name})"
+        )
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        px, py = st.point(self.kp, self.sPk)
+        qx, qy = st.point(self.kq, self.sQk)
+        dx, dy = px - qx, py - qy
+        D2 = dx * dx + dy * dy
+        e = self.e
+        h2 = D2 - e * e
+        ok = h2 >= -1e-12 * np.maximum(D2, e * e)
+        h = np.sqrt(np.maximum(h2, 0.0)) * mode
+        with np.errstate(invalid="ignore", divide="ignore"):
+            # the bar's global normal n with n . d = e
+            nx = np.where(ok, (e * dx - h * dy) / D2, np.nan)
+            ny = np.where(ok, (e * dy + h * dx) / D2, np.nan)
+        # rotation of the bar: maps n_loc to n
+        c = self.n_loc[0] * nx + self.n_loc[1] * ny
+        s = self.n_loc[0] * ny - self.n_loc[1] * nx
+        bar = self.bar
+        st.c[bar], st.s[bar] = c, s
+        st.th[bar] = np.arctan2(s, c)
+        st.x[bar] = qx - (c * self.sQb[0] - s * self.sQb[1])
+        st.y[bar] = qy - (s * self.sQb[0] + c * self.sQb[1])
+        blk = self.blk
+        st.set_angle(blk, st.th[bar] + self.beta)
+        rx, ry = st.rotated(blk, self.sPb)
+        st.x[blk] = px - rx
+        st.y[blk] = py - ry
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ind = np.sqrt(np.maximum(h2, 0.0) / np.maximum(D2, 1e-300))
+        return ok, np.where(ok, ind, 0.0)
+
+    def _frame(self, st: State):
+        ux, uy = st.rotated(self.bar, self.u_loc)
+        px, py = st.point(self.kp, self.sPk)
+        qx, qy = st.point(self.kq, self.sQk)
+        return ux, uy, -uy, ux, px - qx, py - qy
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        ux, uy, nx, ny, dx, dy = self._frame(st)
+        vpx, vpy = st.point_velocity(self.kp, self.sPk)
+        vqx, vqy = st.point_velocity(self.kq, self.sQk)
+        rvx, rvy = vpx - vqx, vpy - vqy
+        # v_P - v_Q = w perp(d) + lamdot u  (the block turns with the bar)
+        w = (rvx * nx + rvy * ny) / (-dy * nx + dx * ny)
+        body_velocity_from_point(st, self.bar, self.sQb, vqx, vqy, w)
+        body_velocity_from_point(st, self.blk, self.sPb, vpx, vpy, w)
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        ux, uy, nx, ny, dx, dy = self._frame(st)
+        vpx, vpy = st.point_velocity(self.kp, self.sPk)
+        vqx, vqy = st.point_velocity(self.kq, self.sQk)
+        w = st.w[self.bar]
+        lamdot = (vpx - vqx + w * dy) * ux + (vpy - vqy - w * dx) * uy
+        apx, apy = st.point_acceleration(self.kp, self.sPk)
+        aqx, aqy = st.point_acceleration(self.kq, self.sQk)
+        # a_P - a_Q = al perp(d) - w^2 d + lamddot u + 2 w lamdot n
+        rx = apx - aqx + w * w * dx - 2 * w * lamdot * nx
+        ry = apy - aqy + w * w * dy - 2 * w * lamdot * ny
+        al = (rx * nx + ry * ny) / (-dy * nx + dx * ny)
+        body_acceleration_from_point(st, self.bar, self.sQb, aqx, aqy, al)
+        body_acceleration_from_point(st, self.blk, self.sPb, apx, apy, al)
+
+    def mode_text(self, st: State, mode: float, pn) -> str:
+        if self.e == 0:
+            where = "positive" if mode > 0 else "negative"
+            return f"{pn[self.jp]} on the {where} side of {pn[self.jq]} along {self.sl.name}"
+        return f"branch {'+' if mode > 0 else '-'} of {self.sl.name}"
+
+    def fail_reason(self, st: State, i: int) -> str:
+        px, py = (v[i] for v in st.point(self.kp, self.sPk))
+        qx, qy = (v[i] for v in st.point(self.kq, self.sQk))
+        D = float(np.hypot(px - qx, py - qy))
+        return (
+            f"{self.label} cannot close: {self.jp.name} is {D:.6g} m from {self.jq.name}, "
+            f"nearer than the line's offset {abs(self.e):.6g} m"
+        )

@@ -1,0 +1,204 @@
+"""The generic group: any block of the constraint system, solved by Newton-Raphson.
+
+Used for groups with no closed form (class III groups, triads, cylinders between two
+moving links, ...) and, with ``solver.method: newton``, for the whole mechanism at once.
+Positions are solved one after another; each starts from a prediction extrapolated from
+the previous solutions (continuation), so that the solution stays on the branch it
+started on. Velocities and accelerations solve the group's block of
+``Phi_q qdot = nu`` and ``Phi_q qddot = gamma`` for all positions in one batched solve.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..solvers.newton import SolveStats, solve
+from ..state import State
+from .base import Drive, Group
+
+
+class NewtonGroup(Group):
+    """A group solved numerically. Keeps per-position solver statistics."""
+
+    kind = "Newton"
+    n_modes = 0  # the branch follows from the start guess and continuity
+
+    def __init__(self, bodies, constraints, names, atol: float, max_iterations: int = 30):
+        self.col = {b: k for k, b in enumerate(bodies)}
+        self.n = 3 * len(bodies)
+        self.m = sum(c.m for c in constraints)
+        self.atol = atol
+        self.max_iterations = max_iterations
+        super().__init__(bodies, constraints, names)
+
+    def describe(self) -> str:
+        joints = ", ".join(c.name for c in self.constraints)
+        return f"group of {', '.join(self.body_names)} (joints {joints})"
+
+    # -- one position ------------------------------------------------------------------
+    def get_q(self, st: State, i: int) -> np.ndarray:
+        q = np.empty(self.n)
+        for b, k in self.col.items():
+            q[3 * k] = st.x[b, i]
+            q[3 * k + 1] = st.y[b, i]
+            q[3 * k + 2] = st.th[b, i]
+        return q
+
+    def set_q(self, st: State, i, q: np.ndarray) -> None:
+        for b, k in self.col.items():
+            st.x[b, i] = q[3 * k]
+            st.y[b, i] = q[3 * k + 1]
+            st.set_angle(b, q[3 * k + 2], i)
+
+    def residual(self, st: State, u) -> np.ndarray:
+        return np.concatenate([c.residual(st, u) for c in self.constraints], axis=0)
+
+    def jacobian(self, st: State) -> np.ndarray:
+        """The group's own block of Phi_q, shape (N, m, n)."""
+        J = np.zeros((st.n, self.m, self.n))
+        r = 0
+        for c in self.constraints:
+            for body, blk in c.jacobian(st).items():
+                k = self.col.get(body)
+                if k is not None:
+                    J[:, r : r + c.m, 3 * k : 3 * k + 3] = blk.transpose(2, 0, 1)
+            r += c.m
+        return J
+
+    def solve_at(self, st1: State, u1: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, SolveStats]:
+        """Solve the group at the single position held by ``st1`` (N == 1) from ``q0``."""
+
+        def fun(q):
+            self.set_q(st1, 0, q)
+            return self.residual(st1, u1)[:, 0]
+
+        def jac(q):
+            self.set_q(st1, 0, q)
+            return self.jacobian(st1)[0]
+
+        q, stats = solve(fun, jac, q0, self.atol, self.max_iterations)
+        self.set_q(st1, 0, q)
+        return q, stats
+
+    # -- the sweep ----------------------------------------------------------------------
+    def sweep(self, st: State, drive: Drive, q_start: np.ndarray, ok_in: np.ndarray):
+        """Solve positions 0..N-1 in order by continuation from ``q_start`` at position 0.
+
+        Returns ``ok``, ``iterations``, ``methods`` (arrays over positions).
+        """
+        n = st.n
+        ok = np.zeros(n, bool)
+        iters = np.zeros(n, int)
+        methods = np.array(["" for _ in range(n)], dtype=object)
+        history: list[np.ndarray] = []
+        hist_u: list[float] = []
+        last_good = np.asarray(q_start, float)
+        for i in range(n):
+            if not ok_in[i]:
+                self._nan(st, i)
+                history.clear()
+                hist_u.clear()
+                continue
+            q0 = _extrapolate(hist_u, history, float(drive.u[i])) if history else last_good
+            st1 = st.take([i])
+            q, stats = self.solve_at(st1, drive.u[i : i + 1], q0)
+            iters[i] = stats.iterations
+            methods[i] = stats.method
+            if stats.converged:
+                ok[i] = True
+                self.set_q(st, i, q)
+                last_good = q
+                history.append(q)
+                hist_u.append(float(drive.u[i]))
+                if len(history) > 3:
+                    history.pop(0)
+                    hist_u.pop(0)
+            else:
+                self._nan(st, i)
+                history.clear()
+                hist_u.clear()
+        return ok, iters, methods
+
+    def _nan(self, st: State, i: int) -> None:
+        for b in self.bodies:
+            for arr in (st.x, st.y, st.th, st.c, st.s):
+                arr[b, i] = np.nan
+
+    def position(self, st: State, drive: Drive, mode=1.0):
+        """Solve all positions by continuation from the poses already in ``st`` at 0."""
+        q0 = self.get_q(st, 0)
+        ok, _, _ = self.sweep(st, drive, q0, np.ones(st.n, bool))
+        return ok, self.indicator(st)
+
+    def indicator(self, st: State) -> np.ndarray:
+        """Reciprocal condition number of the group's Jacobian block at each position."""
+        J = self.jacobian(st)
+        good = np.all(np.isfinite(J), axis=(1, 2))
+        out = np.zeros(st.n)
+        if np.any(good):
+            sv = np.linalg.svd(J[good], compute_uv=False)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out[good] = np.where(sv[:, 0] > 0, sv[:, -1] / sv[:, 0], 0.0)
+        return out
+
+    # -- derivatives --------------------------------------------------------------------
+    def _rhs(self, st: State, drive: Drive, order: int) -> np.ndarray:
+        rows = []
+        for c in self.constraints:
+            if order == 1:
+                r = c.nu(st, drive.ud)
+                vel = (st.vx, st.vy, st.w)
+            else:
+                r = c.gamma(st, drive.udd)
+                vel = (st.ax, st.ay, st.al)
+            r = np.array(r, dtype=float)
+            for body, blk in c.jacobian(st).items():
+                if body in self.col:
+                    continue
+                r -= blk[:, 0] * vel[0][body] + blk[:, 1] * vel[1][body] + blk[:, 2] * vel[2][body]
+            rows.append(r)
+        return np.concatenate(rows, axis=0).T  # (N, m)
+
+    def _solve_batch(self, st: State, rhs: np.ndarray) -> np.ndarray:
+        J = self.jacobian(st)
+        out = np.full((st.n, self.n), np.nan)
+        good = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(rhs), axis=1)
+        if np.any(good):
+            if self.m == self.n:
+                try:
+                    out[good] = np.linalg.solve(J[good], rhs[good][..., None])[..., 0]
+                except np.linalg.LinAlgError:
+                    for i in np.flatnonzero(good):
+                        out[i] = np.linalg.lstsq(J[i], rhs[i], rcond=None)[0]
+            else:
+                for i in np.flatnonzero(good):
+                    out[i] = np.linalg.lstsq(J[i], rhs[i], rcond=None)[0]
+        return out
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        qd = self._solve_batch(st, self._rhs(st, drive, 1))
+        for b, k in self.col.items():
+            st.vx[b], st.vy[b], st.w[b] = qd[:, 3 * k], qd[:, 3 * k + 1], qd[:, 3 * k + 2]
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        qdd = self._solve_batch(st, self._rhs(st, drive, 2))
+        for b, k in self.col.items():
+            st.ax[b], st.ay[b], st.al[b] = qdd[:, 3 * k], qdd[:, 3 * k + 1], qdd[:, 3 * k + 2]
+
+
+def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:
+    """Lagrange extrapolation of the last (up to three) solutions to driver value ``u``."""
+    k = len(qs)
+    if k == 1:
+        return qs[0].copy()
+    out = np.zeros_like(qs[0])
+    for i in range(k):
+        w = 1.0
+        for j in range(k):
+            if j != i:
+                den = us[i] - us[j]
+                if den == 0:
+                    return qs[-1].copy()
+                w *= (u - us[j]) / den
+        out += w * qs[i]
+    return out

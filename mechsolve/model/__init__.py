@@ -1,0 +1,288 @@
+"""The validated model of a planar mechanism: links, joints, driver, sweep, outputs.
+
+A :class:`Mechanism` is what a mechanism file becomes after parsing, and what a user
+builds in code. All values are SI (m, rad, s, kg, N). Coordinates of a link's points are
+in the link's own frame; the ground's points are global.
+
+Names of points, links and joints are identifiers (letters, digits, ``_``) so that they
+can be used in CSV headers and conditions. A point name is global: the same name on two
+links means the same physical point, so those links must be joined there.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from ..errors import InputError
+from ..expr import Expression
+
+if TYPE_CHECKING:
+    from .source import Source
+
+GROUND = "ground"
+NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+KeyPath = tuple[Any, ...]
+
+
+@dataclass
+class Link:
+    """A rigid body carrying named points.
+
+    Parameters
+    ----------
+    name
+        The link's name, e.g. ``"crank"``.
+    points
+        Local coordinates (m) of each named point in the link's frame. The link's angle is
+        the angle of its frame's x axis.
+    mass
+        Mass in kg, or ``None`` for a massless link.
+    com
+        Centre of mass in the link frame (m); the frame origin if not given.
+    inertia
+        Moment of inertia about the centre of mass (kg m^2).
+    """
+
+    name: str
+    points: dict[str, tuple[float, float]]
+    mass: float | None = None
+    com: tuple[float, float] | None = None
+    inertia: float | None = None
+    where: KeyPath = ()
+
+    def local(self, point: str) -> np.ndarray:
+        """Local coordinates of a point of this link."""
+        return np.asarray(self.points[point], dtype=float)
+
+
+@dataclass
+class PinJoint:
+    """A revolute joint: the point ``point`` of link ``a`` and of link ``b`` coincide.
+
+    Reactions are reported as the force exerted on ``b`` by ``a``.
+    """
+
+    name: str
+    a: str
+    b: str
+    point: str
+    where: KeyPath = ()
+
+    kind = "revolute"
+
+    @property
+    def links(self) -> tuple[str, str]:
+        return (self.a, self.b)
+
+
+@dataclass
+class SliderJoint:
+    """A prismatic joint: ``block`` slides along a straight line fixed in ``guide``.
+
+    The block's point ``point`` stays on the line through ``origin`` (guide frame) in the
+    direction ``angle`` (guide frame); the block keeps the orientation of the guide plus
+    ``block_angle``. The slider's displacement ``s`` is measured from ``origin`` along
+    the line direction.
+    """
+
+    name: str
+    guide: str
+    block: str
+    point: str
+    origin: tuple[float, float]
+    angle: float
+    block_angle: float = 0.0
+    where: KeyPath = ()
+
+    kind = "slider"
+
+    @property
+    def a(self) -> str:
+        return self.guide
+
+    @property
+    def b(self) -> str:
+        return self.block
+
+    @property
+    def links(self) -> tuple[str, str]:
+        return (self.guide, self.block)
+
+    @property
+    def direction(self) -> np.ndarray:
+        return np.array([math.cos(self.angle), math.sin(self.angle)])
+
+
+Joint = PinJoint | SliderJoint
+
+
+@dataclass
+class Limit:
+    """A start position defined as the extreme of a quantity, e.g. K's right limit."""
+
+    quantity: Expression
+    extreme: Literal["min", "max"]
+
+
+@dataclass
+class Driver:
+    """The input motion: a joint's coordinate moving at constant speed.
+
+    For a :class:`PinJoint` the coordinate is the angle of link ``b`` relative to link
+    ``a`` (of the line ``line`` of ``b`` when given, else of ``b``'s frame), in rad; for a
+    :class:`SliderJoint` it is the slider displacement in m.
+
+    Parameters
+    ----------
+    joint
+        Name of the driven joint.
+    speed
+        Signed speed (rad/s or m/s); positive is counter-clockwise or along the line.
+    start
+        Driver coordinate at the start of the sweep, or a :class:`Limit`.
+    line
+        Two points of the driven link whose direction the driver angle measures.
+    """
+
+    joint: str
+    speed: float = 1.0
+    start: float | Limit = 0.0
+    line: tuple[str, str] | None = None
+    where: KeyPath = ()
+
+
+@dataclass
+class Sweep:
+    """The positions to solve: driver ``travel`` from the start in steps of ``step``.
+
+    Both are positive and measured in the direction of motion (rad or m). The number of
+    intervals is ``round(travel / step)``; both ends are solved.
+    """
+
+    travel: float | None = None
+    step: float | None = None
+    where: KeyPath = ()
+
+
+@dataclass
+class Assembly:
+    """How to choose the assembly branch at the start of the sweep.
+
+    Parameters
+    ----------
+    conditions
+        Conditions the start position must satisfy, e.g. ``"B left of O3 -> A"`` or
+        ``"C.x > B.x"``.
+    sketch
+        Approximate global coordinates of some points at the start (m); each loop is
+        closed on the branch nearest to the sketch.
+    """
+
+    conditions: list[Expression] = field(default_factory=list)
+    sketch: dict[str, tuple[float, float]] = field(default_factory=dict)
+    where: KeyPath = ()
+
+
+@dataclass
+class Outputs:
+    """What to report. ``None`` means all."""
+
+    points: list[str] | None = None
+    links: list[str] | None = None
+    sliders: list[str] | None = None
+    velocity: bool = True
+    acceleration: bool = True
+    where: KeyPath = ()
+
+
+@dataclass
+class SolverOptions:
+    """Options of the position solver.
+
+    ``method``: ``"auto"`` splits the constraints into Assur groups and solves the
+    groups it recognises in closed form, the others by Newton-Raphson; ``"newton"``
+    solves the whole constraint system by Newton-Raphson at each position.
+    """
+
+    method: Literal["auto", "newton"] = "auto"
+    tolerance: float = 1e-10
+    max_iterations: int = 30
+    where: KeyPath = ()
+
+
+@dataclass
+class Mechanism:
+    """A complete planar mechanism with its analysis request."""
+
+    name: str
+    ground: dict[str, tuple[float, float]]
+    links: list[Link]
+    joints: list[Joint]
+    driver: Driver | None = None
+    sweep: Sweep = field(default_factory=Sweep)
+    assembly: Assembly = field(default_factory=Assembly)
+    outputs: Outputs = field(default_factory=Outputs)
+    solver: SolverOptions = field(default_factory=SolverOptions)
+    length_unit: str = "m"
+    source: Source | None = field(default=None, repr=False)
+
+    # -- lookup --------------------------------------------------------------------
+    def link(self, name: str) -> Link:
+        for lk in self.links:
+            if lk.name == name:
+                return lk
+        raise KeyError(name)
+
+    def joint(self, name: str) -> Joint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(name)
+
+    @property
+    def link_names(self) -> list[str]:
+        return [lk.name for lk in self.links]
+
+    def point_owners(self) -> dict[str, list[str]]:
+        """For every point name, the links (``ground`` included) that carry it."""
+        owners: dict[str, list[str]] = {p: [GROUND] for p in self.ground}
+        for lk in self.links:
+            for p in lk.points:
+                owners.setdefault(p, []).append(lk.name)
+        return owners
+
+    def local_point(self, link: str, point: str) -> np.ndarray:
+        if link == GROUND:
+            return np.asarray(self.ground[point], dtype=float)
+        return self.link(link).local(point)
+
+    def has_point(self, link: str, point: str) -> bool:
+        if link == GROUND:
+            return point in self.ground
+        return point in self.link(link).points
+
+    @property
+    def sliders(self) -> list[SliderJoint]:
+        return [j for j in self.joints if isinstance(j, SliderJoint)]
+
+    # -- errors --------------------------------------------------------------------
+    def error(self, where: KeyPath, message: str) -> InputError:
+        """An :class:`InputError` located at ``where`` in the source file, if any."""
+        if self.source is not None:
+            return self.source.error(where, message)
+        from .source import format_keypath
+
+        return InputError(message, keypath=format_keypath(where) or None)
+
+    # -- validation ----------------------------------------------------------------
+    def validate(self) -> Mechanism:
+        """Check the model's consistency; raise :class:`InputError` on the first problem."""
+        from .validate import validate
+
+        validate(self)
+        return self

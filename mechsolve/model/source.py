@@ -1,0 +1,282 @@
+"""Read a mechanism file safely and remember the line of every key.
+
+YAML is composed with PyYAML's safe loader into a node tree; no Python object is
+ever constructed from a tag. The tree is converted to plain dicts, lists and scalars
+while the line of every key is recorded, so that a later check can say
+``crane.yaml:23: links.crank.points.A: ...``.
+
+Guards: files over :data:`MAX_BYTES`, more than :data:`MAX_NODES` values once aliases
+are expanded (the "billion laughs" alias bomb), nesting deeper than :data:`MAX_DEPTH`,
+duplicate keys and non-standard tags are all refused with a clear message.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ..errors import InputError
+
+MAX_BYTES = 1_000_000
+MAX_NODES = 200_000
+MAX_DEPTH = 64
+
+KeyPath = tuple[Any, ...]
+
+_STD = "tag:yaml.org,2002:"
+_CTOR = yaml.constructor.SafeConstructor()
+
+
+def format_keypath(path: Iterable[Any]) -> str:
+    """Render a key path as ``links.crank.points[0]``."""
+    out = ""
+    for k in path:
+        if isinstance(k, int):
+            out += f"[{k}]"
+        else:
+            out += ("." if out else "") + str(k)
+    return out
+
+
+class Source:
+    """Plain data from a mechanism file, with the line of each key.
+
+    Attributes
+    ----------
+    data
+        The document as dicts, lists, str, int, float, bool and None.
+    file
+        The file name used in messages (``None`` for a model built in code).
+    """
+
+    def __init__(
+        self,
+        data: Any,
+        lines: dict[KeyPath, int] | None = None,
+        file: str | None = None,
+        display: dict[KeyPath, KeyPath] | None = None,
+    ) -> None:
+        self.data = data
+        self.file = file
+        self._lines = lines or {}
+        self._display = display or {}
+
+    def line(self, path: KeyPath) -> int | None:
+        """The line of ``path``, or of its nearest parent that has one."""
+        path = tuple(path)
+        while path:
+            if path in self._lines:
+                return self._lines[path]
+            path = path[:-1]
+        return None
+
+    def error(self, path: KeyPath, message: str) -> InputError:
+        """An :class:`InputError` that names this file, the key path and its line."""
+        path = tuple(path)
+        shown = path
+        probe = path
+        while probe:
+            if probe in self._display:
+                shown = self._display[probe] + path[len(probe) :]
+                break
+            probe = probe[:-1]
+        return InputError(
+            message, file=self.file, keypath=format_keypath(shown) or None, line=self.line(path)
+        )
+
+    # -- variants -------------------------------------------------------------------
+    def with_variant(self, name: str) -> Source:
+        """Return a new source with ``variants.<name>`` merged over the base document.
+
+        Mappings merge key by key; any other value replaces; ``null`` deletes a key.
+        """
+        variants = self.data.get("variants") if isinstance(self.data, dict) else None
+        if not isinstance(variants, dict) or name not in variants:
+            known = ", ".join(sorted(variants)) if isinstance(variants, dict) else "none"
+            raise self.error(("variants",), f"no variant named {name!r} (variants: {known})")
+        over = variants[name]
+        if not isinstance(over, dict):
+            raise self.error(("variants", name), "a variant must be a mapping of keys to override")
+        data = copy.deepcopy(self.data)
+        del data["variants"]
+        lines = dict(self._lines)
+        display = dict(self._display)
+        prefix = ("variants", name)
+        self._merge(data, over, (), prefix, lines, display)
+        return Source(data, lines, self.file, display)
+
+    def _merge(self, base: dict, over: dict, path: KeyPath, prefix: KeyPath, lines, display):
+        for key, value in over.items():
+            here = path + (key,)
+            src = prefix + here
+            if value is None:
+                base.pop(key, None)
+                continue
+            if isinstance(value, dict) and isinstance(base.get(key), dict):
+                self._merge(base[key], value, here, prefix, lines, display)
+                continue
+            base[key] = copy.deepcopy(value)
+            # lines and display of everything below the replaced key come from the variant
+            for p in [p for p in lines if p[: len(here)] == here]:
+                del lines[p]
+            for p, ln in self._lines.items():
+                if p[: len(src)] == src:
+                    lines[here + p[len(src) :]] = ln
+            display[here] = src
+
+
+def _scalar(node: yaml.ScalarNode) -> Any:
+    tag = node.tag
+    if tag == _STD + "str":
+        return node.value
+    if tag == _STD + "int":
+        return _CTOR.construct_yaml_int(node)
+    if tag == _STD + "float":
+        return _CTOR.construct_yaml_float(node)
+    if tag == _STD + "bool":
+        # YAML 1.1 reads yes/no/on/off as booleans; a name like "on" is meant as text
+        if node.value.lower() in ("true", "false"):
+            return node.value.lower() == "true"
+        return node.value
+    if tag == _STD + "null":
+        return None
+    if tag.startswith(_STD):
+        return node.value  # timestamps, binary: keep the text
+    raise ValueError(f"the tag {tag!r} is not allowed in a mechanism file")
+
+
+class _Converter:
+    def __init__(self, file: str | None) -> None:
+        self.file = file
+        self.count = 0
+        self.lines: dict[KeyPath, int] = {}
+
+    def fail(self, node: yaml.Node, path: KeyPath, message: str) -> InputError:
+        return InputError(
+            message,
+            file=self.file,
+            keypath=format_keypath(path) or None,
+            line=node.start_mark.line + 1,
+        )
+
+    def convert(self, node: yaml.Node, path: KeyPath) -> Any:
+        self.count += 1
+        if self.count > MAX_NODES:
+            raise self.fail(
+                node,
+                path,
+                f"the document expands to more than {MAX_NODES} values "
+                "(an alias bomb or a file far larger than any mechanism)",
+            )
+        if len(path) > MAX_DEPTH:
+            raise self.fail(node, path, f"nesting deeper than {MAX_DEPTH} levels")
+        if isinstance(node, yaml.ScalarNode):
+            try:
+                return _scalar(node)
+            except ValueError as exc:
+                raise self.fail(node, path, str(exc)) from None
+        if node.tag not in (_STD + "seq", _STD + "map"):
+            raise self.fail(node, path, f"the tag {node.tag!r} is not allowed in a mechanism file")
+        if isinstance(node, yaml.SequenceNode):
+            out = []
+            for i, item in enumerate(node.value):
+                self.lines[path + (i,)] = item.start_mark.line + 1
+                out.append(self.convert(item, path + (i,)))
+            return out
+        assert isinstance(node, yaml.MappingNode)
+        result: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise self.fail(key_node, path, "a key must be a plain name, not a list or mapping")
+            if key_node.tag == _STD + "merge":
+                raise self.fail(
+                    key_node, path, "YAML merge keys ('<<') are not supported; use 'variants'"
+                )
+            key = key_node.value
+            here = path + (key,)
+            if key in result:
+                raise self.fail(key_node, here, f"the key {key!r} appears twice")
+            self.lines[here] = key_node.start_mark.line + 1
+            result[key] = self.convert(value_node, here)
+        return result
+
+
+def load_text(text: str, file: str | None = None) -> Source:
+    """Parse YAML text into a :class:`Source`; raise :class:`InputError` on any problem."""
+    if len(text) > MAX_BYTES:
+        raise InputError(
+            f"the file is {len(text)} characters long; a mechanism file is limited to "
+            f"{MAX_BYTES} (is this the right file?)",
+            file=file,
+        )
+    try:
+        nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark is not None else None
+        problem = exc.problem or exc.context or "invalid YAML"
+        raise InputError(f"invalid YAML: {problem}", file=file, line=line) from None
+    except yaml.YAMLError as exc:
+        raise InputError(f"invalid YAML: {exc}", file=file) from None
+    except RecursionError:
+        raise InputError("invalid YAML: nesting too deep", file=file) from None
+    nodes = [n for n in nodes if n is not None]
+    if not nodes:
+        raise InputError("the file is empty: a mechanism file is a YAML mapping", file=file)
+    if len(nodes) > 1:
+        raise InputError(
+            "the file holds several YAML documents ('---'); put one mechanism per file",
+            file=file,
+            line=nodes[1].start_mark.line + 1,
+        )
+    conv = _Converter(file)
+    try:
+        data = conv.convert(nodes[0], ())
+    except RecursionError:
+        raise InputError("invalid YAML: nesting too deep", file=file) from None
+    if not isinstance(data, dict):
+        kind = "a list" if isinstance(data, list) else f"a single value ({data!r})"
+        raise InputError(
+            f"the file holds {kind}; a mechanism file must be a mapping with keys such as "
+            "'ground', 'links', 'joints' and 'driver'",
+            file=file,
+            line=1,
+        )
+    return Source(data, conv.lines, file)
+
+
+def load_file(path: str | Path) -> Source:
+    """Read and parse a mechanism file."""
+    p = Path(path)
+    name = str(path)
+    try:
+        size = p.stat().st_size
+    except FileNotFoundError:
+        raise InputError("no such file", file=name) from None
+    except OSError as exc:
+        raise InputError(f"cannot read the file: {exc.strerror}", file=name) from None
+    if p.is_dir():
+        raise InputError("this is a folder, not a mechanism file", file=name)
+    if size > MAX_BYTES:
+        raise InputError(
+            f"the file is {size} bytes; a mechanism file is limited to {MAX_BYTES} bytes "
+            "(is this the right file?)",
+            file=name,
+        )
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read the file: {exc.strerror}", file=name) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"the file is not UTF-8 text (byte {exc.start}); is it a binary file?", file=name
+        ) from None
+    if "\x00" in text:
+        raise InputError("the file contains NUL bytes; is it a binary file?", file=name)
+    return load_text(text, name)

@@ -1,0 +1,268 @@
+"""Consistency checks of a :class:`~mechsolve.model.Mechanism`.
+
+These checks need the whole model (names across sections), so they run after the file's
+sections were read one by one. Each failure names the key where the user must look.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import TYPE_CHECKING
+
+from ..expr import Ref, Side
+from . import GROUND, NAME_RE, Limit, PinJoint, SliderJoint
+
+if TYPE_CHECKING:
+    from . import Mechanism
+
+
+def suggest(name: str, choices: list[str]) -> str:
+    """A ``" (did you mean 'x'?)"`` hint, or an empty string."""
+    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _check_name(mech: Mechanism, name: str, where, what: str) -> None:
+    if not isinstance(name, str) or not NAME_RE.match(name):
+        raise mech.error(
+            where,
+            f"{what} name {name!r} must start with a letter or '_' and contain only "
+            "letters, digits and '_'",
+        )
+
+
+def _find(parent: dict[str, str], x: str) -> str:
+    while parent[x] != x:
+        x = parent[x]
+    return x
+
+
+def validate(mech: Mechanism) -> None:
+    links = {lk.name: lk for lk in mech.links}
+    link_names = [GROUND] + list(links)
+    if len(links) != len(mech.links):
+        seen: set[str] = set()
+        for lk in mech.links:
+            if lk.name in seen:
+                raise mech.error(lk.where, f"two links are named {lk.name!r}")
+            seen.add(lk.name)
+    if not mech.links:
+        raise mech.error(("links",), "the mechanism has no moving links")
+    for p, xy in mech.ground.items():
+        _check_name(mech, p, ("ground", p), "point")
+        if not all(math.isfinite(v) for v in xy):
+            raise mech.error(("ground", p), "coordinates must be finite numbers")
+    for lk in mech.links:
+        _check_name(mech, lk.name, lk.where, "link")
+        if lk.name == GROUND:
+            raise mech.error(
+                lk.where, "'ground' is reserved for the frame; name the link otherwise"
+            )
+        if not lk.points:
+            raise mech.error(lk.where + ("points",), f"link {lk.name!r} has no points")
+        for p, xy in lk.points.items():
+            _check_name(mech, p, lk.where + ("points", p), "point")
+            if not all(math.isfinite(v) for v in xy):
+                raise mech.error(lk.where + ("points", p), "coordinates must be finite numbers")
+        if lk.mass is not None and not (lk.mass >= 0 and math.isfinite(lk.mass)):
+            raise mech.error(lk.where + ("mass",), f"mass must be zero or positive, got {lk.mass}")
+        if lk.inertia is not None and not (lk.inertia >= 0 and math.isfinite(lk.inertia)):
+            raise mech.error(
+                lk.where + ("inertia",),
+                f"moment of inertia must be zero or positive, got {lk.inertia}",
+            )
+
+    # joints
+    names: set[str] = set()
+    for j in mech.joints:
+        _check_name(mech, j.name, j.where, "joint")
+        if j.name in names:
+            raise mech.error(j.where, f"two joints are named {j.name!r}")
+        names.add(j.name)
+        for ln in j.links:
+            if ln not in link_names:
+                raise mech.error(
+                    j.where,
+                    f"joint {j.name!r} names the link {ln!r}, which does not exist"
+                    + suggest(ln, link_names),
+                )
+        a, b = j.links
+        if a == b:
+            raise mech.error(j.where, f"joint {j.name!r} joins the link {a!r} to itself")
+        if isinstance(j, PinJoint):
+            for ln in (a, b):
+                if not mech.has_point(ln, j.point):
+                    pts = list(mech.ground) if ln == GROUND else list(links[ln].points)
+                    raise mech.error(
+                        j.where,
+                        f"joint {j.name!r} is at point {j.point!r}, but "
+                        + ("the ground" if ln == GROUND else f"link {ln!r}")
+                        + f" has no point {j.point!r}"
+                        + suggest(j.point, pts),
+                    )
+        elif isinstance(j, SliderJoint):
+            if j.block == GROUND:
+                raise mech.error(
+                    j.where,
+                    f"slider {j.name!r}: the ground cannot be the sliding block; "
+                    "list the guide first: slider: [guide, block]",
+                )
+            if not mech.has_point(j.block, j.point):
+                pts = list(links[j.block].points)
+                raise mech.error(
+                    j.where,
+                    f"slider {j.name!r}: link {j.block!r} has no point {j.point!r}"
+                    + suggest(j.point, pts),
+                )
+            if not all(math.isfinite(v) for v in (*j.origin, j.angle, j.block_angle)):
+                raise mech.error(j.where, "the guide line must have finite coordinates")
+
+    # the same point name on two links must be a joint between them (directly or in a chain)
+    owners = mech.point_owners()
+    for p, ls in owners.items():
+        if len(ls) < 2:
+            continue
+        parent = {ln: ln for ln in ls}
+        for j in mech.joints:
+            if isinstance(j, PinJoint) and j.point == p and j.a in parent and j.b in parent:
+                parent[_find(parent, j.a)] = _find(parent, j.b)
+        roots = {_find(parent, ln) for ln in ls}
+        if len(roots) > 1:
+            ln = [x for x in ls if x != GROUND][0]
+            where = ("ground", p) if ls[0] == GROUND else links[ln].where + ("points", p)
+            raise mech.error(
+                where,
+                f"point {p!r} is on " + ", ".join(repr(x) for x in ls) + " but no joint pins "
+                "them together there; add a revolute joint or rename one of the points",
+            )
+
+    # every link must be connected to the ground
+    adj: dict[str, set[str]] = {ln: set() for ln in link_names}
+    for j in mech.joints:
+        adj[j.links[0]].add(j.links[1])
+        adj[j.links[1]].add(j.links[0])
+    seen_links = {GROUND}
+    stack = [GROUND]
+    while stack:
+        for nb in adj[stack.pop()]:
+            if nb not in seen_links:
+                seen_links.add(nb)
+                stack.append(nb)
+    for lk in mech.links:
+        if lk.name not in seen_links:
+            raise mech.error(
+                lk.where, f"link {lk.name!r} is not connected to the ground by any chain of joints"
+            )
+
+    # joint points of a link must be distinct places (no zero-length links)
+    for lk in mech.links:
+        used = sorted({j.point for j in mech.joints if lk.name in j.links and j.point in lk.points})
+        scale = max(1e-9, max(math.hypot(*lk.points[p]) for p in lk.points))
+        for i, p in enumerate(used):
+            for q in used[i + 1 :]:
+                d = math.dist(lk.points[p], lk.points[q])
+                if d <= 1e-9 * scale:
+                    raise mech.error(
+                        lk.where + ("points", q),
+                        f"points {p!r} and {q!r} of link {lk.name!r} coincide: the link between "
+                        "them has zero length",
+                    )
+
+    # driver
+    d = mech.driver
+    if d is not None:
+        if d.joint not in names:
+            raise mech.error(
+                d.where + ("joint",),
+                f"the driver names the joint {d.joint!r}, which does not exist"
+                + suggest(d.joint, sorted(names)),
+            )
+        j = mech.joint(d.joint)
+        if d.line is not None:
+            if not isinstance(j, PinJoint):
+                raise mech.error(d.where + ("line",), "'line' applies to a revolute driver only")
+            for p in d.line:
+                if not mech.has_point(j.b, p):
+                    raise mech.error(
+                        d.where + ("line",),
+                        f"the driver's line uses point {p!r}, which is not on the driven link "
+                        f"{j.b!r}",
+                    )
+            p0 = mech.local_point(j.b, d.line[0])
+            p1 = mech.local_point(j.b, d.line[1])
+            if math.dist(p0, p1) == 0:
+                raise mech.error(d.where + ("line",), "the driver's line needs two distinct points")
+        if not math.isfinite(d.speed) or d.speed == 0:
+            raise mech.error(
+                d.where + ("speed",), "the driver speed must be a finite non-zero value"
+            )
+        if isinstance(d.start, Limit):
+            check_refs(mech, d.start.quantity, d.where + ("start",))
+    sw = mech.sweep
+    if sw.step is not None and not (sw.step > 0 and math.isfinite(sw.step)):
+        raise mech.error(sw.where + ("step",), "the step must be positive")
+    if sw.travel is not None and not (sw.travel >= 0 and math.isfinite(sw.travel)):
+        raise mech.error(sw.where, "the sweep range must be zero or positive")
+
+    # assembly and outputs refer to existing things
+    for k, cond in enumerate(mech.assembly.conditions):
+        check_refs(mech, cond, mech.assembly.where + ("conditions", k))
+    for p in mech.assembly.sketch:
+        if p not in owners:
+            raise mech.error(
+                mech.assembly.where + ("sketch", p),
+                f"the sketch places point {p!r}, which no link has" + suggest(p, list(owners)),
+            )
+    out = mech.outputs
+    for key, pool in (
+        ("points", [p for p in owners if owners[p] != [GROUND]]),
+        ("links", list(links)),
+        ("sliders", [j.name for j in mech.sliders]),
+    ):
+        wanted = getattr(out, key)
+        for i, n in enumerate(wanted or []):
+            if n not in pool:
+                raise mech.error(
+                    out.where + (key, i),
+                    f"no {key[:-1]} named {n!r} to report" + suggest(n, pool),
+                )
+
+
+POINT_ATTRS = ("x", "y", "vx", "vy", "ax", "ay", "v", "a")
+LINK_ATTRS = ("angle", "omega", "alpha")
+SLIDER_ATTRS = ("s", "v", "a")
+
+
+def check_refs(mech: Mechanism, expr, where) -> None:
+    """Check that every name an expression reads exists, with a did-you-mean hint."""
+    owners = mech.point_owners()
+    links = mech.link_names
+    sliders = [j.name for j in mech.sliders]
+    for r in expr.refs():
+        if isinstance(r, Side):
+            for p in (r.point, r.start, r.end):
+                if p not in owners:
+                    raise mech.error(
+                        where, f"{expr.text!r}: no point named {p!r}" + suggest(p, list(owners))
+                    )
+            continue
+        assert isinstance(r, Ref)
+        if r.name in owners:
+            attrs = POINT_ATTRS
+        elif r.name in links:
+            attrs = LINK_ATTRS
+        elif r.name in sliders:
+            attrs = SLIDER_ATTRS
+        else:
+            pool = list(owners) + links + sliders
+            raise mech.error(
+                where, f"{expr.text!r}: nothing is named {r.name!r}" + suggest(r.name, pool)
+            )
+        if r.attr not in attrs:
+            raise mech.error(
+                where,
+                f"{expr.text!r}: {r.name!r} has no quantity {r.attr!r} (it has "
+                + ", ".join(attrs)
+                + ")",
+            )

@@ -1,0 +1,305 @@
+"""Results of a sweep: named quantities as arrays, the CSV table, and a summary.
+
+:class:`Results` is what the Python API returns and what the writers read. Arrays run
+over the positions of the sweep; unsolved positions hold NaN and are listed in
+:attr:`Results.failures`.
+
+Conventions: SI units (m, m/s, m/s^2, rad/s, rad/s^2); angles are reported in degrees,
+unwrapped along the sweep so that they change continuously, with the first value in
+[0, 360). Angles are counter-clockwise from +x.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .model import GROUND, Mechanism
+from .sweep import Analysis, Failure, Solution, StateView
+
+
+@dataclass
+class PointMotion:
+    """Position, velocity and acceleration of a point (arrays over positions)."""
+
+    name: str
+    x: np.ndarray
+    y: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    ax: np.ndarray
+    ay: np.ndarray
+
+
+@dataclass
+class LinkMotion:
+    """Angle (rad, unwrapped), angular velocity and angular acceleration of a link."""
+
+    name: str
+    angle: np.ndarray
+    omega: np.ndarray
+    alpha: np.ndarray
+
+
+@dataclass
+class SliderMotion:
+    """Displacement, velocity and acceleration of a slider along its guide."""
+
+    name: str
+    s: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+
+@dataclass
+class Column:
+    """One CSV column: a quantity name, its unit and its values."""
+
+    name: str
+    unit: str
+    values: np.ndarray
+
+    @property
+    def header(self) -> str:
+        return f"{self.name} [{self.unit}]" if self.unit else self.name
+
+
+def unwrap_angle(th: np.ndarray) -> np.ndarray:
+    """Unwrap an angle along the sweep, first finite value in [0, 2 pi)."""
+    out = np.array(th, dtype=float)
+    good = np.isfinite(out)
+    if not np.any(good):
+        return out
+    out[good] = np.unwrap(out[good])
+    first = out[good][0]
+    out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi))
+    return out
+
+
+class Results:
+    """The solved sweep of a mechanism.
+
+    Attributes
+    ----------
+    mechanism
+        The model that was solved.
+    u
+        Driver coordinate at each position (rad or m).
+    t
+        Time at each position (s), from the start of the sweep.
+    ok
+        True where the position was solved.
+    failures
+        Runs of positions where the mechanism cannot close, with the loop and reason.
+    """
+
+    def __init__(self, analysis: Analysis, solution: Solution) -> None:
+        self.analysis = analysis
+        self.solution = solution
+        self.mechanism: Mechanism = analysis.mech
+        self.u = solution.u
+        self.t = solution.t
+        self.ok = solution.ok
+        self.failures: list[Failure] = solution.failures
+        self.view = StateView(analysis, solution.state)
+        self.view.has_velocity = solution.has_velocity
+        self.view.has_acceleration = solution.has_acceleration
+        self.warnings: list[str] = list(solution.warnings)
+
+    # -- sizes and names ----------------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self.u)
+
+    @property
+    def linear(self) -> bool:
+        return self.analysis.linear
+
+    @property
+    def driver_value(self) -> np.ndarray:
+        """Driver coordinate in report units: degrees for a revolute driver, m for a slider."""
+        return self.u if self.linear else np.degrees(self.u)
+
+    @property
+    def driver_travel(self) -> np.ndarray:
+        """Distance travelled by the driver from the start (deg or m), always increasing."""
+        d = np.abs(self.u - self.u[0]) if len(self.u) else self.u
+        return d if self.linear else np.degrees(d)
+
+    def point_names(self) -> list[str]:
+        """Named points reported (the file's ``outputs.points``, default all moving ones)."""
+        mech = self.mechanism
+        if mech.outputs.points is not None:
+            return list(mech.outputs.points)
+        nb = self.analysis.system.nb
+        return [p for p, ref in self.analysis.points.items() if ref.body != nb]
+
+    def link_names(self) -> list[str]:
+        mech = self.mechanism
+        return list(mech.outputs.links) if mech.outputs.links is not None else mech.link_names
+
+    def slider_names(self) -> list[str]:
+        mech = self.mechanism
+        if mech.outputs.sliders is not None:
+            return list(mech.outputs.sliders)
+        return [j.name for j in mech.sliders]
+
+    # -- quantities ---------------------------------------------------------------------
+    def _nan(self) -> np.ndarray:
+        return np.full(len(self.u), np.nan)
+
+    def point(self, name: str) -> PointMotion:
+        """Kinematics of a named point."""
+        if name not in self.analysis.points:
+            raise KeyError(f"no point named {name!r}")
+        v = self.view
+        x, y = v.quantity(name, "x"), v.quantity(name, "y")
+        if v.has_velocity:
+            vx, vy = v.quantity(name, "vx"), v.quantity(name, "vy")
+        else:
+            vx = vy = self._nan()
+        if v.has_acceleration:
+            ax, ay = v.quantity(name, "ax"), v.quantity(name, "ay")
+        else:
+            ax = ay = self._nan()
+        b = np.broadcast_to
+        n = len(self.u)
+        return PointMotion(name, *(np.array(b(a, (n,)), float) for a in (x, y, vx, vy, ax, ay)))
+
+    def link(self, name: str) -> LinkMotion:
+        """Kinematics of a link (its frame's x axis)."""
+        if name == GROUND or name not in self.analysis.system.index:
+            raise KeyError(f"no link named {name!r}")
+        b = self.analysis.system.index[name]
+        st = self.solution.state
+        om = st.w[b] if self.view.has_velocity else self._nan()
+        al = st.al[b] if self.view.has_acceleration else self._nan()
+        return LinkMotion(name, unwrap_angle(st.th[b]), om.copy(), al.copy())
+
+    def slider(self, name: str) -> SliderMotion:
+        """Relative motion of a slider along its guide."""
+        if name not in [j.name for j in self.mechanism.sliders]:
+            raise KeyError(f"no slider named {name!r}")
+        v = self.view
+        s = v.quantity(name, "s")
+        sv = v.quantity(name, "v") if v.has_velocity else self._nan()
+        sa = v.quantity(name, "a") if v.has_acceleration else self._nan()
+        return SliderMotion(name, s, sv, sa)
+
+    # -- the table ----------------------------------------------------------------------
+    def columns(self) -> list[Column]:
+        """All reported quantities as CSV columns, in a stable order."""
+        cols: list[Column] = [Column("t", "s", self.t)]
+        if self.linear:
+            cols += [
+                Column("input.s", "m", self.u),
+                Column("input.travel", "m", self.driver_travel),
+            ]
+        else:
+            cols += [
+                Column("input.angle", "deg", self.driver_value),
+                Column("input.travel", "deg", self.driver_travel),
+            ]
+        vel, acc = self.view.has_velocity, self.view.has_acceleration
+        for p in self.point_names():
+            m = self.point(p)
+            cols += [Column(f"{p}.x", "m", m.x), Column(f"{p}.y", "m", m.y)]
+            if vel:
+                cols += [Column(f"{p}.vx", "m/s", m.vx), Column(f"{p}.vy", "m/s", m.vy)]
+            if acc:
+                cols += [Column(f"{p}.ax", "m/s^2", m.ax), Column(f"{p}.ay", "m/s^2", m.ay)]
+        for ln in self.link_names():
+            m = self.link(ln)
+            cols.append(Column(f"{ln}.angle", "deg", np.degrees(m.angle)))
+            if vel:
+                cols.append(Column(f"{ln}.omega", "rad/s", m.omega))
+            if acc:
+                cols.append(Column(f"{ln}.alpha", "rad/s^2", m.alpha))
+        for sn in self.slider_names():
+            m = self.slider(sn)
+            cols.append(Column(f"{sn}.s", "m", m.s))
+            if vel:
+                cols.append(Column(f"{sn}.v", "m/s", m.v))
+            if acc:
+                cols.append(Column(f"{sn}.a", "m/s^2", m.a))
+        sol = self.solution
+        cols += [
+            Column("solver.iterations", "-", sol.iterations.astype(float)),
+            Column("solver.residual", "m", sol.residual),
+        ]
+        return cols
+
+    def status(self) -> list[str]:
+        """Per position: ``ok`` or why it was not solved."""
+        out = ["ok"] * len(self.u)
+        for f in self.failures:
+            for i in range(f.first, f.last + 1):
+                out[i] = "unassemblable: " + f.group
+        return out
+
+    def methods(self) -> list[str]:
+        return [str(m) if ok else "" for m, ok in zip(self.solution.methods, self.ok)]
+
+    def to_csv(self, path) -> Path:
+        """Write the table as CSV (see :mod:`mechsolve.writers.csv`); return the path."""
+        from .writers.csv import write_csv
+
+        return write_csv(self, path)
+
+    # -- summary ------------------------------------------------------------------------
+    def describe_u(self, i: int) -> str:
+        return self.analysis.format_u(float(self.u[i]))
+
+    def summary(self) -> str:
+        """A short text summary: positions solved, ranges of the outputs, anything unusual."""
+        n = len(self.u)
+        lines = []
+        mech = self.mechanism
+        unit = "m" if self.linear else "deg"
+        dv = self.driver_value
+        lines.append(
+            f"{mech.name}: {int(np.sum(self.ok))} of {n} positions solved, "
+            f"driver {mech.driver.joint} "
+            f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}" + (f" over {self.t[-1]:.6g} s" if n else "")
+        )
+        for f in self.failures:
+            lines.append(
+                f"  unassemblable at {self.describe_u(f.first)}"
+                + (f" to {self.describe_u(f.last)}" if f.last != f.first else "")
+                + f" ({f.last - f.first + 1} position(s)): {f.reason}"
+            )
+        for p in self.point_names()[:12]:
+            m = self.point(p)
+            if np.any(np.isfinite(m.x)):
+                lines.append(
+                    f"  {p}: x {np.nanmin(m.x):.6g} .. {np.nanmax(m.x):.6g} m, "
+                    f"y {np.nanmin(m.y):.6g} .. {np.nanmax(m.y):.6g} m"
+                    + (
+                        f", |v| max {np.nanmax(np.hypot(m.vx, m.vy)):.4g} m/s"
+                        if self.view.has_velocity
+                        else ""
+                    )
+                )
+        if len(self.point_names()) > 12:
+            lines.append(f"  ... and {len(self.point_names()) - 12} more points in the CSV")
+        meth = {str(m) for m, ok in zip(self.solution.methods, self.ok) if ok}
+        fallback = sum(
+            1 for m, ok in zip(self.solution.methods, self.ok) if ok and "scipy" in str(m)
+        )
+        its = self.solution.iterations[self.ok]
+        lines.append(
+            "  solver: "
+            + ", ".join(sorted(meth))
+            + (f"; Newton iterations max {int(its.max())}" if its.size and its.max() > 0 else "")
+            + (f"; scipy fallback at {fallback} position(s)" if fallback else "")
+            + (
+                f"; max constraint residual {np.nanmax(self.solution.residual):.2g} m"
+                if np.any(self.ok)
+                else ""
+            )
+        )
+        for w in self.warnings:
+            lines.append("  warning: " + w)
+        return "\n".join(lines)

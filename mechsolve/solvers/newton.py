@@ -1,0 +1,143 @@
+"""Newton-Raphson with an analytic Jacobian, and the scipy fallback.
+
+:func:`newton` is the workhorse of the generic group solver: a plain Newton-Raphson
+iteration that stops when the residual's infinity norm is below ``atol``. When it fails
+(no convergence within ``max_iterations``, a singular Jacobian, or a growing residual),
+:func:`solve` retries with :func:`scipy.optimize.root` (Powell's hybrid method, then
+Levenberg-Marquardt) and finally :func:`scipy.optimize.least_squares`, which also copes
+with rank-deficient (redundant) systems. The result says which method succeeded and how
+many iterations and evaluations each took.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class SolveStats:
+    """What one position solve cost and how it ended."""
+
+    converged: bool
+    method: str  # "newton", "scipy-hybr", "scipy-lm", "scipy-lsq" or "failed"
+    iterations: int
+    nfev: int
+    njev: int
+    residual: float
+
+
+def newton(
+    fun: Callable[[np.ndarray], np.ndarray],
+    jac: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    atol: float,
+    max_iterations: int = 30,
+) -> tuple[np.ndarray, SolveStats]:
+    """Solve ``fun(x) = 0`` by Newton-Raphson from ``x0``.
+
+    Parameters
+    ----------
+    fun, jac
+        Residual (m,) and Jacobian (m, n) functions; m == n, or m > n for a consistent
+        over-determined system (solved by least squares at each step).
+    atol
+        Convergence when ``max |fun(x)| <= atol``.
+    """
+    x = np.array(x0, dtype=float)
+    f = fun(x)
+    nfev, njev = 1, 0
+    r = float(np.max(np.abs(f))) if f.size else 0.0
+    for it in range(max_iterations + 1):
+        if not np.isfinite(r):
+            break
+        if r <= atol:
+            if it > 0 and r > 0:
+                # one more step costs little and takes a quadratically converging
+                # iteration to the rounding level; keep it only if it helps
+                x2 = _step(jac, x, f)
+                njev += 1
+                if x2 is not None:
+                    f2 = fun(x2)
+                    nfev += 1
+                    r2 = float(np.max(np.abs(f2)))
+                    if r2 <= r:
+                        x, r = x2, r2
+            return x, SolveStats(True, "newton", it, nfev, njev, r)
+        if it == max_iterations:
+            break
+        J = jac(x)
+        njev += 1
+        try:
+            if J.shape[0] == J.shape[1]:
+                dx = np.linalg.solve(J, -f)
+            else:
+                dx = np.linalg.lstsq(J, -f, rcond=None)[0]
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(dx)):
+            break
+        x = x + dx
+        f = fun(x)
+        nfev += 1
+        r_new = float(np.max(np.abs(f)))
+        if it >= 3 and r_new > 2 * r:  # diverging
+            r = r_new
+            break
+        r = r_new
+    return x, SolveStats(False, "newton", max_iterations, nfev, njev, r)
+
+
+def _step(jac, x, f):
+    J = jac(x)
+    try:
+        if J.shape[0] == J.shape[1]:
+            dx = np.linalg.solve(J, -f)
+        else:
+            dx = np.linalg.lstsq(J, -f, rcond=None)[0]
+    except np.linalg.LinAlgError:
+        return None
+    return x + dx if np.all(np.isfinite(dx)) else None
+
+
+def solve(
+    fun: Callable[[np.ndarray], np.ndarray],
+    jac: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    atol: float,
+    max_iterations: int = 30,
+) -> tuple[np.ndarray, SolveStats]:
+    """Newton-Raphson, then scipy when Newton fails. See the module docstring."""
+    x, st = newton(fun, jac, x0, atol, max_iterations)
+    if st.converged:
+        return x, st
+    from scipy.optimize import least_squares, root  # imported only when needed
+
+    nfev, njev, its = st.nfev, st.njev, st.iterations
+    m = len(fun(x0))
+    square = m == len(x0)
+    if square:
+        for method in ("hybr", "lm"):
+            sol = root(fun, x0, jac=jac, method=method, options={"xtol": 1e-14})
+            nfev += int(getattr(sol, "nfev", 0) or 0)
+            njev += int(getattr(sol, "njev", 0) or 0)
+            xs = np.asarray(sol.x, float)
+            # polish with Newton so that the answer meets the same tolerance
+            xp, pst = newton(fun, jac, xs, atol, 5)
+            nfev += pst.nfev
+            njev += pst.njev
+            if pst.converged:
+                return xp, SolveStats(
+                    True, f"scipy-{method}", its + pst.iterations, nfev, njev, pst.residual
+                )
+    sol = least_squares(
+        fun, x0, jac=jac, method="trf" if not square else "lm", xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
+    nfev += int(sol.nfev or 0)
+    njev += int(getattr(sol, "njev", 0) or 0)
+    xs = np.asarray(sol.x, float)
+    r = float(np.max(np.abs(fun(xs))))
+    ok = r <= atol
+    return xs, SolveStats(ok, "scipy-lsq" if ok else "failed", its, nfev, njev, r)

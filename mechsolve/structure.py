@@ -1,0 +1,272 @@
+"""Structural analysis: degrees of freedom and the split into sequentially solvable groups.
+
+The constraint equations are matched to the coordinates they determine (a maximum
+bipartite matching) and ordered into strongly connected blocks (the block-triangular
+form of Phi_q). Blocks that share a body are merged, so that each *group* determines the
+full poses of its bodies from bodies determined before it. For the founding mechanisms
+the groups are the Assur groups of the textbook programs: the driver link (class I),
+then dyads such as RRR, RRP and RPR.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .constraints import Constraint, ConstraintSystem
+from .errors import InputError
+from .model import Mechanism
+
+
+def grubler(mech: Mechanism) -> int:
+    """Mobility by the Grübler-Kutzbach count: ``3 n - 2 j`` (n moving links, j joints).
+
+    Revolute and slider joints each remove two degrees of freedom.
+    """
+    return 3 * len(mech.links) - 2 * len(mech.joints)
+
+
+def _incidence(c: Constraint, nb: int) -> list[list[int]]:
+    """For each equation of ``c``, the coordinates (3*body + k) it involves."""
+    rows: list[list[int]] = []
+    bodies = [b for b in (c.a, c.b) if b != nb]
+    if c.kind == "revolute":
+        for k in (0, 1):
+            rows.append([3 * b + k for b in bodies] + [3 * b + 2 for b in bodies])
+    elif c.kind == "slider":
+        rows.append([3 * b + k for b in bodies for k in range(3)])
+        rows.append([3 * b + 2 for b in bodies])
+    elif getattr(c, "slider", None) is not None:  # linear driver
+        rows.append([3 * b + k for b in bodies for k in range(3)])
+    else:  # angle driver
+        rows.append([3 * b + 2 for b in bodies])
+    return rows
+
+
+@dataclass
+class GroupSpec:
+    """Bodies and constraints of one sequentially solvable group."""
+
+    bodies: list[int]
+    constraints: list[Constraint]
+    depends: set[int] = field(default_factory=set)  # indices of earlier groups
+
+
+class StructureError(InputError):
+    """The constraints do not determine every coordinate exactly once."""
+
+
+def _matching(rows: list[list[int]], nvar: int) -> tuple[list[int], list[int]]:
+    """Maximum matching rows -> variables (greedy start, then augmenting paths)."""
+    row_of = [-1] * nvar
+    var_of = [-1] * len(rows)
+    for r, vs in enumerate(rows):
+        for v in vs:
+            if row_of[v] < 0:
+                row_of[v] = r
+                var_of[r] = v
+                break
+    for r0 in range(len(rows)):
+        if var_of[r0] >= 0:
+            continue
+        # breadth-first search for an augmenting path from row r0
+        prev_row = {}
+        seen_var = set()
+        frontier = [r0]
+        found = -1
+        while frontier and found < 0:
+            nxt = []
+            for r in frontier:
+                for v in rows[r]:
+                    if v in seen_var:
+                        continue
+                    seen_var.add(v)
+                    prev_row[v] = r
+                    if row_of[v] < 0:
+                        found = v
+                        break
+                    nxt.append(row_of[v])
+                if found >= 0:
+                    break
+            frontier = nxt
+        if found < 0:
+            continue
+        v = found
+        while True:
+            r = prev_row[v]
+            pv = var_of[r]
+            row_of[v] = r
+            var_of[r] = v
+            if r == r0:
+                break
+            v = pv
+    return var_of, row_of
+
+
+def _tarjan(n: int, succ: list[list[int]]) -> list[list[int]]:
+    """Strongly connected components, each listed after the components it points to."""
+    index = [0] * n
+    low = [0] * n
+    on = [False] * n
+    seen = [False] * n
+    stack: list[int] = []
+    comps: list[list[int]] = []
+    counter = 1
+    for root in range(n):
+        if seen[root]:
+            continue
+        work = [(root, 0)]
+        while work:
+            v, i = work.pop()
+            if i == 0:
+                seen[v] = True
+                index[v] = low[v] = counter
+                counter += 1
+                stack.append(v)
+                on[v] = True
+            recurse = False
+            while i < len(succ[v]):
+                w = succ[v][i]
+                i += 1
+                if not seen[w]:
+                    work.append((v, i))
+                    work.append((w, 0))
+                    recurse = True
+                    break
+                if on[w]:
+                    low[v] = min(low[v], index[w])
+            if recurse:
+                continue
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on[w] = False
+                    comp.append(w)
+                    if w == v:
+                        break
+                comps.append(comp)
+            if work:
+                u = work[-1][0]
+                low[u] = min(low[u], low[v])
+    return comps
+
+
+def decompose(system: ConstraintSystem) -> list[GroupSpec]:
+    """Split the constraint system into groups solvable one after another.
+
+    Raises
+    ------
+    StructureError
+        When some coordinates are determined by no equation (too few constraints or
+        drivers) or some equations determine nothing new (redundant constraints).
+    """
+    nb = system.nb
+    nvar = 3 * nb
+    rows: list[list[int]] = []
+    row_con: list[int] = []
+    for ci, c in enumerate(system.constraints):
+        for r in _incidence(c, nb):
+            rows.append(r)
+            row_con.append(ci)
+    var_of, row_of = _matching(rows, nvar)
+    free = [v for v in range(nvar) if row_of[v] < 0]
+    extra = [r for r in range(len(rows)) if var_of[r] < 0]
+    if free or extra:
+        raise _structure_error(system, free, extra, row_con)
+
+    # dependency graph between rows: row r needs the rows that determine its other vars
+    succ = [[row_of[v] for v in rows[r] if v != var_of[r]] for r in range(len(rows))]
+    blocks = _tarjan(len(rows), succ)
+
+    # merge blocks into body groups
+    parent = list(range(len(blocks)))
+
+    def find(x: int) -> int:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    body_block: dict[int, int] = {}
+    for bi, blk in enumerate(blocks):
+        for r in blk:
+            b = var_of[r] // 3
+            if b in body_block:
+                parent[find(bi)] = find(body_block[b])
+            else:
+                body_block[b] = bi
+    # constraints must not be split between groups (a joint's two equations together)
+    con_block: dict[int, int] = {}
+    for bi, blk in enumerate(blocks):
+        for r in blk:
+            ci = row_con[r]
+            if ci in con_block:
+                parent[find(bi)] = find(con_block[ci])
+            else:
+                con_block[ci] = bi
+    roots = sorted({find(b) for b in range(len(blocks))})
+    gid = {r: i for i, r in enumerate(roots)}
+    ng = len(roots)
+    g_rows: list[list[int]] = [[] for _ in range(ng)]
+    for bi, blk in enumerate(blocks):
+        g_rows[gid[find(bi)]].extend(blk)
+    row_group = {}
+    for g, rs in enumerate(g_rows):
+        for r in rs:
+            row_group[r] = g
+    g_succ = [
+        sorted({row_group[s] for r in g_rows[g] for s in succ[r] if row_group[s] != g})
+        for g in range(ng)
+    ]
+    # merging can create cycles: merge them, and order groups after their dependencies
+    comps = _tarjan(ng, g_succ)
+    comp_of = {}
+    for k, comp in enumerate(comps):
+        for g in comp:
+            comp_of[g] = k
+    specs: list[GroupSpec] = []
+    for k, comp in enumerate(comps):
+        rs = sorted(r for g in comp for r in g_rows[g])
+        cons = sorted({row_con[r] for r in rs})
+        bodies = sorted({var_of[r] // 3 for r in rs})
+        deps = {comp_of[h] for g in comp for h in g_succ[g] if comp_of[h] != k}
+        specs.append(GroupSpec(bodies, [system.constraints[ci] for ci in cons], deps))
+    return specs
+
+
+def _structure_error(system, free, extra, row_con) -> StructureError:
+    mech = system.mech
+    names = system.body_names
+    dof = grubler(mech)
+    drivers = 1 if system.driver is not None else 0
+    if free:
+        bodies = sorted({names[v // 3] for v in free})
+        if system.driver is None and dof >= 1:
+            msg = (
+                f"the mechanism has {dof} degree(s) of freedom (Grübler) and no driver; "
+                "add a 'driver' section"
+            )
+        elif dof > drivers:
+            msg = (
+                f"the mechanism has {dof} degrees of freedom (Grübler) but only {drivers} driver: "
+                "the motion of " + ", ".join(repr(b) for b in bodies) + " is not determined "
+                "(a joint or link is missing?)"
+            )
+        else:
+            msg = (
+                "the motion of " + ", ".join(repr(b) for b in bodies) + " is not determined "
+                "by the joints (some other part of the mechanism is over-constrained)"
+            )
+    else:
+        cons = []
+        for r in extra:
+            c = system.constraints[row_con[r]]
+            if c.name not in cons:
+                cons.append(c.name)
+        msg = (
+            f"the mechanism is over-constrained: Grübler gives {dof} degree(s) of freedom "
+            f"with {drivers} driver(s); the joint(s) "
+            + ", ".join(repr(c) for c in cons)
+            + " add constraints that nothing is left to satisfy (redundant constraints)"
+        )
+    return StructureError(msg, file=mech.source.file if mech.source else None)

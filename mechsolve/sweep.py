@@ -1,0 +1,595 @@
+"""The kinematic sweep: assemble at the start, then solve every driver position.
+
+Pipeline (one model, one constraint system, arrays over positions):
+
+1. :class:`Analysis` builds the :class:`~mechsolve.constraints.ConstraintSystem` and the
+   plan of group solvers (:func:`~mechsolve.groups.build_plan`).
+2. :meth:`Analysis.assemble` closes the mechanism at the start position and fixes the
+   assembly branch of every group: from the user's conditions, then the sketch, else
+   the documented default (branch +1 of each group).
+3. :meth:`Analysis.solve` solves positions group by group for all positions at once
+   (closed-form groups) or by continuation (Newton groups), marks positions where a group
+   cannot close, checks the full constraint residual at every position, then computes
+   velocities and accelerations from the differentiated constraints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .constraints import ConstraintSystem
+from .errors import AssemblyError, InputError, SolverError
+from .groups import Drive, Group, NewtonGroup, build_plan
+from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
+from .solvers.newton import solve as newton_solve
+from .state import State
+
+
+@dataclass
+class PointRef:
+    body: int
+    local: np.ndarray
+
+
+class StateView:
+    """Read quantities of named points, links and sliders from a :class:`State`.
+
+    Implements the :class:`~mechsolve.expr.Context` protocol for conditions.
+    """
+
+    def __init__(self, analysis: Analysis, st: State, drive: Drive | None = None) -> None:
+        self.an = analysis
+        self.st = st
+        self.drive = drive
+        self.has_velocity = True
+        self.has_acceleration = True
+
+    def point_xy(self, name: str):
+        p = self.an.points[name]
+        return self.st.point(p.body, p.local)
+
+    def quantity(self, name: str, attr: str):
+        an, st = self.an, self.st
+        if name in an.points:
+            p = an.points[name]
+            if attr in ("x", "y"):
+                x, y = st.point(p.body, p.local)
+                return x if attr == "x" else y
+            self._need(attr)
+            if attr in ("vx", "vy", "v"):
+                vx, vy = st.point_velocity(p.body, p.local)
+                return {"vx": vx, "vy": vy}.get(attr, np.hypot(vx, vy) if attr == "v" else None)
+            ax, ay = st.point_acceleration(p.body, p.local)
+            return {"ax": ax, "ay": ay}.get(attr, np.hypot(ax, ay) if attr == "a" else None)
+        if name in an.system.index and name != GROUND:
+            b = an.system.index[name]
+            if attr == "angle":
+                return st.th[b]
+            self._need(attr)
+            return st.w[b] if attr == "omega" else st.al[b]
+        sl = an.system.by_joint[name]
+        if attr == "s":
+            return sl.displacement(st)
+        self._need(attr)
+        return sl.velocity(st) if attr == "v" else sl.acceleration(st)
+
+    def _need(self, attr: str) -> None:
+        if attr.startswith("v") or attr == "omega":
+            if not self.has_velocity:
+                raise InputError(f"'{attr}' is not known here: only positions are")
+        elif not self.has_acceleration:
+            raise InputError(f"'{attr}' is not known here: only positions and velocities are")
+
+
+@dataclass
+class StartAssembly:
+    """The branch chosen for every group at the start, and how it was chosen."""
+
+    modes: list[float]
+    q_start: dict[int, np.ndarray]  # Newton groups: poses at the start
+    reasons: list[str]
+    state: State
+    u0: float
+
+
+@dataclass
+class Failure:
+    """A run of consecutive positions where the mechanism cannot close."""
+
+    first: int
+    last: int
+    group: str
+    reason: str
+
+
+@dataclass
+class Solution:
+    """Everything the sweep computed, before formatting."""
+
+    analysis: Analysis
+    u: np.ndarray
+    t: np.ndarray
+    state: State
+    ok: np.ndarray
+    failures: list[Failure]
+    indicator: np.ndarray  # (n_groups, N)
+    iterations: np.ndarray
+    methods: np.ndarray
+    residual: np.ndarray
+    start: StartAssembly
+    warnings: list[str] = field(default_factory=list)
+    has_velocity: bool = True
+    has_acceleration: bool = True
+
+
+class Analysis:
+    """The constraint system and group plan of a mechanism, ready to solve positions.
+
+    Parameters
+    ----------
+    mech
+        A validated mechanism with a driver.
+    method
+        ``"auto"`` (default: the file's ``solver.method``) or ``"newton"``.
+    """
+
+    def __init__(self, mech: Mechanism, method: str | None = None) -> None:
+        if mech.driver is None:
+            raise mech.error(("driver",), "the mechanism has no driver: add a 'driver' section")
+        self.mech = mech
+        self.system = ConstraintSystem(mech)
+        self.scale = _scale(mech)
+        self.atol = mech.solver.tolerance * self.scale
+        self.method = method or mech.solver.method
+        # the assembly at the start always uses the split into groups, so that branch
+        # conditions apply loop by loop; the sweep uses the chosen method
+        self.groups: list[Group] = build_plan(
+            self.system, "auto", self.atol, mech.solver.max_iterations
+        )
+        self.plan: list[Group] = (
+            self.groups
+            if self.method == "auto"
+            else build_plan(self.system, self.method, self.atol, mech.solver.max_iterations)
+        )
+        self.points: dict[str, PointRef] = {}
+        nb = self.system.nb
+        for p, xy in mech.ground.items():
+            self.points[p] = PointRef(nb, np.asarray(xy, float))
+        for lk in mech.links:  # a point on the ground and a link is a ground point
+            b = self.system.index[lk.name]
+            for p, xy in lk.points.items():
+                self.points.setdefault(p, PointRef(b, np.asarray(xy, float)))
+        d = mech.driver
+        self.linear = isinstance(mech.joint(d.joint), SliderJoint)
+        self.speed = d.speed
+        # for messages: the name of the inner point of each joint
+        self.joint_point = {
+            self.system.by_joint[j.name]: (j.point if isinstance(j, PinJoint) else j.name)
+            for j in mech.joints
+        }
+        self.joint_point[self.system.driver] = d.joint
+
+    # -- driver ---------------------------------------------------------------------
+    def drive(self, u: np.ndarray) -> Drive:
+        u = np.asarray(u, float)
+        return Drive(u, np.full(u.shape, self.speed), np.zeros(u.shape))
+
+    def format_u(self, u: float) -> str:
+        if self.linear:
+            return f"driver position {u:.6g} m"
+        return f"driver angle {math.degrees(u):.6g}°"
+
+    def sweep_values(self, u0: float, step: float | None = None, travel: float | None = None):
+        """Driver values and times of the positions of the sweep."""
+        sw = self.mech.sweep
+        travel = sw.travel if travel is None else travel
+        step = sw.step if step is None else step
+        if travel is None:
+            if self.linear:
+                raise self.mech.error(
+                    ("sweep",), "a linear driver needs 'range' or 'to' in the 'sweep' section"
+                )
+            travel = 2 * math.pi
+        if step is None:
+            step = math.radians(1.0) if not self.linear else travel / 100 if travel else 1.0
+        n = max(0, math.ceil(travel / step - 1e-9))
+        k = np.arange(n + 1, dtype=float)
+        dist = np.minimum(k * step, travel)
+        sign = 1.0 if self.speed > 0 else -1.0
+        u = u0 + sign * dist
+        t = dist / abs(self.speed)
+        return u, t
+
+    # -- positions ------------------------------------------------------------------
+    def _positions(self, st: State, drive: Drive, modes, q_start, groups=None):
+        """Solve positions of all groups. Returns ok per group, indicators, iters, methods."""
+        n = st.n
+        ok_all = np.ones(n, bool)
+        oks, inds = [], []
+        iters = np.zeros(n, int)
+        methods = np.full(n, "closed form", dtype=object)
+        for gi, g in enumerate(self.plan):
+            if isinstance(g, NewtonGroup):
+                qs = q_start.get(gi)
+                if qs is None:
+                    qs = g.get_q(st, 0)
+                ok, it, meth = g.sweep(st, drive, qs, ok_all)
+                iters = np.maximum(iters, it)
+                mask = meth != ""
+                methods[mask] = np.where(
+                    methods[mask] == "closed form", meth[mask], methods[mask] + "+" + meth[mask]
+                )
+                ind = g.indicator(st)
+            else:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    ok, ind = g.position(st, drive, modes[gi])
+            ok = ok & ok_all
+            oks.append(ok)
+            inds.append(ind)
+            ok_all = ok_all & ok
+        return oks, np.array(inds) if inds else np.zeros((0, n)), iters, methods
+
+    def assemble(self, u0: float) -> StartAssembly:
+        """Close the mechanism at driver value ``u0`` and choose every group's branch."""
+        mech = self.mech
+        st = State(self.system.nb, 1)
+        drive = self.drive(np.array([u0]))
+        asm = mech.assembly
+        conds = list(enumerate(asm.conditions))
+        done_bodies = {self.system.nb}
+        modes: list[float] = []
+        reasons: list[str] = []
+        q_start: dict[int, np.ndarray] = {}
+        view = StateView(self, st)
+        view.has_velocity = view.has_acceleration = False
+        for gi, g in enumerate(self.groups):
+            done_bodies |= set(g.bodies)
+            ready = [
+                (k, c)
+                for k, c in conds
+                if all(self.points[p].body in done_bodies for p in c.points() if p in self.points)
+                and all(
+                    (self.system.index[p] in done_bodies)
+                    for p in c.points()
+                    if p not in self.points and p in self.system.index
+                )
+            ]
+            if isinstance(g, NewtonGroup):
+                q0 = self._initial_guess(g, st)
+                st1 = st
+                q, stats = g.solve_at(st1, drive.u, q0)
+                if not stats.converged:
+                    raise AssemblyError(
+                        f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
+                        f"and scipy found no closed position of the {g.label} (residual "
+                        f"{stats.residual:.3g} m); give approximate positions under "
+                        "'assembly: sketch:'"
+                    )
+                q_start[gi] = q
+                modes.append(1.0)
+                reasons.append("from the sketch" if asm.sketch else "from the links' frames")
+                for _, c in ready:
+                    if not bool(np.all(c.evaluate(view))):
+                        raise AssemblyError(
+                            f"{self._file()}the start position found for the {g.label} does not "
+                            f"satisfy {c.text!r}; give approximate positions under "
+                            "'assembly: sketch:'"
+                        )
+                conds = [(k, c) for k, c in conds if (k, c) not in ready]
+                continue
+            if g.n_modes < 2:
+                ok, _ = g.position(st, drive, 1.0)
+                if not ok[0]:
+                    raise AssemblyError(
+                        f"{self._file()}cannot assemble at {self.format_u(u0)}: "
+                        + g.fail_reason(st, 0)
+                    )
+                modes.append(1.0)
+                reasons.append("")
+                continue
+            cand = {}
+            for mode in (1.0, -1.0):
+                trial = State(self.system.nb, 1)
+                trial.put(slice(None), st)
+                ok, _ = g.position(trial, drive, mode)
+                if ok[0]:
+                    cand[mode] = trial
+            if not cand:
+                g.position(st, drive, 1.0)
+                raise AssemblyError(
+                    f"{self._file()}cannot assemble at {self.format_u(u0)}: " + g.fail_reason(st, 0)
+                )
+            chosen, reason = self._choose(g, cand, ready)
+            st.put(slice(None), cand[chosen])
+            modes.append(chosen)
+            reasons.append(reason)
+            conds = [(k, c) for k, c in conds if (k, c) not in ready]
+        for _, c in conds:  # conditions that no group decided: they must hold anyway
+            if not bool(np.all(c.evaluate(view))):
+                raise AssemblyError(
+                    f"{self._file()}the start position does not satisfy the assembly condition "
+                    f"{c.text!r}, and no loop's branch can change that"
+                )
+        if self.plan is not self.groups:  # monolithic Newton starts from the assembled pose
+            q_start = {
+                gi: g.get_q(st, 0) for gi, g in enumerate(self.plan) if isinstance(g, NewtonGroup)
+            }
+            modes = [1.0] * len(self.plan)
+        return StartAssembly(modes, q_start, reasons, st, u0)
+
+    def _choose(self, g: Group, cand: dict, ready) -> tuple[float, str]:
+        mech = self.mech
+        if len(cand) == 1:
+            (m,) = cand
+            return m, "the only branch that closes"
+        sat = {}
+        for mode, trial in cand.items():
+            view = StateView(self, trial)
+            view.has_velocity = view.has_acceleration = False
+            sat[mode] = all(bool(np.all(c.evaluate(view))) for _, c in ready)
+        if ready:
+            good = [m for m in cand if sat[m]]
+            texts = ", ".join(repr(c.text) for _, c in ready)
+            if not good:
+                raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
+            if len(good) == 1:
+                return good[0], f"assembly condition {texts}"
+        sketch = {
+            p: xy for p, xy in mech.assembly.sketch.items() if self.points[p].body in g.bodies
+        }
+        if sketch:
+            dist = {}
+            for mode, trial in cand.items():
+                d = 0.0
+                for p, (sx, sy) in sketch.items():
+                    ref = self.points[p]
+                    x, y = trial.point(ref.body, ref.local)
+                    d += float((x[0] - sx) ** 2 + (y[0] - sy) ** 2)
+                dist[mode] = d
+            best = min(dist, key=dist.get)
+            return best, "nearest to the sketch"
+        return 1.0, "default branch (+)"
+
+    def _initial_guess(self, g: NewtonGroup, st: State) -> np.ndarray:
+        """A start guess for a Newton group: from the sketch, else the links' frames.
+
+        Each body is placed so that one of its joint points (to a body already placed)
+        coincides, with the orientation that best fits any sketched points.
+        """
+        placed = {b for b in range(self.system.nb + 1) if b not in g.bodies}
+        q = np.zeros(g.n)
+        sketch = self.mech.assembly.sketch
+        todo = list(g.bodies)
+        guard = 0
+        while todo and guard < 10 * len(g.bodies):
+            guard += 1
+            b = todo.pop(0)
+            anchor = None
+            for c in g.constraints:
+                if c.kind != "revolute" or b not in (c.a, c.b):
+                    continue
+                other = c.b if c.a == b else c.a
+                if other in placed:
+                    s_b = c.sa if c.a == b else c.sb
+                    s_o = c.sb if c.a == b else c.sa
+                    anchor = (s_b, st.point(other, s_o))
+                    break
+            if anchor is None and todo and guard < 5 * len(g.bodies):
+                todo.append(b)
+                continue
+            name = self.system.body_names[b]
+            pts = {p: xy for p, xy in self.mech.link(name).points.items() if p in sketch}
+            th = 0.0
+            if len(pts) >= 2:
+                (p0, l0), (p1, l1) = list(pts.items())[:2]
+                g0, g1 = np.array(sketch[p0]), np.array(sketch[p1])
+                th = math.atan2(g1[1] - g0[1], g1[0] - g0[0]) - math.atan2(
+                    l1[1] - l0[1], l1[0] - l0[0]
+                )
+            c, s = math.cos(th), math.sin(th)
+            if anchor is not None:
+                s_b, (ax, ay) = anchor
+                x = float(ax[0]) - (c * s_b[0] - s * s_b[1])
+                y = float(ay[0]) - (s * s_b[0] + c * s_b[1])
+            elif pts:
+                p0, l0 = next(iter(pts.items()))
+                x = sketch[p0][0] - (c * l0[0] - s * l0[1])
+                y = sketch[p0][1] - (s * l0[0] + c * l0[1])
+            else:
+                x = y = 0.0
+            k = g.col[b]
+            q[3 * k : 3 * k + 3] = (x, y, th)
+            st.x[b, 0], st.y[b, 0] = x, y
+            st.set_angle(b, th, 0)
+            placed.add(b)
+        return q
+
+    def _file(self) -> str:
+        src = self.mech.source
+        return f"{src.file}: " if src is not None and src.file else ""
+
+    # -- the start ------------------------------------------------------------------
+    def start_value(self) -> float:
+        """The driver value at the start of the sweep (solving for a limit if asked)."""
+        d = self.mech.driver
+        if not isinstance(d.start, Limit):
+            return float(d.start)
+        if self.linear:
+            raise self.mech.error(
+                d.where + ("start",), "a limit start needs a revolute driver; give a number"
+            )
+        return self.find_limit(d.start)
+
+    def find_limit(self, lim: Limit, u_from: float = 0.0) -> float:
+        """Driver angle at which ``lim.quantity`` is extreme over one turn."""
+        u, _ = self.sweep_values(u_from, step=math.radians(1.0), travel=2 * math.pi)
+        sol = self.solve(u, start=self.assemble(u_from))
+        view = StateView(self, sol.state)
+        vals = np.asarray(lim.quantity.evaluate(view), float) * np.ones(len(u))
+        vals = np.where(sol.ok, vals, np.nan)
+        if not np.any(np.isfinite(vals)):
+            raise AssemblyError(f"{self._file()}cannot find the limit of {lim.quantity.text!r}")
+        sign = 1.0 if lim.extreme == "min" else -1.0
+        i = int(np.nanargmin(sign * vals))
+        asm = sol.start
+
+        def f(x: float) -> float:
+            s = self.solve(np.array([x]), start=asm, near=(sol, i))
+            v = float(np.asarray(lim.quantity.evaluate(StateView(self, s.state))).ravel()[0])
+            return sign * v
+
+        from scipy.optimize import minimize_scalar
+
+        h = math.radians(1.0)
+        res = minimize_scalar(
+            f, bounds=(u[i] - h, u[i] + h), method="bounded", options={"xatol": 1e-11}
+        )
+        return float(res.x)
+
+    # -- the sweep ------------------------------------------------------------------
+    def solve(
+        self,
+        u: np.ndarray,
+        start: StartAssembly | None = None,
+        velocity: bool = True,
+        acceleration: bool = True,
+        near: tuple[Solution, int] | None = None,
+    ) -> Solution:
+        """Solve positions (and velocities and accelerations) at driver values ``u``.
+
+        ``u[0]`` is the start of the sweep unless ``start`` is given.
+        """
+        u = np.asarray(u, float)
+        n = len(u)
+        if start is None:
+            start = self.assemble(float(u[0]))
+        st = State(self.system.nb, n)
+        drive = self.drive(u)
+        q_start = dict(start.q_start)
+        if near is not None:  # a single position near a solved one: start Newton groups there
+            sol0, i0 = near
+            for gi, g in enumerate(self.plan):
+                if isinstance(g, NewtonGroup):
+                    q_start[gi] = g.get_q(sol0.state, i0)
+        oks, ind, iters, methods = self._positions(st, drive, start.modes, q_start)
+        ok = np.ones(n, bool)
+        for o in oks:
+            ok &= o
+        # check the full constraint residual everywhere; polish where needed
+        with np.errstate(invalid="ignore"):
+            res = (
+                np.max(np.abs(self.system.residual(st, u)), axis=0)
+                if self.system.nc
+                else np.zeros(n)
+            )
+        bad = ok & ~(res <= self.atol)
+        for i in np.flatnonzero(bad):
+            ok[i], res[i], it = self._polish(st, drive, i)
+            iters[i] += it
+            methods[i] = methods[i] + "+newton polish"
+        res = np.where(ok, res, np.nan)
+        failures = self._failures(st, oks, ok)
+        warnings = []
+        sol = Solution(
+            self,
+            u,
+            (u - u[0]) / self.speed if n else u,
+            st,
+            ok,
+            failures,
+            ind,
+            iters,
+            methods,
+            res,
+            start,
+            warnings,
+            velocity,
+            velocity and acceleration,
+        )
+        if velocity:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                for g in self.plan:
+                    g.velocity(st, drive)
+                if acceleration:
+                    for g in self.plan:
+                        g.acceleration(st, drive)
+        return sol
+
+    def _polish(self, st: State, drive: Drive, i: int):
+        """Newton on the whole system at position ``i`` from the closed-form answer."""
+        st1 = st.take([i])
+        sys_ = self.system
+        u1 = drive.u[i : i + 1]
+
+        def setq(q):
+            for b in range(sys_.nb):
+                st1.x[b, 0], st1.y[b, 0] = q[3 * b], q[3 * b + 1]
+                st1.set_angle(b, q[3 * b + 2], 0)
+
+        def fun(q):
+            setq(q)
+            return sys_.residual(st1, u1)[:, 0]
+
+        def jac(q):
+            setq(q)
+            return sys_.jacobian(st1)[0]
+
+        q0 = st1.q()[0]
+        if not np.all(np.isfinite(q0)):
+            return False, np.nan, 0
+        q, stats = newton_solve(fun, jac, q0, self.atol, self.mech.solver.max_iterations)
+        if stats.converged:
+            setq(q)
+            st.put([i], st1)
+        return stats.converged, stats.residual, stats.iterations
+
+    def _failures(self, st: State, oks, ok) -> list[Failure]:
+        out: list[Failure] = []
+        n = len(ok)
+        i = 0
+        while i < n:
+            if ok[i]:
+                i += 1
+                continue
+            j = i
+            while j + 1 < n and not ok[j + 1]:
+                j += 1
+            gi = next((k for k, o in enumerate(oks) if not o[i]), None)
+            if gi is None:
+                group, reason = "the whole system", "the constraint residual stays above tolerance"
+            else:
+                g = self.plan[gi]
+                group = g.label
+                reason = (
+                    g.fail_reason(st, i)
+                    if not isinstance(g, NewtonGroup)
+                    else (f"{g.label}: Newton-Raphson and scipy found no closed position")
+                )
+            out.append(Failure(i, j, group, reason))
+            i = j + 1
+        return out
+
+
+def _scale(mech: Mechanism) -> float:
+    """A characteristic length of the mechanism (m), for tolerances."""
+    r = 0.0
+    for xy in mech.ground.values():
+        r = max(r, math.hypot(*xy))
+    for lk in mech.links:
+        pts = list(lk.points.values())
+        for i, a in enumerate(pts):
+            for b in pts[i + 1 :]:
+                r = max(r, math.dist(a, b))
+    return r if r > 0 else 1.0
+
+
+def check_solution(sol: Solution) -> None:
+    """Raise :class:`SolverError` if nothing could be solved."""
+    if not np.any(sol.ok):
+        f = sol.failures[0] if sol.failures else None
+        raise SolverError(
+            "no position of the sweep could be solved" + (f": {f.reason}" if f else "")
+        )

@@ -1,0 +1,217 @@
+"""Quantities with units, as textbooks write them: ``"110 mm"``, ``"25 deg"``, ``"1.06 rpm"``.
+
+Everything inside mechsolve is SI (m, kg, s, N, rad). A value in a mechanism file may be
+a plain number or a string ``"<number> <unit>"``. A plain number is SI, except lengths and
+angles, which use the file's ``units.length`` (default m) and ``units.angle`` (default deg).
+
+Dimensions are vectors of exponents over (length, mass, time, angle). Angle is kept as a
+dimension of its own so that ``"110 mm"`` given for an angle is caught; a value without
+an angle where one is expected (``"2 1/s"`` for an angular speed) is read as radians.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+Dim = tuple[int, int, int, int]  # exponents of length, mass, time, angle
+
+_DIMS: dict[str, Dim] = {
+    "dimensionless": (0, 0, 0, 0),
+    "length": (1, 0, 0, 0),
+    "mass": (0, 1, 0, 0),
+    "time": (0, 0, 1, 0),
+    "angle": (0, 0, 0, 1),
+    "speed": (1, 0, -1, 0),
+    "acceleration": (1, 0, -2, 0),
+    "angular speed": (0, 0, -1, 1),
+    "angular acceleration": (0, 0, -2, 1),
+    "force": (1, 1, -2, 0),
+    "torque": (2, 1, -2, 0),
+    "moment of inertia": (2, 1, 0, 0),
+    "stiffness": (0, 1, -2, 0),
+    "damping": (0, 1, -1, 0),
+    "rotational damping": (2, 1, -1, -1),
+    "density per length": (-1, 1, 0, 0),
+}
+
+# symbol -> (factor to SI, dimension)
+_UNITS: dict[str, tuple[float, Dim]] = {
+    # length
+    "m": (1.0, (1, 0, 0, 0)),
+    "mm": (1e-3, (1, 0, 0, 0)),
+    "cm": (1e-2, (1, 0, 0, 0)),
+    "dm": (1e-1, (1, 0, 0, 0)),
+    "km": (1e3, (1, 0, 0, 0)),
+    "um": (1e-6, (1, 0, 0, 0)),
+    "in": (0.0254, (1, 0, 0, 0)),
+    "ft": (0.3048, (1, 0, 0, 0)),
+    # mass
+    "kg": (1.0, (0, 1, 0, 0)),
+    "g": (1e-3, (0, 1, 0, 0)),
+    "t": (1e3, (0, 1, 0, 0)),
+    # time
+    "s": (1.0, (0, 0, 1, 0)),
+    "ms": (1e-3, (0, 0, 1, 0)),
+    "min": (60.0, (0, 0, 1, 0)),
+    "h": (3600.0, (0, 0, 1, 0)),
+    # angle
+    "rad": (1.0, (0, 0, 0, 1)),
+    "deg": (math.pi / 180.0, (0, 0, 0, 1)),
+    "°": (math.pi / 180.0, (0, 0, 0, 1)),
+    "rev": (2.0 * math.pi, (0, 0, 0, 1)),
+    "r": (2.0 * math.pi, (0, 0, 0, 1)),
+    "turn": (2.0 * math.pi, (0, 0, 0, 1)),
+    # rotational speed
+    "rpm": (2.0 * math.pi / 60.0, (0, 0, -1, 1)),
+    # force, torque, energy, power, pressure
+    "N": (1.0, (1, 1, -2, 0)),
+    "kN": (1e3, (1, 1, -2, 0)),
+    "MN": (1e6, (1, 1, -2, 0)),
+    "kgf": (9.80665, (1, 1, -2, 0)),
+    "Nm": (1.0, (2, 1, -2, 0)),
+    "kNm": (1e3, (2, 1, -2, 0)),
+    "J": (1.0, (2, 1, -2, 0)),
+    "kJ": (1e3, (2, 1, -2, 0)),
+    "W": (1.0, (2, 1, -3, 0)),
+    "kW": (1e3, (2, 1, -3, 0)),
+    "Pa": (1.0, (-1, 1, -2, 0)),
+    "kPa": (1e3, (-1, 1, -2, 0)),
+    "MPa": (1e6, (-1, 1, -2, 0)),
+    "bar": (1e5, (-1, 1, -2, 0)),
+}
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_QUANTITY_RE = re.compile(rf"^\s*({_NUMBER})\s*(.*?)\s*$")
+_FACTOR_RE = re.compile(r"^([A-Za-zµ°]+)(?:(?:\^|\*\*)([-+]?\d+))?$")
+
+
+class UnitError(ValueError):
+    """A quantity could not be read or has the wrong dimension."""
+
+
+@dataclass(frozen=True)
+class Unit:
+    """A parsed unit: multiply a number by ``factor`` to get SI."""
+
+    factor: float
+    dim: Dim
+
+
+def dimension(kind: str) -> Dim:
+    """Return the dimension vector of a named kind of quantity (``"length"``...)."""
+    return _DIMS[kind]
+
+
+def dim_name(dim: Dim) -> str:
+    """Name a dimension vector in words, for messages."""
+    for name, d in _DIMS.items():
+        if d == dim:
+            return name
+    parts = []
+    for sym, e in zip(("m", "kg", "s", "rad"), dim):
+        if e:
+            parts.append(sym if e == 1 else f"{sym}^{e}")
+    return " ".join(parts) or "dimensionless"
+
+
+def parse_unit(text: str) -> Unit:
+    """Parse a unit expression such as ``"m/s^2"``, ``"kg m^2"``, ``"N*m"``, ``"r/min"``."""
+    text = text.strip().replace("·", " ").replace("µ", "u")
+    if text in ("", "1", "-"):
+        return Unit(1.0, (0, 0, 0, 0))
+    factor = 1.0
+    dim = [0, 0, 0, 0]
+    parts = text.split("/")
+    for i, part in enumerate(parts):
+        sign = 1 if i == 0 else -1
+        tokens = [tok for tok in re.split(r"[\s*]+", part.strip()) if tok]
+        if not tokens:
+            if i == 0 and len(parts) > 1:  # "1/s" written as "/s"
+                continue
+            raise UnitError(f"cannot read unit {text!r}")
+        for tok in tokens:
+            if tok == "1" and i == 0:
+                continue
+            m = _FACTOR_RE.match(tok)
+            if not m or m.group(1) not in _UNITS:
+                known = ", ".join(sorted(_UNITS))
+                raise UnitError(f"unknown unit {tok!r} in {text!r} (known units: {known})")
+            f, d = _UNITS[m.group(1)]
+            exp = sign * int(m.group(2) or 1)
+            factor *= f**exp
+            for k in range(4):
+                dim[k] += d[k] * exp
+    return Unit(factor, tuple(dim))  # type: ignore[arg-type]
+
+
+def _finite(x: float, text: object) -> float:
+    if not math.isfinite(x):
+        raise UnitError(f"{text!r} is not a finite number")
+    return x
+
+
+def parse_quantity(value: object, kind: str, default_unit: str | None = None) -> float:
+    """Convert a plain number or a ``"<number> <unit>"`` string to SI.
+
+    Parameters
+    ----------
+    value
+        A number, or a string such as ``"110 mm"``.
+    kind
+        The kind of quantity expected (a key of the dimension table, e.g. ``"length"``).
+    default_unit
+        The unit of a plain number; SI when not given.
+
+    Returns
+    -------
+    float
+        The value in SI units (radians for angles).
+    """
+    want = _DIMS[kind]
+    if isinstance(value, bool) or value is None:
+        raise UnitError(f"expected a {kind}, got {value!r}")
+    if isinstance(value, (int, float)):
+        x = _finite(float(value), value)
+        if default_unit is not None:
+            x *= parse_unit(default_unit).factor
+        return x
+    if not isinstance(value, str):
+        raise UnitError(f"expected a {kind} (a number or a string like '110 mm'), got {value!r}")
+    m = _QUANTITY_RE.match(value)
+    if not m:
+        raise UnitError(
+            f"cannot read {value!r} as a {kind}: write a number and a unit, e.g. '110 mm'"
+        )
+    number = _finite(float(m.group(1)), value)
+    unit_text = m.group(2)
+    if unit_text == "":
+        unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
+    else:
+        unit = parse_unit(unit_text)
+    dim = unit.dim
+    if dim != want:
+        # an angle is dimensionless in SI: "2 1/s" is a valid angular speed in rad/s
+        if want[3] != 0 and dim[:3] == want[:3] and dim[3] == 0:
+            pass
+        else:
+            raise UnitError(f"{value!r} is a {dim_name(dim)}, but a {kind} is expected")
+    return number * unit.factor
+
+
+def format_unit(kind: str) -> str:
+    """The SI unit printed in CSV headers and plot labels for a kind of quantity."""
+    return {
+        "length": "m",
+        "speed": "m/s",
+        "acceleration": "m/s^2",
+        "angle": "deg",
+        "angular speed": "rad/s",
+        "angular acceleration": "rad/s^2",
+        "time": "s",
+        "force": "N",
+        "torque": "N*m",
+        "mass": "kg",
+        "dimensionless": "-",
+    }[kind]

@@ -1,0 +1,1 @@
+"""Writers: CSV tables, plots and drawings of mechanisms. They only read results."""

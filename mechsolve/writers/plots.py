@@ -1,0 +1,278 @@
+"""Plots an engineer expects from a kinematic sweep (matplotlib, PNG by default).
+
+* ``trajectories.png``: the mechanism drawn at the start position with the paths of the
+  output points;
+* ``point_<P>.png``: x and y position, velocity and acceleration of each output point
+  against the driver coordinate;
+* ``links.png``: angle, angular velocity and angular acceleration of the output links;
+* ``sliders.png``: displacement, velocity and acceleration of the output sliders.
+
+Every axis names its quantity and unit. matplotlib is imported only here.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ..results import Results
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def driver_axis(res: Results) -> tuple[np.ndarray, str]:
+    name = res.mechanism.driver.joint
+    if res.linear:
+        return res.u, f"driver position ({name}) [m]"
+    return np.degrees(res.u), f"driver angle ({name}) [deg]"
+
+
+def draw_mechanism(
+    ax, res_or_analysis, state, i: int, color: str = "k", labels: bool = True
+) -> None:
+    """Draw links, joints, ground pivots and slider guides at position ``i``."""
+    an = getattr(res_or_analysis, "analysis", res_or_analysis)
+    mech = an.mech
+    sys_ = an.system
+    joint_pts = set()
+    for j in mech.joints:
+        joint_pts.add(j.point)
+    palette = [
+        "#1f77b4",
+        "#ff7f0e",
+        "#2ca02c",
+        "#d62728",
+        "#9467bd",
+        "#8c564b",
+        "#e377c2",
+        "#17becf",
+    ]
+    for k, lk in enumerate(mech.links):
+        b = sys_.index[lk.name]
+        xy = []
+        for loc in lk.points.values():
+            x, y = state.point(b, np.asarray(loc, float), [i])
+            xy.append((float(x[0]), float(y[0])))
+        pts = np.array(xy)
+        if not np.all(np.isfinite(pts)):
+            continue
+        col = palette[k % len(palette)]
+        if len(pts) == 1:
+            # a slider block: a small square along its guide
+            size = 0.03 * an.scale
+            th = float(state.th[b, i])
+            c, s = math.cos(th), math.sin(th)
+            sq = np.array([[-1, -0.6], [1, -0.6], [1, 0.6], [-1, 0.6], [-1, -0.6]]) * size
+            rot = sq @ np.array([[c, s], [-s, c]])
+            ax.fill(rot[:, 0] + pts[0, 0], rot[:, 1] + pts[0, 1], color=col, alpha=0.5, lw=1)
+            continue
+        hull = _hull(pts)
+        if len(hull) >= 3:
+            ax.fill(hull[:, 0], hull[:, 1], color=col, alpha=0.18, lw=0)
+            closed = np.vstack([hull, hull[:1]])
+            ax.plot(closed[:, 0], closed[:, 1], color=col, lw=2)
+        else:
+            ax.plot(hull[:, 0], hull[:, 1], color=col, lw=2.5, solid_capstyle="round")
+        if labels:
+            cx, cy = pts.mean(axis=0)
+            ax.annotate(lk.name, (cx, cy), fontsize=7, color=col, ha="center", va="center")
+    # guides of sliders on the ground
+    for j in mech.sliders:
+        sl = sys_.by_joint[j.name]
+        if sl.a == sys_.nb:
+            s_all = sl.displacement(state)
+            s_all = s_all[np.isfinite(s_all)]
+            if s_all.size == 0:
+                continue
+            lo, hi = float(s_all.min()), float(s_all.max())
+            pad = 0.15 * (hi - lo) + 0.05 * an.scale
+            ox, oy = sl.o
+            ux, uy = sl.u_loc
+            ss = np.array([lo - pad, hi + pad])
+            ax.plot(ox + ss * ux, oy + ss * uy, "--", color="0.4", lw=1)
+    # joints and ground pivots
+    for p, ref in an.points.items():
+        x, y = state.point(ref.body, ref.local, [i])
+        x, y = float(x[0]), float(y[0])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            continue
+        if ref.body == sys_.nb:
+            if p in joint_pts:
+                ax.plot([x], [y], marker="^", ms=11, color="0.3", zorder=3)
+                ax.plot([x], [y], "o", ms=5, mfc="white", mec="k", zorder=4)
+        elif p in joint_pts:
+            ax.plot([x], [y], "o", ms=5, mfc="white", mec="k", zorder=4)
+        else:
+            ax.plot([x], [y], ".", ms=5, color=color, zorder=4)
+        if labels:
+            ax.annotate(p, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+
+
+def _hull(pts: np.ndarray) -> np.ndarray:
+    """Convex hull (monotone chain), or the two farthest points of collinear ones."""
+    uniq = np.unique(np.round(pts, 12), axis=0)
+    if len(uniq) <= 2:
+        return uniq
+    p = sorted(map(tuple, uniq))
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list = []
+    for q in p:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], q) <= 0:
+            lower.pop()
+        lower.append(q)
+    upper: list = []
+    for q in reversed(p):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], q) <= 0:
+            upper.pop()
+        upper.append(q)
+    hull = lower[:-1] + upper[:-1]
+    return np.array(hull)
+
+
+def plot_trajectories(res: Results, path: Path) -> Path:
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 6.5))
+    i0 = int(np.flatnonzero(res.ok)[0]) if np.any(res.ok) else 0
+    draw_mechanism(ax, res, res.solution.state, i0)
+    for p in res.point_names():
+        m = res.point(p)
+        ax.plot(m.x, m.y, "-", lw=1.2, label=f"path of {p}")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{res.mechanism.name}: mechanism at the start and point paths")
+    ax.grid(True, alpha=0.3)
+    if res.point_names():
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_point(res: Results, name: str, path: Path) -> Path:
+    plt = _plt()
+    m = res.point(name)
+    xs, xlabel = driver_axis(res)
+    rows = [("position", "m", m.x, m.y)]
+    if res.view.has_velocity:
+        rows.append(("velocity", "m/s", m.vx, m.vy))
+    if res.view.has_acceleration:
+        rows.append(("acceleration", "m/s^2", m.ax, m.ay))
+    fig, axes = plt.subplots(
+        len(rows), 2, figsize=(10, 2.8 * len(rows)), sharex=True, squeeze=False
+    )
+    syms = {"position": ("x", "y"), "velocity": ("vx", "vy"), "acceleration": ("ax", "ay")}
+    for r, (what, unit, a, b) in enumerate(rows):
+        for c, (vals, sym) in enumerate(zip((a, b), syms[what])):
+            ax = axes[r][c]
+            ax.plot(xs, vals, lw=1.4)
+            ax.set_ylabel(f"{name}.{sym} [{unit}]")
+            ax.grid(True, alpha=0.3)
+    for c in range(2):
+        axes[-1][c].set_xlabel(xlabel)
+    fig.suptitle(f"{res.mechanism.name}: point {name}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_links(res: Results, path: Path) -> Path | None:
+    names = res.link_names()
+    if not names:
+        return None
+    plt = _plt()
+    xs, xlabel = driver_axis(res)
+    rows = [("angle", "deg")]
+    if res.view.has_velocity:
+        rows.append(("omega", "rad/s"))
+    if res.view.has_acceleration:
+        rows.append(("alpha", "rad/s^2"))
+    fig, axes = plt.subplots(len(rows), 1, figsize=(9, 2.8 * len(rows)), sharex=True, squeeze=False)
+    for ln in names:
+        m = res.link(ln)
+        vals = {"angle": np.degrees(m.angle), "omega": m.omega, "alpha": m.alpha}
+        for r, (q, _) in enumerate(rows):
+            axes[r][0].plot(xs, vals[q], lw=1.3, label=ln)
+    labels = {"angle": "link angle", "omega": "angular velocity", "alpha": "angular acceleration"}
+    for r, (q, unit) in enumerate(rows):
+        axes[r][0].set_ylabel(f"{labels[q]} [{unit}]")
+        axes[r][0].grid(True, alpha=0.3)
+    axes[0][0].legend(fontsize=7, ncol=3)
+    axes[-1][0].set_xlabel(xlabel)
+    fig.suptitle(f"{res.mechanism.name}: links")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_sliders(res: Results, path: Path) -> Path | None:
+    names = res.slider_names()
+    if not names:
+        return None
+    plt = _plt()
+    xs, xlabel = driver_axis(res)
+    rows = [("s", "displacement", "m")]
+    if res.view.has_velocity:
+        rows.append(("v", "velocity", "m/s"))
+    if res.view.has_acceleration:
+        rows.append(("a", "acceleration", "m/s^2"))
+    fig, axes = plt.subplots(len(rows), 1, figsize=(9, 2.8 * len(rows)), sharex=True, squeeze=False)
+    for sn in names:
+        m = res.slider(sn)
+        for r, (q, _, _) in enumerate(rows):
+            axes[r][0].plot(xs, getattr(m, q), lw=1.3, label=sn)
+    for r, (_, label, unit) in enumerate(rows):
+        axes[r][0].set_ylabel(f"slider {label} [{unit}]")
+        axes[r][0].grid(True, alpha=0.3)
+    axes[0][0].legend(fontsize=7)
+    axes[-1][0].set_xlabel(xlabel)
+    fig.suptitle(f"{res.mechanism.name}: sliders (along their guides)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_plots(res: Results, outdir: Path) -> list[Path]:
+    """Write all kinematic plots into ``outdir``; return the files written."""
+    outdir.mkdir(parents=True, exist_ok=True)
+    written = [plot_trajectories(res, outdir / "trajectories.png")]
+    for p in res.point_names():
+        written.append(plot_point(res, p, outdir / f"point_{p}.png"))
+    for f in (plot_links(res, outdir / "links.png"), plot_sliders(res, outdir / "sliders.png")):
+        if f is not None:
+            written.append(f)
+    return written
+
+
+def draw_start(analysis, state, path: Path, title: str) -> Path:
+    """Draw the assembled start position alone (``mechsolve check --draw``)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 6))
+    draw_mechanism(ax, analysis, state, 0)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
