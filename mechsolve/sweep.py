@@ -22,6 +22,7 @@ import numpy as np
 
 from .constraints import ConstraintSystem
 from .errors import AssemblyError, InputError, SolverError
+from .expr import Ref
 from .groups import Drive, Group, NewtonGroup, build_plan
 from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
 from .solvers.newton import solve as newton_solve
@@ -435,17 +436,35 @@ class Analysis:
         sign = 1.0 if lim.extreme == "min" else -1.0
         i = int(np.nanargmin(sign * vals))
         asm = sol.start
+        h = math.radians(1.0)
 
-        def f(x: float) -> float:
+        def at(x: float, attr: str | None = None) -> float:
             s = self.solve(np.array([x]), start=asm, near=(sol, i))
-            v = float(np.asarray(lim.quantity.evaluate(StateView(self, s.state))).ravel()[0])
-            return sign * v
+            view = StateView(self, s.state)
+            if attr is None:
+                v = lim.quantity.evaluate(view)
+            else:
+                tree = lim.quantity.tree
+                v = view.quantity(tree.name, attr)
+            return float(np.asarray(v, float).ravel()[0])
 
+        # an extreme of a coordinate is where its rate vanishes: find that root exactly
+        tree = lim.quantity.tree
+        rate = _RATE.get(getattr(tree, "attr", None)) if isinstance(tree, Ref) else None
+        if rate is not None:
+            from scipy.optimize import brentq
+
+            lo, hi = u[i] - h, u[i] + h
+            flo, fhi = at(lo, rate), at(hi, rate)
+            if np.isfinite(flo) and np.isfinite(fhi) and flo * fhi < 0:
+                return float(brentq(lambda x: at(x, rate), lo, hi, xtol=1e-15, rtol=1e-15))
         from scipy.optimize import minimize_scalar
 
-        h = math.radians(1.0)
         res = minimize_scalar(
-            f, bounds=(u[i] - h, u[i] + h), method="bounded", options={"xatol": 1e-11}
+            lambda x: sign * at(x),
+            bounds=(u[i] - h, u[i] + h),
+            method="bounded",
+            options={"xatol": 1e-11},
         )
         return float(res.x)
 
@@ -571,6 +590,9 @@ class Analysis:
             out.append(Failure(i, j, group, reason))
             i = j + 1
         return out
+
+
+_RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 
 
 def _scale(mech: Mechanism) -> float:

@@ -1,0 +1,19 @@
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+MECH = ROOT / "mechanisms"
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def ref(name: str) -> dict:
+    return json.loads((DATA / name).read_text())
+
+
+@pytest.fixture
+def data():
+    return ref

@@ -1,0 +1,94 @@
+"""The command line: run and check on every example, through click and as a process."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from conftest import MECH
+from mechsolve.cli import main
+
+EXAMPLES = sorted(p.name for p in MECH.glob("*.yaml"))
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_check_every_example(name):
+    r = CliRunner().invoke(main, ["check", str(MECH / name)])
+    assert r.exit_code == 0, r.output
+    assert "degrees of freedom: 1 by Grübler" in r.output
+    assert "1 by the rank of the constraint Jacobian" in r.output
+    assert "start position" in r.output
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_run_every_example(name, tmp_path):
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["run", str(MECH / name), "-o", str(out), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert "positions solved" in r.output
+    rows = list(csv.reader((out / "results.csv").open()))
+    header = rows[0]
+    assert header[:4] == ["step", "t [s]", "input.angle [deg]", "input.travel [deg]"]
+    # every quantity column names its unit
+    for h in header[1:-2]:
+        assert h.endswith("]") and " [" in h, h
+    assert header[-2:] == ["status", "solver.method"]
+    assert all(row[-2] == "ok" for row in rows[1:])
+    assert len({len(row) for row in rows}) == 1
+
+
+def test_run_writes_plots_and_default_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["run", str(MECH / "fourbar.yaml"), "--step", "10 deg"])
+    assert r.exit_code == 0, r.output
+    folder = tmp_path / "fourbar"
+    names = {p.name for p in folder.iterdir()}
+    assert {"results.csv", "trajectories.png", "point_P.png", "links.png"} <= names
+    assert not any(n.endswith(".part") for n in names)
+    rows = list(csv.reader((folder / "results.csv").open()))
+    assert len(rows) == 1 + 37  # 0..360 deg in 10 deg steps
+
+
+def test_run_variant_and_time_step(tmp_path):
+    out = tmp_path / "jib"
+    r = CliRunner().invoke(
+        main,
+        ["run", str(MECH / "crane.yaml"), "--variant", "jib-driven", "-o", str(out), "--no-plots"],
+    )
+    assert r.exit_code == 0, r.output
+    rows = list(csv.reader((out / "results.csv").open()))
+    assert len(rows) == 1 + 42  # 93..134 deg
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "shaper.yaml"), "--step", "0.05 s", "-o", str(out), "--no-plots"]
+    )
+    assert r.exit_code == 0, r.output
+    rows = list(csv.reader((out / "results.csv").open()))
+    assert len(rows) == 1 + 21  # one turn at 60 rpm in 0.05 s steps
+
+
+def test_check_draws_the_start(tmp_path):
+    png = tmp_path / "start.png"
+    r = CliRunner().invoke(main, ["check", str(MECH / "shaper.yaml"), "--draw", str(png)])
+    assert r.exit_code == 0, r.output
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_real_process(tmp_path):
+    out = tmp_path / "crane"
+    p = subprocess.run(
+        [sys.executable, "-m", "mechsolve", "run", str(MECH / "crane.yaml"), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert p.returncode == 0, p.stderr
+    assert "37 of 37 positions solved" in p.stdout
+    assert (out / "point_K.png").exists()
+    p = subprocess.run(
+        [sys.executable, "-m", "mechsolve", "--help"], capture_output=True, text=True, timeout=60
+    )
+    assert p.returncode == 0 and "Exit codes" in p.stdout
