@@ -31,7 +31,9 @@ driver: {joint: O2, speed: 1 rad/s}
 def run(tmp_path, text, command="run"):
     f = tmp_path / "bad.yaml"
     f.write_text(text)
-    args = [command, str(f)] + (["-o", str(tmp_path / "out"), "--no-plots"] if command == "run" else [])
+    args = [command, str(f)] + (
+        ["-o", str(tmp_path / "out"), "--no-plots"] if command == "run" else []
+    )
     r = CliRunner().invoke(main, args)
     assert r.exception is None or isinstance(r.exception, SystemExit), r.exception
     assert "Traceback" not in r.output
@@ -44,28 +46,62 @@ def test_good_file_runs(tmp_path):
 
 CASES = [
     # (replace, with, exit code, expected fragments)
-    ("links:\n  crank:\n    points: {O2: [0, 0], A: [1, 0]}",
-     "links:\n  crank:\n    points: {O2: [0, 0], A: [1, 0]",
-     2, ["bad.yaml:", "invalid YAML"]),
-    ("  rocker:\n    points:",
-     "  rocker:\n    lenght: 3\n    points:",
-     2, ["bad.yaml:11:", "links.rocker.lenght", "unknown key 'lenght'"]),
-    ("  B: [coupler, rocker]", "  B: [coupler, rockr]",
-     2, ["bad.yaml:15:", "joints.B", "'rockr', which does not exist", "did you mean 'rocker'"]),
-    ("    points: {O4: [0, 0], B: [2.5, 0]}", "    points: {O4: [0, 0], Q: [2.5, 0]}",
-     2, ["bad.yaml:15:", "joints.B", "link 'rocker' has no point 'B'"]),
-    ("  A: [crank, coupler]", "  A: [crank, crank]",
-     2, ["bad.yaml:14:", "joints.A", "joins the link 'crank' to itself"]),
-    ("B: [3.5, 0]}", "B: [9.5, 0]}",
-     3, ["bad.yaml", "cannot assemble at driver angle 0°", "loop B", "cannot close"]),
-    ("driver: {joint: O2, speed: 1 rad/s}", "driver: {joint: O2, speed: 1 mm}",
-     2, ["bad.yaml:17:", "driver.speed", "is a length, but a angular speed is expected"]),
-    ("driver: {joint: O2, speed: 1 rad/s}", "driver: {joint: O9, speed: 1 rad/s}",
-     2, ["bad.yaml:17:", "driver.joint", "'O9', which does not exist"]),
-    ("joints:\n", "  extra:\n    points: {B: [0, 0], X: [1, 0]}\njoints:\n  B2: {revolute: [rocker, extra], point: B}\n",
-     2, ["bad.yaml", "2 degrees of freedom", "the motion of 'extra' is not determined"]),
-    ("driver: {joint: O2, speed: 1 rad/s}\n", "",
-     2, ["bad.yaml", "no driver"]),
+    (
+        "links:\n  crank:\n    points: {O2: [0, 0], A: [1, 0]}",
+        "links:\n  crank:\n    points: {O2: [0, 0], A: [1, 0]",
+        2,
+        ["bad.yaml:", "invalid YAML"],
+    ),
+    (
+        "  rocker:\n    points:",
+        "  rocker:\n    lenght: 3\n    points:",
+        2,
+        ["bad.yaml:11:", "links.rocker.lenght", "unknown key 'lenght'"],
+    ),
+    (
+        "  B: [coupler, rocker]",
+        "  B: [coupler, rockr]",
+        2,
+        ["bad.yaml:15:", "joints.B", "'rockr', which does not exist", "did you mean 'rocker'"],
+    ),
+    (
+        "    points: {O4: [0, 0], B: [2.5, 0]}",
+        "    points: {O4: [0, 0], Q: [2.5, 0]}",
+        2,
+        ["bad.yaml:15:", "joints.B", "link 'rocker' has no point 'B'"],
+    ),
+    (
+        "  A: [crank, coupler]",
+        "  A: [crank, crank]",
+        2,
+        ["bad.yaml:14:", "joints.A", "joins the link 'crank' to itself"],
+    ),
+    (
+        "B: [3.5, 0]}",
+        "B: [9.5, 0]}",
+        3,
+        ["bad.yaml", "cannot assemble at driver angle 0°", "loop B", "cannot close"],
+    ),
+    (
+        "driver: {joint: O2, speed: 1 rad/s}",
+        "driver: {joint: O2, speed: 1 mm}",
+        2,
+        ["bad.yaml:17:", "driver.speed", "is a length, but a angular speed is expected"],
+    ),
+    (
+        "driver: {joint: O2, speed: 1 rad/s}",
+        "driver: {joint: O9, speed: 1 rad/s}",
+        2,
+        ["bad.yaml:17:", "driver.joint", "'O9', which does not exist"],
+    ),
+    (
+        "joints:\n",
+        "  extra:\n    points: {B: [0, 0], X: [1, 0]}\n"
+        "joints:\n  B2: {revolute: [rocker, extra], point: B}\n",
+        2,
+        ["bad.yaml", "2 degrees of freedom", "the motion of 'extra' is not determined"],
+    ),
+    ("driver: {joint: O2, speed: 1 rad/s}\n", "", 2, ["bad.yaml", "no driver"]),
 ]
 
 

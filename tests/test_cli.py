@@ -9,8 +9,9 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-from conftest import MECH
 from mechsolve.cli import main
+
+from conftest import MECH
 
 EXAMPLES = sorted(p.name for p in MECH.glob("*.yaml"))
 

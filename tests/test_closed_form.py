@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
+
 from closed_form import fourbar, slider_crank, slotted_bar
 
 RTOL = 1e-10

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from conftest import MECH
 from mechsolve.constraints import ConstraintSystem
 from mechsolve.state import State
+
+from conftest import MECH
 
 
 def set_q(st, q, qd=None, qdd=None):

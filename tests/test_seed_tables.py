@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
+
 from conftest import MECH, ref
 
 
@@ -195,7 +196,9 @@ def test_shaper_exact_start_and_stroke():
     C = res.point("C")
     np.testing.assert_allclose(C.x * 1e3, rec[:, 1], atol=1e-6)
     np.testing.assert_allclose(C.ax, rec[:, 3], atol=1e-8)
-    assert np.degrees(res.u[0]) % 360 == pytest.approx(180 + np.degrees(np.arcsin(110 / 380)), abs=1e-7)
+    assert np.degrees(res.u[0]) % 360 == pytest.approx(
+        180 + np.degrees(np.arcsin(110 / 380)), abs=1e-7
+    )
 
 
 def test_shaper_position7_graphical_branch():

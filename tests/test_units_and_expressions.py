@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mechsolve.errors import InputError
-from mechsolve.expr import Expression, ExprError
+from mechsolve.expr import ExprError, Expression
 from mechsolve.model.source import load_text
 from mechsolve.units import UnitError, parse_quantity
 
@@ -59,9 +59,11 @@ def test_bad_quantities(text, kind, msg):
 
 class Ctx:
     def __init__(self):
-        self.pts = {"A": (np.array([0.0, 0.0]), np.array([0.0, 0.0])),
-                    "B": (np.array([1.0, 1.0]), np.array([0.0, 0.0])),
-                    "P": (np.array([0.5, 0.5]), np.array([1.0, -1.0]))}
+        self.pts = {
+            "A": (np.array([0.0, 0.0]), np.array([0.0, 0.0])),
+            "B": (np.array([1.0, 1.0]), np.array([0.0, 0.0])),
+            "P": (np.array([0.5, 0.5]), np.array([1.0, -1.0])),
+        }
 
     def point_xy(self, name):
         return self.pts[name]
