@@ -38,6 +38,8 @@ def parse_step(mech: Mechanism, text: str | float) -> float:
     except UnitError:
         try:
             val = parse_quantity(text, "time") * abs(mech.driver.speed)
+            if val == 0:
+                raise InputError("--step: a driver at rest (speed 0) has no time step")
         except UnitError:
             raise InputError(
                 f"--step {text!r}: expected {'a length' if linear else 'an angle'} such as "
@@ -55,6 +57,7 @@ def solve(
     method: str | None = None,
     velocity: bool | None = None,
     acceleration: bool | None = None,
+    forces: bool | None = None,
 ) -> Results:
     """Solve the mechanism's sweep.
 
@@ -68,14 +71,24 @@ def solve(
         ``"auto"`` or ``"newton"``; default from the file.
     velocity, acceleration
         Override the file's ``outputs.quantities``.
+    forces
+        Run the force analysis (default: when the model has masses or loads).
     """
     an = Analysis(mech, method)
     u0 = an.start_value()
     u, _ = an.sweep_values(u0, step=step)
     vel = mech.outputs.velocity if velocity is None else velocity
     acc = mech.outputs.acceleration if acceleration is None else acceleration
+    forces = mech.needs_forces if forces is None else forces
+    if forces:
+        vel = acc = True
     sol = an.solve(u, velocity=vel or bool(acc), acceleration=bool(acc))
-    return Results(an, sol)
+    force_result = None
+    if forces:
+        from .solvers.forces import solve_forces
+
+        force_result = solve_forces(an, sol)
+    return Results(an, sol, force_result)
 
 
 def run(path: str | Path, variant: str | None = None, **kwargs) -> Results:

@@ -96,9 +96,10 @@ class Results:
         Runs of positions where the mechanism cannot close, with the loop and reason.
     """
 
-    def __init__(self, analysis: Analysis, solution: Solution) -> None:
+    def __init__(self, analysis: Analysis, solution: Solution, forces=None) -> None:
         self.analysis = analysis
         self.solution = solution
+        self.forces = forces  # a ForceResult, or None when no force analysis was asked
         self.mechanism: Mechanism = analysis.mech
         self.u = solution.u
         self.t = solution.t
@@ -224,6 +225,8 @@ class Results:
                 cols.append(Column(f"{sn}.v", "m/s", m.v))
             if acc:
                 cols.append(Column(f"{sn}.a", "m/s^2", m.a))
+        if self.forces is not None:
+            cols += self.force_columns()
         sol = self.solution
         cols += [
             Column("solver.iterations", "-", sol.iterations.astype(float)),
@@ -231,12 +234,98 @@ class Results:
         ]
         return cols
 
+    # -- forces -------------------------------------------------------------------------
+    @property
+    def effort_name(self) -> tuple[str, str]:
+        """("torque", "N*m") for a revolute driver, ("force", "N") for a linear one."""
+        return ("force", "N") if self.linear else ("torque", "N*m")
+
+    def joint_label(self, name: str) -> str:
+        """``O1(ground->crank)``: the reaction is the force on the second link by the first."""
+        j = self.mechanism.joint(name)
+        return f"{name}({j.links[0]}->{j.links[1]})"
+
+    def reaction(self, name: str) -> dict[str, np.ndarray]:
+        """Reaction components of a joint: Fx, Fy, F (revolute) or N, M, Fx, Fy (slider)."""
+        if self.forces is None:
+            raise KeyError("no force analysis was run (the model has no masses or loads)")
+        return self.forces.reactions[name]
+
+    @property
+    def driving_effort(self) -> np.ndarray:
+        """The driving torque (N m) or force (N) the driver applies to the driven link."""
+        if self.forces is None:
+            raise KeyError("no force analysis was run (the model has no masses or loads)")
+        return np.where(self.forces.ok, self.forces.effort, np.nan)
+
+    def force_columns(self) -> list[Column]:
+        f = self.forces
+        ok = f.ok
+
+        def m(a):
+            return np.where(ok, a, np.nan)
+
+        kind, unit = self.effort_name
+        cols = [Column(f"input.{kind}", unit, m(f.effort))]
+        for j in self.mechanism.joints:
+            lab = self.joint_label(j.name)
+            r = f.reactions[j.name]
+            if "F" in r:
+                cols += [
+                    Column(f"{lab}.Fx", "N", m(r["Fx"])),
+                    Column(f"{lab}.Fy", "N", m(r["Fy"])),
+                    Column(f"{lab}.F", "N", m(r["F"])),
+                ]
+            else:
+                cols += [
+                    Column(f"{lab}.N", "N", m(r["N"])),
+                    Column(f"{lab}.M", "N*m", m(r["M"])),
+                    Column(f"{lab}.Fx", "N", m(r["Fx"])),
+                    Column(f"{lab}.Fy", "N", m(r["Fy"])),
+                ]
+        for name, on in f.active.items():
+            cols.append(Column(f"load.{name}.active", "-", on.astype(float)))
+        cols += [
+            Column("energy.kinetic", "J", m(f.kinetic)),
+            Column("energy.potential", "J", m(f.potential)),
+            Column("power.input", "W", m(f.power_input)),
+            Column("power.kinetic_rate", "W", m(f.kinetic_rate)),
+            Column("power.potential_rate", "W", m(f.potential_rate)),
+            Column("power.loads", "W", m(f.power_loads)),
+            Column("power.residual", "W", m(f.residual)),
+            Column("forces.rcond", "-", np.where(self.ok, f.rcond, np.nan)),
+        ]
+        return cols
+
+    def power_scale(self) -> float:
+        """The largest power term over the sweep: the scale of the power-balance check."""
+        f = self.forces
+        terms = [f.power_input, f.kinetic_rate, f.potential_rate, f.power_loads]
+        vals = [np.nanmax(np.abs(np.where(f.ok, t, np.nan))) for t in terms if np.any(f.ok)]
+        return float(max(vals)) if vals else 0.0
+
+    def work(self) -> float:
+        """Work done by the driver over the sweep (J); for a full turn, the work per cycle.
+        See :func:`mechsolve.solvers.forces.driver_work`."""
+        from .solvers.forces import driver_work
+
+        if not hasattr(self, "_work"):
+            self._work = driver_work(self.analysis, self.solution, self.forces)
+        return self._work
+
+    def is_full_cycle(self) -> bool:
+        return (not self.linear) and abs(abs(self.u[-1] - self.u[0]) - 2 * math.pi) < 1e-9
+
     def status(self) -> list[str]:
         """Per position: ``ok`` or why it was not solved."""
         out = ["ok"] * len(self.u)
         for f in self.failures:
             for i in range(f.first, f.last + 1):
                 out[i] = "unassemblable: " + f.group
+        if self.forces is not None:
+            for i, label in self.forces.singular:
+                if out[i] == "ok":
+                    out[i] = f"singular: forces indeterminate in {label}"
         return out
 
     def methods(self) -> list[str]:
@@ -250,7 +339,14 @@ class Results:
 
     # -- summary ------------------------------------------------------------------------
     def describe_u(self, i: int) -> str:
-        return self.analysis.format_u(float(self.u[i]))
+        """The driver position of sample ``i`` in words, e.g. ``driver angle 246.8°``."""
+        u = float(self.u[i])
+        if self.linear:
+            return self.analysis.format_u(u)
+        text = f"driver angle {math.degrees(u) % 360:.6g}°"
+        if self.u[0] != 0 or self.mechanism.driver.direction < 0:
+            text += f" ({float(self.driver_travel[i]):.6g}° from the start)"
+        return text
 
     def summary(self) -> str:
         """A short text summary: positions solved, ranges of the outputs, anything unusual."""
@@ -300,6 +396,58 @@ class Results:
                 else ""
             )
         )
+        if self.forces is not None:
+            lines += self.force_summary()
         for w in self.warnings:
             lines.append("  warning: " + w)
         return "\n".join(lines)
+
+    def force_summary(self) -> list[str]:
+        f = self.forces
+        lines = []
+        if not np.any(f.ok):
+            return ["  forces: no position could be solved"]
+        kind, unit = self.effort_name
+        e = np.where(f.ok, f.effort, np.nan)
+        scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")
+        imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
+        rms = float(np.sqrt(np.nanmean(e**2)))
+        work = self.work()
+        per = "per cycle" if self.is_full_cycle() else "over the sweep"
+        travel = self.u[-1] - self.u[0]
+        mean = work / travel if travel != 0 else float("nan")
+        lines.append(
+            f"  driving {kind}: max {e[imax] / scale:.6g} {sym}{unit} at {self.describe_u(imax)}, "
+            f"min {e[imin] / scale:.6g} {sym}{unit} at {self.describe_u(imin)}, "
+            f"RMS {rms / scale:.6g} {sym}{unit}, mean {mean / scale:.6g} {sym}{unit}"
+        )
+        wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
+        lines.append(f"  work of the driver {per}: {work / wscale:.6g} {wsym}J")
+        peaks = []
+        for j in self.mechanism.joints:
+            r = f.reactions[j.name]
+            mag = np.abs(r["F"] if "F" in r else r["N"])
+            mag = np.where(f.ok, mag, np.nan)
+            if np.any(np.isfinite(mag)):
+                i = int(np.nanargmax(mag))
+                peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {self.describe_u(i)}")
+        lines.append("  peak reactions: " + "; ".join(peaks))
+        res = np.nanmax(np.abs(np.where(f.ok, f.residual, np.nan)))
+        ps = self.power_scale()
+        rel = res / ps if ps > 0 else 0.0
+        lines.append(
+            f"  power balance: max residual {res:.3g} W ({rel:.2g} of the largest power term)"
+        )
+        if rel > 1e-6:
+            self.warnings.append(
+                f"the power balance residual reaches {rel:.2g} of the largest power term "
+                "(above 1e-6): check the results"
+            )
+        if f.singular:
+            where = ", ".join(self.describe_u(i) for i, _ in f.singular[:5])
+            more = f" and {len(f.singular) - 5} more" if len(f.singular) > 5 else ""
+            lines.append(
+                f"  forces indeterminate at {len(f.singular)} singular position(s): {where}{more} "
+                f"({f.singular[0][1]})"
+            )
+        return lines

@@ -199,9 +199,8 @@ class Analysis:
         n = max(0, math.ceil(travel / step - 1e-9))
         k = np.arange(n + 1, dtype=float)
         dist = np.minimum(k * step, travel)
-        sign = 1.0 if self.speed > 0 else -1.0
-        u = u0 + sign * dist
-        t = dist / abs(self.speed)
+        u = u0 + self.mech.driver.direction * dist
+        t = dist / abs(self.speed) if self.speed else np.zeros_like(dist)
         return u, t
 
     # -- positions ------------------------------------------------------------------
@@ -515,7 +514,7 @@ class Analysis:
         sol = Solution(
             self,
             u,
-            (u - u[0]) / self.speed if n else u,
+            (u - u[0]) / self.speed if n and self.speed else np.zeros_like(u),
             st,
             ok,
             failures,

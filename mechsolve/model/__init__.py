@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from .source import Source
 
 GROUND = "ground"
+STANDARD_G = 9.81  # m/s^2, the textbooks' value
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 KeyPath = tuple[Any, ...]
 
@@ -122,6 +123,53 @@ Joint = PinJoint | SliderJoint
 
 
 @dataclass
+class Load:
+    """Base of applied loads. ``when``: a condition; the load acts only where it holds."""
+
+    name: str
+    when: Expression | None = None
+    where: KeyPath = ()
+
+
+@dataclass
+class PointForce(Load):
+    """A force at a point of a link: global components, or link-fixed with ``frame="link"``."""
+
+    link: str = ""
+    point: str = ""
+    force: tuple[float, float] = (0.0, 0.0)
+    frame: Literal["global", "link"] = "global"
+
+
+@dataclass
+class Torque(Load):
+    """A torque (counter-clockwise positive) applied to a link by the ground."""
+
+    link: str = ""
+    torque: float = 0.0
+
+
+@dataclass
+class Spring(Load):
+    """A linear spring between two points: force ``k (L - L0)`` along the line between them."""
+
+    ends: tuple[tuple[str, str], tuple[str, str]] = (("", ""), ("", ""))  # (link, point) x 2
+    stiffness: float = 0.0
+    free_length: float = 0.0
+
+
+@dataclass
+class Damper(Load):
+    """A viscous damper: between two points (force ``c dL/dt`` along the line), along a
+    slider (force ``c ds/dt`` on the block), or at a point against its velocity (``drag``)."""
+
+    ends: tuple[tuple[str, str], tuple[str, str]] | None = None
+    slider: str | None = None
+    drag: tuple[str, str] | None = None  # (link, point)
+    coefficient: float = 0.0
+
+
+@dataclass
 class Limit:
     """A start position defined as the extreme of a quantity, e.g. K's right limit."""
 
@@ -143,6 +191,8 @@ class Driver:
         Name of the driven joint.
     speed
         Signed speed (rad/s or m/s); positive is counter-clockwise or along the line.
+        Zero gives a quasi-static sweep: positions at rest (velocities and inertia zero),
+        swept in the direction ``sense``.
     start
         Driver coordinate at the start of the sweep, or a :class:`Limit`.
     line
@@ -153,7 +203,15 @@ class Driver:
     speed: float = 1.0
     start: float | Limit = 0.0
     line: tuple[str, str] | None = None
+    sense: int | None = None  # +1 / -1: the direction of the sweep when speed is 0
     where: KeyPath = ()
+
+    @property
+    def direction(self) -> int:
+        """+1 when the driver coordinate increases along the sweep, -1 otherwise."""
+        if self.speed != 0:
+            return 1 if self.speed > 0 else -1
+        return self.sense if self.sense is not None else 1
 
 
 @dataclass
@@ -228,6 +286,8 @@ class Mechanism:
     assembly: Assembly = field(default_factory=Assembly)
     outputs: Outputs = field(default_factory=Outputs)
     solver: SolverOptions = field(default_factory=SolverOptions)
+    gravity: tuple[float, float] | None = None  # None: (0, -9.81) if any link has mass
+    loads: list[Load] = field(default_factory=list)
     length_unit: str = "m"
     source: Source | None = field(default=None, repr=False)
 
@@ -265,6 +325,20 @@ class Mechanism:
         if link == GROUND:
             return point in self.ground
         return point in self.link(link).points
+
+    @property
+    def has_masses(self) -> bool:
+        return any(lk.mass for lk in self.links)
+
+    @property
+    def needs_forces(self) -> bool:
+        """Force analysis runs when the model has masses or loads."""
+        return self.has_masses or bool(self.loads)
+
+    def gravity_vector(self) -> tuple[float, float]:
+        if self.gravity is not None:
+            return self.gravity
+        return (0.0, -STANDARD_G) if self.has_masses else (0.0, 0.0)
 
     @property
     def sliders(self) -> list[SliderJoint]:

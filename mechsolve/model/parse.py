@@ -16,16 +16,22 @@ from ..expr import ExprError, Expression
 from ..units import UnitError, parse_quantity, parse_unit
 from . import (
     GROUND,
+    STANDARD_G,
     Assembly,
+    Damper,
     Driver,
     Limit,
     Link,
+    Load,
     Mechanism,
     Outputs,
     PinJoint,
+    PointForce,
     SliderJoint,
     SolverOptions,
+    Spring,
     Sweep,
+    Torque,
 )
 from .source import KeyPath, Source, load_file, load_text
 from .validate import suggest
@@ -42,6 +48,8 @@ TOP_KEYS = (
     "assembly",
     "outputs",
     "solver",
+    "gravity",
+    "loads",
     "variants",
 )
 
@@ -202,11 +210,21 @@ def read_point(
     return (origin[0] + length * math.cos(a), origin[1] + length * math.sin(a))
 
 
-def read_link(r: Reader, name: str, value: Any) -> Link:
+LINK_KEYS = (
+    "points",
+    "mass",
+    "weight",
+    "com",
+    "inertia",
+    "uniform_bar",
+    "point_masses",
+    "description",
+)
+
+
+def read_link(r: Reader, name: str, value: Any, g: float = STANDARD_G) -> Link:
     path: KeyPath = ("links", name)
-    m = r.mapping(
-        value, path, ("points", "mass", "com", "inertia", "description"), f"link {name!r}"
-    )
+    m = r.mapping(value, path, LINK_KEYS, f"link {name!r}")
     if "points" not in m:
         raise r.fail(path, f"link {name!r} needs 'points': its named points in its own frame")
     raw = m["points"]
@@ -237,29 +255,264 @@ def read_link(r: Reader, name: str, value: Any) -> Link:
     # keep the file's order
     points = {p: points[p] for p in raw}
     link = Link(name, points, where=path)
-    if "mass" in m:
-        link.mass = r.quantity(m["mass"], path + ("mass",), "mass")
-    if "inertia" in m:
-        link.inertia = r.quantity(m["inertia"], path + ("inertia",), "moment of inertia")
-    if "com" in m:
-        c = m["com"]
-        if isinstance(c, str) and c in points:
-            link.com = points[c]
-        elif isinstance(c, str) and not any(ch.isdigit() for ch in c.split()[0][:1]):
-            raise r.fail(
-                path + ("com",),
-                f"link {name!r} has no point {c!r} for its centre of mass"
-                + suggest(c, list(points)),
-            )
-        else:
-            link.com = r.xy(c, path + ("com",))
+    read_mass(r, m, link, path, g)
     return link
 
 
-def read_links(r: Reader, value: Any) -> list[Link]:
+def _point_or_xy(r: Reader, value: Any, path: KeyPath, points, what: str):
+    if isinstance(value, str) and value in points:
+        return points[value]
+    if isinstance(value, str) and "," not in value:
+        raise r.fail(path, f"{what} has no point {value!r}" + suggest(value, list(points)))
+    return r.xy(value, path)
+
+
+def read_mass(r: Reader, m: dict, link: Link, path: KeyPath, g: float) -> None:
+    """Mass properties: mass (or weight), centre of mass, inertia about it; conveniences
+    ``uniform_bar: [P, Q]`` (centre at the middle, J = m l^2 / 12) and
+    ``point_masses: {P: m, ...}`` (combined by the parallel-axis theorem).
+
+    A mass without an inertia is a point mass at the centre of mass.
+    """
+    name, points = link.name, link.points
+    if "mass" in m and "weight" in m:
+        raise r.fail(path, f"link {name!r}: give 'mass' or 'weight', not both")
+    mass = None
+    if "mass" in m:
+        mass = r.quantity(m["mass"], path + ("mass",), "mass")
+    elif "weight" in m:
+        mass = r.quantity(m["weight"], path + ("weight",), "force") / g
+    if mass is not None and not mass >= 0:
+        key = "mass" if "mass" in m else "weight"
+        raise r.fail(path + (key,), f"{key} must be zero or positive, got {m[key]!r}")
+    com = None
+    if "com" in m:
+        com = _point_or_xy(r, m["com"], path + ("com",), points, f"link {name!r}")
+    inertia = None
+    if "inertia" in m:
+        inertia = r.quantity(m["inertia"], path + ("inertia",), "moment of inertia")
+        if not inertia >= 0:
+            raise r.fail(
+                path + ("inertia",),
+                f"moment of inertia must be zero or positive, got {m['inertia']!r}",
+            )
+    if "uniform_bar" in m:
+        ends = r.names(m["uniform_bar"], path + ("uniform_bar",), "point", 2)
+        for p in ends:
+            if p not in points:
+                raise r.fail(
+                    path + ("uniform_bar",),
+                    f"link {name!r} has no point {p!r}" + suggest(p, list(points)),
+                )
+        if mass is None:
+            raise r.fail(path, f"link {name!r}: 'uniform_bar' needs the bar's 'mass' or 'weight'")
+        (x0, y0), (x1, y1) = points[ends[0]], points[ends[1]]
+        if com is None:
+            com = ((x0 + x1) / 2, (y0 + y1) / 2)
+        if inertia is None:
+            inertia = mass * ((x1 - x0) ** 2 + (y1 - y0) ** 2) / 12.0
+    if mass is not None and com is None:
+        raise r.fail(
+            path,
+            f"link {name!r} has a mass: give its centre of mass 'com' (a point name or [x, y])",
+        )
+    if "point_masses" in m:
+        pm = m["point_masses"]
+        if not isinstance(pm, dict) or not pm:
+            raise r.fail(path + ("point_masses",), "'point_masses' maps point names to masses")
+        bodies = [] if mass is None else [(mass, com, inertia or 0.0)]
+        for p, v in pm.items():
+            here = path + ("point_masses", p)
+            xy = _point_or_xy(r, p, here, points, f"link {name!r}")
+            mp = r.quantity(v, here, "mass")
+            if not mp >= 0:
+                raise r.fail(here, f"mass must be zero or positive, got {v!r}")
+            bodies.append((mp, xy, 0.0))
+        total = sum(b[0] for b in bodies)
+        if total > 0:
+            cx = sum(b[0] * b[1][0] for b in bodies) / total
+            cy = sum(b[0] * b[1][1] for b in bodies) / total
+            inertia = sum(b[2] + b[0] * ((b[1][0] - cx) ** 2 + (b[1][1] - cy) ** 2) for b in bodies)
+            mass, com = total, (cx, cy)
+    link.mass = mass
+    link.com = com
+    link.inertia = inertia if inertia is not None else (0.0 if mass is not None else None)
+
+
+def read_links(r: Reader, value: Any, g: float = STANDARD_G) -> list[Link]:
     if not isinstance(value, dict) or not value:
         raise r.fail(("links",), "'links' must map link names to their points")
-    return [read_link(r, str(n), v) for n, v in value.items()]
+    return [read_link(r, str(n), v, g) for n, v in value.items()]
+
+
+def read_gravity(r: Reader, value: Any) -> tuple[float, float]:
+    """``gravity: 9.81 m/s^2`` (downwards), ``{g: ..., direction: -90 deg}``, or ``off``."""
+    path: KeyPath = ("gravity",)
+    if value is False or value in ("off", "none", 0, 0.0):
+        return (0.0, 0.0)
+    if isinstance(value, dict):
+        m = r.mapping(value, path, ("g", "direction"), "'gravity'", ("g",))
+        g = r.quantity(m["g"], path + ("g",), "acceleration")
+        ang = r.quantity(m.get("direction", -90.0), path + ("direction",), "angle")
+    else:
+        g = r.quantity(value, path, "acceleration")
+        ang = -math.pi / 2
+    if g < 0:
+        raise r.fail(path, "the magnitude of gravity must be zero or positive (give a direction)")
+    return (g * math.cos(ang), g * math.sin(ang))
+
+
+LOAD_KINDS = {
+    "force": {"force", "direction", "at", "on", "frame"},
+    "torque": {"torque", "on"},
+    "spring": {"spring", "stiffness", "free_length", "on"},
+    "damper": {"damper", "coefficient", "on"},
+    "drag": {"drag", "coefficient", "on"},
+}
+LOAD_KEYS = tuple(sorted(set().union(*LOAD_KINDS.values()) | {"when", "description"}))
+
+
+class _Owners:
+    """Which links carry each point, to find the link a load acts on."""
+
+    def __init__(self, r: Reader, ground, links_list) -> None:
+        self.r = r
+        self.owners: dict[str, list[str]] = {p: [GROUND] for p in ground}
+        for lk in links_list:
+            for p in lk.points:
+                self.owners.setdefault(p, []).append(lk.name)
+        self.links = {lk.name for lk in links_list}
+
+    def link(self, path: KeyPath, key: str, point: str, on: Any, allow_ground=False) -> str:
+        r = self.r
+        if on is not None:
+            ln = r.name(on, path + ("on",), "link")
+            pool = self.links | ({GROUND} if allow_ground else set())
+            if ln not in pool:
+                raise r.fail(path + ("on",), f"no link named {ln!r}" + suggest(ln, sorted(pool)))
+            if ln not in self.owners.get(point, []):
+                raise r.fail(path + ("on",), f"link {ln!r} has no point {point!r}")
+            return ln
+        if point not in self.owners:
+            raise r.fail(
+                path + (key,),
+                f"no link has a point {point!r}" + suggest(point, list(self.owners)),
+            )
+        moving = [ln for ln in self.owners[point] if ln != GROUND]
+        if not moving:
+            if allow_ground:
+                return GROUND
+            raise r.fail(
+                path + (key,), f"point {point!r} is on the ground only: a load there does nothing"
+            )
+        if len(moving) > 1:
+            raise r.fail(
+                path,
+                f"point {point!r} is on links {', '.join(moving)}: say which one the load acts "
+                "on with 'on:'",
+            )
+        return moving[0]
+
+
+def read_loads(r: Reader, value: Any, ground, links_list, joints) -> list[Load]:
+    """The ``loads`` section: forces, torques, springs, dampers, each optionally ``when``."""
+    path0: KeyPath = ("loads",)
+    if not isinstance(value, dict):
+        raise r.fail(path0, "'loads' must map load names to their definitions")
+    owners = _Owners(r, ground, links_list)
+    sliders = {j.name for j in joints if isinstance(j, SliderJoint)}
+    out: list[Load] = []
+    for name, spec in value.items():
+        path = path0 + (name,)
+        m = r.mapping(spec, path, LOAD_KEYS, f"load {name!r}")
+        kinds = [k for k in LOAD_KINDS if k in m]
+        if len(kinds) != 1:
+            raise r.fail(
+                path, f"load {name!r} needs exactly one of force, torque, spring, damper, drag"
+            )
+        kind = kinds[0]
+        for key in m:
+            if key not in LOAD_KINDS[kind] | {"when", "description"}:
+                raise r.fail(path + (key,), f"{key!r} does not apply to a {kind} load")
+        when = r.expression(m["when"], path + ("when",)) if "when" in m else None
+        if when is not None and not when.is_condition():
+            raise r.fail(path + ("when",), f"{m['when']!r} is not a condition (use <, >, and...)")
+        if kind == "force":
+            out.append(_read_force(r, m, path, name, when, owners))
+        elif kind == "torque":
+            if "on" not in m:
+                raise r.fail(path, f"torque {name!r} needs 'on': the link it acts on")
+            ln = r.name(m["on"], path + ("on",), "link")
+            if ln not in owners.links:
+                raise r.fail(
+                    path + ("on",), f"no link named {ln!r}" + suggest(ln, sorted(owners.links))
+                )
+            torque = r.quantity(m["torque"], path + ("torque",), "torque")
+            out.append(Torque(name, when, path, ln, torque))
+        elif kind == "drag":
+            point = r.name(m["drag"], path + ("drag",), "point")
+            link = owners.link(path, "drag", point, m.get("on"))
+            c = _coefficient(r, m, path, name)
+            out.append(Damper(name, when, path, drag=(link, point), coefficient=c))
+        elif kind == "damper" and isinstance(m["damper"], str):  # along a slider
+            sl = m["damper"]
+            if sl not in sliders:
+                raise r.fail(
+                    path + ("damper",), f"no slider named {sl!r}" + suggest(sl, sorted(sliders))
+                )
+            c = _coefficient(r, m, path, name)
+            out.append(Damper(name, when, path, slider=sl, coefficient=c))
+        else:  # spring or damper between two points
+            pts = r.names(m[kind], path + (kind,), "point", 2)
+            ons = r.names(m["on"], path + ("on",), "link", 2) if "on" in m else [None, None]
+            ends = tuple(
+                (owners.link(path, kind, p, on, allow_ground=True), p) for p, on in zip(pts, ons)
+            )
+            if kind == "spring":
+                for key in ("stiffness", "free_length"):
+                    if key not in m:
+                        raise r.fail(path, f"spring {name!r} needs '{key}'")
+                k = r.quantity(m["stiffness"], path + ("stiffness",), "stiffness")
+                l0 = r.positive(m["free_length"], path + ("free_length",), "length", True)
+                out.append(Spring(name, when, path, ends, k, l0))
+            else:
+                c = _coefficient(r, m, path, name)
+                out.append(Damper(name, when, path, ends=ends, coefficient=c))
+    return out
+
+
+def _read_force(r: Reader, m: dict, path: KeyPath, name: str, when, owners: _Owners) -> PointForce:
+    if "at" not in m:
+        raise r.fail(path, f"force {name!r} needs 'at': the point it acts at")
+    point = r.name(m["at"], path + ("at",), "point")
+    link = owners.link(path, "at", point, m.get("on"))
+    f = m["force"]
+    if isinstance(f, list):
+        if len(f) != 2:
+            raise r.fail(path + ("force",), "expected [Fx, Fy] or a magnitude")
+        if "direction" in m:
+            raise r.fail(path + ("direction",), "give [Fx, Fy], or a magnitude and a direction")
+        force = (
+            r.quantity(f[0], path + ("force", 0), "force"),
+            r.quantity(f[1], path + ("force", 1), "force"),
+        )
+    else:
+        mag = r.quantity(f, path + ("force",), "force")
+        ang = r.quantity(m.get("direction", 0.0), path + ("direction",), "angle")
+        force = (mag * math.cos(ang), mag * math.sin(ang))
+    frame = m.get("frame", "global")
+    if frame not in ("global", "link"):
+        raise r.fail(path + ("frame",), f"frame is 'global' or 'link', got {frame!r}")
+    return PointForce(name, when, path, link, point, force, frame)
+
+
+def _coefficient(r: Reader, m: dict, path: KeyPath, name: str) -> float:
+    if "coefficient" not in m:
+        raise r.fail(path, f"damper {name!r} needs 'coefficient' (e.g. 15 N s/m)")
+    c = r.quantity(m["coefficient"], path + ("coefficient",), "damping")
+    if c < 0:
+        raise r.fail(path + ("coefficient",), "a damping coefficient must be zero or positive")
+    return c
 
 
 def read_line(
@@ -370,6 +623,7 @@ def read_driver(r: Reader, value: Any, joints) -> Driver:
                 f"direction must be one of {', '.join(ok)}, got {direction!r}",
             )
         d.speed = abs(d.speed) * ok[direction]
+        d.sense = ok[direction]
     if "start" in m:
         s = m["start"]
         if isinstance(s, dict):
@@ -394,6 +648,9 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
     sw = Sweep(where=path)
     kind = "length" if linear else "angle"
     speed = abs(driver.speed) if driver is not None else 1.0
+    if speed == 0 and ("duration" in m or "time_step" in m):
+        key = "duration" if "duration" in m else "time_step"
+        raise r.fail(path + (key,), "a driver at rest (speed 0) has no time: give range and step")
     given = [k for k in ("range", "to", "duration") if k in m]
     if len(given) > 1:
         raise r.fail(path, f"give only one of range, to, duration (got {', '.join(given)})")
@@ -405,7 +662,7 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
         if driver is None or isinstance(driver.start, Limit):
             raise r.fail(path + ("to",), "'to' needs a driver with a numeric start; use 'range'")
         end = r.quantity(m["to"], path + ("to",), kind)
-        travel = (end - driver.start) * (1 if driver.speed > 0 else -1)
+        travel = (end - driver.start) * driver.direction
         if travel < 0:
             raise r.fail(
                 path + ("to",),
@@ -531,9 +788,12 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
     for key in ("links", "joints"):
         if key not in data:
             raise src.error((), f"the file has no '{key}' section")
+    gravity = read_gravity(r, data["gravity"]) if "gravity" in data else None
+    g = math.hypot(*gravity) if gravity is not None and any(gravity) else STANDARD_G
     ground = read_ground(r, data.get("ground"))
-    links = read_links(r, data["links"])
+    links = read_links(r, data["links"], g)
     joints = read_joints(r, data["joints"], ground, links)
+    loads = read_loads(r, data["loads"], ground, links, joints) if "loads" in data else []
     driver = read_driver(r, data["driver"], joints) if "driver" in data else None
     linear = driver is not None and any(
         isinstance(j, SliderJoint) and j.name == driver.joint for j in joints
@@ -551,6 +811,8 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         assembly=read_assembly(r, data["assembly"]) if "assembly" in data else Assembly(),
         outputs=read_outputs(r, data["outputs"]) if "outputs" in data else Outputs(),
         solver=read_solver(r, data["solver"]) if "solver" in data else SolverOptions(),
+        gravity=gravity,
+        loads=loads,
         length_unit=r.length_unit,
         source=src,
     )

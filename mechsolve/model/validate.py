@@ -193,10 +193,8 @@ def validate(mech: Mechanism) -> None:
             p1 = mech.local_point(j.b, d.line[1])
             if math.dist(p0, p1) == 0:
                 raise mech.error(d.where + ("line",), "the driver's line needs two distinct points")
-        if not math.isfinite(d.speed) or d.speed == 0:
-            raise mech.error(
-                d.where + ("speed",), "the driver speed must be a finite non-zero value"
-            )
+        if not math.isfinite(d.speed):
+            raise mech.error(d.where + ("speed",), "the driver speed must be a finite number")
         if isinstance(d.start, Limit):
             check_refs(mech, d.start.quantity, d.where + ("start",))
     sw = mech.sweep
@@ -204,6 +202,10 @@ def validate(mech: Mechanism) -> None:
         raise mech.error(sw.where + ("step",), "the step must be positive")
     if sw.travel is not None and not (sw.travel >= 0 and math.isfinite(sw.travel)):
         raise mech.error(sw.where, "the sweep range must be zero or positive")
+
+    for load in mech.loads:
+        if load.when is not None:
+            check_refs(mech, load.when, load.where + ("when",))
 
     # assembly and outputs refer to existing things
     for k, cond in enumerate(mech.assembly.conditions):

@@ -5,7 +5,10 @@
 * ``point_<P>.png``: x and y position, velocity and acceleration of each output point
   against the driver coordinate;
 * ``links.png``: angle, angular velocity and angular acceleration of the output links;
-* ``sliders.png``: displacement, velocity and acceleration of the output sliders.
+* ``sliders.png``: displacement, velocity and acceleration of the output sliders;
+* with force analysis: ``torque.png`` (the driving torque with its mean and the work per
+  cycle), ``reactions.png`` (magnitudes of all joint reactions) and ``hodographs.png``
+  (vector-tip diagrams of the reactions at the fixed hinges).
 
 Every axis names its quantity and unit. matplotlib is imported only here.
 """
@@ -250,8 +253,137 @@ def plot_sliders(res: Results, path: Path) -> Path | None:
     return path
 
 
+def _switches(res: Results) -> np.ndarray:
+    """Indices k where a conditional load switches between samples k and k+1."""
+    ks: set[int] = set()
+    for on in res.forces.active.values():
+        ks.update(np.flatnonzero(on[1:] != on[:-1]).tolist())
+    return np.array(sorted(ks), dtype=int)
+
+
+def _broken(res: Results, *arrays: np.ndarray) -> list[np.ndarray]:
+    """Copies of ``arrays`` with NaN inserted where a load switches, so that a plotted line
+    shows the jump instead of joining the two sides."""
+    k = _switches(res)
+    if k.size == 0:
+        return [np.asarray(a, float) for a in arrays]
+    return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
+
+
+def _scaled(values: np.ndarray, unit: str) -> tuple[float, str]:
+    big = np.nanmax(np.abs(values)) if np.any(np.isfinite(values)) else 0.0
+    return (1e3, "k" + unit) if big >= 1e4 else (1.0, unit)
+
+
+def plot_effort(res: Results, path: Path) -> Path:
+    """The driving torque (force) against the driver, with its mean and the work."""
+    plt = _plt()
+    xs, xlabel = driver_axis(res)
+    e = res.driving_effort
+    kind, unit = res.effort_name
+    work = res.work()
+    travel = res.u[-1] - res.u[0]
+    mean = work / travel if travel else float("nan")
+    per = "per cycle" if res.is_full_cycle() else "over the sweep"
+    sc, su = _scaled(e, unit)
+    wsc, wu = (1e3, "kJ") if abs(work) >= 1e4 else (1.0, "J")
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    bx, be = _broken(res, xs, e / sc)
+    ax.plot(bx, be, lw=1.6, label=f"driving {kind}")
+    ax.axhline(
+        mean / sc,
+        ls="--",
+        color="C3",
+        lw=1.2,
+        label=f"mean {mean / sc:.6g} {su}; work {per} {work / wsc:.6g} {wu}",
+    )
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel(xlabel)
+    driven = res.mechanism.joint(res.mechanism.driver.joint).b
+    ax.set_ylabel(f"driving {kind} on {driven} [{su}]")
+    ax.set_title(f"{res.mechanism.name}: driving {kind} (counter-clockwise positive)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def ground_joints(res: Results) -> list[str]:
+    """Revolute joints with the ground: the fixed hinges whose reactions an engineer plots."""
+    from ..model import GROUND, PinJoint
+
+    return [j.name for j in res.mechanism.joints if isinstance(j, PinJoint) and GROUND in j.links]
+
+
+def plot_hodographs(res: Results, path: Path) -> Path | None:
+    """Vector-tip diagrams (hodographs) of the reactions at the fixed hinges."""
+    names = ground_joints(res)
+    if not names:
+        return None
+    plt = _plt()
+    k = len(names)
+    cols = min(k, 3)
+    rows = math.ceil(k / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.4 * rows), squeeze=False)
+    for ax, name in zip(axes.flat, names):
+        r = res.reaction(name)
+        fx, fy = np.where(res.forces.ok, r["Fx"], np.nan), np.where(res.forces.ok, r["Fy"], np.nan)
+        scale, sym = (1e3, "k") if np.nanmax(np.hypot(fx, fy)) >= 1e4 else (1.0, "")
+        bx, by = _broken(res, fx / scale, fy / scale)
+        ax.plot(bx, by, "-o", ms=2.5, lw=1.2)
+        i0 = int(np.flatnonzero(np.isfinite(fx))[0])
+        ax.annotate(
+            "",
+            xy=(fx[i0] / scale, fy[i0] / scale),
+            xytext=(0, 0),
+            arrowprops={"arrowstyle": "->", "color": "C3"},
+        )
+        ax.annotate("start", (fx[i0] / scale, fy[i0] / scale), fontsize=7, color="C3")
+        ax.plot([0], [0], "k+", ms=10)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"{name}.Fx [{sym}N]")
+        ax.set_ylabel(f"{name}.Fy [{sym}N]")
+        ax.set_title(f"{res.joint_label(name)}", fontsize=9)
+        ax.grid(True, alpha=0.3)
+    for ax in list(axes.flat)[k:]:
+        ax.axis("off")
+    fig.suptitle(f"{res.mechanism.name}: hodographs of the fixed-hinge reactions")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_reactions(res: Results, path: Path) -> Path:
+    """Magnitudes of all joint reactions against the driver."""
+    plt = _plt()
+    xs, xlabel = driver_axis(res)
+    fig, ax = plt.subplots(figsize=(9, 4.8))
+    mags = {}
+    for j in res.mechanism.joints:
+        r = res.reaction(j.name)
+        mag = np.abs(r["F"]) if "F" in r else np.abs(r["N"])
+        mags[j.name] = np.where(res.forces.ok, mag, np.nan)
+    sc, su = _scaled(np.concatenate(list(mags.values())), "N")
+    for j in res.mechanism.joints:
+        label = res.joint_label(j.name) + ("" if j.kind == "revolute" else " normal")
+        bx, bm = _broken(res, xs, mags[j.name] / sc)
+        ax.plot(bx, bm, lw=1.3, label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(f"reaction magnitude [{su}]")
+    ax.set_title(f"{res.mechanism.name}: joint reactions")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def write_plots(res: Results, outdir: Path) -> list[Path]:
-    """Write all kinematic plots into ``outdir``; return the files written."""
+    """Write all plots into ``outdir``; return the files written."""
     outdir.mkdir(parents=True, exist_ok=True)
     written = [plot_trajectories(res, outdir / "trajectories.png")]
     for p in res.point_names():
@@ -259,6 +391,12 @@ def write_plots(res: Results, outdir: Path) -> list[Path]:
     for f in (plot_links(res, outdir / "links.png"), plot_sliders(res, outdir / "sliders.png")):
         if f is not None:
             written.append(f)
+    if res.forces is not None and np.any(res.forces.ok):
+        written.append(plot_effort(res, outdir / "torque.png"))
+        written.append(plot_reactions(res, outdir / "reactions.png"))
+        h = plot_hodographs(res, outdir / "hodographs.png")
+        if h is not None:
+            written.append(h)
     return written
 
 

@@ -1,0 +1,448 @@
+"""Kinetostatics: joint reactions and the driver's effort at every solved position.
+
+d'Alembert's principle in body coordinates: the constraint forces balance the applied
+and inertia forces, ``Phi_q^T lambda = Q_applied + Q_inertia``, with
+``Q_inertia = -(m a_G, m a_G, J alpha)`` per body, expressed at the body's frame origin.
+The multipliers give the reactions directly:
+
+* revolute joint ``[a, b]``: ``lambda`` is the force exerted on ``b`` by ``a``;
+* slider joint ``[guide, block]``: ``-lambda_1`` is the normal force on the block by the guide
+  (along the line's left normal) and ``-lambda_2`` the moment on the block by the guide;
+* driver: ``-lambda`` is the torque (force) the driver applies to the driven link.
+
+``Phi_q`` is block lower-triangular in the order of the structural groups, so its transpose
+is solved group by group from the last group back to the first (the classic dyad-by-dyad
+kinetostatics), each with the group's own small square block. A group whose block is
+singular at a position (a toggle or dead-centre position) makes the reactions there
+indeterminate: they are reported as such, never filled from a bad solve.
+
+Power balance (a built-in check at every position)::
+
+    P_driver = dT/dt + dV/dt - P_loads
+
+T is the kinetic energy, V the potential energy of gravity and unconditional springs,
+P_loads the power of the applied forces, torques, dampers and conditional springs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..model import GROUND, Damper, PointForce, Spring, Torque
+
+if TYPE_CHECKING:
+    from ..sweep import Analysis, Solution
+
+SINGULAR_RCOND = 1e-10
+
+
+@dataclass
+class ForceResult:
+    """Reactions, driver effort, energies and the power balance over the positions."""
+
+    lam: np.ndarray  # (N, nc) Lagrange multipliers
+    effort: np.ndarray  # (N,) driving torque (N m) or force (N) on the driven link
+    reactions: dict[str, dict[str, np.ndarray]]
+    active: dict[str, np.ndarray]  # per conditional load: where it acts
+    kinetic: np.ndarray
+    potential: np.ndarray
+    power_input: np.ndarray
+    kinetic_rate: np.ndarray
+    potential_rate: np.ndarray
+    power_loads: np.ndarray
+    residual: np.ndarray
+    rcond: np.ndarray  # smallest reciprocal condition of the groups' blocks
+    singular: list[tuple[int, str]] = field(default_factory=list)  # (position, group label)
+    ok: np.ndarray | None = None
+    load_power: dict[str, np.ndarray] = field(default_factory=dict)  # power of each load
+    stroke_extremes: list[tuple[float, float]] = field(default_factory=list)
+
+
+class _Q:
+    """Accumulates generalised forces (nq, N) and their power."""
+
+    def __init__(self, an: Analysis, sol: Solution) -> None:
+        self.st = sol.state
+        self.nb = an.system.nb
+        self.Q = np.zeros((3 * self.nb, sol.state.n))
+
+    def force(self, b: int, s, fx, fy) -> None:
+        """A force (fx, fy) at the local point ``s`` of body ``b``."""
+        if b == self.nb:
+            return
+        rx, ry = self.st.rotated(b, np.asarray(s, float))
+        self.Q[3 * b] += fx
+        self.Q[3 * b + 1] += fy
+        self.Q[3 * b + 2] += rx * fy - ry * fx
+
+    def torque(self, b: int, t) -> None:
+        if b != self.nb:
+            self.Q[3 * b + 2] += t
+
+
+def stroke_function(extremes: list[tuple[float, float]], replay: bool = False):
+    """``stroke(q)``: the fraction of ``q`` between its extremes over the sweep.
+
+    Over the sweep, the extremes are found from the samples and refined by a parabola
+    through the three samples around each one (so that a coarse sweep still finds the true
+    ends of the stroke), and recorded in ``extremes``. With ``replay``, the recorded
+    extremes are used again, in the same order: for evaluating a condition at a single
+    position between samples.
+    """
+    calls = iter(extremes) if replay else None
+
+    def stroke(q):
+        q = np.asarray(q, float)
+        if calls is not None:
+            lo, hi = next(calls)
+        else:
+            good = np.flatnonzero(np.isfinite(q))
+            if good.size < 2:
+                return np.full_like(q, np.nan)
+            lo = _extreme(q, good, np.argmin, -1.0)
+            hi = _extreme(q, good, np.argmax, 1.0)
+            extremes.append((lo, hi))
+        span = hi - lo
+        return (q - lo) / span if span > 0 else np.zeros_like(q)
+
+    return stroke
+
+
+def _extreme(q, good, arg, sign):
+    vals = q[good]
+    k = int(arg(vals))
+    best = vals[k]
+    if 0 < k < len(vals) - 1 and good[k + 1] - good[k - 1] == 2:
+        a, b, c = vals[k - 1], vals[k], vals[k + 1]
+        den = a - 2 * b + c
+        if den * sign < 0:  # a true parabola vertex
+            best = b - (c - a) ** 2 / (8 * den)
+    return best
+
+
+def condition_masks(
+    an: Analysis, sol: Solution, view, extremes: list, replay: bool = False
+) -> dict[str, np.ndarray]:
+    """Where each conditional load acts (False where a position was not solved)."""
+    out = {}
+    funcs = {"stroke": stroke_function(extremes, replay)}
+    n = len(sol.u)
+    for load in an.mech.loads:
+        if load.when is None:
+            continue
+        with np.errstate(invalid="ignore"):
+            val = load.when.evaluate(view, funcs)
+        out[load.name] = np.broadcast_to(np.asarray(val, bool), (n,)) & sol.ok
+    return out
+
+
+def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
+    """Kinetostatic analysis of a solved sweep (positions, velocities, accelerations)."""
+    from ..sweep import StateView
+
+    mech, sys_ = an.mech, an.system
+    st = sol.state
+    n = st.n
+    nb = sys_.nb
+    view = StateView(an, st)
+    acc = _Q(an, sol)
+    gx, gy = mech.gravity_vector()
+
+    kinetic = np.zeros(n)
+    kinetic_rate = np.zeros(n)
+    potential = np.zeros(n)
+    potential_rate = np.zeros(n)
+    power_loads = np.zeros(n)
+
+    # inertia and gravity, at each body's centre of mass
+    for lk in mech.links:
+        if not lk.mass and not lk.inertia:
+            continue
+        b = sys_.index[lk.name]
+        m = lk.mass or 0.0
+        J = lk.inertia or 0.0
+        s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
+        xg, yg = st.point(b, s)
+        vx, vy = st.point_velocity(b, s)
+        ax, ay = st.point_acceleration(b, s)
+        w, al = st.w[b], st.al[b]
+        acc.force(b, s, m * (gx - ax), m * (gy - ay))
+        acc.torque(b, -J * al)
+        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * J * w * w
+        kinetic_rate += m * (vx * ax + vy * ay) + J * w * al
+        potential += -m * (gx * xg + gy * yg)
+        potential_rate += -m * (gx * vx + gy * vy)
+
+    extremes: list[tuple[float, float]] = []
+    active = condition_masks(an, sol, view, extremes)
+    load_power: dict[str, np.ndarray] = {}
+    for load in mech.loads:
+        before = power_loads.copy()
+        on = active.get(load.name)
+        f = on.astype(float) if on is not None else 1.0
+        if isinstance(load, PointForce):
+            b = sys_.index[load.link]
+            s = an.mech.local_point(load.link, load.point)
+            fx, fy = load.force
+            if load.frame == "link":
+                fx, fy = st.rotated(b, np.array(load.force))
+            fx, fy = fx * f, fy * f
+            acc.force(b, s, fx, fy)
+            vx, vy = st.point_velocity(b, s)
+            power_loads += fx * vx + fy * vy
+        elif isinstance(load, Torque):
+            b = sys_.index[load.link]
+            acc.torque(b, load.torque * f)
+            power_loads += load.torque * f * st.w[b]
+        elif isinstance(load, Damper) and load.slider is not None:
+            sl = sys_.by_joint[load.slider]
+            ux, uy, *_ = sl.frame(st)
+            sd = sl.velocity(st)
+            fmag = -load.coefficient * sd * f  # on the block, along the line
+            acc.force(sl.b, sl.sb, fmag * ux, fmag * uy)
+            xp, yp = st.point(sl.b, sl.sb)
+            # the reaction acts on the guide at the material point under the block
+            _force_at_global(acc, st, sl.a, xp, yp, -fmag * ux, -fmag * uy)
+            power_loads += fmag * sd
+        elif isinstance(load, Damper) and load.drag is not None:
+            b = sys_.index[load.drag[0]]
+            s = an.mech.local_point(*load.drag)
+            vx, vy = st.point_velocity(b, s)
+            c = load.coefficient * f
+            acc.force(b, s, -c * vx, -c * vy)
+            power_loads += -c * (vx * vx + vy * vy)
+        else:  # spring or damper between two points
+            (la, pa), (lb, pb) = load.ends
+            ba = nb if la == GROUND else sys_.index[la]
+            bb = nb if lb == GROUND else sys_.index[lb]
+            sa, sb = mech.local_point(la, pa), mech.local_point(lb, pb)
+            xa, ya = st.point(ba, sa)
+            xb, yb = st.point(bb, sb)
+            vax, vay = st.point_velocity(ba, sa)
+            vbx, vby = st.point_velocity(bb, sb)
+            dx, dy = xb - xa, yb - ya
+            L = np.hypot(dx, dy)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                ex, ey = dx / L, dy / L
+            Ld = ex * (vbx - vax) + ey * (vby - vay)
+            if isinstance(load, Spring):
+                t = load.stiffness * (L - load.free_length)  # tension
+                if load.when is None:
+                    potential += 0.5 * load.stiffness * (L - load.free_length) ** 2
+                    potential_rate += t * Ld
+                else:
+                    power_loads += -t * f * Ld
+                t = t * f
+            else:
+                t = load.coefficient * Ld * f
+                power_loads += -t * Ld
+            # tension t pulls b towards a and a towards b
+            acc.force(bb, sb, -t * ex, -t * ey)
+            acc.force(ba, sa, t * ex, t * ey)
+        load_power[load.name] = power_loads - before
+
+    lam, rcond, singular = _solve_groups(an, st, acc.Q)
+    drv = sys_.driver
+    row = next(r.start for r in sys_.rows if r.constraint is drv)
+    effort = -lam[:, row]
+    reactions = _reactions(an, st, lam)
+    power_input = effort * np.asarray(an.speed)
+    residual = power_input - kinetic_rate - potential_rate + power_loads
+    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
+    return ForceResult(
+        lam,
+        effort,
+        reactions,
+        active,
+        kinetic,
+        potential,
+        power_input,
+        kinetic_rate,
+        potential_rate,
+        power_loads,
+        residual,
+        rcond,
+        singular,
+        ok,
+        load_power,
+        extremes,
+    )
+
+
+def _force_at_global(acc: _Q, st, b: int, x, y, fx, fy) -> None:
+    if b == acc.nb:
+        return
+    rx, ry = x - st.x[b], y - st.y[b]
+    acc.Q[3 * b] += fx
+    acc.Q[3 * b + 1] += fy
+    acc.Q[3 * b + 2] += rx * fy - ry * fx
+
+
+def _solve_groups(an: Analysis, st, Q: np.ndarray):
+    """Solve Phi_q^T lambda = Q group by group, last group first."""
+    sys_ = an.system
+    n = st.n
+    lam = np.full((n, sys_.nc), np.nan)
+    R = Q.copy()  # applied + inertia + reactions of the groups solved so far
+    row_of = {id(r.constraint): r.start for r in sys_.rows}
+    rcond = np.ones(n)
+    singular: list[tuple[int, str]] = []
+    for g in reversed(an.plan):
+        col = {b: k for k, b in enumerate(g.bodies)}
+        m = sum(c.m for c in g.constraints)
+        nn = 3 * len(g.bodies)
+        J = np.zeros((n, m, nn))
+        blocks = []
+        r0 = 0
+        for c in g.constraints:
+            jac = c.jacobian(st)
+            blocks.append((c, r0, jac))
+            for body, blk in jac.items():
+                k = col.get(body)
+                if k is not None:
+                    J[:, r0 : r0 + c.m, 3 * k : 3 * k + 3] = blk.transpose(2, 0, 1)
+            r0 += c.m
+        rhs = np.stack([R[3 * b + k] for b in g.bodies for k in range(3)], axis=1)  # (N, nn)
+        good = np.all(np.isfinite(J), axis=(1, 2))
+        finite_rhs = np.all(np.isfinite(rhs), axis=1)
+        x = np.full((n, m), np.nan)
+        rc = np.zeros(n)
+        if np.any(good):
+            Jg = J[good]
+            # equilibrate rows and columns so that the condition number is unit-free
+            cs = np.linalg.norm(Jg, axis=1, keepdims=True)
+            cs[cs == 0] = 1.0
+            Js = Jg / cs
+            rs = np.linalg.norm(Js, axis=2, keepdims=True)
+            rs[rs == 0] = 1.0
+            Js = Js / rs
+            sv = np.linalg.svd(Js, compute_uv=False)
+            rc_g = np.where(sv[:, 0] > 0, sv[:, -1] / sv[:, 0], 0.0)
+            rc[good] = rc_g
+            regular = rc_g > SINGULAR_RCOND
+            idx = np.flatnonzero(good)[regular]
+            idx = idx[finite_rhs[idx]]
+            if idx.size:
+                JT = np.transpose(J[idx], (0, 2, 1))
+                x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
+            for i in np.flatnonzero(good)[~regular]:
+                singular.append((int(i), g.label))
+        rcond = np.minimum(rcond, rc)
+        for c, r0, jac in blocks:
+            lc = x[:, r0 : r0 + c.m]  # (N, m_c)
+            lam[:, row_of[id(c)] : row_of[id(c)] + c.m] = lc
+            for body, blk in jac.items():  # blk (m_c, 3, N)
+                if body == sys_.nb:
+                    continue
+                for k in range(3):
+                    R[3 * body + k] -= np.einsum("mn,nm->n", blk[:, k, :], lc)
+    singular.sort()
+    return lam, rcond, singular
+
+
+def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """Named reaction components of every joint, with the sign conventions above."""
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for row in an.system.rows:
+        c = row.constraint
+        if c.kind == "revolute":
+            fx, fy = lam[:, row.start], lam[:, row.start + 1]
+            out[c.name] = {"Fx": fx, "Fy": fy, "F": np.hypot(fx, fy)}
+        elif c.kind == "slider":
+            nrm = -lam[:, row.start]
+            mom = -lam[:, row.start + 1]
+            ux, uy, nx, ny, _, _ = c.frame(st)
+            out[c.name] = {"N": nrm, "M": mom, "Fx": nrm * nx, "Fy": nrm * ny}
+    return out
+
+
+def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
+    """Work done by the driver over the sweep (J), by the energy method.
+
+    ``W = (T + V)(end) - (T + V)(start) - W_loads``. The kinetic and potential energies are
+    state functions, exact at the ends. A constant force (global components) or torque does
+    work ``F . (r_1 - r_0)`` (``T (theta_1 - theta_0)``) over each interval where it acts;
+    where a condition switches between two samples, the switch is located by bisection on
+    the driver coordinate, so the result does not depend on the step. The work of other
+    loads (springs under a condition, dampers, link-fixed forces) is integrated with
+    Simpson's rule. Falls back to Simpson's rule on the driver's effort if some position
+    was not solved.
+    """
+    from scipy.integrate import simpson
+
+    ok = fr.ok
+    if np.sum(ok) < 2:
+        return float("nan")
+    if not np.all(ok):
+        return float(simpson(fr.effort[ok], x=sol.u[ok]))
+    mech, sys_ = an.mech, an.system
+    st = sol.state
+    energy = fr.kinetic + fr.potential
+    work = energy[-1] - energy[0]
+    for load in mech.loads:
+        if isinstance(load, PointForce) and load.frame == "global":
+            b = sys_.index[load.link]
+            s = mech.local_point(load.link, load.point)
+
+            def pos(state, i, b=b, s=s, f=load.force):
+                x, y = state.point(b, s, [i])
+                return f[0] * float(x[0]) + f[1] * float(y[0])
+
+        elif isinstance(load, Torque):
+            b = sys_.index[load.link]
+
+            def pos(state, i, b=b, t=load.torque):
+                return t * float(state.th[b, i])
+
+        else:
+            p = fr.load_power[load.name]
+            work -= float(simpson(p, x=sol.t))
+            continue
+        # "pos" is the load's potential-like function: its work is a difference of it
+        on = fr.active.get(load.name)
+        if on is None:
+            work -= pos(st, -1) - pos(st, 0)
+            continue
+        for k in range(len(sol.u) - 1):
+            if on[k] and on[k + 1]:
+                work -= pos(st, k + 1) - pos(st, k)
+            elif on[k] != on[k + 1]:
+                us, ss = _switch(an, sol, fr, load, k)
+                if on[k]:
+                    work -= pos(ss, 0) - pos(st, k)
+                else:
+                    work -= pos(st, k + 1) - pos(ss, 0)
+    return float(work)
+
+
+def _switch(an: Analysis, sol: Solution, fr: ForceResult, load, k: int, iters: int = 60):
+    """Bisect the driver coordinate between samples k and k+1 where ``load`` switches."""
+    from ..sweep import StateView
+
+    lo, hi = float(sol.u[k]), float(sol.u[k + 1])
+    on_lo = bool(fr.active[load.name][k])
+    state = None
+    for _ in range(iters):
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):
+            break
+        one = an.solve(np.array([mid]), start=sol.start, near=(sol, k))
+        view = StateView(an, one.state)
+        with np.errstate(invalid="ignore"):
+            val = bool(
+                np.asarray(
+                    load.when.evaluate(
+                        view, {"stroke": stroke_function(list(fr.stroke_extremes), True)}
+                    )
+                ).ravel()[0]
+            )
+        if val == on_lo:
+            lo = mid
+        else:
+            hi = mid
+        state = one.state
+    one = an.solve(np.array([0.5 * (lo + hi)]), start=sol.start, near=(sol, k))
+    return 0.5 * (lo + hi), one.state if one.ok[0] else state
