@@ -137,6 +137,14 @@ class CheckReport:
         lines.append(f"  start position ({an.format_u(self.start_u)}), global coordinates [m]:")
         for p, (x, y) in self.start_points.items():
             lines.append(f"    {p:>8s}: ({x:.6g}, {y:.6g})")
+        red = self.analysis.redundancy
+        if red is not None:
+            lines.append(
+                f"  redundant constraints: {red.count} of the {self.analysis.system.nc} "
+                f"equations repeat the others (rank {red.rank}); they involve "
+                f"{', '.join(red.equations)}. Kinematics is solved by least squares on all "
+                "equations; reactions there are not unique (minimum-norm values are reported)"
+            )
         for n in self.notes:
             lines.append("  " + n)
         return "\n".join(lines)
@@ -154,7 +162,7 @@ def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     J = free.jacobian(st)[0]
     if J.size:
         sv = np.linalg.svd(J, compute_uv=False)
-        rank = int(np.sum(sv > 1e-9 * max(1.0, sv[0])))
+        rank = int(np.sum(sv > 1e-9 * sv[0]))
     else:
         rank = 0
     branches = []

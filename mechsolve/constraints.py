@@ -275,6 +275,30 @@ class SliderDriverConstraint(Constraint):
         return (np.broadcast_to(np.asarray(udd, float), (st.n,)) + g)[None, :]
 
 
+class RowSubset(Constraint):
+    """Some of the equations of another constraint (the rest being redundant)."""
+
+    def __init__(self, base: Constraint, rows: list[int]) -> None:
+        self.base = base
+        self.rows = list(rows)
+        self.m = len(self.rows)
+        self.name = base.name
+        self.kind = base.kind + " (part)"
+        self.a, self.b = base.a, base.b
+
+    def residual(self, st: State, u) -> np.ndarray:
+        return self.base.residual(st, u)[self.rows]
+
+    def jacobian(self, st: State) -> dict[int, np.ndarray]:
+        return {b: blk[self.rows] for b, blk in self.base.jacobian(st).items()}
+
+    def nu(self, st: State, ud) -> np.ndarray:
+        return self.base.nu(st, ud)[self.rows]
+
+    def gamma(self, st: State, udd) -> np.ndarray:
+        return self.base.gamma(st, udd)[self.rows]
+
+
 @dataclass
 class Row:
     """Where a constraint's equations sit in the system."""
@@ -327,6 +351,30 @@ class ConstraintSystem:
             k += c.m
         self.nc = k
         self.nq = 3 * self.nb
+
+    def without(self, drop: list[tuple[Constraint, int]]) -> ConstraintSystem:
+        """A copy without the equations ``drop`` (constraint, equation index)."""
+        import copy
+
+        out = copy.copy(self)
+        gone: dict[int, set[int]] = {}
+        for c, k in drop:
+            gone.setdefault(id(c), set()).add(k)
+        cons: list[Constraint] = []
+        for c in self.constraints:
+            rm = gone.get(id(c), set())
+            if not rm:
+                cons.append(c)
+            elif len(rm) < c.m:
+                cons.append(RowSubset(c, [k for k in range(c.m) if k not in rm]))
+        out.constraints = cons
+        out.rows = []
+        k = 0
+        for c in cons:
+            out.rows.append(Row(c, k))
+            k += c.m
+        out.nc = k
+        return out
 
     # -- evaluation over N positions --------------------------------------------------
     def residual(self, st: State, u) -> np.ndarray:

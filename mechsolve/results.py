@@ -56,15 +56,17 @@ class SliderMotion:
 
 @dataclass
 class Column:
-    """One CSV column: a quantity name, its unit and its values."""
+    """One CSV column: a quantity name, its unit, its values and an optional note."""
 
     name: str
     unit: str
     values: np.ndarray
+    note: str = ""
 
     @property
     def header(self) -> str:
-        return f"{self.name} [{self.unit}]" if self.unit else self.name
+        head = f"{self.name} [{self.unit}]" if self.unit else self.name
+        return f"{head} ({self.note})" if self.note else head
 
 
 def unwrap_angle(th: np.ndarray) -> np.ndarray:
@@ -229,10 +231,107 @@ class Results:
             cols += self.force_columns()
         sol = self.solution
         cols += [
+            Column("jacobian.rcond", "-", np.where(self.ok, self.jacobian_rcond(), np.nan)),
             Column("solver.iterations", "-", sol.iterations.astype(float)),
             Column("solver.residual", "m", sol.residual),
         ]
         return cols
+
+    # -- conditioning and design figures --------------------------------------------------
+    def jacobian_rcond(self) -> np.ndarray:
+        """Reciprocal condition number of the constraint Jacobian at each position (the
+        smallest over the groups' equilibrated blocks): 1 well conditioned, 0 singular."""
+        if not hasattr(self, "_rcond"):
+            from .conditioning import jacobian_rcond
+
+            with np.errstate(invalid="ignore", divide="ignore"):
+                self._rcond = jacobian_rcond(self.analysis, self.solution.state)
+        return self._rcond
+
+    def limit_positions(self):
+        """Limit positions of the rockers and sliders (see :mod:`mechsolve.limits`)."""
+        if not hasattr(self, "_limits"):
+            from .limits import limit_positions
+
+            self._limits = limit_positions(self)
+        return self._limits
+
+    def transmission_angles(self):
+        """The smallest transmission angle of each loop (see :mod:`mechsolve.limits`)."""
+        from .limits import transmission_angles
+
+        return transmission_angles(self)
+
+    @property
+    def events(self):
+        """Bifurcations, dead zones stepped over, near-singular minima met by the sweep."""
+        return self.solution.events
+
+    def design_summary(self) -> list[str]:
+        lines = []
+        if len(self.u) < 2:
+            return lines
+        ev = self.events
+        if ev:
+            parts = []
+            for e in ev[:8]:
+                where = self.analysis.format_u(e.u)
+                if e.kind == "bifurcation":
+                    parts.append(
+                        f"{e.group} passes a bifurcation at {where}: followed the smooth motion "
+                        "onto its other branch"
+                    )
+                elif e.kind == "dead zone":
+                    parts.append(f"{e.group} cannot close near {where} (between two samples)")
+                else:
+                    parts.append(
+                        f"{e.group} near-singular at {where} (transmission angle "
+                        f"{math.degrees(e.transmission):.3g}°)"
+                    )
+            more = f"; and {len(ev) - 8} more" if len(ev) > 8 else ""
+            lines.append("  singular positions: " + "; ".join(parts) + more)
+        rc = np.where(self.ok, self.jacobian_rcond(), np.nan)
+        if np.any(np.isfinite(rc)):
+            i = int(np.nanargmin(rc))
+            lines.append(
+                f"  conditioning: smallest reciprocal condition of the constraint Jacobian "
+                f"{rc[i]:.3g} at {self.describe_u(i)}"
+            )
+        lim = self.limit_positions()
+        if lim:
+            parts = []
+            ratios = []
+            for lp in lim:
+                a, b = self.analysis.format_u(lp.u_low), self.analysis.format_u(lp.u_high)
+                if lp.kind == "rocker":
+                    parts.append(
+                        f"rocker {lp.name} {math.degrees(lp.low):.6g}° at {a} to "
+                        f"{math.degrees(lp.high):.6g}° at {b} (swing {math.degrees(lp.swing):.6g}°)"
+                    )
+                else:
+                    parts.append(
+                        f"slider {lp.name} {lp.low:.6g} m at {a} to {lp.high:.6g} m at {b} "
+                        f"(stroke {lp.swing:.6g} m)"
+                    )
+                if lp.time_ratio is not None:
+                    ratios.append(
+                        f"{lp.name} K = {lp.time_ratio:.4g} "
+                        f"({math.degrees(max(lp.forward, lp.back)):.5g}° "
+                        f"/ {math.degrees(min(lp.forward, lp.back)):.5g}° of the driver)"
+                    )
+            lines.append("  limit positions: " + "; ".join(parts))
+            if ratios:
+                lines.append("  time ratio: " + "; ".join(ratios))
+        tr = self.transmission_angles()
+        if tr:
+            lines.append(
+                "  minimum transmission angle: "
+                + "; ".join(
+                    f"{t.group} {math.degrees(t.angle):.4g}° at {self.analysis.format_u(t.u)}"
+                    for t in tr
+                )
+            )
+        return lines
 
     # -- forces -------------------------------------------------------------------------
     @property
@@ -266,23 +365,16 @@ class Results:
             return np.where(ok, a, np.nan)
 
         kind, unit = self.effort_name
-        cols = [Column(f"input.{kind}", unit, m(f.effort))]
+        cols = [Column(f"input.{kind}", unit, m(f.effort), self._note("driver", "effort"))]
         for j in self.mechanism.joints:
             lab = self.joint_label(j.name)
             r = f.reactions[j.name]
-            if "F" in r:
-                cols += [
-                    Column(f"{lab}.Fx", "N", m(r["Fx"])),
-                    Column(f"{lab}.Fy", "N", m(r["Fy"])),
-                    Column(f"{lab}.F", "N", m(r["F"])),
-                ]
-            else:
-                cols += [
-                    Column(f"{lab}.N", "N", m(r["N"])),
-                    Column(f"{lab}.M", "N*m", m(r["M"])),
-                    Column(f"{lab}.Fx", "N", m(r["Fx"])),
-                    Column(f"{lab}.Fy", "N", m(r["Fy"])),
-                ]
+            comps = (
+                [("Fx", "N"), ("Fy", "N"), ("F", "N")]
+                if "F" in r
+                else [("N", "N"), ("M", "N*m"), ("Fx", "N"), ("Fy", "N")]
+            )
+            cols += [Column(f"{lab}.{c}", un, m(r[c]), self._note(j.name, c)) for c, un in comps]
         for name, on in f.active.items():
             cols.append(Column(f"load.{name}.active", "-", on.astype(float)))
         cols += [
@@ -296,6 +388,11 @@ class Results:
             Column("forces.rcond", "-", np.where(self.ok, f.rcond, np.nan)),
         ]
         return cols
+
+    def _note(self, joint: str, component: str) -> str:
+        """``minimum-norm`` for a reaction component that redundant constraints leave
+        indeterminate."""
+        return "minimum-norm" if component in self.forces.nonunique.get(joint, ()) else ""
 
     def power_scale(self) -> float:
         """The largest power term over the sweep: the scale of the power-balance check."""
@@ -396,6 +493,15 @@ class Results:
                 else ""
             )
         )
+        red = self.analysis.redundancy
+        if red is not None:
+            lines.append(
+                f"  redundant constraints: {red.count} equation(s) repeat the others "
+                f"(the constraint Jacobian has rank {red.rank} for {self.analysis.system.nc} "
+                f"equations), among: {', '.join(red.equations)}; solved by least squares on "
+                "all of them"
+            )
+        lines += self.design_summary()
         if self.forces is not None:
             lines += self.force_summary()
         for w in self.warnings:
@@ -442,6 +548,15 @@ class Results:
             self.warnings.append(
                 f"the power balance residual reaches {rel:.2g} of the largest power term "
                 "(above 1e-6): check the results"
+            )
+        if f.nonunique:
+            parts = [f"{j} ({', '.join(sorted(c))})" for j, c in f.nonunique.items()]
+            unique = "driver" not in f.nonunique
+            lines.append(
+                "  statically indeterminate (redundant constraints): the reactions "
+                + "; ".join(parts)
+                + " are not unique; the CSV gives the minimum-norm solution, labelled so"
+                + (f"; the driving {kind} is unique" if unique else "")
             )
         if f.singular:
             where = ", ".join(self.describe_u(i) for i, _ in f.singular[:5])

@@ -27,6 +27,10 @@ def grubler(mech: Mechanism) -> int:
 
 def _incidence(c: Constraint, nb: int) -> list[list[int]]:
     """For each equation of ``c``, the coordinates (3*body + k) it involves."""
+    base = getattr(c, "base", None)
+    if base is not None:  # a subset of another constraint's equations
+        full = _incidence(base, nb)
+        return [full[k] for k in c.rows]
     rows: list[list[int]] = []
     bodies = [b for b in (c.a, c.b) if b != nb]
     if c.kind == "revolute":
@@ -55,17 +59,37 @@ class StructureError(InputError):
     """The constraints do not determine every coordinate exactly once."""
 
 
-def _matching(rows: list[list[int]], nvar: int) -> tuple[list[int], list[int]]:
-    """Maximum matching rows -> variables (greedy start, then augmenting paths)."""
+class RedundantStructure(StructureError):
+    """More equations than coordinates, every coordinate determined: redundant constraints.
+
+    ``extra`` lists (constraint, equation index) of the equations left over; whether they
+    are consistent with the others can only be told numerically, at a position.
+    """
+
+    def __init__(self, message: str, extra, **kw) -> None:
+        super().__init__(message, **kw)
+        self.extra = extra
+
+
+def _matching(
+    rows: list[list[int]], nvar: int, first: list[int] | None = None
+) -> tuple[list[int], list[int]]:
+    """Maximum matching rows -> variables (greedy start, then augmenting paths).
+
+    Rows listed in ``first`` are matched first, so that when some rows must stay
+    unmatched (redundant constraints) they are not among those.
+    """
     row_of = [-1] * nvar
     var_of = [-1] * len(rows)
-    for r, vs in enumerate(rows):
+    order = list(first or []) + [r for r in range(len(rows)) if r not in set(first or [])]
+    for r in order:
+        vs = rows[r]
         for v in vs:
             if row_of[v] < 0:
                 row_of[v] = r
                 var_of[r] = v
                 break
-    for r0 in range(len(rows)):
+    for r0 in order:
         if var_of[r0] >= 0:
             continue
         # breadth-first search for an augmenting path from row r0
@@ -168,7 +192,8 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
         for r in _incidence(c, nb):
             rows.append(r)
             row_con.append(ci)
-    var_of, row_of = _matching(rows, nvar)
+    first = [r for r, ci in enumerate(row_con) if system.constraints[ci].kind == "driver"]
+    var_of, row_of = _matching(rows, nvar, first)
     free = [v for v in range(nvar) if row_of[v] < 0]
     extra = [r for r in range(len(rows)) if var_of[r] < 0]
     if free or extra:
@@ -259,8 +284,12 @@ def _structure_error(system, free, extra, row_con) -> StructureError:
             )
     else:
         cons = []
+        extra_eq = []
         for r in extra:
-            c = system.constraints[row_con[r]]
+            ci = row_con[r]
+            c = system.constraints[ci]
+            local = r - row_con.index(ci)
+            extra_eq.append((c, local))
             if c.name not in cons:
                 cons.append(c.name)
         msg = (
@@ -269,4 +298,5 @@ def _structure_error(system, free, extra, row_con) -> StructureError:
             + ", ".join(repr(c) for c in cons)
             + " add constraints that nothing is left to satisfy (redundant constraints)"
         )
+        return RedundantStructure(msg, extra_eq, file=mech.source.file if mech.source else None)
     return StructureError(msg, file=mech.source.file if mech.source else None)

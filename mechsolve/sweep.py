@@ -27,6 +27,7 @@ from .groups import Drive, Group, NewtonGroup, build_plan
 from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
 from .solvers.newton import solve as newton_solve
 from .state import State
+from .structure import RedundantStructure
 
 
 @dataclass
@@ -86,6 +87,20 @@ class StateView:
 
 
 @dataclass
+class Redundancy:
+    """Redundant constraints found at the start position.
+
+    ``count`` equations repeat the others: the constraint Jacobian has rank ``rank``, less
+    than its number of equations. ``equations`` names the equations that take part in the
+    dependencies (any ``count`` of them could be left out).
+    """
+
+    count: int
+    rank: int
+    equations: list[str]
+
+
+@dataclass
 class StartAssembly:
     """The branch chosen for every group at the start, and how it was chosen."""
 
@@ -107,6 +122,24 @@ class Failure:
 
 
 @dataclass
+class Event:
+    """Something the sweep met between or at its positions, in a group with two branches.
+
+    ``kind`` is ``"bifurcation"`` (the group passed through a singular configuration where
+    its two branches meet; the sweep followed the smooth motion onto the other branch),
+    ``"dead zone"`` (the group cannot close somewhere between two solved positions: the
+    motion between them is not continuous) or ``"near-singular"`` (a local minimum of the
+    transmission angle below 3 degrees).
+    """
+
+    kind: str
+    group: str
+    u: float
+    after: int  # the event lies after sample ``after`` (between it and the next one)
+    transmission: float  # transmission angle at the event (rad)
+
+
+@dataclass
 class Solution:
     """Everything the sweep computed, before formatting."""
 
@@ -124,6 +157,8 @@ class Solution:
     warnings: list[str] = field(default_factory=list)
     has_velocity: bool = True
     has_acceleration: bool = True
+    events: list[Event] = field(default_factory=list)
+    flips: dict[int, list[float]] = field(default_factory=dict)  # group -> where its branch flips
 
 
 class Analysis:
@@ -147,14 +182,35 @@ class Analysis:
         self.method = method or mech.solver.method
         # the assembly at the start always uses the split into groups, so that branch
         # conditions apply loop by loop; the sweep uses the chosen method
-        self.groups: list[Group] = build_plan(
-            self.system, "auto", self.atol, mech.solver.max_iterations
-        )
-        self.plan: list[Group] = (
-            self.groups
-            if self.method == "auto"
-            else build_plan(self.system, self.method, self.atol, mech.solver.max_iterations)
-        )
+        its = mech.solver.max_iterations
+        self.redundant: list = []  # surplus equations (constraint, index), if any
+        self.redundancy: Redundancy | None = None
+        try:
+            self.groups: list[Group] = build_plan(self.system, "auto", self.atol, its)
+        except RedundantStructure as exc:
+            # redundant constraints: assemble on the others, sweep by least squares on all
+            self.redundant = exc.extra
+            self.groups = build_plan(self.system.without(exc.extra), "auto", self.atol, its)
+            self.method = "newton"
+        if self.redundant:
+            self.plan = [
+                NewtonGroup(
+                    list(range(self.system.nb)),
+                    list(self.system.constraints),
+                    self.system.body_names,
+                    self.atol,
+                    its,
+                )
+            ]
+        elif self.method == "auto":
+            self.plan = self.groups
+        else:
+            self.plan = build_plan(self.system, self.method, self.atol, its)
+        for g in self.groups + self.plan:
+            if hasattr(g, "scale"):
+                g.scale = self.scale
+            if hasattr(g, "lref"):
+                g.lref = self.scale
         self.points: dict[str, PointRef] = {}
         nb = self.system.nb
         for p, xy in mech.ground.items():
@@ -181,7 +237,7 @@ class Analysis:
     def format_u(self, u: float) -> str:
         if self.linear:
             return f"driver position {u:.6g} m"
-        return f"driver angle {math.degrees(u):.6g}°"
+        return f"driver angle {math.degrees(u) % 360:.6g}°"
 
     def sweep_values(self, u0: float, step: float | None = None, travel: float | None = None):
         """Driver values and times of the positions of the sweep."""
@@ -204,34 +260,6 @@ class Analysis:
         return u, t
 
     # -- positions ------------------------------------------------------------------
-    def _positions(self, st: State, drive: Drive, modes, q_start, groups=None):
-        """Solve positions of all groups. Returns ok per group, indicators, iters, methods."""
-        n = st.n
-        ok_all = np.ones(n, bool)
-        oks, inds = [], []
-        iters = np.zeros(n, int)
-        methods = np.full(n, "closed form", dtype=object)
-        for gi, g in enumerate(self.plan):
-            if isinstance(g, NewtonGroup):
-                qs = q_start.get(gi)
-                if qs is None:
-                    qs = g.get_q(st, 0)
-                ok, it, meth = g.sweep(st, drive, qs, ok_all)
-                iters = np.maximum(iters, it)
-                mask = meth != ""
-                methods[mask] = np.where(
-                    methods[mask] == "closed form", meth[mask], methods[mask] + "+" + meth[mask]
-                )
-                ind = g.indicator(st)
-            else:
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    ok, ind = g.position(st, drive, modes[gi])
-            ok = ok & ok_all
-            oks.append(ok)
-            inds.append(ind)
-            ok_all = ok_all & ok
-        return oks, np.array(inds) if inds else np.zeros((0, n)), iters, methods
-
     def assemble(self, u0: float) -> StartAssembly:
         """Close the mechanism at driver value ``u0`` and choose every group's branch."""
         mech = self.mech
@@ -259,8 +287,13 @@ class Analysis:
             ]
             if isinstance(g, NewtonGroup):
                 q0 = self._initial_guess(g, st)
-                st1 = st
-                q, stats = g.solve_at(st1, drive.u, q0)
+                solver = g
+                if any(getattr(c, "base", None) is not None for c in g.constraints):
+                    # a group that lost redundant equations: close it on all of them, by
+                    # least squares, so that it lands on the configuration they agree on
+                    full = [getattr(c, "base", c) for c in g.constraints]
+                    solver = NewtonGroup(g.bodies, full, self.system.body_names, self.atol, 50)
+                q, stats = solver.solve_at(st, drive.u, q0)
                 if not stats.converged:
                     raise AssemblyError(
                         f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
@@ -313,12 +346,41 @@ class Analysis:
                     f"{self._file()}the start position does not satisfy the assembly condition "
                     f"{c.text!r}, and no loop's branch can change that"
                 )
+        if self.redundant:
+            self.redundancy = self._check_redundancy(st, drive)
         if self.plan is not self.groups:  # monolithic Newton starts from the assembled pose
             q_start = {
                 gi: g.get_q(st, 0) for gi, g in enumerate(self.plan) if isinstance(g, NewtonGroup)
             }
             modes = [1.0] * len(self.plan)
         return StartAssembly(modes, q_start, reasons, st, u0)
+
+    def _check_redundancy(self, st: State, drive: Drive) -> Redundancy:
+        """At the assembled start: are the surplus equations consistent, and which ones
+        take part in a dependency (the left null space of Phi_q)?"""
+        sys_ = self.system
+        res = np.abs(sys_.residual(st, drive.u)[:, 0])
+        names = sys_.equation_names()
+        if np.max(res) > self.atol:
+            k = int(np.argmax(res))
+            raise AssemblyError(
+                f"{self._file()}the mechanism is over-constrained and cannot close at "
+                f"{self.format_u(float(drive.u[0]))}: the equation {names[k]!r} is off by "
+                f"{res[k]:.3g} m once the others are met (check the dimensions of the "
+                "redundant links)"
+            )
+        J = sys_.jacobian(st)[0]
+        U, sv, _ = np.linalg.svd(J)
+        rank = int(np.sum(sv > 1e-9 * sv[0]))
+        if rank < sys_.nq:
+            raise AssemblyError(
+                f"{self._file()}the constraints leave {sys_.nq - rank} coordinate(s) free at "
+                f"{self.format_u(float(drive.u[0]))}: the mechanism is not determined"
+            )
+        # the equations that take part in a dependency: nonzero in the left null space
+        null = U[:, rank:]
+        involved = np.flatnonzero(np.max(np.abs(null), axis=1) > 1e-8)
+        return Redundancy(sys_.nc - rank, rank, [names[k] for k in involved])
 
     def _choose(self, g: Group, cand: dict, ready) -> tuple[float, str]:
         mech = self.mech
@@ -468,6 +530,16 @@ class Analysis:
         return float(res.x)
 
     # -- the sweep ------------------------------------------------------------------
+    def sigma_at(self, sigma0: float, flips: list[float], u: np.ndarray) -> np.ndarray:
+        """A two-branch group's branch at driver values ``u``, given its start branch and the
+        driver values where the sweep followed it through a bifurcation."""
+        u = np.asarray(u, float)
+        out = np.full(u.shape, float(sigma0))
+        d = self.mech.driver.direction
+        for uf in flips:
+            out = np.where(d * (u - uf) > 0, -out, out)
+        return out
+
     def solve(
         self,
         u: np.ndarray,
@@ -475,27 +547,76 @@ class Analysis:
         velocity: bool = True,
         acceleration: bool = True,
         near: tuple[Solution, int] | None = None,
+        per_unit_driver: bool = False,
     ) -> Solution:
         """Solve positions (and velocities and accelerations) at driver values ``u``.
 
-        ``u[0]`` is the start of the sweep unless ``start`` is given.
+        ``u[0]`` is the start of the sweep unless ``start`` is given; with ``near``, the
+        positions are solved close to sample ``i`` of a solved sweep, on its branches.
+        Groups are solved one after another for all positions at once. Derivatives are
+        computed per unit of the driver coordinate and scaled by the driver's speed at the
+        end, so that the branch analysis has tangents even for a sweep at rest
+        (``per_unit_driver`` keeps them per unit driver coordinate).
         """
         u = np.asarray(u, float)
         n = len(u)
         if start is None:
             start = self.assemble(float(u[0]))
         st = State(self.system.nb, n)
-        drive = self.drive(u)
+        unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
+        analyse = near is None and n > 1
+        derivs = velocity or acceleration or analyse
         q_start = dict(start.q_start)
-        if near is not None:  # a single position near a solved one: start Newton groups there
+        flips = {gi: [] for gi in range(len(self.plan))}
+        if near is not None:
             sol0, i0 = near
+            flips = {gi: list(v) for gi, v in sol0.flips.items()}
             for gi, g in enumerate(self.plan):
                 if isinstance(g, NewtonGroup):
                     q_start[gi] = g.get_q(sol0.state, i0)
-        oks, ind, iters, methods = self._positions(st, drive, start.modes, q_start)
-        ok = np.ones(n, bool)
-        for o in oks:
-            ok &= o
+        ok_all = np.ones(n, bool)
+        oks, inds = [], []
+        iters = np.zeros(n, int)
+        methods = np.full(n, "closed form", dtype=object)
+        events: list[Event] = []
+        warnings: list[str] = []
+        ctx = _Context(self, st, u, start, flips, q_start)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for gi, g in enumerate(self.plan):
+                if isinstance(g, NewtonGroup):
+                    ok, it, meth = g.sweep(
+                        st,
+                        unit,
+                        q_start[gi],
+                        ok_all,
+                        prefix=lambda uu, k, gi=gi: ctx.prefix(gi, uu, k),
+                    )
+                    iters = np.maximum(iters, it)
+                    mask = meth != ""
+                    methods[mask] = np.where(
+                        methods[mask] == "closed form", meth[mask], methods[mask] + "+" + meth[mask]
+                    )
+                    if derivs:
+                        g.velocity(st, unit)
+                    if acceleration:
+                        g.acceleration(st, unit)
+                    ind = np.ones(n)  # conditioning of Newton groups: see jacobian_rcond()
+                else:
+                    if g.n_modes == 2 and analyse:
+                        evs, warn = self._branch_events(gi, g, ctx, ok_all)
+                        events += evs
+                        warnings += warn
+                    sigma = self.sigma_at(start.modes[gi], flips[gi], u)
+                    ok, ind = g.position(st, unit, sigma)
+                    if derivs:
+                        g.velocity(st, unit)
+                    if acceleration:
+                        g.acceleration(st, unit)
+                ok = ok & ok_all
+                oks.append(ok)
+                inds.append(ind)
+                ok_all = ok_all & ok
+        ok = ok_all.copy()
         # check the full constraint residual everywhere; polish where needed
         with np.errstate(invalid="ignore"):
             res = (
@@ -505,20 +626,26 @@ class Analysis:
             )
         bad = ok & ~(res <= self.atol)
         for i in np.flatnonzero(bad):
-            ok[i], res[i], it = self._polish(st, drive, i)
+            ok[i], res[i], it = self._polish(st, unit, i)
             iters[i] += it
             methods[i] = methods[i] + "+newton polish"
         res = np.where(ok, res, np.nan)
+        # derivatives per unit driver coordinate -> time derivatives at constant speed
+        w = 1.0 if per_unit_driver else self.speed
+        for arr in (st.vx, st.vy, st.w):
+            arr *= w
+        for arr in (st.ax, st.ay, st.al):
+            arr *= w * w
         failures = self._failures(st, oks, ok)
-        warnings = []
-        sol = Solution(
+        events.sort(key=lambda e: e.after)
+        return Solution(
             self,
             u,
             (u - u[0]) / self.speed if n and self.speed else np.zeros_like(u),
             st,
             ok,
             failures,
-            ind,
+            np.array(inds) if inds else np.zeros((0, n)),
             iters,
             methods,
             res,
@@ -526,15 +653,79 @@ class Analysis:
             warnings,
             velocity,
             velocity and acceleration,
+            events,
+            flips,
         )
-        if velocity:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                for g in self.plan:
-                    g.velocity(st, drive)
-                if acceleration:
-                    for g in self.plan:
-                        g.acceleration(st, drive)
-        return sol
+
+    def _branch_events(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
+        """Find where a two-branch group meets a singular configuration along the sweep.
+
+        The group's discriminant H (zero where its branches meet) depends only on earlier
+        groups; with its exact rate H' it locates each local minimum of H: between two
+        samples where H' changes sign, refined by bisection on H' = 0. At a minimum where H
+        touches zero (to rounding) the motion passes through a bifurcation point: the
+        smooth continuation is on the other branch, so the branch flips there. A minimum
+        below zero means the sweep stepped over a dead zone.
+        """
+        H, dH = g.disc(ctx.st)
+        d = self.mech.driver.direction
+        Hs = dH * d  # rate along the sweep
+        u = ctx.u
+        good = ok_prev & np.isfinite(H) & np.isfinite(Hs)
+        pair = good[:-1] & good[1:] & (H[:-1] >= -TOUCH) & (H[1:] >= -TOUCH)
+        inside = pair & (Hs[:-1] < 0) & (Hs[1:] > 0)
+        h = np.abs(u[1:] - u[:-1])
+        est = _hermite_min(H[:-1], H[1:], Hs[:-1] * h, Hs[1:] * h)
+        cand = np.flatnonzero(inside & (est < EVENT_CHECK))
+        events: list[Event] = []
+        warnings: list[str] = []
+        found: list[tuple[int, float, float]] = []  # (k, u*, H*)
+        if cand.size:
+            lo, hi = u[cand].copy(), u[cand + 1].copy()
+            for _ in range(64):
+                mid = 0.5 * (lo + hi)
+                stm = ctx.prefix(gi, mid, cand)
+                _, dHm = g.disc(stm)
+                down = dHm * d < 0
+                lo = np.where(down, mid, lo)
+                hi = np.where(down, hi, mid)
+                if np.all(np.abs(hi - lo) <= 4e-16 * (1 + np.abs(lo))):
+                    break
+            ustar = 0.5 * (lo + hi)
+            Hstar, _ = g.disc(ctx.prefix(gi, ustar, cand))
+            found = list(zip(cand.tolist(), ustar.tolist(), np.asarray(Hstar).tolist()))
+        # minima exactly at a sample
+        for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
+            if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
+                found.append((int(k) - 1, float(u[k]), float(H[k])))
+        # near-singular minima seen at the samples themselves
+        for k in np.flatnonzero(good[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
+            if H[k - 1] >= H[k] <= H[k + 1] and not any(f[0] in (k - 1, k) for f in found):
+                found.append((int(k) - 1, float(u[k]), float(H[k])))
+        found.sort(key=lambda f: d * f[1])
+        merged: list[tuple[int, float, float]] = []
+        for f in found:  # one minimum seen from both sides of a sample is one event
+            if merged and abs(f[1] - merged[-1][1]) <= 1e-9 * (1.0 + abs(f[1])):
+                if f[2] < merged[-1][2]:
+                    merged[-1] = (merged[-1][0], f[1], f[2])
+                continue
+            merged.append(f)
+        for k, us, hs in merged:
+            mu = float(np.arcsin(np.sqrt(max(min(hs, 1.0), 0.0))))
+            if hs < -TOUCH:
+                events.append(Event("dead zone", g.label, us, k, 0.0))
+                warnings.append(
+                    f"between {self.format_u(u[k])} and {self.format_u(u[k + 1])} the "
+                    f"{g.label} cannot close (near {self.format_u(us)}): the sweep steps over "
+                    "this dead zone; the motion between these positions is not continuous "
+                    "(use a smaller step to see it)"
+                )
+            elif hs <= TOUCH:
+                events.append(Event("bifurcation", g.label, us, k, mu))
+                ctx.flips[gi].append(us)
+            elif mu < math.radians(3.0):
+                events.append(Event("near-singular", g.label, us, k, mu))
+        return events, warnings
 
     def _polish(self, st: State, drive: Drive, i: int):
         """Newton on the whole system at position ``i`` from the closed-form answer."""
@@ -592,6 +783,65 @@ class Analysis:
 
 
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
+
+TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
+EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
+NEAR_SINGULAR = math.sin(math.radians(3.0))
+
+
+def _hermite_min(h0, h1, d0, d1):
+    """Smallest value of the cubic Hermite interpolant on [0, 1] (values h, slopes d)."""
+    t = np.linspace(0.0, 1.0, 17)[:, None]
+    t2, t3 = t * t, t * t * t
+    vals = (
+        (2 * t3 - 3 * t2 + 1) * h0
+        + (t3 - 2 * t2 + t) * d0
+        + (-2 * t3 + 3 * t2) * h1
+        + (t3 - t2) * d1
+    )
+    return vals.min(axis=0)
+
+
+class _Context:
+    """What the groups of one sweep share: the state so far, the branches and the driver
+    values; evaluates the groups before a given one at new driver values."""
+
+    def __init__(self, an: Analysis, st: State, u, start: StartAssembly, flips, q_start):
+        self.an = an
+        self.st = st
+        self.u = u
+        self.start = start
+        self.flips = flips
+        self.q_start = q_start
+
+    def prefix(self, gi: int, u_new, near_k) -> State:
+        """Solve the groups before ``gi`` (positions and derivatives per unit driver
+        coordinate) at driver values ``u_new``, each near sample ``near_k`` of the sweep."""
+        an = self.an
+        u_new = np.atleast_1d(np.asarray(u_new, float))
+        near_k = np.broadcast_to(np.asarray(near_k, int), u_new.shape)
+        m = len(u_new)
+        st = State(an.system.nb, m)
+        unit = Drive(u_new, np.ones(m), np.zeros(m))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for gj in range(gi):
+                g = an.plan[gj]
+                if isinstance(g, NewtonGroup):
+                    for j in range(m):
+                        k = int(near_k[j])
+                        q = g.get_q(self.st, k)
+                        du = u_new[j] - self.u[k]
+                        qd = g.get_qdot(self.st, k)
+                        q0 = q + qd * du if np.all(np.isfinite(qd)) else q
+                        st1 = st.take([j])
+                        qj, stats = g.solve_at(st1, u_new[j : j + 1], q0)
+                        g.set_q(st, j, qj if stats.converged else np.full_like(qj, np.nan))
+                    g.velocity(st, unit)
+                else:
+                    sigma = an.sigma_at(self.start.modes[gj], self.flips[gj], u_new)
+                    g.position(st, unit, sigma)
+                    g.velocity(st, unit)
+        return st
 
 
 def _scale(mech: Mechanism) -> float:

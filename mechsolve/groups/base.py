@@ -12,6 +12,9 @@ Contract of a subclass:
     ``n_modes == 2``. Return ``(ok, indicator)``: ``ok`` is False where the group cannot
     close (its rows are then NaN); ``indicator`` in [0, 1] measures how far the group is
     from a singular (toggle) configuration, 0 being singular.
+``disc(st)``
+    For groups with two branches: a discriminant that vanishes at the singular
+    configurations where the branches meet, and its rate (see :meth:`Group.disc`).
 ``velocity(st, drive)`` / ``acceleration(st, drive)``
     Fill ``vx, vy, w`` / ``ax, ay, al`` of the group's bodies, given earlier groups'.
     They solve exactly ``Phi_q qdot = nu`` and ``Phi_q qddot = gamma`` restricted to the
@@ -64,6 +67,16 @@ class Group:
 
     def acceleration(self, st: State, drive: Drive) -> None:
         raise NotImplementedError
+
+    def disc(self, st: State) -> tuple[np.ndarray, np.ndarray] | None:
+        """The group's discriminant and its rate, for branch groups (``n_modes == 2``).
+
+        A smooth, dimensionless function of the already solved bodies that is positive
+        where the group closes on two distinct branches, zero at a singular (toggle)
+        configuration where the branches meet, and negative where it cannot close; and its
+        time derivative from their velocities. Returns None for other groups.
+        """
+        return None
 
     def mode_text(self, st: State, mode: float, point_names: dict) -> str:
         """Describe branch ``mode`` in words (for ``mechsolve check``)."""

@@ -191,6 +191,20 @@ class RRR(Group):
             ind = np.abs(np.sqrt(np.maximum(h2, 0.0)) * D2) / (L1 * L2)
         return ok, np.where(ok, np.minimum(ind, 1.0), 0.0)
 
+    def disc(self, st: State):
+        """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2."""
+        px, py, qx, qy = self.ends(st)
+        vpx, vpy = st.point_velocity(self.k1, self.sPk)
+        vqx, vqy = st.point_velocity(self.k2, self.sQk)
+        dx, dy = qx - px, qy - py
+        D2 = dx * dx + dy * dy
+        dD2 = 2.0 * (dx * (vqx - vpx) + dy * (vqy - vpy))
+        L1s, L2s = self.L1**2, self.L2**2
+        norm = 4.0 * L1s * L2s
+        H = (4.0 * L1s * D2 - (L1s - L2s + D2) ** 2) / norm
+        dH = 2.0 * (L1s + L2s - D2) * dD2 / norm
+        return H, dH
+
     def _g(self, st: State):
         g1x, g1y = st.rotated(self.b1, self.sM1 - self.sP1)
         g2x, g2y = st.rotated(self.b2, self.sM2 - self.sQ2)
@@ -293,6 +307,18 @@ class RRP(Group):
         ind = np.sqrt(np.maximum(h2, 0.0)) / self.L  # |cos| of the rod to the guide
         return ok, np.where(ok, ind, 0.0)
 
+    def disc(self, st: State):
+        """``1 - (dist / L)^2``: ``cos^2`` of the rod's angle to the guide."""
+        px, py = st.point(self.k1, self.sPk)
+        lx, ly, ux, uy, *_ = self._line(st)
+        nx, ny = -uy, ux
+        dist = (px - lx) * nx + (py - ly) * ny
+        vpx, vpy = st.point_velocity(self.k1, self.sPk)
+        vkx, vky = _carried_velocity(st, self.g, px, py)
+        ddist = (vpx - vkx) * nx + (vpy - vky) * ny  # relative to the guide's frame
+        L2 = self.L**2
+        return 1.0 - dist * dist / L2, -2.0 * dist * ddist / L2
+
     def velocity(self, st: State, drive: Drive) -> None:
         g = self.g
         ux, uy = st.rotated(g, self.sl.u_loc)
@@ -375,6 +401,8 @@ class RPR(Group):
         self.u_loc = sl.u_loc
         self.n_loc = np.array([-sl.u_loc[1], sl.u_loc[0]])
         self.e = float(self.n_loc @ (self.c_loc - self.w_loc))
+        # a length scale for the discriminant; the analysis sets the mechanism's size
+        self.lref = 1.0
         super().__init__([block, bar], [jp, jq, sl], names)
 
     def describe(self) -> str:
@@ -412,6 +440,18 @@ class RPR(Group):
         with np.errstate(invalid="ignore", divide="ignore"):
             ind = np.sqrt(np.maximum(h2, 0.0) / np.maximum(D2, 1e-300))
         return ok, np.where(ok, ind, 0.0)
+
+    def disc(self, st: State):
+        """``(D^2 - e^2) / Lref^2``: zero when the pin reaches the line's offset circle."""
+        px, py = st.point(self.kp, self.sPk)
+        qx, qy = st.point(self.kq, self.sQk)
+        vpx, vpy = st.point_velocity(self.kp, self.sPk)
+        vqx, vqy = st.point_velocity(self.kq, self.sQk)
+        dx, dy = px - qx, py - qy
+        ref = self.lref**2
+        return (dx * dx + dy * dy - self.e**2) / ref, 2.0 * (
+            dx * (vpx - vqx) + dy * (vpy - vqy)
+        ) / ref
 
     def _frame(self, st: State):
         ux, uy = st.rotated(self.bar, self.u_loc)

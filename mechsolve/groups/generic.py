@@ -12,9 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import SolverError
 from ..solvers.newton import SolveStats, solve
 from ..state import State
 from .base import Drive, Group
+
+MAX_JUMP = 0.05  # largest accepted Newton correction: 5 % of the size, or 0.05 rad
+MAX_DEPTH = 10  # at most 2**10 substeps per interval
 
 
 class NewtonGroup(Group):
@@ -28,6 +32,7 @@ class NewtonGroup(Group):
         self.n = 3 * len(bodies)
         self.m = sum(c.m for c in constraints)
         self.atol = atol
+        self.scale = 1.0  # the mechanism's size; the analysis sets it
         self.max_iterations = max_iterations
         super().__init__(bodies, constraints, names)
 
@@ -81,43 +86,103 @@ class NewtonGroup(Group):
         return q, stats
 
     # -- the sweep ----------------------------------------------------------------------
-    def sweep(self, st: State, drive: Drive, q_start: np.ndarray, ok_in: np.ndarray):
+    def get_qdot(self, st: State, i: int) -> np.ndarray:
+        q = np.empty(self.n)
+        for b, k in self.col.items():
+            q[3 * k], q[3 * k + 1], q[3 * k + 2] = st.vx[b, i], st.vy[b, i], st.w[b, i]
+        return q
+
+    def _jump(self, q: np.ndarray, q_pred: np.ndarray) -> float:
+        """Size of the Newton correction from the prediction: lengths over the mechanism's
+        size, angles in radians."""
+        d = np.abs(q - q_pred)
+        d[0::3] /= self.scale
+        d[1::3] /= self.scale
+        return float(d.max()) if d.size else 0.0
+
+    def sweep(self, st: State, drive: Drive, q_start: np.ndarray, ok_in: np.ndarray, prefix=None):
         """Solve positions 0..N-1 in order by continuation from ``q_start`` at position 0.
 
-        Returns ``ok``, ``iterations``, ``methods`` (arrays over positions).
+        Each step predicts from the previous solutions (Lagrange extrapolation) and corrects
+        by Newton-Raphson (scipy when Newton fails). A step is accepted when the correction
+        is small (:data:`MAX_JUMP`); otherwise the interval is marched in 2, 4, 8, ...
+        substeps (``prefix(u, k)`` solves the groups before this one at substep values), so
+        that a coarse step cannot jump to another branch. Returns ``ok``, ``iterations`` and
+        ``methods`` over the positions.
+
+        Raises
+        ------
+        SolverError
+            When even the finest substeps jump: the branch cannot be followed.
         """
         n = st.n
         ok = np.zeros(n, bool)
         iters = np.zeros(n, int)
         methods = np.array(["" for _ in range(n)], dtype=object)
-        history: list[np.ndarray] = []
-        hist_u: list[float] = []
+        hu: list[float] = []
+        hq: list[np.ndarray] = []
         last_good = np.asarray(q_start, float)
         for i in range(n):
             if not ok_in[i]:
                 self._nan(st, i)
-                history.clear()
-                hist_u.clear()
+                hu, hq = [], []
                 continue
-            q0 = _extrapolate(hist_u, history, float(drive.u[i])) if history else last_good
             st1 = st.take([i])
-            q, stats = self.solve_at(st1, drive.u[i : i + 1], q0)
+            ui = float(drive.u[i])
+            if not hq:  # the start, or the first position after a gap
+                q, stats = self.solve_at(st1, drive.u[i : i + 1], last_good)
+                good = stats.converged
+            else:
+                q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix)
             iters[i] = stats.iterations
             methods[i] = stats.method
-            if stats.converged:
+            if good:
                 ok[i] = True
                 self.set_q(st, i, q)
                 last_good = q
-                history.append(q)
-                hist_u.append(float(drive.u[i]))
-                if len(history) > 3:
-                    history.pop(0)
-                    hist_u.pop(0)
+                hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
             else:
                 self._nan(st, i)
-                history.clear()
-                hist_u.clear()
+                hu, hq = [], []
         return ok, iters, methods
+
+    def _advance(self, st1: State, ui: float, hu, hq, k: int, prefix):
+        """One continuation step to ``ui``; substeps when the full step jumps."""
+        q_pred = _extrapolate(hu, hq, ui)
+        q, stats = self.solve_at(st1, np.array([ui]), q_pred)
+        if stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
+            return q, stats, True
+        converged_somewhere = stats.converged
+        u0 = hu[-1]
+        for depth in range(1, MAX_DEPTH + 1):
+            m = 2**depth
+            us = u0 + (ui - u0) * np.arange(1, m + 1) / m
+            sub = prefix(us[:-1], k) if (prefix is not None and m > 1) else None
+            lu, lq = list(hu), list(hq)
+            total = 0
+            ok_all = True
+            for j, uj in enumerate(us):
+                stj = st1 if j == m - 1 else (sub.take([j]) if sub is not None else st1)
+                qp = _extrapolate(lu, lq, uj)
+                qj, sj = self.solve_at(stj, np.array([uj]), qp)
+                total += sj.iterations
+                converged_somewhere |= sj.converged
+                if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP):
+                    ok_all = False
+                    break
+                lu, lq = (lu + [uj])[-3:], (lq + [qj])[-3:]
+            if ok_all:
+                sj.iterations = total
+                return qj, sj, True
+            if not sj.converged and j == 0 and depth >= 4:
+                break  # no solution even right next to the last one: a dead zone starts here
+        if converged_somewhere and stats.converged:
+            raise SolverError(
+                f"cannot follow the branch of the {self.label} up to driver value {ui:.6g}: "
+                f"the solution jumps even in {2**MAX_DEPTH} substeps (a singular position?); "
+                "use a smaller step"
+            )
+        return q, stats, False
 
     def _nan(self, st: State, i: int) -> None:
         for b in self.bodies:

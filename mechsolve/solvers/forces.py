@@ -31,12 +31,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..conditioning import SINGULAR_RCOND, group_block, rcond
 from ..model import GROUND, Damper, PointForce, Spring, Torque
 
 if TYPE_CHECKING:
     from ..sweep import Analysis, Solution
-
-SINGULAR_RCOND = 1e-10
 
 
 @dataclass
@@ -58,6 +57,7 @@ class ForceResult:
     singular: list[tuple[int, str]] = field(default_factory=list)  # (position, group label)
     ok: np.ndarray | None = None
     load_power: dict[str, np.ndarray] = field(default_factory=dict)  # power of each load
+    nonunique: dict[str, set[str]] = field(default_factory=dict)  # joint -> components
     stroke_extremes: list[tuple[float, float]] = field(default_factory=list)
 
 
@@ -244,7 +244,7 @@ def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
             acc.force(ba, sa, t * ex, t * ey)
         load_power[load.name] = power_loads - before
 
-    lam, rcond, singular = _solve_groups(an, st, acc.Q)
+    lam, rcond, singular, nonunique = _solve_groups(an, st, acc.Q)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
@@ -267,9 +267,28 @@ def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
         rcond,
         singular,
         ok,
-        load_power,
-        extremes,
+        load_power=load_power,
+        stroke_extremes=extremes,
+        nonunique=_nonunique_components(an, nonunique),
     )
+
+
+def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]:
+    """Reaction components that redundant constraints leave indeterminate."""
+    out: dict[str, set[str]] = {}
+    for row in an.system.rows:
+        c = row.constraint
+        f = free[row.start : row.start + c.m]
+        if not np.any(f):
+            continue
+        if c.kind == "revolute":
+            comps = {k for k, on in zip(("Fx", "Fy"), f) if on} | {"F"}
+        elif c.kind == "slider":
+            comps = ({"N", "Fx", "Fy"} if f[0] else set()) | ({"M"} if f[1] else set())
+        else:
+            comps = {"effort"}
+        out[c.name] = comps
+    return out
 
 
 def _force_at_global(acc: _Q, st, b: int, x, y, fx, fy) -> None:
@@ -288,49 +307,33 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray):
     lam = np.full((n, sys_.nc), np.nan)
     R = Q.copy()  # applied + inertia + reactions of the groups solved so far
     row_of = {id(r.constraint): r.start for r in sys_.rows}
-    rcond = np.ones(n)
+    rcond_all = np.ones(n)
     singular: list[tuple[int, str]] = []
+    nonunique = np.zeros(sys_.nc, bool)
     for g in reversed(an.plan):
-        col = {b: k for k, b in enumerate(g.bodies)}
-        m = sum(c.m for c in g.constraints)
-        nn = 3 * len(g.bodies)
-        J = np.zeros((n, m, nn))
-        blocks = []
-        r0 = 0
-        for c in g.constraints:
-            jac = c.jacobian(st)
-            blocks.append((c, r0, jac))
-            for body, blk in jac.items():
-                k = col.get(body)
-                if k is not None:
-                    J[:, r0 : r0 + c.m, 3 * k : 3 * k + 3] = blk.transpose(2, 0, 1)
-            r0 += c.m
+        J, blocks = group_block(g, st)
+        m = J.shape[1]
         rhs = np.stack([R[3 * b + k] for b in g.bodies for k in range(3)], axis=1)  # (N, nn)
-        good = np.all(np.isfinite(J), axis=(1, 2))
-        finite_rhs = np.all(np.isfinite(rhs), axis=1)
         x = np.full((n, m), np.nan)
-        rc = np.zeros(n)
-        if np.any(good):
-            Jg = J[good]
-            # equilibrate rows and columns so that the condition number is unit-free
-            cs = np.linalg.norm(Jg, axis=1, keepdims=True)
-            cs[cs == 0] = 1.0
-            Js = Jg / cs
-            rs = np.linalg.norm(Js, axis=2, keepdims=True)
-            rs[rs == 0] = 1.0
-            Js = Js / rs
-            sv = np.linalg.svd(Js, compute_uv=False)
-            rc_g = np.where(sv[:, 0] > 0, sv[:, -1] / sv[:, 0], 0.0)
-            rc[good] = rc_g
-            regular = rc_g > SINGULAR_RCOND
-            idx = np.flatnonzero(good)[regular]
-            idx = idx[finite_rhs[idx]]
-            if idx.size:
-                JT = np.transpose(J[idx], (0, 2, 1))
-                x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
-            for i in np.flatnonzero(good)[~regular]:
-                singular.append((int(i), g.label))
-        rcond = np.minimum(rcond, rc)
+        good = np.all(np.isfinite(J), axis=(1, 2))
+        if m > J.shape[2]:  # redundant constraints: the minimum-norm multipliers
+            x, rc, free = _min_norm(J, rhs, good)
+            r0 = 0
+            for c in g.constraints:
+                nonunique[row_of[id(c)] : row_of[id(c)] + c.m] |= free[r0 : r0 + c.m]
+                r0 += c.m
+            regular = good & (rc > SINGULAR_RCOND)
+            x[~regular] = np.nan
+            idx = np.flatnonzero(regular)
+        else:
+            rc = rcond(J)
+            regular = good & (rc > SINGULAR_RCOND)
+            idx = np.flatnonzero(regular & np.all(np.isfinite(rhs), axis=1))
+        if idx.size and m == J.shape[2]:
+            JT = np.transpose(J[idx], (0, 2, 1))
+            x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
+        singular += [(int(i), g.label) for i in np.flatnonzero(good & ~regular)]
+        rcond_all = np.minimum(rcond_all, rc)
         for c, r0, jac in blocks:
             lc = x[:, r0 : r0 + c.m]  # (N, m_c)
             lam[:, row_of[id(c)] : row_of[id(c)] + c.m] = lc
@@ -340,7 +343,34 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray):
                 for k in range(3):
                     R[3 * body + k] -= np.einsum("mn,nm->n", blk[:, k, :], lc)
     singular.sort()
-    return lam, rcond, singular
+    return lam, rcond_all, singular, nonunique
+
+
+def _min_norm(J: np.ndarray, rhs: np.ndarray, good: np.ndarray):
+    """Minimum-norm solutions of the under-determined ``J^T x = rhs`` (N, m > n).
+
+    Returns the solutions, the reciprocal condition of the determined part (the smallest
+    of the first n singular values over the largest) and which unknowns are not unique
+    (those with a component along the null space of ``J^T``).
+    """
+    n, m, nn = J.shape
+    x = np.full((n, m), np.nan)
+    rc = np.zeros(n)
+    free = np.zeros(m, bool)
+    idx = np.flatnonzero(good & np.all(np.isfinite(rhs), axis=1))
+    if idx.size == 0:
+        return x, rc, free
+    JT = np.transpose(J[idx], (0, 2, 1))  # (k, nn, m)
+    U, sv, Vt = np.linalg.svd(JT, full_matrices=True)  # sv (k, nn)
+    tol = 1e-10 * sv[:, :1]
+    rank_ok = sv[:, -1:] > tol  # the nn equations are independent
+    inv = np.where(sv > tol, 1.0 / np.where(sv > 0, sv, 1.0), 0.0)
+    y = np.einsum("kij,ki->kj", U, rhs[idx]) * inv  # (k, nn)
+    x[idx] = np.einsum("kij,ki->kj", Vt[:, :nn, :], y)
+    rc[idx] = np.where(rank_ok[:, 0], sv[:, -1] / sv[:, 0], 0.0)
+    null = Vt[:, nn:, :]  # (k, m - nn, m)
+    free = np.max(np.abs(null), axis=(0, 1)) > 1e-8
+    return x, rc, free
 
 
 def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndarray]]:

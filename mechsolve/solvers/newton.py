@@ -44,27 +44,20 @@ def newton(
         Residual (m,) and Jacobian (m, n) functions; m == n, or m > n for a consistent
         over-determined system (solved by least squares at each step).
     atol
-        Convergence when ``max |fun(x)| <= atol``.
+        Convergence when ``max |fun(x)| <= atol`` and the last step was below
+        ``1e-3 atol`` (or stopped shrinking): near a singular position Newton converges
+        only linearly and a small residual alone would stop it early.
     """
     x = np.array(x0, dtype=float)
     f = fun(x)
     nfev, njev = 1, 0
     r = float(np.max(np.abs(f))) if f.size else 0.0
+    xtol = 1e-3 * atol
+    last_dx = np.inf
     for it in range(max_iterations + 1):
         if not np.isfinite(r):
             break
-        if r <= atol:
-            if it > 0 and r > 0:
-                # one more step costs little and takes a quadratically converging
-                # iteration to the rounding level; keep it only if it helps
-                x2 = _step(jac, x, f)
-                njev += 1
-                if x2 is not None:
-                    f2 = fun(x2)
-                    nfev += 1
-                    r2 = float(np.max(np.abs(f2)))
-                    if r2 <= r:
-                        x, r = x2, r2
+        if r <= atol and (last_dx <= xtol or r == 0.0 or it == max_iterations):
             return x, SolveStats(True, "newton", it, nfev, njev, r)
         if it == max_iterations:
             break
@@ -79,14 +72,20 @@ def newton(
             break
         if not np.all(np.isfinite(dx)):
             break
-        x = x + dx
-        f = fun(x)
+        step = float(np.max(np.abs(dx))) if dx.size else 0.0
+        x_new = x + dx
+        f_new = fun(x_new)
         nfev += 1
-        r_new = float(np.max(np.abs(f)))
+        r_new = float(np.max(np.abs(f_new)))
+        if r <= atol and (r_new > r or step >= last_dx):
+            # converged already; the step no longer improves anything (rounding level)
+            return x, SolveStats(True, "newton", it, nfev, njev, r)
         if it >= 3 and r_new > 2 * r:  # diverging
             r = r_new
             break
-        r = r_new
+        x, f, r, last_dx = x_new, f_new, r_new, step
+    if r <= atol:
+        return x, SolveStats(True, "newton", max_iterations, nfev, njev, r)
     return x, SolveStats(False, "newton", max_iterations, nfev, njev, r)
 
 

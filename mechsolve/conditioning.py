@@ -1,0 +1,69 @@
+"""Conditioning of the constraint Jacobian, group by group.
+
+Phi_q is block lower-triangular in the order of the structural groups, so it is singular
+exactly where one of its diagonal blocks (a group's own Jacobian) is singular. The
+reciprocal condition number of each block is computed after equilibrating its rows and
+columns (so that it does not depend on units); the smallest over the groups measures how
+close a position is to a singular (toggle, dead-centre) configuration: 1 is perfectly
+conditioned, 0 singular.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .state import State
+
+if TYPE_CHECKING:
+    from .groups import Group
+    from .sweep import Analysis
+
+SINGULAR_RCOND = 1e-10  # below this a block is treated as singular
+
+
+def group_block(g: Group, st: State):
+    """The group's square block of Phi_q, shape (N, m, n), and each constraint's Jacobian
+    blocks (for reuse by the force solver)."""
+    col = {b: k for k, b in enumerate(g.bodies)}
+    m = sum(c.m for c in g.constraints)
+    J = np.zeros((st.n, m, 3 * len(g.bodies)))
+    blocks = []
+    r0 = 0
+    for c in g.constraints:
+        jac = c.jacobian(st)
+        blocks.append((c, r0, jac))
+        for body, blk in jac.items():
+            k = col.get(body)
+            if k is not None:
+                J[:, r0 : r0 + c.m, 3 * k : 3 * k + 3] = blk.transpose(2, 0, 1)
+        r0 += c.m
+    return J, blocks
+
+
+def rcond(J: np.ndarray) -> np.ndarray:
+    """Reciprocal 2-norm condition numbers of equilibrated matrices (N, m, n); 0 where the
+    matrix has non-finite entries."""
+    out = np.zeros(J.shape[0])
+    good = np.all(np.isfinite(J), axis=(1, 2))
+    if not np.any(good):
+        return out
+    Jg = J[good]
+    cs = np.linalg.norm(Jg, axis=1, keepdims=True)
+    cs[cs == 0] = 1.0
+    Js = Jg / cs
+    rs = np.linalg.norm(Js, axis=2, keepdims=True)
+    rs[rs == 0] = 1.0
+    sv = np.linalg.svd(Js / rs, compute_uv=False)
+    out[good] = np.where(sv[:, 0] > 0, sv[:, -1] / sv[:, 0], 0.0)
+    return out
+
+
+def jacobian_rcond(an: Analysis, st: State) -> np.ndarray:
+    """The smallest reciprocal condition number over the groups at each position."""
+    out = np.ones(st.n)
+    for g in an.plan:
+        J, _ = group_block(g, st)
+        out = np.minimum(out, rcond(J))
+    return out

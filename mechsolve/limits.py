@@ -1,0 +1,164 @@
+"""Design figures of a sweep: limit positions, stroke, time ratio, transmission angles.
+
+* **Limit positions** of each rocker (a link pinned to the ground, other than the driven
+  one, that does not turn fully) and of each slider: where its angle (displacement) is
+  extreme. Each extreme is located exactly, as the root of the angular velocity (sliding
+  velocity) found with Brent's method between the two samples that bracket it.
+* **Time ratio** (quick-return coefficient) for a crank driven over one full turn: the
+  driver travel from one limit to the other, against the travel back; K >= 1 is the
+  slower over the faster.
+* **Minimum transmission angle** of each loop: the angle between the links that transmit
+  the force at the loop's inner joint (RRR), between the rod and the guide's normal (RRP);
+  90 degrees for a slotted bar whose line passes through its pivot (RPR). It is the arcsine
+  of the loop's singularity indicator; 0 is a toggle position.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .model import GROUND, PinJoint, SliderJoint
+
+if TYPE_CHECKING:
+    from .results import Results
+
+
+@dataclass
+class LimitPositions:
+    """The extremes of a rocker's angle (rad) or a slider's displacement (m)."""
+
+    name: str
+    kind: str  # "rocker" or "slider"
+    low: float
+    u_low: float
+    high: float
+    u_high: float
+    time_ratio: float | None = None
+    forward: float | None = None  # driver travel from low to high (rad)
+    back: float | None = None
+
+    @property
+    def swing(self) -> float:
+        return self.high - self.low
+
+
+@dataclass
+class Transmission:
+    """The smallest transmission angle of a loop over the sweep (rad)."""
+
+    group: str
+    angle: float
+    u: float
+
+
+def _rate_root(res: Results, k: int, value_rate):
+    """Driver value in (u_k, u_k+1) where the rate changes sign (Brent's method)."""
+    from scipy.optimize import brentq
+
+    an, sol = res.analysis, res.solution
+
+    def f(x: float) -> float:
+        one = an.solve(np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True)
+        return float(value_rate(one.state)[1][0])
+
+    lo, hi = float(res.u[k]), float(res.u[k + 1])
+    flo, fhi = f(lo), f(hi)
+    if not (np.isfinite(flo) and np.isfinite(fhi)) or flo * fhi > 0:
+        return None
+    if flo == 0:
+        return lo
+    if fhi == 0:
+        return hi
+    x = brentq(f, lo, hi, xtol=1e-14, rtol=1e-15)
+    one = an.solve(np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True)
+    return x, float(value_rate(one.state)[0][0])
+
+
+def limit_positions(res: Results) -> list[LimitPositions]:
+    """Limit positions of the rockers and sliders, with the time ratio over a full turn."""
+    mech, an = res.mechanism, res.analysis
+    sys_ = an.system
+    driven = mech.joint(mech.driver.joint)
+    items = []
+    for j in mech.joints:
+        if isinstance(j, PinJoint) and GROUND in j.links and j is not driven:
+            link = j.b if j.a == GROUND else j.a
+            b = sys_.index[link]
+
+            def vr(st, b=b):
+                return st.th[b], st.w[b]
+
+            items.append((link, "rocker", vr))
+        elif isinstance(j, SliderJoint) and j is not driven:
+            sl = sys_.by_joint[j.name]
+
+            def vr(st, sl=sl):
+                return sl.displacement(st), sl.velocity(st)
+
+            items.append((j.name, "slider", vr))
+    out = []
+    ok = res.ok
+    full = res.is_full_cycle()
+    for name, kind, vr in items:
+        val, rate = vr(res.solution.state)
+        val = np.where(ok, val, np.nan)
+        if kind == "rocker":
+            val = np.unwrap(np.where(ok, val, 0.0))
+            val = np.where(ok, val, np.nan)
+            if np.nanmax(val) - np.nanmin(val) >= 2 * math.pi - 1e-9:
+                continue  # it turns fully: not a rocker
+        sgn = np.sign(rate * res.mechanism.driver.direction * np.sign(an.speed or 1.0))
+        extremes = []  # (u, value, is_max)
+        for k in np.flatnonzero(ok[:-1] & ok[1:] & (sgn[:-1] * sgn[1:] < 0)):
+            root = _rate_root(res, int(k), vr)
+            if root is None:
+                continue
+            x, v = root
+            if kind == "rocker":  # bring the angle next to the unwrapped samples
+                v = v + 2 * math.pi * round((val[k] - v) / (2 * math.pi))
+            extremes.append((x, v, sgn[k] > 0))
+        if not extremes:
+            continue
+        hi = max((e for e in extremes if e[2]), key=lambda e: e[1], default=None)
+        lo = min((e for e in extremes if not e[2]), key=lambda e: e[1], default=None)
+        if hi is None or lo is None:
+            continue
+        lp = LimitPositions(name, kind, lo[1], lo[0], hi[1], hi[0])
+        if full and len(extremes) == 2:
+            fwd = (hi[0] - lo[0]) * mech.driver.direction % (2 * math.pi)
+            back = 2 * math.pi - fwd
+            lp.forward, lp.back = fwd, back
+            lp.time_ratio = max(fwd, back) / min(fwd, back)
+        out.append(lp)
+    return out
+
+
+def transmission_angles(res: Results) -> list[Transmission]:
+    """The smallest transmission angle of each two-branch loop over the sweep."""
+    out = []
+    sol = res.solution
+    for gi, g in enumerate(res.analysis.plan):
+        if g.n_modes != 2:
+            continue
+        ind = np.where(res.ok, sol.indicator[gi], np.nan)
+        if not np.any(np.isfinite(ind)):
+            continue
+        mu = np.arcsin(np.clip(ind, 0.0, 1.0))
+        k = int(np.nanargmin(mu))
+        best, uk = float(mu[k]), float(res.u[k])
+        if 0 < k < len(mu) - 1 and np.all(np.isfinite(mu[k - 1 : k + 2])):
+            a, b, c = mu[k - 1], mu[k], mu[k + 1]
+            den = a - 2 * b + c
+            if den > 0:  # a parabola through the three samples around the minimum
+                t = 0.5 * (a - c) / den
+                best = float(b - 0.25 * (a - c) * t)
+                uk = float(res.u[k] + t * (res.u[k + 1] - res.u[k]))
+        for e in sol.events:  # refined minima found by the branch analysis
+            if e.group == g.label and e.transmission < best:
+                best, uk = e.transmission, e.u
+        out.append(Transmission(g.label, max(best, 0.0), uk))
+    return out
