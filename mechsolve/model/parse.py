@@ -16,6 +16,7 @@ from ..expr import ExprError, Expression
 from ..units import UnitError, parse_quantity, parse_unit
 from . import (
     GROUND,
+    NAME_RE,
     STANDARD_G,
     Assembly,
     Damper,
@@ -121,6 +122,16 @@ class Reader:
             self.quantity(value[1], path + (1,), "length"),
         )
 
+    def ident(self, name: str, path: KeyPath, what: str) -> str:
+        """A name of a point, link or joint: an identifier (checked as soon as it is read)."""
+        if not NAME_RE.match(name):
+            raise self.fail(
+                path,
+                f"{what} name {name!r} must start with a letter or '_' and contain only "
+                "letters, digits and '_'",
+            )
+        return name
+
     def name(self, value: Any, path: KeyPath, what: str) -> str:
         if not isinstance(value, str):
             raise self.fail(path, f"expected the name of a {what}, got {_kind(value)}")
@@ -177,7 +188,9 @@ def read_ground(r: Reader, value: Any) -> dict[str, tuple[float, float]]:
         return {}
     if not isinstance(value, dict):
         raise r.fail(("ground",), "'ground' must map point names to coordinates [x, y]")
-    return {str(p): r.xy(v, ("ground", p)) for p, v in value.items()}
+    return {
+        r.ident(str(p), ("ground", p), "point"): r.xy(v, ("ground", p)) for p, v in value.items()
+    }
 
 
 def read_point(
@@ -230,6 +243,8 @@ def read_link(r: Reader, name: str, value: Any, g: float = STANDARD_G) -> Link:
     raw = m["points"]
     if not isinstance(raw, dict) or not raw:
         raise r.fail(path + ("points",), "'points' must map point names to coordinates")
+    for p in raw:
+        r.ident(p, path + ("points", p), "point")
     points: dict[str, tuple[float, float]] = {}
     pending = dict(raw)
     while pending:
@@ -342,7 +357,7 @@ def read_mass(r: Reader, m: dict, link: Link, path: KeyPath, g: float) -> None:
 def read_links(r: Reader, value: Any, g: float = STANDARD_G) -> list[Link]:
     if not isinstance(value, dict) or not value:
         raise r.fail(("links",), "'links' must map link names to their points")
-    return [read_link(r, str(n), v, g) for n, v in value.items()]
+    return [read_link(r, r.ident(str(n), ("links", n), "link"), v, g) for n, v in value.items()]
 
 
 def read_gravity(r: Reader, value: Any) -> tuple[float, float]:
@@ -593,7 +608,9 @@ def read_joints(r: Reader, value: Any, ground, links) -> list[PinJoint | SliderJ
         raise r.fail(("joints",), "'joints' must map joint names to their definitions")
     pts = {GROUND: ground}
     pts.update({lk.name: lk.points for lk in links})
-    return [read_joint(r, str(n), v, pts) for n, v in value.items()]
+    return [
+        read_joint(r, r.ident(str(n), ("joints", n), "joint"), v, pts) for n, v in value.items()
+    ]
 
 
 def read_driver(r: Reader, value: Any, joints) -> Driver:

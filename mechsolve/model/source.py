@@ -32,7 +32,10 @@ _CTOR = yaml.constructor.SafeConstructor()
 
 
 def format_keypath(path: Iterable[Any]) -> str:
-    """Render a key path as ``links.crank.points[0]``."""
+    """Render a key path as ``links.crank.points[0]`` (very deep ones shortened)."""
+    path = list(path)
+    if len(path) > 12:
+        return format_keypath(path[:4]) + "..." + format_keypath(path[-2:])
     out = ""
     for k in path:
         if isinstance(k, int):

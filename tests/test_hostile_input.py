@@ -1,0 +1,94 @@
+"""Hostile input: every file in tests/bad_inputs gives one clear message and its exit code.
+
+Each file starts with ``# expect: <exit code>: <fragment>; <fragment>...`` (the empty file
+keeps its expectation in ``empty.expect``). No traceback, ever; and no case may take long
+(a guard against catastrophic behaviour, such as an alias bomb expanding; the speed itself
+is not what this tests).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mechsolve.cli import main
+
+BAD = Path(__file__).resolve().parent / "bad_inputs"
+FILES = sorted(BAD.glob("*.yaml"))
+
+
+def expectation(path: Path) -> tuple[int, list[str]]:
+    src = path.with_suffix(".expect") if path.with_suffix(".expect").exists() else path
+    first = src.read_text().splitlines()[0]
+    assert first.startswith("# expect: "), path
+    code, frags = first[len("# expect: ") :].split(": ", 1)
+    return int(code), [f.strip() for f in frags.split("; ")]
+
+
+def run(args):
+    t0 = time.perf_counter()
+    r = CliRunner().invoke(main, args)
+    elapsed = time.perf_counter() - t0
+    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+    assert "Traceback" not in r.output
+    return r, elapsed
+
+
+def test_corpus_is_there():
+    assert len(FILES) >= 40
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
+def test_bad_file(path, tmp_path):
+    code, frags = expectation(path)
+    for command in (["check", str(path)], ["run", str(path), "-o", str(tmp_path), "--no-plots"]):
+        r, elapsed = run(command)
+        assert r.exit_code == code, r.output
+        assert r.output.count("error:") == 1, r.output
+        for frag in frags:
+            assert frag in r.output, (frag, r.output)
+        assert elapsed < 5.0
+    assert not (tmp_path / "results.csv").exists()
+
+
+def test_file_of_several_megabytes(tmp_path):
+    big = tmp_path / "big.yaml"
+    big.write_text("name: x\n" + "# padding\n" * 400_000)
+    r, elapsed = run(["check", str(big)])
+    assert r.exit_code == 2 and "limited to" in r.output and elapsed < 5.0
+
+
+def test_binary_file(tmp_path):
+    f = tmp_path / "image.yaml"
+    f.write_bytes(bytes(range(256)) * 64)
+    r, _ = run(["check", str(f)])
+    assert r.exit_code == 2 and "not UTF-8 text" in r.output
+
+
+def test_folder_and_missing_file(tmp_path):
+    r, _ = run(["check", str(tmp_path / "nope.yaml")])
+    assert r.exit_code == 2 and "no such file" in r.output
+
+
+def test_unknown_variant_and_bad_step():
+    mech = str(Path(__file__).resolve().parents[1] / "mechanisms" / "crane.yaml")
+    r, _ = run(["check", mech, "--variant", "nope"])
+    assert r.exit_code == 2 and "no variant named 'nope'" in r.output and "jib-driven" in r.output
+    r, _ = run(["run", mech, "--step", "3 kg"])
+    assert r.exit_code == 2 and "--step '3 kg'" in r.output
+
+
+def test_a_failing_run_keeps_a_previous_complete_csv(tmp_path):
+    """The CSV is written to a temporary file and moved into place: a failing run never
+    leaves a half-written file, and never clobbers a complete one."""
+    mech = Path(__file__).resolve().parents[1] / "mechanisms" / "fourbar.yaml"
+    r, _ = run(["run", str(mech), "-o", str(tmp_path), "--no-plots"])
+    assert r.exit_code == 0
+    before = (tmp_path / "results.csv").read_text()
+    r, _ = run(["run", str(BAD / "cannot_assemble.yaml"), "-o", str(tmp_path), "--no-plots"])
+    assert r.exit_code == 3
+    assert (tmp_path / "results.csv").read_text() == before
+    assert not list(tmp_path.glob("*.part"))
