@@ -69,11 +69,10 @@ def _rate_root(res: Results, k: int, value_rate):
     flo, fhi = f(lo), f(hi)
     if not (np.isfinite(flo) and np.isfinite(fhi)) or flo * fhi > 0:
         return None
-    if flo == 0:
-        return lo
-    if fhi == 0:
-        return hi
-    x = brentq(f, lo, hi, xtol=1e-14, rtol=1e-15)
+    try:
+        x = lo if flo == 0 else hi if fhi == 0 else brentq(f, lo, hi, xtol=1e-14, rtol=1e-15)
+    except ValueError:  # the interval holds a position that cannot close
+        return None
     one = an.solve(np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True)
     return x, float(value_rate(one.state)[0][0])
 
@@ -113,7 +112,10 @@ def limit_positions(res: Results) -> list[LimitPositions]:
                 continue  # it turns fully: not a rocker
         sgn = np.sign(rate * res.mechanism.driver.direction * np.sign(an.speed or 1.0))
         extremes = []  # (u, value, is_max)
+        gaps = {e.after for e in res.events if e.kind == "dead zone"}
         for k in np.flatnonzero(ok[:-1] & ok[1:] & (sgn[:-1] * sgn[1:] < 0)):
+            if int(k) in gaps:
+                continue  # not a continuous motion between these samples
             root = _rate_root(res, int(k), vr)
             if root is None:
                 continue

@@ -109,6 +109,7 @@ class StartAssembly:
     reasons: list[str]
     state: State
     u0: float
+    group_modes: list[float] = field(default_factory=list)  # of the assembly groups
 
 
 @dataclass
@@ -294,6 +295,13 @@ class Analysis:
                     full = [getattr(c, "base", c) for c in g.constraints]
                     solver = NewtonGroup(g.bodies, full, self.system.body_names, self.atol, 50)
                 q, stats = solver.solve_at(st, drive.u, q0)
+                if not stats.converged and solver is not g:
+                    raise AssemblyError(
+                        f"{self._file()}the mechanism is over-constrained and cannot close at "
+                        f"{self.format_u(u0)}: the redundant constraints of the {g.label} "
+                        f"disagree by {stats.residual:.3g} m (check the dimensions of the "
+                        "redundant links)"
+                    )
                 if not stats.converged:
                     raise AssemblyError(
                         f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
@@ -348,12 +356,26 @@ class Analysis:
                 )
         if self.redundant:
             self.redundancy = self._check_redundancy(st, drive)
+        group_modes = list(modes)
         if self.plan is not self.groups:  # monolithic Newton starts from the assembled pose
             q_start = {
                 gi: g.get_q(st, 0) for gi, g in enumerate(self.plan) if isinstance(g, NewtonGroup)
             }
             modes = [1.0] * len(self.plan)
-        return StartAssembly(modes, q_start, reasons, st, u0)
+        return StartAssembly(modes, q_start, reasons, st, u0, group_modes)
+
+    def assembly_guess(self, u: float, start: StartAssembly) -> State | None:
+        """The mechanism closed at driver value ``u`` by the assembly groups on the start's
+        branches (None if some group has no closed form or cannot close there): where a
+        Newton sweep restarts after a dead zone, so that it resumes on the user's branch."""
+        st = State(self.system.nb, 1)
+        drive = self.drive(np.array([u]))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for g, mode in zip(self.groups, start.group_modes):
+                ok, _ = g.position(st, drive, mode)
+                if not ok[0]:
+                    return None
+        return st
 
     def _check_redundancy(self, st: State, drive: Drive) -> Redundancy:
         """At the assembled start: are the surplus equations consistent, and which ones
@@ -590,6 +612,7 @@ class Analysis:
                         q_start[gi],
                         ok_all,
                         prefix=lambda uu, k, gi=gi: ctx.prefix(gi, uu, k),
+                        restart=lambda i, g=g: _restart_guess(self, g, float(u[i]), start),
                     )
                     iters = np.maximum(iters, it)
                     mask = meth != ""
@@ -698,8 +721,11 @@ class Analysis:
         for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
             if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
                 found.append((int(k) - 1, float(u[k]), float(H[k])))
-        # near-singular minima seen at the samples themselves
-        for k in np.flatnonzero(good[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
+        # near-singular minima seen at the samples themselves (where the group closes)
+        closable = good & (H >= -TOUCH)
+        for k in np.flatnonzero(closable[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
+            if not (closable[k - 1] and closable[k + 1]):
+                continue
             if H[k - 1] >= H[k] <= H[k + 1] and not any(f[0] in (k - 1, k) for f in found):
                 found.append((int(k) - 1, float(u[k]), float(H[k])))
         found.sort(key=lambda f: d * f[1])
@@ -787,6 +813,17 @@ _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
 NEAR_SINGULAR = math.sin(math.radians(3.0))
+
+
+def _restart_guess(an: Analysis, g: NewtonGroup, u: float, start: StartAssembly):
+    """Where a Newton sweep resumes after a gap: the closed-form groups on the user's
+    branches; ``False`` when they cannot close there (the position is unassemblable on
+    the user's branch, whatever another branch would allow); None if there is no closed
+    form to ask."""
+    if an.plan is an.groups or any(isinstance(h, NewtonGroup) for h in an.groups):
+        return None
+    st = an.assembly_guess(u, start)
+    return False if st is None else g.get_q(st, 0)
 
 
 def _hermite_min(h0, h1, d0, d1):

@@ -100,15 +100,26 @@ class NewtonGroup(Group):
         d[1::3] /= self.scale
         return float(d.max()) if d.size else 0.0
 
-    def sweep(self, st: State, drive: Drive, q_start: np.ndarray, ok_in: np.ndarray, prefix=None):
+    def sweep(
+        self,
+        st: State,
+        drive: Drive,
+        q_start: np.ndarray,
+        ok_in: np.ndarray,
+        prefix=None,
+        restart=None,
+    ):
         """Solve positions 0..N-1 in order by continuation from ``q_start`` at position 0.
 
         Each step predicts from the previous solutions (Lagrange extrapolation) and corrects
         by Newton-Raphson (scipy when Newton fails). A step is accepted when the correction
         is small (:data:`MAX_JUMP`); otherwise the interval is marched in 2, 4, 8, ...
         substeps (``prefix(u, k)`` solves the groups before this one at substep values), so
-        that a coarse step cannot jump to another branch. Returns ``ok``, ``iterations`` and
-        ``methods`` over the positions.
+        that a coarse step cannot jump to another branch. After a gap (a dead zone) the
+        sweep resumes from ``restart(i)`` when it gives a guess (the closed-form groups on
+        the user's branches; ``False`` when those cannot close there: the position is then
+        unassemblable), else from the last solution. Returns ``ok``, ``iterations``
+        and ``methods`` over the positions.
 
         Raises
         ------
@@ -130,7 +141,13 @@ class NewtonGroup(Group):
             st1 = st.take([i])
             ui = float(drive.u[i])
             if not hq:  # the start, or the first position after a gap
-                q, stats = self.solve_at(st1, drive.u[i : i + 1], last_good)
+                guess = restart(i) if (restart is not None and i > 0) else None
+                if guess is False:  # it cannot close on the user's branch here
+                    self._nan(st, i)
+                    methods[i] = "failed"
+                    continue
+                q0 = guess if guess is not None else last_good
+                q, stats = self.solve_at(st1, drive.u[i : i + 1], q0)
                 good = stats.converged
             else:
                 q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix)

@@ -1,0 +1,568 @@
+"""Hard cases: bifurcations, coarse steps, dead zones, redundant constraints, triads,
+limit positions and design figures, exit codes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mechsolve as ms
+from mechsolve.cli import main
+
+from closed_form import fourbar
+from conftest import MECH, ref
+
+
+def wrap(x):
+    return (np.asarray(x) + np.pi) % (2 * np.pi) - np.pi
+
+
+def parallelogram(method: str, step: float, start: float, sweep: float = 720.0) -> str:
+    return f"""
+ground: {{O2: [0, 0], O4: [3, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [1, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [3, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [1, 0]}}}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly: {{sketch: {{B: [3.8, 0.6]}}}}
+driver: {{joint: O2, speed: 2 rad/s, start: {start} deg}}
+sweep: {{range: {sweep} deg, step: {step} deg}}
+solver: {{method: {method}}}
+"""
+
+
+@pytest.mark.parametrize("method", ["auto", "newton"])
+@pytest.mark.parametrize("step", [1, 7, 30, 45])
+@pytest.mark.parametrize("start", [0, 10])
+def test_parallelogram_stays_a_parallelogram_through_collinearity(method, step, start):
+    """Driven through the positions where all links are collinear (0 and 180 deg), a
+    parallelogram must not fold into the anti-parallelogram."""
+    res = ms.solve(ms.loads(parallelogram(method, step, start)))
+    assert res.ok.all()
+    # the coupler translates and the rocker turns with the crank; a Newton solver at the
+    # exactly singular samples reaches only the square root of the rounding error
+    tol = 1e-12 if method == "auto" else 1e-7
+    assert np.max(np.abs(wrap(res.link("coupler").angle))) < tol
+    assert np.max(np.abs(wrap(res.link("rocker").angle - res.u))) < tol
+    regular = np.abs(np.sin(res.u)) > 1e-6
+    np.testing.assert_allclose(res.link("rocker").omega[regular], 2.0, atol=1e-6)
+    if method == "auto":
+        kinds = {e.kind for e in res.events}
+        assert kinds == {"bifurcation"}
+        angles = sorted({round(math.degrees(e.u) % 360, 6) for e in res.events})
+        assert angles == [0.0, 180.0]
+        assert "bifurcation" in res.summary() and "followed the smooth motion" in res.summary()
+
+
+def test_slotted_bar_through_its_pivot_turns_on():
+    """A crank pin that passes exactly through the slotted bar's pivot: the bar turns on
+    smoothly (a bifurcation followed), it does not flip by half a turn."""
+    res = ms.solve(
+        ms.loads("""
+ground: {O4: [0, 0], O2: [0, 0.5]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.5, 0]}}
+  block: {points: {A: [0, 0]}}
+  bar: {points: {O4: [0, 0], B: [1, 0]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, block]
+  slot: {slider: [bar, block], point: A, line: [O4, B]}
+  O4: [ground, bar]
+driver: {joint: O2, speed: 1 rad/s, start: 0 deg}
+sweep: {range: 360 deg, step: 5 deg}
+""")
+    )
+    bar = res.link("bar").angle
+    # the pin is at the pivot at -90 deg; the bar's angle is half the crank's (inscribed angle)
+    ok = np.abs(wrap(res.u + np.pi / 2)) > 1e-9
+    np.testing.assert_allclose(wrap(bar[ok] - (res.u[ok] / 2 + np.pi / 4)), 0, atol=1e-12)
+    assert any(e.kind == "bifurcation" for e in res.events)
+
+
+CRANK_ROCKERS = [(0.3, 1.1, 0.8, 1.0), (1.0, 3.0, 2.5, 3.2), (0.2, 0.9, 0.5, 0.8), (2, 7, 9, 6)]
+
+
+@pytest.mark.parametrize("geom", CRANK_ROCKERS)
+@pytest.mark.parametrize("positions", [8, 12])
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("method", ["auto", "newton"])
+def test_coarse_step_keeps_the_branch(geom, positions, side, method):
+    a, b, c, d = geom
+    text = f"""
+ground: {{O2: [0, 0], O4: [{d}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B {side} of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 17 deg}}
+sweep: {{range: 720 deg, steps: {2 * positions}}}
+solver: {{method: {method}}}
+"""
+    res = ms.solve(ms.loads(text))
+    th2 = res.u
+    want = None
+    for br in (1, -1):
+        th3, th4, *_ = fourbar(a, b, c, d, th2, 1.0, br)
+        ax, ay = a * math.cos(th2[0]), a * math.sin(th2[0])
+        bx, by = d + c * math.cos(th4[0]), c * math.sin(th4[0])
+        if ((d - ax) * (by - ay) + ay * (bx - ax) > 0) == (side == "left"):
+            want = th4
+    assert np.max(np.abs(wrap(res.link("rocker").angle - want))) < 1e-9
+
+
+def test_crane_double_rocker_driven_into_its_dead_zone():
+    """The jib O3C driven down from 110 deg: below 92.569 deg the double rocker cannot
+    close; those positions are reported with the loop, the others kept."""
+    limit = 92.56911487175758  # tests/data/000_crane_design.json
+    for method in ("auto", "newton"):
+        mech = ms.load(MECH / "crane.yaml", variant="jib-driven")
+        mech.driver.start = math.radians(110)
+        mech.driver.speed = -abs(mech.driver.speed)
+        mech.sweep.travel, mech.sweep.step = math.radians(30), math.radians(0.5)
+        res = ms.solve(mech, method=method)
+        angle = np.degrees(res.u)
+        np.testing.assert_array_equal(res.ok, angle > limit)
+        assert len(res.failures) == 1
+        f = res.failures[0]
+        assert angle[f.first] == pytest.approx(92.5) and angle[f.last] == pytest.approx(80)
+        if method == "auto":
+            assert "loop D" in f.reason and "cannot close" in f.reason
+        assert np.isnan(res.point("K").x[~res.ok]).all()
+        assert np.isfinite(res.point("K").x[res.ok]).all()
+        assert res.solution.residual[res.ok].max() < 1e-9
+
+
+def test_partial_sweep_exit_code_and_csv(tmp_path):
+    text = (MECH / "crane.yaml").read_text()
+    f = tmp_path / "crane.yaml"
+    f.write_text(
+        text.replace(
+            "driver: {joint: O3, line: [O3, C], start: 93 deg}",
+            "driver: {joint: O3, line: [O3, C], start: 100 deg, direction: cw}",
+        ).replace(
+            "sweep: {range: null, to: 134 deg, step: 1 deg}",
+            "sweep: {range: null, to: 85 deg, step: 1 deg}",
+        )
+    )
+    r = CliRunner().invoke(
+        main, ["run", str(f), "--variant", "jib-driven", "-o", str(tmp_path / "o"), "--no-plots"]
+    )
+    assert r.exit_code == 1, r.output
+    assert "unassemblable at driver angle 92° (8° from the start) to driver angle 85°" in r.output
+    import csv
+
+    rows = list(csv.reader((tmp_path / "o" / "results.csv").open()))
+    assert len(rows) == 1 + 16
+    assert rows[-1][-2].startswith("unassemblable: loop D")
+    assert rows[1][-2] == "ok"
+
+
+def test_non_grashof_rocker_driven_full_turn_keeps_the_users_branch():
+    """A triple rocker driven over a full turn: two dead zones, and after each one the
+    sweep resumes on the branch the user chose (B on the left of A -> O4)."""
+    a, b, c, d = 1.0, 1.0, 1.0, 1.75
+    for method in ("auto", "newton"):
+        text = f"""
+ground: {{O2: [0, 0], O4: [{d}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B left of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 30 deg}}
+sweep: {{range: 360 deg, step: 2 deg}}
+solver: {{method: {method}}}
+"""
+        res = ms.solve(ms.loads(text))
+        A = np.stack([a * np.cos(res.u), a * np.sin(res.u)])
+        B = np.stack([res.point("B").x, res.point("B").y])
+        cross = (d - A[0]) * (B[1] - A[1]) - (0 - A[1]) * (B[0] - A[0])
+        assert np.all(cross[res.ok] > 0)
+        D = np.hypot(d - A[0], A[1])
+        np.testing.assert_array_equal(res.ok, D <= b + c)
+        assert len(res.failures) == 1  # one dead zone around 180 deg
+
+
+def test_dead_zone_narrower_than_the_step_is_reported():
+    """A four-bar whose coupler just fails to reach around 180 deg for about 1 deg: a
+    10 deg step jumps over it, and the summary says so."""
+    # |A - O4| at 180 deg is a + d = 2.0; b + c = 1.99995 < 2.0
+    text = """
+ground: {O2: [0, 0], O4: [1.2, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.8, 0]}}
+  coupler: {points: {A: [0, 0], B: [1.2, 0]}}
+  rocker: {points: {O4: [0, 0], B: [0.79995, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 1 rad/s, start: 5 deg}
+sweep: {range: 350 deg, step: 10 deg}
+"""
+    res = ms.solve(ms.loads(text))
+    assert res.ok.all()
+    kinds = [e.kind for e in res.events]
+    assert "dead zone" in kinds
+    e = next(e for e in res.events if e.kind == "dead zone")
+    assert math.degrees(e.u) == pytest.approx(180.0, abs=1e-6)
+    assert "steps over this dead zone" in res.summary()
+
+
+def test_branch_that_cannot_be_followed_stops_with_a_message(monkeypatch, tmp_path):
+    """If even the finest substeps jump, the sweep stops and says where, suggesting a
+    smaller step (forced here by allowing no substeps at all)."""
+    import mechsolve.groups.generic as generic
+
+    monkeypatch.setattr(generic, "MAX_DEPTH", 0)
+    f = tmp_path / "p.yaml"
+    f.write_text(parallelogram("newton", 45, 10))
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 3, r.output
+    assert "cannot follow the branch" in r.output and "use a smaller step" in r.output
+
+
+# --- redundant constraints ------------------------------------------------------------
+
+REDUNDANT = """
+# a parallelogram with a third parallel crank: one redundant constraint
+ground: {O2: [0, 0], O4: [3, 0], O6: [1.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [1, 0]}, mass: 2, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [3, 0], C: [1.5, 0]}, mass: 6, uniform_bar: [A, B]}
+  crank2: {points: {O4: [0, 0], B: [1, 0]}, mass: 2, uniform_bar: [O4, B]}
+  crank3: {points: {O6: [0, 0], C: [1, 0]}, mass: 3, uniform_bar: [O6, C]}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, crank2]
+  O4: [ground, crank2]
+  C: [coupler, crank3]
+  O6: [ground, crank3]
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 2 rad/s, start: 20 deg}
+sweep: {range: 140 deg, step: 10 deg}
+"""
+
+
+def test_redundant_parallelogram_kinematics_and_unique_torque(tmp_path):
+    res = ms.solve(ms.loads(REDUNDANT))
+    red = res.analysis.redundancy
+    assert red is not None and red.count == 1
+    assert res.ok.all()
+    # every crank turns with the driver, the coupler translates
+    for crank in ("crank", "crank2", "crank3"):
+        np.testing.assert_allclose(wrap(res.link(crank).angle - res.u), 0, atol=1e-12)
+        np.testing.assert_allclose(res.link(crank).omega, 2.0, atol=1e-12)
+    np.testing.assert_allclose(res.link("coupler").angle, 0, atol=1e-12)
+    # hand solution: the kinetic energy is constant, so T w = power against gravity:
+    # T = g cos(theta) (sum over the cranks of m l/2 + m_coupler l)
+    hand = 9.81 * np.cos(res.u) * (2 * 0.5 + 2 * 0.5 + 3 * 0.5 + 6 * 1.0)
+    np.testing.assert_allclose(res.driving_effort, hand, rtol=0, atol=1e-9 * np.max(hand))
+    f = res.forces
+    assert "driver" not in f.nonunique and set(f.nonunique) == {"O2", "A", "B", "O4", "C", "O6"}
+    headers = [c.header for c in res.columns()]
+    assert "O6(ground->crank3).Fx [N] (minimum-norm)" in headers
+    assert "input.torque [N*m]" in headers
+    # the minimum-norm reactions still balance every link: the power balance holds
+    assert np.max(np.abs(f.residual)) < 1e-9 * res.power_scale()
+    text = res.summary()
+    assert "redundant constraints: 1 equation(s)" in text and "driving torque is unique" in text
+    f = tmp_path / "r.yaml"
+    f.write_text(REDUNDANT)
+    r = CliRunner().invoke(main, ["check", str(f)])
+    assert r.exit_code == 0 and "0 by Grübler" in r.output and "1 by the rank" in r.output
+    assert "the two counts differ" in r.output and "redundant constraints" in r.output
+
+
+def test_inconsistent_redundant_constraints_cannot_assemble():
+    text = REDUNDANT.replace(
+        "crank3: {points: {O6: [0, 0], C: [1, 0]}", "crank3: {points: {O6: [0, 0], C: [1.1, 0]}"
+    )
+    with pytest.raises(ms.AssemblyError, match="over-constrained and cannot close"):
+        ms.solve(ms.loads(text))
+
+
+def test_two_identical_links_in_parallel():
+    """A four-bar whose coupler is doubled (two identical links between A and B)."""
+    text = """
+ground: {O2: [0, 0], O4: [1.0, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.3, 0]}}
+  coupler: {points: {A: [0, 0], B: [1.1, 0]}}
+  twin: {points: {A: [0, 0], B: [1.1, 0]}}
+  rocker: {points: {O4: [0, 0], B: [0.8, 0]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  A2: {revolute: [crank, twin], point: A}
+  B: [coupler, rocker]
+  B2: {revolute: [twin, rocker], point: B}
+  O4: [ground, rocker]
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 1 rad/s}
+sweep: {range: 360 deg, step: 10 deg}
+"""
+    res = ms.solve(ms.loads(text), forces=False)
+    assert res.analysis.redundancy is not None and res.ok.all()
+    th3, th4, *_ = fourbar(0.3, 1.1, 0.8, 1.0, res.u, 1.0, 1)
+    np.testing.assert_allclose(
+        wrap(res.link("twin").angle - res.link("coupler").angle), 0, atol=1e-12
+    )
+    ref = (
+        th4
+        if np.all(np.abs(wrap(res.link("rocker").angle - th4)) < 1e-6)
+        else fourbar(0.3, 1.1, 0.8, 1.0, res.u, 1.0, -1)[1]
+    )
+    np.testing.assert_allclose(wrap(res.link("rocker").angle - ref), 0, atol=1e-10)
+
+
+# --- a class-III group (triad), solved by Newton, against a 1-D construction -----------
+
+
+def triad_reference(th, geo):
+    """Stephenson six-bar: crank O-A drives a ternary link T (P1, P2, P3) held by three
+    binary links: G1-P1, G2-P2 and A-P3. For each crank angle, the angle phi of G1 -> P1
+    is found by Brent's method so that |P3 - A| = l3 (P2 from a circle intersection);
+    the rates come from the loop equations written in link angles."""
+    from scipy.optimize import brentq
+
+    G1, G2, r, l1, l2, l3, p1, p2, p3, phi0, br = geo
+    p12 = np.subtract(p2, p1)
+    p13 = np.subtract(p3, p1)
+    d12 = math.hypot(*p12)
+
+    def build(phi, t):
+        P1 = np.array(G1) + l1 * np.array([math.cos(phi), math.sin(phi)])
+        dx, dy = G2[0] - P1[0], G2[1] - P1[1]
+        D = math.hypot(dx, dy)
+        cg = (d12 * d12 + D * D - l2 * l2) / (2 * d12 * D)
+        if abs(cg) > 1:
+            return None
+        ang = math.atan2(dy, dx) + br * math.acos(cg)
+        P2 = P1 + d12 * np.array([math.cos(ang), math.sin(ang)])
+        psi = ang - math.atan2(p12[1], p12[0])  # T's frame angle
+        c, s = math.cos(psi), math.sin(psi)
+        P3 = P1 + np.array([c * p13[0] - s * p13[1], s * p13[0] + c * p13[1]])
+        A = np.array([r * math.cos(t), r * math.sin(t)])
+        return P1, P2, P3, psi, A
+
+    def f(phi, t):
+        b = build(phi, t)
+        return np.inf if b is None else math.hypot(*(b[2] - b[4])) - l3
+
+    out = []
+    phi = phi0
+    for t in th:
+        lo, hi = phi - 0.2, phi + 0.2
+        grid = np.linspace(lo, hi, 81)
+        vals = [f(x, t) for x in grid]
+        k = min(
+            (
+                i
+                for i in range(80)
+                if np.isfinite(vals[i]) and np.isfinite(vals[i + 1]) and vals[i] * vals[i + 1] <= 0
+            ),
+            key=lambda i: abs(grid[i] - phi),
+        )
+        phi = brentq(f, grid[k], grid[k + 1], args=(t,), xtol=1e-15, rtol=1e-15)
+        P1, P2, P3, psi, A = build(phi, t)
+        phi2 = math.atan2(P2[1] - G2[1], P2[0] - G2[0])
+        phi3 = math.atan2(P3[1] - A[1], P3[0] - A[0])
+        out.append((phi, psi, phi2, phi3, P3, A))
+    return out
+
+
+def test_stephenson_triad_against_one_dimensional_construction():
+    # a configuration built first, the link lengths taken from it
+    G1, G2 = (0.0, 1.2), (0.96, 1.63)
+    r = 0.4
+    p1, p2, p3 = (0.0, 0.0), (0.9, 0.1), (0.4, -0.5)
+    t0, phi0 = 0.3, math.radians(-60)
+    P1 = np.array(G1) + 0.7 * np.array([math.cos(phi0), math.sin(phi0)])
+    psi0 = 0.2
+    rot = np.array([[math.cos(psi0), -math.sin(psi0)], [math.sin(psi0), math.cos(psi0)]])
+    P2 = P1 + rot @ np.subtract(p2, p1)
+    P3 = P1 + rot @ np.subtract(p3, p1)
+    A0 = np.array([r * math.cos(t0), r * math.sin(t0)])
+    l1, l2, l3 = 0.7, float(np.hypot(*(P2 - G2))), float(np.hypot(*(P3 - A0)))
+    dx, dy = G2[0] - P1[0], G2[1] - P1[1]
+    ang_true = math.atan2(P2[1] - P1[1], P2[0] - P1[0])
+    br = 1 if (ang_true - math.atan2(dy, dx)) % (2 * math.pi) < math.pi else -1
+    text = f"""
+ground: {{O: [0, 0], G1: [{G1[0]}, {G1[1]}], G2: [{G2[0]}, {G2[1]}]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [{r}, 0]}}}}
+  L1: {{points: {{G1: [0, 0], P1: [{l1}, 0]}}}}
+  L2: {{points: {{G2: [0, 0], P2: [{l2!r}, 0]}}}}
+  L3: {{points: {{A: [0, 0], P3: [{l3!r}, 0]}}}}
+  T: {{points: {{P1: [{p1[0]}, {p1[1]}], P2: [{p2[0]}, {p2[1]}], P3: [{p3[0]}, {p3[1]}]}}}}
+joints:
+  O: [ground, crank]
+  A: [crank, L3]
+  P3: [L3, T]
+  P1: [L1, T]
+  G1: [ground, L1]
+  P2: [T, L2]
+  G2: [ground, L2]
+assembly:
+  sketch: {{P1: {[float(v) for v in P1]}, P2: {[float(v) for v in P2]},
+           P3: {[float(v) for v in P3]}}}
+driver: {{joint: O, speed: 1.5 rad/s, start: {t0} rad}}
+sweep: {{range: 60 deg, step: 2 deg}}
+"""
+    res = ms.solve(ms.loads(text))
+    assert [g.kind for g in res.analysis.plan] == ["driver link", "Newton"]
+    assert res.ok.all()
+    ref = triad_reference(res.u, (G1, G2, r, l1, l2, l3, p1, p2, p3, phi0, br))
+    phi = np.array([x[0] for x in ref])
+    psi = np.array([x[1] for x in ref])
+    np.testing.assert_allclose(wrap(res.link("L1").angle - phi), 0, atol=1e-9)
+    np.testing.assert_allclose(wrap(res.link("T").angle - psi), 0, atol=1e-9)
+    # rates: the loop equations G1 + l1 e1 + R(psi)(p2 - p1) = G2 + l2 e2 and
+    # G1 + l1 e1 + R(psi)(p3 - p1) = A + l3 e3, differentiated: 4 equations in
+    # (w1, wT, w2, w3)
+    w = 1.5
+    for k in range(0, len(res.u), 5):
+        ph, ps, ph2, ph3, _, _ = ref[k]
+        t = res.u[k]
+
+        def perp_rot(v, ang):
+            c, s = math.cos(ang), math.sin(ang)
+            x, y = c * v[0] - s * v[1], s * v[0] + c * v[1]
+            return np.array([-y, x])
+
+        e1p = l1 * np.array([-math.sin(ph), math.cos(ph)])
+        M = np.zeros((4, 4))
+        M[:2, 0] = e1p
+        M[:2, 1] = perp_rot(np.subtract(p2, p1), ps)
+        M[:2, 2] = -l2 * np.array([-math.sin(ph2), math.cos(ph2)])
+        M[2:, 0] = e1p
+        M[2:, 1] = perp_rot(np.subtract(p3, p1), ps)
+        M[2:, 3] = -l3 * np.array([-math.sin(ph3), math.cos(ph3)])
+        rhs = np.zeros(4)
+        rhs[2:] = r * w * np.array([-math.sin(t), math.cos(t)])
+        w1, wT, w2, w3 = np.linalg.solve(M, rhs)
+        assert res.link("L1").omega[k] == pytest.approx(w1, rel=1e-9, abs=1e-12)
+        assert res.link("T").omega[k] == pytest.approx(wT, rel=1e-9, abs=1e-12)
+        assert res.link("L3").omega[k] == pytest.approx(w3, rel=1e-9, abs=1e-12)
+
+
+# --- limit positions and design figures -----------------------------------------------
+
+
+def test_shaper_limit_positions_and_time_ratio():
+    res = ms.run(MECH / "shaper.yaml", variant="graphical")
+    lim = {lp.name: lp for lp in res.limit_positions()}
+    ram = lim["ram_guide"]
+    assert ram.swing == pytest.approx(2 * 0.54 * 0.11 / 0.38, abs=1e-9)  # the stroke
+    # K = (180 + theta) / (180 - theta), theta = 2 asin(110/380): 1.46 in the seed
+    theta = 2 * math.degrees(math.asin(110 / 380))
+    assert ram.time_ratio == pytest.approx((180 + theta) / (180 - theta), rel=1e-9)
+    assert round(ram.time_ratio, 2) == 1.46
+    bar = lim["guide_bar"]
+    assert math.degrees(bar.swing) == pytest.approx(
+        2 * (90 - math.degrees(math.acos(110 / 380))), rel=1e-9
+    )
+    assert "time ratio: " in res.summary() and "K = 1.46" in res.summary()
+
+
+def test_crane_jib_swing_is_the_designed_one():
+    res = ms.run(MECH / "crane.yaml")
+    jib = next(lp for lp in res.limit_positions() if lp.name == "jib")
+    # the jib's frame is O3 -> B, 25 deg clockwise of O3 -> C
+    lo, hi = math.degrees(jib.low) + 25, math.degrees(jib.high) + 25
+    # exactly: at the rocker's limits the crank and the coupler are in line, |O1 B| =
+    # l2 -+ l1, and the triangle O3-O1-B gives the angle of O3 -> B
+    O1 = (2.86, 4.0)
+    d = math.hypot(*O1)
+    exact = [
+        math.degrees(math.atan2(O1[1], O1[0]) + math.acos((16 + d * d - L * L) / (8 * d))) + 25
+        for L in (2.780 - 1.388, 2.780 + 1.388)
+    ]
+    assert lo == pytest.approx(exact[0], abs=1e-9)
+    assert hi == pytest.approx(exact[1], abs=1e-9)
+    design = ref("000_crane_design.json")["recomputed"]  # found on a grid: within 1e-6 deg
+    assert lo == pytest.approx(design["O3C_swing_with_rounded_l1_l2_deg"][0], abs=1e-5)
+    assert hi == pytest.approx(design["O3C_swing_with_rounded_l1_l2_deg"][1], abs=1e-5)
+    assert math.degrees(jib.u_low) == pytest.approx(design["K_right_limit"]["theta1_deg"], abs=1e-6)
+
+
+def test_slider_crank_stroke_time_ratio_and_transmission():
+    r, l, e = 0.05, 0.2, 0.01
+    res = ms.run(MECH / "slider-crank.yaml")
+    cyl = res.limit_positions()[0]
+    assert cyl.swing == pytest.approx(
+        math.sqrt((l + r) ** 2 - e**2) - math.sqrt((l - r) ** 2 - e**2), rel=1e-12
+    )
+    # limit positions: crank and rod in line, stretched and folded
+    t_out = math.asin(e / (l + r))
+    t_in = math.pi + math.asin(e / (l - r))
+    fwd = (t_out - t_in) % (2 * math.pi)
+    assert cyl.time_ratio == pytest.approx(
+        max(fwd, 2 * math.pi - fwd) / min(fwd, 2 * math.pi - fwd), rel=1e-9
+    )
+    (tr,) = res.transmission_angles()
+    # the rod's largest angle to the guide: when the crank is perpendicular to it
+    assert math.degrees(tr.angle) == pytest.approx(
+        90 - math.degrees(math.asin((r + e) / l)), abs=1e-6
+    )
+
+
+def test_fourbar_minimum_transmission_angle():
+    a, b, c, d = 26.5, 105.6, 59.0, 87.5
+    res = ms.run(MECH / "fourbar.yaml")
+    (tr,) = res.transmission_angles()
+    mu0 = math.acos((b * b + c * c - (d - a) ** 2) / (2 * b * c))
+    mu180 = math.pi - math.acos((b * b + c * c - (d + a) ** 2) / (2 * b * c))
+    assert tr.angle == pytest.approx(min(mu0, mu180), abs=1e-9)
+
+
+def test_conditioning_column_and_exit_code_help(tmp_path):
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "fourbar.yaml"), "-o", str(tmp_path), "--no-plots"]
+    )
+    assert r.exit_code == 0
+    header = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
+    assert "jacobian.rcond [-]" in header
+    r = CliRunner().invoke(main, ["--help"])
+    for line in ("0  success", "1  completed with warnings", "2  input error", "3  solver failure"):
+        assert line in r.output
+
+
+def test_newton_resumes_on_the_users_branch_after_a_dead_zone():
+    """After a dead zone, the whole-system Newton solver must not close positions on the
+    first loop's other branch (where the second loop happens to close): found by
+    hypothesis, a coupler midpoint E whose dyad E-F-G fails for a third of the turn."""
+    text = """
+ground: {O2: [0, 0], O4: [1.0, 0], G: [0.0, 0.0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.5, 0]}}
+  coupler: {points: {A: [0, 0], B: [1.0, 0], E: [0.5, 0.0]}}
+  rocker: {points: {O4: [0, 0], B: [1.0, 0]}}
+  link5: {points: {E: [0, 0], F: [1.5, 0]}}
+  link6: {points: {G: [0, 0], F: [1.0, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker],
+         E: [coupler, link5], F: [link5, link6], G: [ground, link6]}
+assembly: ["B left of A -> O4", "F left of E -> G"]
+driver: {joint: O2, speed: 0.9 rad/s, start: 1.0 rad}
+sweep: {range: 360 deg, step: 5 deg}
+solver: {method: METHOD}
+"""
+    auto = ms.solve(ms.loads(text.replace("METHOD", "auto")))
+    newton = ms.solve(ms.loads(text.replace("METHOD", "newton")))
+    np.testing.assert_array_equal(auto.ok, newton.ok)
+    assert [(f.first, f.last) for f in newton.failures] == [(20, 55)]
+    both = auto.ok
+    np.testing.assert_allclose(newton.point("F").x[both], auto.point("F").x[both], atol=1e-9)
+    assert not auto.events  # no event reported inside the unassemblable range
