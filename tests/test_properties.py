@@ -233,7 +233,8 @@ FINE = np.linspace(0, 2 * math.pi, 20001)
 
 def grashof_crank_rocker(draw_a, draw_b, draw_c, draw_d):
     L = sorted([draw_a, draw_b, draw_c, draw_d])
-    return L[0] == draw_a and L[0] + L[3] < L[1] + L[2]
+    # strictly: a change point (s + l = p + q) passes bifurcations, tested elsewhere
+    return L[0] == draw_a and L[0] + L[3] < L[1] + L[2] - 1e-6
 
 
 @SETTINGS
