@@ -381,6 +381,23 @@ class ConstraintSystem:
         """Phi for all positions, shape (nc, N)."""
         return np.concatenate([c.residual(st, u) for c in self.constraints], axis=0)
 
+    def max_residual(self, st: State, u) -> np.ndarray:
+        """max |Phi| over the equations at each position (N,).
+
+        Joint by joint on rows of N values: batching joints into (joints, N) temporaries
+        is slower, as arrays of that size are allocated by mmap, page by page.
+        """
+        out = np.zeros(st.n)
+        for c in self.constraints:
+            if type(c) is RevoluteConstraint:
+                xa, ya = st.point(c.a, c.sa)
+                xb, yb = st.point(c.b, c.sb)
+                np.maximum(out, np.abs(xa - xb), out=out)
+                np.maximum(out, np.abs(ya - yb), out=out)
+            else:
+                np.maximum(out, np.abs(c.residual(st, u)).max(axis=0), out=out)
+        return out
+
     def jacobian(self, st: State) -> np.ndarray:
         """Phi_q for all positions, shape (N, nc, nq)."""
         J = np.zeros((st.n, self.nc, self.nq))

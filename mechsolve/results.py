@@ -426,7 +426,11 @@ class Results:
         return out
 
     def methods(self) -> list[str]:
-        return [str(m) if ok else "" for m, ok in zip(self.solution.methods, self.ok)]
+        """How each position was solved (``closed form``, ``newton``, ``scipy-hybr``...)."""
+        m = self.solution.methods
+        if m is None:
+            return ["closed form" if ok else "" for ok in self.ok]
+        return [str(x) if ok else "" for x, ok in zip(m, self.ok)]
 
     def to_csv(self, path) -> Path:
         """Write the table as CSV (see :mod:`mechsolve.writers.csv`); return the path."""
@@ -477,10 +481,9 @@ class Results:
                 )
         if len(self.point_names()) > 12:
             lines.append(f"  ... and {len(self.point_names()) - 12} more points in the CSV")
-        meth = {str(m) for m, ok in zip(self.solution.methods, self.ok) if ok}
-        fallback = sum(
-            1 for m, ok in zip(self.solution.methods, self.ok) if ok and "scipy" in str(m)
-        )
+        methods = self.methods()
+        meth = {m for m, ok in zip(methods, self.ok) if ok}
+        fallback = sum(1 for m in methods if "scipy" in m)
         its = self.solution.iterations[self.ok]
         lines.append(
             "  solver: "

@@ -21,6 +21,8 @@ class State:
     __slots__ = (
         "nb",
         "n",
+        "token",
+        "consts",
         "x",
         "y",
         "th",
@@ -34,21 +36,30 @@ class State:
         "al",
     )
 
+    _count = 0
+
     def __init__(self, nb: int, n: int) -> None:
         self.nb = nb
         self.n = n
-        shape = (nb + 1, n)
-        self.x = np.zeros(shape)
-        self.y = np.zeros(shape)
-        self.th = np.zeros(shape)
-        self.c = np.ones(shape)
-        self.s = np.zeros(shape)
-        self.vx = np.zeros(shape)
-        self.vy = np.zeros(shape)
-        self.w = np.zeros(shape)
-        self.ax = np.zeros(shape)
-        self.ay = np.zeros(shape)
-        self.al = np.zeros(shape)
+        State._count += 1
+        self.token = State._count  # tells group caches which state they belong to
+        self.consts: dict = {}
+        # one block for all arrays: a single zeroed allocation is far cheaper than eleven
+        block = np.zeros((11, nb + 1, n))
+        (
+            self.x,
+            self.y,
+            self.th,
+            self.c,
+            self.s,
+            self.vx,
+            self.vy,
+            self.w,
+            self.ax,
+            self.ay,
+            self.al,
+        ) = block
+        self.c[nb] = 1.0  # the ground's frame; the bodies' are set by their groups
 
     @property
     def ground(self) -> int:
@@ -60,19 +71,26 @@ class State:
         self.c[i, idx] = np.cos(th)
         self.s[i, idx] = np.sin(th)
 
+    ARRAYS = ("x", "y", "th", "c", "s", "vx", "vy", "w", "ax", "ay", "al")
+
     def take(self, idx) -> State:
         """A new state holding only the positions ``idx``."""
         out = State.__new__(State)
         out.nb = self.nb
-        for name in State.__slots__[2:]:
+        State._count += 1
+        out.token = State._count
+        out.consts = {}
+        for name in State.ARRAYS:
             setattr(out, name, getattr(self, name)[:, idx].copy())
         out.n = out.x.shape[1]
         return out
 
     def put(self, idx, other: State) -> None:
         """Copy ``other``'s positions into positions ``idx`` of this state."""
-        for name in State.__slots__[2:]:
+        for name in State.ARRAYS:
             getattr(self, name)[:, idx] = getattr(other, name)
+        State._count += 1
+        self.token = State._count  # its content changed: caches are stale
 
     def q(self) -> np.ndarray:
         """Generalised coordinates as an array (N, 3 * nb): x0, y0, th0, x1, ..."""
@@ -85,14 +103,32 @@ class State:
         )
 
     # -- points ----------------------------------------------------------------------
+    # The ground (row nb) is at rest with the identity frame, and many local vectors are
+    # zero (a link's frame at one of its joints): both have fast paths, which return
+    # read-only broadcast views.
+    def _const(self, v: float, idx) -> np.ndarray:
+        n = self.n if isinstance(idx, slice) and idx == slice(None) else len(self.x[0, idx])
+        key = (float(v), n)
+        arr = self.consts.get(key)
+        if arr is None:
+            arr = self.consts[key] = np.broadcast_to(np.float64(v), (n,))
+        return arr
+
     def rotated(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
         """Global components of the local vector ``s`` on body ``i``."""
+        if i == self.nb:
+            return self._const(s[0], idx), self._const(s[1], idx)
+        if s[0] == 0.0 and s[1] == 0.0:
+            z = self._const(0.0, idx)
+            return z, z
         c = self.c[i, idx]
         sn = self.s[i, idx]
         return c * s[0] - sn * s[1], sn * s[0] + c * s[1]
 
     def point(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
         """Global position of the point with local coordinates ``s`` on body ``i``."""
+        if i == self.nb:
+            return self._const(s[0], idx), self._const(s[1], idx)
         if s[0] == 0.0 and s[1] == 0.0:
             return self.x[i, idx], self.y[i, idx]
         rx, ry = self.rotated(i, s, idx)
@@ -101,6 +137,9 @@ class State:
     def point_velocity(
         self, i: int, s: np.ndarray, idx=slice(None)
     ) -> tuple[np.ndarray, np.ndarray]:
+        if i == self.nb:
+            z = self._const(0.0, idx)
+            return z, z
         if s[0] == 0.0 and s[1] == 0.0:
             return self.vx[i, idx], self.vy[i, idx]
         rx, ry = self.rotated(i, s, idx)
@@ -110,6 +149,9 @@ class State:
     def point_acceleration(
         self, i: int, s: np.ndarray, idx=slice(None)
     ) -> tuple[np.ndarray, np.ndarray]:
+        if i == self.nb:
+            z = self._const(0.0, idx)
+            return z, z
         if s[0] == 0.0 and s[1] == 0.0:
             return self.ax[i, idx], self.ay[i, idx]
         rx, ry = self.rotated(i, s, idx)

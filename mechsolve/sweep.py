@@ -152,7 +152,7 @@ class Solution:
     failures: list[Failure]
     indicator: np.ndarray  # (n_groups, N)
     iterations: np.ndarray
-    methods: np.ndarray
+    methods: np.ndarray | None  # None: every position solved in closed form
     residual: np.ndarray
     start: StartAssembly
     warnings: list[str] = field(default_factory=list)
@@ -599,7 +599,7 @@ class Analysis:
         ok_all = np.ones(n, bool)
         oks, inds = [], []
         iters = np.zeros(n, int)
-        methods = np.full(n, "closed form", dtype=object)
+        methods = _Methods(n)
         events: list[Event] = []
         warnings: list[str] = []
         ctx = _Context(self, st, u, start, flips, q_start)
@@ -615,10 +615,7 @@ class Analysis:
                         restart=lambda i, g=g: _restart_guess(self, g, float(u[i]), start),
                     )
                     iters = np.maximum(iters, it)
-                    mask = meth != ""
-                    methods[mask] = np.where(
-                        methods[mask] == "closed form", meth[mask], methods[mask] + "+" + meth[mask]
-                    )
+                    methods.merge(meth)
                     if derivs:
                         g.velocity(st, unit)
                     if acceleration:
@@ -642,23 +639,20 @@ class Analysis:
         ok = ok_all.copy()
         # check the full constraint residual everywhere; polish where needed
         with np.errstate(invalid="ignore"):
-            res = (
-                np.max(np.abs(self.system.residual(st, u)), axis=0)
-                if self.system.nc
-                else np.zeros(n)
-            )
+            res = self.system.max_residual(st, u)
         bad = ok & ~(res <= self.atol)
         for i in np.flatnonzero(bad):
             ok[i], res[i], it = self._polish(st, unit, i)
             iters[i] += it
-            methods[i] = methods[i] + "+newton polish"
+            methods.append(i, "newton polish")
         res = np.where(ok, res, np.nan)
         # derivatives per unit driver coordinate -> time derivatives at constant speed
         w = 1.0 if per_unit_driver else self.speed
-        for arr in (st.vx, st.vy, st.w):
-            arr *= w
-        for arr in (st.ax, st.ay, st.al):
-            arr *= w * w
+        if w != 1.0:
+            for arr in (st.vx, st.vy, st.w):
+                arr *= w
+            for arr in (st.ax, st.ay, st.al):
+                arr *= w * w
         failures = self._failures(st, oks, ok)
         events.sort(key=lambda e: e.after)
         return Solution(
@@ -670,7 +664,7 @@ class Analysis:
             failures,
             np.array(inds) if inds else np.zeros((0, n)),
             iters,
-            methods,
+            methods.array(),
             res,
             start,
             warnings,
@@ -696,10 +690,10 @@ class Analysis:
         u = ctx.u
         good = ok_prev & np.isfinite(H) & np.isfinite(Hs)
         pair = good[:-1] & good[1:] & (H[:-1] >= -TOUCH) & (H[1:] >= -TOUCH)
-        inside = pair & (Hs[:-1] < 0) & (Hs[1:] > 0)
-        h = np.abs(u[1:] - u[:-1])
-        est = _hermite_min(H[:-1], H[1:], Hs[:-1] * h, Hs[1:] * h)
-        cand = np.flatnonzero(inside & (est < EVENT_CHECK))
+        inside = np.flatnonzero(pair & (Hs[:-1] < 0) & (Hs[1:] > 0))
+        h = np.abs(u[inside + 1] - u[inside])
+        est = _hermite_min(H[inside], H[inside + 1], Hs[inside] * h, Hs[inside + 1] * h)
+        cand = inside[est < EVENT_CHECK]
         events: list[Event] = []
         warnings: list[str] = []
         found: list[tuple[int, float, float]] = []  # (k, u*, H*)
@@ -783,15 +777,12 @@ class Analysis:
 
     def _failures(self, st: State, oks, ok) -> list[Failure]:
         out: list[Failure] = []
-        n = len(ok)
-        i = 0
-        while i < n:
-            if ok[i]:
-                i += 1
-                continue
-            j = i
-            while j + 1 < n and not ok[j + 1]:
-                j += 1
+        if ok.all():
+            return out
+        bad = np.concatenate(([False], ~ok, [False]))
+        edges = np.flatnonzero(bad[1:] != bad[:-1])  # starts and ends of runs of failures
+        for i, j in zip(edges[0::2], edges[1::2] - 1):
+            i, j = int(i), int(j)
             gi = next((k for k, o in enumerate(oks) if not o[i]), None)
             if gi is None:
                 group, reason = "the whole system", "the constraint residual stays above tolerance"
@@ -804,7 +795,6 @@ class Analysis:
                     else (f"{g.label}: Newton-Raphson and scipy found no closed position")
                 )
             out.append(Failure(i, j, group, reason))
-            i = j + 1
         return out
 
 
@@ -813,6 +803,33 @@ _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
 NEAR_SINGULAR = math.sin(math.radians(3.0))
+
+
+class _Methods:
+    """How each position was solved; an array of text only once some are not closed form."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.arr: np.ndarray | None = None
+
+    def _materialise(self) -> np.ndarray:
+        if self.arr is None:
+            self.arr = np.full(self.n, "closed form", dtype=object)
+        return self.arr
+
+    def merge(self, meth: np.ndarray) -> None:
+        mask = meth != ""
+        if not np.any(mask):
+            return
+        a = self._materialise()
+        a[mask] = np.where(a[mask] == "closed form", meth[mask], a[mask] + "+" + meth[mask])
+
+    def append(self, i: int, text: str) -> None:
+        a = self._materialise()
+        a[i] = a[i] + "+" + text
+
+    def array(self) -> np.ndarray | None:
+        return self.arr
 
 
 def _restart_guess(an: Analysis, g: NewtonGroup, u: float, start: StartAssembly):

@@ -68,6 +68,14 @@ class Group:
     def acceleration(self, st: State, drive: Drive) -> None:
         raise NotImplementedError
 
+    def cache(self, st: State) -> dict:
+        """Intermediate results shared by this group's passes over the same state (the
+        discriminant, positions, velocities and accelerations reuse the solved ends)."""
+        if getattr(self, "_ctoken", None) != st.token:
+            self._ctoken = st.token
+            self._cache = {}
+        return self._cache
+
     def disc(self, st: State) -> tuple[np.ndarray, np.ndarray] | None:
         """The group's discriminant and its rate, for branch groups (``n_modes == 2``).
 
@@ -96,26 +104,44 @@ def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
     """
     ex, ey = sm[0] - s0[0], sm[1] - s0[1]
     l2 = ex * ex + ey * ey
-    c = (ex * gx + ey * gy) / l2
-    s = (ex * gy - ey * gx) / l2
-    st.c[b] = c
-    st.s[b] = s
-    st.th[b] = np.arctan2(s, c)
-    st.x[b] = px - (c * s0[0] - s * s0[1])
-    st.y[b] = py - (s * s0[0] + c * s0[1])
+    if ey == 0.0:  # the usual frame: x along the segment
+        c = st.c[b]
+        s = st.s[b]
+        np.multiply(gx, ex / l2, out=c)
+        np.multiply(gy, ex / l2, out=s)
+    else:
+        c = (ex * gx + ey * gy) / l2
+        s = (ex * gy - ey * gx) / l2
+        st.c[b] = c
+        st.s[b] = s
+    np.arctan2(s, c, out=st.th[b])
+    if s0[0] == 0.0 and s0[1] == 0.0:
+        st.x[b] = px
+        st.y[b] = py
+    else:
+        st.x[b] = px - (c * s0[0] - s * s0[1])
+        st.y[b] = py - (s * s0[0] + c * s0[1])
 
 
 def body_velocity_from_point(st: State, b: int, s0, vpx, vpy, w) -> None:
     """Body ``b``'s frame velocity from its point ``s0``'s velocity and angular velocity."""
-    rx, ry = st.rotated(b, s0)
     st.w[b] = w
+    if s0[0] == 0.0 and s0[1] == 0.0:
+        st.vx[b] = vpx
+        st.vy[b] = vpy
+        return
+    rx, ry = st.rotated(b, s0)
     st.vx[b] = vpx + w * ry
     st.vy[b] = vpy - w * rx
 
 
 def body_acceleration_from_point(st: State, b: int, s0, apx, apy, al) -> None:
+    st.al[b] = al
+    if s0[0] == 0.0 and s0[1] == 0.0:
+        st.ax[b] = apx
+        st.ay[b] = apy
+        return
     rx, ry = st.rotated(b, s0)
     w2 = st.w[b] ** 2
-    st.al[b] = al
     st.ax[b] = apx + al * ry + w2 * rx
     st.ay[b] = apy - al * rx + w2 * ry

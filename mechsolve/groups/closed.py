@@ -164,62 +164,78 @@ class RRR(Group):
         )
 
     def ends(self, st: State):
-        px, py = st.point(self.k1, self.sPk)
-        qx, qy = st.point(self.k2, self.sQk)
-        return px, py, qx, qy
+        """P and Q, and Q - P with its squared length (cached for this state)."""
+        c = self.cache(st)
+        if "ends" not in c:
+            px, py = st.point(self.k1, self.sPk)
+            qx, qy = st.point(self.k2, self.sQk)
+            dx, dy = qx - px, qy - py
+            c["ends"] = (px, py, qx, qy, dx, dy, dx * dx + dy * dy)
+        return c["ends"]
+
+    def _dv(self, st: State):
+        """v_P and v_Q - v_P (cached)."""
+        c = self.cache(st)
+        if "dv" not in c:
+            vpx, vpy = st.point_velocity(self.k1, self.sPk)
+            vqx, vqy = st.point_velocity(self.k2, self.sQk)
+            c["dv"] = (vpx, vpy, vqx - vpx, vqy - vpy)
+        return c["dv"]
 
     def position(self, st: State, drive: Drive, mode=1.0):
-        px, py, qx, qy = self.ends(st)
-        dx, dy = qx - px, qy - py
-        D2 = dx * dx + dy * dy
+        px, py, qx, qy, dx, dy, D2 = self.ends(st)
         L1, L2 = self.L1, self.L2
         with np.errstate(invalid="ignore", divide="ignore"):
-            a = (L1 * L1 - L2 * L2 + D2) / (2.0 * D2)  # along P->Q, as a fraction of D
-            h2 = L1 * L1 / D2 - a * a  # (height / D)^2
+            inv = 1.0 / D2
+            a = (0.5 * (L1 * L1 - L2 * L2)) * inv + 0.5  # along P->Q, as a fraction of D
+            h2 = (L1 * L1) * inv - a * a  # (height / D)^2
             # a toggle position (h = 0) within rounding still closes
-            tol = 1e-12 * max(L1, L2) ** 2 / np.maximum(D2, 1e-300)
+            tol = (1e-12 * max(L1, L2) ** 2) * inv
             ok = (h2 >= -tol) & (D2 > 0)
-            h = np.sqrt(np.maximum(h2, 0.0)) * mode
-            mx = px + a * dx - h * dy
-            my = py + a * dy + h * dx
-        mx = np.where(ok, mx, np.nan)
-        my = np.where(ok, my, np.nan)
-        set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, mx - px, my - py)
-        set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, mx - qx, my - qy)
+            hs = np.sqrt(np.maximum(h2, 0.0))
+            h = hs * mode
+            g1x = a * dx - h * dy  # M - P
+            g1y = a * dy + h * dx
+        if not ok.all():
+            g1x = np.where(ok, g1x, np.nan)
+            g1y = np.where(ok, g1y, np.nan)
+        g2x, g2y = g1x - dx, g1y - dy  # M - Q
+        self.cache(st)["g"] = (g1x, g1y, g2x, g2y)
+        set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, g1x, g1y)
+        set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, g2x, g2y)
         # sin of the angle between the two links at M
-        with np.errstate(invalid="ignore"):
-            ind = np.abs(np.sqrt(np.maximum(h2, 0.0)) * D2) / (L1 * L2)
+        ind = hs * D2 * (1.0 / (L1 * L2))
         return ok, np.where(ok, np.minimum(ind, 1.0), 0.0)
 
     def disc(self, st: State):
         """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2."""
-        px, py, qx, qy = self.ends(st)
-        vpx, vpy = st.point_velocity(self.k1, self.sPk)
-        vqx, vqy = st.point_velocity(self.k2, self.sQk)
-        dx, dy = qx - px, qy - py
-        D2 = dx * dx + dy * dy
-        dD2 = 2.0 * (dx * (vqx - vpx) + dy * (vqy - vpy))
+        px, py, qx, qy, dx, dy, D2 = self.ends(st)
+        _, _, dvx, dvy = self._dv(st)
+        dD2 = 2.0 * (dx * dvx + dy * dvy)
         L1s, L2s = self.L1**2, self.L2**2
-        norm = 4.0 * L1s * L2s
-        H = (4.0 * L1s * D2 - (L1s - L2s + D2) ** 2) / norm
-        dH = 2.0 * (L1s + L2s - D2) * dD2 / norm
+        norm = 1.0 / (4.0 * L1s * L2s)
+        t = (L1s - L2s) + D2
+        H = (4.0 * L1s * norm) * D2 - norm * (t * t)
+        dH = (2.0 * norm) * ((L1s + L2s) - D2) * dD2
         return H, dH
 
     def _g(self, st: State):
-        g1x, g1y = st.rotated(self.b1, self.sM1 - self.sP1)
-        g2x, g2y = st.rotated(self.b2, self.sM2 - self.sQ2)
-        return g1x, g1y, g2x, g2y
+        c = self.cache(st)
+        if "g" not in c:
+            g1x, g1y = st.rotated(self.b1, self.sM1 - self.sP1)
+            g2x, g2y = st.rotated(self.b2, self.sM2 - self.sQ2)
+            c["g"] = (g1x, g1y, g2x, g2y)
+        return c["g"]
 
     def velocity(self, st: State, drive: Drive) -> None:
         g1x, g1y, g2x, g2y = self._g(st)
-        vpx, vpy = st.point_velocity(self.k1, self.sPk)
-        vqx, vqy = st.point_velocity(self.k2, self.sQk)
-        dvx, dvy = vqx - vpx, vqy - vpy
-        cross = g1x * g2y - g1y * g2x
-        w1 = (dvx * g2x + dvy * g2y) / cross
-        w2 = (dvx * g1x + dvy * g1y) / cross
+        vpx, vpy, dvx, dvy = self._dv(st)
+        inv = 1.0 / (g1x * g2y - g1y * g2x)
+        self.cache(st)["inv"] = inv
+        w1 = (dvx * g2x + dvy * g2y) * inv
+        w2 = (dvx * g1x + dvy * g1y) * inv
         body_velocity_from_point(st, self.b1, self.sP1, vpx, vpy, w1)
-        body_velocity_from_point(st, self.b2, self.sQ2, vqx, vqy, w2)
+        body_velocity_from_point(st, self.b2, self.sQ2, vpx + dvx, vpy + dvy, w2)
 
     def acceleration(self, st: State, drive: Drive) -> None:
         g1x, g1y, g2x, g2y = self._g(st)
@@ -228,9 +244,11 @@ class RRR(Group):
         w1s, w2s = st.w[self.b1] ** 2, st.w[self.b2] ** 2
         dax = aqx - apx - w2s * g2x + w1s * g1x
         day = aqy - apy - w2s * g2y + w1s * g1y
-        cross = g1x * g2y - g1y * g2x
-        a1 = (dax * g2x + day * g2y) / cross
-        a2 = (dax * g1x + day * g1y) / cross
+        inv = self.cache(st).get("inv")
+        if inv is None:
+            inv = 1.0 / (g1x * g2y - g1y * g2x)
+        a1 = (dax * g2x + day * g2y) * inv
+        a2 = (dax * g1x + day * g1y) * inv
         body_acceleration_from_point(st, self.b1, self.sP1, apx, apy, a1)
         body_acceleration_from_point(st, self.b2, self.sQ2, aqx, aqy, a2)
 
@@ -239,7 +257,7 @@ class RRR(Group):
         return f"{pn[self.j2]} {side} of {pn[self.j1]} -> {pn[self.j3]}"
 
     def fail_reason(self, st: State, i: int) -> str:
-        px, py, qx, qy = (v[i] for v in self.ends(st))
+        px, py, qx, qy = (v[i] for v in self.ends(st)[:4])
         D = float(np.hypot(qx - px, qy - py))
         L1, L2 = self.L1, self.L2
         if D > L1 + L2:
