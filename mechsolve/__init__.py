@@ -26,6 +26,7 @@ _API = {
     "solve": "api",
     "run": "api",
     "check": "api",
+    "stream": "api",
     "Mechanism": "model",
     "Link": "model",
     "PinJoint": "model",

@@ -22,7 +22,17 @@ from .structure import grubler
 from .sweep import Analysis, StartAssembly
 from .units import UnitError, parse_quantity
 
-__all__ = ["load", "loads", "solve", "run", "check", "CheckReport", "parse_step"]
+__all__ = [
+    "load",
+    "loads",
+    "solve",
+    "stream",
+    "run",
+    "check",
+    "CheckReport",
+    "parse_step",
+    "positions",
+]
 
 
 def parse_step(mech: Mechanism, text: str | float) -> float:
@@ -89,6 +99,26 @@ def solve(
 
         force_result = solve_forces(an, sol)
     return Results(an, sol, force_result)
+
+
+def positions(mech: Mechanism, step: float | None = None) -> int:
+    """How many positions the sweep has (without solving it)."""
+    sw = mech.sweep
+    travel = sw.travel if sw.travel is not None else 2 * math.pi
+    step = step if step is not None else sw.step
+    if step is None:
+        return 361
+    return max(0, math.ceil(travel / step - 1e-9)) + 1
+
+
+def stream(mech: Mechanism, csv_path, **kwargs):
+    """Solve a long sweep chunk by chunk and stream its CSV (see :mod:`mechsolve.chunked`).
+
+    Returns a :class:`~mechsolve.chunked.StreamSummary` and the Results of a coarse sweep
+    of the same range."""
+    from .chunked import stream as _stream
+
+    return _stream(mech, csv_path, **kwargs)
 
 
 def run(path: str | Path, variant: str | None = None, **kwargs) -> Results:

@@ -16,6 +16,7 @@ import click
 from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, MechsolveError
 
 EXIT_INTERNAL = 4
+STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk by chunk
 
 EPILOG = """\b
 Exit codes:
@@ -81,22 +82,30 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
 
         mech = api.load(file, variant)
         st = api.parse_step(mech, step) if step is not None else None
-        res = api.solve(mech, step=st, method=method)
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         outdir.mkdir(parents=True, exist_ok=True)
-        written = [res.to_csv(outdir / "results.csv")]
+        if api.positions(mech, st) > STREAM_ABOVE:
+            # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
+            # sweep of the same range
+            summary, res = api.stream(mech, outdir / "results.csv", step=st, method=method)
+            text, failed = summary.text(res), bool(summary.failures)
+            written = [summary.path]
+        else:
+            res = api.solve(mech, step=st, method=method)
+            text, failed = res.summary(), bool(res.failures)
+            written = [res.to_csv(outdir / "results.csv")]
         if not no_plots:
             from .writers.plots import write_plots
 
             written += write_plots(res, outdir)
         if not quiet:
-            click.echo(res.summary())
+            click.echo(text)
             click.echo(
                 f"  wrote {len(written)} file(s) to {outdir}/: "
                 + ", ".join(p.name for p in written)
             )
-        sys.exit(EXIT_WARNINGS if res.failures else EXIT_OK)
+        sys.exit(EXIT_WARNINGS if failed else EXIT_OK)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
         _fail(exc)
 

@@ -2,10 +2,10 @@
 
 Phi_q is block lower-triangular in the order of the structural groups, so it is singular
 exactly where one of its diagonal blocks (a group's own Jacobian) is singular. The
-reciprocal condition number of each block is computed after equilibrating its rows and
-columns (so that it does not depend on units); the smallest over the groups measures how
+reciprocal condition number of each group's equations (see :func:`jacobian_rcond`; for a
+Newton group its block, equilibrated so that it does not depend on units) measures how
 close a position is to a singular (toggle, dead-centre) configuration: 1 is perfectly
-conditioned, 0 singular.
+conditioned, 0 singular. The smallest over the groups is reported per position.
 """
 
 from __future__ import annotations
@@ -60,10 +60,21 @@ def rcond(J: np.ndarray) -> np.ndarray:
     return out
 
 
-def jacobian_rcond(an: Analysis, st: State) -> np.ndarray:
-    """The smallest reciprocal condition number over the groups at each position."""
+def jacobian_rcond(an: Analysis, st: State, indicator: np.ndarray | None = None) -> np.ndarray:
+    """The smallest reciprocal condition number over the groups at each position.
+
+    A group solved in closed form is determined by a 2x2 system in its two unknown rates
+    (the two links' angular velocities of a dyad, or an angular velocity and a sliding
+    velocity); its unit columns make the group's transmission angle mu, so its reciprocal
+    condition number is tan(mu / 2) = s / (1 + sqrt(1 - s^2)), s = sin mu being the
+    group's indicator. A Newton group's is that of its (equilibrated) block of Phi_q.
+    """
     out = np.ones(st.n)
-    for g in an.plan:
-        J, _ = group_block(g, st)
-        out = np.minimum(out, rcond(J))
+    for gi, g in enumerate(an.plan):
+        if g.n_modes == 2 and indicator is not None and gi < len(indicator):
+            s = np.clip(indicator[gi], 0.0, 1.0)
+            out = np.minimum(out, s / (1.0 + np.sqrt(1.0 - s * s)))
+        elif g.kind == "Newton":
+            J, _ = group_block(g, st)
+            out = np.minimum(out, rcond(J))
     return out

@@ -69,15 +69,19 @@ class Column:
         return f"{head} ({self.note})" if self.note else head
 
 
-def unwrap_angle(th: np.ndarray) -> np.ndarray:
-    """Unwrap an angle along the sweep, first finite value in [0, 2 pi)."""
+def unwrap_angle(th: np.ndarray, near: float | None = None) -> np.ndarray:
+    """Unwrap an angle along the sweep: the first finite value in [0, 2 pi), or within
+    half a turn of ``near`` (to continue a previous chunk of the sweep)."""
     out = np.array(th, dtype=float)
     good = np.isfinite(out)
     if not np.any(good):
         return out
     out[good] = np.unwrap(out[good])
     first = out[good][0]
-    out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi))
+    if near is None or not math.isfinite(near):
+        out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi))
+    else:
+        out[good] -= 2 * math.pi * round((first - near) / (2 * math.pi))
     return out
 
 
@@ -111,6 +115,7 @@ class Results:
         self.view.has_velocity = solution.has_velocity
         self.view.has_acceleration = solution.has_acceleration
         self.warnings: list[str] = list(solution.warnings)
+        self.angle_origin: dict[str, float] = {}  # a previous chunk's last link angles
 
     # -- sizes and names ----------------------------------------------------------------
     def __len__(self) -> int:
@@ -128,7 +133,7 @@ class Results:
     @property
     def driver_travel(self) -> np.ndarray:
         """Distance travelled by the driver from the start (deg or m), always increasing."""
-        d = np.abs(self.u - self.u[0]) if len(self.u) else self.u
+        d = np.abs(self.u - self.solution.start.u0)
         return d if self.linear else np.degrees(d)
 
     def point_names(self) -> list[str]:
@@ -179,7 +184,9 @@ class Results:
         st = self.solution.state
         om = st.w[b] if self.view.has_velocity else self._nan()
         al = st.al[b] if self.view.has_acceleration else self._nan()
-        return LinkMotion(name, unwrap_angle(st.th[b]), om.copy(), al.copy())
+        return LinkMotion(
+            name, unwrap_angle(st.th[b], self.angle_origin.get(name)), om.copy(), al.copy()
+        )
 
     def slider(self, name: str) -> SliderMotion:
         """Relative motion of a slider along its guide."""
@@ -239,13 +246,15 @@ class Results:
 
     # -- conditioning and design figures --------------------------------------------------
     def jacobian_rcond(self) -> np.ndarray:
-        """Reciprocal condition number of the constraint Jacobian at each position (the
-        smallest over the groups' equilibrated blocks): 1 well conditioned, 0 singular."""
+        """Reciprocal condition number of the constraint equations at each position (the
+        smallest over the groups, see :func:`mechsolve.conditioning.jacobian_rcond`):
+        1 well conditioned, 0 singular."""
         if not hasattr(self, "_rcond"):
             from .conditioning import jacobian_rcond
 
             with np.errstate(invalid="ignore", divide="ignore"):
-                self._rcond = jacobian_rcond(self.analysis, self.solution.state)
+                sol = self.solution
+                self._rcond = jacobian_rcond(self.analysis, sol.state, sol.indicator)
         return self._rcond
 
     def limit_positions(self):
@@ -385,7 +394,6 @@ class Results:
             Column("power.potential_rate", "W", m(f.potential_rate)),
             Column("power.loads", "W", m(f.power_loads)),
             Column("power.residual", "W", m(f.residual)),
-            Column("forces.rcond", "-", np.where(self.ok, f.rcond, np.nan)),
         ]
         return cols
 

@@ -120,6 +120,8 @@ class Failure:
     last: int
     group: str
     reason: str
+    u_first: float = math.nan  # the driver values at the first and last position
+    u_last: float = math.nan
 
 
 @dataclass
@@ -570,11 +572,13 @@ class Analysis:
         acceleration: bool = True,
         near: tuple[Solution, int] | None = None,
         per_unit_driver: bool = False,
+        follow: Solution | None = None,
     ) -> Solution:
         """Solve positions (and velocities and accelerations) at driver values ``u``.
 
         ``u[0]`` is the start of the sweep unless ``start`` is given; with ``near``, the
-        positions are solved close to sample ``i`` of a solved sweep, on its branches.
+        positions are solved close to sample ``i`` of a solved sweep, on its branches;
+        with ``follow``, ``u`` continues a solved sweep from its last position (chunks).
         Groups are solved one after another for all positions at once. Derivatives are
         computed per unit of the driver coordinate and scaled by the driver's speed at the
         end, so that the branch analysis has tangents even for a sweep at rest
@@ -590,11 +594,15 @@ class Analysis:
         derivs = velocity or acceleration or analyse
         q_start = dict(start.q_start)
         flips = {gi: [] for gi in range(len(self.plan))}
-        if near is not None:
-            sol0, i0 = near
+        if near is not None or follow is not None:
+            # near: single positions next to a solved sweep; follow: the next chunk of a
+            # sweep, starting at the previous chunk's last position, on its branches
+            sol0 = near[0] if near is not None else follow
+            solved = np.flatnonzero(sol0.ok)
+            i0 = near[1] if near is not None else (int(solved[-1]) if solved.size else -1)
             flips = {gi: list(v) for gi, v in sol0.flips.items()}
             for gi, g in enumerate(self.plan):
-                if isinstance(g, NewtonGroup):
+                if isinstance(g, NewtonGroup) and i0 >= 0:
                     q_start[gi] = g.get_q(sol0.state, i0)
         ok_all = np.ones(n, bool)
         oks, inds = [], []
@@ -653,12 +661,12 @@ class Analysis:
                 arr *= w
             for arr in (st.ax, st.ay, st.al):
                 arr *= w * w
-        failures = self._failures(st, oks, ok)
+        failures = self._failures(st, oks, ok, u)
         events.sort(key=lambda e: e.after)
         return Solution(
             self,
             u,
-            (u - u[0]) / self.speed if n and self.speed else np.zeros_like(u),
+            (u - start.u0) / self.speed if n and self.speed else np.zeros_like(u),
             st,
             ok,
             failures,
@@ -775,7 +783,7 @@ class Analysis:
             st.put([i], st1)
         return stats.converged, stats.residual, stats.iterations
 
-    def _failures(self, st: State, oks, ok) -> list[Failure]:
+    def _failures(self, st: State, oks, ok, st_u) -> list[Failure]:
         out: list[Failure] = []
         if ok.all():
             return out
@@ -794,7 +802,7 @@ class Analysis:
                     if not isinstance(g, NewtonGroup)
                     else (f"{g.label}: Newton-Raphson and scipy found no closed position")
                 )
-            out.append(Failure(i, j, group, reason))
+            out.append(Failure(i, j, group, reason, float(st_u[i]), float(st_u[j])))
         return out
 
 

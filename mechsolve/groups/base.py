@@ -145,3 +145,31 @@ def body_acceleration_from_point(st: State, b: int, s0, apx, apy, al) -> None:
     w2 = st.w[b] ** 2
     st.ax[b] = apx + al * ry + w2 * rx
     st.ay[b] = apy - al * rx + w2 * ry
+
+
+# --- force analysis helpers ------------------------------------------------------------
+# R holds, per body, the generalised force (Fx, Fy, moment about the body's frame origin)
+# of everything acting on it that is known so far: applied loads, inertia forces and the
+# reactions of the groups solved after this one. A group computes the forces in its own
+# joints and adds their reactions onto the bodies before it.
+
+
+def resultant_about(st: State, R: np.ndarray, b: int, X, Y):
+    """Body ``b``'s known force (Fx, Fy) and its moment about the global point (X, Y)."""
+    fx, fy, t = R[3 * b], R[3 * b + 1], R[3 * b + 2]
+    return fx, fy, t + (st.x[b] - X) * fy - (st.y[b] - Y) * fx
+
+
+def add_force(st: State, R: np.ndarray, b: int, X, Y, fx, fy) -> None:
+    """Add a force (fx, fy) acting at the global point (X, Y) on body ``b``."""
+    if b == st.nb:
+        return
+    R[3 * b] += fx
+    R[3 * b + 1] += fy
+    R[3 * b + 2] += (X - st.x[b]) * fy - (Y - st.y[b]) * fx
+
+
+def pin_multiplier(joint, on: int, fx, fy):
+    """The multipliers of a revolute joint (the force on its second link by its first)
+    from the force (fx, fy) the joint exerts on body ``on``."""
+    return (fx, fy) if joint.b == on else (-fx, -fy)

@@ -21,8 +21,11 @@ from ..state import State
 from .base import (
     Drive,
     Group,
+    add_force,
     body_acceleration_from_point,
     body_velocity_from_point,
+    pin_multiplier,
+    resultant_about,
     set_pose_from_vectors,
 )
 
@@ -79,6 +82,21 @@ class DriverLink(Group):
         apx, apy = st.point_acceleration(self.k, self.sk)
         body_acceleration_from_point(st, self.b, self.sp, apx, apy, al)
 
+    def forces(self, st: State, R: np.ndarray, out: dict) -> None:
+        """The pin carries the link's force, the driver its moment about the pin."""
+        px, py = st.point(self.k, self.sk)
+        fx, fy, tp = resultant_about(st, R, self.b, px, py)
+        # on the link: F_P + F = 0 and M_driver + T_P = 0
+        out[self.pin] = pin_multiplier(self.pin, self.b, -fx, -fy)
+        m = -tp if self.drv.b == self.b else tp  # the torque on the driver's second link
+        out[self.drv] = (-m,)
+        add_force(st, R, self.k, px, py, fx, fy)
+        # the driver applies m to its second link and -m to its first
+        if self.drv.a != st.nb and self.drv.a != self.b:
+            R[3 * self.drv.a + 2] -= m
+        if self.drv.b != st.nb and self.drv.b != self.b:
+            R[3 * self.drv.b + 2] += m
+
 
 class DrivenSlider(Group):
     """A block on a solved guide whose displacement the driver sets (linear actuator)."""
@@ -120,6 +138,21 @@ class DrivenSlider(Group):
         ax = agx + drive.udd * ux + 2 * wg * drive.ud * (-uy)
         ay = agy + drive.udd * uy + 2 * wg * drive.ud * ux
         body_acceleration_from_point(st, b, sl.sb, ax, ay, st.al[g])
+
+    def forces(self, st: State, R: np.ndarray, out: dict) -> None:
+        sl, b, g = self.sl, self.b, self.sl.a
+        ux, uy = st.rotated(g, sl.u_loc)
+        nx, ny = -uy, ux
+        sx, sy = st.point(b, sl.sb)
+        fx, fy, ts = resultant_about(st, R, b, sx, sy)
+        nrm = -(fx * nx + fy * ny)  # the guide's normal force on the block
+        fd = -(fx * ux + fy * uy)  # the driving force along the line
+        t = -ts  # the guide's moment on the block
+        out[self.sl] = (-nrm, -t)
+        out[self.constraints[1]] = (-fd,)
+        add_force(st, R, g, sx, sy, -(nrm * nx + fd * ux), -(nrm * ny + fd * uy))
+        if g != st.nb:
+            R[3 * g + 2] -= t
 
 
 def _carried_velocity(st: State, g: int, px, py):
@@ -252,6 +285,28 @@ class RRR(Group):
         body_acceleration_from_point(st, self.b1, self.sP1, apx, apy, a1)
         body_acceleration_from_point(st, self.b2, self.sQ2, aqx, aqy, a2)
 
+    def forces(self, st: State, R: np.ndarray, out: dict) -> None:
+        """Dyad equilibrium: moments of each link about M give the force in M (Cramer),
+        then the forces at P and Q."""
+        px, py, qx, qy, *_ = self.ends(st)
+        g1x, g1y, g2x, g2y = self._g(st)
+        mx, my = px + g1x, py + g1y
+        f1x, f1y, t1 = resultant_about(st, R, self.b1, mx, my)
+        f2x, f2y, t2 = resultant_about(st, R, self.b2, mx, my)
+        # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta
+        alpha = -t1 - (g1x * f1y - g1y * f1x)
+        beta = t2 + (g2x * f2y - g2y * f2x)
+        inv = 1.0 / (g1x * g2y - g1y * g2x)
+        fmx = (-alpha * g2x + g1x * beta) * inv
+        fmy = (-alpha * g2y + g1y * beta) * inv
+        fpx, fpy = fmx - f1x, fmy - f1y  # on link 1 at P
+        fqx, fqy = -fmx - f2x, -fmy - f2y  # on link 2 at Q
+        out[self.j1] = pin_multiplier(self.j1, self.b1, fpx, fpy)
+        out[self.j2] = pin_multiplier(self.j2, self.b2, fmx, fmy)
+        out[self.j3] = pin_multiplier(self.j3, self.b2, fqx, fqy)
+        add_force(st, R, self.k1, px, py, -fpx, -fpy)
+        add_force(st, R, self.k2, qx, qy, -fqx, -fqy)
+
     def mode_text(self, st: State, mode: float, pn) -> str:
         side = "left" if mode > 0 else "right"
         return f"{pn[self.j2]} {side} of {pn[self.j1]} -> {pn[self.j3]}"
@@ -373,6 +428,31 @@ class RRP(Group):
         amy = apy + al1 * g1x - w1s * g1y
         body_acceleration_from_point(st, self.rod, self.sP1, apx, apy, al1)
         body_acceleration_from_point(st, self.blk, self.sMb, amx, amy, st.al[g])
+
+    def forces(self, st: State, R: np.ndarray, out: dict) -> None:
+        """The rod's moment about M gives the guide's normal force on the block; then the
+        pin forces and the guide's moment."""
+        g = self.g
+        ux, uy = st.rotated(g, self.sl.u_loc)
+        nx, ny = -uy, ux
+        px, py = st.point(self.k1, self.sPk)
+        mx, my = st.point(self.blk, self.sMb)
+        sx, sy = st.point(self.blk, self.sl.sb)
+        fr_x, fr_y, tr = resultant_about(st, R, self.rod, mx, my)
+        fs_x, fs_y, ts = resultant_about(st, R, self.blk, mx, my)
+        ex, ey = px - mx, py - my
+        alpha = -tr + (ex * fr_y - ey * fr_x)  # e x F_M
+        nrm = -(alpha + (ex * fs_y - ey * fs_x)) / (ex * ny - ey * nx)
+        fmx, fmy = -fs_x - nrm * nx, -fs_y - nrm * ny  # on the block at M, by the rod
+        fpx, fpy = fmx - fr_x, fmy - fr_y  # on the rod at P
+        t = -ts - ((sx - mx) * nrm * ny - (sy - my) * nrm * nx)  # guide's moment on block
+        out[self.j1] = pin_multiplier(self.j1, self.rod, fpx, fpy)
+        out[self.j2] = pin_multiplier(self.j2, self.blk, fmx, fmy)
+        out[self.sl] = (-nrm, -t)
+        add_force(st, R, self.k1, px, py, -fpx, -fpy)
+        add_force(st, R, g, sx, sy, -nrm * nx, -nrm * ny)
+        if g != st.nb:
+            R[3 * g + 2] -= t
 
     def mode_text(self, st: State, mode: float, pn) -> str:
         where = "ahead of" if mode > 0 else "behind"
@@ -501,6 +581,27 @@ class RPR(Group):
         al = (rx * nx + ry * ny) / (-dy * nx + dx * ny)
         body_acceleration_from_point(st, self.bar, self.sQb, aqx, aqy, al)
         body_acceleration_from_point(st, self.blk, self.sPb, apx, apy, al)
+
+    def forces(self, st: State, R: np.ndarray, out: dict) -> None:
+        """The moments of block and bar about their pins give the normal force between
+        them; then the pin forces and the moment between block and bar."""
+        ux, uy = st.rotated(self.bar, self.u_loc)
+        nx, ny = -uy, ux
+        px, py = st.point(self.kp, self.sPk)
+        qx, qy = st.point(self.kq, self.sQk)
+        sx, sy = st.point(self.blk, self.sl.sb)
+        fb_x, fb_y, tb = resultant_about(st, R, self.blk, px, py)
+        fr_x, fr_y, tr = resultant_about(st, R, self.bar, qx, qy)
+        # N (Q - P) x n = -(T_block,P + T_bar,Q)
+        nrm = -(tb + tr) / ((qx - px) * ny - (qy - py) * nx)
+        t = -tb - ((sx - px) * nrm * ny - (sy - py) * nrm * nx)  # bar's moment on block
+        fpx, fpy = -fb_x - nrm * nx, -fb_y - nrm * ny  # on the block at P
+        fqx, fqy = nrm * nx - fr_x, nrm * ny - fr_y  # on the bar at Q
+        out[self.jp] = pin_multiplier(self.jp, self.blk, fpx, fpy)
+        out[self.jq] = pin_multiplier(self.jq, self.bar, fqx, fqy)
+        out[self.sl] = (-nrm, -t)
+        add_force(st, R, self.kp, px, py, -fpx, -fpy)
+        add_force(st, R, self.kq, qx, qy, -fqx, -fqy)
 
     def mode_text(self, st: State, mode: float, pn) -> str:
         if self.e == 0:

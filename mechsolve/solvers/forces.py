@@ -32,10 +32,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..conditioning import SINGULAR_RCOND, group_block, rcond
+from ..groups.generic import NewtonGroup
 from ..model import GROUND, Damper, PointForce, Spring, Torque
 
 if TYPE_CHECKING:
     from ..sweep import Analysis, Solution
+
+SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a toggle
 
 
 @dataclass
@@ -53,7 +56,6 @@ class ForceResult:
     potential_rate: np.ndarray
     power_loads: np.ndarray
     residual: np.ndarray
-    rcond: np.ndarray  # smallest reciprocal condition of the groups' blocks
     singular: list[tuple[int, str]] = field(default_factory=list)  # (position, group label)
     ok: np.ndarray | None = None
     load_power: dict[str, np.ndarray] = field(default_factory=dict)  # power of each load
@@ -139,8 +141,14 @@ def condition_masks(
     return out
 
 
-def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
-    """Kinetostatic analysis of a solved sweep (positions, velocities, accelerations)."""
+def solve_forces(
+    an: Analysis, sol: Solution, stroke_extremes: list[tuple[float, float]] | None = None
+) -> ForceResult:
+    """Kinetostatic analysis of a solved sweep (positions, velocities, accelerations).
+
+    ``stroke_extremes``: the extremes that ``stroke(q)`` in load conditions uses, when
+    they come from elsewhere (a long sweep solved in chunks); found over ``sol`` if None.
+    """
     from ..sweep import StateView
 
     mech, sys_ = an.mech, an.system
@@ -176,8 +184,9 @@ def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
         potential += -m * (gx * xg + gy * yg)
         potential_rate += -m * (gx * vx + gy * vy)
 
-    extremes: list[tuple[float, float]] = []
-    active = condition_masks(an, sol, view, extremes)
+    replay = stroke_extremes is not None
+    extremes: list[tuple[float, float]] = list(stroke_extremes) if replay else []
+    active = condition_masks(an, sol, view, extremes, replay)
     load_power: dict[str, np.ndarray] = {}
     for load in mech.loads:
         before = power_loads.copy()
@@ -244,7 +253,7 @@ def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
             acc.force(ba, sa, t * ex, t * ey)
         load_power[load.name] = power_loads - before
 
-    lam, rcond, singular, nonunique = _solve_groups(an, st, acc.Q)
+    lam, singular, nonunique = _solve_groups(an, st, acc.Q, sol.indicator)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
@@ -264,7 +273,6 @@ def solve_forces(an: Analysis, sol: Solution) -> ForceResult:
         potential_rate,
         power_loads,
         residual,
-        rcond,
         singular,
         ok,
         load_power=load_power,
@@ -300,17 +308,34 @@ def _force_at_global(acc: _Q, st, b: int, x, y, fx, fy) -> None:
     acc.Q[3 * b + 2] += rx * fy - ry * fx
 
 
-def _solve_groups(an: Analysis, st, Q: np.ndarray):
-    """Solve Phi_q^T lambda = Q group by group, last group first."""
+def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray):
+    """Solve Phi_q^T lambda = Q group by group, last group first.
+
+    Groups with a closed form solve their own equilibrium explicitly (the dyad-by-dyad
+    kinetostatics of the textbooks); a group is singular where its indicator vanishes.
+    Other groups solve their block of Phi_q^T, singular where its condition number is.
+    """
     sys_ = an.system
     n = st.n
     lam = np.full((n, sys_.nc), np.nan)
     R = Q.copy()  # applied + inertia + reactions of the groups solved so far
     row_of = {id(r.constraint): r.start for r in sys_.rows}
-    rcond_all = np.ones(n)
     singular: list[tuple[int, str]] = []
     nonunique = np.zeros(sys_.nc, bool)
-    for g in reversed(an.plan):
+    for gi in reversed(range(len(an.plan))):
+        g = an.plan[gi]
+        if hasattr(g, "forces") and not isinstance(g, NewtonGroup):
+            out: dict = {}
+            with np.errstate(invalid="ignore", divide="ignore"):
+                g.forces(st, R, out)
+            ind = indicator[gi] if len(indicator) > gi else np.ones(n)
+            sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
+            for c, comps in out.items():
+                r0 = row_of[id(c)]
+                for k, v in enumerate(comps):
+                    lam[:, r0 + k] = np.where(sing, np.nan, v)
+            singular += [(int(i), g.label) for i in np.flatnonzero(sing & np.isfinite(st.x[0]))]
+            continue
         J, blocks = group_block(g, st)
         m = J.shape[1]
         rhs = np.stack([R[3 * b + k] for b in g.bodies for k in range(3)], axis=1)  # (N, nn)
@@ -324,16 +349,14 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray):
                 r0 += c.m
             regular = good & (rc > SINGULAR_RCOND)
             x[~regular] = np.nan
-            idx = np.flatnonzero(regular)
         else:
             rc = rcond(J)
             regular = good & (rc > SINGULAR_RCOND)
             idx = np.flatnonzero(regular & np.all(np.isfinite(rhs), axis=1))
-        if idx.size and m == J.shape[2]:
-            JT = np.transpose(J[idx], (0, 2, 1))
-            x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
+            if idx.size:
+                JT = np.transpose(J[idx], (0, 2, 1))
+                x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
         singular += [(int(i), g.label) for i in np.flatnonzero(good & ~regular)]
-        rcond_all = np.minimum(rcond_all, rc)
         for c, r0, jac in blocks:
             lc = x[:, r0 : r0 + c.m]  # (N, m_c)
             lam[:, row_of[id(c)] : row_of[id(c)] + c.m] = lc
@@ -343,7 +366,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray):
                 for k in range(3):
                     R[3 * body + k] -= np.einsum("mn,nm->n", blk[:, k, :], lc)
     singular.sort()
-    return lam, rcond_all, singular, nonunique
+    return lam, singular, nonunique
 
 
 def _min_norm(J: np.ndarray, rhs: np.ndarray, good: np.ndarray):

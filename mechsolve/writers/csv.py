@@ -3,11 +3,14 @@
 The file is written to a temporary name beside the target and moved into place at the
 end, so that a failing run never leaves a half-written file that looks complete.
 Unsolved positions keep their row: the quantities are empty and ``status`` says why.
+Rows can be appended chunk by chunk (:class:`CsvStream`), so that a sweep of millions of
+positions never holds more than one chunk in memory.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -21,33 +24,80 @@ if TYPE_CHECKING:
 
 def format_values(values: np.ndarray) -> list[str]:
     """Numbers with 12 significant digits; NaN as an empty cell."""
-    out = []
-    for v in values:
-        out.append("" if not np.isfinite(v) else format(float(v), ".12g"))
-    return out
+    return ["" if not np.isfinite(v) else format(float(v), ".12g") for v in values]
+
+
+BATCH = 4096
+
+
+class CsvStream:
+    """A CSV file written chunk by chunk, moved into place only when complete."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, self.tmp = tempfile.mkstemp(
+            prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent
+        )
+        self.fh = os.fdopen(fd, "w", newline="", encoding="utf-8")
+        self.header: list[str] | None = None
+        self.rows = 0
+
+    def write(self, results: Results, skip: int = 0) -> None:
+        """Append the rows of ``results`` (leaving out the first ``skip``)."""
+        cols = results.columns()
+        headers = ["step"] + [c.header for c in cols] + ["status", "solver.method"]
+        if self.header is None:
+            self.header = headers
+            csv.writer(self.fh).writerow(headers)
+        elif headers != self.header:
+            raise ValueError("the columns changed between chunks")
+        n = len(results)
+        if skip >= n:
+            return
+        status = results.status()
+        methods = results.methods()
+        fmt = ",".join(["%.12g"] * len(cols))
+        for lo in range(skip, n, BATCH):  # a few thousand rows at a time: bounded memory
+            hi = min(n, lo + BATCH)
+            M = np.column_stack([np.asarray(c.values[lo:hi], float) for c in cols])
+            finite = np.all(np.isfinite(M), axis=1)
+            buf = io.StringIO()
+            w = csv.writer(buf)
+            for k, row in enumerate(M.tolist()):
+                i = lo + k
+                step = self.rows + i - skip
+                st, me = status[i], methods[i]
+                if finite[k] and "," not in st and '"' not in st:
+                    buf.write(f"{step},{fmt % tuple(row)},{st},{me}\r\n")
+                else:
+                    w.writerow([step] + format_values(np.array(row)) + [st, me])
+            self.fh.write(buf.getvalue())
+        self.rows += n - skip
+
+    def close(self) -> Path:
+        """Finish the file and move it into place."""
+        self.fh.close()
+        os.replace(self.tmp, self.path)
+        return self.path
+
+    def abort(self) -> None:
+        """Forget the partial file (the target is left as it was)."""
+        try:
+            self.fh.close()
+        finally:
+            try:
+                os.unlink(self.tmp)
+            except OSError:
+                pass
 
 
 def write_csv(results: Results, path: str | os.PathLike) -> Path:
     """Write ``results`` as CSV at ``path`` (atomically) and return the path."""
-    path = Path(path)
-    cols = results.columns()
-    headers = ["step"] + [c.header for c in cols] + ["status", "solver.method"]
-    body = [format_values(np.asarray(c.values, float)) for c in cols]
-    status = results.status()
-    methods = results.methods()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    stream = CsvStream(path)
     try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(headers)
-            for i in range(len(results)):
-                w.writerow([i] + [col[i] for col in body] + [status[i], methods[i]])
-        os.replace(tmp, path)
+        stream.write(results)
     except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        stream.abort()
         raise
-    return path
+    return stream.close()
