@@ -5,13 +5,13 @@ from __future__ import annotations
 import csv
 import math
 
-import numpy as np
 import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from conftest import MECH
 from mechsolve.cli import main
+
+from conftest import MECH
 
 
 def table(path):
