@@ -19,6 +19,8 @@ from .base import Drive, Group
 
 MAX_JUMP = 0.05  # largest accepted Newton correction: 5 % of the size, or 0.05 rad
 MAX_DEPTH = 10  # at most 2**10 substeps per interval
+BATCH_MIN = 64  # sweeps of at least this many positions are refined in one batch
+COARSE = 48  # positions of the coarse continuation that predicts a batched sweep
 
 
 class NewtonGroup(Group):
@@ -33,6 +35,7 @@ class NewtonGroup(Group):
         self.m = sum(c.m for c in constraints)
         self.atol = atol
         self.scale = 1.0  # the mechanism's size; the analysis sets it
+        self.batched = True
         self.max_iterations = max_iterations
         super().__init__(bodies, constraints, names)
 
@@ -101,6 +104,110 @@ class NewtonGroup(Group):
         return float(d.max()) if d.size else 0.0
 
     def sweep(
+        self,
+        st: State,
+        drive: Drive,
+        q_start: np.ndarray,
+        ok_in: np.ndarray,
+        prefix=None,
+        restart=None,
+    ):
+        """Solve positions 0..N-1: batched when possible (:meth:`sweep_batched`), else by
+        continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``."""
+        if self.batched and st.n >= BATCH_MIN and self.m == self.n and ok_in.all():
+            out = self.sweep_batched(st, drive, q_start, prefix)
+            if out is not None:
+                return out
+        return self.sweep_sequential(st, drive, q_start, ok_in, prefix, restart)
+
+    def sweep_batched(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """Predict every position from a coarse continuation, then refine all positions
+        at once by batched Newton-Raphson.
+
+        1. every k-th position (about :data:`COARSE` of them) is solved by continuation
+           (:meth:`sweep_sequential`, with its jump checks and substeps);
+        2. the group's rates dq/du there (a linear solve) give a cubic Hermite
+           prediction of every position in between;
+        3. Newton-Raphson iterates on all positions together (one batched linear solve per
+           iteration); each position must converge and stay within :data:`MAX_JUMP` of
+           its prediction.
+
+        Returns None when any of this fails, so that the caller marches sequentially.
+        """
+        n = st.n
+        k = max(1, n // COARSE)
+        coarse = np.unique(np.r_[np.arange(0, n, k), n - 1])
+        sub = st.take(coarse)
+        dsub = drive.take(coarse)
+        okc, itc, _ = self.sweep_sequential(
+            sub, dsub, q_start, np.ones(len(coarse), bool), prefix=None if k == 1 else prefix
+        )
+        if not okc.all():
+            return None
+        self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
+        qc = np.stack([self.get_q(sub, j) for j in range(len(coarse))])
+        dqc = np.stack([self.get_qdot(sub, j) for j in range(len(coarse))])
+        if not np.all(np.isfinite(dqc)):
+            return None
+        # cubic Hermite between coarse positions, in the driver coordinate
+        u = drive.u
+        seg = np.clip(np.searchsorted(coarse, np.arange(n), side="right") - 1, 0, len(coarse) - 2)
+        u0, u1 = u[coarse[seg]], u[coarse[seg + 1]]
+        h = (u1 - u0)[:, None]
+        t = ((u - u0) / (u1 - u0))[:, None]
+        h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+        h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+        pred = h00 * qc[seg] + h10 * h * dqc[seg] + h01 * qc[seg + 1] + h11 * h * dqc[seg + 1]
+        q = pred.copy()
+        iters = np.zeros(n, int)
+        todo = np.ones(n, bool)
+        todo[coarse] = False
+        q[coarse] = qc
+        last = np.full(n, np.inf)
+        for _ in range(self.max_iterations):
+            idx = np.flatnonzero(todo)
+            if idx.size == 0:
+                break
+            s1 = st.take(idx)
+            self._set_q_rows(s1, q[idx])
+            f = self.residual(s1, u[idx]).T  # (k, m)
+            r = np.max(np.abs(f), axis=1)
+            J = self.jacobian(s1)
+            try:
+                dq = np.linalg.solve(J, -f[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                return None
+            step = np.max(np.abs(dq), axis=1)
+            # converged: the residual was already small and the step tiny, or no longer
+            # shrinking (the rounding level); the last step is then not taken
+            done = (r <= self.atol) & ((step <= 1e-3 * self.atol) | (step >= last[idx]))
+            take = ~done | (step <= 1e-3 * self.atol)
+            q[idx[take]] += dq[take]
+            iters[idx] += 1
+            last[idx] = step
+            todo[idx[done]] = False
+        if todo.any():
+            return None
+        d = np.abs(q - pred)
+        d[:, 0::3] /= self.scale
+        d[:, 1::3] /= self.scale
+        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
+            return None
+        self._set_q_rows_into(st, q)
+        iters[coarse] = itc
+        methods = np.full(n, "newton (batched)", dtype=object)
+        return np.ones(n, bool), iters, methods
+
+    def _set_q_rows(self, st1: State, q: np.ndarray) -> None:
+        for b, k in self.col.items():
+            st1.x[b] = q[:, 3 * k]
+            st1.y[b] = q[:, 3 * k + 1]
+            st1.set_angle(b, q[:, 3 * k + 2])
+
+    def _set_q_rows_into(self, st: State, q: np.ndarray) -> None:
+        self._set_q_rows(st, q)
+
+    def sweep_sequential(
         self,
         st: State,
         drive: Drive,
