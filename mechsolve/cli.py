@@ -54,6 +54,7 @@ def main() -> None:
     \b
     mechsolve run mechanisms/crane.yaml      solve the sweep, write CSV and plots
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
+    mechsolve bench --quick                  speed against error, in one run
     """
 
 
@@ -85,7 +86,8 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         outdir.mkdir(parents=True, exist_ok=True)
-        if api.positions(mech, st) > STREAM_ABOVE:
+        stream_above = int(os.environ.get("MECHSOLVE_STREAM_ABOVE", STREAM_ABOVE))
+        if api.positions(mech, st) > stream_above:
             # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
             # sweep of the same range
             summary, res = api.stream(mech, outdir / "results.csv", step=st, method=method)
@@ -132,6 +134,51 @@ def check(file: Path, variant, draw) -> None:
             draw_start(report.analysis, report.assembly.state, draw, f"{mech.name}: start position")
             click.echo(f"  drew the start position to {draw}")
         sys.exit(EXIT_OK)
+    except Exception as exc:  # noqa: BLE001
+        _fail(exc)
+
+
+@main.command()
+@click.option("--quick", is_flag=True, help="Few repetitions and small sizes (as CI runs it).")
+@click.option(
+    "--case",
+    "cases",
+    multiple=True,
+    type=click.Choice(
+        [
+            "fourbar-kinematics",
+            "crane-kinematics",
+            "fourbar-kinetostatics",
+            "crane-kinetostatics",
+            "chain-growth",
+            "positions-growth",
+            "stream",
+            "startup",
+            "peers",
+        ]
+    ),
+    help="Run only these cases (repeatable).",
+)
+@click.option(
+    "--plot",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write a work-precision diagram (time against error, log-log) to this file.",
+)
+def bench(quick, cases, plot) -> None:
+    """Measure speed against error: mechsolve against hand-written closed forms.
+
+    \b
+    Each case prints its settings with their median wall time and largest error
+    against an independent reference, then the ratio to the hand-written closed form.
+    Results measured on this project's machine are in benchmarks/README.md.
+    """
+    try:
+        from . import bench as b
+
+        done = b.run(quick=quick, cases=list(cases) or None, echo=click.echo)
+        if plot is not None:
+            b.plot(done, plot)
+            click.echo(f"wrote the work-precision diagram to {plot}")
     except Exception as exc:  # noqa: BLE001
         _fail(exc)
 

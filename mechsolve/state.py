@@ -38,6 +38,12 @@ class State:
 
     _count = 0
 
+    @staticmethod
+    def new_token() -> int:
+        """A fresh token: the state's content changed, group caches must not be reused."""
+        State._count += 1
+        return State._count
+
     def __init__(self, nb: int, n: int) -> None:
         self.nb = nb
         self.n = n
@@ -108,6 +114,8 @@ class State:
     # read-only broadcast views.
     def _const(self, v: float, idx) -> np.ndarray:
         n = self.n if isinstance(idx, slice) and idx == slice(None) else len(self.x[0, idx])
+        if n <= 8:  # a few positions: a plain array is cheaper than a cached view
+            return np.full(n, float(v))
         key = (float(v), n)
         arr = self.consts.get(key)
         if arr is None:

@@ -155,13 +155,33 @@ class Solution:
     indicator: np.ndarray  # (n_groups, N)
     iterations: np.ndarray
     methods: np.ndarray | None  # None: every position solved in closed form
-    residual: np.ndarray
+    residual_: np.ndarray | None  # None: not computed yet (see residual)
     start: StartAssembly
     warnings: list[str] = field(default_factory=list)
     has_velocity: bool = True
     has_acceleration: bool = True
     events: list[Event] = field(default_factory=list)
     flips: dict[int, list[float]] = field(default_factory=dict)  # group -> where its branch flips
+
+    @property
+    def residual(self) -> np.ndarray:
+        """max |Phi| at each position (NaN where not solved).
+
+        Sweeps with a Newton group check it while solving (and polish where needed).
+        Closed-form groups close exactly by construction, so for them it is computed
+        here, when first asked for (the CSV column, the summary); a value above the
+        tolerance would be a bug, and the summary says so."""
+        if self.residual_ is None:
+            with np.errstate(invalid="ignore"):
+                r = self.analysis.system.max_residual(self.state, self.u)
+            self.residual_ = np.where(self.ok, r, np.nan)
+            bad = int(np.sum(self.ok & ~(r <= self.analysis.atol)))
+            if bad:
+                self.warnings.append(
+                    f"the constraint residual exceeds the tolerance at {bad} position(s) "
+                    "solved in closed form: please report this"
+                )
+        return self.residual_
 
 
 class Analysis:
@@ -266,7 +286,9 @@ class Analysis:
     def assemble(self, u0: float) -> StartAssembly:
         """Close the mechanism at driver value ``u0`` and choose every group's branch."""
         mech = self.mech
-        st = State(self.system.nb, 1)
+        # two columns: the "+" and "-" branches of the group being decided; equal otherwise
+        st2 = State(self.system.nb, 2)
+        drive2 = self.drive(np.array([u0, u0]))
         drive = self.drive(np.array([u0]))
         asm = mech.assembly
         conds = list(enumerate(asm.conditions))
@@ -274,21 +296,13 @@ class Analysis:
         modes: list[float] = []
         reasons: list[str] = []
         q_start: dict[int, np.ndarray] = {}
-        view = StateView(self, st)
+        view = StateView(self, st2)
         view.has_velocity = view.has_acceleration = False
         for gi, g in enumerate(self.groups):
             done_bodies |= set(g.bodies)
-            ready = [
-                (k, c)
-                for k, c in conds
-                if all(self.points[p].body in done_bodies for p in c.points() if p in self.points)
-                and all(
-                    (self.system.index[p] in done_bodies)
-                    for p in c.points()
-                    if p not in self.points and p in self.system.index
-                )
-            ]
+            ready = self._ready(conds, done_bodies)
             if isinstance(g, NewtonGroup):
+                st = st2.take([0])
                 q0 = self._initial_guess(g, st)
                 solver = g
                 if any(getattr(c, "base", None) is not None for c in g.constraints):
@@ -312,6 +326,8 @@ class Analysis:
                         "'assembly: sketch:'"
                     )
                 q_start[gi] = q
+                g.set_q(st2, 0, q)
+                g.set_q(st2, 1, q)
                 modes.append(1.0)
                 reasons.append("from the sketch" if asm.sketch else "from the links' frames")
                 for _, c in ready:
@@ -324,32 +340,34 @@ class Analysis:
                 conds = [(k, c) for k, c in conds if (k, c) not in ready]
                 continue
             if g.n_modes < 2:
-                ok, _ = g.position(st, drive, 1.0)
+                ok, _ = g.position(st2, drive2, 1.0)
                 if not ok[0]:
                     raise AssemblyError(
                         f"{self._file()}cannot assemble at {self.format_u(u0)}: "
-                        + g.fail_reason(st, 0)
+                        + g.fail_reason(st2, 0)
                     )
                 modes.append(1.0)
                 reasons.append("")
                 continue
-            cand = {}
-            for mode in (1.0, -1.0):
-                trial = State(self.system.nb, 1)
-                trial.put(slice(None), st)
-                ok, _ = g.position(trial, drive, mode)
-                if ok[0]:
-                    cand[mode] = trial
-            if not cand:
-                g.position(st, drive, 1.0)
+            # both branches at once, one in each column
+            ok2, _ = g.position(st2, drive2, np.array([1.0, -1.0]))
+            if not ok2.any():
                 raise AssemblyError(
-                    f"{self._file()}cannot assemble at {self.format_u(u0)}: " + g.fail_reason(st, 0)
+                    f"{self._file()}cannot assemble at {self.format_u(u0)}: "
+                    + g.fail_reason(st2, 0)
                 )
-            chosen, reason = self._choose(g, cand, ready)
-            st.put(slice(None), cand[chosen])
-            modes.append(chosen)
+            j, reason = self._choose(g, st2, ok2, ready)
+            for name in State.ARRAYS:  # keep the chosen branch in both columns
+                arr = getattr(st2, name)
+                for b in g.bodies:
+                    arr[b, 1 - j] = arr[b, j]
+            st2.token = State.new_token()
+            modes.append(1.0 if j == 0 else -1.0)
             reasons.append(reason)
             conds = [(k, c) for k, c in conds if (k, c) not in ready]
+        st = st2  # both columns hold the chosen assembly; index 0 is the start
+        view = StateView(self, st)
+        view.has_velocity = view.has_acceleration = False
         for _, c in conds:  # conditions that no group decided: they must hold anyway
             if not bool(np.all(c.evaluate(view))):
                 raise AssemblyError(
@@ -379,6 +397,60 @@ class Analysis:
                     return None
         return st
 
+    def _decide_at_start(self, gi, g, st, ok, start, conds, done_bodies):
+        """Choose a group's branch at the sweep's first position, as :meth:`assemble`
+        does, after the group was solved on its current branch. Returns the conditions
+        still to use and whether the group must be solved again on the other branch."""
+        if not ok[0]:
+            raise AssemblyError(
+                f"{self._file()}cannot assemble at {self.format_u(start.u0)}: "
+                + g.fail_reason(st, 0)
+            )
+        if g.n_modes < 2:
+            return conds, False
+        ready = self._ready(conds, done_bodies)
+        conds = [(k, c) for k, c in conds if (k, c) not in ready]
+        has_sketch = any(self.points[p].body in g.bodies for p in self.mech.assembly.sketch)
+        if not has_sketch:
+            if not ready:
+                start.reasons[gi] = "default branch (+)"
+                return conds, False
+            one = st.take([0])
+            view = StateView(self, one)
+            view.has_velocity = view.has_acceleration = False
+            if all(bool(np.all(c.evaluate(view))) for _, c in ready):
+                texts = ", ".join(repr(c.text) for _, c in ready)
+                start.reasons[gi] = f"assembly condition {texts}"
+                return conds, False
+        # both branches at the first position, one in each column
+        two = st.take([0, 0])
+        u0 = start.u0
+        ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
+        j, reason = self._choose(g, two, ok2, ready)
+        start.reasons[gi] = reason
+        if j == 0:
+            return conds, False
+        start.modes[gi] = -1.0
+        return conds, True
+
+    def _ready(self, conds, done_bodies: set) -> list:
+        """The assembly conditions whose points are all on bodies solved so far."""
+        out = []
+        for k, c in conds:
+            bodies = set()
+            for p in c.points():
+                if p in self.points:
+                    bodies.add(self.points[p].body)
+                elif p in self.system.index:
+                    bodies.add(self.system.index[p])
+            if bodies <= done_bodies:
+                out.append((k, c))
+        return out
+
+    def _lazy_start(self) -> bool:
+        """Can the branches be chosen inside the sweep (no separate assembly pass)?"""
+        return self.plan is self.groups and not any(isinstance(g, NewtonGroup) for g in self.plan)
+
     def _check_redundancy(self, st: State, drive: Drive) -> Redundancy:
         """At the assembled start: are the surplus equations consistent, and which ones
         take part in a dependency (the left null space of Phi_q)?"""
@@ -406,38 +478,33 @@ class Analysis:
         involved = np.flatnonzero(np.max(np.abs(null), axis=1) > 1e-8)
         return Redundancy(sys_.nc - rank, rank, [names[k] for k in involved])
 
-    def _choose(self, g: Group, cand: dict, ready) -> tuple[float, str]:
-        mech = self.mech
-        if len(cand) == 1:
-            (m,) = cand
-            return m, "the only branch that closes"
-        sat = {}
-        for mode, trial in cand.items():
-            view = StateView(self, trial)
-            view.has_velocity = view.has_acceleration = False
-            sat[mode] = all(bool(np.all(c.evaluate(view))) for _, c in ready)
+    def _choose(self, g: Group, st2: State, ok2: np.ndarray, ready) -> tuple[int, str]:
+        """The column (0: branch +, 1: branch -) to keep: the conditions that apply, then
+        the sketch, then branch +."""
+        if ok2.sum() == 1:
+            return int(np.flatnonzero(ok2)[0]), "the only branch that closes"
         if ready:
-            good = [m for m in cand if sat[m]]
+            view = StateView(self, st2)
+            view.has_velocity = view.has_acceleration = False
+            sat = np.ones(2, bool)
+            for _, c in ready:
+                sat &= np.broadcast_to(np.asarray(c.evaluate(view), bool), (2,))
             texts = ", ".join(repr(c.text) for _, c in ready)
-            if not good:
+            if not sat.any():
                 raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
-            if len(good) == 1:
-                return good[0], f"assembly condition {texts}"
+            if sat.sum() == 1:
+                return int(np.flatnonzero(sat)[0]), f"assembly condition {texts}"
         sketch = {
-            p: xy for p, xy in mech.assembly.sketch.items() if self.points[p].body in g.bodies
+            p: xy for p, xy in self.mech.assembly.sketch.items() if self.points[p].body in g.bodies
         }
         if sketch:
-            dist = {}
-            for mode, trial in cand.items():
-                d = 0.0
-                for p, (sx, sy) in sketch.items():
-                    ref = self.points[p]
-                    x, y = trial.point(ref.body, ref.local)
-                    d += float((x[0] - sx) ** 2 + (y[0] - sy) ** 2)
-                dist[mode] = d
-            best = min(dist, key=dist.get)
-            return best, "nearest to the sketch"
-        return 1.0, "default branch (+)"
+            dist = np.zeros(2)
+            for p, (sx, sy) in sketch.items():
+                ref = self.points[p]
+                x, y = st2.point(ref.body, ref.local)
+                dist += (x - sx) ** 2 + (y - sy) ** 2
+            return int(np.argmin(dist)), "nearest to the sketch"
+        return 0, "default branch (+)"
 
     def _initial_guess(self, g: NewtonGroup, st: State) -> np.ndarray:
         """A start guess for a Newton group: from the sketch, else the links' frames.
@@ -586,7 +653,13 @@ class Analysis:
         """
         u = np.asarray(u, float)
         n = len(u)
-        if start is None:
+        lazy = start is None and near is None and follow is None and self._lazy_start()
+        if lazy:  # the branches are chosen as the groups are solved, at the first position
+            ng = len(self.plan)
+            start = StartAssembly([1.0] * ng, {}, [""] * ng, None, float(u[0]), [1.0] * ng)
+            conds = list(enumerate(self.mech.assembly.conditions))
+            done_bodies = {self.system.nb}
+        elif start is None:
             start = self.assemble(float(u[0]))
         st = State(self.system.nb, n)
         unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
@@ -636,6 +709,14 @@ class Analysis:
                         warnings += warn
                     sigma = self.sigma_at(start.modes[gi], flips[gi], u)
                     ok, ind = g.position(st, unit, sigma)
+                    if lazy:
+                        done_bodies |= set(g.bodies)
+                        conds, redo = self._decide_at_start(
+                            gi, g, st, ok, start, conds, done_bodies
+                        )
+                        if redo:
+                            sigma = self.sigma_at(start.modes[gi], flips[gi], u)
+                            ok, ind = g.position(st, unit, sigma)
                     if derivs:
                         g.velocity(st, unit)
                     if acceleration:
@@ -644,16 +725,29 @@ class Analysis:
                 oks.append(ok)
                 inds.append(ind)
                 ok_all = ok_all & ok
+        if lazy:
+            start.state = st.take([0])
+            start.group_modes = list(start.modes)
+            view = StateView(self, start.state)
+            view.has_velocity = view.has_acceleration = False
+            for _, c in conds:  # conditions that no group decided: they must hold anyway
+                if not bool(np.all(c.evaluate(view))):
+                    raise AssemblyError(
+                        f"{self._file()}the start position does not satisfy the assembly "
+                        f"condition {c.text!r}, and no loop's branch can change that"
+                    )
         ok = ok_all.copy()
-        # check the full constraint residual everywhere; polish where needed
-        with np.errstate(invalid="ignore"):
-            res = self.system.max_residual(st, u)
-        bad = ok & ~(res <= self.atol)
-        for i in np.flatnonzero(bad):
-            ok[i], res[i], it = self._polish(st, unit, i)
-            iters[i] += it
-            methods.append(i, "newton polish")
-        res = np.where(ok, res, np.nan)
+        res = None
+        if any(isinstance(g, NewtonGroup) for g in self.plan):
+            # check the full constraint residual everywhere; polish where needed
+            with np.errstate(invalid="ignore"):
+                res = self.system.max_residual(st, u)
+            bad = ok & ~(res <= self.atol)
+            for i in np.flatnonzero(bad):
+                ok[i], res[i], it = self._polish(st, unit, i)
+                iters[i] += it
+                methods.append(i, "newton polish")
+            res = np.where(ok, res, np.nan)
         # derivatives per unit driver coordinate -> time derivatives at constant speed
         w = 1.0 if per_unit_driver else self.speed
         if w != 1.0:
@@ -682,6 +776,57 @@ class Analysis:
             flips,
         )
 
+    def _refine_minima(self, gi: int, g: Group, ctx: _Context, cand, H, Hs):
+        """Locate the minima of the discriminant between samples ``cand`` and ``cand + 1``.
+
+        Bisection on its rate H' = 0, evaluating the groups before this one at the
+        midpoints (all candidates at once). A candidate is settled early once the cubic
+        Hermite interpolant through the bracket's ends and a parabola agree that its
+        minimum is clearly above zero (no bifurcation there, just how near it comes).
+        """
+        d = self.mech.driver.direction
+        u = ctx.u
+        lo, hi = u[cand].copy(), u[cand + 1].copy()
+        hlo, hhi = H[cand].copy(), H[cand + 1].copy()
+        slo, shi = Hs[cand].copy(), Hs[cand + 1].copy()  # rates along the sweep
+        est = np.zeros(len(cand))
+        ustar = 0.5 * (lo + hi)
+        open_ = np.ones(len(cand), bool)
+        for _ in range(64):
+            w = np.abs(hi - lo)
+            cubic = _hermite_min(hlo, hhi, slo * w, shi * w)
+            curv = (shi - slo) / np.where(w > 0, w, 1.0)
+            parab = hlo - slo * slo / (2 * np.where(curv > 0, curv, np.inf))
+            settled = (
+                (cubic > NO_TOUCH) & (parab > NO_TOUCH) & (np.abs(cubic - parab) < 0.5 * cubic)
+            )
+            tiny = w <= 4e-16 * (1 + np.abs(lo))
+            est = np.where(open_, np.where(settled, np.minimum(cubic, parab), est), est)
+            open_ &= ~(settled | tiny)
+            if not open_.any():
+                break
+            k = np.flatnonzero(open_)
+            mid = 0.5 * (lo[k] + hi[k])
+            stm = ctx.prefix(gi, mid, cand[k])
+            hm, dm = g.disc(stm)
+            sm = dm * d
+            down = sm < 0
+            lo[k] = np.where(down, mid, lo[k])
+            hlo[k] = np.where(down, hm, hlo[k])
+            slo[k] = np.where(down, sm, slo[k])
+            hi[k] = np.where(down, hi[k], mid)
+            hhi[k] = np.where(down, hhi[k], hm)
+            shi[k] = np.where(down, shi[k], sm)
+        # where the bracket closed in on the minimum, the discriminant there
+        exact = est == 0
+        if exact.any():
+            k = np.flatnonzero(exact)
+            ustar[k] = 0.5 * (lo[k] + hi[k])
+            est[k] = np.asarray(g.disc(ctx.prefix(gi, ustar[k], cand[k]))[0])
+        settled = ~exact
+        ustar[settled] = 0.5 * (lo[settled] + hi[settled])
+        return list(zip(cand.tolist(), ustar.tolist(), est.tolist()))
+
     def _branch_events(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
         """Find where a two-branch group meets a singular configuration along the sweep.
 
@@ -706,19 +851,7 @@ class Analysis:
         warnings: list[str] = []
         found: list[tuple[int, float, float]] = []  # (k, u*, H*)
         if cand.size:
-            lo, hi = u[cand].copy(), u[cand + 1].copy()
-            for _ in range(64):
-                mid = 0.5 * (lo + hi)
-                stm = ctx.prefix(gi, mid, cand)
-                _, dHm = g.disc(stm)
-                down = dHm * d < 0
-                lo = np.where(down, mid, lo)
-                hi = np.where(down, hi, mid)
-                if np.all(np.abs(hi - lo) <= 4e-16 * (1 + np.abs(lo))):
-                    break
-            ustar = 0.5 * (lo + hi)
-            Hstar, _ = g.disc(ctx.prefix(gi, ustar, cand))
-            found = list(zip(cand.tolist(), ustar.tolist(), np.asarray(Hstar).tolist()))
+            found = self._refine_minima(gi, g, ctx, cand, H, Hs)
         # minima exactly at a sample
         for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
             if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
@@ -809,6 +942,7 @@ class Analysis:
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 
 TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
+NO_TOUCH = 1e-6  # a minimum estimated clearly above this needs no further refinement
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
 NEAR_SINGULAR = math.sin(math.radians(3.0))
 

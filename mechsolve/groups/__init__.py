@@ -84,10 +84,16 @@ def build_plan(
     """The ordered list of group solvers for ``system``.
 
     ``method="auto"`` splits into groups and uses closed forms where recognised;
-    ``method="newton"`` solves the whole system as one Newton group.
+    ``method="newton"`` solves the whole system as one Newton group;
+    ``method="split-newton"`` splits into groups but solves each by Newton.
     """
     if method == "newton":
         spec = GroupSpec(list(range(system.nb)), list(system.constraints))
         decompose(system)  # still diagnose structural problems with a clear message
         return [NewtonGroup(spec.bodies, spec.constraints, system.body_names, atol, max_iterations)]
+    if method == "split-newton":  # the split into groups, every group by Newton (benchmarks)
+        return [
+            NewtonGroup(s.bodies, s.constraints, system.body_names, atol, max_iterations)
+            for s in decompose(system)
+        ]
     return [recognise(s, system, atol, max_iterations) for s in decompose(system)]

@@ -1,0 +1,676 @@
+"""``mechsolve bench``: speed against error, measured in one run.
+
+Each case prints a table: the setting (a hand-written reference, or mechsolve with a
+given method), its median wall time over several interleaved repetitions, and its
+largest error against the reference; then the ratio of mechsolve's time to the closed
+form's. The references (:mod:`mechsolve.bench.references`) are written independently of
+the solver. Timings are medians of runs alternating between the reference and
+mechsolve, so that the machine's state affects both alike. Nothing here is asserted:
+the numbers are reported, and recorded in ``benchmarks/README.md``.
+
+Cases: four-bar and crane kinematics and kinetostatics (3600 positions), growth with the
+number of loops of a chain and with the number of positions, a streamed sweep of a
+million positions with its peak memory, start-up time of the command line, and, when
+they are installed, the peers pylinkage and exudyn.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import references as R
+
+
+@dataclass
+class Row:
+    setting: str
+    seconds: float
+    errors: dict[str, float] = field(default_factory=dict)  # quantity -> max relative error
+    note: str = ""
+
+    @property
+    def error(self) -> float:
+        vals = [v for v in self.errors.values() if v is not None and math.isfinite(v)]
+        return max(vals) if vals else float("nan")
+
+
+@dataclass
+class Case:
+    name: str
+    title: str
+    rows: list[Row] = field(default_factory=list)
+    lines: list[str] = field(default_factory=list)  # the final line(s): ratios, fits
+
+    def text(self) -> str:
+        out = [f"== {self.name}: {self.title}"]
+        if self.rows:
+            qs = []
+            for r in self.rows:
+                for q in r.errors:
+                    if q not in qs:
+                        qs.append(q)
+            head = f"  {'setting':<58s} {'time':>11s}" + "".join(f" {'err ' + q:>12s}" for q in qs)
+            out.append(head)
+            for r in self.rows:
+                errs = "".join(
+                    f" {r.errors[q]:12.1e}"
+                    if q in r.errors and r.errors[q] is not None
+                    else f" {'-':>12s}"
+                    for q in qs
+                )
+                out.append(
+                    f"  {r.setting:<58s} {_fmt_time(r.seconds):>11s}{errs}"
+                    + (f"  {r.note}" if r.note else "")
+                )
+        out += ["  " + ln for ln in self.lines]
+        return "\n".join(out)
+
+
+def _fmt_time(s: float) -> str:
+    if not math.isfinite(s):
+        return "-"
+    if s < 1e-3:
+        return f"{s * 1e6:.0f} us"
+    if s < 1:
+        return f"{s * 1e3:.2f} ms"
+    return f"{s:.2f} s"
+
+
+def interleaved(
+    fns: dict[str, Callable[[], object]], repeats: int
+) -> dict[str, tuple[float, object]]:
+    """Median wall time of each function, the functions alternating run by run."""
+    times: dict[str, list[float]] = {k: [] for k in fns}
+    last: dict[str, object] = {}
+    for k, f in fns.items():  # one untimed run each: imports, first allocations
+        last[k] = f()
+    for _ in range(repeats):
+        for k, f in fns.items():
+            t0 = time.perf_counter()
+            last[k] = f()
+            times[k].append(time.perf_counter() - t0)
+    return {k: (statistics.median(v), last[k]) for k, v in times.items()}
+
+
+def rel(a, b) -> float:
+    """Largest difference relative to the largest reference value."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    scale = float(np.max(np.abs(b))) or 1.0
+    return float(np.max(np.abs(a - b))) / scale
+
+
+def wrap(x):
+    return (np.asarray(x) + np.pi) % (2 * np.pi) - np.pi
+
+
+# --- the mechanisms of the benchmarks ---------------------------------------------------
+
+
+def fourbar_yaml(n: int, masses: bool = False) -> str:
+    a, b, c, d = R.A2, R.B3, R.C4, R.D1
+    m = R.MASSES
+
+    def mass(k: int, ends: str) -> str:
+        return f", mass: {m[k]}, uniform_bar: [{ends}]" if masses else ""
+
+    loads = (
+        f"\ngravity: {R.G} m/s^2\nloads:\n  F: {{force: [{R.LOAD[0]} N, {R.LOAD[1]} N], at: P}}\n"
+        if masses
+        else "\n"
+    )
+    return f"""
+name: benchmark four-bar
+ground: {{O2: [0, 0], O4: [{d}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0]}}{mass(0, "O2, A")}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0], P: {list(R.P_LOCAL)}}}{mass(1, "A, B")}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}{mass(2, "O4, B")}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B left of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 0}}
+sweep: {{range: {360 * (n - 1) / n!r} deg, steps: {n - 1}}}
+outputs: {{points: [B]}}{loads}"""
+
+
+def chain_yaml(loops: int, positions: int) -> str:
+    """A chain of four-bar loops driven by one crank: each loop's rocker is a ternary link
+    whose second arm is the crank of the next loop (each loop a Grashof crank-rocker for
+    its input, so the whole chain closes at every position)."""
+    a, b, c, d = 1.0, 3.5, 3.0, 3.2
+    lines = ["name: chain", "ground:"]
+    lines += [f"  G{k}: [{k * d}, 0]" for k in range(loops + 1)]
+    lines += ["links:", f"  r0: {{points: {{G0: [0, 0], P0: [{a}, 0]}}}}"]
+    for k in range(1, loops + 1):
+        lines.append(f"  c{k}: {{points: {{P{k - 1}: [0, 0], Q{k}: [{b}, 0]}}}}")
+        lines.append(
+            f"  r{k}: {{points: {{G{k}: [0, 0], Q{k}: [{c}, 0], "
+            f"P{k}: {{length: {a}, angle: 200 deg}}}}}}"
+        )
+    lines.append("joints:")
+    lines.append("  G0: [ground, r0]")
+    for k in range(1, loops + 1):
+        lines += [
+            f"  P{k - 1}: [r{k - 1}, c{k}]",
+            f"  Q{k}: [c{k}, r{k}]",
+            f"  G{k}: [ground, r{k}]",
+        ]
+    lines.append("assembly:")
+    lines += [f"  - Q{k} left of P{k - 1} -> G{k}" for k in range(1, loops + 1)]
+    lines.append("driver: {joint: G0, speed: 1 rad/s, start: 0}")
+    lines.append(
+        f"sweep: {{range: {360 * (positions - 1) / positions!r} deg, steps: {positions - 1}}}"
+    )
+    lines.append("outputs: {points: [], links: [], sliders: []}")
+    return "\n".join(lines) + "\n"
+
+
+# --- the cases --------------------------------------------------------------------------
+
+
+def _kinematic_rows(
+    mech, ref: Callable, compare: Callable, repeats: int, newton_n: int
+) -> list[Row]:
+    import mechsolve as ms
+    from mechsolve.sweep import Analysis
+
+    an = Analysis(mech)
+    start = an.assemble(0.0)
+    u, _ = an.sweep_values(0.0)
+    th = u.copy()
+    fns = {
+        "ref": lambda: ref(th),
+        "call": lambda: ms.solve(mech, forces=False),
+        "sweep": lambda: an.solve(u, start=start),
+    }
+    t = interleaved(fns, repeats)
+    want = t["ref"][1]
+    rows = [
+        Row("closed form by hand (reference)", t["ref"][0], {}, ""),
+        Row(
+            "mechsolve auto: whole call (setup, assembly, sweep)",
+            t["call"][0],
+            compare(t["call"][1], want),
+        ),
+        Row(
+            "mechsolve auto: the sweep alone (closed-form Assur groups)",
+            t["sweep"][0],
+            compare(t["sweep"][1], want),
+        ),
+    ]
+    # Newton-Raphson settings, on fewer positions when asked (the sequential one is slow)
+    step = 2 * math.pi / newton_n
+    for label, method, batched, tol in (
+        ("mechsolve split-newton: Newton per group, batched", "split-newton", True, 1e-10),
+        ("mechsolve newton: whole system, batched, tol 1e-6", "newton", True, 1e-6),
+        ("mechsolve newton: whole system, batched, tol 1e-10", "newton", True, 1e-10),
+        ("mechsolve newton: whole system, batched, tol 1e-13", "newton", True, 1e-13),
+        ("mechsolve newton: whole system, sequential, tol 1e-10", "newton", False, 1e-10),
+    ):
+        mech.solver.tolerance = tol
+        an2 = Analysis(mech, method)
+        for g in an2.plan:
+            if hasattr(g, "batched"):
+                g.batched = batched
+        u2, _ = an2.sweep_values(0.0, step=step, travel=step * (newton_n - 1))
+        st2 = an2.assemble(0.0)
+        reps = max(1, repeats // 3) if not batched else repeats
+        tt = interleaved({"x": lambda an2=an2, u2=u2, st2=st2: an2.solve(u2, start=st2)}, reps)
+        rows.append(
+            Row(
+                label,
+                tt["x"][0],
+                compare(tt["x"][1], ref(u2)),
+                "" if len(u2) == len(u) else f"(on {len(u2)} positions)",
+            )
+        )
+    mech.solver.tolerance = 1e-10
+    return rows
+
+
+def _sol_fourbar(sol):
+    """Coupler and rocker angles, rates and accelerations of a Solution or Results."""
+    st = sol.state if hasattr(sol, "state") else sol.solution.state
+    return st.th[1], st.th[2], st.w[1], st.w[2], st.al[1], st.al[2]
+
+
+def _compare_fourbar(sol, want):
+    th3, th4, w3, w4, al3, al4 = _sol_fourbar(sol)
+    r3, r4, rw3, rw4, ra3, ra4 = want
+    return {
+        "angle": max(np.max(np.abs(wrap(th3 - r3))), np.max(np.abs(wrap(th4 - r4)))),
+        "omega": max(rel(w3, rw3), rel(w4, rw4)),
+        "alpha": max(rel(al3, ra3), rel(al4, ra4)),
+    }
+
+
+def case_fourbar_kinematics(n: int, repeats: int, newton_n: int) -> Case:
+    import mechsolve as ms
+
+    mech = ms.loads(fourbar_yaml(n))
+    case = Case(
+        "fourbar-kinematics", f"crank-rocker, {n} positions: positions, velocities, accelerations"
+    )
+    rows = _kinematic_rows(mech, R.fourbar_textbook, _compare_fourbar, repeats, newton_n)
+    rows[0].setting = "closed form by hand, Norton's textbook formulas (reference)"
+    t = interleaved(
+        {"v": lambda: R.fourbar_vector(np.linspace(0, 2 * np.pi, n, endpoint=False))}, repeats
+    )
+    vec = R.fourbar_vector(np.linspace(0, 2 * np.pi, n, endpoint=False))
+    rows.insert(
+        1,
+        Row(
+            "closed form by hand, vector form, no trigonometry",
+            t["v"][0],
+            {"angle": 0.0, "omega": 0.0, "alpha": 0.0} | _errs_ref(vec, n),
+        ),
+    )
+    case.rows = rows
+    ref = rows[0].seconds
+    case.lines = [
+        f"ratio mechsolve (whole call) / closed form (textbook): {rows[2].seconds / ref:.2f}",
+        f"ratio mechsolve (sweep alone) / closed form (textbook): {rows[3].seconds / ref:.2f}",
+        f"ratio mechsolve (whole call) / closed form (vector form): "
+        f"{rows[2].seconds / rows[1].seconds:.2f}",
+    ]
+    return case
+
+
+def _errs_ref(vec, n):
+    want = R.fourbar_textbook(np.linspace(0, 2 * np.pi, n, endpoint=False))
+    th3, th4, w3, w4, al3, al4 = vec
+    return {
+        "angle": max(np.max(np.abs(wrap(th3 - want[0]))), np.max(np.abs(wrap(th4 - want[1])))),
+        "omega": max(rel(w3, want[2]), rel(w4, want[3])),
+        "alpha": max(rel(al3, want[4]), rel(al4, want[5])),
+    }
+
+
+def _crane_mech(n: int, masses: bool):
+    import mechsolve as ms
+
+    from .. import api
+
+    path = _find("crane.yaml")
+    if path is not None:
+        mech = api.load(path)
+    else:  # an installed package without the examples: the crane's file is not there
+        return None
+    mech.driver.start = 0.0
+    mech.sweep.travel = 2 * math.pi * (n - 1) / n
+    mech.sweep.step = 2 * math.pi / n
+    mech.outputs.points = ["K"]
+    if not masses:
+        for lk in mech.links:
+            lk.mass = lk.inertia = None
+        mech.loads = []
+        mech.gravity = (0.0, 0.0)
+    _ = ms
+    return mech
+
+
+def _find(name: str) -> Path | None:
+    for base in (Path.cwd() / "mechanisms", Path(__file__).resolve().parents[2] / "mechanisms"):
+        if (base / name).exists():
+            return base / name
+    return None
+
+
+def _compare_crane(sol, want):
+    st = sol.state if hasattr(sol, "state") else sol.solution.state
+    # K on the boom (body 3): from the state
+    from mechsolve.results import Results
+
+    res = sol if isinstance(sol, Results) else None
+    if res is not None:
+        K = res.point("K")
+        kx, ky, ax = K.x, K.y, K.ax
+    else:
+        an = sol.analysis
+        ref_ = an.points["K"]
+        kx, ky = st.point(ref_.body, ref_.local)
+        ax, _ = st.point_acceleration(ref_.body, ref_.local)
+    return {
+        "position": max(rel(kx, want["K"].real), rel(ky, want["K"].imag)),
+        "omega": rel(st.w[3], want["w"][3]),
+        "alpha": max(rel(st.al[3], want["al"][3]), rel(ax, want["aK"].real)),
+    }
+
+
+def case_crane_kinematics(n: int, repeats: int, newton_n: int) -> Case | None:
+    mech = _crane_mech(n, masses=False)
+    if mech is None:
+        return None
+    w = mech.driver.speed
+    case = Case("crane-kinematics", f"dock crane (two loops in series), {n} positions")
+    case.rows = _kinematic_rows(
+        mech, lambda th: R.crane_kinematics(th, w), _compare_crane, repeats, newton_n
+    )
+    ref = case.rows[0].seconds
+    case.lines = [
+        f"ratio mechsolve (whole call) / closed form: {case.rows[1].seconds / ref:.2f}",
+        f"ratio mechsolve (sweep alone) / closed form: {case.rows[2].seconds / ref:.2f}",
+    ]
+    return case
+
+
+def case_fourbar_forces(n: int, repeats: int) -> Case:
+    import mechsolve as ms
+
+    mech = ms.loads(fourbar_yaml(n, masses=True))
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    t = interleaved(
+        {
+            "ref": lambda: R.fourbar_forces(th),
+            "call": lambda: ms.solve(mech),
+            "newton": lambda: ms.solve(mech, method="newton"),
+        },
+        repeats,
+    )
+    Td, FO2, FA, FB, FO4 = t["ref"][1]
+
+    def errs(res):
+        return {
+            "torque": rel(res.driving_effort, Td),
+            "O2": max(
+                rel(res.reaction("O2")["Fx"], FO2.real), rel(res.reaction("O2")["Fy"], FO2.imag)
+            ),
+            "B": max(rel(res.reaction("B")["Fx"], FB.real), rel(res.reaction("B")["Fy"], FB.imag)),
+            "O4": max(
+                rel(res.reaction("O4")["Fx"], FO4.real), rel(res.reaction("O4")["Fy"], FO4.imag)
+            ),
+        }
+
+    case = Case(
+        "fourbar-kinetostatics",
+        f"crank-rocker with masses, gravity and a load, {n} positions: all pin "
+        "forces and the driving torque",
+    )
+    case.rows = [
+        Row("free bodies by hand, dyad by dyad (reference)", t["ref"][0]),
+        Row("mechsolve auto: whole call (kinematics and forces)", t["call"][0], errs(t["call"][1])),
+        Row(
+            "mechsolve newton: whole call, Lagrange multipliers",
+            t["newton"][0],
+            errs(t["newton"][1]),
+        ),
+    ]
+    case.lines = [
+        f"ratio mechsolve (whole call) / free bodies by hand: "
+        f"{case.rows[1].seconds / case.rows[0].seconds:.2f}"
+    ]
+    return case
+
+
+def case_crane_forces(n: int, repeats: int) -> Case | None:
+    import mechsolve as ms
+
+    mech = _crane_mech(n, masses=True)
+    if mech is None:
+        return None
+    w = mech.driver.speed
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    t = interleaved({"ref": lambda: R.crane_forces(th, w), "call": lambda: ms.solve(mech)}, repeats)
+    Td, RO1, RO3, RO4 = t["ref"][1]
+    res = t["call"][1]
+    errs = {
+        "torque": rel(res.driving_effort, Td),
+        "O1": max(rel(res.reaction("O1")["Fx"], RO1.real), rel(res.reaction("O1")["Fy"], RO1.imag)),
+        "O3": max(rel(res.reaction("O3")["Fx"], RO3.real), rel(res.reaction("O3")["Fy"], RO3.imag)),
+        "O4": max(rel(res.reaction("O4")["Fx"], RO4.real), rel(res.reaction("O4")["Fy"], RO4.imag)),
+    }
+    case = Case(
+        "crane-kinetostatics", f"dock crane with masses and the conditional load, {n} positions"
+    )
+    case.rows = [
+        Row("free bodies by hand, dyad by dyad (reference)", t["ref"][0]),
+        Row("mechsolve auto: whole call (kinematics and forces)", t["call"][0], errs),
+    ]
+    case.lines = [
+        f"ratio mechsolve (whole call) / free bodies by hand: "
+        f"{case.rows[1].seconds / case.rows[0].seconds:.2f}"
+    ]
+    return case
+
+
+def case_chain(loops: list[int], positions: int, repeats: int) -> Case:
+    import mechsolve as ms
+
+    case = Case(
+        "chain-growth", f"a chain of N four-bar loops driven by one crank, {positions} positions"
+    )
+    ns, ts = [], []
+    for k in loops:
+        mech = ms.loads(chain_yaml(k, positions))
+        t = interleaved({"x": lambda mech=mech: ms.solve(mech, forces=False)}, repeats)
+        res = t["x"][1]
+        resid = float(np.nanmax(res.solution.residual))
+        solved = int(res.ok.sum())
+        case.rows.append(
+            Row(
+                f"N = {k} loops ({2 * k + 1} links)",
+                t["x"][0],
+                {"residual": resid},
+                f"{t['x'][0] / positions * 1e6:.1f} us per position; {solved} solved",
+            )
+        )
+        ns.append(k)
+        ts.append(t["x"][0])
+    if len(ns) >= 2:
+        p = np.polyfit(np.log(ns), np.log(ts), 1)[0]
+        p2 = np.polyfit(np.log(ns[1:]), np.log(ts[1:]), 1)[0] if len(ns) >= 3 else p
+        case.lines = [
+            f"fitted exponent of time against N: {p:.3f} over all N, {p2:.3f} without N = 1"
+            " (1 = linear)"
+        ]
+    return case
+
+
+def case_positions(sizes: list[int], repeats: int) -> Case:
+    import mechsolve as ms
+
+    case = Case("positions-growth", "the four-bar's sweep against its number of positions")
+    ns, ts = [], []
+    for n in sizes:
+        mech = ms.loads(fourbar_yaml(n))
+        th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        t = interleaved(
+            {"x": lambda mech=mech: ms.solve(mech, forces=False)},
+            max(1, repeats if n <= 10_000 else repeats // 3),
+        )
+        case.rows.append(
+            Row(
+                f"{n} positions",
+                t["x"][0],
+                _compare_fourbar(t["x"][1], R.fourbar_textbook(th)),
+                f"{t['x'][0] / n * 1e6:.2f} us per position",
+            )
+        )
+        ns.append(n)
+        ts.append(t["x"][0])
+    p = np.polyfit(np.log(ns), np.log(ts), 1)[0]
+    case.lines = [f"fitted exponent of time against the number of positions: {p:.3f} (1 = linear)"]
+    return case
+
+
+def _mechsolve_cmd() -> list[str]:
+    exe = shutil.which("mechsolve")
+    return [exe] if exe else [sys.executable, "-m", "mechsolve"]
+
+
+def case_stream(n: int, stream_above: int | None) -> Case:
+    """A sweep of n positions through the command line, its CSV streamed; peak memory of
+    the process."""
+    case = Case("stream", f"the four-bar with forces, {n} positions, CSV streamed to disk")
+    with tempfile.TemporaryDirectory() as tmp:
+        f = Path(tmp) / "fourbar.yaml"
+        f.write_text(fourbar_yaml(361, masses=True))
+        step = f"{360.0 / n!r} deg"
+        env = dict(os.environ)
+        if stream_above is not None:
+            env["MECHSOLVE_STREAM_ABOVE"] = str(stream_above)
+        cmd = _mechsolve_cmd() + ["run", str(f), "--step", step, "--no-plots", "-q", "-o", tmp]
+        # measure the child's peak memory in a fresh helper process, so that earlier
+        # children of this process do not count
+        probe = (
+            "import resource, subprocess, sys, time\n"
+            "t = time.perf_counter()\n"
+            f"p = subprocess.run({cmd!r}, env={env!r})\n"
+            "dt = time.perf_counter() - t\n"
+            "r = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss\n"
+            "print(p.returncode, dt, r)\n"
+        )
+        out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+        try:
+            code, dt, rss = out.stdout.split()
+            rows = sum(1 for _ in open(Path(tmp) / "results.csv")) - 1
+        except (ValueError, OSError):
+            case.lines = [f"failed: {out.stderr.strip()[-300:]}"]
+            return case
+        mb = int(rss) / 1024
+        case.rows.append(
+            Row(
+                f"mechsolve run --step {step} (exit {code})",
+                float(dt),
+                {},
+                f"{rows} rows; peak resident memory {mb:.0f} MB",
+            )
+        )
+        case.lines = [f"peak resident memory: {mb:.0f} MB (target: under 500 MB)"]
+    return case
+
+
+def case_startup(repeats: int) -> Case:
+    case = Case("startup", "the command line as whole processes")
+    path = _find("fourbar.yaml")
+    with tempfile.TemporaryDirectory() as tmp:
+        if path is None:
+            path = Path(tmp) / "fourbar.yaml"
+            path.write_text(fourbar_yaml(181, masses=True))
+        for label, args in (
+            (
+                f"mechsolve run {path.name} --no-plots",
+                ["run", str(path), "--no-plots", "-q", "-o", tmp],
+            ),
+            ("mechsolve --help", ["--help"]),
+        ):
+            ts = []
+            for _ in range(max(1, repeats)):
+                t0 = time.perf_counter()
+                subprocess.run(_mechsolve_cmd() + args, capture_output=True)
+                ts.append(time.perf_counter() - t0)
+            case.rows.append(Row(label, statistics.median(ts)))
+    case.lines = ["targets: run at most 0.6 s, --help at most 0.3 s"]
+    return case
+
+
+def case_peers(n: int) -> Case | None:
+    try:
+        from . import peers
+    except ImportError:
+        return None
+    avail = peers.available()
+    case = Case("peers", f"other tools on the same four-bar, {n} positions")
+    want = None
+    for name, fn in (("pylinkage", peers.pylinkage_fourbar), ("exudyn", peers.exudyn_fourbar)):
+        if not avail.get(name):
+            case.lines.append(f"{name}: not installed (pip install 'mechsolve[bench]'), skipped")
+            continue
+        out = fn(n)
+        if out is None or "error" in out:
+            case.lines.append(f"{name}: failed: {out.get('error') if out else 'unavailable'}")
+            continue
+        th = np.asarray(out["theta"])
+        ax, ay = R.A2 * np.cos(th), R.A2 * np.sin(th)
+        want = R.fourbar_vector(th)
+        bx = ax + R.B3 * np.cos(want[0])
+        by = ay + R.B3 * np.sin(want[0])
+        errs = {"position": max(rel(out["Bx"], bx), rel(out["By"], by))}
+        if out.get("torque") is not None:
+            Td = R.fourbar_forces(th)[0]
+            errs["torque"] = rel(out["torque"], Td)
+        first = str(out.get("note", "")).split(";")[0]
+        note = f"import {out.get('import_seconds', float('nan')):.2f} s; {first}"
+        case.rows.append(Row(out["name"], out["seconds"], errs, note.strip("; ")))
+    return case
+
+
+def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list[Case]:
+    """Run the benchmark cases; ``quick`` uses few repetitions and small sizes (for CI)."""
+    reps = 3 if quick else 15
+    n = 3600
+    plan: list[tuple[str, Callable[[], Case | None]]] = [
+        ("fourbar-kinematics", lambda: case_fourbar_kinematics(n, reps, 360 if quick else n)),
+        ("crane-kinematics", lambda: case_crane_kinematics(n, reps, 360 if quick else n)),
+        ("fourbar-kinetostatics", lambda: case_fourbar_forces(n, reps)),
+        ("crane-kinetostatics", lambda: case_crane_forces(n, reps)),
+        (
+            "chain-growth",
+            lambda: case_chain(
+                [1, 10, 100] if quick else [1, 10, 100, 1000],
+                90 if quick else 360,
+                1 if quick else 3,
+            ),
+        ),
+        (
+            "positions-growth",
+            lambda: case_positions([1000, 10_000] if quick else [1000, 10_000, 100_000], reps),
+        ),
+        ("stream", lambda: case_stream(20_000 if quick else 1_000_000, 5_000 if quick else None)),
+        ("startup", lambda: case_startup(2 if quick else 7)),
+        ("peers", lambda: case_peers(n)),
+    ]
+    out = []
+    for name, fn in plan:
+        if cases and name not in cases:
+            continue
+        case = fn()
+        if case is None:
+            echo(f"== {name}: skipped (its data is not available here)")
+            continue
+        echo(case.text())
+        echo("")
+        out.append(case)
+    return out
+
+
+def plot(cases: list[Case], path: str | Path) -> Path:
+    """A work-precision diagram: wall time against largest error, log-log."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    markers = "osD^v<>p*h"
+    for ci, case in enumerate(c for c in cases if any(r.errors for r in c.rows)):
+        for r in case.rows:
+            err = r.error if r.errors else 1e-17
+            err = max(err, 1e-17)
+            ax.loglog(
+                r.seconds,
+                err,
+                markers[ci % len(markers)],
+                ms=7,
+                label=f"{case.name}: {r.setting}"[:90],
+            )
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("largest relative error against the reference [-] (1e-17: the reference)")
+    ax.set_title("mechsolve: speed against error")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=5.5, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)

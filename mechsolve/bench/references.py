@@ -1,0 +1,240 @@
+"""Hand-written references for the benchmarks, independent of the solver.
+
+Nothing here imports mechsolve's solver: these are the closed forms and free-body
+solutions an engineer writes by hand in numpy, against which mechsolve's speed and error
+are measured.
+
+* :func:`fourbar_textbook`: Norton's half-angle closed form (Design of Machinery, 4.10,
+  6.7, 7.3) for positions, velocities and accelerations, trigonometric throughout;
+* :func:`fourbar_vector`: the same by circle intersection in vector form, with no
+  trigonometry but the crank's, the fastest closed form we could write;
+* :func:`fourbar_forces`: kinetostatics of the four-bar, free body by free body: the
+  coupler-rocker dyad by the force polygon (tangential components from each link's
+  moment about the inner joint, normal ones from the dyad's force balance), then the crank;
+* :func:`crane_kinematics` and :func:`crane_forces`: the dock crane in complex numbers,
+  dyad by dyad as its seed program does, and its free-body kinetostatics.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# --- the four-bar of the benchmarks ---------------------------------------------------
+A2, B3, C4, D1 = 0.0265, 0.1056, 0.059, 0.0875  # crank, coupler, rocker, ground (m)
+
+
+def fourbar_textbook(th2, w2=1.0, a=A2, b=B3, c=C4, d=D1):
+    """Open-branch four-bar by Norton's formulas: angles, rates, accelerations."""
+    c2, s2 = np.cos(th2), np.sin(th2)
+    K1, K2, K3 = d / a, d / c, (a * a - b * b + c * c + d * d) / (2 * a * c)
+    A = c2 - K1 - K2 * c2 + K3
+    B = -2 * s2
+    C = K1 - (K2 + 1) * c2 + K3
+    th4 = 2 * np.arctan2(-B - np.sqrt(B * B - 4 * A * C), 2 * A)
+    K4, K5 = d / b, (c * c - d * d - a * a - b * b) / (2 * a * b)
+    D = c2 - K1 + K4 * c2 + K5
+    E = -2 * s2
+    F = K1 + (K4 - 1) * c2 + K5
+    th3 = 2 * np.arctan2(-E - np.sqrt(E * E - 4 * D * F), 2 * D)
+    c3, s3, c4, s4 = np.cos(th3), np.sin(th3), np.cos(th4), np.sin(th4)
+    s34 = np.sin(th3 - th4)
+    w3 = a * w2 * np.sin(th4 - th2) / (b * s34)
+    w4 = a * w2 * np.sin(th2 - th3) / (-c * s34)
+    Ap, Bp = c * s4, b * s3
+    Cp = a * w2 * w2 * c2 + b * w3 * w3 * c3 - c * w4 * w4 * c4
+    Dp, Ep = c * c4, b * c3
+    Fp = -a * w2 * w2 * s2 - b * w3 * w3 * s3 + c * w4 * w4 * s4
+    den = Ap * Ep - Bp * Dp
+    al3 = (Cp * Dp - Ap * Fp) / den
+    al4 = (Cp * Ep - Bp * Fp) / den
+    return th3, th4, w3, w4, al3, al4
+
+
+def fourbar_vector(th2, w2=1.0, a=A2, b=B3, c=C4, d=D1):
+    """The same four-bar by circle intersection, vectors only."""
+    ax, ay = a * np.cos(th2), a * np.sin(th2)
+    dx, dy = d - ax, -ay
+    D2 = dx * dx + dy * dy
+    f = (b * b - c * c + D2) / (2 * D2)
+    h = np.sqrt(b * b / D2 - f * f)
+    bx, by = ax + f * dx - h * dy, ay + f * dy + h * dx
+    g1x, g1y, g2x, g2y = bx - ax, by - ay, bx - d, by
+    cr = g1x * g2y - g1y * g2x
+    vax, vay = -ay * w2, ax * w2
+    w3 = (-vax * g2x - vay * g2y) / cr
+    w4 = (-vax * g1x - vay * g1y) / cr
+    dax = ax * w2 * w2 - w4 * w4 * g2x + w3 * w3 * g1x
+    day = ay * w2 * w2 - w4 * w4 * g2y + w3 * w3 * g1y
+    al3 = (dax * g2x + day * g2y) / cr
+    al4 = (dax * g1x + day * g1y) / cr
+    return np.arctan2(g1y, g1x), np.arctan2(g2y, g2x), w3, w4, al3, al4
+
+
+# masses of the benchmark four-bar: uniform bars, and a load at a coupler point
+MASSES = (0.05, 0.2, 0.11)
+LOAD = (1.0, -2.0)  # N, at the coupler point P
+P_LOCAL = (0.05, 0.02)  # m, in the coupler's frame (x along A -> B)
+G = 9.81
+
+
+def fourbar_forces(th2, w2=1.0, a=A2, b=B3, c=C4, d=D1):
+    """Driving torque and pin forces of the four-bar with uniform bars, gravity and the
+    load at P, by free bodies. Returns Td and the forces on the crank at O2, on the
+    coupler at A, on the rocker at B and on the rocker at O4 (each as complex Fx + i Fy).
+    """
+    m2, m3, m4 = MASSES
+    th3, th4, w3, w4, al3, al4 = fourbar_textbook(th2, w2, a, b, c, d)
+    e2, e3, e4 = np.exp(1j * th2), np.exp(1j * th3), np.exp(1j * th4)
+    A = a * e2
+    B = d + c * e4
+    # accelerations of the centres (alpha2 = 0)
+    aG2 = -(w2**2) * a / 2 * e2
+    aA = -(w2**2) * A
+    aG3 = aA + (1j * al3 - w3**2) * (b / 2) * e3
+    aG4 = (1j * al4 - w4**2) * (c / 2) * e4
+    G2, G3, G4 = A / 2, A + b / 2 * e3, d + c / 2 * e4
+    P = A + (P_LOCAL[0] + 1j * P_LOCAL[1]) * e3
+    J3, J4 = m3 * b * b / 12, m4 * c * c / 12
+    # known forces (gravity, inertia, the load) and moments (inertia couples)
+    F3 = m3 * (-1j * G) - m3 * aG3 + (LOAD[0] + 1j * LOAD[1])
+    F4 = m4 * (-1j * G) - m4 * aG4
+
+    def cross(u, v):
+        return (u.conjugate() * v).imag
+
+    # moments about B of everything known on the coupler and on the rocker
+    M3B = cross(G3 - B, m3 * (-1j * G) - m3 * aG3) + cross(P - B, LOAD[0] + 1j * LOAD[1])
+    M3B = M3B - J3 * al3
+    M4B = cross(G4 - B, m4 * (-1j * G) - m4 * aG4) - J4 * al4
+    # tangential components: A on the coupler, O4 on the rocker (moments about B)
+    uA, uO = (A - B) / b, (d - B) / c  # unit vectors from B
+    tA = -M3B / b  # component of the force at A along i * uA
+    tO = -M4B / c
+    # normal components from the dyad's force balance: nA uA + nO uO = S
+    S = -(F3 + F4) - tA * 1j * uA - tO * 1j * uO
+    det = cross(uA, uO)
+    nA = cross(S, uO) / det
+    nO = cross(uA, S) / det
+    FA = tA * 1j * uA + nA * uA  # on the coupler at A, by the crank
+    FO4 = tO * 1j * uO + nO * uO  # on the rocker at O4, by the ground
+    FB = -FO4 - F4  # on the rocker at B, by the coupler
+    # the crank: the coupler pushes it with -FA at A
+    aG2f = m2 * (-1j * G) - m2 * aG2
+    FO2 = FA - aG2f  # on the crank at O2, by the ground
+    J2 = m2 * a * a / 12
+    Td = -(cross(A, -FA) + cross(G2, aG2f) - J2 * 0.0)
+    return Td, FO2, FA, FB, FO4
+
+
+# --- the dock crane (seed 000) --------------------------------------------------------
+O1, O3, O4 = 2.86 + 4.0j, 0.0 + 0.0j, 5.6 + 8.1j
+L1, L2, L3B, L3C, L4, L5, L4K = 1.388, 2.780, 4.0, 28.525, 3.625, 25.15, 8.35
+BETA_C, BETA_K = np.radians(25.0), np.radians(176.0)
+S3 = (8.5, np.radians(7.0))
+S4 = (1.0, np.radians(95.0))
+S5 = (2.5, np.radians(24.0))
+M3, M4, M5, Q = 3500.0, 3600.0, 5500.0, 50e3
+
+
+def _dyad(P, vP, aP, Qp, l1, l2, side):
+    """Links P-M (l1) and Q-M (l2), Q fixed, M on the ``side`` (+1 left) of P -> Q:
+    angles of P -> M and Q -> M with their rates and accelerations (complex algebra)."""
+    dq = Qp - P
+    D = np.abs(dq)
+    gam = np.arccos((l1 * l1 + D * D - l2 * l2) / (2 * l1 * D))
+    t1 = np.angle(dq) + side * gam
+    M = P + l1 * np.exp(1j * t1)
+    t2 = np.angle(M - Qp)
+    e1, e2 = np.exp(1j * t1), np.exp(1j * t2)
+    # vP + i w1 l1 e1 = i w2 l2 e2: project on e2 and e1 to eliminate
+    w1 = (-vP * e2.conjugate()).real / (1j * l1 * e1 * e2.conjugate()).real
+    w2 = (vP * e1.conjugate()).real / (1j * l2 * e2 * e1.conjugate()).real
+    rhs = -aP + w1**2 * l1 * e1 - w2**2 * l2 * e2  # = i al1 l1 e1 - i al2 l2 e2
+    a1 = (rhs * e2.conjugate()).real / (1j * l1 * e1 * e2.conjugate()).real
+    a2 = -(rhs * e1.conjugate()).real / (1j * l2 * e2 * e1.conjugate()).real
+    return t1, t2, w1, w2, a1, a2, M
+
+
+def crane_kinematics(th1, w1):
+    """Link angles (crank, coupler, jib, boom, tie), their rates and accelerations, and
+    the points of the crane, as complex numbers."""
+    e1 = np.exp(1j * th1)
+    A = O1 + L1 * e1
+    vA = 1j * w1 * L1 * e1
+    aA = -(w1**2) * L1 * e1
+    # B on the right of A -> O3 ("B left of O3 -> A")
+    t2, t3, w2, w3, a2, a3, B = _dyad(A, vA, aA, O3, L2, L3B, -1)
+    eC = np.exp(1j * (t3 + BETA_C))
+    C = O3 + L3C * eC
+    vC = 1j * w3 * L3C * eC
+    aC = (1j * a3 - w3**2) * L3C * eC
+    t4, t5, w4, w5, a4, a5, D = _dyad(C, vC, aC, O4, L4, L5, +1)
+    eK = np.exp(1j * (t4 + BETA_K))
+    K = C + L4K * eK
+    vK = vC + 1j * w4 * L4K * eK
+    aK = aC + (1j * a4 - w4**2) * L4K * eK
+    return dict(
+        th=(th1, t2, t3, t4, t5),
+        w=(w1, w2, w3, w4, w5),
+        al=(0.0, a2, a3, a4, a5),
+        A=A,
+        B=B,
+        C=C,
+        D=D,
+        K=K,
+        vK=vK,
+        aK=aK,
+        aC=aC,
+        vC=vC,
+    )
+
+
+def crane_forces(th1, w1):
+    """Driving torque and the fixed-hinge reactions of the crane (point masses at S3, S4,
+    S5, gravity, the load at K while K moves left), free body by free body."""
+    k = crane_kinematics(th1, w1)
+    _, t2, t3, t4, t5 = k["th"]
+    _, w2, w3, w4, w5 = k["w"]
+    _, a2, a3, a4, a5 = k["al"]
+    A, B, C, D, K = k["A"], k["B"], k["C"], k["D"], k["K"]
+
+    def point(origin, r, ang, t, w, al, a_origin):
+        e = np.exp(1j * (t + ang))
+        return origin + r * e, a_origin + (1j * al - w * w) * r * e
+
+    g = -1j * 9.81
+    pS3, aS3 = point(O3, S3[0], S3[1], t3, w3, a3, 0.0)
+    pS4, aS4 = point(C, S4[0], S4[1], t4, w4, a4, k["aC"])
+    pS5, aS5 = point(O4, S5[0], S5[1], t5, w5, a5, 0.0)
+    load = np.where(k["vK"].real < 0, -1j * Q, 0.0)
+    F3 = M3 * (g - aS3)
+    F4 = M4 * (g - aS4) + load
+    F5 = M5 * (g - aS5)
+
+    def cross(u, v):
+        return (u.conjugate() * v).imag
+
+    # dyad boom (4) and tie (5), inner joint D: tangential components by moments about D
+    M4D = cross(pS4 - D, M4 * (g - aS4)) + cross(K - D, load)
+    M5D = cross(pS5 - D, F5)
+    u4, u5 = (C - D) / L4, (O4 - D) / L5
+    t4c, t5c = -M4D / L4, -M5D / L5
+    S = -(F4 + F5) - t4c * 1j * u4 - t5c * 1j * u5
+    det = cross(u4, u5)
+    n4, n5 = cross(S, u5) / det, cross(u4, S) / det
+    FC = t4c * 1j * u4 + n4 * u4  # on the boom at C, by the jib
+    RO4 = t5c * 1j * u5 + n5 * u5  # on the tie at O4, by the ground
+    # the jib: -FC at C, its weight and inertia, the two-force coupler's push at B
+    eAB = (B - A) / np.abs(B - A)
+    M3O3 = cross(C - O3, -FC) + cross(pS3 - O3, F3)
+    f = -M3O3 / cross(B - O3, eAB)  # the coupler pushes the jib with f eAB at B
+    FB = f * eAB
+    RO3 = -(FB - FC + F3)  # on the jib at O3, by the ground
+    RO1 = FB  # on the crank at O1: the coupler pulls the crank with -FB at A
+    Td = cross(A - O1, FB)
+    return Td, RO1, RO3, RO4
+
+
+def crane_limits():
+    """Positions of the crane used by the benchmarks: crank angles of one turn."""
+    return np.linspace(0.0, 2 * np.pi, 3600, endpoint=False)
