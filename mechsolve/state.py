@@ -23,6 +23,7 @@ class State:
         "n",
         "token",
         "consts",
+        "block",
         "x",
         "y",
         "th",
@@ -51,7 +52,11 @@ class State:
         self.token = State._count  # tells group caches which state they belong to
         self.consts: dict = {}
         # one block for all arrays: a single zeroed allocation is far cheaper than eleven
-        block = np.zeros((11, nb + 1, n))
+        self._unpack(np.zeros((11, nb + 1, n)))
+        self.c[nb] = 1.0  # the ground's frame; the bodies' are set by their groups
+
+    def _unpack(self, block: np.ndarray) -> None:
+        self.block = block
         (
             self.x,
             self.y,
@@ -65,7 +70,6 @@ class State:
             self.ay,
             self.al,
         ) = block
-        self.c[nb] = 1.0  # the ground's frame; the bodies' are set by their groups
 
     @property
     def ground(self) -> int:
@@ -73,6 +77,11 @@ class State:
 
     def set_angle(self, i: int, th: np.ndarray, idx=slice(None)) -> None:
         """Set body ``i``'s angle (and its cosine and sine)."""
+        if isinstance(idx, slice) and idx == slice(None):  # in place: no temporaries
+            self.th[i] = th
+            np.cos(self.th[i], out=self.c[i])
+            np.sin(self.th[i], out=self.s[i])
+            return
         self.th[i, idx] = th
         self.c[i, idx] = np.cos(th)
         self.s[i, idx] = np.sin(th)
@@ -83,20 +92,19 @@ class State:
         """A new state holding only the positions ``idx``."""
         out = State.__new__(State)
         out.nb = self.nb
-        State._count += 1
-        out.token = State._count
+        out.token = State.new_token()
         out.consts = {}
-        for name in State.ARRAYS:
-            setattr(out, name, getattr(self, name)[:, idx].copy())
-        out.n = out.x.shape[1]
+        block = self.block[:, :, idx]
+        if isinstance(idx, slice):
+            block = block.copy()
+        out._unpack(block)
+        out.n = block.shape[2]
         return out
 
     def put(self, idx, other: State) -> None:
         """Copy ``other``'s positions into positions ``idx`` of this state."""
-        for name in State.ARRAYS:
-            getattr(self, name)[:, idx] = getattr(other, name)
-        State._count += 1
-        self.token = State._count  # its content changed: caches are stale
+        self.block[:, :, idx] = other.block
+        self.token = State.new_token()  # its content changed: caches are stale
 
     def q(self) -> np.ndarray:
         """Generalised coordinates as an array (N, 3 * nb): x0, y0, th0, x1, ..."""

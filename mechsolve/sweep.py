@@ -357,10 +357,8 @@ class Analysis:
                     + g.fail_reason(st2, 0)
                 )
             j, reason = self._choose(g, st2, ok2, ready)
-            for name in State.ARRAYS:  # keep the chosen branch in both columns
-                arr = getattr(st2, name)
-                for b in g.bodies:
-                    arr[b, 1 - j] = arr[b, j]
+            bodies = list(g.bodies)  # keep the chosen branch in both columns
+            st2.block[:, bodies, 1 - j] = st2.block[:, bodies, j]
             st2.token = State.new_token()
             modes.append(1.0 if j == 0 else -1.0)
             reasons.append(reason)
@@ -397,41 +395,29 @@ class Analysis:
                     return None
         return st
 
-    def _decide_at_start(self, gi, g, st, ok, start, conds, done_bodies):
+    def _decide_at_start(self, gi, g, st, start, conds, done_bodies):
         """Choose a group's branch at the sweep's first position, as :meth:`assemble`
-        does, after the group was solved on its current branch. Returns the conditions
-        still to use and whether the group must be solved again on the other branch."""
-        if not ok[0]:
-            raise AssemblyError(
-                f"{self._file()}cannot assemble at {self.format_u(start.u0)}: "
-                + g.fail_reason(st, 0)
-            )
-        if g.n_modes < 2:
-            return conds, False
+        does, before the group is solved over the sweep (the groups before it are).
+        Returns the conditions still to use."""
         ready = self._ready(conds, done_bodies)
         conds = [(k, c) for k, c in conds if (k, c) not in ready]
         has_sketch = any(self.points[p].body in g.bodies for p in self.mech.assembly.sketch)
-        if not has_sketch:
-            if not ready:
-                start.reasons[gi] = "default branch (+)"
-                return conds, False
-            one = st.take([0])
-            view = StateView(self, one)
-            view.has_velocity = view.has_acceleration = False
-            if all(bool(np.all(c.evaluate(view))) for _, c in ready):
-                texts = ", ".join(repr(c.text) for _, c in ready)
-                start.reasons[gi] = f"assembly condition {texts}"
-                return conds, False
         # both branches at the first position, one in each column
         two = st.take([0, 0])
         u0 = start.u0
         ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
+        if not ok2.any():
+            raise AssemblyError(
+                f"{self._file()}cannot assemble at {self.format_u(u0)}: "
+                + g.fail_reason(two, 0)
+            )
+        if not ready and not has_sketch and ok2[0]:
+            start.reasons[gi] = "default branch (+)"
+            return conds
         j, reason = self._choose(g, two, ok2, ready)
         start.reasons[gi] = reason
-        if j == 0:
-            return conds, False
-        start.modes[gi] = -1.0
-        return conds, True
+        start.modes[gi] = 1.0 if j == 0 else -1.0
+        return conds
 
     def _ready(self, conds, done_bodies: set) -> list:
         """The assembly conditions whose points are all on bodies solved so far."""
@@ -707,16 +693,17 @@ class Analysis:
                         evs, warn = self._branch_events(gi, g, ctx, ok_all)
                         events += evs
                         warnings += warn
-                    sigma = self.sigma_at(start.modes[gi], flips[gi], u)
-                    ok, ind = g.position(st, unit, sigma)
                     if lazy:
                         done_bodies |= set(g.bodies)
-                        conds, redo = self._decide_at_start(
-                            gi, g, st, ok, start, conds, done_bodies
+                        if g.n_modes == 2:
+                            conds = self._decide_at_start(gi, g, st, start, conds, done_bodies)
+                    sigma = self.sigma_at(start.modes[gi], flips[gi], u)
+                    ok, ind = g.position(st, unit, sigma)
+                    if lazy and not ok[0]:
+                        raise AssemblyError(
+                            f"{self._file()}cannot assemble at {self.format_u(start.u0)}: "
+                            + g.fail_reason(st, 0)
                         )
-                        if redo:
-                            sigma = self.sigma_at(start.modes[gi], flips[gi], u)
-                            ok, ind = g.position(st, unit, sigma)
                     if derivs:
                         g.velocity(st, unit)
                     if acceleration:
@@ -987,15 +974,20 @@ def _restart_guess(an: Analysis, g: NewtonGroup, u: float, start: StartAssembly)
 
 def _hermite_min(h0, h1, d0, d1):
     """Smallest value of the cubic Hermite interpolant on [0, 1] (values h, slopes d)."""
-    t = np.linspace(0.0, 1.0, 17)[:, None]
-    t2, t3 = t * t, t * t * t
-    vals = (
-        (2 * t3 - 3 * t2 + 1) * h0
-        + (t3 - 2 * t2 + t) * d0
-        + (-2 * t3 + 3 * t2) * h1
-        + (t3 - t2) * d1
-    )
+    if len(h0) == 0:
+        return np.zeros(0)
+    b00, b10, b01, b11 = _HERMITE_BASIS
+    vals = b00 * h0 + b10 * d0 + b01 * h1 + b11 * d1
     return vals.min(axis=0)
+
+
+def _hermite_basis(k: int = 17):
+    t = np.linspace(0.0, 1.0, k)[:, None]
+    t2, t3 = t * t, t * t * t
+    return (2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + t, -2 * t3 + 3 * t2, t3 - t2)
+
+
+_HERMITE_BASIS = _hermite_basis()
 
 
 class _Context:

@@ -89,18 +89,30 @@ def _fmt_time(s: float) -> str:
 
 
 def interleaved(
-    fns: dict[str, Callable[[], object]], repeats: int
+    fns: dict[str, Callable[[], object]], repeats: int, batch_seconds: float = 0.01
 ) -> dict[str, tuple[float, object]]:
-    """Median wall time of each function, the functions alternating run by run."""
+    """Median wall time per call of each function, the functions alternating run by run.
+
+    A run of a fast function is a batch of calls lasting about ``batch_seconds`` (as
+    ``timeit`` does), so that the timer's resolution and the machine's jitter weigh
+    little; the time reported is the batch's time over its number of calls.
+    """
     times: dict[str, list[float]] = {k: [] for k in fns}
     last: dict[str, object] = {}
-    for k, f in fns.items():  # one untimed run each: imports, first allocations
+    count: dict[str, int] = {}
+    for k, f in fns.items():  # one untimed run each (imports, first allocations), then one
+        last[k] = f()  # timed run to size the batches
+        t0 = time.perf_counter()
         last[k] = f()
+        once = time.perf_counter() - t0
+        count[k] = max(1, min(1000, int(batch_seconds / max(once, 1e-9))))
     for _ in range(repeats):
         for k, f in fns.items():
+            m = count[k]
             t0 = time.perf_counter()
-            last[k] = f()
-            times[k].append(time.perf_counter() - t0)
+            for _ in range(m):
+                last[k] = f()
+            times[k].append((time.perf_counter() - t0) / m)
     return {k: (statistics.median(v), last[k]) for k, v in times.items()}
 
 
@@ -608,7 +620,7 @@ def case_peers(n: int) -> Case | None:
 
 def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list[Case]:
     """Run the benchmark cases; ``quick`` uses few repetitions and small sizes (for CI)."""
-    reps = 3 if quick else 15
+    reps = 5 if quick else 25
     n = 3600
     plan: list[tuple[str, Callable[[], Case | None]]] = [
         ("fourbar-kinematics", lambda: case_fourbar_kinematics(n, reps, 360 if quick else n)),

@@ -26,6 +26,7 @@ P_loads the power of the applied forces, torques, dampers and conditional spring
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -43,24 +44,61 @@ SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a to
 
 @dataclass
 class ForceResult:
-    """Reactions, driver effort, energies and the power balance over the positions."""
+    """Reactions, driver effort, energies and the power balance over the positions.
+
+    The energies and the power balance are computed when first read (a sweep that only
+    wants reactions does not pay for them).
+    """
 
     lam: np.ndarray  # (N, nc) Lagrange multipliers
     effort: np.ndarray  # (N,) driving torque (N m) or force (N) on the driven link
     reactions: dict[str, dict[str, np.ndarray]]
     active: dict[str, np.ndarray]  # per conditional load: where it acts
-    kinetic: np.ndarray
-    potential: np.ndarray
-    power_input: np.ndarray
-    kinetic_rate: np.ndarray
-    potential_rate: np.ndarray
-    power_loads: np.ndarray
-    residual: np.ndarray
+    power_loads: np.ndarray  # power of the applied loads (W)
     singular: list[tuple[int, str]] = field(default_factory=list)  # (position, group label)
     ok: np.ndarray | None = None
     load_power: dict[str, np.ndarray] = field(default_factory=dict)  # power of each load
     nonunique: dict[str, set[str]] = field(default_factory=dict)  # joint -> components
     stroke_extremes: list[tuple[float, float]] = field(default_factory=list)
+    speed: float = 0.0  # the driver's speed (rad/s or m/s)
+    # (kinetic, kinetic rate, potential, potential rate) on demand
+    energy_terms: Callable[[], tuple] | None = field(default=None, repr=False)
+    _energies: tuple | None = field(default=None, repr=False)
+
+    def _terms(self) -> tuple:
+        if self._energies is None:
+            self._energies = self.energy_terms()
+        return self._energies
+
+    @property
+    def kinetic(self) -> np.ndarray:
+        """Kinetic energy T (J)."""
+        return self._terms()[0]
+
+    @property
+    def kinetic_rate(self) -> np.ndarray:
+        """dT/dt (W)."""
+        return self._terms()[1]
+
+    @property
+    def potential(self) -> np.ndarray:
+        """Potential energy V of gravity and unconditional springs (J)."""
+        return self._terms()[2]
+
+    @property
+    def potential_rate(self) -> np.ndarray:
+        """dV/dt (W)."""
+        return self._terms()[3]
+
+    @property
+    def power_input(self) -> np.ndarray:
+        """Power of the driver (W)."""
+        return self.effort * self.speed
+
+    @property
+    def residual(self) -> np.ndarray:
+        """Power balance: P_driver - dT/dt - dV/dt + P_loads (W), zero to rounding."""
+        return self.power_input - self.kinetic_rate - self.potential_rate + self.power_loads
 
 
 class _Q:
@@ -159,13 +197,11 @@ def solve_forces(
     acc = _Q(an, sol)
     gx, gy = mech.gravity_vector()
 
-    kinetic = np.zeros(n)
-    kinetic_rate = np.zeros(n)
-    potential = np.zeros(n)
-    potential_rate = np.zeros(n)
     power_loads = np.zeros(n)
+    springs = [0.0, 0.0]  # potential of unconditional springs and its rate
 
     # inertia and gravity, at each body's centre of mass
+    massive = []
     for lk in mech.links:
         if not lk.mass and not lk.inertia:
             continue
@@ -173,111 +209,118 @@ def solve_forces(
         m = lk.mass or 0.0
         J = lk.inertia or 0.0
         s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
-        xg, yg = st.point(b, s)
-        vx, vy = st.point_velocity(b, s)
         ax, ay = st.point_acceleration(b, s)
-        w, al = st.w[b], st.al[b]
         acc.force(b, s, m * (gx - ax), m * (gy - ay))
-        acc.torque(b, -J * al)
-        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * J * w * w
-        kinetic_rate += m * (vx * ax + vy * ay) + J * w * al
-        potential += -m * (gx * xg + gy * yg)
-        potential_rate += -m * (gx * vx + gy * vy)
+        if J:
+            acc.torque(b, -J * st.al[b])
+        massive.append((b, m, J, s))
+
+    def energy_terms():
+        kinetic = np.zeros(n)
+        kinetic_rate = np.zeros(n)
+        potential = np.zeros(n) + springs[0]
+        potential_rate = np.zeros(n) + springs[1]
+        with np.errstate(invalid="ignore"):  # unsolved positions stay NaN
+            for b, m, J, s in massive:
+                xg, yg = st.point(b, s)
+                vx, vy = st.point_velocity(b, s)
+                ax, ay = st.point_acceleration(b, s)
+                w, al = st.w[b], st.al[b]
+                kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * J * w * w
+                kinetic_rate += m * (vx * ax + vy * ay) + J * w * al
+                potential += -m * (gx * xg + gy * yg)
+                potential_rate += -m * (gx * vx + gy * vy)
+        return kinetic, kinetic_rate, potential, potential_rate
 
     replay = stroke_extremes is not None
     extremes: list[tuple[float, float]] = list(stroke_extremes) if replay else []
     active = condition_masks(an, sol, view, extremes, replay)
     load_power: dict[str, np.ndarray] = {}
-    for load in mech.loads:
-        before = power_loads.copy()
-        on = active.get(load.name)
-        f = on.astype(float) if on is not None else 1.0
-        if isinstance(load, PointForce):
-            b = sys_.index[load.link]
-            s = an.mech.local_point(load.link, load.point)
-            fx, fy = load.force
-            if load.frame == "link":
-                fx, fy = st.rotated(b, np.array(load.force))
-            fx, fy = fx * f, fy * f
-            acc.force(b, s, fx, fy)
-            vx, vy = st.point_velocity(b, s)
-            power_loads += fx * vx + fy * vy
-        elif isinstance(load, Torque):
-            b = sys_.index[load.link]
-            acc.torque(b, load.torque * f)
-            power_loads += load.torque * f * st.w[b]
-        elif isinstance(load, Damper) and load.slider is not None:
-            sl = sys_.by_joint[load.slider]
-            ux, uy, *_ = sl.frame(st)
-            sd = sl.velocity(st)
-            fmag = -load.coefficient * sd * f  # on the block, along the line
-            acc.force(sl.b, sl.sb, fmag * ux, fmag * uy)
-            xp, yp = st.point(sl.b, sl.sb)
-            # the reaction acts on the guide at the material point under the block
-            _force_at_global(acc, st, sl.a, xp, yp, -fmag * ux, -fmag * uy)
-            power_loads += fmag * sd
-        elif isinstance(load, Damper) and load.drag is not None:
-            b = sys_.index[load.drag[0]]
-            s = an.mech.local_point(*load.drag)
-            vx, vy = st.point_velocity(b, s)
-            c = load.coefficient * f
-            acc.force(b, s, -c * vx, -c * vy)
-            power_loads += -c * (vx * vx + vy * vy)
-        else:  # spring or damper between two points
-            (la, pa), (lb, pb) = load.ends
-            ba = nb if la == GROUND else sys_.index[la]
-            bb = nb if lb == GROUND else sys_.index[lb]
-            sa, sb = mech.local_point(la, pa), mech.local_point(lb, pb)
-            xa, ya = st.point(ba, sa)
-            xb, yb = st.point(bb, sb)
-            vax, vay = st.point_velocity(ba, sa)
-            vbx, vby = st.point_velocity(bb, sb)
-            dx, dy = xb - xa, yb - ya
-            L = np.hypot(dx, dy)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                ex, ey = dx / L, dy / L
-            Ld = ex * (vbx - vax) + ey * (vby - vay)
-            if isinstance(load, Spring):
-                t = load.stiffness * (L - load.free_length)  # tension
-                if load.when is None:
-                    potential += 0.5 * load.stiffness * (L - load.free_length) ** 2
-                    potential_rate += t * Ld
+    with np.errstate(invalid="ignore"):  # unsolved positions stay NaN
+        for load in mech.loads:
+            before = power_loads.copy()
+            on = active.get(load.name)
+            f = on.astype(float) if on is not None else 1.0
+            if isinstance(load, PointForce):
+                b = sys_.index[load.link]
+                s = an.mech.local_point(load.link, load.point)
+                fx, fy = load.force
+                if load.frame == "link":
+                    fx, fy = st.rotated(b, np.array(load.force))
+                fx, fy = fx * f, fy * f
+                acc.force(b, s, fx, fy)
+                vx, vy = st.point_velocity(b, s)
+                power_loads += fx * vx + fy * vy
+            elif isinstance(load, Torque):
+                b = sys_.index[load.link]
+                acc.torque(b, load.torque * f)
+                power_loads += load.torque * f * st.w[b]
+            elif isinstance(load, Damper) and load.slider is not None:
+                sl = sys_.by_joint[load.slider]
+                ux, uy, *_ = sl.frame(st)
+                sd = sl.velocity(st)
+                fmag = -load.coefficient * sd * f  # on the block, along the line
+                acc.force(sl.b, sl.sb, fmag * ux, fmag * uy)
+                xp, yp = st.point(sl.b, sl.sb)
+                # the reaction acts on the guide at the material point under the block
+                _force_at_global(acc, st, sl.a, xp, yp, -fmag * ux, -fmag * uy)
+                power_loads += fmag * sd
+            elif isinstance(load, Damper) and load.drag is not None:
+                b = sys_.index[load.drag[0]]
+                s = an.mech.local_point(*load.drag)
+                vx, vy = st.point_velocity(b, s)
+                c = load.coefficient * f
+                acc.force(b, s, -c * vx, -c * vy)
+                power_loads += -c * (vx * vx + vy * vy)
+            else:  # spring or damper between two points
+                (la, pa), (lb, pb) = load.ends
+                ba = nb if la == GROUND else sys_.index[la]
+                bb = nb if lb == GROUND else sys_.index[lb]
+                sa, sb = mech.local_point(la, pa), mech.local_point(lb, pb)
+                xa, ya = st.point(ba, sa)
+                xb, yb = st.point(bb, sb)
+                vax, vay = st.point_velocity(ba, sa)
+                vbx, vby = st.point_velocity(bb, sb)
+                dx, dy = xb - xa, yb - ya
+                L = np.hypot(dx, dy)
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    ex, ey = dx / L, dy / L
+                Ld = ex * (vbx - vax) + ey * (vby - vay)
+                if isinstance(load, Spring):
+                    t = load.stiffness * (L - load.free_length)  # tension
+                    if load.when is None:
+                        springs[0] = springs[0] + 0.5 * load.stiffness * (L - load.free_length) ** 2
+                        springs[1] = springs[1] + t * Ld
+                    else:
+                        power_loads += -t * f * Ld
+                    t = t * f
                 else:
-                    power_loads += -t * f * Ld
-                t = t * f
-            else:
-                t = load.coefficient * Ld * f
-                power_loads += -t * Ld
-            # tension t pulls b towards a and a towards b
-            acc.force(bb, sb, -t * ex, -t * ey)
-            acc.force(ba, sa, t * ex, t * ey)
-        load_power[load.name] = power_loads - before
+                    t = load.coefficient * Ld * f
+                    power_loads += -t * Ld
+                # tension t pulls b towards a and a towards b
+                acc.force(bb, sb, -t * ex, -t * ey)
+                acc.force(ba, sa, t * ex, t * ey)
+            load_power[load.name] = power_loads - before
 
     lam, singular, nonunique = _solve_groups(an, st, acc.Q, sol.indicator)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
     reactions = _reactions(an, st, lam)
-    power_input = effort * np.asarray(an.speed)
-    residual = power_input - kinetic_rate - potential_rate + power_loads
     ok = sol.ok & np.all(np.isfinite(lam), axis=1)
     return ForceResult(
         lam,
         effort,
         reactions,
         active,
-        kinetic,
-        potential,
-        power_input,
-        kinetic_rate,
-        potential_rate,
         power_loads,
-        residual,
         singular,
         ok,
         load_power=load_power,
         stroke_extremes=extremes,
         nonunique=_nonunique_components(an, nonunique),
+        speed=float(an.speed),
+        energy_terms=energy_terms,
     )
 
 
@@ -330,10 +373,11 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray):
                 g.forces(st, R, out)
             ind = indicator[gi] if len(indicator) > gi else np.ones(n)
             sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
+            any_sing = bool(sing.any())
             for c, comps in out.items():
                 r0 = row_of[id(c)]
                 for k, v in enumerate(comps):
-                    lam[:, r0 + k] = np.where(sing, np.nan, v)
+                    lam[:, r0 + k] = np.where(sing, np.nan, v) if any_sing else v
             singular += [(int(i), g.label) for i in np.flatnonzero(sing & np.isfinite(st.x[0]))]
             continue
         J, blocks = group_block(g, st)
@@ -403,7 +447,7 @@ def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndar
         c = row.constraint
         if c.kind == "revolute":
             fx, fy = lam[:, row.start], lam[:, row.start + 1]
-            out[c.name] = {"Fx": fx, "Fy": fy, "F": np.hypot(fx, fy)}
+            out[c.name] = {"Fx": fx, "Fy": fy, "F": np.sqrt(fx * fx + fy * fy)}
         elif c.kind == "slider":
             nrm = -lam[:, row.start]
             mom = -lam[:, row.start + 1]
