@@ -81,7 +81,8 @@ def _matching(
     """
     row_of = [-1] * nvar
     var_of = [-1] * len(rows)
-    order = list(first or []) + [r for r in range(len(rows)) if r not in set(first or [])]
+    firsts = set(first or [])
+    order = list(first or []) + [r for r in range(len(rows)) if r not in firsts]
     for r in order:
         vs = rows[r]
         for v in vs:
@@ -199,12 +200,13 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
     if free or extra:
         raise _structure_error(system, free, extra, row_con)
 
-    # dependency graph between rows: row r needs the rows that determine its other vars
-    succ = [[row_of[v] for v in rows[r] if v != var_of[r]] for r in range(len(rows))]
-    blocks = _tarjan(len(rows), succ)
-
-    # merge blocks into body groups
-    parent = list(range(len(blocks)))
+    # Rows that must be solved together: the rows of one constraint (a joint's equations
+    # stay together) and the rows that determine coordinates of one body (a group
+    # determines whole poses). Union-find over rows, then the strongly connected
+    # components of the graph between these classes (rows that need each other's
+    # coordinates), each listed after the ones it depends on.
+    nr = len(rows)
+    parent = list(range(nr))
 
     def find(x: int) -> int:
         while parent[x] != x:
@@ -212,49 +214,35 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
             x = parent[x]
         return x
 
-    body_block: dict[int, int] = {}
-    for bi, blk in enumerate(blocks):
-        for r in blk:
-            b = var_of[r] // 3
-            if b in body_block:
-                parent[find(bi)] = find(body_block[b])
-            else:
-                body_block[b] = bi
-    # constraints must not be split between groups (a joint's two equations together)
-    con_block: dict[int, int] = {}
-    for bi, blk in enumerate(blocks):
-        for r in blk:
-            ci = row_con[r]
-            if ci in con_block:
-                parent[find(bi)] = find(con_block[ci])
-            else:
-                con_block[ci] = bi
-    roots = sorted({find(b) for b in range(len(blocks))})
-    gid = {r: i for i, r in enumerate(roots)}
-    ng = len(roots)
-    g_rows: list[list[int]] = [[] for _ in range(ng)]
-    for bi, blk in enumerate(blocks):
-        g_rows[gid[find(bi)]].extend(blk)
-    row_group = {}
-    for g, rs in enumerate(g_rows):
-        for r in rs:
-            row_group[r] = g
-    g_succ = [
-        sorted({row_group[s] for r in g_rows[g] for s in succ[r] if row_group[s] != g})
-        for g in range(ng)
-    ]
-    # merging can create cycles: merge them, and order groups after their dependencies
-    comps = _tarjan(ng, g_succ)
+    first_of: dict[tuple[str, int], int] = {}
+    for r in range(nr):
+        for key in (("c", row_con[r]), ("b", var_of[r] // 3)):
+            other = first_of.setdefault(key, r)
+            if other != r:
+                parent[find(r)] = find(other)
+    roots = sorted({find(r) for r in range(nr)})
+    cls = {root: i for i, root in enumerate(roots)}
+    row_cls = [cls[find(r)] for r in range(nr)]
+    succ = [set() for _ in roots]
+    for r in range(nr):
+        a = row_cls[r]
+        for v in rows[r]:
+            b = row_cls[row_of[v]]
+            if b != a:
+                succ[a].add(b)
+    comps = _tarjan(len(roots), [sorted(x) for x in succ])
     comp_of = {}
     for k, comp in enumerate(comps):
-        for g in comp:
-            comp_of[g] = k
+        for a in comp:
+            comp_of[a] = k
+    members: list[list[int]] = [[] for _ in comps]
+    for r in range(nr):
+        members[comp_of[row_cls[r]]].append(r)
     specs: list[GroupSpec] = []
-    for k, comp in enumerate(comps):
-        rs = sorted(r for g in comp for r in g_rows[g])
+    for k, rs in enumerate(members):
         cons = sorted({row_con[r] for r in rs})
         bodies = sorted({var_of[r] // 3 for r in rs})
-        deps = {comp_of[h] for g in comp for h in g_succ[g] if comp_of[h] != k}
+        deps = {comp_of[b] for r in rs for b in succ[row_cls[r]] if comp_of[b] != k}
         specs.append(GroupSpec(bodies, [system.constraints[ci] for ci in cons], deps))
     return specs
 

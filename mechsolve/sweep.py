@@ -22,7 +22,7 @@ import numpy as np
 
 from .constraints import ConstraintSystem
 from .errors import AssemblyError, InputError, SolverError
-from .expr import Ref
+from .expr import Ref, Side
 from .groups import Drive, Group, NewtonGroup, build_plan
 from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
 from .solvers.newton import solve as newton_solve
@@ -402,14 +402,27 @@ class Analysis:
         ready = self._ready(conds, done_bodies)
         conds = [(k, c) for k, c in conds if (k, c) not in ready]
         has_sketch = any(self.points[p].body in g.bodies for p in self.mech.assembly.sketch)
+        if ready and not has_sketch:
+            # a condition that is the group's own branch statement ("B left of A -> O4"
+            # for the loop A-B-O4) decides it without solving anything
+            modes = {
+                g.mode_of_side(t.point, t.side, t.start, t.end, self.joint_point)
+                if isinstance(t := c.tree, Side)
+                else None
+                for _, c in ready
+            }
+            if len(modes) == 1 and None not in modes:
+                texts = ", ".join(repr(c.text) for _, c in ready)
+                start.reasons[gi] = f"assembly condition {texts}"
+                start.modes[gi] = modes.pop()
+                return conds
         # both branches at the first position, one in each column
         two = st.take([0, 0])
         u0 = start.u0
         ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
         if not ok2.any():
             raise AssemblyError(
-                f"{self._file()}cannot assemble at {self.format_u(u0)}: "
-                + g.fail_reason(two, 0)
+                f"{self._file()}cannot assemble at {self.format_u(u0)}: " + g.fail_reason(two, 0)
             )
         if not ready and not has_sketch and ok2[0]:
             start.reasons[gi] = "default branch (+)"

@@ -90,6 +90,12 @@ class Group:
         """Describe branch ``mode`` in words (for ``mechsolve check``)."""
         return ""
 
+    def mode_of_side(self, point: str, side: str, start: str, end: str, point_names: dict):
+        """The branch that the condition ``point side of start -> end`` states, when it
+        is exactly this group's own branch statement (so that it needs no evaluation);
+        None otherwise."""
+        return None
+
     def fail_reason(self, st: State, i: int) -> str:
         """Why the group cannot close at position ``i`` (for messages)."""
         return "the loop cannot close"

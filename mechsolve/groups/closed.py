@@ -215,16 +215,28 @@ class RRR(Group):
             c["dv"] = (vpx, vpy, vqx - vpx, vqy - vpy)
         return c["dv"]
 
+    def _triangle(self, st: State):
+        """The branch-free part of the closure (cached): M's distance along P -> Q and
+        its squared height, both as fractions of |PQ|, and where the loop closes."""
+        c = self.cache(st)
+        if "tri" not in c:
+            D2 = self.ends(st)[6]
+            L1, L2 = self.L1, self.L2
+            with np.errstate(invalid="ignore", divide="ignore"):
+                inv = 1.0 / D2
+                a = (0.5 * (L1 * L1 - L2 * L2)) * inv + 0.5  # along P->Q, fraction of D
+                h2 = (L1 * L1) * inv - a * a  # (height / D)^2
+                # a toggle position (h = 0) within rounding still closes
+                tol = (1e-12 * max(L1, L2) ** 2) * inv
+                ok = (h2 >= -tol) & (D2 > 0)
+            c["tri"] = (a, h2, ok)
+        return c["tri"]
+
     def position(self, st: State, drive: Drive, mode=1.0):
         px, py, qx, qy, dx, dy, D2 = self.ends(st)
         L1, L2 = self.L1, self.L2
+        a, h2, ok = self._triangle(st)
         with np.errstate(invalid="ignore", divide="ignore"):
-            inv = 1.0 / D2
-            a = (0.5 * (L1 * L1 - L2 * L2)) * inv + 0.5  # along P->Q, as a fraction of D
-            h2 = (L1 * L1) * inv - a * a  # (height / D)^2
-            # a toggle position (h = 0) within rounding still closes
-            tol = (1e-12 * max(L1, L2) ** 2) * inv
-            ok = (h2 >= -tol) & (D2 > 0)
             hs = np.sqrt(np.maximum(h2, 0.0))
             h = hs * mode
             g1x = a * dx - h * dy  # M - P
@@ -237,19 +249,23 @@ class RRR(Group):
         set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, g1x, g1y)
         set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, g2x, g2y)
         # sin of the angle between the two links at M
-        ind = hs * D2 * (1.0 / (L1 * L2))
-        return ok, np.where(ok, np.minimum(ind, 1.0), 0.0)
+        ind = hs * D2
+        ind *= 1.0 / (L1 * L2)
+        np.minimum(ind, 1.0, out=ind)
+        return ok, ind if ok.all() else np.where(ok, ind, 0.0)
 
     def disc(self, st: State):
-        """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2."""
+        """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2,
+        which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close)."""
         px, py, qx, qy, dx, dy, D2 = self.ends(st)
         _, _, dvx, dvy = self._dv(st)
-        dD2 = 2.0 * (dx * dvx + dy * dvy)
+        _, h2, _ = self._triangle(st)
         L1s, L2s = self.L1**2, self.L2**2
-        norm = 1.0 / (4.0 * L1s * L2s)
-        t = (L1s - L2s) + D2
-        H = (4.0 * L1s * norm) * D2 - norm * (t * t)
-        dH = (2.0 * norm) * ((L1s + L2s) - D2) * dD2
+        H = h2 * D2
+        H *= D2 * (1.0 / (L1s * L2s))
+        dD2 = dx * dvx + dy * dvy  # half the rate of D^2
+        dH = ((L1s + L2s) - D2) * dD2
+        dH *= 1.0 / (L1s * L2s)
         return H, dH
 
     def _g(self, st: State):
@@ -310,6 +326,15 @@ class RRR(Group):
     def mode_text(self, st: State, mode: float, pn) -> str:
         side = "left" if mode > 0 else "right"
         return f"{pn[self.j2]} {side} of {pn[self.j1]} -> {pn[self.j3]}"
+
+    def mode_of_side(self, point, side, start, end, pn):
+        """``M left of P -> Q`` is branch +1 (M - P = a (Q - P) + h n, n the left normal
+        of P -> Q, h > 0), and ``M left of Q -> P`` branch -1."""
+        m, p, q = pn[self.j2], pn[self.j1], pn[self.j3]
+        if point != m or {start, end} != {p, q} or p == q:
+            return None
+        sign = 1.0 if side == "left" else -1.0
+        return sign if (start, end) == (p, q) else -sign
 
     def fail_reason(self, st: State, i: int) -> str:
         px, py, qx, qy = (v[i] for v in self.ends(st)[:4])
