@@ -80,9 +80,6 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     try:
         from . import api
-        from .allocator import keep_freed_memory
-
-        keep_freed_memory()  # chunks of a long sweep reuse memory instead of faulting it in
         mech = api.load(file, variant)
         st = api.parse_step(mech, step) if step is not None else None
         if outdir is None:
@@ -156,7 +153,6 @@ def check(file: Path, variant, draw) -> None:
             "positions-growth",
             "stream",
             "startup",
-            "allocator",
             "peers",
         ]
     ),

@@ -622,74 +622,8 @@ def case_peers(n: int) -> Case | None:
     return case
 
 
-def whole_call_times(repeats: int, n: int = 3600) -> dict[str, tuple[float, float]]:
-    """Median times (reference, mechsolve whole call) of the four 3600-position cases in
-    this process, as they are (for the allocator case, run in a child process)."""
-    import mechsolve as ms
-
-    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    fk = ms.loads(fourbar_yaml(n))
-    ff = ms.loads(fourbar_yaml(n, masses=True))
-    pairs = {
-        "fourbar-kinematics": (lambda: R.fourbar_textbook(th), lambda: ms.solve(fk, forces=False)),
-        "fourbar-kinetostatics": (lambda: R.fourbar_forces(th), lambda: ms.solve(ff)),
-    }
-    ck, cf = _crane_mech(n, masses=False), _crane_mech(n, masses=True)
-    if ck is not None and cf is not None:
-        w = ck.driver.speed
-        pairs["crane-kinematics"] = (
-            lambda: R.crane_kinematics(th, w),
-            lambda: ms.solve(ck, forces=False),
-        )
-        pairs["crane-kinetostatics"] = (lambda: R.crane_forces(th, w), lambda: ms.solve(cf))
-    out = {}
-    for name, (ref, call) in pairs.items():
-        t = interleaved({"ref": ref, "call": call}, repeats)
-        out[name] = (t["ref"][0], t["call"][0])
-    return out
-
-
-def case_allocator(repeats: int, tuned: bool) -> Case:
-    """The whole calls again in a child process left with glibc's default allocator
-    settings, against the same references in that process."""
-    case = Case(
-        "allocator",
-        "the whole calls with glibc's default malloc settings (a child process), "
-        "against the same references there",
-    )
-    code = (
-        "import json\n"
-        "from mechsolve.bench import whole_call_times\n"
-        f"print(json.dumps(whole_call_times({repeats})))\n"
-    )
-    env = dict(os.environ, MECHSOLVE_MALLOC="default")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    try:
-        import json
-
-        times = json.loads(out.stdout.strip().splitlines()[-1])
-    except (ValueError, IndexError):
-        case.lines = [f"failed: {out.stderr.strip()[-300:]}"]
-        return case
-    for name, (ref, call) in times.items():
-        case.rows.append(Row(f"{name}: reference", ref))
-        case.rows.append(Row(f"{name}: mechsolve whole call", call, {}, f"ratio {call / ref:.2f}"))
-    case.lines = [
-        "this process (the other cases): "
-        + (
-            "glibc keeps freed memory for reuse (mechsolve.allocator, as `mechsolve run` does)"
-            if tuned
-            else "glibc's default settings (not glibc, or MECHSOLVE_MALLOC=default)"
-        )
-    ]
-    return case
-
-
 def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list[Case]:
     """Run the benchmark cases; ``quick`` uses few repetitions and small sizes (for CI)."""
-    from ..allocator import keep_freed_memory
-
-    tuned = keep_freed_memory()  # as the command line runs a sweep
     reps = 5 if quick else 25
     n = 3600
     plan: list[tuple[str, Callable[[], Case | None]]] = [
@@ -711,7 +645,6 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         ),
         ("stream", lambda: case_stream(20_000 if quick else 1_000_000, 5_000 if quick else None)),
         ("startup", lambda: case_startup(2 if quick else 7)),
-        ("allocator", lambda: case_allocator(reps, tuned)),
         ("peers", lambda: case_peers(n)),
     ]
     out = []
