@@ -80,6 +80,7 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     try:
         from . import api
+
         mech = api.load(file, variant)
         st = api.parse_step(mech, step) if step is not None else None
         if outdir is None:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .model import GROUND, PinJoint, SliderJoint
+from .numerics import brent_root
 
 if TYPE_CHECKING:
     from .results import Results
@@ -57,8 +58,6 @@ class Transmission:
 
 def _rate_root(res: Results, k: int, value_rate):
     """Driver value in (u_k, u_k+1) where the rate changes sign (Brent's method)."""
-    from scipy.optimize import brentq
-
     an, sol = res.analysis, res.solution
 
     def f(x: float) -> float:
@@ -70,8 +69,8 @@ def _rate_root(res: Results, k: int, value_rate):
     if not (np.isfinite(flo) and np.isfinite(fhi)) or flo * fhi > 0:
         return None
     try:
-        x = lo if flo == 0 else hi if fhi == 0 else brentq(f, lo, hi, xtol=1e-14, rtol=1e-15)
-    except ValueError:  # the interval holds a position that cannot close
+        x = brent_root(f, lo, hi, xtol=1e-14, rtol=1e-15, fa=flo, fb=fhi)
+    except (ValueError, RuntimeError):  # a position that cannot close, or no convergence
         return None
     one = an.solve(np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True)
     return x, float(value_rate(one.state)[0][0])

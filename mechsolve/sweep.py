@@ -25,6 +25,7 @@ from .errors import AssemblyError, InputError, SolverError
 from .expr import Ref, Side
 from .groups import Drive, Group, NewtonGroup, build_plan
 from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
+from .numerics import brent_root
 from .solvers.newton import solve as newton_solve
 from .state import State
 from .structure import RedundantStructure
@@ -603,12 +604,15 @@ class Analysis:
         tree = lim.quantity.tree
         rate = _RATE.get(getattr(tree, "attr", None)) if isinstance(tree, Ref) else None
         if rate is not None:
-            from scipy.optimize import brentq
-
             lo, hi = u[i] - h, u[i] + h
             flo, fhi = at(lo, rate), at(hi, rate)
             if np.isfinite(flo) and np.isfinite(fhi) and flo * fhi < 0:
-                return float(brentq(lambda x: at(x, rate), lo, hi, xtol=1e-15, rtol=1e-15))
+                try:
+                    return brent_root(
+                        lambda x: at(x, rate), lo, hi, xtol=1e-15, rtol=1e-15, fa=flo, fb=fhi
+                    )
+                except (ValueError, RuntimeError):
+                    pass  # find the extreme by minimisation instead
         from scipy.optimize import minimize_scalar
 
         res = minimize_scalar(

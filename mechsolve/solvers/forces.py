@@ -35,6 +35,7 @@ import numpy as np
 from ..conditioning import SINGULAR_RCOND, group_block, rcond
 from ..groups.generic import NewtonGroup
 from ..model import GROUND, Damper, PointForce, Spring, Torque
+from ..numerics import simpson
 
 if TYPE_CHECKING:
     from ..sweep import Analysis, Solution
@@ -468,8 +469,6 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     Simpson's rule. Falls back to Simpson's rule on the driver's effort if some position
     was not solved.
     """
-    from scipy.integrate import simpson
-
     ok = fr.ok
     if np.sum(ok) < 2:
         return float("nan")

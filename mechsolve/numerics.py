@@ -1,0 +1,125 @@
+"""Two small numerical routines used on every run, kept here so that a run does not
+import scipy (half a second of start-up) for them.
+
+:func:`brent_root` is Brent's root bracketing method (R. P. Brent, *Algorithms for
+Minimization without Derivatives*, 1973, ch. 4: the ``zeroin`` algorithm), as
+``scipy.optimize.brentq``; :func:`simpson` is the composite Simpson rule on samples
+with uneven spacing, as ``scipy.integrate.simpson`` (with its treatment of an odd
+number of intervals). ``tests/test_numerics.py`` checks both against scipy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+EPS = np.finfo(float).eps
+
+
+def brent_root(
+    f: Callable[[float], float],
+    a: float,
+    b: float,
+    xtol: float = 2e-12,
+    rtol: float = 4 * EPS,
+    maxiter: int = 200,
+    fa: float | None = None,
+    fb: float | None = None,
+) -> float:
+    """A root of ``f`` in ``[a, b]``, where ``f(a)`` and ``f(b)`` differ in sign.
+
+    Inverse quadratic interpolation or secant steps where they make progress, bisection
+    otherwise; converges when the bracket is narrower than ``2 (xtol + rtol |x|)``.
+
+    Raises
+    ------
+    ValueError
+        When ``f(a)`` and ``f(b)`` have the same sign, or ``f`` is not finite.
+    RuntimeError
+        When the bracket is still wider than the tolerance after ``maxiter`` steps.
+
+    ``fa`` and ``fb``, when given, are ``f(a)`` and ``f(b)`` already evaluated.
+    """
+    fa = f(a) if fa is None else fa
+    fb = f(b) if fb is None else fb
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if not (np.isfinite(fa) and np.isfinite(fb)):
+        raise ValueError("f is not finite at the ends of the bracket")
+    if (fa > 0) == (fb > 0):
+        raise ValueError("f(a) and f(b) must have different signs")
+    c, fc = a, fa
+    d = e = b - a
+    for _ in range(maxiter):
+        if (fb > 0) == (fc > 0):  # keep the root between b and c
+            c, fc = a, fa
+            d = e = b - a
+        if abs(fc) < abs(fb):  # b is the best estimate
+            a, b, c = b, c, b
+            fa, fb, fc = fb, fc, fb
+        tol = 2.0 * rtol * abs(b) + 0.5 * xtol
+        m = 0.5 * (c - b)
+        if abs(m) <= tol or fb == 0.0:
+            return b
+        if abs(e) >= tol and abs(fa) > abs(fb):
+            s = fb / fa
+            if a == c:  # secant
+                p = 2.0 * m * s
+                q = 1.0 - s
+            else:  # inverse quadratic interpolation
+                q = fa / fc
+                r = fb / fc
+                p = s * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0))
+                q = (q - 1.0) * (r - 1.0) * (s - 1.0)
+            if p > 0:
+                q = -q
+            else:
+                p = -p
+            if 2.0 * p < min(3.0 * m * q - abs(tol * q), abs(e * q)):
+                e, d = d, p / q  # accept the interpolation
+            else:
+                d = e = m  # bisect
+        else:
+            d = e = m
+        a, fa = b, fb
+        b += d if abs(d) > tol else (tol if m > 0 else -tol)
+        fb = f(b)
+        if not np.isfinite(fb):
+            raise ValueError(f"f is not finite at {b!r}")
+    raise RuntimeError(f"Brent's method did not converge in {maxiter} iterations")
+
+
+def simpson(y: np.ndarray, x: np.ndarray) -> float:
+    """Integral of samples ``y`` at increasing abscissae ``x`` (composite Simpson).
+
+    Pairs of intervals use Simpson's rule for uneven spacing, exact for quadratics; with
+    an odd number of intervals the last one is integrated with the parabola through the
+    last three samples (Cartwright's correction, as scipy does).
+    """
+    y = np.asarray(y, float)
+    x = np.asarray(x, float)
+    n = len(y)
+    if n < 2:
+        return 0.0
+    if n == 2:
+        return float(0.5 * (x[1] - x[0]) * (y[0] + y[1]))
+    h = np.diff(x)
+    last = (n - 1) % 2 == 1  # an odd number of intervals
+    k = n - 2 if last else n - 1  # intervals covered by pairs
+    h0, h1 = h[0:k:2], h[1:k:2]
+    y0, y1, y2 = y[0:k:2], y[1:k:2], y[2 : k + 1 : 2]
+    hs = h0 + h1
+    total = float(
+        np.sum(hs / 6.0 * ((2.0 - h1 / h0) * y0 + hs * hs / (h0 * h1) * y1 + (2.0 - h0 / h1) * y2))
+    )
+    if last:
+        a, b = h[-2], h[-1]
+        total += float(
+            y[-1] * (2 * b * b + 3 * a * b) / (6 * (a + b))
+            + y[-2] * (b * b + 3 * a * b) / (6 * a)
+            - y[-3] * b**3 / (6 * a * (a + b))
+        )
+    return total
