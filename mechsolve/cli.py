@@ -79,8 +79,12 @@ def main() -> None:
 def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     try:
+        import numpy as np
+
         from . import api
 
+        # singular positions give inf and NaN on purpose; the summary reports them
+        np.seterr(divide="ignore", invalid="ignore", over="ignore")
         mech = api.load(file, variant)
         st = api.parse_step(mech, step) if step is not None else None
         if outdir is None:

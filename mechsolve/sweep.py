@@ -292,16 +292,15 @@ class Analysis:
         drive2 = self.drive(np.array([u0, u0]))
         drive = self.drive(np.array([u0]))
         asm = mech.assembly
-        conds = list(enumerate(asm.conditions))
-        done_bodies = {self.system.nb}
+        conds = _PendingConditions(self, asm.conditions)
         modes: list[float] = []
         reasons: list[str] = []
         q_start: dict[int, np.ndarray] = {}
         view = StateView(self, st2)
         view.has_velocity = view.has_acceleration = False
         for gi, g in enumerate(self.groups):
-            done_bodies |= set(g.bodies)
-            ready = self._ready(conds, done_bodies)
+            conds.solved(g.bodies)
+            ready = conds.ready()
             if isinstance(g, NewtonGroup):
                 st = st2.take([0])
                 q0 = self._initial_guess(g, st)
@@ -338,7 +337,7 @@ class Analysis:
                             f"satisfy {c.text!r}; give approximate positions under "
                             "'assembly: sketch:'"
                         )
-                conds = [(k, c) for k, c in conds if (k, c) not in ready]
+                conds.use(ready)
                 continue
             if g.n_modes < 2:
                 ok, _ = g.position(st2, drive2, 1.0)
@@ -363,11 +362,11 @@ class Analysis:
             st2.token = State.new_token()
             modes.append(1.0 if j == 0 else -1.0)
             reasons.append(reason)
-            conds = [(k, c) for k, c in conds if (k, c) not in ready]
+            conds.use(ready)
         st = st2  # both columns hold the chosen assembly; index 0 is the start
         view = StateView(self, st)
         view.has_velocity = view.has_acceleration = False
-        for _, c in conds:  # conditions that no group decided: they must hold anyway
+        for _, c in conds.remaining():  # conditions that no group decided: they must hold
             if not bool(np.all(c.evaluate(view))):
                 raise AssemblyError(
                     f"{self._file()}the start position does not satisfy the assembly condition "
@@ -396,12 +395,11 @@ class Analysis:
                     return None
         return st
 
-    def _decide_at_start(self, gi, g, st, start, conds, done_bodies):
+    def _decide_at_start(self, gi, g, st, start, conds: _PendingConditions) -> None:
         """Choose a group's branch at the sweep's first position, as :meth:`assemble`
-        does, before the group is solved over the sweep (the groups before it are).
-        Returns the conditions still to use."""
-        ready = self._ready(conds, done_bodies)
-        conds = [(k, c) for k, c in conds if (k, c) not in ready]
+        does, before the group is solved over the sweep (the groups before it are)."""
+        ready = conds.ready()
+        conds.use(ready)
         has_sketch = any(self.points[p].body in g.bodies for p in self.mech.assembly.sketch)
         if ready and not has_sketch:
             # a condition that is the group's own branch statement ("B left of A -> O4"
@@ -416,7 +414,7 @@ class Analysis:
                 texts = ", ".join(repr(c.text) for _, c in ready)
                 start.reasons[gi] = f"assembly condition {texts}"
                 start.modes[gi] = modes.pop()
-                return conds
+                return
         # both branches at the first position, one in each column
         two = st.take([0, 0])
         u0 = start.u0
@@ -427,25 +425,20 @@ class Analysis:
             )
         if not ready and not has_sketch and ok2[0]:
             start.reasons[gi] = "default branch (+)"
-            return conds
+            return
         j, reason = self._choose(g, two, ok2, ready)
         start.reasons[gi] = reason
         start.modes[gi] = 1.0 if j == 0 else -1.0
-        return conds
 
-    def _ready(self, conds, done_bodies: set) -> list:
-        """The assembly conditions whose points are all on bodies solved so far."""
-        out = []
-        for k, c in conds:
-            bodies = set()
-            for p in c.points():
-                if p in self.points:
-                    bodies.add(self.points[p].body)
-                elif p in self.system.index:
-                    bodies.add(self.system.index[p])
-            if bodies <= done_bodies:
-                out.append((k, c))
-        return out
+    def condition_bodies(self, c) -> set[int]:
+        """The bodies whose poses a condition reads."""
+        bodies = set()
+        for p in c.points():
+            if p in self.points:
+                bodies.add(self.points[p].body)
+            elif p in self.system.index:
+                bodies.add(self.system.index[p])
+        return bodies
 
     def _lazy_start(self) -> bool:
         """Can the branches be chosen inside the sweep (no separate assembly pass)?"""
@@ -660,8 +653,7 @@ class Analysis:
         if lazy:  # the branches are chosen as the groups are solved, at the first position
             ng = len(self.plan)
             start = StartAssembly([1.0] * ng, {}, [""] * ng, None, float(u[0]), [1.0] * ng)
-            conds = list(enumerate(self.mech.assembly.conditions))
-            done_bodies = {self.system.nb}
+            conds = _PendingConditions(self, self.mech.assembly.conditions)
         elif start is None:
             start = self.assemble(float(u[0]))
         st = State(self.system.nb, n)
@@ -711,9 +703,9 @@ class Analysis:
                         events += evs
                         warnings += warn
                     if lazy:
-                        done_bodies |= set(g.bodies)
+                        conds.solved(g.bodies)
                         if g.n_modes == 2:
-                            conds = self._decide_at_start(gi, g, st, start, conds, done_bodies)
+                            self._decide_at_start(gi, g, st, start, conds)
                     sigma = self.sigma_at(start.modes[gi], flips[gi], u)
                     ok, ind = g.position(st, unit, sigma)
                     if lazy and not ok[0]:
@@ -734,7 +726,7 @@ class Analysis:
             start.group_modes = list(start.modes)
             view = StateView(self, start.state)
             view.has_velocity = view.has_acceleration = False
-            for _, c in conds:  # conditions that no group decided: they must hold anyway
+            for _, c in conds.remaining():  # conditions no group decided: they must hold
                 if not bool(np.all(c.evaluate(view))):
                     raise AssemblyError(
                         f"{self._file()}the start position does not satisfy the assembly "
@@ -949,6 +941,47 @@ TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifu
 NO_TOUCH = 1e-6  # a minimum estimated clearly above this needs no further refinement
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
 NEAR_SINGULAR = math.sin(math.radians(3.0))
+
+
+class _PendingConditions:
+    """The assembly conditions not used yet, each released once the groups solved so far
+    have placed every body it reads (linear in the number of conditions and groups)."""
+
+    def __init__(self, an: Analysis, conditions) -> None:
+        self.items = dict(enumerate(conditions))
+        self.waiting: dict[int, int] = {}  # condition -> number of bodies still unsolved
+        self.by_body: dict[int, list[int]] = {}
+        self.released: dict[int, object] = {}
+        for k, c in self.items.items():
+            bodies = an.condition_bodies(c) - {an.system.nb}
+            if not bodies:
+                self.released[k] = c
+                continue
+            self.waiting[k] = len(bodies)
+            for b in bodies:
+                self.by_body.setdefault(b, []).append(k)
+
+    def solved(self, bodies) -> None:
+        """These bodies are placed now."""
+        for b in bodies:
+            for k in self.by_body.pop(b, ()):
+                self.waiting[k] -= 1
+                if self.waiting[k] == 0:
+                    del self.waiting[k]
+                    self.released[k] = self.items[k]
+
+    def ready(self) -> list:
+        """(index, condition) of the conditions that can be evaluated and are not used."""
+        return sorted(self.released.items(), key=lambda kc: kc[0])
+
+    def use(self, ready) -> None:
+        for k, _ in ready:
+            self.released.pop(k, None)
+
+    def remaining(self) -> list:
+        """Every condition not used yet, in the file's order."""
+        left = set(self.released) | set(self.waiting)
+        return [(k, self.items[k]) for k in sorted(left)]
 
 
 class _Methods:

@@ -143,6 +143,12 @@ sweep: {{range: 360 deg, step: 6 deg}}
 solver: {{method: {method}}}
 """)
     )
+    if abs(r + abs(e) - l) <= 1e-9 * l:
+        # a change-point slider-crank (r + |e| = l): the two branches meet where the rod
+        # stands perpendicular to the line, and the sweep continues smoothly on the
+        # other branch there, so a fixed-branch closed form does not apply
+        assert any(ev.kind == "bifurcation" for ev in res.solution.events)
+        return
     x, xd, xdd, phi, phid, phidd = slider_crank(r, l, e, res.u, w, ahead)
     sn = (e - r * np.sin(res.u)) / l
     clear = np.abs(np.abs(sn) - 1) > 1e-7

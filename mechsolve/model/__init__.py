@@ -293,6 +293,15 @@ class Mechanism:
 
     # -- lookup --------------------------------------------------------------------
     def link(self, name: str) -> Link:
+        # an index by name, rebuilt when the list of links is replaced or changes length
+        # (a model built in code may be edited); a renamed link is found by a scan
+        idx = self.__dict__.get("_link_index")
+        if idx is None or idx[0] is not self.links or idx[1] != len(self.links):
+            idx = (self.links, len(self.links), {lk.name: lk for lk in self.links})
+            self.__dict__["_link_index"] = idx
+        lk = idx[2].get(name)
+        if lk is not None and lk.name == name:
+            return lk
         for lk in self.links:
             if lk.name == name:
                 return lk
