@@ -602,9 +602,42 @@ def case_peers(n: int) -> Case | None:
         from . import peers
     except ImportError:
         return None
+    import mechsolve as ms
+
     avail = peers.available()
     case = Case("peers", f"other tools on the same four-bar, {n} positions")
     want = None
+    if any(avail.get(k) for k in ("pylinkage", "exudyn")):
+        # mechsolve doing the same work in this run: pylinkage's positions, velocities and
+        # accelerations; exudyn's reactions and driving torque
+        th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        fk = ms.loads(fourbar_yaml(n))
+        ff = ms.loads(fourbar_yaml(n, masses=True))
+        t = interleaved({"k": lambda: ms.solve(fk, forces=False), "f": lambda: ms.solve(ff)}, 15)
+        res_k, res_f = t["k"][1], t["f"][1]
+        vec = R.fourbar_vector(th)
+        B = res_k.point("B")
+        bx = R.D1 + R.C4 * np.cos(vec[1])
+        by = R.C4 * np.sin(vec[1])
+        vbx, vby = -R.C4 * vec[3] * np.sin(vec[1]), R.C4 * vec[3] * np.cos(vec[1])
+        case.rows.append(
+            Row(
+                "mechsolve: kinematics, whole call",
+                t["k"][0],
+                {
+                    "position": max(rel(B.x, bx), rel(B.y, by)),
+                    "velocity": max(rel(B.vx, vbx), rel(B.vy, vby)),
+                },
+                "no compile step",
+            )
+        )
+        case.rows.append(
+            Row(
+                "mechsolve: kinetostatics, whole call",
+                t["f"][0],
+                {"torque": rel(res_f.driving_effort, R.fourbar_forces(th)[0])},
+            )
+        )
     for name, fn in (("pylinkage", peers.pylinkage_fourbar), ("exudyn", peers.exudyn_fourbar)):
         if not avail.get(name):
             case.lines.append(f"{name}: not installed (pip install 'mechsolve[bench]'), skipped")
@@ -619,10 +652,14 @@ def case_peers(n: int) -> Case | None:
         bx = ax + R.B3 * np.cos(want[0])
         by = ay + R.B3 * np.sin(want[0])
         errs = {"position": max(rel(out["Bx"], bx), rel(out["By"], by))}
+        if out.get("vBx") is not None:  # B on the rocker: v = i w4 c e^(i th4)
+            vbx = -R.C4 * want[3] * np.sin(want[1])
+            vby = R.C4 * want[3] * np.cos(want[1])
+            errs["velocity"] = max(rel(out["vBx"], vbx), rel(out["vBy"], vby))
         if out.get("torque") is not None:
             Td = R.fourbar_forces(th)[0]
             errs["torque"] = rel(out["torque"], Td)
-        first = str(out.get("note", "")).split(";")[0]
+        first = "; ".join(str(out.get("note", "")).split("; ")[:2])
         note = f"import {out.get('import_seconds', float('nan')):.2f} s; {first}"
         case.rows.append(Row(out["name"], out["seconds"], errs, note.strip("; ")))
     return case
