@@ -227,30 +227,31 @@ def _kinematic_rows(
     ]
     # Newton-Raphson settings, on fewer positions when asked (the sequential one is slow)
     step = 2 * math.pi / newton_n
-    for label, method, batched, tol in (
-        ("mechsolve split-newton: Newton per group, batched", "split-newton", True, 1e-10),
-        ("mechsolve newton: whole system, batched, tol 1e-6", "newton", True, 1e-6),
-        ("mechsolve newton: whole system, batched, tol 1e-10", "newton", True, 1e-10),
-        ("mechsolve newton: whole system, batched, tol 1e-13", "newton", True, 1e-13),
-        ("mechsolve newton: whole system, sequential, tol 1e-10", "newton", False, 1e-10),
+    for label, method, batched, tol, pred in (
+        ("mechsolve split-newton: Newton per group, batched", "split-newton", True, 1e-10, "h"),
+        ("mechsolve newton: whole system, batched, tol 1e-6", "newton", True, 1e-6, "h"),
+        ("mechsolve newton: whole system, batched, tol 1e-10", "newton", True, 1e-10, "h"),
+        ("mechsolve newton: whole system, batched, tol 1e-13", "newton", True, 1e-13, "h"),
+        ("mechsolve newton: batched, linear predictor, tol 1e-10", "newton", True, 1e-10, "l"),
+        ("mechsolve newton: whole system, sequential, tol 1e-10", "newton", False, 1e-10, "h"),
     ):
         mech.solver.tolerance = tol
         an2 = Analysis(mech, method)
         for g in an2.plan:
             if hasattr(g, "batched"):
                 g.batched = batched
+                g.predictor = "linear" if pred == "l" else "hermite"
         u2, _ = an2.sweep_values(0.0, step=step, travel=step * (newton_n - 1))
         st2 = an2.assemble(0.0)
         reps = max(1, repeats // 3) if not batched else repeats
         tt = interleaved({"x": lambda an2=an2, u2=u2, st2=st2: an2.solve(u2, start=st2)}, reps)
-        rows.append(
-            Row(
-                label,
-                tt["x"][0],
-                compare(tt["x"][1], ref(u2)),
-                "" if len(u2) == len(u) else f"(on {len(u2)} positions)",
-            )
-        )
+        sol2 = tt["x"][1]
+        meths = sol2.methods if sol2.methods is not None else ["closed form"]
+        how = sorted({m for x in meths for m in str(x).split("+")})
+        note = f"{np.mean(sol2.iterations):.2f} Newton iterations per position ({', '.join(how)})"
+        if len(u2) != len(u):
+            note += f"; on {len(u2)} positions"
+        rows.append(Row(label, tt["x"][0], compare(sol2, ref(u2)), note))
     mech.solver.tolerance = 1e-10
     return rows
 
@@ -704,31 +705,83 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
     return out
 
 
+def _family(setting: str) -> tuple[str, str]:
+    """Legend group and colour of a row, by method."""
+    s = setting.lower()
+    for key, label, colour in (
+        ("vector form", "closed form by hand, vector form", "0.45"),
+        ("the sweep alone", "mechsolve auto, the sweep alone", "tab:cyan"),
+        ("split-newton", "mechsolve split-newton (Newton per group)", "tab:orange"),
+        ("sequential", "mechsolve newton, sequential", "tab:red"),
+        ("newton: whole call", "mechsolve newton (Lagrange multipliers)", "tab:green"),
+        (
+            "newton: whole system, batched",
+            "mechsolve newton, batched (tol 1e-6 ... 1e-13)",
+            "tab:green",
+        ),
+        ("mechsolve", "mechsolve auto, whole call", "tab:blue"),
+        ("pylinkage", "pylinkage (numba)", "tab:purple"),
+        ("exudyn", "exudyn", "tab:brown"),
+    ):
+        if key in s:
+            return label, colour
+    return setting, "k"
+
+
 def plot(cases: list[Case], path: str | Path) -> Path:
-    """A work-precision diagram: wall time against largest error, log-log."""
+    """A work-precision diagram: wall time against largest error, log-log; kinematics
+    and kinetostatics side by side, the hand-written references as vertical lines."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    markers = "osD^v<>p*h"
-    for ci, case in enumerate(c for c in cases if any(r.errors for r in c.rows)):
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.2), sharey=True)
+    panels = {"kinematics": axes[0], "kinetostatics": axes[1]}
+    floor = 1e-17
+    seen: set[tuple[int, str]] = set()
+    for case in cases:
+        if case.name.endswith("-kinematics") or case.name.endswith("-kinetostatics"):
+            mech, kind = case.name.split("-", 1)
+        elif case.name == "peers":
+            mech, kind = "fourbar", ""
+        else:
+            continue  # growth, memory and start-up cases are not method comparisons
+        marker = "o" if mech == "fourbar" else "s"
         for r in case.rows:
-            err = r.error if r.errors else 1e-17
-            err = max(err, 1e-17)
+            k = kind or ("kinetostatics" if "torque" in r.errors else "kinematics")
+            ax = panels[k]
+            if not r.errors:  # a reference: its time as a line
+                ax.axvline(r.seconds, color="0.6", ls="--" if mech == "fourbar" else ":", lw=1)
+                ax.annotate(
+                    f"{mech} by hand",
+                    (r.seconds, 3e-17 if mech == "fourbar" else 1e-16),
+                    rotation=90,
+                    fontsize=7,
+                    color="0.4",
+                    ha="right",
+                )
+                continue
+            label, colour = _family(r.setting)
+            key = (id(ax), label)
             ax.loglog(
                 r.seconds,
-                err,
-                markers[ci % len(markers)],
+                max(r.error, floor),
+                marker,
+                color=colour,
                 ms=7,
-                label=f"{case.name}: {r.setting}"[:90],
+                mfc=colour if mech == "fourbar" else "none",
+                label=None if key in seen else label,
             )
-    ax.set_xlabel("wall time [s]")
-    ax.set_ylabel("largest relative error against the reference [-] (1e-17: the reference)")
-    ax.set_title("mechsolve: speed against error")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=5.5, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+            seen.add(key)
+    for name, ax in panels.items():
+        ax.set_title(f"{name}, 3600 positions (o four-bar, \u25a1 crane)")
+        ax.set_xlabel("wall time [s]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[0].set_ylabel("largest relative error against the reference [-] (0 drawn at 1e-17)")
+    axes[0].set_ylim(floor / 3, 1e-4)
+    fig.suptitle("mechsolve bench: speed against error")
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)

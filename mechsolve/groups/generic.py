@@ -36,6 +36,7 @@ class NewtonGroup(Group):
         self.atol = atol
         self.scale = 1.0  # the mechanism's size; the analysis sets it
         self.batched = True
+        self.predictor = "hermite"  # batched prediction between coarse positions: or "linear"
         self.max_iterations = max_iterations
         super().__init__(bodies, constraints, names)
 
@@ -155,9 +156,12 @@ class NewtonGroup(Group):
         u0, u1 = u[coarse[seg]], u[coarse[seg + 1]]
         h = (u1 - u0)[:, None]
         t = ((u - u0) / (u1 - u0))[:, None]
-        h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
-        h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
-        pred = h00 * qc[seg] + h10 * h * dqc[seg] + h01 * qc[seg + 1] + h11 * h * dqc[seg + 1]
+        if self.predictor == "linear":  # first order: the chord between coarse positions
+            pred = (1 - t) * qc[seg] + t * qc[seg + 1]
+        else:
+            h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+            h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+            pred = h00 * qc[seg] + h10 * h * dqc[seg] + h01 * qc[seg + 1] + h11 * h * dqc[seg + 1]
         q = pred.copy()
         iters = np.zeros(n, int)
         todo = np.ones(n, bool)
