@@ -71,9 +71,10 @@ def main() -> None:
 @click.option("--no-plots", is_flag=True, help="Write the CSV only.")
 @click.option(
     "--method",
-    type=click.Choice(["auto", "newton"]),
+    type=click.Choice(["auto", "newton", "split-newton"]),
     help="auto: closed-form Assur groups where recognised (default); newton: Newton-Raphson "
-    "on the whole constraint system.",
+    "on the whole constraint system; split-newton: the same groups as auto, each by "
+    "Newton-Raphson.",
 )
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:

@@ -158,3 +158,21 @@ def test_lazy_start_equals_a_separate_assembly():
         assert lazy.start.modes == sep.start.modes, name
         np.testing.assert_allclose(lazy.state.x, sep.state.x, atol=1e-12, equal_nan=True)
         assert math.isclose(lazy.start.u0, sep.start.u0)
+
+
+def test_split_newton_from_the_file_and_the_command_line(tmp_path):
+    from click.testing import CliRunner
+
+    from mechsolve.cli import main
+
+    text = fourbar_yaml(90).replace("outputs:", "solver: {method: split-newton}\noutputs:")
+    mech = ms.loads(text)
+    assert mech.solver.method == "split-newton"
+    res = ms.solve(mech)
+    assert all(m.startswith("newton") for m in res.methods())
+    f = tmp_path / "fb.yaml"
+    f.write_text(fourbar_yaml(90))
+    out = CliRunner().invoke(
+        main, ["run", str(f), "--method", "split-newton", "--no-plots", "-o", str(tmp_path)]
+    )
+    assert out.exit_code == 0, out.output

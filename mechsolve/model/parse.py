@@ -54,6 +54,8 @@ TOP_KEYS = (
     "variants",
 )
 
+METHODS = ("auto", "newton", "split-newton")  # solver.method and --method
+
 
 class Reader:
     """Reads values out of a :class:`Source` with unit conversion and located errors."""
@@ -764,8 +766,11 @@ def read_solver(r: Reader, value: Any) -> SolverOptions:
     m = r.mapping(value, path, ("method", "tolerance", "max_iterations"), "'solver'")
     opts = SolverOptions(where=path)
     if "method" in m:
-        if m["method"] not in ("auto", "newton"):
-            raise r.fail(path + ("method",), f"method is 'auto' or 'newton', got {m['method']!r}")
+        if m["method"] not in METHODS:
+            raise r.fail(
+                path + ("method",),
+                f"method is {', '.join(repr(x) for x in METHODS)}, got {m['method']!r}",
+            )
         opts.method = m["method"]
     if "tolerance" in m:
         t = m["tolerance"]
