@@ -527,23 +527,31 @@ class Analysis:
                 todo.append(b)
                 continue
             name = self.system.body_names[b]
-            pts = {p: xy for p, xy in self.mech.link(name).points.items() if p in sketch}
-            th = 0.0
-            if len(pts) >= 2:
-                (p0, l0), (p1, l1) = list(pts.items())[:2]
-                g0, g1 = np.array(sketch[p0]), np.array(sketch[p1])
-                th = math.atan2(g1[1] - g0[1], g1[0] - g0[0]) - math.atan2(
-                    l1[1] - l0[1], l1[0] - l0[0]
-                )
-            c, s = math.cos(th), math.sin(th)
+            # Known points of the body: its anchor (where it joins a placed body) and
+            # its sketched points; the orientation is the rotation that best maps the
+            # local coordinates onto them (2-D Procrustes), the anchor kept exact.
+            pairs = [
+                (np.asarray(xy, float), np.asarray(sketch[p], float))
+                for p, xy in self.mech.link(name).points.items()
+                if p in sketch
+            ]
             if anchor is not None:
                 s_b, (ax, ay) = anchor
-                x = float(ax[0]) - (c * s_b[0] - s * s_b[1])
-                y = float(ay[0]) - (s * s_b[0] + c * s_b[1])
-            elif pts:
-                p0, l0 = next(iter(pts.items()))
-                x = sketch[p0][0] - (c * l0[0] - s * l0[1])
-                y = sketch[p0][1] - (s * l0[0] + c * l0[1])
+                pairs.insert(0, (np.asarray(s_b, float), np.array([ax[0], ay[0]], float)))
+            th = 0.0
+            if len(pairs) >= 2:
+                loc = np.array([p[0] for p in pairs])
+                glo = np.array([p[1] for p in pairs])
+                loc, glo = loc - loc.mean(0), glo - glo.mean(0)
+                cross = float(np.sum(loc[:, 0] * glo[:, 1] - loc[:, 1] * glo[:, 0]))
+                dot = float(np.sum(loc * glo))
+                if cross or dot:
+                    th = math.atan2(cross, dot)
+            c, s = math.cos(th), math.sin(th)
+            if pairs:
+                (lx, ly), (gx, gy) = pairs[0]
+                x = gx - (c * lx - s * ly)
+                y = gy - (s * lx + c * ly)
             else:
                 x = y = 0.0
             k = g.col[b]

@@ -458,6 +458,51 @@ sweep: {{range: 60 deg, step: 2 deg}}
         assert res.link("L3").omega[k] == pytest.approx(w3, rel=1e-9, abs=1e-12)
 
 
+TRIAD = """
+units: {length: mm, angle: deg}
+ground: {O1: [0, 0], O2: [150, -20], O3: [60, 120]}
+links:
+  crank: {points: {O1: [0, 0], A: [20, 0]}}
+  p: {points: {A: [0, 0], B: [72.1110255, 0]}}
+  tern: {points: {B: [0, 0], C: [60, 0], D: [10, 70]}}
+  q: {points: {O2: [0, 0], C: [60.8276253, 0]}}
+  r: {points: {O3: [0, 0], D: [31.6227766, 0]}}
+joints:
+  O1: [ground, crank]
+  A: [crank, p]
+  B: [p, tern]
+  C: [tern, q]
+  O2: [ground, q]
+  D: [tern, r]
+  O3: [ground, r]
+assembly:
+  sketch: SKETCH
+driver: {joint: O1, speed: 10 rad/s}
+sweep: {range: 30 deg, step: 5 deg}
+"""
+
+
+@pytest.mark.parametrize(
+    "sketch",
+    [
+        # a closed position (B, C, D exact), one sketched point per link
+        {"B": (80, 40), "C": (140, 40), "D": (90, 110)},
+        # the other assembly near it, sketched roughly
+        {"B": (88, 24), "C": (146, 41), "D": (78, 94)},
+    ],
+)
+def test_a_one_point_sketch_chooses_the_triads_assembly(sketch):
+    """A Newton group starts from the sketch even when each link has only one sketched
+    point: the assembly reached is the one nearest to the sketch."""
+    text = TRIAD.replace("SKETCH", str({k: list(v) for k, v in sketch.items()}))
+    res = ms.solve(ms.loads(text.replace("'", "")))
+    assert res.ok.all()
+    assert [g.kind for g in res.analysis.plan] == ["driver link", "Newton"]
+    for name, (x, y) in sketch.items():
+        pt = res.point(name)
+        assert math.hypot(pt.x[0] * 1e3 - x, pt.y[0] * 1e3 - y) < 2.0, name
+
+
 # --- limit positions and design figures -----------------------------------------------
 
 
