@@ -74,7 +74,7 @@ def solve(
     Parameters
     ----------
     mech
-        A validated mechanism (from :func:`load` or built in code and validated).
+        A mechanism from :func:`load`, or built in code (validated here if it was not).
     step
         Override the sweep step (rad, or m for a linear driver).
     method
@@ -84,6 +84,8 @@ def solve(
     forces
         Run the force analysis (default: when the model has masses or loads).
     """
+    if not mech.__dict__.get("_validated"):  # built in code: check it first
+        mech.validate()
     an = Analysis(mech, method)
     u0 = an.start_value()
     u, _ = an.sweep_values(u0, step=step)
@@ -161,7 +163,10 @@ class CheckReport:
             )
         an = self.analysis
         lines.append(f"  driver: joint {mech.driver.joint}, start at {an.format_u(self.start_u)}")
-        lines.append("  groups, solved in this order:")
+        if an.redundant:
+            lines.append("  groups of the start assembly (without the redundant equations):")
+        else:
+            lines.append("  groups, solved in this order:")
         for k, (g, b) in enumerate(zip(self.groups, self.branches), 1):
             lines.append(f"    {k}. {g}" + (f": {b}" if b else ""))
         lines.append(f"  start position ({an.format_u(self.start_u)}), global coordinates [m]:")
@@ -182,6 +187,8 @@ class CheckReport:
 
 def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     """Validate, count degrees of freedom, and assemble the start position."""
+    if not mech.__dict__.get("_validated"):  # built in code: check it first
+        mech.validate()
     an = Analysis(mech, method)
     u0 = an.start_value()
     asm = an.assemble(u0)
@@ -197,7 +204,8 @@ def check(mech: Mechanism, method: str | None = None) -> CheckReport:
         rank = 0
     branches = []
     pn = an.joint_point
-    for g, mode, why in zip(an.groups, asm.modes, asm.reasons):
+    modes = asm.group_modes if len(asm.group_modes) == len(an.groups) else asm.modes
+    for g, mode, why in zip(an.groups, modes, asm.reasons):
         text = g.mode_text(st, mode, pn)
         branches.append(f"{text} ({why})" if text and why else text or why)
     pts = {}

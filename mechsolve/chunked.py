@@ -89,6 +89,8 @@ def stream(
     """
     from .solvers.forces import solve_forces
 
+    if not mech.__dict__.get("_validated"):  # built in code: check it first
+        mech.validate()
     an = Analysis(mech, method)
     u0 = an.start_value()
     u_all, _ = an.sweep_values(u0, step=step)

@@ -21,8 +21,9 @@ STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk 
 EPILOG = """\b
 Exit codes:
   0  success
-  1  completed with warnings: some positions could not be solved
-     (their CSV rows say why); everything else was written
+  1  completed with warnings: some positions could not be solved, or
+     some values are not determined at singular positions (their CSV
+     rows say why), or a check failed; everything else was written
   2  input error: the file or the command line is wrong
   3  solver failure: the mechanism cannot be assembled or solved
   4  internal error (a bug in mechsolve; please report it)
@@ -100,7 +101,8 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
             written = [summary.path]
         else:
             res = api.solve(mech, step=st, method=method)
-            text, failed = res.summary(), bool(res.failures)
+            text = res.summary()
+            failed = res.incomplete()
             written = [res.to_csv(outdir / "results.csv")]
         if not no_plots:
             from .writers.plots import write_plots

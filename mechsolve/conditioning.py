@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from .sweep import Analysis
 
 SINGULAR_RCOND = 1e-10  # below this a block is treated as singular
+SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a toggle
 
 
 def group_block(g: Group, st: State):

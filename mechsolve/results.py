@@ -299,6 +299,18 @@ class Results:
                     )
             more = f"; and {len(ev) - 8} more" if len(ev) > 8 else ""
             lines.append("  singular positions: " + "; ".join(parts) + more)
+        sol = self.solution
+        for idx, what in (
+            (sol.rates_by_limit, "are their limits along the motion"),
+            (sol.rates_undetermined, "are not determined (left blank)"),
+        ):
+            if idx:
+                where = ", ".join(self.describe_u(i) for i in idx[:5])
+                more = f" and {len(idx) - 5} more" if len(idx) > 5 else ""
+                lines.append(
+                    f"  velocities and accelerations at {len(idx)} singular position(s) "
+                    f"{what}: {where}{more}"
+                )
         rc = np.where(self.ok, self.jacobian_rcond(), np.nan)
         if np.any(np.isfinite(rc)):
             i = int(np.nanargmin(rc))
@@ -418,6 +430,42 @@ class Results:
             self._work = driver_work(self.analysis, self.solution, self.forces)
         return self._work
 
+    def incomplete(self) -> bool:
+        """Whether anything asked for was left out or is doubtful: positions not solved,
+        rates or forces not determined at singular positions, or a warning (call after
+        :meth:`summary`, which runs the checks). The command line exits with 1 then."""
+        sol = self.solution
+        return bool(
+            self.failures
+            or sol.rates_undetermined
+            or (self.forces is not None and self.forces.singular)
+            or self.warnings
+        )
+
+    def mean_effort(self) -> tuple[float, str]:
+        """The driver's mean effort and what it is: the work over the travel when the
+        motion has no gaps (the exact mean over the sweep, between samples too), else
+        the average of the solved samples, said so."""
+        work = self.work()
+        travel = self.u[-1] - self.u[0]
+        if math.isfinite(work) and travel != 0:
+            return work / travel, "mean"
+        e = np.where(self.forces.ok, self.forces.effort, np.nan)
+        if not np.any(np.isfinite(e)):
+            return float("nan"), "mean"
+        return float(np.nanmean(e)), "mean of the solved positions"
+
+    def work_text(self) -> str:
+        """``work of the driver per cycle: 31.74 kJ``, or why it is not defined."""
+        per = "per cycle" if self.is_full_cycle() else "over the sweep"
+        work = self.work()
+        if not math.isfinite(work):
+            missing = int(np.sum(~self.solution.ok))
+            why = f"{missing} position(s) not solved" if missing else "not enough positions"
+            return f"work of the driver {per}: not defined ({why})"
+        wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
+        return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
+
     def is_full_cycle(self) -> bool:
         return (not self.linear) and abs(abs(self.u[-1] - self.u[0]) - 2 * math.pi) < 1e-9
 
@@ -452,7 +500,10 @@ class Results:
         u = float(self.u[i])
         if self.linear:
             return self.analysis.format_u(u)
-        text = f"driver angle {math.degrees(u) % 360:.6g}°"
+        deg = math.degrees(u) % 360
+        if i != 0 and deg == 0 and u != self.u[0] and i == len(self.u) - 1:
+            deg = 360.0  # the end of a full turn, not its start again
+        text = f"driver angle {deg:.6g}°"
         if self.u[0] != 0 or self.mechanism.driver.direction < 0:
             text += f" ({float(self.driver_travel[i]):.6g}° from the start)"
         return text
@@ -529,17 +580,13 @@ class Results:
         scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
         rms = float(np.sqrt(np.nanmean(e**2)))
-        work = self.work()
-        per = "per cycle" if self.is_full_cycle() else "over the sweep"
-        travel = self.u[-1] - self.u[0]
-        mean = work / travel if travel != 0 else float("nan")
+        mean, what = self.mean_effort()
         lines.append(
             f"  driving {kind}: max {e[imax] / scale:.6g} {sym}{unit} at {self.describe_u(imax)}, "
             f"min {e[imin] / scale:.6g} {sym}{unit} at {self.describe_u(imin)}, "
-            f"RMS {rms / scale:.6g} {sym}{unit}, mean {mean / scale:.6g} {sym}{unit}"
+            f"RMS {rms / scale:.6g} {sym}{unit}, {what} {mean / scale:.6g} {sym}{unit}"
         )
-        wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
-        lines.append(f"  work of the driver {per}: {work / wscale:.6g} {wsym}J")
+        lines.append("  " + self.work_text())
         peaks = []
         for j in self.mechanism.joints:
             r = f.reactions[j.name]

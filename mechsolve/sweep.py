@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .conditioning import SINGULAR_INDICATOR, group_block, rcond
 from .constraints import ConstraintSystem
 from .errors import AssemblyError, InputError, SolverError
 from .expr import Ref, Side
@@ -163,6 +164,9 @@ class Solution:
     has_acceleration: bool = True
     events: list[Event] = field(default_factory=list)
     flips: dict[int, list[float]] = field(default_factory=dict)  # group -> where its branch flips
+    # singular positions whose rates are limits along the motion, or could not be found
+    rates_by_limit: list[int] = field(default_factory=list)
+    rates_undetermined: list[int] = field(default_factory=list)
 
     @property
     def residual(self) -> np.ndarray:
@@ -644,6 +648,7 @@ class Analysis:
         near: tuple[Solution, int] | None = None,
         per_unit_driver: bool = False,
         follow: Solution | None = None,
+        limits: bool = True,
     ) -> Solution:
         """Solve positions (and velocities and accelerations) at driver values ``u``.
 
@@ -653,7 +658,9 @@ class Analysis:
         Groups are solved one after another for all positions at once. Derivatives are
         computed per unit of the driver coordinate and scaled by the driver's speed at the
         end, so that the branch analysis has tangents even for a sweep at rest
-        (``per_unit_driver`` keeps them per unit driver coordinate).
+        (``per_unit_driver`` keeps them per unit driver coordinate). At a position where a
+        group is singular the rates are the limits along the followed motion (see
+        :meth:`_rates_at_singular`; ``limits=False`` leaves them as computed).
         """
         u = np.asarray(u, float)
         n = len(u)
@@ -761,7 +768,7 @@ class Analysis:
                 arr *= w * w
         failures = self._failures(st, oks, ok, u)
         events.sort(key=lambda e: e.after)
-        return Solution(
+        sol = Solution(
             self,
             u,
             (u - start.u0) / self.speed if n and self.speed else np.zeros_like(u),
@@ -779,6 +786,95 @@ class Analysis:
             events,
             flips,
         )
+        if limits and derivs and inds:
+            self._rates_at_singular(sol, velocity, acceleration, per_unit_driver)
+        return sol
+
+    def _rates_at_singular(
+        self, sol: Solution, velocity: bool, acceleration: bool, per_unit_driver: bool
+    ) -> None:
+        """Rates at the positions where a group is singular (a toggle or a bifurcation
+        point: the sine of a loop's transmission angle below ``SINGULAR_INDICATOR``, or a
+        Newton group's reciprocal condition number below ``NEWTON_SINGULAR_RCOND``).
+
+        There the differentiated constraints do not determine the rates (0 / 0 in the
+        group's formulas, rounding noise in practice). The motion the sweep follows is
+        smooth through such a point, so its rates are their limits: the analytic rates
+        are evaluated at ``u -+ d`` and ``u -+ 2d`` on the followed branches and
+        extrapolated to ``u`` (Richardson, error O(d^4)); at the first or last sample of
+        a sweep, from the side the sweep follows (``u + d ... u + 4d``, cubic). ``d`` is
+        5e-3 rad, or 5e-3 of the mechanism's size for a linear driver: rounding grows
+        near the singular point as d shrinks (about eps / d^3 in accelerations), the
+        extrapolation error as d^4; the limits are good to about 1e-9 of the rates'
+        natural sizes. Where the motion
+        does not exist on both sides (a limit position of a driven rocker: the rates are
+        infinite) or the two sides disagree, the rates stay NaN.
+        """
+        ind = sol.indicator
+        st = sol.state
+        sing = np.zeros(len(sol.u), bool)
+        newton = np.zeros(len(sol.u), bool)
+        for gi, g in enumerate(self.plan):
+            if g.n_modes == 2 and gi < len(ind):
+                sing |= ind[gi] <= SINGULAR_INDICATOR
+            elif isinstance(g, NewtonGroup):
+                # a Newton solve stops within the square root of the rounding error of
+                # a singular point, so its block is only nearly singular there
+                newton |= rcond(group_block(g, st)[0]) <= NEWTON_SINGULAR_RCOND
+        newton &= sol.ok
+        sing &= sol.ok & ~newton
+        rows = slice(5, 8) if not acceleration else slice(5, 11)
+        # A Newton group at a singular point: which of the branches that meet there
+        # continues the motion is not known from this position alone, so its rates
+        # are not guessed.
+        st.block[rows, :, newton] = np.nan
+        sol.rates_undetermined = [int(i) for i in np.flatnonzero(newton)]
+        if not sing.any():
+            return
+        rows = slice(5, 8) if not acceleration else slice(5, 11)
+        d = 5e-3 * (self.scale if self.linear else 1.0)
+        # natural sizes of the rates, for telling a jump from rounding
+        ws = (1.0 if per_unit_driver else abs(self.speed)) / (self.scale if self.linear else 1.0)
+        kind = np.array([self.scale * ws, self.scale * ws, ws] + [self.scale * ws * ws] * 2)
+        kind = np.append(kind, ws * ws)[rows, None]
+        n = len(sol.u)
+        for i in np.flatnonzero(sing):
+            ui = float(sol.u[i])
+            one_sided = n > 1 and i in (0, n - 1)
+            if one_sided:
+                # the first or last sample: the followed motion lies on one side only
+                into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
+                x = ui + into * d * np.arange(1.0, 5.0)
+            else:
+                x = ui + d * np.array([-1.0, 1.0, -2.0, 2.0])
+            near = self.solve(
+                x,
+                start=sol.start,
+                velocity=velocity,
+                acceleration=acceleration,
+                near=(sol, int(i)),
+                per_unit_driver=per_unit_driver,
+                limits=False,
+            )
+            r = near.state.block[rows, :, :]
+            if not near.ok.all():
+                st.block[rows, :, i] = np.nan
+                sol.rates_undetermined.append(int(i))
+                continue
+            if one_sided:  # cubic extrapolation
+                st.block[rows, :, i] = r @ np.array([4.0, -6.0, 4.0, -1.0])
+                sol.rates_by_limit.append(int(i))
+                continue
+            lo1, hi1, lo2, hi2 = (r[:, :, k] for k in range(4))
+            # a smooth motion changes twice as much over 4d as over 2d; a jump does not
+            smooth = np.abs((hi2 - lo2) - 2.0 * (hi1 - lo1)) <= (
+                0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
+            )
+            est = (4.0 * (lo1 + hi1) - (lo2 + hi2)) / 6.0
+            st.block[rows, :, i] = np.where(smooth.all(), est, np.nan)
+            (sol.rates_by_limit if smooth.all() else sol.rates_undetermined).append(int(i))
+        sol.rates_undetermined.sort()
+        st.token = State.new_token()
 
     def _refine_minima(self, gi: int, g: Group, ctx: _Context, cand, H, Hs):
         """Locate the minima of the discriminant between samples ``cand`` and ``cand + 1``.
@@ -945,6 +1041,7 @@ class Analysis:
 
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 
+NEWTON_SINGULAR_RCOND = 1e-7  # a Newton group's block this near singular: rates by limits
 TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
 NO_TOUCH = 1e-6  # a minimum estimated clearly above this needs no further refinement
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this

@@ -72,3 +72,30 @@ def test_invalid_model_in_code_raises_input_error():
     mech.joints.append(ms.PinJoint("X", "crank", "crank", "A"))
     with pytest.raises(ms.InputError, match="joins the link 'crank' to itself"):
         mech.validate()
+
+
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (lambda m: setattr(m.links[1], "mass", -1.0), "mass must be zero or positive"),
+        (lambda m: setattr(m.joints[2], "point", "Z"), "no point 'Z'"),
+        (
+            lambda m: m.loads.append(ms.PointForce("f", link="rod", point="Q", force=(0, 1))),
+            "load 'f' acts at point 'Q', which link 'rod' does not have",
+        ),
+        (
+            lambda m: m.loads.append(
+                ms.Spring("s", ends=(("crank", "A"), ("ground", "O")), stiffness=-5.0)
+            ),
+            "stiffness must be zero or positive",
+        ),
+    ],
+)
+def test_solve_validates_a_model_built_in_code(change, message):
+    """ms.solve checks a model built in code that was never validated: a clear
+    InputError, not a KeyError from deep inside or a silent result."""
+    mech = build_slider_crank()
+    del mech.__dict__["_validated"]  # as if built without calling validate()
+    change(mech)
+    with pytest.raises(ms.InputError, match=message):
+        ms.solve(mech)

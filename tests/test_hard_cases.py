@@ -52,8 +52,26 @@ def test_parallelogram_stays_a_parallelogram_through_collinearity(method, step, 
     tol = 1e-12 if method == "auto" else 1e-7
     assert np.max(np.abs(wrap(res.link("coupler").angle))) < tol
     assert np.max(np.abs(wrap(res.link("rocker").angle - res.u))) < tol
-    regular = np.abs(np.sin(res.u)) > 1e-6
-    np.testing.assert_allclose(res.link("rocker").omega[regular], 2.0, atol=1e-6)
+    # rates everywhere, the singular samples too: there auto gives the limits along the
+    # motion; Newton leaves them blank (which branch continues is not known there)
+    singular = np.abs(np.sin(res.u)) < 1e-6
+    rock, coup, A, B = res.link("rocker"), res.link("coupler"), res.point("A"), res.point("B")
+    blank = np.isnan(rock.omega)
+    if method == "auto":
+        assert not blank.any()
+        assert sorted(res.solution.rates_by_limit) == list(np.flatnonzero(singular))
+    else:
+        assert not (blank & ~singular).any()
+        assert sorted(res.solution.rates_undetermined) == list(np.flatnonzero(blank))
+    k = ~blank
+    np.testing.assert_allclose(rock.omega[k], 2.0, atol=1e-9)
+    np.testing.assert_allclose(coup.omega[k], 0.0, atol=1e-9)
+    np.testing.assert_allclose(rock.alpha[k], 0.0, atol=1e-6)  # scale omega^2 = 4
+    np.testing.assert_allclose(coup.alpha[k], 0.0, atol=1e-6)
+    for q in ("vx", "vy", "ax", "ay"):  # the coupler translates
+        np.testing.assert_allclose(getattr(B, q)[k], getattr(A, q)[k], atol=1e-6)
+    if singular.any():
+        assert "velocities and accelerations at" in res.summary()
     if method == "auto":
         kinds = {e.kind for e in res.events}
         assert kinds == {"bifurcation"}
@@ -141,6 +159,27 @@ def test_crane_double_rocker_driven_into_its_dead_zone():
         assert np.isnan(res.point("K").x[~res.ok]).all()
         assert np.isfinite(res.point("K").x[res.ok]).all()
         assert res.solution.residual[res.ok].max() < 1e-9
+
+
+def test_forces_over_a_sweep_with_gaps():
+    """A crank too long for the four-bar: the positions where it closes keep their
+    forces; the work per cycle is not defined over the gaps (no integral across them),
+    the mean is that of the solved positions, and the gaps are failures, not singular
+    positions of the force analysis."""
+    text = (MECH / "fourbar.yaml").read_text()
+    text = text.replace("A: [26.5, 0]", "A: [80, 0]").replace("start: 0 deg", "start: 90 deg")
+    res = ms.solve(ms.loads(text))
+    assert 0 < res.ok.sum() < len(res.u)
+    assert math.isnan(res.work())
+    e = res.driving_effort
+    mean, what = res.mean_effort()
+    assert what == "mean of the solved positions"
+    assert mean == pytest.approx(np.mean(e[res.ok]), rel=1e-12)
+    assert np.isfinite(e[res.ok]).all() and np.isnan(e[~res.ok]).all()
+    assert res.forces.singular == []
+    text = res.summary()
+    assert "work of the driver per cycle: not defined" in text
+    assert "forces indeterminate" not in text
 
 
 def test_partial_sweep_exit_code_and_csv(tmp_path):
@@ -283,6 +322,9 @@ def test_redundant_parallelogram_kinematics_and_unique_torque(tmp_path):
     r = CliRunner().invoke(main, ["check", str(f)])
     assert r.exit_code == 0 and "0 by Grübler" in r.output and "1 by the rank" in r.output
     assert "the two counts differ" in r.output and "redundant constraints" in r.output
+    # every group of the start assembly is listed with its branch
+    assert "groups of the start assembly (without the redundant equations)" in r.output
+    assert "    3. " in r.output and "loop" in r.output
 
 
 def test_inconsistent_redundant_constraints_cannot_assemble():

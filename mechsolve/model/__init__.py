@@ -244,6 +244,13 @@ class Assembly:
     conditions: list[Expression] = field(default_factory=list)
     sketch: dict[str, tuple[float, float]] = field(default_factory=dict)
     where: KeyPath = ()
+    condition_where: list[KeyPath] = field(default_factory=list)  # each condition's key
+
+    def where_of(self, k: int) -> KeyPath:
+        """The key path of condition ``k`` as the file wrote it."""
+        if k < len(self.condition_where):
+            return self.condition_where[k]
+        return self.where + ("conditions", k)
 
 
 @dataclass
@@ -368,4 +375,5 @@ class Mechanism:
         from .validate import validate
 
         validate(self)
+        self.__dict__["_validated"] = True
         return self

@@ -731,6 +731,7 @@ def read_assembly(r: Reader, value: Any) -> Assembly:
                 lines_path + (i,), f"{c!r} is not a condition (it needs <, >, 'left of'...)"
             )
         asm.conditions.append(e)
+        asm.condition_where.append(lines_path + (i,))
     sketch = m.get("sketch", {})
     if not isinstance(sketch, dict):
         raise r.fail(path + ("sketch",), "'sketch' must map point names to approximate [x, y]")

@@ -219,9 +219,17 @@ def load_text(text: str, file: str | None = None) -> Source:
     try:
         nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
+        # the context ("while parsing a flow sequence", at the '[' left open) is usually
+        # where the mistake is; the problem is where the parser noticed it
+        ctx, mark = exc.context_mark, exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
         problem = exc.problem or exc.context or "invalid YAML"
+        if exc.context and ctx is not None and mark is not None and ctx.line != mark.line:
+            problem += f" at line {mark.line + 1} ({exc.context} that starts at line {ctx.line + 1}"
+            if ctx.column is not None:
+                problem += f", column {ctx.column + 1}"
+            problem += ")"
+            line = ctx.line + 1
         raise InputError(f"invalid YAML: {problem}", file=file, line=line) from None
     except yaml.YAMLError as exc:
         raise InputError(f"invalid YAML: {exc}", file=file) from None

@@ -11,7 +11,7 @@ import math
 from typing import TYPE_CHECKING
 
 from ..expr import Ref, Side
-from . import GROUND, NAME_RE, Limit, PinJoint, SliderJoint
+from . import GROUND, NAME_RE, Damper, Limit, PinJoint, PointForce, SliderJoint, Spring, Torque
 
 if TYPE_CHECKING:
     from . import Mechanism
@@ -204,12 +204,13 @@ def validate(mech: Mechanism) -> None:
         raise mech.error(sw.where, "the sweep range must be zero or positive")
 
     for load in mech.loads:
+        _check_load(mech, load, links)
         if load.when is not None:
             check_refs(mech, load.when, load.where + ("when",))
 
     # assembly and outputs refer to existing things
     for k, cond in enumerate(mech.assembly.conditions):
-        check_refs(mech, cond, mech.assembly.where + ("conditions", k))
+        check_refs(mech, cond, mech.assembly.where_of(k))
     for p in mech.assembly.sketch:
         if p not in owners:
             raise mech.error(
@@ -267,4 +268,61 @@ def check_refs(mech: Mechanism, expr, where) -> None:
                 f"{expr.text!r}: {r.name!r} has no quantity {r.attr!r} (it has "
                 + ", ".join(attrs)
                 + ")",
+            )
+
+
+def _check_load(mech: Mechanism, load, links: dict) -> None:
+    """A load acts on links and points that exist, with sensible coefficients (the file
+    reader checks these as it reads; a model built in code is checked here)."""
+
+    def on(link: str | None, point: str | None, key: str) -> None:
+        if link not in links and link != GROUND:
+            raise mech.error(
+                load.where + (key,),
+                f"load {load.name!r} acts on link {link!r}, which does not exist"
+                + suggest(str(link), list(links)),
+            )
+        pts = mech.ground if link == GROUND else links[link].points
+        if point is not None and point not in pts:
+            raise mech.error(
+                load.where + (key,),
+                f"load {load.name!r} acts at point {point!r}, which link {link!r} does not "
+                "have" + suggest(str(point), list(pts)),
+            )
+
+    if isinstance(load, PointForce):
+        on(load.link, load.point, "at")
+        if not all(math.isfinite(v) for v in load.force):
+            raise mech.error(load.where + ("force",), "the force must be finite")
+    elif isinstance(load, Torque):
+        on(load.link, None, "torque")
+        if not math.isfinite(load.torque):
+            raise mech.error(load.where + ("torque",), "the torque must be finite")
+    elif isinstance(load, (Spring, Damper)):
+        key = "spring" if isinstance(load, Spring) else "damper"
+        for link, point in getattr(load, "ends", None) or ():
+            on(link, point, key)
+        if isinstance(load, Damper) and load.drag is not None:
+            on(load.drag[0], load.drag[1], "drag")
+        if isinstance(load, Damper) and load.slider is not None:
+            if load.slider not in [j.name for j in mech.sliders]:
+                raise mech.error(
+                    load.where + ("slider",),
+                    f"damper {load.name!r} acts along slider {load.slider!r}, which does not exist",
+                )
+        if isinstance(load, Spring):
+            if not (load.stiffness >= 0 and math.isfinite(load.stiffness)):
+                raise mech.error(
+                    load.where + ("stiffness",),
+                    f"a spring's stiffness must be zero or positive, got {load.stiffness}",
+                )
+            if not (load.free_length >= 0 and math.isfinite(load.free_length)):
+                raise mech.error(
+                    load.where + ("free_length",),
+                    f"a spring's free length must be zero or positive, got {load.free_length}",
+                )
+        elif not (load.coefficient >= 0 and math.isfinite(load.coefficient)):
+            raise mech.error(
+                load.where + ("coefficient",),
+                f"a damping coefficient must be zero or positive, got {load.coefficient}",
             )

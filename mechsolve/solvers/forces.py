@@ -32,15 +32,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..conditioning import SINGULAR_RCOND, group_block, rcond
+from ..conditioning import SINGULAR_INDICATOR, SINGULAR_RCOND, group_block, rcond
 from ..groups.generic import NewtonGroup
 from ..model import GROUND, Damper, PointForce, Spring, Torque
 from ..numerics import simpson
 
 if TYPE_CHECKING:
     from ..sweep import Analysis, Solution
-
-SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a toggle
 
 
 @dataclass
@@ -303,7 +301,7 @@ def solve_forces(
                 acc.force(ba, sa, t * ex, t * ey)
             load_power[load.name] = power_loads - before
 
-    lam, singular, nonunique = _solve_groups(an, st, acc.Q, sol.indicator)
+    lam, singular, nonunique = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
@@ -352,12 +350,14 @@ def _force_at_global(acc: _Q, st, b: int, x, y, fx, fy) -> None:
     acc.Q[3 * b + 2] += rx * fy - ry * fx
 
 
-def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray):
+def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved: np.ndarray):
     """Solve Phi_q^T lambda = Q group by group, last group first.
 
     Groups with a closed form solve their own equilibrium explicitly (the dyad-by-dyad
     kinetostatics of the textbooks); a group is singular where its indicator vanishes.
     Other groups solve their block of Phi_q^T, singular where its condition number is.
+    Positions not ``solved`` (the mechanism does not close there) are not singular: they
+    are reported as failures of the sweep, not here.
     """
     sys_ = an.system
     n = st.n
@@ -379,7 +379,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray):
                 r0 = row_of[id(c)]
                 for k, v in enumerate(comps):
                     lam[:, r0 + k] = np.where(sing, np.nan, v) if any_sing else v
-            singular += [(int(i), g.label) for i in np.flatnonzero(sing & np.isfinite(st.x[0]))]
+            singular += [(int(i), g.label) for i in np.flatnonzero(sing & solved)]
             continue
         J, blocks = group_block(g, st)
         m = J.shape[1]
@@ -401,7 +401,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray):
             if idx.size:
                 JT = np.transpose(J[idx], (0, 2, 1))
                 x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
-        singular += [(int(i), g.label) for i in np.flatnonzero(good & ~regular)]
+        singular += [(int(i), g.label) for i in np.flatnonzero(good & ~regular & solved)]
         for c, r0, jac in blocks:
             lc = x[:, r0 : r0 + c.m]  # (N, m_c)
             lam[:, row_of[id(c)] : row_of[id(c)] + c.m] = lc
@@ -466,14 +466,12 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     where a condition switches between two samples, the switch is located by bisection on
     the driver coordinate, so the result does not depend on the step. The work of other
     loads (springs under a condition, dampers, link-fixed forces) is integrated with
-    Simpson's rule. Falls back to Simpson's rule on the driver's effort if some position
-    was not solved.
+    Simpson's rule. The energies need only the motion, so positions where the forces are
+    indeterminate (singular) do not matter; if the mechanism could not be solved at some
+    position, the work is not defined (NaN).
     """
-    ok = fr.ok
-    if np.sum(ok) < 2:
-        return float("nan")
-    if not np.all(ok):
-        return float(simpson(fr.effort[ok], x=sol.u[ok]))
+    if len(sol.u) < 2 or not np.all(sol.ok):
+        return float("nan")  # the motion has gaps: no work over the sweep to speak of
     mech, sys_ = an.mech, an.system
     st = sol.state
     energy = fr.kinetic + fr.potential

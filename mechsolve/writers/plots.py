@@ -281,12 +281,8 @@ def plot_effort(res: Results, path: Path) -> Path:
     xs, xlabel = driver_axis(res)
     e = res.driving_effort
     kind, unit = res.effort_name
-    work = res.work()
-    travel = res.u[-1] - res.u[0]
-    mean = work / travel if travel else float("nan")
-    per = "per cycle" if res.is_full_cycle() else "over the sweep"
+    mean, what = res.mean_effort()
     sc, su = _scaled(e, unit)
-    wsc, wu = (1e3, "kJ") if abs(work) >= 1e4 else (1.0, "J")
     fig, ax = plt.subplots(figsize=(9, 4.5))
     bx, be = _broken(res, xs, e / sc)
     ax.plot(bx, be, lw=1.6, label=f"driving {kind}")
@@ -295,7 +291,7 @@ def plot_effort(res: Results, path: Path) -> Path:
         ls="--",
         color="C3",
         lw=1.2,
-        label=f"mean {mean / sc:.6g} {su}; work {per} {work / wsc:.6g} {wu}",
+        label=f"{what} {mean / sc:.6g} {su}; {res.work_text().replace('of the driver ', '')}",
     )
     ax.axhline(0, color="0.5", lw=0.8)
     ax.set_xlabel(xlabel)
@@ -311,14 +307,19 @@ def plot_effort(res: Results, path: Path) -> Path:
 
 
 def ground_joints(res: Results) -> list[str]:
-    """Revolute joints with the ground: the fixed hinges whose reactions an engineer plots."""
+    """Joints with the ground, fixed hinges first, then sliders on fixed guides: the
+    reactions the frame (foundation) must carry."""
     from ..model import GROUND, PinJoint
 
-    return [j.name for j in res.mechanism.joints if isinstance(j, PinJoint) and GROUND in j.links]
+    on_ground = [j for j in res.mechanism.joints if GROUND in j.links]
+    pins = [j.name for j in on_ground if isinstance(j, PinJoint)]
+    return pins + [j.name for j in on_ground if not isinstance(j, PinJoint)]
 
 
 def plot_hodographs(res: Results, path: Path) -> Path | None:
-    """Vector-tip diagrams (hodographs) of the reactions at the fixed hinges."""
+    """Vector-tip diagrams (hodographs) of the reactions on the ground: at the fixed
+    hinges, and at the sliders on fixed guides (the guide's normal force with its
+    components; its tip moves along the guide's normal)."""
     names = ground_joints(res)
     if not names:
         return None
@@ -345,11 +346,14 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(f"{name}.Fx [{sym}N]")
         ax.set_ylabel(f"{name}.Fy [{sym}N]")
-        ax.set_title(f"{res.joint_label(name)}", fontsize=9)
+        slider = "F" not in r
+        ax.set_title(
+            f"{res.joint_label(name)}" + (" (guide normal force)" if slider else ""), fontsize=9
+        )
         ax.grid(True, alpha=0.3)
     for ax in list(axes.flat)[k:]:
         ax.axis("off")
-    fig.suptitle(f"{res.mechanism.name}: hodographs of the fixed-hinge reactions")
+    fig.suptitle(f"{res.mechanism.name}: hodographs of the reactions on the ground")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
