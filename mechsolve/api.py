@@ -110,7 +110,10 @@ def positions(mech: Mechanism, step: float | None = None) -> int:
     step = step if step is not None else sw.step
     if step is None:
         return 361
-    return max(0, math.ceil(travel / step - 1e-9)) + 1
+    ratio = travel / step
+    if not ratio < 1e15:  # absurd (or infinite): the sweep itself says so
+        return 10**15
+    return max(0, math.ceil(ratio - 1e-9)) + 1
 
 
 def stream(mech: Mechanism, csv_path, **kwargs):

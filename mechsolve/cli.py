@@ -16,6 +16,7 @@ import click
 from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, MechsolveError
 
 EXIT_INTERNAL = 4
+EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
 STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk by chunk
 
 EPILOG = """\b
@@ -27,6 +28,7 @@ Exit codes:
   2  input error: the file or the command line is wrong
   3  solver failure: the mechanism cannot be assembled or solved
   4  internal error (a bug in mechsolve; please report it)
+  130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
 """
 
 
@@ -45,6 +47,19 @@ def _fail(exc: BaseException) -> None:
             err=True,
         )
     sys.exit(EXIT_INTERNAL)
+
+
+def _interrupt_on_sigterm() -> None:
+    """Make SIGTERM unwind like Ctrl-C, so that a half-written file is removed."""
+    import signal
+
+    def handler(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    try:
+        signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (an embedding application): leave it
+        pass
 
 
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
@@ -80,6 +95,7 @@ def main() -> None:
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
+    _interrupt_on_sigterm()
     try:
         import numpy as np
 
@@ -115,6 +131,10 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
                 + ", ".join(p.name for p in written)
             )
         sys.exit(EXIT_WARNINGS if failed else EXIT_OK)
+    except KeyboardInterrupt:
+        # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
+        click.echo("interrupted: the files not yet finished were not written", err=True)
+        sys.exit(EXIT_INTERRUPTED)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
         _fail(exc)
 

@@ -25,7 +25,7 @@ from .constraints import ConstraintSystem
 from .errors import AssemblyError, InputError, SolverError
 from .expr import Ref, Side
 from .groups import Drive, Group, NewtonGroup, build_plan
-from .model import GROUND, Limit, Mechanism, PinJoint, SliderJoint
+from .model import GROUND, MAX_POSITIONS, Limit, Mechanism, PinJoint, SliderJoint
 from .numerics import brent_root
 from .solvers.newton import solve as newton_solve
 from .state import State
@@ -280,7 +280,14 @@ class Analysis:
             travel = 2 * math.pi
         if step is None:
             step = math.radians(1.0) if not self.linear else travel / 100 if travel else 1.0
-        n = max(0, math.ceil(travel / step - 1e-9))
+        ratio = travel / step
+        if not ratio < MAX_POSITIONS:
+            raise self.mech.error(
+                ("sweep",),
+                f"the sweep has {ratio:.3g} positions, more than the {MAX_POSITIONS:,} "
+                "mechsolve solves in one run: use a larger step or a smaller range",
+            )
+        n = max(0, math.ceil(ratio - 1e-9))
         k = np.arange(n + 1, dtype=float)
         dist = np.minimum(k * step, travel)
         u = u0 + self.mech.driver.direction * dist

@@ -146,6 +146,38 @@ def parse_unit(text: str) -> Unit:
     return Unit(factor, tuple(dim))  # type: ignore[arg-type]
 
 
+_EXAMPLE = {
+    "dimensionless": "0.5",
+    "length": "110 mm",
+    "mass": "2.5 kg",
+    "time": "0.5 s",
+    "angle": "25 deg",
+    "speed": "0.3 m/s",
+    "acceleration": "9.81 m/s^2",
+    "angular speed": "1.06 rpm",
+    "angular acceleration": "2 rad/s^2",
+    "force": "50 kN",
+    "torque": "12 N*m",
+    "moment of inertia": "0.02 kg*m^2",
+    "stiffness": "500 N/m",
+    "damping": "15 N*s/m",
+    "rotational damping": "0.1 N*m*s/rad",
+    "density per length": "2 kg/m",
+}
+
+
+def _a(word: str) -> str:
+    """``a length``, ``an angle``."""
+    return ("an " if word[:1].lower() in "aeiou" else "a ") + word
+
+
+def _to_float(value: object) -> float:
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except OverflowError:
+        raise UnitError(f"{str(value)[:20]}... is too large a number") from None
+
+
 def _finite(x: float, text: object) -> float:
     if not math.isfinite(x):
         raise UnitError(f"{text!r} is not a finite number")
@@ -171,20 +203,24 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
     """
     want = _DIMS[kind]
     if isinstance(value, bool) or value is None:
-        raise UnitError(f"expected a {kind}, got {value!r}")
+        raise UnitError(f"expected {_a(kind)}, got {value!r}")
     if isinstance(value, (int, float)):
-        x = _finite(float(value), value)
+        x = _finite(_to_float(value), value)
         if default_unit is not None:
             x *= parse_unit(default_unit).factor
         return x
     if not isinstance(value, str):
-        raise UnitError(f"expected a {kind} (a number or a string like '110 mm'), got {value!r}")
+        raise UnitError(
+            f"expected {_a(kind)} (a number or a string like '{_EXAMPLE.get(kind, '110 mm')}'), "
+            f"got {value!r}"
+        )
     m = _QUANTITY_RE.match(value)
     if not m:
         raise UnitError(
-            f"cannot read {value!r} as a {kind}: write a number and a unit, e.g. '110 mm'"
+            f"cannot read {value!r} as {_a(kind)}: write a number and a unit, "
+            f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
         )
-    number = _finite(float(m.group(1)), value)
+    number = _finite(_to_float(m.group(1)), value)
     unit_text = m.group(2)
     if unit_text == "":
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
@@ -196,7 +232,7 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
         if want[3] != 0 and dim[:3] == want[:3] and dim[3] == 0:
             pass
         else:
-            raise UnitError(f"{value!r} is a {dim_name(dim)}, but a {kind} is expected")
+            raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
     return number * unit.factor
 
 

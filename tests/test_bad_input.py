@@ -86,7 +86,7 @@ CASES = [
         "driver: {joint: O2, speed: 1 rad/s}",
         "driver: {joint: O2, speed: 1 mm}",
         2,
-        ["bad.yaml:17:", "driver.speed", "is a length, but a angular speed is expected"],
+        ["bad.yaml:17:", "driver.speed", "is a length, but an angular speed is expected"],
     ),
     (
         "driver: {joint: O2, speed: 1 rad/s}",

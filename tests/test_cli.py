@@ -93,3 +93,43 @@ def test_real_process(tmp_path):
         [sys.executable, "-m", "mechsolve", "--help"], capture_output=True, text=True, timeout=60
     )
     assert p.returncode == 0 and "Exit codes" in p.stdout
+
+
+def test_csv_gets_the_usual_file_mode(tmp_path):
+    """The CSV is written to a private temporary file and moved into place; it must
+    end with the mode any new file gets (umask), like the plots."""
+    import os
+
+    old = os.umask(0o022)
+    try:
+        r = CliRunner().invoke(
+            main, ["run", str(MECH / "fourbar.yaml"), "--no-plots", "-o", str(tmp_path)]
+        )
+    finally:
+        os.umask(old)
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "results.csv").stat().st_mode & 0o777 == 0o644
+
+
+def test_sigterm_leaves_no_partial_file(tmp_path):
+    """A long streamed run stopped by SIGTERM exits 130 and removes its partial CSV."""
+    import signal
+    import time
+
+    out = tmp_path / "out"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "mechsolve", "run", str(MECH / "fourbar.yaml")]
+        + ["--step", "0.0002 deg", "--no-plots", "-o", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while not list(out.glob(".results.csv.*.part")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert list(out.glob(".results.csv.*.part")), "the streamed CSV was never started"
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    assert list(out.iterdir()) == []

@@ -43,7 +43,7 @@ def test_plain_numbers_use_the_default_unit():
 @pytest.mark.parametrize(
     "text,kind,msg",
     [
-        ("110 mm", "angle", "is a length, but a angle is expected"),
+        ("110 mm", "angle", "is a length, but an angle is expected"),
         ("3 parsecs", "length", "unknown unit 'parsecs'"),
         ("abc", "length", "cannot read 'abc'"),
         (".nan", "length", "cannot read"),

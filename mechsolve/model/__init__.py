@@ -30,6 +30,9 @@ NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 KeyPath = tuple[Any, ...]
 
 
+MAX_POSITIONS = 10_000_000  # a sweep longer than this is a mistake (about 2 min streamed)
+
+
 @dataclass
 class Link:
     """A rigid body carrying named points.

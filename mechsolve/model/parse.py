@@ -824,6 +824,8 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
     name = data.get("name", Path(src.file).stem if src.file else "mechanism")
     if not isinstance(name, str):
         raise src.error(("name",), "the name must be text")
+    if "description" in data and not isinstance(data["description"], (str, type(None))):
+        raise src.error(("description",), "the description must be text")
     mech = Mechanism(
         name=name,
         ground=ground,

@@ -11,7 +11,18 @@ import math
 from typing import TYPE_CHECKING
 
 from ..expr import Ref, Side
-from . import GROUND, NAME_RE, Damper, Limit, PinJoint, PointForce, SliderJoint, Spring, Torque
+from . import (
+    GROUND,
+    MAX_POSITIONS,
+    NAME_RE,
+    Damper,
+    Limit,
+    PinJoint,
+    PointForce,
+    SliderJoint,
+    Spring,
+    Torque,
+)
 
 if TYPE_CHECKING:
     from . import Mechanism
@@ -202,6 +213,14 @@ def validate(mech: Mechanism) -> None:
         raise mech.error(sw.where + ("step",), "the step must be positive")
     if sw.travel is not None and not (sw.travel >= 0 and math.isfinite(sw.travel)):
         raise mech.error(sw.where, "the sweep range must be zero or positive")
+    travel = sw.travel if sw.travel is not None else 2 * math.pi
+    if sw.step is not None and not travel / sw.step < MAX_POSITIONS:
+        raise mech.error(
+            sw.where or ("sweep",),
+            f"the sweep has {travel / sw.step:.3g} positions, more than the "
+            f"{MAX_POSITIONS:,} mechsolve solves in one run: use a larger step or a smaller "
+            "range",
+        )
 
     for load in mech.loads:
         _check_load(mech, load, links)

@@ -78,6 +78,10 @@ class CsvStream:
     def close(self) -> Path:
         """Finish the file and move it into place."""
         self.fh.close()
+        # mkstemp makes the file private (0600); give it the mode any new file gets
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(self.tmp, 0o666 & ~mask)
         os.replace(self.tmp, self.path)
         return self.path
 
