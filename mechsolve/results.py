@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .model import GROUND, Mechanism
-from .sweep import Analysis, Failure, Solution, StateView
+from .sweep import Analysis, Failure, Solution, StateView, angle_deg
 
 
 @dataclass
@@ -500,7 +500,7 @@ class Results:
         u = float(self.u[i])
         if self.linear:
             return self.analysis.format_u(u)
-        deg = math.degrees(u) % 360
+        deg = angle_deg(u)
         if i != 0 and deg == 0 and u != self.u[0] and i == len(self.u) - 1:
             deg = 360.0  # the end of a full turn, not its start again
         text = f"driver angle {deg:.6g}°"

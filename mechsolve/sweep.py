@@ -265,7 +265,7 @@ class Analysis:
     def format_u(self, u: float) -> str:
         if self.linear:
             return f"driver position {u:.6g} m"
-        return f"driver angle {math.degrees(u) % 360:.6g}°"
+        return f"driver angle {angle_deg(u):.6g}°"
 
     def sweep_values(self, u0: float, step: float | None = None, travel: float | None = None):
         """Driver values and times of the positions of the sweep."""
@@ -1192,6 +1192,12 @@ class _Context:
                     g.position(st, unit, sigma)
                     g.velocity(st, unit)
         return st
+
+
+def angle_deg(u: float) -> float:
+    """A driver angle in degrees in [0, 360), rounding noise (1e-13°) shown as 0."""
+    d = round(math.degrees(u) % 360, 9)
+    return 0.0 if d >= 360 else d + 0.0
 
 
 def _scale(mech: Mechanism) -> float:

@@ -719,6 +719,7 @@ def _family(setting: str) -> tuple[str, str]:
             "mechsolve newton, batched (tol 1e-6 ... 1e-13)",
             "tab:green",
         ),
+        ("linear predictor", "mechsolve newton, batched, linear predictor", "tab:olive"),
         ("mechsolve", "mechsolve auto, whole call", "tab:blue"),
         ("pylinkage", "pylinkage (numba)", "tab:purple"),
         ("exudyn", "exudyn", "tab:brown"),

@@ -725,6 +725,12 @@ def read_assembly(r: Reader, value: Any) -> Assembly:
     if not isinstance(conds, list):
         raise r.fail(lines_path, "conditions must be a list of texts such as 'B left of O3 -> A'")
     for i, c in enumerate(conds):
+        if isinstance(c, dict) and "sketch" in c:
+            raise r.fail(
+                lines_path + (i,),
+                "a sketch is not a condition: write 'assembly: {conditions: [...], "
+                "sketch: {B: [80, 50]}}'",
+            )
         e = r.expression(c, lines_path + (i,))
         if not e.is_condition():
             raise r.fail(

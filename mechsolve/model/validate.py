@@ -131,6 +131,21 @@ def validate(mech: Mechanism) -> None:
 
     # the same point name on two links must be a joint between them (directly or in a chain)
     owners = mech.point_owners()
+    # points, links and sliders share one namespace in conditions and CSV headers
+    # ("crank.vx"): one name may not stand for two of them
+    sliders = {j.name: j for j in mech.sliders}
+    for p, ls in owners.items():
+        clash = "link" if p in links else "slider" if p in sliders else None
+        if clash:
+            where = ("ground", p) if ls[0] == GROUND else links[ls[0]].where + ("points", p)
+            raise mech.error(
+                where,
+                f"point {p!r} has the name of a {clash}; names of points, links and sliders "
+                "must differ (conditions and CSV columns such as 'crank.vx' use them)",
+            )
+    for name, j in sliders.items():
+        if name in links:
+            raise mech.error(j.where, f"slider {name!r} has the name of a link; rename one")
     for p, ls in owners.items():
         if len(ls) < 2:
             continue
