@@ -653,3 +653,34 @@ solver: {method: METHOD}
     both = auto.ok
     np.testing.assert_allclose(newton.point("F").x[both], auto.point("F").x[both], atol=1e-9)
     assert not auto.events  # no event reported inside the unassemblable range
+
+
+@pytest.mark.parametrize("step", [3, 4, 5])
+def test_split_newton_batched_through_a_dead_zone(step):
+    """split-newton on a non-Grashof four-bar, 73+ positions (the batched path, whose
+    coarse continuation solves the driver group at substeps): every position where the
+    closed form closes is solved, on the branch the automatic method keeps."""
+    from closed_form import fourbar_disc
+
+    text = f"""
+ground: {{O2: [0, 0], O4: [3, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [2, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [2, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [2.5, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: [B left of A -> O4]
+driver: {{joint: O2, speed: 1 rad/s, start: 90 deg}}
+sweep: {{range: 360 deg, step: {step} deg}}
+"""
+    mech = ms.loads(text)
+    res = ms.solve(mech, method="split-newton")
+    auto = ms.solve(mech)
+    closes = fourbar_disc(2.0, 2.0, 2.5, 3.0, res.u) >= 0
+    np.testing.assert_array_equal(res.ok, closes)
+    np.testing.assert_array_equal(auto.ok, closes)
+    th4 = wrap(res.link("rocker").angle[res.ok])
+    ref = [fourbar(2.0, 2.0, 2.5, 3.0, res.u[res.ok], 1.0, br)[1] for br in (1, -1)]
+    on_a_branch = np.minimum(*(np.abs(wrap(th4 - r)) for r in ref))
+    assert on_a_branch.max() < 1e-9
+    np.testing.assert_allclose(wrap(th4 - auto.link("rocker").angle[res.ok]), 0, atol=1e-9)

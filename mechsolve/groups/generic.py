@@ -140,8 +140,10 @@ class NewtonGroup(Group):
         coarse = np.unique(np.r_[np.arange(0, n, k), n - 1])
         sub = st.take(coarse)
         dsub = drive.take(coarse)
+        # the coarse pass counts its own positions; prefix() wants the sweep's sample
+        sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
         okc, itc, _ = self.sweep_sequential(
-            sub, dsub, q_start, np.ones(len(coarse), bool), prefix=None if k == 1 else prefix
+            sub, dsub, q_start, np.ones(len(coarse), bool), prefix=sub_prefix
         )
         if not okc.all():
             return None
