@@ -105,8 +105,10 @@ def limit_positions(res: Results) -> list[LimitPositions]:
         val, rate = vr(res.solution.state)
         val = np.where(ok, val, np.nan)
         if kind == "rocker":
-            val = np.unwrap(np.where(ok, val, 0.0))
-            val = np.where(ok, val, np.nan)
+            # unwrapped over the solved samples only (a filler across a gap would add
+            # a spurious turn)
+            val = val.copy()
+            val[ok] = np.unwrap(val[ok])
             if np.nanmax(val) - np.nanmin(val) >= 2 * math.pi - 1e-9:
                 continue  # it turns fully: not a rocker
         sgn = np.sign(rate * res.mechanism.driver.direction * np.sign(an.speed or 1.0))
@@ -122,6 +124,24 @@ def limit_positions(res: Results) -> list[LimitPositions]:
             if kind == "rocker":  # bring the angle next to the unwrapped samples
                 v = v + 2 * math.pi * round((val[k] - v) / (2 * math.pi))
             extremes.append((x, v, sgn[k] > 0))
+        # where the sweep meets an unassemblable range the motion stops at a toggle
+        # position: the solved samples next to it bound the swing too (to the step)
+        edges = []
+        for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
+            if 0 < k < len(ok) - 1 or not ok.all():
+                if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
+                    edges.append((float(res.u[k]), float(val[k])))
+        if edges and extremes:
+            vals = [e[1] for e in extremes] + [e[1] for e in edges]
+            top, bottom = max(vals), min(vals)
+            for x, v in edges:
+                if v == top:
+                    extremes.append((x, v, True))
+                if v == bottom:
+                    extremes.append((x, v, False))
+        elif edges and len(edges) >= 2:
+            (x1, v1), (x2, v2) = max(edges, key=lambda e: e[1]), min(edges, key=lambda e: e[1])
+            extremes += [(x1, v1, True), (x2, v2, False)]
         if not extremes:
             continue
         hi = max((e for e in extremes if e[2]), key=lambda e: e[1], default=None)
@@ -129,7 +149,7 @@ def limit_positions(res: Results) -> list[LimitPositions]:
         if hi is None or lo is None:
             continue
         lp = LimitPositions(name, kind, lo[1], lo[0], hi[1], hi[0])
-        if full and len(extremes) == 2:
+        if full and len(extremes) == 2 and not edges:
             fwd = (hi[0] - lo[0]) * mech.driver.direction % (2 * math.pi)
             back = 2 * math.pi - fwd
             lp.forward, lp.back = fwd, back

@@ -684,3 +684,29 @@ sweep: {{range: 360 deg, step: {step} deg}}
     on_a_branch = np.minimum(*(np.abs(wrap(th4 - r)) for r in ref))
     assert on_a_branch.max() < 1e-9
     np.testing.assert_allclose(wrap(th4 - auto.link("rocker").angle[res.ok]), 0, atol=1e-9)
+
+
+def test_limit_positions_of_a_rocker_beside_a_dead_zone():
+    """A sweep with an unassemblable range still reports the rocker's limit positions:
+    the extreme where its angular velocity vanishes (refined between samples, checked
+    against the closed form there) and the toggle side bounded by the last solved sample."""
+    text = """
+ground: {O2: [0, 0], O4: [3, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [2, 0]}}
+  coupler: {points: {A: [0, 0], B: [2, 0]}}
+  rocker: {points: {O4: [0, 0], B: [2.5, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: [B left of A -> O4]
+driver: {joint: O2, speed: 1 rad/s, start: 90 deg}
+sweep: {range: 360 deg, step: 5 deg}
+"""
+    res = ms.solve(ms.loads(text))
+    assert res.failures
+    (lp,) = res.limit_positions()
+    th = np.unwrap(res.link("rocker").angle[res.ok])
+    assert lp.low <= th.min() + 1e-12 and lp.high >= th.max() - 1e-12
+    assert lp.time_ratio is None  # no full cycle of motion
+    # the minimum is a true extreme: the closed form's rocker rate vanishes there
+    w4 = [fourbar(2.0, 2.0, 2.5, 3.0, lp.u_low, 1.0, br)[3] for br in (1, -1)]
+    assert min(abs(float(w)) for w in w4) < 1e-7
