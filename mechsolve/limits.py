@@ -6,7 +6,9 @@
   velocity) found with Brent's method between the two samples that bracket it.
 * **Time ratio** (quick-return coefficient) for a crank driven over one full turn: the
   driver travel from one limit to the other, against the travel back; K >= 1 is the
-  slower over the faster.
+  slower over the faster. Only for a rocker (pivoted to the ground) or a slider on a
+  ground guide (a ram): a block sliding along a moving link (the shaper's slot) has
+  limit positions too, but the time between them is not a quick-return figure.
 * **Minimum transmission angle** of each loop: the angle between the links that transmit
   the force at the loop's inner joint (RRR), between the rod and the guide's normal (RRP);
   90 degrees for a slotted bar whose line passes through its pivot (RPR). It is the arcsine
@@ -90,18 +92,20 @@ def limit_positions(res: Results) -> list[LimitPositions]:
             def vr(st, b=b):
                 return st.th[b], st.w[b]
 
-            items.append((link, "rocker", vr))
+            items.append((link, "rocker", vr, True))
         elif isinstance(j, SliderJoint) and j is not driven:
             sl = sys_.by_joint[j.name]
 
             def vr(st, sl=sl):
                 return sl.displacement(st), sl.velocity(st)
 
-            items.append((j.name, "slider", vr))
+            # a ram on a ground guide has a working and a return stroke; a block on a
+            # moving guide (a slotted bar) does not: no time ratio for it
+            items.append((j.name, "slider", vr, GROUND in (j.guide, j.block)))
     out = []
     ok = res.ok
     full = res.is_full_cycle()
-    for name, kind, vr in items:
+    for name, kind, vr, grounded in items:
         val, rate = vr(res.solution.state)
         val = np.where(ok, val, np.nan)
         if kind == "rocker":
@@ -149,7 +153,7 @@ def limit_positions(res: Results) -> list[LimitPositions]:
         if hi is None or lo is None:
             continue
         lp = LimitPositions(name, kind, lo[1], lo[0], hi[1], hi[0])
-        if full and len(extremes) == 2 and not edges:
+        if grounded and full and len(extremes) == 2 and not edges:
             fwd = (hi[0] - lo[0]) * mech.driver.direction % (2 * math.pi)
             back = 2 * math.pi - fwd
             lp.forward, lp.back = fwd, back

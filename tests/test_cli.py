@@ -133,3 +133,17 @@ def test_sigterm_leaves_no_partial_file(tmp_path):
     assert p.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     assert list(out.iterdir()) == []
+
+
+def test_time_ratio_only_for_rockers_and_rams(tmp_path):
+    """The shaper's block slides in the slotted bar (a moving guide): it has limit
+    positions but no quick-return time ratio; the rocker and the ram have one."""
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "shaper.yaml"), "--no-plots", "-o", str(tmp_path)]
+    )
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.output.splitlines() if x.strip().startswith("time ratio:"))
+    assert "slot" not in line, line
+    assert "guide_bar K = 1.46" in line and "ram_guide K = 1.46" in line
+    limits = next(x for x in r.output.splitlines() if "limit positions:" in x)
+    assert "slider slot" in limits  # its stroke along the slot is still reported
