@@ -11,6 +11,7 @@ that every chunk uses the same extremes.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,6 +40,9 @@ class StreamSummary:
     effort_count: int = 0
     work: float = 0.0
     power_residual: float = 0.0
+    power_scale: float = 0.0  # the largest power term: the scale of the balance check
+    undetermined: int = 0  # positions whose rates are not determined (left blank)
+    forces_singular: int = 0  # positions whose forces are indeterminate (left blank)
     events: int = 0
     warnings: list[str] = field(default_factory=list)
     design: list[str] = field(default_factory=list)
@@ -68,9 +72,39 @@ class StreamSummary:
                 f"{self.work:.6g} J; power balance residual up to {self.power_residual:.3g} W"
             )
         lines += self.design
-        for w in self.warnings:
+        if self.undetermined:
+            lines.append(
+                f"  velocities and accelerations at {self.undetermined} singular position(s) "
+                "are not determined (left blank)"
+            )
+        if self.forces_singular:
+            lines.append(
+                f"  forces indeterminate at {self.forces_singular} singular position(s) "
+                "(left blank)"
+            )
+        for w in self.all_warnings():
             lines.append("  warning: " + w)
         return "\n".join(lines)
+
+    def all_warnings(self) -> list[str]:
+        """The chunks' warnings, and the power balance checked against the largest power
+        term of the whole sweep (as the one-piece summary does)."""
+        out = list(self.warnings)
+        if self.effort_count and self.power_scale > 0:
+            rel = self.power_residual / self.power_scale
+            if rel > 1e-6:
+                out.append(
+                    f"the power balance residual reaches {rel:.2g} of the largest power term "
+                    "(above 1e-6): check the results"
+                )
+        return out
+
+    def incomplete(self) -> bool:
+        """Whether the command line exits with 1, as for :meth:`Results.incomplete`:
+        positions not solved, values not determined at singular positions, a warning."""
+        return bool(
+            self.failures or self.undetermined or self.forces_singular or self.all_warnings()
+        )
 
 
 def stream(
@@ -81,11 +115,13 @@ def stream(
     method: str | None = None,
     chunk: int = CHUNK,
     forces: bool | None = None,
+    progress: Callable[[int], object] | None = None,
 ) -> tuple[StreamSummary, Results]:
     """Solve a long sweep chunk by chunk, streaming the CSV to ``csv_path``.
 
-    Returns the summary and the Results of a coarse sweep of the same range (for plots
-    and the design figures).
+    ``progress``, if given, is called after each chunk with the number of positions it
+    added (a progress bar's ``update``). Returns the summary and the Results of a coarse
+    sweep of the same range (for plots and the design figures).
     """
     from .solvers.forces import solve_forces
 
@@ -132,6 +168,8 @@ def stream(
             prev, prev_res = sol, res
             offset = first + len(u)
             summary.chunks += 1
+            if progress is not None:
+                progress(len(u) - skip)
         path = out.close()
     except BaseException:
         out.abort()
@@ -169,6 +207,9 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
     resid = res.solution.residual[skip:]
     if np.any(np.isfinite(resid)):
         s.max_residual = max(s.max_residual, float(np.nanmax(resid)))
+    s.undetermined += sum(1 for i in res.solution.rates_undetermined if i >= skip)
+    if res.forces is not None:
+        s.forces_singular += sum(1 for i, _ in res.forces.singular if i >= skip)
     for w in res.warnings:
         if w not in s.warnings:
             s.warnings.append(w)
@@ -181,6 +222,7 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
         s.work += res.work()
         pr = np.abs(f.residual[skip:][f.ok[skip:]])
         s.power_residual = max(s.power_residual, float(pr.max()))
+        s.power_scale = max(s.power_scale, res.power_scale())
 
 
 def _merge(failures: list[Failure]) -> list[Failure]:

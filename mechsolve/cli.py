@@ -8,16 +8,20 @@ from __future__ import annotations
 
 import os
 import sys
+import tempfile
 import traceback
+from collections.abc import Mapping
 from pathlib import Path
+from typing import IO, Any
 
 import click
 
-from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, MechsolveError
+from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, InputError, MechsolveError
 
 EXIT_INTERNAL = 4
 EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
 STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk by chunk
+PROGRESS_DELAY = 1.0  # seconds: a streamed run that ends sooner never shows its bar
 
 EPILOG = """\b
 Exit codes:
@@ -47,6 +51,95 @@ def _fail(exc: BaseException) -> None:
             err=True,
         )
     sys.exit(EXIT_INTERNAL)
+
+
+def _ancestor_problem(path: Path) -> str | None:
+    """Why a folder cannot be created at ``path`` when one of its parents is a file."""
+    for parent in [path, *path.parents]:
+        if parent.exists() or parent.is_symlink():
+            if not parent.is_dir():
+                return f"{parent} is a file, not a folder"
+            return None
+    return None
+
+
+def output_folder(outdir: Path) -> Path:
+    """Create ``outdir`` and make sure a file can be written in it, before anything is
+    solved (a long sweep must not fail at its end); an OS refusal is an input error."""
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".mechsolve-", suffix=".probe", dir=outdir)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        why = _ancestor_problem(outdir) or exc.strerror or str(exc)
+        raise InputError(f"-o {outdir}: the output folder cannot be written: {why}") from None
+    return outdir
+
+
+def _write_error(exc: OSError, outdir: Path) -> InputError | None:
+    """An OS error while writing into ``outdir`` (full disk, permissions changed under
+    us) as a message, or None when it concerns some other file."""
+    name = exc.filename
+    if not isinstance(name, (str, os.PathLike)):
+        return None
+    try:
+        Path(name).resolve().relative_to(outdir.resolve())
+    except ValueError:
+        return None
+    return InputError(f"cannot write {name}: {exc.strerror or exc}")
+
+
+def progress_wanted(
+    quiet: bool, stream: IO[str] | None = None, environ: Mapping[str, str] | None = None
+) -> bool:
+    """Whether to show a progress bar: on a terminal, not under ``-q``, not in CI (the
+    ``CI`` environment variable set to anything but empty, 0, false or no), and only
+    when tqdm is installed (it is optional: ``pip install "mechsolve[progress]"``)."""
+    stream = sys.stderr if stream is None else stream
+    environ = os.environ if environ is None else environ
+    if quiet or environ.get("CI", "").strip().lower() not in ("", "0", "false", "no"):
+        return False
+    try:
+        if not stream.isatty():
+            return False
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
+    try:
+        import tqdm  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _progress_bar(total: int, quiet: bool) -> Any | None:
+    """A tqdm bar over ``total`` positions on stderr, or None (see :func:`progress_wanted`)."""
+    if not progress_wanted(quiet):
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        desc="solving",
+        unit=" positions",
+        unit_scale=True,
+        delay=PROGRESS_DELAY,
+        leave=False,  # the summary follows; the bar has done its job
+        dynamic_ncols=True,
+        file=sys.stderr,
+    )
+
+
+def _stream_above() -> int:
+    text = os.environ.get("MECHSOLVE_STREAM_ABOVE")
+    if text is None:
+        return STREAM_ABOVE
+    try:
+        return int(text)
+    except ValueError:
+        raise InputError(
+            f"MECHSOLVE_STREAM_ABOVE={text!r}: expected a whole number of positions"
+        ) from None
 
 
 def _interrupt_on_sigterm() -> None:
@@ -96,6 +189,7 @@ def main() -> None:
 def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     _interrupt_on_sigterm()
+    bar = None
     try:
         import numpy as np
 
@@ -107,13 +201,23 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
         st = api.parse_step(mech, step) if step is not None else None
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-        outdir.mkdir(parents=True, exist_ok=True)
-        stream_above = int(os.environ.get("MECHSOLVE_STREAM_ABOVE", STREAM_ABOVE))
-        if api.positions(mech, st) > stream_above:
+        output_folder(outdir)
+        n = api.positions(mech, st)
+        if n > _stream_above():
             # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
-            # sweep of the same range
-            summary, res = api.stream(mech, outdir / "results.csv", step=st, method=method)
-            text, failed = summary.text(res), bool(summary.failures)
+            # sweep of the same range; a bar on a terminal, moved on after each chunk
+            bar = _progress_bar(n, quiet)
+            summary, res = api.stream(
+                mech,
+                outdir / "results.csv",
+                step=st,
+                method=method,
+                progress=None if bar is None else bar.update,
+            )
+            if bar is not None:
+                bar.close()
+                bar = None
+            text, failed = summary.text(res), summary.incomplete()
             written = [summary.path]
         else:
             res = api.solve(mech, step=st, method=method)
@@ -133,9 +237,17 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
         sys.exit(EXIT_WARNINGS if failed else EXIT_OK)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
+        if bar is not None:
+            bar.close()
         click.echo("interrupted: the files not yet finished were not written", err=True)
         sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        if bar is not None:
+            bar.close()
+        _fail((outdir is not None and _write_error(exc, outdir)) or exc)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        if bar is not None:
+            bar.close()
         _fail(exc)
 
 
@@ -158,7 +270,12 @@ def check(file: Path, variant, draw) -> None:
         if draw is not None:
             from .writers.plots import draw_start
 
-            draw_start(report.analysis, report.assembly.state, draw, f"{mech.name}: start position")
+            try:
+                draw_start(
+                    report.analysis, report.assembly.state, draw, f"{mech.name}: start position"
+                )
+            except OSError as exc:
+                raise InputError(f"--draw {draw}: cannot write it: {exc.strerror or exc}") from None
             click.echo(f"  drew the start position to {draw}")
         sys.exit(EXIT_OK)
     except Exception as exc:  # noqa: BLE001

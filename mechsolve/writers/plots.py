@@ -16,6 +16,8 @@ Every axis names its quantity and unit. matplotlib is imported only here.
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,6 +25,26 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..results import Results
+
+
+def _save(fig, path: Path, dpi: int) -> None:
+    """Save ``fig`` to a temporary file beside ``path`` and move it into place, so that
+    an interrupted run (Ctrl-C, SIGTERM) never leaves a half-written image."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
+        mask = os.umask(0)  # mkstemp makes the file private; give it the usual mode
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
 
 
 def _plt():
@@ -162,7 +184,7 @@ def plot_trajectories(res: Results, path: Path) -> Path:
     if res.point_names():
         ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    _save(fig, path, 120)
     plt.close(fig)
     return path
 
@@ -190,7 +212,7 @@ def plot_point(res: Results, name: str, path: Path) -> Path:
         axes[-1][c].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: point {name}")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -220,7 +242,7 @@ def plot_links(res: Results, path: Path) -> Path | None:
     axes[-1][0].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: links")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -248,7 +270,7 @@ def plot_sliders(res: Results, path: Path) -> Path | None:
     axes[-1][0].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: sliders (along their guides)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -301,7 +323,7 @@ def plot_effort(res: Results, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -355,7 +377,7 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         ax.axis("off")
     fig.suptitle(f"{res.mechanism.name}: hodographs of the reactions on the ground")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -381,7 +403,7 @@ def plot_reactions(res: Results, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -415,6 +437,6 @@ def draw_start(analysis, state, path: Path, title: str) -> Path:
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    _save(fig, path, 120)
     plt.close(fig)
     return path
