@@ -8,11 +8,16 @@ the optional peers are skipped cleanly when they are not installed.
 from __future__ import annotations
 
 import importlib.util
+import os
 import re
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 CASES = [
     "fourbar-kinematics",
@@ -106,3 +111,75 @@ def test_streamed_sweep_writes_every_row(quick):
 def test_missing_peers_are_skipped_cleanly(quick):
     sec = _section(quick[0].stdout, "peers")
     assert "pylinkage: not installed" in sec and "exudyn: not installed" in sec
+
+
+def test_bench_data_is_package_data(tmp_path, monkeypatch):
+    """The mechanisms the bench loads come from the package (importlib.resources), not
+    from a mechanisms/ folder beside the current directory or the repository."""
+    from importlib import resources
+
+    from mechsolve import bench
+
+    data = resources.files("mechsolve.bench") / "data"
+    assert {"crane.yaml", "fourbar.yaml"} <= {p.name for p in data.iterdir()}
+    monkeypatch.chdir(tmp_path)  # no mechanisms/ here
+    mech = bench._crane_mech(36, masses=True)
+    assert mech.name and "K" in mech.outputs.points and len(mech.links) >= 3
+    src = Path(bench.__file__).read_text()
+    assert '"mechanisms"' not in src and "parents[2]" not in src
+
+
+@pytest.mark.parametrize("name", ["crane.yaml", "fourbar.yaml"])
+def test_bench_data_matches_the_examples(name):
+    """The bench's copies are the examples of mechanisms/ (update both together)."""
+    from mechsolve import bench
+
+    ours = bench.case_file(name).read_text(encoding="utf-8")
+    assert ours == (ROOT / "mechanisms" / name).read_text(encoding="utf-8"), (
+        f"mechsolve/bench/data/{name} differs from mechanisms/{name}: copy it over"
+    )
+
+
+def test_installed_package_benchmarks_the_crane(tmp_path):
+    """Lay out the package as a wheel or ``pip install .`` would (setuptools' build_py,
+    which copies the packages and their declared package data; run on a copy of the
+    sources so that the working tree stays clean), then run the crane case from that
+    copy, in a folder without mechanisms/: it must not be skipped."""
+    src = tmp_path / "src"
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
+    shutil.copytree(
+        ROOT / "mechsolve", src / "mechsolve", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    site = tmp_path / "site"
+    subprocess.run(
+        [sys.executable, "-c", "import setuptools; setuptools.setup()", "-q", "build_py"]
+        + ["--build-lib", str(site)],
+        cwd=src,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+    assert (site / "mechsolve" / "bench" / "data" / "crane.yaml").is_file()
+    run_dir = tmp_path / "elsewhere"
+    run_dir.mkdir()
+    env = dict(os.environ, PYTHONPATH=str(site))
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import mechsolve, sys; print(mechsolve.__file__); "
+            "from mechsolve.cli import main; sys.exit(main())",
+        ]
+        + ["bench", "--quick", "--case", "crane-kinematics"],
+        capture_output=True,
+        text=True,
+        cwd=run_dir,
+        env=env,
+        timeout=600,
+    )
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.splitlines()[0].startswith(str(site))  # the installed copy ran
+    assert "skipped" not in p.stdout
+    assert "ratio mechsolve (whole call) / closed form:" in _section(p.stdout, "crane-kinematics")

@@ -27,6 +27,8 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from importlib import resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 
 import numpy as np
@@ -315,15 +317,7 @@ def _errs_ref(vec, n):
 
 
 def _crane_mech(n: int, masses: bool):
-    import mechsolve as ms
-
-    from .. import api
-
-    path = _find("crane.yaml")
-    if path is not None:
-        mech = api.load(path)
-    else:  # an installed package without the examples: the crane's file is not there
-        return None
+    mech = load_case("crane.yaml")
     mech.driver.start = 0.0
     mech.sweep.travel = 2 * math.pi * (n - 1) / n
     mech.sweep.step = 2 * math.pi / n
@@ -333,15 +327,21 @@ def _crane_mech(n: int, masses: bool):
             lk.mass = lk.inertia = None
         mech.loads = []
         mech.gravity = (0.0, 0.0)
-    _ = ms
     return mech
 
 
-def _find(name: str) -> Path | None:
-    for base in (Path.cwd() / "mechanisms", Path(__file__).resolve().parents[2] / "mechanisms"):
-        if (base / name).exists():
-            return base / name
-    return None
+def case_file(name: str) -> Traversable:
+    """A mechanism file of the benchmarks, shipped inside the package
+    (``mechsolve/bench/data/``, copies of the examples in ``mechanisms/``), so that an
+    installed mechsolve benchmarks every case wherever it is run from."""
+    return resources.files(__name__) / "data" / name
+
+
+def load_case(name: str):
+    """The benchmark's mechanism ``name`` (``"crane.yaml"``), loaded from package data."""
+    from .. import api
+
+    return api.loads(case_file(name).read_text(encoding="utf-8"), file=name)
 
 
 def _compare_crane(sol, want):
@@ -365,10 +365,8 @@ def _compare_crane(sol, want):
     }
 
 
-def case_crane_kinematics(n: int, repeats: int, newton_n: int) -> Case | None:
+def case_crane_kinematics(n: int, repeats: int, newton_n: int) -> Case:
     mech = _crane_mech(n, masses=False)
-    if mech is None:
-        return None
     w = mech.driver.speed
     case = Case("crane-kinematics", f"dock crane (two loops in series), {n} positions")
     case.rows = _kinematic_rows(
@@ -430,12 +428,10 @@ def case_fourbar_forces(n: int, repeats: int) -> Case:
     return case
 
 
-def case_crane_forces(n: int, repeats: int) -> Case | None:
+def case_crane_forces(n: int, repeats: int) -> Case:
     import mechsolve as ms
 
     mech = _crane_mech(n, masses=True)
-    if mech is None:
-        return None
     w = mech.driver.speed
     th = np.linspace(0, 2 * np.pi, n, endpoint=False)
     t = interleaved({"ref": lambda: R.crane_forces(th, w), "call": lambda: ms.solve(mech)}, repeats)
@@ -576,11 +572,7 @@ def case_stream(n: int, stream_above: int | None) -> Case:
 
 def case_startup(repeats: int) -> Case:
     case = Case("startup", "the command line as whole processes")
-    path = _find("fourbar.yaml")
-    with tempfile.TemporaryDirectory() as tmp:
-        if path is None:
-            path = Path(tmp) / "fourbar.yaml"
-            path.write_text(fourbar_yaml(181, masses=True))
+    with tempfile.TemporaryDirectory() as tmp, resources.as_file(case_file("fourbar.yaml")) as path:
         for label, args in (
             (
                 f"mechsolve run {path.name} --no-plots",
@@ -697,7 +689,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
             continue
         case = fn()
         if case is None:
-            echo(f"== {name}: skipped (its data is not available here)")
+            echo(f"== {name}: skipped (not available here)")
             continue
         echo(case.text())
         echo("")
