@@ -183,6 +183,8 @@ class CheckReport:
                 f"{', '.join(red.equations)}. Kinematics is solved by least squares on all "
                 "equations; reactions there are not unique (minimum-norm values are reported)"
             )
+            if red.removable:
+                lines.append("  " + red.suggestion())
         for n in self.notes:
             lines.append("  " + n)
         return "\n".join(lines)

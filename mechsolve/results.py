@@ -563,6 +563,8 @@ class Results:
                 f"equations), among: {', '.join(red.equations)}; solved by least squares on "
                 "all of them"
             )
+            if red.removable:
+                lines.append("  " + red.suggestion())
         lines += self.design_summary()
         if self.forces is not None:
             lines += self.force_summary()

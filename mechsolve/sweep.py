@@ -100,6 +100,17 @@ class Redundancy:
     count: int
     rank: int
     equations: list[str]
+    removable: list[str] = field(default_factory=list)
+
+    def suggestion(self) -> str:
+        """Which constraints a user could remove to make the mechanism determinate."""
+        if not self.removable:
+            return ""
+        return (
+            f"without {' and '.join(self.removable)} the constraints are independent and "
+            "still determine the motion (a revolute joint's single component: let that "
+            "joint slide along it, a pin in a slot)"
+        )
 
 
 @dataclass
@@ -239,6 +250,8 @@ class Analysis:
                 g.scale = self.scale
             if hasattr(g, "lref"):
                 g.lref = self.scale
+            if hasattr(g, "direction"):
+                g.direction = float(mech.driver.direction)
         self.points: dict[str, PointRef] = {}
         nb = self.system.nb
         for p, xy in mech.ground.items():
@@ -297,10 +310,15 @@ class Analysis:
     # -- positions ------------------------------------------------------------------
     def assemble(self, u0: float) -> StartAssembly:
         """Close the mechanism at driver value ``u0`` and choose every group's branch."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return self._assemble(u0)
+
+    def _assemble(self, u0: float) -> StartAssembly:
         mech = self.mech
         # two columns: the "+" and "-" branches of the group being decided; equal otherwise
         st2 = State(self.system.nb, 2)
         drive2 = self.drive(np.array([u0, u0]))
+        unit2 = Drive(drive2.u, np.ones(2), np.zeros(2))  # rates per unit driver coordinate
         drive = self.drive(np.array([u0]))
         asm = mech.assembly
         conds = _PendingConditions(self, asm.conditions)
@@ -313,41 +331,13 @@ class Analysis:
             conds.solved(g.bodies)
             ready = conds.ready()
             if isinstance(g, NewtonGroup):
-                st = st2.take([0])
-                q0 = self._initial_guess(g, st)
-                solver = g
-                if any(getattr(c, "base", None) is not None for c in g.constraints):
-                    # a group that lost redundant equations: close it on all of them, by
-                    # least squares, so that it lands on the configuration they agree on
-                    full = [getattr(c, "base", c) for c in g.constraints]
-                    solver = NewtonGroup(g.bodies, full, self.system.body_names, self.atol, 50)
-                q, stats = solver.solve_at(st, drive.u, q0)
-                if not stats.converged and solver is not g:
-                    raise AssemblyError(
-                        f"{self._file()}the mechanism is over-constrained and cannot close at "
-                        f"{self.format_u(u0)}: the redundant constraints of the {g.label} "
-                        f"disagree by {stats.residual:.3g} m (check the dimensions of the "
-                        "redundant links)"
-                    )
-                if not stats.converged:
-                    raise AssemblyError(
-                        f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
-                        f"and scipy found no closed position of the {g.label} (residual "
-                        f"{stats.residual:.3g} m); give approximate positions under "
-                        "'assembly: sketch:'"
-                    )
+                q = self._assemble_newton_group(g, st2, drive, ready, u0)
                 q_start[gi] = q
                 g.set_q(st2, 0, q)
                 g.set_q(st2, 1, q)
+                g.velocity(st2, unit2)
                 modes.append(1.0)
                 reasons.append("from the sketch" if asm.sketch else "from the links' frames")
-                for _, c in ready:
-                    if not bool(np.all(c.evaluate(view))):
-                        raise AssemblyError(
-                            f"{self._file()}the start position found for the {g.label} does not "
-                            f"satisfy {c.text!r}; give approximate positions under "
-                            "'assembly: sketch:'"
-                        )
                 conds.use(ready)
                 continue
             if g.n_modes < 2:
@@ -357,6 +347,7 @@ class Analysis:
                         f"{self._file()}cannot assemble at {self.format_u(u0)}: "
                         + g.fail_reason(st2, 0)
                     )
+                g.velocity(st2, unit2)
                 modes.append(1.0)
                 reasons.append("")
                 continue
@@ -367,11 +358,18 @@ class Analysis:
                     f"{self._file()}cannot assemble at {self.format_u(u0)}: "
                     + g.fail_reason(st2, 0)
                 )
-            j, reason = self._choose(g, st2, ok2, ready)
+            g.velocity(st2, unit2)
+            j, reason = self._choose(
+                g, *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0), ready
+            )
+            mode = 1.0 if j == 0 else -1.0
+            if _coincident_at(g, st2, 0):  # the limit from the side the motion goes to
+                g.position(st2, drive2, np.array([-mode, -mode]))
+                g.velocity(st2, unit2)
             bodies = list(g.bodies)  # keep the chosen branch in both columns
             st2.block[:, bodies, 1 - j] = st2.block[:, bodies, j]
             st2.token = State.new_token()
-            modes.append(1.0 if j == 0 else -1.0)
+            modes.append(mode)
             reasons.append(reason)
             conds.use(ready)
         st = st2  # both columns hold the chosen assembly; index 0 is the start
@@ -392,6 +390,68 @@ class Analysis:
             }
             modes = [1.0] * len(self.plan)
         return StartAssembly(modes, q_start, reasons, st, u0, group_modes)
+
+    def _assemble_newton_group(self, g: NewtonGroup, st2: State, drive: Drive, ready, u0):
+        """Close a Newton group at the start, on a configuration that satisfies the
+        assembly conditions that apply to it.
+
+        The first guess places the links as their frames (or the sketch) say. Where that
+        guess is itself a singular configuration (links drawn collinear, as a file often
+        draws them), the direction of Newton's first step is decided by rounding, and so
+        by the linear algebra library: such a guess is not used. Further guesses turn
+        each link by fixed pseudo-random angles (the same on every machine); the first
+        closed configuration that satisfies the conditions is taken.
+        """
+        st = st2.take([0])
+        solver = g
+        if any(getattr(c, "base", None) is not None for c in g.constraints):
+            # a group that lost redundant equations: close it on all of them, by
+            # least squares, so that it lands on the configuration they agree on
+            full = [getattr(c, "base", c) for c in g.constraints]
+            solver = NewtonGroup(g.bodies, full, self.system.body_names, self.atol, 50)
+        view = StateView(self, st2)
+        view.has_velocity = view.has_acceleration = False
+        rng = np.random.default_rng(20261123)
+        first = None  # the first closed configuration, and its residual
+        worst = math.inf
+        tries = 1 + NEWTON_START_TRIES
+        for k in range(tries):
+            turn = None if k == 0 else rng.uniform(-math.pi, math.pi, len(g.bodies))
+            q0 = self._initial_guess(g, st, turn)
+            if k == 0:
+                g.set_q(st, 0, q0)
+                if rcond(group_block(g, st)[0])[0] < START_GUESS_RCOND:
+                    continue  # a singular guess: which branch Newton takes is rounding
+            q, stats = solver.solve_at(st, drive.u, q0)
+            if not stats.converged:
+                worst = min(worst, stats.residual)
+                continue
+            if first is None:
+                first = q
+            if not ready:
+                return q
+            g.set_q(st2, 0, q)
+            g.set_q(st2, 1, q)
+            if all(bool(np.all(c.evaluate(view))) for _, c in ready):
+                return q
+        if first is None and solver is not g:
+            raise AssemblyError(
+                f"{self._file()}the mechanism is over-constrained and cannot close at "
+                f"{self.format_u(u0)}: the redundant constraints of the {g.label} "
+                f"disagree by {worst:.3g} m (check the dimensions of the redundant links)"
+            )
+        if first is None:
+            raise AssemblyError(
+                f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
+                f"and scipy found no closed position of the {g.label} (residual "
+                f"{worst:.3g} m); give approximate positions under 'assembly: sketch:'"
+            )
+        texts = ", ".join(repr(c.text) for _, c in ready)
+        raise AssemblyError(
+            f"{self._file()}no closed position of the {g.label} found from "
+            f"{tries} start guesses satisfies {texts}; give approximate positions under "
+            "'assembly: sketch:'"
+        )
 
     def assembly_guess(self, u: float, start: StartAssembly) -> State | None:
         """The mechanism closed at driver value ``u`` by the assembly groups on the start's
@@ -437,9 +497,55 @@ class Analysis:
         if not ready and not has_sketch and ok2[0]:
             start.reasons[gi] = "default branch (+)"
             return
-        j, reason = self._choose(g, two, ok2, ready)
+        j, reason = self._choose(
+            g, *self._where_to_choose(gi, g, two, ok2, start.modes, start.q_start, u0), ready
+        )
         start.reasons[gi] = reason
         start.modes[gi] = 1.0 if j == 0 else -1.0
+
+    def _where_to_choose(self, gi: int, g: Group, st2: State, ok2, modes, q_start, u0: float):
+        """Where a group's branch is read at the start: at the start itself, or, where
+        the group is singular there (its two branches meet: a toggle, a bifurcation,
+        coincident joints), just past it, where the branches differ. Returns the state
+        with both branches (one in each column) and where each closes."""
+        H = g.disc(st2)[0]
+        if not (np.isfinite(H[0]) and H[0] <= TOUCH):
+            return st2, ok2
+        d = self.mech.driver.direction
+        delta = START_PROBE * (self.scale if self.linear else 1.0)
+        for side in (1.0, -1.0):  # the side the motion goes to, else where it comes from
+            u = u0 + side * d * delta
+            st = self._groups_at(u, gi, modes, q_start)
+            if st is None:
+                continue
+            unit = Drive(np.array([u, u]), np.ones(2), np.zeros(2))
+            ok, _ = g.position(st, unit, np.array([side, -side]))
+            if ok.any():
+                return st, ok
+        return st2, ok2
+
+    def _groups_at(self, u: float, upto: int, modes, q_start) -> State | None:
+        """The assembly groups before ``upto`` solved at driver value ``u`` (two equal
+        columns) on the given branches, with their rates; None if one cannot close."""
+        st = State(self.system.nb, 2)
+        unit = Drive(np.array([u, u]), np.ones(2), np.zeros(2))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for gj in range(upto):
+                h = self.groups[gj]
+                if isinstance(h, NewtonGroup):
+                    st1 = st.take([0])
+                    q, stats = h.solve_at(st1, unit.u[:1], q_start[gj])
+                    if not stats.converged:
+                        return None
+                    h.set_q(st, 0, q)
+                    h.set_q(st, 1, q)
+                    st.token = State.new_token()
+                else:
+                    ok, _ = h.position(st, unit, modes[gj])
+                    if not ok.all():
+                        return None
+                h.velocity(st, unit)
+        return st
 
     def condition_bodies(self, c) -> set[int]:
         """The bodies whose poses a condition reads."""
@@ -480,7 +586,28 @@ class Analysis:
         # the equations that take part in a dependency: nonzero in the left null space
         null = U[:, rank:]
         involved = np.flatnonzero(np.max(np.abs(null), axis=1) > 1e-8)
-        return Redundancy(sys_.nc - rank, rank, [names[k] for k in involved])
+        # single equations that can go, the last in the file first (the added link):
+        # leaving one out keeps the rank, so the others still determine every coordinate
+        keep = list(range(sys_.nc))
+        tol = 1e-9 * sv[0]
+        gone: list[int] = []
+        for k in reversed(involved.tolist()):
+            if len(gone) == sys_.nc - rank:
+                break
+            trial = [r for r in keep if r != k]
+            if np.sum(np.linalg.svd(J[trial], compute_uv=False) > tol) == rank:
+                keep = trial
+                gone.append(k)
+        removable = []
+        row = 0
+        for c in sys_.constraints:
+            rows = set(range(row, row + c.m))
+            row += c.m
+            if rows <= set(gone):
+                removable.append(f"joint {c.name}")
+            else:
+                removable += [names[k] for k in sorted(rows & set(gone))]
+        return Redundancy(sys_.nc - rank, rank, [names[k] for k in involved], removable)
 
     def _choose(self, g: Group, st2: State, ok2: np.ndarray, ready) -> tuple[int, str]:
         """The column (0: branch +, 1: branch -) to keep: the conditions that apply, then
@@ -510,11 +637,14 @@ class Analysis:
             return int(np.argmin(dist)), "nearest to the sketch"
         return 0, "default branch (+)"
 
-    def _initial_guess(self, g: NewtonGroup, st: State) -> np.ndarray:
+    def _initial_guess(
+        self, g: NewtonGroup, st: State, turn: np.ndarray | None = None
+    ) -> np.ndarray:
         """A start guess for a Newton group: from the sketch, else the links' frames.
 
         Each body is placed so that one of its joint points (to a body already placed)
-        coincides, with the orientation that best fits any sketched points.
+        coincides, with the orientation that best fits any sketched points, turned by
+        ``turn[k]`` (rad) for the group's k-th body when given.
         """
         placed = {b for b in range(self.system.nb + 1) if b not in g.bodies}
         q = np.zeros(g.n)
@@ -558,6 +688,8 @@ class Analysis:
                 dot = float(np.sum(loc * glo))
                 if cross or dot:
                     th = math.atan2(cross, dot)
+            if turn is not None:
+                th += float(turn[g.col[b]])
             c, s = math.cos(th), math.sin(th)
             if pairs:
                 (lx, ly), (gx, gy) = pairs[0]
@@ -701,6 +833,7 @@ class Analysis:
         events: list[Event] = []
         warnings: list[str] = []
         ctx = _Context(self, st, u, start, flips, q_start)
+        ctx.is_start = near is None and follow is None
         with np.errstate(invalid="ignore", divide="ignore"):
             for gi, g in enumerate(self.plan):
                 if isinstance(g, NewtonGroup):
@@ -728,6 +861,10 @@ class Analysis:
                         conds.solved(g.bodies)
                         if g.n_modes == 2:
                             self._decide_at_start(gi, g, st, start, conds)
+                    if ctx.is_start and n and _coincident_at(g, st, 0):
+                        # the start's branch is the one taken from the start; the pose at
+                        # the start itself is the limit from that side (see RRR)
+                        flips[gi][:0] = [-math.inf * self.mech.driver.direction, float(u[0])]
                     sigma = self.sigma_at(start.modes[gi], flips[gi], u)
                     ok, ind = g.position(st, unit, sigma)
                     if lazy and not ok[0]:
@@ -797,6 +934,21 @@ class Analysis:
             self._rates_at_singular(sol, velocity, acceleration, per_unit_driver)
         return sol
 
+    def _downstream(self) -> list[set[int]]:
+        """For each group of the plan, its bodies and those of every later group that
+        depends on them (through a joint, directly or through other groups)."""
+        if getattr(self, "_down", None) is None:
+            down = []
+            for gi, g in enumerate(self.plan):
+                bodies = set(g.bodies)
+                for h in self.plan[gi + 1 :]:
+                    touches = {b for c in h.constraints for b in (c.a, c.b)}
+                    if touches & bodies:
+                        bodies |= set(h.bodies)
+                down.append(bodies)
+            self._down = down
+        return self._down
+
     def _rates_at_singular(
         self, sol: Solution, velocity: bool, acceleration: bool, per_unit_driver: bool
     ) -> None:
@@ -813,30 +965,32 @@ class Analysis:
         5e-3 rad, or 5e-3 of the mechanism's size for a linear driver: rounding grows
         near the singular point as d shrinks (about eps / d^3 in accelerations), the
         extrapolation error as d^4; the limits are good to about 1e-9 of the rates'
-        natural sizes. Where the motion
-        does not exist on both sides (a limit position of a driven rocker: the rates are
-        infinite) or the two sides disagree, the rates stay NaN.
+        natural sizes. A Newton group's points on each side are reached by continuation
+        from the neighbouring sample on that side, which lies on the followed motion.
+        Where the motion does not exist on both sides (a limit position of a driven
+        rocker: the rates are infinite) or the two sides disagree, the rates of the
+        singular group and of the groups that depend on it stay NaN; the other rates
+        (the driver's, groups before it or beside it) keep their values.
         """
         ind = sol.indicator
         st = sol.state
-        sing = np.zeros(len(sol.u), bool)
-        newton = np.zeros(len(sol.u), bool)
+        n = len(sol.u)
+        sing_by: dict[int, list[int]] = {}  # position -> its singular groups
+        newton = np.zeros(n, bool)
         for gi, g in enumerate(self.plan):
             if g.n_modes == 2 and gi < len(ind):
-                sing |= ind[gi] <= SINGULAR_INDICATOR
+                where = ind[gi] <= SINGULAR_INDICATOR
             elif isinstance(g, NewtonGroup):
                 # a Newton solve stops within the square root of the rounding error of
                 # a singular point, so its block is only nearly singular there
-                newton |= rcond(group_block(g, st)[0]) <= NEWTON_SINGULAR_RCOND
-        newton &= sol.ok
-        sing &= sol.ok & ~newton
-        rows = slice(5, 8) if not acceleration else slice(5, 11)
-        # A Newton group at a singular point: which of the branches that meet there
-        # continues the motion is not known from this position alone, so its rates
-        # are not guessed.
-        st.block[rows, :, newton] = np.nan
-        sol.rates_undetermined = [int(i) for i in np.flatnonzero(newton)]
-        if not sing.any():
+                where = rcond(group_block(g, st)[0]) <= NEWTON_SINGULAR_RCOND
+                newton |= where & sol.ok
+            else:
+                continue
+            for i in np.flatnonzero(where & sol.ok):
+                sing_by.setdefault(int(i), []).append(gi)
+        sol.rates_undetermined = []
+        if not sing_by:
             return
         rows = slice(5, 8) if not acceleration else slice(5, 11)
         d = 5e-3 * (self.scale if self.linear else 1.0)
@@ -844,33 +998,52 @@ class Analysis:
         ws = (1.0 if per_unit_driver else abs(self.speed)) / (self.scale if self.linear else 1.0)
         kind = np.array([self.scale * ws, self.scale * ws, ws] + [self.scale * ws * ws] * 2)
         kind = np.append(kind, ws * ws)[rows, None]
-        n = len(sol.u)
-        for i in np.flatnonzero(sing):
+        down = self._downstream()
+        kw = dict(
+            start=sol.start,
+            velocity=velocity,
+            acceleration=acceleration,
+            per_unit_driver=per_unit_driver,
+            limits=False,
+        )
+        for i, groups in sorted(sing_by.items()):
             ui = float(sol.u[i])
             one_sided = n > 1 and i in (0, n - 1)
             if one_sided:
                 # the first or last sample: the followed motion lies on one side only
                 into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
                 x = ui + into * d * np.arange(1.0, 5.0)
+                if newton[i]:
+                    k = i + 1 if i == 0 else i - 1  # continue from the neighbour inward
+                    side = self._side_solve(sol, k, x[::-1], kw)
+                    r = None if side is None else side.block[rows, :, ::-1]
+                else:
+                    near = self.solve(x, near=(sol, int(i)), **kw)
+                    r = near.state.block[rows, :, :] if near.ok.all() else None
+            elif newton[i]:
+                lo = self._side_solve(sol, i - 1, ui - d * np.array([2.0, 1.0]), kw)
+                hi = self._side_solve(sol, i + 1, ui + d * np.array([2.0, 1.0]), kw)
+                r = None
+                if lo is not None and hi is not None:
+                    a, b = lo.block[rows], hi.block[rows]
+                    r = np.stack([a[:, :, 1], b[:, :, 1], a[:, :, 0], b[:, :, 0]], axis=2)
             else:
-                x = ui + d * np.array([-1.0, 1.0, -2.0, 2.0])
-            near = self.solve(
-                x,
-                start=sol.start,
-                velocity=velocity,
-                acceleration=acceleration,
-                near=(sol, int(i)),
-                per_unit_driver=per_unit_driver,
-                limits=False,
-            )
-            r = near.state.block[rows, :, :]
-            if not near.ok.all():
-                st.block[rows, :, i] = np.nan
+                near = self.solve(ui + d * np.array([-1.0, 1.0, -2.0, 2.0]), near=(sol, i), **kw)
+                r = near.state.block[rows, :, :] if near.ok.all() else None
+            bodies = sorted(set().union(*(down[gi] for gi in groups)))
+            if r is None:
+                st.block[rows, bodies, i] = np.nan
                 sol.rates_undetermined.append(int(i))
                 continue
-            if one_sided:  # cubic extrapolation
-                st.block[rows, :, i] = r @ np.array([4.0, -6.0, 4.0, -1.0])
-                sol.rates_by_limit.append(int(i))
+            if one_sided:  # cubic extrapolation, checked against the quadratic one
+                est = r @ np.array([4.0, -6.0, 4.0, -1.0])
+                quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
+                if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
+                    st.block[rows, :, i] = est
+                    sol.rates_by_limit.append(int(i))
+                else:  # not smooth there: the rates grow without bound (a limit position)
+                    st.block[rows, bodies, i] = np.nan
+                    sol.rates_undetermined.append(int(i))
                 continue
             lo1, hi1, lo2, hi2 = (r[:, :, k] for k in range(4))
             # a smooth motion changes twice as much over 4d as over 2d; a jump does not
@@ -878,44 +1051,62 @@ class Analysis:
                 0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
             )
             est = (4.0 * (lo1 + hi1) - (lo2 + hi2)) / 6.0
-            st.block[rows, :, i] = np.where(smooth.all(), est, np.nan)
-            (sol.rates_by_limit if smooth.all() else sol.rates_undetermined).append(int(i))
-        sol.rates_undetermined.sort()
+            if smooth.all():
+                st.block[rows, :, i] = est
+                sol.rates_by_limit.append(int(i))
+            else:
+                st.block[rows, bodies, i] = np.nan
+                sol.rates_undetermined.append(int(i))
         st.token = State.new_token()
 
-    def _refine_minima(self, gi: int, g: Group, ctx: _Context, cand, H, Hs):
-        """Locate the minima of the discriminant between samples ``cand`` and ``cand + 1``.
+    def _side_solve(self, sol: Solution, k: int, x: np.ndarray, kw) -> State | None:
+        """Positions ``x`` reached by continuation from solved sample ``k`` (which is
+        solved again first, so that the march starts on its pose); None if sample ``k``
+        was not solved or a position does not close."""
+        if not (0 <= k < len(sol.u)) or not sol.ok[k]:
+            return None
+        near = self.solve(np.r_[sol.u[k], x], near=(sol, k), **kw)
+        if not near.ok.all():
+            return None
+        return near.state.take(np.arange(1, len(x) + 1))
+
+    def _refine_minima(self, gi: int, g: Group, ctx: _Context, cand, u, H, Hs, near):
+        """Locate the minima of the discriminant between points ``cand`` and ``cand + 1``
+        of the analysis grid ``u`` (with values ``H``, rates along the sweep ``Hs``, and
+        the sweep sample ``near`` each grid point lies next to).
 
         Bisection on its rate H' = 0, evaluating the groups before this one at the
-        midpoints (all candidates at once). A candidate is settled early once the cubic
-        Hermite interpolant through the bracket's ends and a parabola agree that its
-        minimum is clearly above zero (no bifurcation there, just how near it comes).
+        midpoints (all candidates at once), until the bracket closes in on the minimum
+        (to rounding), where H is evaluated. A candidate is settled early only when the
+        minimum is proven above zero: once the bracket is short (:data:`SETTLE_WIDTH`),
+        H is convex on it, so H lies above both end tangents, and their intersection is a
+        lower bound of the minimum; if that bound is above :data:`NO_TOUCH`, the motion
+        does not pass through a singular configuration there.
         """
         d = self.mech.driver.direction
-        u = ctx.u
         lo, hi = u[cand].copy(), u[cand + 1].copy()
         hlo, hhi = H[cand].copy(), H[cand + 1].copy()
         slo, shi = Hs[cand].copy(), Hs[cand + 1].copy()  # rates along the sweep
-        est = np.zeros(len(cand))
-        ustar = 0.5 * (lo + hi)
+        nk = near[cand]
+        est = np.full(len(cand), np.nan)
         open_ = np.ones(len(cand), bool)
-        for _ in range(64):
+        settle_w = SETTLE_WIDTH * (self.scale if self.linear else 1.0)
+        for _ in range(80):
             w = np.abs(hi - lo)
-            cubic = _hermite_min(hlo, hhi, slo * w, shi * w)
-            curv = (shi - slo) / np.where(w > 0, w, 1.0)
-            parab = hlo - slo * slo / (2 * np.where(curv > 0, curv, np.inf))
-            settled = (
-                (cubic > NO_TOUCH) & (parab > NO_TOUCH) & (np.abs(cubic - parab) < 0.5 * cubic)
-            )
+            with np.errstate(invalid="ignore", divide="ignore"):
+                x = (hhi - hlo - shi * w) / (slo - shi)  # where the end tangents meet
+                bound = hlo + slo * np.clip(x, 0.0, w)
+            settled = (w <= settle_w) & (bound > NO_TOUCH)
             tiny = w <= 4e-16 * (1 + np.abs(lo))
-            est = np.where(open_, np.where(settled, np.minimum(cubic, parab), est), est)
+            est = np.where(
+                open_ & settled, np.maximum(bound, _hermite_min(hlo, hhi, slo * w, shi * w)), est
+            )
             open_ &= ~(settled | tiny)
             if not open_.any():
                 break
             k = np.flatnonzero(open_)
             mid = 0.5 * (lo[k] + hi[k])
-            stm = ctx.prefix(gi, mid, cand[k])
-            hm, dm = g.disc(stm)
+            hm, dm = g.disc(ctx.prefix(gi, mid, nk[k]))
             sm = dm * d
             down = sm < 0
             lo[k] = np.where(down, mid, lo[k])
@@ -924,66 +1115,121 @@ class Analysis:
             hi[k] = np.where(down, hi[k], mid)
             hhi[k] = np.where(down, hhi[k], hm)
             shi[k] = np.where(down, shi[k], sm)
+        ustar = 0.5 * (lo + hi)
         # where the bracket closed in on the minimum, the discriminant there
-        exact = est == 0
+        exact = np.isnan(est)
         if exact.any():
             k = np.flatnonzero(exact)
-            ustar[k] = 0.5 * (lo[k] + hi[k])
-            est[k] = np.asarray(g.disc(ctx.prefix(gi, ustar[k], cand[k]))[0])
-        settled = ~exact
-        ustar[settled] = 0.5 * (lo[settled] + hi[settled])
-        return list(zip(cand.tolist(), ustar.tolist(), est.tolist()))
+            est[k] = np.asarray(g.disc(ctx.prefix(gi, ustar[k], nk[k]))[0])
+        return ustar, est
+
+    def _analysis_grid(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
+        """The discriminant on the sweep's samples and, where the samples are further
+        apart than :data:`EVENT_STEP`, on points in between (evaluating the groups before
+        this one there), so that no minimum hides between two samples.
+
+        Returns ``u, H, Hs, good, near, at_sample``: the grid's driver values, H and its
+        rate along the sweep, where both are known, the sweep sample each point lies
+        next to (the interval it is in), and which grid points are samples.
+        """
+        H, dH = g.disc(ctx.st)
+        d = self.mech.driver.direction
+        u = ctx.u
+        n = len(u)
+        good = ok_prev & np.isfinite(H) & np.isfinite(dH)
+        step = EVENT_STEP * (self.scale if self.linear else 1.0)
+        w = np.abs(np.diff(u))
+        extra = np.where(good[:-1] & good[1:], np.ceil(w / step).astype(int) - 1, 0)
+        extra = np.maximum(extra, 0)
+        if not extra.any():
+            return u, H, dH * d, good, np.arange(n), np.ones(n, bool)
+        counts = extra + 1
+        owner = np.repeat(np.arange(n - 1), counts)
+        first = np.cumsum(counts) - counts
+        j = np.arange(len(owner)) - np.repeat(first, counts)  # 0: the sample itself
+        frac = j / np.repeat(counts, counts)
+        ug = np.append(u[owner] + frac * (u[owner + 1] - u[owner]), u[-1])
+        at_sample = np.append(j == 0, True)
+        near = np.append(owner, n - 1)
+        Hg = np.empty(len(ug))
+        dHg = np.empty(len(ug))
+        idx = np.flatnonzero(at_sample)
+        Hg[idx], dHg[idx] = H, dH
+        mid = np.flatnonzero(~at_sample)
+        hm, dm = g.disc(ctx.prefix(gi, ug[mid], near[mid]))
+        Hg[mid], dHg[mid] = hm, dm
+        goodg = np.empty(len(ug), bool)
+        goodg[idx] = good
+        goodg[mid] = np.isfinite(hm) & np.isfinite(dm)
+        return ug, Hg, dHg * d, goodg, near, at_sample
 
     def _branch_events(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
         """Find where a two-branch group meets a singular configuration along the sweep.
 
         The group's discriminant H (zero where its branches meet) depends only on earlier
-        groups; with its exact rate H' it locates each local minimum of H: between two
-        samples where H' changes sign, refined by bisection on H' = 0. At a minimum where H
+        groups; with its exact rate H' it locates each local minimum of H on a grid no
+        coarser than :data:`EVENT_STEP`: between two grid points where H' changes sign,
+        refined by bisection on H' = 0 (see :meth:`_refine_minima`). At a minimum where H
         touches zero (to rounding) the motion passes through a bifurcation point: the
         smooth continuation is on the other branch, so the branch flips there. A minimum
-        below zero means the sweep stepped over a dead zone.
+        below zero means the sweep stepped over a dead zone. A minimum at the sweep's
+        first position does not flip anything: the start's branch is the one the motion
+        takes from there (see :meth:`assemble`).
         """
-        H, dH = g.disc(ctx.st)
         d = self.mech.driver.direction
-        Hs = dH * d  # rate along the sweep
-        u = ctx.u
-        good = ok_prev & np.isfinite(H) & np.isfinite(Hs)
-        pair = good[:-1] & good[1:] & (H[:-1] >= -TOUCH) & (H[1:] >= -TOUCH)
+        u_s = ctx.u
+        u, H, Hs, good, near, at_sample = self._analysis_grid(gi, g, ctx, ok_prev)
+        # intervals between two samples where the group closes (a minimum elsewhere is
+        # part of a range where it cannot close, reported as such)
+        hs_ = H[at_sample]
+        closes = good[at_sample] & (hs_ >= -TOUCH)
+        both = closes[:-1] & closes[1:]
+        owner = np.minimum(near[:-1], len(closes) - 2) if len(closes) > 1 else near[:-1]
+        pair = good[:-1] & good[1:] & (both[owner] if len(closes) > 1 else False)
         inside = np.flatnonzero(pair & (Hs[:-1] < 0) & (Hs[1:] > 0))
         h = np.abs(u[inside + 1] - u[inside])
         est = _hermite_min(H[inside], H[inside + 1], Hs[inside] * h, Hs[inside + 1] * h)
         cand = inside[est < EVENT_CHECK]
         events: list[Event] = []
         warnings: list[str] = []
-        found: list[tuple[int, float, float]] = []  # (k, u*, H*)
+        found: list[tuple[int, float, float]] = []  # (sample before, u*, H*)
         if cand.size:
-            found = self._refine_minima(gi, g, ctx, cand, H, Hs)
-        # minima exactly at a sample
+            us, hs = self._refine_minima(gi, g, ctx, cand, u, H, Hs, near)
+            found += list(zip(near[cand].tolist(), us.tolist(), hs.tolist()))
+        # minima exactly at a grid point
         for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
             if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
-                found.append((int(k) - 1, float(u[k]), float(H[k])))
-        # near-singular minima seen at the samples themselves (where the group closes)
+                found.append((int(near[k - 1]), float(u[k]), float(H[k])))
+        # near-singular minima seen at the grid points themselves (where the group closes)
         closable = good & (H >= -TOUCH)
         for k in np.flatnonzero(closable[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
             if not (closable[k - 1] and closable[k + 1]):
                 continue
-            if H[k - 1] >= H[k] <= H[k + 1] and not any(f[0] in (k - 1, k) for f in found):
-                found.append((int(k) - 1, float(u[k]), float(H[k])))
+            if H[k - 1] >= H[k] <= H[k + 1] and not any(
+                abs(f[1] - u[k]) <= abs(u[k + 1] - u[k - 1]) for f in found
+            ):
+                found.append((int(near[k - 1]), float(u[k]), float(H[k])))
         found.sort(key=lambda f: d * f[1])
         merged: list[tuple[int, float, float]] = []
-        for f in found:  # one minimum seen from both sides of a sample is one event
+        for f in found:  # one minimum seen from both sides of a point is one event
             if merged and abs(f[1] - merged[-1][1]) <= 1e-9 * (1.0 + abs(f[1])):
                 if f[2] < merged[-1][2]:
-                    merged[-1] = (merged[-1][0], f[1], f[2])
+                    merged[-1] = (merged[-1][0], merged[-1][1], f[2])
                 continue
             merged.append(f)
         for k, us, hs in merged:
+            # a minimum on a sample (to rounding) is that sample: the sample keeps the
+            # branch it comes in on, and the flip applies after it
+            j = int(np.argmin(np.abs(u_s - us)))
+            if abs(u_s[j] - us) <= 1e-12 * (1.0 + abs(us)):
+                us = float(u_s[j])
+                if j == 0 and ctx.is_start:
+                    continue  # the start's branch is the one taken from the start
             mu = float(np.arcsin(np.sqrt(max(min(hs, 1.0), 0.0))))
             if hs < -TOUCH:
                 events.append(Event("dead zone", g.label, us, k, 0.0))
                 warnings.append(
-                    f"between {self.format_u(u[k])} and {self.format_u(u[k + 1])} the "
+                    f"between {self.format_u(u_s[k])} and {self.format_u(u_s[k + 1])} the "
                     f"{g.label} cannot close (near {self.format_u(us)}): the sweep steps over "
                     "this dead zone; the motion between these positions is not continuous "
                     "(use a smaller step to see it)"
@@ -1048,9 +1294,14 @@ class Analysis:
 
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 
+NEWTON_START_TRIES = 24  # further start guesses for a Newton group at the assembly
+START_GUESS_RCOND = 1e-8  # a start guess this near singular leaves the branch to rounding
 NEWTON_SINGULAR_RCOND = 1e-7  # a Newton group's block this near singular: rates by limits
 TOUCH = 1e-10  # |discriminant| below this at a minimum: the branches meet (bifurcation)
-NO_TOUCH = 1e-6  # a minimum estimated clearly above this needs no further refinement
+NO_TOUCH = 1e-6  # a minimum proven above this needs no further refinement
+SETTLE_WIDTH = 0.02  # brackets this short (rad, or of the size) are convex about a minimum
+EVENT_STEP = math.radians(2.0)  # the branch analysis's coarsest grid (x size: linear driver)
+START_PROBE = 1e-4  # how far past a singular start its branch is read (rad, x size)
 EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below this
 NEAR_SINGULAR = math.sin(math.radians(3.0))
 
@@ -1134,6 +1385,13 @@ def _restart_guess(an: Analysis, g: NewtonGroup, u: float, start: StartAssembly)
     return False if st is None else g.get_q(st, 0)
 
 
+def _coincident_at(g: Group, st: State, i: int) -> bool:
+    """Do the outer joints of the group coincide at position ``i`` (see RRR)?"""
+    f = getattr(g, "coincident", None)
+    c = f(st) if f is not None else None
+    return c is not None and bool(c[i])
+
+
 def _hermite_min(h0, h1, d0, d1):
     """Smallest value of the cubic Hermite interpolant on [0, 1] (values h, slopes d)."""
     if len(h0) == 0:
@@ -1163,6 +1421,7 @@ class _Context:
         self.start = start
         self.flips = flips
         self.q_start = q_start
+        self.is_start = True  # u[0] is the sweep's start (not a chunk, nor a single position)
 
     def prefix(self, gi: int, u_new, near_k) -> State:
         """Solve the groups before ``gi`` (positions and derivatives per unit driver

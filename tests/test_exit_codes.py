@@ -82,10 +82,19 @@ def test_1_unassemblable_positions(tmp_path):
 
 
 def test_1_values_undetermined_at_singular_positions(tmp_path):
-    # a parallelogram solved by Newton through its collinear positions: the rates there
-    # are left blank
-    text = fourbar(1, 3, 1, 3, "assembly: {sketch: {B: [3.8, 0.6]}}\nsolver: {method: newton}")
-    p = mechsolve("run", write(tmp_path, "par.yaml", text), "-o", str(tmp_path), "--no-plots")
+    # a four-bar driven by its rocker exactly to the rocker's limit position: there the
+    # crank's and the coupler's rates grow without bound and are left blank
+    import math
+
+    a, b, c, d = 0.3, 1.1, 0.8, 1.0
+    lim = math.degrees(math.acos(((a + b) ** 2 - d * d - c * c) / (2 * d * c)))
+    text = (
+        fourbar(a, b, c, d, "")
+        .replace("joint: O2", "joint: O4")
+        .replace("start: 0 deg", f"direction: cw, start: {lim + 30!r} deg")
+    )
+    text += "sweep: {range: 30 deg, steps: 30}\n"
+    p = mechsolve("run", write(tmp_path, "lim.yaml", text), "-o", str(tmp_path), "--no-plots")
     assert p.returncode == 1, p.stdout + p.stderr
     assert "are not determined (left blank)" in p.stdout
 

@@ -29,6 +29,8 @@ from .base import (
     set_pose_from_vectors,
 )
 
+COINCIDENT = 1e-7  # |PQ| below this fraction of the arms: the outer joints coincide
+
 
 def _local(c: RevoluteConstraint, body: int) -> np.ndarray:
     return c.sa if c.a == body else c.sb
@@ -188,6 +190,8 @@ class RRR(Group):
         self.sM1, self.sM2 = _local(j2, b1), _local(j2, b2)
         self.L1 = float(np.hypot(*(self.sM1 - self.sP1)))
         self.L2 = float(np.hypot(*(self.sM2 - self.sQ2)))
+        self.equal_arms = abs(self.L1 - self.L2) <= 1e-12 * max(self.L1, self.L2)
+        self.direction = 1.0  # the sweep's direction along the driver; the analysis sets it
         super().__init__([b1, b2], [j1, j2, j3], names)
 
     def describe(self) -> str:
@@ -217,30 +221,51 @@ class RRR(Group):
 
     def _triangle(self, st: State):
         """The branch-free part of the closure (cached): M's distance along P -> Q and
-        its squared height, both as fractions of |PQ|, and where the loop closes."""
+        its squared height, both as fractions of |PQ|, where the loop closes, the
+        discriminant ``H`` (see :meth:`disc`) and where the outer joints coincide."""
         c = self.cache(st)
         if "tri" not in c:
             D2 = self.ends(st)[6]
             L1, L2 = self.L1, self.L2
-            with np.errstate(invalid="ignore", divide="ignore"):
+            L1s, L2s = L1 * L1, L2 * L2
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 inv = 1.0 / D2
-                a = (0.5 * (L1 * L1 - L2 * L2)) * inv + 0.5  # along P->Q, fraction of D
-                h2 = (L1 * L1) * inv - a * a  # (height / D)^2
+                a = (0.5 * (L1s - L2s)) * inv + 0.5  # along P->Q, fraction of D
+                h2 = L1s * inv - a * a  # (height / D)^2
+                # 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2, written without a
+                # division so that it stays finite where P and Q coincide
+                aD2 = 0.5 * (L1s - L2s + D2)
+                H = (L1s * D2 - aD2 * aD2) * (1.0 / (L1s * L2s))
                 # a toggle position (h = 0) within rounding still closes
                 tol = (1e-12 * max(L1, L2) ** 2) * inv
                 ok = (h2 >= -tol) & (D2 > 0)
-            c["tri"] = (a, h2, ok)
+                coincident = None
+                if self.equal_arms:
+                    # P and Q (nearly) coincide: with equal arms every position of M on
+                    # the circle about them closes the loop (a bifurcation point)
+                    coincident = D2 <= (COINCIDENT * L1) ** 2
+                    if coincident.any():
+                        ok = ok | coincident
+                        H = np.where(coincident, np.maximum(H, 0.0), H)
+                    else:
+                        coincident = None
+            c["tri"] = (a, h2, ok, H, coincident)
         return c["tri"]
+
+    def coincident(self, st: State) -> np.ndarray | None:
+        """Where the outer joints P and Q coincide (arms of equal length only), or None."""
+        return self._triangle(st)[4]
 
     def position(self, st: State, drive: Drive, mode=1.0):
         px, py, qx, qy, dx, dy, D2 = self.ends(st)
-        L1, L2 = self.L1, self.L2
-        a, h2, ok = self._triangle(st)
+        a, h2, ok, H, coincident = self._triangle(st)
         with np.errstate(invalid="ignore", divide="ignore"):
             hs = np.sqrt(np.maximum(h2, 0.0))
             h = hs * mode
             g1x = a * dx - h * dy  # M - P
             g1y = a * dy + h * dx
+            if coincident is not None:
+                g1x, g1y = self._coincident_pose(st, coincident, mode, g1x, g1y)
         if not ok.all():
             g1x = np.where(ok, g1x, np.nan)
             g1y = np.where(ok, g1y, np.nan)
@@ -249,20 +274,39 @@ class RRR(Group):
         set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, g1x, g1y)
         set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, g2x, g2y)
         # sin of the angle between the two links at M
-        ind = hs * D2
-        ind *= 1.0 / (L1 * L2)
-        np.minimum(ind, 1.0, out=ind)
+        with np.errstate(invalid="ignore"):
+            ind = np.sqrt(np.clip(H, 0.0, 1.0))
         return ok, ind if ok.all() else np.where(ok, ind, 0.0)
+
+    def _coincident_pose(self, st: State, where, mode, g1x, g1y):
+        """M - P where P and Q coincide: the limit along the motion.
+
+        Near the coincidence Q - P = d(u) ~ d'(u*) (u - u*), and M - P tends to
+        ``mode L1 perp(d / |d|)``: the direction of d flips as the joints pass through each
+        other, so the smooth motion flips the branch there (a bifurcation, which the
+        sweep records). At the coincident position itself the direction of d is
+        rounding, so the limit is taken from the side the sweep comes from (``-direction``
+        along d'); at the sweep's start, from the side it goes to (the sweep flips the
+        branch of that one position, see :meth:`Analysis.solve`). The rate d' of Q - P
+        comes from the groups solved before (per unit of the driver coordinate).
+        """
+        _, _, dvx, dvy = self._dv(st)
+        nv = np.hypot(dvx, dvy)
+        s = -self.direction / np.where(nv > 0, nv, np.nan)
+        ex, ey = s * dvx, s * dvy  # unit vector along d on the incoming side
+        m = np.broadcast_to(mode, np.shape(g1x))
+        return (
+            np.where(where, -m * self.L1 * ey, g1x),
+            np.where(where, m * self.L1 * ex, g1y),
+        )
 
     def disc(self, st: State):
         """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2,
         which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close)."""
-        px, py, qx, qy, dx, dy, D2 = self.ends(st)
+        dx, dy, D2 = self.ends(st)[4:]
         _, _, dvx, dvy = self._dv(st)
-        _, h2, _ = self._triangle(st)
+        H = self._triangle(st)[3]
         L1s, L2s = self.L1**2, self.L2**2
-        H = h2 * D2
-        H *= D2 * (1.0 / (L1s * L2s))
         dD2 = dx * dvx + dy * dvy  # half the rate of D^2
         dH = ((L1s + L2s) - D2) * dD2
         dH *= 1.0 / (L1s * L2s)
