@@ -92,3 +92,94 @@ def test_a_failing_run_keeps_a_previous_complete_csv(tmp_path):
     assert r.exit_code == 3
     assert (tmp_path / "results.csv").read_text() == before
     assert not list(tmp_path.glob("*.part"))
+
+
+# --- faults found by fuzzing (issue 10) ----------------------------------------------
+
+FOURBAR = Path(__file__).resolve().parents[1] / "mechanisms" / "fourbar.yaml"
+
+
+def test_deep_nesting_is_refused_fast(tmp_path):
+    f = tmp_path / "deep.yaml"
+    f.write_text("[" * 20_000 + "]" * 20_000)
+    g = tmp_path / "deep_block.yaml"
+    g.write_text("links:\n  a:\n    " + "- " * 20_000 + "x\n")
+    for path in (f, g):
+        t0 = time.process_time()
+        r, _ = run(["check", str(path)])
+        assert time.process_time() - t0 < 1.0
+        assert r.exit_code == 2 and "nesting deeper than 64 levels" in r.output, r.output
+    assert f"{g}:3: links.a[0][0]" in r.output
+
+
+def test_a_huge_flat_list_is_refused_fast(tmp_path):
+    f = tmp_path / "flat.yaml"
+    f.write_text("links: [" + ", ".join(["1"] * 140_000) + "]\n")
+    t0 = time.process_time()
+    r, _ = run(["check", str(f)])
+    assert time.process_time() - t0 < 1.0
+    assert r.exit_code == 2 and "more than 100000 values" in r.output, r.output
+
+
+def _limited(cmd: list[str], **kw):
+    """Run the real command with 2 GB of address space (a runaway read fails fast)."""
+    import resource
+    import subprocess
+    import sys
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+    return subprocess.run(
+        [sys.executable, "-m", "mechsolve", *cmd],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=limit,
+        **kw,
+    )
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom"])
+def test_a_device_that_never_ends(device, tmp_path):
+    if not Path(device).exists():
+        pytest.skip(f"no {device}")
+    t0 = time.perf_counter()
+    r = _limited(["run", device, "-o", str(tmp_path), "--no-plots"])
+    assert time.perf_counter() - t0 < 30
+    assert r.returncode == 2, r.stderr
+    assert f"{device}: the file is longer than 1000000 bytes" in r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_a_fifo(tmp_path):
+    import os
+    import threading
+
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    fifo = tmp_path / "pipe.yaml"
+
+    def write(data: bytes, repeat: bool) -> None:
+        try:
+            with open(fifo, "wb") as w:
+                while True:
+                    w.write(data)
+                    if not repeat:
+                        break
+        except (BrokenPipeError, OSError):
+            pass
+
+    # an endless writer: refused after the limit
+    os.mkfifo(fifo)
+    t = threading.Thread(target=write, args=(b"# padding\n" * 1000, True), daemon=True)
+    t.start()
+    r = _limited(["check", str(fifo)])
+    assert r.returncode == 2 and "longer than 1000000 bytes" in r.stderr, r.stderr
+    t.join(10)
+    # a mechanism through a pipe is read like a file
+    t = threading.Thread(target=write, args=(FOURBAR.read_bytes(), False), daemon=True)
+    t.start()
+    r = _limited(["check", str(fifo)])
+    assert r.returncode == 0, r.stderr
+    t.join(10)

@@ -142,6 +142,8 @@ def _scalar(node: yaml.ScalarNode) -> Any:
     if tag == _STD + "str":
         return node.value
     if tag == _STD + "int":
+        if len(node.value) > 400:  # Python refuses to convert over 4300 digits; no key needs 400
+            raise ValueError(f"{node.value[:20]}... is too large a number")
         return _CTOR.construct_yaml_int(node)
     if tag == _STD + "float":
         return _CTOR.construct_yaml_float(node)
@@ -213,6 +215,73 @@ class _Converter:
         return result
 
 
+class _Open:
+    """A collection open in the event stream, and where in it the parser is."""
+
+    __slots__ = ("is_map", "index", "key", "expect_key", "here")
+
+    def __init__(self, is_map: bool) -> None:
+        self.is_map = is_map
+        self.index = 0
+        self.key: Any = None
+        self.expect_key = True
+        self.here: Any = None  # the path component of the node being read in it
+
+
+def _check_events(text: str, file: str | None) -> None:
+    """Count the parser's events and the nesting depth as the text is parsed.
+
+    Raise :class:`InputError` as soon as the file holds more than :data:`MAX_EVENTS`
+    events or nests deeper than :data:`MAX_DEPTH`, naming the key path and the line. The
+    parser is lazy, so a hostile file is refused after reading only its beginning.
+    """
+    stack: list[_Open] = []
+    node_events = (yaml.ScalarEvent, yaml.AliasEvent, yaml.CollectionStartEvent)
+    nodes = 0
+    for n, ev in enumerate(yaml.parse(text, Loader=_LOADER)):
+        if n > MAX_EVENTS:
+            raise InputError(
+                f"the file holds more than {MAX_EVENTS} YAML items; no mechanism needs "
+                "that many (is this the right file?)",
+                file=file,
+            )
+        if isinstance(ev, yaml.CollectionEndEvent):
+            stack.pop()
+            continue
+        if not isinstance(ev, node_events):
+            continue
+        nodes += 1
+        if nodes > MAX_NODES:  # before aliases expand: composing them all would be slow
+            raise InputError(
+                f"the document holds more than {MAX_NODES} values (a file far larger than "
+                "any mechanism)",
+                file=file,
+                line=ev.start_mark.line + 1,
+            )
+        is_key = False
+        if stack:
+            top = stack[-1]
+            if not top.is_map:
+                top.here = top.index
+                top.index += 1
+            elif top.expect_key:
+                top.key = ev.value if isinstance(ev, yaml.ScalarEvent) else "?"
+                top.expect_key = False
+                is_key = True
+            else:
+                top.here = top.key
+                top.expect_key = True
+        if len(stack) > MAX_DEPTH and not is_key:
+            raise InputError(
+                f"nesting deeper than {MAX_DEPTH} levels",
+                file=file,
+                keypath=format_keypath(f.here for f in stack) or None,
+                line=ev.start_mark.line + 1,
+            )
+        if isinstance(ev, yaml.CollectionStartEvent):
+            stack.append(_Open(isinstance(ev, yaml.MappingStartEvent)))
+
+
 def load_text(text: str, file: str | None = None) -> Source:
     """Parse YAML text into a :class:`Source`; raise :class:`InputError` on any problem."""
     if len(text) > MAX_BYTES:
@@ -222,15 +291,10 @@ def load_text(text: str, file: str | None = None) -> Source:
             file=file,
         )
     try:
-        # count the parser's events first (cheap, and it stops early): a file with more
-        # values than any mechanism is refused before Python builds a node for each
-        for n, _ in enumerate(yaml.parse(text, Loader=_LOADER)):
-            if n > MAX_EVENTS:
-                raise InputError(
-                    f"the file holds more than {MAX_EVENTS} YAML items; no mechanism needs "
-                    "that many (is this the right file?)",
-                    file=file,
-                )
+        # walk the parser's events first (cheap, and it stops early): a file with more
+        # values than any mechanism, or nested deeper than any, is refused before Python
+        # builds a node for each (composing 20 000 nested brackets takes seconds)
+        _check_events(text, file)
         nodes = list(yaml.compose_all(text, Loader=_LOADER))
     except yaml.MarkedYAMLError as exc:
         # the context ("while parsing a flow sequence", at the '[' left open) is usually
@@ -292,10 +356,18 @@ def load_file(path: str | Path) -> Source:
             "(is this the right file?)",
             file=name,
         )
+    # a device or a pipe has no size (/dev/zero never ends): read one byte past the limit
     try:
-        raw = p.read_bytes()
+        with open(p, "rb") as f:
+            raw = f.read(MAX_BYTES + 1)
     except OSError as exc:
         raise InputError(f"cannot read the file: {exc.strerror}", file=name) from None
+    if len(raw) > MAX_BYTES:
+        raise InputError(
+            f"the file is longer than {MAX_BYTES} bytes; a mechanism file is limited to "
+            f"{MAX_BYTES} bytes (is this the right file?)",
+            file=name,
+        )
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
