@@ -82,6 +82,51 @@ _UNITS: dict[str, tuple[float, Dim]] = {
     "bar": (1e5, (-1, 1, -2, 0)),
 }
 
+# The largest magnitude (SI) a value of each kind may have. Far beyond any mechanism, and
+# small enough that no later formula overflows: with lengths to 1e6 m, angular speeds to
+# 1e6 rad/s and masses to 1e9 kg, accelerations stay below 1e18 m/s^2, inertia forces
+# below 1e27 N and powers below 1e40 W, squares of them far inside the float range.
+LIMITS: dict[str, float] = {
+    "dimensionless": 1e12,
+    "length": 1e6,
+    "mass": 1e9,
+    "time": 1e9,
+    "angle": 1e6,
+    "speed": 1e6,
+    "acceleration": 1e6,
+    "angular speed": 1e6,
+    "angular acceleration": 1e12,
+    "force": 1e12,
+    "torque": 1e15,
+    "moment of inertia": 1e21,
+    "stiffness": 1e12,
+    "damping": 1e12,
+    "rotational damping": 1e15,
+    "density per length": 1e9,
+}
+
+# how the limits are written in messages
+_SI = {
+    "length": "m",
+    "mass": "kg",
+    "time": "s",
+    "angle": "rad",
+    "speed": "m/s",
+    "acceleration": "m/s^2",
+    "angular speed": "rad/s",
+    "angular acceleration": "rad/s^2",
+    "force": "N",
+    "torque": "N m",
+    "moment of inertia": "kg m^2",
+    "stiffness": "N/m",
+    "damping": "N s/m",
+    "rotational damping": "N m s/rad",
+    "density per length": "kg/m",
+}
+
+# a unit's exponent: m^4 (second moment of area) is the largest any mechanism needs
+MAX_EXPONENT = 6
+
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _QUANTITY_RE = re.compile(rf"^\s*({_NUMBER})\s*(.*?)\s*$")
 _FACTOR_RE = re.compile(r"^([A-Za-zµ°]+)(?:(?:\^|\*\*)([-+]?\d+))?$")
@@ -140,6 +185,11 @@ def parse_unit(text: str) -> Unit:
                 raise UnitError(f"unknown unit {tok!r} in {text!r} (known units: {known})")
             f, d = _UNITS[m.group(1)]
             exp = sign * int(m.group(2) or 1)
+            if abs(exp) > MAX_EXPONENT:
+                raise UnitError(
+                    f"the exponent in {tok!r} of {text!r} is beyond {MAX_EXPONENT}: "
+                    "no quantity of a mechanism has such a unit"
+                )
             factor *= f**exp
             for k in range(4):
                 dim[k] += d[k] * exp
@@ -178,6 +228,27 @@ def _to_float(value: object) -> float:
         raise UnitError(f"{str(value)[:20]}... is too large a number") from None
 
 
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def check_range(x: float, kind: str, value: object = None) -> float:
+    """Return ``x`` (SI) if it is finite and within :data:`LIMITS` for ``kind``; else
+    raise :class:`UnitError` saying so (``value`` is what the user wrote)."""
+    shown = _short(x if value is None else value)
+    if not math.isfinite(x):
+        raise UnitError(f"{shown} is not a finite number")
+    limit = LIMITS.get(kind, LIMITS["dimensionless"])
+    if abs(x) > limit:
+        unit = _SI.get(kind, "")
+        raise UnitError(
+            f"{shown} is too large a number for {_a(kind)}: mechsolve accepts at most "
+            f"{limit:g}{' ' + unit if unit else ''} in magnitude"
+        )
+    return x
+
+
 def _finite(x: float, text: object) -> float:
     if not math.isfinite(x):
         raise UnitError(f"{text!r} is not a finite number")
@@ -208,7 +279,7 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
         x = _finite(_to_float(value), value)
         if default_unit is not None:
             x *= parse_unit(default_unit).factor
-        return x
+        return check_range(x, kind, value)
     if not isinstance(value, str):
         raise UnitError(
             f"expected {_a(kind)} (a number or a string like '{_EXAMPLE.get(kind, '110 mm')}'), "
@@ -233,7 +304,7 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             pass
         else:
             raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
-    return number * unit.factor
+    return check_range(number * unit.factor, kind, value)
 
 
 def format_unit(kind: str) -> str:

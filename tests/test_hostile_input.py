@@ -99,6 +99,64 @@ def test_a_failing_run_keeps_a_previous_complete_csv(tmp_path):
 FOURBAR = Path(__file__).resolve().parents[1] / "mechanisms" / "fourbar.yaml"
 
 
+@pytest.mark.parametrize(
+    "old,new,where",
+    [
+        ("B: [59, 0]", "B: [1e308, 0]", ":22: links.rocker.points.B[0]: "),
+        ("O2: [0, 0], A:", "O2: [0, 1e308], A:", ":11: links.crank.points.O2[1]: "),
+        ("mass: 0.2 kg", "mass: 1e300 kg", ":19: links.coupler.mass: "),
+        ("force: [0, -2 N]", "force: [0, -1e300 N]", ":41: loads.pull.force[1]: "),
+        ("speed: 1 rad/s", "speed: 1e200 rad/s", ":35: driver.speed: "),
+        ("O4: [87.5, 0]", "O4: [1e7 km, 0]", ":7: ground.O4[0]: "),
+    ],
+)
+def test_huge_numbers_are_refused_where_they_are_read(old, new, where, tmp_path):
+    text = FOURBAR.read_text()
+    assert old in text
+    f = tmp_path / "fourbar.yaml"
+    f.write_text(text.replace(old, new, 1))
+    for command in (["check", str(f)], ["run", str(f), "-o", str(tmp_path), "--no-plots"]):
+        r, _ = run(command)
+        assert r.exit_code == 2, r.output
+        assert f"{f}{where}" in r.output and "too large a number" in r.output, r.output
+
+
+def test_huge_whole_numbers_and_unit_powers(tmp_path):
+    text = FOURBAR.read_text()
+    cases = [
+        ("sweep: {range: 360 deg, step: 2 deg}", "sweep: {steps: " + "9" * 400 + "}", "steps"),
+        ("sweep: {range: 360 deg, step: 2 deg}", "sweep: {steps: " + "9" * 5000 + "}", "steps"),
+        ("gravity: 9.81 m/s^2", "solver: {tolerance: " + "9" * 330 + "}", "tolerance"),
+        ("mass: 0.2 kg", "mass: 2 kg^400", "links.coupler.mass"),
+        ("mass: 0.2 kg", "mass: 2 kg/g^-999", "links.coupler.mass"),
+    ]
+    for old, new, key in cases:
+        f = tmp_path / "fourbar.yaml"
+        f.write_text(text.replace(old, new, 1))
+        r, _ = run(["check", str(f)])
+        assert r.exit_code == 2 and key in r.output, (new[:40], r.output)
+        assert len(r.output) < 400, r.output
+
+
+def test_weight_under_a_tiny_gravity(tmp_path):
+    text = FOURBAR.read_text().replace("gravity: 9.81 m/s^2", "gravity: 1e-300 m/s^2")
+    text = text.replace("mass: 0.2 kg", "weight: 2 N")
+    f = tmp_path / "fourbar.yaml"
+    f.write_text(text)
+    r, _ = run(["check", str(f)])
+    assert r.exit_code == 2 and "links.coupler.weight" in r.output and "gravity" in r.output
+
+
+def test_a_model_built_in_code_with_a_huge_number():
+    import mechsolve as ms
+    from mechsolve.errors import InputError
+
+    mech = ms.load(FOURBAR)
+    mech.links[2].points["B"] = (1e308, 0.0)
+    with pytest.raises(InputError, match="links.rocker.points.B: .*too large a number"):
+        mech.validate()
+
+
 def test_deep_nesting_is_refused_fast(tmp_path):
     f = tmp_path / "deep.yaml"
     f.write_text("[" * 20_000 + "]" * 20_000)

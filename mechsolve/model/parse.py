@@ -13,9 +13,10 @@ from typing import Any
 
 from ..errors import InputError
 from ..expr import ExprError, Expression
-from ..units import UnitError, parse_quantity, parse_unit
+from ..units import LIMITS, UnitError, parse_quantity, parse_unit
 from . import (
     GROUND,
+    MAX_POSITIONS,
     NAME_RE,
     STANDARD_G,
     Assembly,
@@ -164,7 +165,8 @@ def _kind(value: Any) -> str:
         return f"a list of {len(value)}"
     if value is None:
         return "nothing (null)"
-    return repr(value)
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 # --- sections ----------------------------------------------------------------------
@@ -299,6 +301,12 @@ def read_mass(r: Reader, m: dict, link: Link, path: KeyPath, g: float) -> None:
         mass = r.quantity(m["mass"], path + ("mass",), "mass")
     elif "weight" in m:
         mass = r.quantity(m["weight"], path + ("weight",), "force") / g
+        if not abs(mass) <= LIMITS["mass"]:  # a tiny gravity makes a huge mass
+            raise r.fail(
+                path + ("weight",),
+                f"the weight {m['weight']!r} under gravity {g:g} m/s^2 is a mass of {mass:g} kg, "
+                f"more than the {LIMITS['mass']:g} kg mechsolve accepts (is gravity right?)",
+            )
     if mass is not None and not mass >= 0:
         key = "mass" if "mass" in m else "weight"
         raise r.fail(path + (key,), f"{key} must be zero or positive, got {m[key]!r}")
@@ -700,7 +708,14 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
         n = m["steps"]
         if not isinstance(n, int) or isinstance(n, bool) or n < 1:
             raise r.fail(
-                path + ("steps",), f"'steps' must be a whole number of at least 1, got {n!r}"
+                path + ("steps",), f"'steps' must be a whole number of at least 1, got {_kind(n)}"
+            )
+        if n > MAX_POSITIONS:  # a huge whole number would overflow the division below
+            shown = f"{n:,}" if n < 10**15 else "over 1e15"
+            raise r.fail(
+                path + ("steps",),
+                f"the sweep has {shown} positions, more than the {MAX_POSITIONS:,} mechsolve "
+                "solves in one run: use a larger step or fewer steps",
             )
         if sw.travel is None:
             sw.travel = 2 * math.pi if not linear else None
@@ -782,9 +797,11 @@ def read_solver(r: Reader, value: Any) -> SolverOptions:
     if "tolerance" in m:
         t = m["tolerance"]
         try:
-            t = float(t)
-        except (TypeError, ValueError):
-            raise r.fail(path + ("tolerance",), f"expected a number, got {t!r}") from None
+            t = float(t) if not isinstance(t, bool) else None
+        except (TypeError, ValueError, OverflowError):  # a huge whole number overflows
+            t = None
+        if t is None:
+            raise r.fail(path + ("tolerance",), f"expected a number, got {_kind(m['tolerance'])}")
         if not (0 < t < 1e-2):
             raise r.fail(path + ("tolerance",), "the tolerance must be between 0 and 0.01")
         opts.tolerance = t

@@ -11,6 +11,7 @@ import math
 from typing import TYPE_CHECKING
 
 from ..expr import Ref, Side
+from ..units import UnitError, check_range
 from . import (
     GROUND,
     MAX_POSITIONS,
@@ -43,6 +44,17 @@ def _check_name(mech: Mechanism, name: str, where, what: str) -> None:
         )
 
 
+def _in_range(mech: Mechanism, where, kind: str, *values: float) -> None:
+    """Each value finite and within the sane range of its kind (see units.LIMITS), so that
+    no formula downstream overflows; a model built in code is held to what a file is."""
+    for v in values:
+        try:
+            check_range(float(v), kind)
+        except (UnitError, TypeError, ValueError, OverflowError) as exc:
+            msg = str(exc) if isinstance(exc, UnitError) else f"{v!r} is not a number"
+            raise mech.error(where, msg) from None
+
+
 def _find(parent: dict[str, str], x: str) -> str:
     while parent[x] != x:
         x = parent[x]
@@ -64,6 +76,7 @@ def validate(mech: Mechanism) -> None:
         _check_name(mech, p, ("ground", p), "point")
         if not all(math.isfinite(v) for v in xy):
             raise mech.error(("ground", p), "coordinates must be finite numbers")
+        _in_range(mech, ("ground", p), "length", *xy)
     for lk in mech.links:
         _check_name(mech, lk.name, lk.where, "link")
         if lk.name == GROUND:
@@ -76,6 +89,7 @@ def validate(mech: Mechanism) -> None:
             _check_name(mech, p, lk.where + ("points", p), "point")
             if not all(math.isfinite(v) for v in xy):
                 raise mech.error(lk.where + ("points", p), "coordinates must be finite numbers")
+            _in_range(mech, lk.where + ("points", p), "length", *xy)
         if lk.mass is not None and not (lk.mass >= 0 and math.isfinite(lk.mass)):
             raise mech.error(lk.where + ("mass",), f"mass must be zero or positive, got {lk.mass}")
         if lk.inertia is not None and not (lk.inertia >= 0 and math.isfinite(lk.inertia)):
@@ -83,6 +97,12 @@ def validate(mech: Mechanism) -> None:
                 lk.where + ("inertia",),
                 f"moment of inertia must be zero or positive, got {lk.inertia}",
             )
+        if lk.mass is not None:
+            _in_range(mech, lk.where + ("mass",), "mass", lk.mass)
+        if lk.inertia is not None:
+            _in_range(mech, lk.where + ("inertia",), "moment of inertia", lk.inertia)
+        if lk.com is not None:
+            _in_range(mech, lk.where + ("com",), "length", *lk.com)
 
     # joints
     names: set[str] = set()
@@ -128,6 +148,9 @@ def validate(mech: Mechanism) -> None:
                 )
             if not all(math.isfinite(v) for v in (*j.origin, j.angle, j.block_angle)):
                 raise mech.error(j.where, "the guide line must have finite coordinates")
+            _in_range(mech, j.where + ("line",), "length", *j.origin)
+            _in_range(mech, j.where + ("line",), "angle", j.angle)
+            _in_range(mech, j.where + ("block_angle",), "angle", j.block_angle)
 
     # the same point name on two links must be a joint between them (directly or in a chain)
     owners = mech.point_owners()
@@ -221,6 +244,10 @@ def validate(mech: Mechanism) -> None:
                 raise mech.error(d.where + ("line",), "the driver's line needs two distinct points")
         if not math.isfinite(d.speed):
             raise mech.error(d.where + ("speed",), "the driver speed must be a finite number")
+        linear = isinstance(j, SliderJoint)
+        _in_range(mech, d.where + ("speed",), "speed" if linear else "angular speed", d.speed)
+        if not isinstance(d.start, Limit):
+            _in_range(mech, d.where + ("start",), "length" if linear else "angle", d.start)
         if isinstance(d.start, Limit):
             check_refs(mech, d.start.quantity, d.where + ("start",))
     sw = mech.sweep
@@ -237,6 +264,10 @@ def validate(mech: Mechanism) -> None:
             "range",
         )
 
+    if mech.gravity is not None:
+        _in_range(mech, ("gravity",), "acceleration", *mech.gravity)
+    for p, xy in mech.assembly.sketch.items():
+        _in_range(mech, mech.assembly.where + ("sketch", p), "length", *xy)
     for load in mech.loads:
         _check_load(mech, load, links)
         if load.when is not None:
@@ -328,10 +359,12 @@ def _check_load(mech: Mechanism, load, links: dict) -> None:
         on(load.link, load.point, "at")
         if not all(math.isfinite(v) for v in load.force):
             raise mech.error(load.where + ("force",), "the force must be finite")
+        _in_range(mech, load.where + ("force",), "force", *load.force)
     elif isinstance(load, Torque):
         on(load.link, None, "torque")
         if not math.isfinite(load.torque):
             raise mech.error(load.where + ("torque",), "the torque must be finite")
+        _in_range(mech, load.where + ("torque",), "torque", load.torque)
     elif isinstance(load, (Spring, Damper)):
         key = "spring" if isinstance(load, Spring) else "damper"
         for link, point in getattr(load, "ends", None) or ():
@@ -355,8 +388,12 @@ def _check_load(mech: Mechanism, load, links: dict) -> None:
                     load.where + ("free_length",),
                     f"a spring's free length must be zero or positive, got {load.free_length}",
                 )
+            _in_range(mech, load.where + ("stiffness",), "stiffness", load.stiffness)
+            _in_range(mech, load.where + ("free_length",), "length", load.free_length)
         elif not (load.coefficient >= 0 and math.isfinite(load.coefficient)):
             raise mech.error(
                 load.where + ("coefficient",),
                 f"a damping coefficient must be zero or positive, got {load.coefficient}",
             )
+        if isinstance(load, Damper):
+            _in_range(mech, load.where + ("coefficient",), "damping", load.coefficient)
