@@ -94,7 +94,7 @@ def solve(
     forces = mech.needs_forces if forces is None else forces
     if forces:
         vel = acc = True
-    sol = an.solve(u, velocity=vel or bool(acc), acceleration=bool(acc))
+    sol = an.solve_sweep(u, velocity=vel or bool(acc), acceleration=bool(acc))
     force_result = None
     if forces:
         from .solvers.forces import solve_forces

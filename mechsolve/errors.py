@@ -77,6 +77,19 @@ class AssemblyError(MechsolveError):
     exit_code = EXIT_SOLVER
 
 
+class CannotCloseAtStart(AssemblyError):
+    """The mechanism cannot close at the first position of a sweep (a dead zone there).
+
+    ``group`` names the loop and ``reason`` says why; ``first_ok`` is the index of the
+    first position where that loop closes, when the sweep knows it (else None)."""
+
+    def __init__(self, message: str, group: str, reason: str, first_ok: int | None = None):
+        super().__init__(message)
+        self.group = group
+        self.reason = reason
+        self.first_ok = first_ok
+
+
 class SolverError(MechsolveError):
     """A solver could not produce a trustworthy answer."""
 

@@ -78,6 +78,29 @@ def _rate_root(res: Results, k: int, value_rate):
     return x, float(value_rate(one.state)[0][0])
 
 
+def _edge_value(res: Results, k: int, value_rate, vk: float, angle: bool):
+    """(driver value, value) where the motion next to solved sample ``k`` meets an
+    unassemblable range: at the range's exact edge when known, else at the sample."""
+    sol = res.solution
+    x = math.nan
+    for f in sol.failures:
+        if f.first == k + 1 and np.isfinite(f.edge_in):
+            x = f.edge_in
+        elif f.last == k - 1 and np.isfinite(f.edge_out):
+            x = f.edge_out
+    if not np.isfinite(x):
+        return float(res.u[k]), vk
+    one = res.analysis.solve(
+        np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True, limits=False
+    )
+    v = float(value_rate(one.state)[0][0])
+    if not (one.ok[0] and np.isfinite(v)):
+        return float(res.u[k]), vk
+    if angle:  # next to the unwrapped samples
+        v += 2 * math.pi * round((vk - v) / (2 * math.pi))
+    return x, v
+
+
 def limit_positions(res: Results) -> list[LimitPositions]:
     """Limit positions of the rockers and sliders, with the time ratio over a full turn."""
     mech, an = res.mechanism, res.analysis
@@ -129,12 +152,13 @@ def limit_positions(res: Results) -> list[LimitPositions]:
                 v = v + 2 * math.pi * round((val[k] - v) / (2 * math.pi))
             extremes.append((x, v, sgn[k] > 0))
         # where the sweep meets an unassemblable range the motion stops at a toggle
-        # position: the solved samples next to it bound the swing too (to the step)
+        # position: there (located exactly, see Analysis.locate_edges; else at the
+        # solved sample next to it) the swing is bounded too
         edges = []
         for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
             if 0 < k < len(ok) - 1 or not ok.all():
                 if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
-                    edges.append((float(res.u[k]), float(val[k])))
+                    edges.append(_edge_value(res, int(k), vr, float(val[k]), kind == "rocker"))
         if edges and extremes:
             vals = [e[1] for e in extremes] + [e[1] for e in edges]
             top, bottom = max(vals), min(vals)
@@ -162,6 +186,52 @@ def limit_positions(res: Results) -> list[LimitPositions]:
     return out
 
 
+def _exact_minimum(res: Results, gi: int, g, k: int):
+    """The transmission angle's minimum next to sample ``k``, located exactly: the root of
+    the rate of the loop's discriminant (which is least where the angle is) by Brent's method in an
+    interval beside ``k`` where that rate changes sign (over a full turn the last sample
+    is the first one's neighbour before it). Returns (angle, driver value) or None."""
+    an, sol = res.analysis, res.solution
+    n = len(res.u)
+    ok = res.ok
+    pairs = [(k - 1, k), (k, k + 1)]
+    if k == 0 and res.is_full_cycle():
+        pairs.append((n - 2, n - 1))
+    if k == n - 1 and res.is_full_cycle():
+        pairs.append((0, 1))
+    gaps = {e.after for e in sol.events if e.kind == "dead zone"}
+
+    def disc(x: float, near: int):
+        one = an.solve(
+            np.array([x]), start=sol.start, near=(sol, near), per_unit_driver=True, limits=False
+        )
+        if not one.ok[0]:
+            return math.nan, math.nan
+        # the discriminant's minimum is the indicator's (both grow with the same distance)
+        return float(one.indicator[gi][0]), float(g.disc(one.state)[1][0])
+
+    best = None
+    for a, b in pairs:
+        if not (0 <= a and b < n and ok[a] and ok[b]) or a in gaps:
+            continue
+        ua, ub = float(res.u[a]), float(res.u[b])
+        fa, fb = disc(ua, a)[1], disc(ub, b)[1]
+        if not (np.isfinite(fa) and np.isfinite(fb)) or fa * fb > 0:
+            continue
+        try:
+            x = brent_root(
+                lambda x, a=a: disc(x, a)[1], ua, ub, xtol=1e-15, rtol=1e-15, fa=fa, fb=fb
+            )
+        except (ValueError, RuntimeError):
+            continue
+        ind = disc(x, a)[0]
+        if np.isfinite(ind):
+            mu = math.asin(min(max(ind, 0.0), 1.0))
+            if best is None or mu < best[0]:
+                best = (mu, x)
+    return best
+
+
 def transmission_angles(res: Results) -> list[Transmission]:
     """The smallest transmission angle of each two-branch loop over the sweep."""
     out = []
@@ -175,7 +245,11 @@ def transmission_angles(res: Results) -> list[Transmission]:
         mu = np.arcsin(np.clip(ind, 0.0, 1.0))
         k = int(np.nanargmin(mu))
         best, uk = float(mu[k]), float(res.u[k])
-        if 0 < k < len(mu) - 1 and np.all(np.isfinite(mu[k - 1 : k + 2])):
+        exact = _exact_minimum(res, gi, g, k)
+        if exact is not None:
+            if exact[0] < best:
+                best, uk = exact
+        elif 0 < k < len(mu) - 1 and np.all(np.isfinite(mu[k - 1 : k + 2])):
             a, b, c = mu[k - 1], mu[k], mu[k + 1]
             den = a - 2 * b + c
             if den > 0:  # a parabola through the three samples around the minimum

@@ -525,6 +525,16 @@ class Results:
                 f"  unassemblable at {self.describe_u(f.first)}"
                 + (f" to {self.describe_u(f.last)}" if f.last != f.first else "")
                 + f" ({f.last - f.first + 1} position(s)): {f.reason}"
+                + (
+                    f"; it stops closing at {self.analysis.format_u(f.edge_in)}"
+                    if np.isfinite(f.edge_in)
+                    else ""
+                )
+                + (
+                    f"; it closes again from {self.analysis.format_u(f.edge_out)}"
+                    if np.isfinite(f.edge_out)
+                    else ""
+                )
             )
         for p in self.point_names()[:12]:
             m = self.point(p)

@@ -15,6 +15,7 @@ Pipeline (one model, one constraint system, arrays over positions):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from .conditioning import SINGULAR_INDICATOR, group_block, rcond
 from .constraints import ConstraintSystem
-from .errors import AssemblyError, InputError, SolverError
+from .errors import AssemblyError, CannotCloseAtStart, InputError, SolverError
 from .expr import Ref, Side
 from .groups import Drive, Group, NewtonGroup, build_plan
 from .model import GROUND, MAX_POSITIONS, Limit, Mechanism, PinJoint, SliderJoint
@@ -135,6 +136,10 @@ class Failure:
     reason: str
     u_first: float = math.nan  # the driver values at the first and last position
     u_last: float = math.nan
+    # where the loop stops closing before the first position and closes again after the
+    # last (the roots of its discriminant between the samples), NaN where not known
+    edge_in: float = math.nan
+    edge_out: float = math.nan
 
 
 @dataclass
@@ -343,10 +348,7 @@ class Analysis:
             if g.n_modes < 2:
                 ok, _ = g.position(st2, drive2, 1.0)
                 if not ok[0]:
-                    raise AssemblyError(
-                        f"{self._file()}cannot assemble at {self.format_u(u0)}: "
-                        + g.fail_reason(st2, 0)
-                    )
+                    raise self._cannot_close(g, st2, u0)
                 g.velocity(st2, unit2)
                 modes.append(1.0)
                 reasons.append("")
@@ -354,10 +356,7 @@ class Analysis:
             # both branches at once, one in each column
             ok2, _ = g.position(st2, drive2, np.array([1.0, -1.0]))
             if not ok2.any():
-                raise AssemblyError(
-                    f"{self._file()}cannot assemble at {self.format_u(u0)}: "
-                    + g.fail_reason(st2, 0)
-                )
+                raise self._cannot_close(g, st2, u0)
             g.velocity(st2, unit2)
             j, reason = self._choose(
                 g, *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0), ready
@@ -441,10 +440,12 @@ class Analysis:
                 f"disagree by {worst:.3g} m (check the dimensions of the redundant links)"
             )
         if first is None:
-            raise AssemblyError(
+            raise CannotCloseAtStart(
                 f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
                 f"and scipy found no closed position of the {g.label} (residual "
-                f"{worst:.3g} m); give approximate positions under 'assembly: sketch:'"
+                f"{worst:.3g} m); give approximate positions under 'assembly: sketch:'",
+                g.label,
+                f"{g.label}: Newton-Raphson and scipy found no closed position",
             )
         texts = ", ".join(repr(c.text) for _, c in ready)
         raise AssemblyError(
@@ -491,9 +492,7 @@ class Analysis:
         u0 = start.u0
         ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
         if not ok2.any():
-            raise AssemblyError(
-                f"{self._file()}cannot assemble at {self.format_u(u0)}: " + g.fail_reason(two, 0)
-            )
+            raise self._cannot_close(g, two, u0)
         if not ready and not has_sketch and ok2[0]:
             start.reasons[gi] = "default branch (+)"
             return
@@ -502,6 +501,79 @@ class Analysis:
         )
         start.reasons[gi] = reason
         start.modes[gi] = 1.0 if j == 0 else -1.0
+
+    def _cannot_close(self, g: Group, st: State, u0: float, first_ok=None) -> CannotCloseAtStart:
+        reason = g.fail_reason(st, 0)
+        return CannotCloseAtStart(
+            f"{self._file()}cannot assemble at {self.format_u(u0)}: {reason}",
+            g.label,
+            reason,
+            first_ok,
+        )
+
+    def solve_sweep(self, u: np.ndarray, velocity: bool = True, acceleration: bool = True):
+        """Solve a sweep from its start, as :meth:`solve`; where the mechanism cannot close
+        at the start (a dead zone there), skip ahead to the first position where it
+        closes, assemble there (on the branches the conditions and sketch ask for), and
+        keep the positions skipped as unassemblable rows."""
+        u = np.asarray(u, float)
+        k = 0
+        first: CannotCloseAtStart | None = None
+        while True:
+            try:
+                sol = self.solve(u[k:], velocity=velocity, acceleration=acceleration)
+                break
+            except CannotCloseAtStart as exc:
+                if first is None:
+                    first = exc
+                nxt = k + (exc.first_ok if exc.first_ok else 1)
+                if nxt >= len(u) or nxt <= k:
+                    raise first from None
+                k = nxt
+        if k:
+            sol = _prepend_gap(self, sol, u, k, first)
+        self.locate_edges(sol)
+        return sol
+
+    def locate_edges(self, sol: Solution) -> None:
+        """Where each unassemblable range truly begins and ends: the root of the failing
+        loop's discriminant between the last position that closes and the first that does
+        not (bisection to rounding, the end kept on the side that closes)."""
+        if not sol.failures:
+            return
+        ctx = _Context(self, sol.state, sol.u, sol.start, sol.flips, {})
+        ctx.is_start = False
+        labels = {g.label: gi for gi, g in enumerate(self.plan)}
+        n = len(sol.u)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for f in sol.failures:
+                gi = labels.get(f.group)
+                if gi is None or self.plan[gi].n_modes != 2:
+                    continue
+                if f.first > 0 and sol.ok[f.first - 1]:
+                    f.edge_in = self._edge(ctx, gi, f.first - 1, f.first)
+                if f.last < n - 1 and sol.ok[f.last + 1]:
+                    f.edge_out = self._edge(ctx, gi, f.last + 1, f.last)
+
+    def _edge(self, ctx: _Context, gi: int, good: int, bad: int) -> float:
+        g = self.plan[gi]
+        near = min(good, bad)
+
+        def H(x: float) -> float:
+            return float(g.disc(ctx.prefix(gi, np.array([x]), near))[0][0])
+
+        a, b = float(ctx.u[good]), float(ctx.u[bad])
+        if not (H(a) >= -TOUCH and H(b) < -TOUCH):
+            return math.nan
+        for _ in range(200):
+            m = 0.5 * (a + b)
+            if m in (a, b):
+                break
+            if H(m) >= 0.0:
+                a = m
+            else:
+                b = m
+        return a
 
     def _where_to_choose(self, gi: int, g: Group, st2: State, ok2, modes, q_start, u0: float):
         """Where a group's branch is read at the start: at the start itself, or, where
@@ -834,6 +906,10 @@ class Analysis:
         warnings: list[str] = []
         ctx = _Context(self, st, u, start, flips, q_start)
         ctx.is_start = near is None and follow is None
+        two = [gi for gi, g in enumerate(self.plan) if g.n_modes == 2]
+        if analyse and two:
+            ctx.build_grid(EVENT_STEP * (self.scale if self.linear else 1.0))
+            ctx.grid_upto = max(two)
         with np.errstate(invalid="ignore", divide="ignore"):
             for gi, g in enumerate(self.plan):
                 if isinstance(g, NewtonGroup):
@@ -868,9 +944,9 @@ class Analysis:
                     sigma = self.sigma_at(start.modes[gi], flips[gi], u)
                     ok, ind = g.position(st, unit, sigma)
                     if lazy and not ok[0]:
-                        raise AssemblyError(
-                            f"{self._file()}cannot assemble at {self.format_u(start.u0)}: "
-                            + g.fail_reason(st, 0)
+                        closes = np.flatnonzero(ok & ok_all)
+                        raise self._cannot_close(
+                            g, st, start.u0, int(closes[0]) if closes.size else None
                         )
                     if derivs:
                         g.velocity(st, unit)
@@ -880,6 +956,7 @@ class Analysis:
                 oks.append(ok)
                 inds.append(ind)
                 ok_all = ok_all & ok
+                ctx.extend_grid(gi)
         if lazy:
             start.state = st.take([0])
             start.group_modes = list(start.modes)
@@ -1137,30 +1214,20 @@ class Analysis:
         u = ctx.u
         n = len(u)
         good = ok_prev & np.isfinite(H) & np.isfinite(dH)
-        step = EVENT_STEP * (self.scale if self.linear else 1.0)
-        w = np.abs(np.diff(u))
-        extra = np.where(good[:-1] & good[1:], np.ceil(w / step).astype(int) - 1, 0)
-        extra = np.maximum(extra, 0)
-        if not extra.any():
+        if ctx.grid is None:
             return u, H, dH * d, good, np.arange(n), np.ones(n, bool)
-        counts = extra + 1
-        owner = np.repeat(np.arange(n - 1), counts)
-        first = np.cumsum(counts) - counts
-        j = np.arange(len(owner)) - np.repeat(first, counts)  # 0: the sample itself
-        frac = j / np.repeat(counts, counts)
-        ug = np.append(u[owner] + frac * (u[owner + 1] - u[owner]), u[-1])
-        at_sample = np.append(j == 0, True)
-        near = np.append(owner, n - 1)
+        ug, at_sample, near, gst = ctx.grid
         Hg = np.empty(len(ug))
         dHg = np.empty(len(ug))
         idx = np.flatnonzero(at_sample)
         Hg[idx], dHg[idx] = H, dH
         mid = np.flatnonzero(~at_sample)
-        hm, dm = g.disc(ctx.prefix(gi, ug[mid], near[mid]))
+        hm, dm = g.disc(gst)  # the groups before this one are solved there
         Hg[mid], dHg[mid] = hm, dm
         goodg = np.empty(len(ug), bool)
         goodg[idx] = good
-        goodg[mid] = np.isfinite(hm) & np.isfinite(dm)
+        k = near[mid]
+        goodg[mid] = np.isfinite(hm) & np.isfinite(dm) & good[k] & good[k + 1]
         return ug, Hg, dHg * d, goodg, near, at_sample
 
     def _branch_events(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
@@ -1385,6 +1452,64 @@ def _restart_guess(an: Analysis, g: NewtonGroup, u: float, start: StartAssembly)
     return False if st is None else g.get_q(st, 0)
 
 
+def _prepend_gap(an: Analysis, sol: Solution, u: np.ndarray, k: int, exc) -> Solution:
+    """The sweep's solution with its first ``k`` positions, where the mechanism could not
+    close, put back in front of ``sol`` (solved from position ``k``) as failures."""
+    n = len(u)
+    nb = an.system.nb
+    st = State(nb, n)
+    st.block[:, :, k:] = sol.state.block
+    st.block[:, :nb, :k] = np.nan
+    st.block[:, nb, :k] = sol.state.block[:, nb, :1]  # the ground stays where it is
+    ok = np.zeros(n, bool)
+    ok[k:] = sol.ok
+    fails = [Failure(0, k - 1, exc.group, exc.reason, float(u[0]), float(u[k - 1]))]
+    for f in sol.failures:
+        fails.append(Failure(f.first + k, f.last + k, f.group, f.reason, f.u_first, f.u_last))
+    ind = np.zeros((sol.indicator.shape[0], n))
+    ind[:, k:] = sol.indicator
+    iters = np.zeros(n, int)
+    iters[k:] = sol.iterations
+    methods = None
+    if sol.methods is not None:
+        methods = np.full(n, "failed", dtype=object)
+        methods[k:] = sol.methods
+    res = None
+    if sol.residual_ is not None:
+        res = np.full(n, np.nan)
+        res[k:] = sol.residual_
+    for e in sol.events:
+        e.after += k
+    warnings = [
+        f"the mechanism cannot close at the start of the sweep: from {an.format_u(u[0])} to "
+        f"{an.format_u(u[k - 1])} the {exc.reason}; the sweep starts at "
+        f"{an.format_u(u[k])}, the first position that closes, on the branches chosen there"
+    ] + sol.warnings
+    speed = an.speed
+    out = Solution(
+        an,
+        u,
+        (u - u[0]) / speed if speed else np.zeros(n),
+        st,
+        ok,
+        fails,
+        ind,
+        iters,
+        methods,
+        res,
+        dataclasses.replace(sol.start, u0=float(u[0])),  # the sweep still starts at u[0]
+        warnings,
+        sol.has_velocity,
+        sol.has_acceleration,
+        sol.events,
+        sol.flips,
+        [i + k for i in sol.rates_by_limit],
+        [i + k for i in sol.rates_undetermined],
+    )
+    out.skipped_start = k
+    return out
+
+
 def _coincident_at(g: Group, st: State, i: int) -> bool:
     """Do the outer joints of the group coincide at position ``i`` (see RRR)?"""
     f = getattr(g, "coincident", None)
@@ -1422,6 +1547,65 @@ class _Context:
         self.flips = flips
         self.q_start = q_start
         self.is_start = True  # u[0] is the sweep's start (not a chunk, nor a single position)
+        # the branch analysis's points between samples further apart than its grid step:
+        # (driver values of samples and points, which are samples, the sample before each
+        # point, the state at the points with the groups solved so far)
+        self.grid: tuple | None = None
+        self.grid_upto = 0  # the groups before this one are solved on the grid
+
+    def build_grid(self, step: float) -> None:
+        """Points between the samples so that the grid is no coarser than ``step``; the
+        groups are solved there as the sweep solves them (:meth:`extend_grid`)."""
+        u = self.u
+        n = len(u)
+        if n < 2:
+            return
+        extra = np.maximum(np.ceil(np.abs(np.diff(u)) / step).astype(int) - 1, 0)
+        if not extra.any():
+            return
+        counts = extra + 1
+        owner = np.repeat(np.arange(n - 1), counts)
+        first = np.cumsum(counts) - counts
+        j = np.arange(len(owner)) - np.repeat(first, counts)  # 0: the sample itself
+        frac = j / np.repeat(counts, counts)
+        ug = np.append(u[owner] + frac * (u[owner + 1] - u[owner]), u[-1])
+        at_sample = np.append(j == 0, True)
+        near = np.append(owner, n - 1)
+        gst = State(self.an.system.nb, int(np.sum(~at_sample)))
+        self.grid = (ug, at_sample, near, gst)
+
+    def extend_grid(self, gi: int) -> None:
+        """Solve group ``gi`` (positions and rates) at the grid's points between samples."""
+        if self.grid is None or gi >= self.grid_upto:
+            return  # no group after this one needs it
+        ug, at_sample, near, gst = self.grid
+        mid = ~at_sample
+        with np.errstate(invalid="ignore", divide="ignore"):
+            self._solve_group(gi, gst, ug[mid], near[mid])
+
+    def _solve_group(self, gj: int, st: State, u_new: np.ndarray, near_k) -> None:
+        """Group ``gj`` at driver values ``u_new`` (the groups before it solved in ``st``),
+        each near sample ``near_k`` of the sweep, with its rates per unit driver."""
+        an = self.an
+        g = an.plan[gj]
+        m = len(u_new)
+        unit = Drive(u_new, np.ones(m), np.zeros(m))
+        if isinstance(g, NewtonGroup):
+            for j in range(m):
+                k = int(near_k[j])
+                q = g.get_q(self.st, k)
+                du = u_new[j] - self.u[k]
+                qd = g.get_qdot(self.st, k)
+                q0 = q + qd * du if np.all(np.isfinite(qd)) else q
+                st1 = st.take([j])
+                qj, stats = g.solve_at(st1, u_new[j : j + 1], q0)
+                g.set_q(st, j, qj if stats.converged else np.full_like(qj, np.nan))
+            st.token = State.new_token()
+            g.velocity(st, unit)
+        else:
+            sigma = an.sigma_at(self.start.modes[gj], self.flips[gj], u_new)
+            g.position(st, unit, sigma)
+            g.velocity(st, unit)
 
     def prefix(self, gi: int, u_new, near_k) -> State:
         """Solve the groups before ``gi`` (positions and derivatives per unit driver
@@ -1429,27 +1613,10 @@ class _Context:
         an = self.an
         u_new = np.atleast_1d(np.asarray(u_new, float))
         near_k = np.broadcast_to(np.asarray(near_k, int), u_new.shape)
-        m = len(u_new)
-        st = State(an.system.nb, m)
-        unit = Drive(u_new, np.ones(m), np.zeros(m))
+        st = State(an.system.nb, len(u_new))
         with np.errstate(invalid="ignore", divide="ignore"):
             for gj in range(gi):
-                g = an.plan[gj]
-                if isinstance(g, NewtonGroup):
-                    for j in range(m):
-                        k = int(near_k[j])
-                        q = g.get_q(self.st, k)
-                        du = u_new[j] - self.u[k]
-                        qd = g.get_qdot(self.st, k)
-                        q0 = q + qd * du if np.all(np.isfinite(qd)) else q
-                        st1 = st.take([j])
-                        qj, stats = g.solve_at(st1, u_new[j : j + 1], q0)
-                        g.set_q(st, j, qj if stats.converged else np.full_like(qj, np.nan))
-                    g.velocity(st, unit)
-                else:
-                    sigma = an.sigma_at(self.start.modes[gj], self.flips[gj], u_new)
-                    g.position(st, unit, sigma)
-                    g.velocity(st, unit)
+                self._solve_group(gj, st, u_new, near_k)
         return st
 
 

@@ -223,3 +223,50 @@ def test_check_and_run_agree_at_a_singular_start(tmp_path, side):
     assert parallel == (side == "left")  # just after 0 deg, B left of A -> O4: parallel
     asm = ms.check(ms.load(str(f)))
     assert "B left of A -> O4" in asm.text() or "B right of A -> O4" in asm.text()
+
+
+def test_sweep_starting_inside_a_dead_zone_skips_ahead():
+    """A non-Grashof four-bar started where the coupler and rocker cannot reach the crank
+    pin: the sweep skips to the first position that closes (cos(theta) >= 0.125 here,
+    from the closed form |A O4| <= b + c), keeps the skipped positions as unassemblable
+    rows, says so, and solves the rest on the branch the condition names."""
+    text = fourbar_text(0.6, 0.6, 0.5, 1.0, 150.0, 1.0, 360)
+    res = ms.solve(ms.loads(text), forces=False)
+    closes = (0.36 + 1.0 - 1.2 * np.cos(res.u)) <= 1.1**2 + 1e-12
+    np.testing.assert_array_equal(res.ok, closes)
+    first = int(np.flatnonzero(closes)[0])
+    f = res.failures[0]
+    assert (f.first, f.last) == (0, first - 1) and "cannot close" in f.reason
+    assert "cannot close at the start of the sweep" in res.summary()
+    assert "150° (0° from the start)" in res.summary()
+    B = res.point("B")
+    ref = np.array([_both_b(0.6, 0.6, 0.5, 1.0, x) or ((np.nan,) * 2,) * 2 for x in res.u])
+    np.testing.assert_allclose(B.x[res.ok], ref[res.ok, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(B.y[res.ok], ref[res.ok, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(res.t, res.u - res.u[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("step", [1.0, 7.0, 13.0])
+def test_edges_of_an_unassemblable_range_are_exact(step):
+    """A non-Grashof four-bar: the loop stops closing where |A O4| = b + c, at crank
+    angles +-acos(0.125), whatever the step; there the rocker reaches its limit (coupler
+    and rocker collinear), which bounds its swing."""
+    text = fourbar_text(0.6, 0.6, 0.5, 1.0, 0.0, 1.0, round(360 / step))
+    res = ms.solve(ms.loads(text), forces=False)
+    edge = math.acos(0.125)
+    (f,) = res.failures
+    assert f.edge_in == pytest.approx(edge, abs=1e-12)
+    assert f.edge_out == pytest.approx(2 * math.pi - edge, abs=1e-12)
+    assert "it stops closing at driver angle 82.8192" in res.summary()
+
+    def rocker_at(th):
+        A = 0.6 * np.array([math.cos(th), math.sin(th)])
+        O4 = np.array([1.0, 0.0])
+        B = A + 0.6 * (O4 - A) / np.linalg.norm(O4 - A)
+        return math.atan2(B[1], B[0] - 1.0) % (2 * math.pi)
+
+    (lp,) = [lp for lp in res.limit_positions() if lp.name == "rocker"]
+    assert lp.u_high % (2 * math.pi) == pytest.approx(2 * math.pi - edge, abs=1e-9)
+    # the angle grows as the square root of the distance to the toggle: a root found to
+    # rounding (1e-16) gives the angle to about 1e-8
+    assert lp.high % (2 * math.pi) == pytest.approx(rocker_at(-edge), abs=1e-7)

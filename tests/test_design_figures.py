@@ -128,29 +128,15 @@ def test_fourbar_transmission_angle():
     assert abs(wrap(tr.u - u_want)) < np.radians(0.1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="limits.transmission_angles refines the minimum by a parabola through the three "
-    "samples around it, not at the exact minimum of the loop's discriminant (which the "
-    "README says is located exactly between samples, and which is sin^2 of the transmission "
-    "angle): 6.6e-6 rad off here at a 7 deg step, 6.3e-4 rad (0.036 deg) on the crane's "
-    "loop D at the file's 10 deg step",
-)
 def test_fourbar_transmission_angle_exact():
     (tr,) = fourbar_at(98).transmission_angles()
     assert tr.angle == pytest.approx(transmission_fourbar(0.0), abs=1e-8)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="limits.transmission_angles does not refine a minimum that falls between the "
-    "first two samples of a full turn (the sample at k = 0 has no neighbour before it, "
-    "though the last sample of a full turn is the same position): the sampled value is "
-    "returned, 5.1e-4 rad (0.03 deg) above the true minimum here",
-)
 def test_fourbar_transmission_angle_between_first_samples():
+    # over a full turn the last sample is the first one's neighbour: refined exactly too
     (tr,) = fourbar_at(-2.5).transmission_angles()
-    assert tr.angle == pytest.approx(transmission_fourbar(0.0), abs=3e-5)
+    assert tr.angle == pytest.approx(transmission_fourbar(0.0), abs=1e-8)
 
 
 # --- the offset slider-crank -------------------------------------------------------------
@@ -280,12 +266,12 @@ def test_crane_jib_swing_and_transmission_angles():
     jib = by_name(res.limit_positions(), "jib")
     assert jib.low == pytest.approx(lo, abs=TIGHT) and jib.high == pytest.approx(hi, abs=TIGHT)
     tr = {t.group.split()[1]: t for t in res.transmission_angles()}
-    # the parabola's error at this step: 4e-6 (B) and 1.1e-5 rad (D)
-    assert tr["B"].angle == pytest.approx(mu_B, abs=3e-5)
-    assert tr["D"].angle == pytest.approx(mu_D, abs=3e-5)
-    # at the file's 10 deg step the parabola is 6.3e-4 rad off on loop D (see the xfail
-    # above); a refinement 0.15 deg (2.6e-3 rad) off must still fail
+    # each minimum is located exactly between the samples (a parabola through three
+    # samples was 4e-6 rad off on B and 1.1e-5 on D at this step)
+    assert tr["B"].angle == pytest.approx(mu_B, abs=1e-8)
+    assert tr["D"].angle == pytest.approx(mu_D, abs=1e-8)
+    # and at the file's 10 deg step (the parabola: 6.3e-4 rad off on loop D)
     coarse = ms.solve(ms.load(MECH / "crane.yaml"), forces=False)
     tr = {t.group.split()[1]: t for t in coarse.transmission_angles()}
-    assert tr["B"].angle == pytest.approx(mu_B, abs=1e-3)
-    assert tr["D"].angle == pytest.approx(mu_D, abs=1e-3)
+    assert tr["B"].angle == pytest.approx(mu_B, abs=1e-8)
+    assert tr["D"].angle == pytest.approx(mu_D, abs=1e-8)

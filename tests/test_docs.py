@@ -28,3 +28,20 @@ def test_readme_first_commands_and_ci_agree():
     assert "python -m pytest" in test_cmd
     ci = (ROOT / ".ci" / "run").read_text()
     assert re.search(r"grep -m1 -E '\^pip install \.\*python -m pytest' README.md", ci)
+
+
+def test_every_hard_case_promise_names_a_test_that_exists():
+    """README's hard-case section names, in brackets, the test that proves each promise:
+    every name must be a test function (or file) of this suite."""
+    section = readme().split("## Hard cases", 1)[1].split("\n## ", 1)[0]
+    refs = {n for b in re.findall(r"\[(`[^\]]+`)\]", section) for n in re.findall(r"`([^`]+)`", b)}
+    assert len(refs) >= 8
+    tests = {p.name: p.read_text() for p in (ROOT / "tests").glob("test_*.py")}
+    for ref in refs:
+        file, _, func = ref.rpartition("::") if "::" in ref else ("", "", ref)
+        if ref.endswith(".py") and "::" not in ref:
+            assert ref in tests, ref
+            continue
+        pattern = re.escape(func).replace(r"\*", r"\w*")
+        where = [tests[file]] if file else list(tests.values())
+        assert any(re.search(rf"^def {pattern}\(", t, re.M) for t in where), ref
