@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import core
 from .errors import InputError
 from .model import Mechanism, PinJoint
 from .model.parse import load, loads
@@ -41,6 +42,17 @@ def parse_step(mech: Mechanism, text: str | float) -> float:
     from .model import SliderJoint
 
     linear = mech.driver is not None and isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    if mech.driver is not None and mech.sweep.duration is not None:  # swept in time
+        try:
+            val = parse_quantity(text, "time")
+        except UnitError:
+            raise InputError(
+                f"--step {text!r}: this driver follows a motion law of time: give a time "
+                "step such as '0.01 s'"
+            ) from None
+        if not val > 0:
+            raise InputError(f"--step {text!r}: the step must be positive")
+        return val
     kind = "length" if linear else "angle"
     default = mech.length_unit if linear else "deg"
     try:
@@ -87,25 +99,27 @@ def solve(
     if not mech.__dict__.get("_validated"):  # built in code: check it first
         mech.validate()
     an = Analysis(mech, method)
-    u0 = an.start_value()
-    u, _ = an.sweep_values(u0, step=step)
+    ud = udd = None
+    if mech.driver.motion is not None:  # a motion law of time
+        u, t, ud, udd = an.motion_values(step if mech.sweep.duration is not None else None)
+    else:
+        u, t = an.sweep_values(an.start_value(), step=step)
     vel = mech.outputs.velocity if velocity is None else velocity
     acc = mech.outputs.acceleration if acceleration is None else acceleration
     forces = mech.needs_forces if forces is None else forces
     if forces:
         vel = acc = True
-    sol = an.solve_sweep(u, velocity=vel or bool(acc), acceleration=bool(acc))
-    force_result = None
-    if forces:
-        from .solvers.forces import solve_forces
-
-        force_result = solve_forces(an, sol)
+    sol = core.states(an, u, ud, udd, t=t, velocity=vel or bool(acc), acceleration=bool(acc))
+    force_result = core.forces(an, sol) if forces else None
     return Results(an, sol, force_result)
 
 
 def positions(mech: Mechanism, step: float | None = None) -> int:
     """How many positions the sweep has (without solving it)."""
     sw = mech.sweep
+    if sw.duration is not None:  # swept in time
+        dt = step if step is not None else sw.time_step
+        return max(0, math.ceil(sw.duration / dt - 1e-9)) + 1
     travel = sw.travel if sw.travel is not None else 2 * math.pi
     step = step if step is not None else sw.step
     if step is None:

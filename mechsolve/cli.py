@@ -185,8 +185,17 @@ def main() -> None:
     "on the whole constraint system; split-newton: the same groups as auto, each by "
     "Newton-Raphson.",
 )
+@click.option(
+    "--at",
+    "at",
+    multiple=True,
+    metavar="STATE",
+    help="Solve only this instant, e.g. 'theta=30 deg, omega=10 rad/s, alpha=5 rad/s^2' "
+    "('s=..., v=..., a=...' for a linear driver; alpha defaults to 0); may be repeated. "
+    "Prints every quantity and force and writes instants.csv.",
+)
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
-def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
+def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     _interrupt_on_sigterm()
     bar = None
@@ -203,6 +212,19 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         output_folder(outdir)
         n = api.positions(mech, st)
+        instants_failed = False
+        if at or mech.instants:
+            from .instants import Instant, instants_table, parse_instant, solve_instants
+
+            todo = [parse_instant(mech, a) for a in at] or [Instant(*i) for i in mech.instants]
+            ires = solve_instants(mech, todo, method=method)
+            path = ires.to_csv(outdir / "instants.csv")
+            instants_failed = ires.incomplete()
+            if not quiet:
+                click.echo(instants_table(ires))
+                click.echo(f"  wrote {path}")
+            if at:  # only the instants asked for
+                sys.exit(EXIT_WARNINGS if instants_failed else EXIT_OK)
         if n > _stream_above():
             # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
             # sweep of the same range; a bar on a terminal, moved on after each chunk
@@ -234,7 +256,7 @@ def run(file: Path, outdir, step, variant, no_plots, method, quiet) -> None:
                 f"  wrote {len(written)} file(s) to {outdir}/: "
                 + ", ".join(p.name for p in written)
             )
-        sys.exit(EXIT_WARNINGS if failed else EXIT_OK)
+        sys.exit(EXIT_WARNINGS if failed or instants_failed else EXIT_OK)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
         if bar is not None:

@@ -508,6 +508,33 @@ class Results:
             text += f" ({float(self.driver_travel[i]):.6g}° from the start)"
         return text
 
+    def motion_events(self) -> list[tuple[float, float, float]]:
+        """(time, acceleration before, after) where the driver's acceleration jumps (the
+        joins of a segmented motion law), within the sweep."""
+        law = self.mechanism.driver.motion
+        jumps = getattr(law, "jumps", None)
+        if jumps is None or not len(self.t):
+            return []
+        end = float(np.max(self.t))
+        return [j for j in jumps() if j[0] <= end]
+
+    def motion_summary(self) -> list[str]:
+        """The driver's motion law and where its acceleration jumps (summary lines)."""
+        law = self.mechanism.driver.motion
+        if law is None:
+            return []
+        from .model.motion import describe
+
+        unit = "m/s^2" if self.linear else "rad/s^2"
+        lines = [f"  driver motion: {describe(law)}"]
+        jumps = self.motion_events()
+        if jumps:
+            lines.append(
+                "  driver acceleration jumps (position and speed continuous) at "
+                + ", ".join(f"t = {t:.6g} s ({a:.6g} -> {b:.6g} {unit})" for t, a, b in jumps)
+            )
+        return lines
+
     def summary(self) -> str:
         """A short text summary: positions solved, ranges of the outputs, anything unusual."""
         n = len(self.u)
@@ -520,6 +547,7 @@ class Results:
             f"driver {mech.driver.joint} "
             f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}" + (f" over {self.t[-1]:.6g} s" if n else "")
         )
+        lines += self.motion_summary()
         for f in self.failures:
             lines.append(
                 f"  unassemblable at {self.describe_u(f.first)}"

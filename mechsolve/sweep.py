@@ -183,6 +183,17 @@ class Solution:
     # singular positions whose rates are limits along the motion, or could not be found
     rates_by_limit: list[int] = field(default_factory=list)
     rates_undetermined: list[int] = field(default_factory=list)
+    # the driver's rate and its rate of change at each position (None: the constant speed
+    # of the file and no acceleration)
+    ud: np.ndarray | None = None
+    udd: np.ndarray | None = None
+
+    def driver_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """(u', u'') at each position: the driver's speed and acceleration."""
+        n = len(self.u)
+        ud = self.ud if self.ud is not None else np.full(n, float(self.analysis.speed))
+        udd = self.udd if self.udd is not None else np.zeros(n)
+        return ud, udd
 
     @property
     def residual(self) -> np.ndarray:
@@ -274,6 +285,49 @@ class Analysis:
             for j in mech.joints
         }
         self.joint_point[self.system.driver] = d.joint
+
+    def reversed(self) -> Analysis:
+        """The same analysis with the driver moving the other way from its start (for
+        positions behind the start)."""
+        import copy
+
+        mech = copy.copy(self.mech)
+        d = self.mech.driver
+        mech.driver = dataclasses.replace(d, speed=-d.speed, sense=-d.direction)
+        return Analysis(mech, self.method)
+
+    def motion_values(self, time_step: float | None = None):
+        """``(u, t, u', u'')`` of the sweep of a driver with a motion law: at time steps
+        over the sweep's duration, or (constant acceleration over an angle range) at the
+        sweep's driver steps, each at the time the law reaches it."""
+        d = self.mech.driver
+        law = d.motion
+        sw = self.mech.sweep
+        if sw.duration is None:
+            u, _ = self.sweep_values(float(d.start))
+            t = law.time_at(d.direction * (u - float(d.start)))
+            reach = np.isfinite(t)
+            if not reach.all():
+                k = int(np.argmin(reach))
+                raise self.mech.error(
+                    ("sweep",),
+                    f"the motion never reaches {self.format_u(float(u[k]))}: it stops and "
+                    "turns back before; sweep it in time (duration, time_step) instead",
+                )
+        else:
+            dt = time_step or sw.time_step
+            n = max(0, math.ceil(sw.duration / dt - 1e-9))
+            if n >= MAX_POSITIONS:
+                raise self.mech.error(("sweep",), "too many positions for one run")
+            t = np.minimum(np.arange(n + 1) * dt, sw.duration)
+        u, ud, udd = law.at(t)
+        bad = ~(np.isfinite(u) & np.isfinite(ud) & np.isfinite(udd))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise self.mech.error(
+                ("driver", "motion"), f"the motion law is not finite at t = {t[k]:.6g} s"
+            )
+        return u, t, ud, udd
 
     # -- driver ---------------------------------------------------------------------
     def drive(self, u: np.ndarray) -> Drive:
@@ -511,7 +565,13 @@ class Analysis:
             first_ok,
         )
 
-    def solve_sweep(self, u: np.ndarray, velocity: bool = True, acceleration: bool = True):
+    def solve_sweep(
+        self,
+        u: np.ndarray,
+        velocity: bool = True,
+        acceleration: bool = True,
+        per_unit_driver: bool = False,
+    ):
         """Solve a sweep from its start, as :meth:`solve`; where the mechanism cannot close
         at the start (a dead zone there), skip ahead to the first position where it
         closes, assemble there (on the branches the conditions and sketch ask for), and
@@ -521,7 +581,12 @@ class Analysis:
         first: CannotCloseAtStart | None = None
         while True:
             try:
-                sol = self.solve(u[k:], velocity=velocity, acceleration=acceleration)
+                sol = self.solve(
+                    u[k:],
+                    velocity=velocity,
+                    acceleration=acceleration,
+                    per_unit_driver=per_unit_driver,
+                )
                 break
             except CannotCloseAtStart as exc:
                 if first is None:

@@ -208,6 +208,9 @@ class Driver:
     line: tuple[str, str] | None = None
     sense: int | None = None  # +1 / -1: the direction of the sweep when speed is 0
     where: KeyPath = ()
+    # a motion law of time instead of the constant speed (see mechsolve.model.motion);
+    # ``speed`` then holds its nominal speed, whose sign is the direction of motion
+    motion: object | None = None
 
     @property
     def direction(self) -> int:
@@ -228,6 +231,9 @@ class Sweep:
     travel: float | None = None
     step: float | None = None
     where: KeyPath = ()
+    # a sweep in time (a driver with a motion law): its length and step (s)
+    duration: float | None = None
+    time_step: float | None = None
 
 
 @dataclass
@@ -300,6 +306,8 @@ class Mechanism:
     loads: list[Load] = field(default_factory=list)
     length_unit: str = "m"
     source: Source | None = field(default=None, repr=False)
+    # instants to solve besides the sweep: (u, u', u'', label), see mechsolve.instants
+    instants: list[tuple[float, float, float, str]] = field(default_factory=list)
 
     # -- lookup --------------------------------------------------------------------
     def link(self, name: str) -> Link:

@@ -53,6 +53,7 @@ TOP_KEYS = (
     "gravity",
     "loads",
     "variants",
+    "instants",
 )
 
 METHODS = ("auto", "newton", "split-newton")  # solver.method and --method
@@ -628,7 +629,7 @@ def read_driver(r: Reader, value: Any, joints) -> Driver:
     m = r.mapping(
         value,
         path,
-        ("joint", "speed", "direction", "start", "line", "description"),
+        ("joint", "speed", "direction", "start", "line", "description", "motion"),
         "'driver'",
         ("joint",),
     )
@@ -664,7 +665,142 @@ def read_driver(r: Reader, value: Any, joints) -> Driver:
     if "line" in m:
         a, b = r.names(m["line"], path + ("line",), "point", 2)
         d.line = (a, b)
+    if "motion" in m:
+        read_motion(r, m["motion"], d, linear, "direction" in m, "speed" in m, "start" in m)
     return d
+
+
+def read_motion(
+    r: Reader, value: Any, d: Driver, linear: bool, has_dir: bool, has_speed: bool, has_start
+) -> None:
+    """The driver's motion law (see :mod:`mechsolve.model.motion`): ``accelerate`` (with
+    ``from``), ``segments`` (with ``from``), ``table`` (with ``end``) or ``law``."""
+    import numpy as np
+
+    from .motion import ConstantAcceleration, Segments, TableMotion
+
+    path: KeyPath = ("driver", "motion")
+    m = r.mapping(
+        value, path, ("accelerate", "from", "segments", "table", "end", "law"), "'motion'"
+    )
+    kinds = [k for k in ("accelerate", "segments", "table", "law") if k in m]
+    if len(kinds) != 1:
+        raise r.fail(
+            path,
+            "give one of accelerate (with from), segments, table or law"
+            + (f" (got {', '.join(kinds)})" if kinds else ""),
+        )
+    kind = kinds[0]
+    if has_speed:
+        raise r.fail(("driver", "speed"), "a driver with a motion law has no constant speed")
+    if isinstance(d.start, Limit):
+        raise r.fail(("driver", "start"), "a motion law needs a numeric start")
+    unit = "length" if linear else "angle"
+    speed_kind = "speed" if linear else "angular speed"
+    acc_kind = "acceleration" if linear else "angular acceleration"
+    for key, allowed in (("from", ("accelerate", "segments")), ("end", ("table",))):
+        if key in m and kind not in allowed:
+            raise r.fail(path + (key,), f"'{key}' goes with {' or '.join(allowed)}")
+    if has_dir and kind != "segments":
+        raise r.fail(
+            ("driver", "direction"),
+            "with this motion law the signs of its values give the direction; "
+            "'direction' goes with segments",
+        )
+    sign = d.sense or 1
+    w0 = r.quantity(m["from"], path + ("from",), speed_kind) if "from" in m else 0.0
+    if kind == "accelerate":
+        acc = r.quantity(m["accelerate"], path + ("accelerate",), acc_kind)
+        if acc == 0 and w0 == 0:
+            raise r.fail(path, "the driver would not move: give a nonzero accelerate or from")
+        law = ConstantAcceleration(start=float(d.start), speed0=w0, acceleration=acc)
+    elif kind == "segments":
+        segs = m["segments"]
+        if not isinstance(segs, list) or not segs:
+            raise r.fail(path + ("segments",), "'segments' must be a list of segments")
+        if w0 < 0:
+            raise r.fail(
+                path + ("from",), "segment speeds are magnitudes; 'direction' sets the sense"
+            )
+        spec = []
+        for k, seg in enumerate(segs):
+            sp = path + ("segments", k)
+            sm = r.mapping(seg, sp, ("accelerate", "run", "decelerate", "dwell", "to"), "a segment")
+            which = [x for x in ("accelerate", "run", "decelerate", "dwell") if x in sm]
+            if len(which) != 1:
+                raise r.fail(
+                    sp, "a segment is one of accelerate, run, decelerate, dwell: its duration"
+                )
+            sk = which[0]
+            length = r.positive(sm[sk], sp + (sk,), "time")
+            target = None
+            if "to" in sm:
+                if sk not in ("accelerate", "decelerate"):
+                    raise r.fail(sp + ("to",), f"'to' goes with accelerate or decelerate, not {sk}")
+                target = sign * r.positive(sm["to"], sp + ("to",), speed_kind, allow_zero=True)
+            elif sk == "accelerate":
+                raise r.fail(sp, "'accelerate' needs 'to': the speed to reach")
+            spec.append((sk, length, target))
+        try:
+            law = Segments.build(float(d.start), sign * w0, spec)
+        except ValueError as exc:
+            raise r.fail(path + ("segments",), str(exc)) from None
+    elif kind == "table":
+        rows = m["table"]
+        if not isinstance(rows, list) or len(rows) < 2:
+            raise r.fail(path + ("table",), "'table' must list at least 2 points [time, value]")
+        ts, us = [], []
+        for k, row in enumerate(rows):
+            rp = path + ("table", k)
+            if not isinstance(row, list) or len(row) != 2:
+                raise r.fail(rp, f"a table point is [time, {'position' if linear else 'angle'}]")
+            ts.append(r.quantity(row[0], rp + (0,), "time"))
+            us.append(r.quantity(row[1], rp + (1,), unit))
+        for k in range(1, len(ts)):
+            if not ts[k] > ts[k - 1]:
+                raise r.fail(
+                    path + ("table", k, 0),
+                    f"the times must increase: {ts[k]:.6g} s follows {ts[k - 1]:.6g} s",
+                )
+        if has_start:
+            raise r.fail(("driver", "start"), "the table gives the start (its first point)")
+        end = m.get("end", "not-a-knot")
+        if end not in ("not-a-knot", "natural", "clamped"):
+            raise r.fail(
+                path + ("end",), f"end must be not-a-knot, natural or clamped, got {end!r}"
+            )
+        law = TableMotion(times=np.array(ts), values=np.array(us), end=end)
+        d.start = law.start
+    else:
+        law = read_law(r, m["law"], path + ("law",), has_start)
+        d.start = law.start
+    d.motion = law
+    d.speed = law.nominal_speed()
+    d.sense = 1 if d.speed > 0 else -1
+
+
+def read_law(r: Reader, value: Any, path: KeyPath, has_start: bool):
+    """``u(t)`` as an expression of ``t`` (SI: rad or m), differentiated symbolically."""
+    import numpy as np
+
+    from .motion import ExpressionMotion
+
+    if not isinstance(value, str):
+        raise r.fail(
+            path, f"'law' must be an expression of t, such as \"0.5 * t^2\", got {value!r}"
+        )
+    if has_start:
+        raise r.fail(("driver", "start"), "the law gives the start (its value at t = 0)")
+    try:
+        e = Expression(value, variables=("t",))
+        e1 = e.derivative("t")
+        e2 = e1.derivative("t")
+        law = ExpressionMotion(expr=e, first=e1, second=e2)
+    except ExprError as exc:
+        raise r.fail(path, str(exc)) from None
+    if not np.isfinite(law.start):
+        raise r.fail(path, "the law is not finite at t = 0")
+    return law
 
 
 def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sweep:
@@ -672,6 +808,18 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
     if value is None:
         value = {}
     m = r.mapping(value, path, ("range", "to", "step", "steps", "duration", "time_step"), "'sweep'")
+    if driver is not None and driver.motion is not None:
+        from .motion import ConstantAcceleration
+
+        if not (isinstance(driver.motion, ConstantAcceleration) and ("range" in m or "to" in m)):
+            return read_time_sweep(r, m, path, driver)
+        for key in ("duration", "time_step"):
+            if key in m:
+                raise r.fail(
+                    path + (key,),
+                    "give only driver positions (range or to, with step or steps) or a sweep "
+                    f"in time (duration, time_step), not both: {key!r} with a range",
+                )
     sw = Sweep(where=path)
     kind = "length" if linear else "angle"
     speed = abs(driver.speed) if driver is not None else 1.0
@@ -722,6 +870,48 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
         if sw.travel is None:
             raise r.fail(path, "a linear driver needs 'range' or 'to' for its sweep")
         sw.step = sw.travel / n if sw.travel > 0 else 1.0
+    return sw
+
+
+def read_time_sweep(r: Reader, m: dict, path: KeyPath, driver: Driver) -> Sweep:
+    """The sweep of a driver with a motion law: a duration (default: the law's own) in
+    time steps (``time_step``, or ``steps``: intervals; default 200)."""
+    law = driver.motion
+    sw = Sweep(where=path)
+    for key in ("range", "to", "step"):
+        if key in m:
+            raise r.fail(
+                path + (key,),
+                f"a driver with a motion law is swept in time: give duration and time_step "
+                f"(or steps), not {key!r}",
+            )
+    if "duration" in m:
+        sw.duration = r.positive(m["duration"], path + ("duration",), "time")
+    elif law.duration:
+        sw.duration = float(law.duration)
+    else:
+        raise r.fail(path, "this motion law has no end: give the sweep's duration")
+    if law.duration and sw.duration > law.duration * (1 + 1e-12):
+        raise r.fail(
+            path + ("duration",),
+            f"the motion law ends at {law.duration:.6g} s; the sweep asks for {sw.duration:.6g} s",
+        )
+    if "time_step" in m and "steps" in m:
+        raise r.fail(path, "give only one of time_step, steps")
+    if "time_step" in m:
+        sw.time_step = r.positive(m["time_step"], path + ("time_step",), "time")
+    else:
+        n = m.get("steps", 200)
+        if not isinstance(n, int) or isinstance(n, bool) or n < 1 or n > MAX_POSITIONS:
+            raise r.fail(
+                path + ("steps",), f"'steps' must be a whole number from 1 to {MAX_POSITIONS:,}"
+            )
+        sw.time_step = sw.duration / n if sw.duration > 0 else 1.0
+    if sw.duration / sw.time_step >= MAX_POSITIONS:
+        raise r.fail(
+            path,
+            f"the sweep has more than the {MAX_POSITIONS:,} positions mechsolve solves in one run",
+        )
     return sw
 
 
@@ -864,7 +1054,34 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         length_unit=r.length_unit,
         source=src,
     )
+    if "instants" in data:
+        mech.instants = read_instants(r, data["instants"], linear)
     return mech.validate()
+
+
+def read_instants(r: Reader, value: Any, linear: bool) -> list[tuple[float, float, float, str]]:
+    """``instants: [{theta: 30 deg, omega: 10 rad/s, alpha: 5 rad/s^2}, ...]`` (``s``,
+    ``v``, ``a`` for a linear driver; the acceleration defaults to 0)."""
+    path: KeyPath = ("instants",)
+    if not isinstance(value, list) or not value:
+        raise r.fail(path, "'instants' must be a list of driver states")
+    keys = ("s", "v", "a") if linear else ("theta", "omega", "alpha")
+    kinds = (
+        ("length", "speed", "acceleration")
+        if linear
+        else ("angle", "angular speed", "angular acceleration")
+    )
+    out = []
+    for k, item in enumerate(value):
+        ip = path + (k,)
+        m = r.mapping(item, ip, keys, "an instant", keys[:2])
+        vals = [
+            r.quantity(m[key], ip + (key,), kind) if key in m else 0.0
+            for key, kind in zip(keys, kinds)
+        ]
+        label = ", ".join(f"{key}={m[key]}" for key in keys if key in m)
+        out.append((vals[0], vals[1], vals[2], label))
+    return out
 
 
 def load(path: str | Path, variant: str | None = None) -> Mechanism:

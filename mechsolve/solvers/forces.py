@@ -59,7 +59,7 @@ class ForceResult:
     load_power: dict[str, np.ndarray] = field(default_factory=dict)  # power of each load
     nonunique: dict[str, set[str]] = field(default_factory=dict)  # joint -> components
     stroke_extremes: list[tuple[float, float]] = field(default_factory=list)
-    speed: float = 0.0  # the driver's speed (rad/s or m/s)
+    speed: np.ndarray | float = 0.0  # the driver's speed at each position (rad/s or m/s)
     # (kinetic, kinetic rate, potential, potential rate) on demand
     energy_terms: Callable[[], tuple] | None = field(default=None, repr=False)
     _energies: tuple | None = field(default=None, repr=False)
@@ -318,7 +318,7 @@ def solve_forces(
         load_power=load_power,
         stroke_extremes=extremes,
         nonunique=_nonunique_components(an, nonunique),
-        speed=float(an.speed),
+        speed=sol.driver_rates()[0],
         energy_terms=energy_terms,
     )
 

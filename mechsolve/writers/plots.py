@@ -57,10 +57,24 @@ def _plt():
 
 
 def driver_axis(res: Results) -> tuple[np.ndarray, str]:
+    """The x axis of the curves: it follows the motion. Time for a driver with a motion
+    law; else the driver's travel from the start (so that a clockwise crank's curves run
+    left to right, as time does), labelled with the start."""
     name = res.mechanism.driver.joint
+    if res.mechanism.driver.motion is not None:
+        return res.t, "time [s]"
+    start = float(res.u[0]) if len(res.u) else 0.0
     if res.linear:
-        return res.u, f"driver position ({name}) [m]"
-    return np.degrees(res.u), f"driver angle ({name}) [deg]"
+        if res.mechanism.driver.direction > 0:
+            return res.u, f"driver position ({name}) [m]"
+        return res.driver_travel, f"driver travel ({name}) from {start:.6g} m [m]"
+    if res.mechanism.driver.direction > 0 and 0 <= start < 2 * np.pi:
+        return np.degrees(res.u), f"driver angle ({name}) [deg]"
+    sense = "clockwise" if res.mechanism.driver.direction < 0 else "counter-clockwise"
+    return (
+        res.driver_travel,
+        f"driver angle ({name}) travelled {sense} from {np.degrees(start) % 360:.6g}° [deg]",
+    )
 
 
 def draw_mechanism(
