@@ -157,9 +157,8 @@ def number_value(draw: st.DrawFn, old: Any) -> Any:
     kind = draw(st.sampled_from(["fixed", "scaled", "scaled", "unit"]))
     if kind == "fixed":
         return draw(st.sampled_from(HUGE + TINY + ODD + WRONG))
-    m = NUMBER_RE.match(str(old))
-    assert m
-    number, unit = float(m.group(1)) or 1.0, m.group(2)
+    m = NUMBER_RE.match(str(old))  # no match: nan or inf from an earlier mutation
+    number, unit = (float(m.group(1)) or 1.0, m.group(2)) if m else (1.0, "")
     if kind == "scaled":
         k = draw(st.integers(-330, 330))
         try:
@@ -224,6 +223,7 @@ def mutant(draw: st.DrawFn) -> tuple[str, str | None]:
     """The text of a mutated example file, and maybe a variant to run."""
     name = draw(st.sampled_from(sorted(DATA)))
     data = copy.deepcopy(DATA[name])
+    dup = None
     for _ in range(draw(st.integers(1, 3))):
         op = draw(
             st.sampled_from(
@@ -254,8 +254,7 @@ def mutant(draw: st.DrawFn) -> tuple[str, str | None]:
                 p = draw(st.sampled_from(exprs))
                 put(data, p, draw(expression_text(point_names(data), get(data, p))))
         elif op == "duplicate":  # the same mapping key twice: done on the text
-            data = {"__duplicate__": draw(st.integers(0, 10_000)), **data}
-    dup = data.pop("__duplicate__", None) if isinstance(data, dict) else None
+            dup = draw(st.integers(0, 10_000))
     text = yaml.safe_dump(data, sort_keys=False, width=10**9)
     if dup is not None:
         lines = text.splitlines(keepends=True)
