@@ -7,6 +7,12 @@ angles, which use the file's ``units.length`` (default m) and ``units.angle`` (d
 Dimensions are vectors of exponents over (length, mass, time, angle). Angle is kept as a
 dimension of its own so that ``"110 mm"`` given for an angle is caught; a value without
 an angle where one is expected (``"2 1/s"`` for an angular speed) is read as radians.
+
+US customary units are exact: in, ft, yd, lbm, lbf, slug (lbf s^2/ft), blob (lbf s^2/in),
+kip, psi, ksi. ``lb`` is read as a pound-mass where that gives the expected dimension and
+as a pound-force otherwise, as textbooks print it: ``"50 lb"`` is a force where a force
+is expected, ``"2 lb"`` a mass where a mass is, and ``"0.3 lb in s^2"`` (lbf s^2 in) a
+moment of inertia.
 """
 
 from __future__ import annotations
@@ -36,6 +42,10 @@ _DIMS: dict[str, Dim] = {
     "density per length": (-1, 1, 0, 0),
 }
 
+# the avoirdupois pound (exact, 1959) and the pound-force under standard gravity
+_LB = 0.45359237  # kg
+_LBF = _LB * 9.80665  # N
+
 # symbol -> (factor to SI, dimension)
 _UNITS: dict[str, tuple[float, Dim]] = {
     # length
@@ -45,15 +55,22 @@ _UNITS: dict[str, tuple[float, Dim]] = {
     "dm": (1e-1, (1, 0, 0, 0)),
     "km": (1e3, (1, 0, 0, 0)),
     "um": (1e-6, (1, 0, 0, 0)),
+    # US customary, exact by definition (1959): 1 in = 0.0254 m, 1 ft = 0.3048 m
     "in": (0.0254, (1, 0, 0, 0)),
+    "inch": (0.0254, (1, 0, 0, 0)),
     "ft": (0.3048, (1, 0, 0, 0)),
+    "yd": (0.9144, (1, 0, 0, 0)),
     # mass
     "kg": (1.0, (0, 1, 0, 0)),
     "g": (1e-3, (0, 1, 0, 0)),
     "t": (1e3, (0, 1, 0, 0)),
+    "lbm": (_LB, (0, 1, 0, 0)),  # "lb" is lbm or lbf, see parse_quantity
+    "slug": (_LBF / 0.3048, (0, 1, 0, 0)),  # lbf s^2/ft
+    "blob": (_LBF / 0.0254, (0, 1, 0, 0)),  # lbf s^2/in (Norton's unit)
     # time
     "s": (1.0, (0, 0, 1, 0)),
     "ms": (1e-3, (0, 0, 1, 0)),
+    "sec": (1.0, (0, 0, 1, 0)),
     "min": (60.0, (0, 0, 1, 0)),
     "h": (3600.0, (0, 0, 1, 0)),
     # angle
@@ -70,6 +87,8 @@ _UNITS: dict[str, tuple[float, Dim]] = {
     "kN": (1e3, (1, 1, -2, 0)),
     "MN": (1e6, (1, 1, -2, 0)),
     "kgf": (9.80665, (1, 1, -2, 0)),
+    "lbf": (_LBF, (1, 1, -2, 0)),
+    "kip": (1e3 * _LBF, (1, 1, -2, 0)),
     "Nm": (1.0, (2, 1, -2, 0)),
     "kNm": (1e3, (2, 1, -2, 0)),
     "J": (1.0, (2, 1, -2, 0)),
@@ -80,6 +99,8 @@ _UNITS: dict[str, tuple[float, Dim]] = {
     "kPa": (1e3, (-1, 1, -2, 0)),
     "MPa": (1e6, (-1, 1, -2, 0)),
     "bar": (1e5, (-1, 1, -2, 0)),
+    "psi": (_LBF / 0.0254**2, (-1, 1, -2, 0)),
+    "ksi": (1e3 * _LBF / 0.0254**2, (-1, 1, -2, 0)),
 }
 
 # The largest magnitude (SI) a value of each kind may have. Far beyond any mechanism, and
@@ -161,9 +182,22 @@ def dim_name(dim: Dim) -> str:
     return " ".join(parts) or "dimensionless"
 
 
-def parse_unit(text: str) -> Unit:
-    """Parse a unit expression such as ``"m/s^2"``, ``"kg m^2"``, ``"N*m"``, ``"r/min"``."""
+_HYPHEN_RE = re.compile(r"(?<=[A-Za-z])-(?=[A-Za-z])")
+_LB_RE = re.compile(r"(?<![A-Za-z])lb(?![A-Za-z])")
+_SUPERSCRIPT_RE = re.compile("⁻?[⁰¹²³⁴⁵⁶⁷⁸⁹]+")
+_SUPERSCRIPTS = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+
+
+def parse_unit(text: str, pound: str = "lbm") -> Unit:
+    """Parse a unit expression such as ``"m/s^2"``, ``"kg m^2"``, ``"N*m"``, ``"r/min"``.
+
+    Products may be written with spaces, ``*``, ``·`` or, between letters, ``-``
+    (``"lb-in"``); exponents with ``^``, ``**`` or superscripts (``"s²"``). ``lb``
+    stands for ``pound`` (``"lbm"`` or ``"lbf"``).
+    """
     text = text.strip().replace("·", " ").replace("µ", "u")
+    text = _HYPHEN_RE.sub(" ", text)
+    text = _SUPERSCRIPT_RE.sub(lambda m: "^" + m.group().translate(_SUPERSCRIPTS), text)
     if text in ("", "1", "-"):
         return Unit(1.0, (0, 0, 0, 0))
     factor = 1.0
@@ -180,10 +214,13 @@ def parse_unit(text: str) -> Unit:
             if tok == "1" and i == 0:
                 continue
             m = _FACTOR_RE.match(tok)
-            if not m or m.group(1) not in _UNITS:
-                known = ", ".join(sorted(_UNITS))
+            sym = m.group(1) if m else ""
+            if sym == "lb":
+                sym = pound
+            if sym not in _UNITS:
+                known = ", ".join(sorted([*_UNITS, "lb"]))
                 raise UnitError(f"unknown unit {tok!r} in {text!r} (known units: {known})")
-            f, d = _UNITS[m.group(1)]
+            f, d = _UNITS[sym]
             exp = sign * int(m.group(2) or 1)
             if abs(exp) > MAX_EXPONENT:
                 raise UnitError(
@@ -297,14 +334,21 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
     else:
         unit = parse_unit(unit_text)
+        if not _fits(unit.dim, want) and _LB_RE.search(unit_text):
+            # textbooks write "lb" for the pound-force too ("50 lb", "lb in s^2")
+            alt = parse_unit(unit_text, pound="lbf")
+            if _fits(alt.dim, want):
+                unit = alt
     dim = unit.dim
-    if dim != want:
-        # an angle is dimensionless in SI: "2 1/s" is a valid angular speed in rad/s
-        if want[3] != 0 and dim[:3] == want[:3] and dim[3] == 0:
-            pass
-        else:
-            raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
+    if not _fits(dim, want):
+        raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
     return check_range(number * unit.factor, kind, value)
+
+
+def _fits(dim: Dim, want: Dim) -> bool:
+    """Whether a unit of dimension ``dim`` gives a quantity of dimension ``want``: an
+    angle is dimensionless in SI, so "2 1/s" is a valid angular speed in rad/s."""
+    return dim == want or (want[3] != 0 and dim[:3] == want[:3] and dim[3] == 0)
 
 
 def format_unit(kind: str) -> str:
