@@ -72,6 +72,9 @@ class Source:
         self.file = file
         self._lines = lines or {}
         self._display = display or {}
+        # mappings a variant merged into: the variant's key path there (an error about
+        # the merged mapping as a whole, "give only one of range, to", points at it)
+        self._merged: dict[KeyPath, KeyPath] = {}
 
     def line(self, path: KeyPath) -> int | None:
         """The line of ``path``, or of its nearest parent that has one."""
@@ -85,6 +88,11 @@ class Source:
     def error(self, path: KeyPath, message: str) -> InputError:
         """An :class:`InputError` that names this file, the key path and its line."""
         path = tuple(path)
+        if path in self._merged and self._merged[path] in self._lines:
+            src = self._merged[path]
+            return InputError(
+                message, file=self.file, keypath=format_keypath(src), line=self._lines[src]
+            )
         shown = path
         probe = path
         while probe:
@@ -100,7 +108,10 @@ class Source:
     def with_variant(self, name: str) -> Source:
         """Return a new source with ``variants.<name>`` merged over the base document.
 
-        Mappings merge key by key; any other value replaces; ``null`` deletes a key.
+        Mappings merge key by key; any other value replaces; ``null`` deletes a key. A key
+        of a group of mutually exclusive keys (:data:`EXCLUSIVE`: ``sweep`` ``range``,
+        ``to`` and ``duration``; ``step``, ``steps`` and ``time_step``...) drops the base's
+        other keys of its group.
         """
         variants = self.data.get("variants") if isinstance(self.data, dict) else None
         if not isinstance(variants, dict) or name not in variants:
@@ -114,10 +125,23 @@ class Source:
         lines = dict(self._lines)
         display = dict(self._display)
         prefix = ("variants", name)
-        self._merge(data, over, (), prefix, lines, display)
-        return Source(data, lines, self.file, display)
+        merged: dict[KeyPath, KeyPath] = {}
+        self._merge(data, over, (), prefix, lines, display, merged)
+        out = Source(data, lines, self.file, display)
+        out._merged = merged
+        return out
 
-    def _merge(self, base: dict, over: dict, path: KeyPath, prefix: KeyPath, lines, display):
+    def _merge(
+        self, base: dict, over: dict, path: KeyPath, prefix: KeyPath, lines, display, merged
+    ) -> None:
+        # a key the variant sets replaces the base's keys that exclude it ("steps" drops
+        # the base's "step"), so that no variant has to write "step: null"
+        for group in exclusive_groups(path):
+            setting = [k for k in group if over.get(k) is not None]
+            if setting:
+                for k in group:
+                    if k not in over:
+                        base.pop(k, None)
         for key, value in over.items():
             here = path + (key,)
             src = prefix + here
@@ -125,7 +149,8 @@ class Source:
                 base.pop(key, None)
                 continue
             if isinstance(value, dict) and isinstance(base.get(key), dict):
-                self._merge(base[key], value, here, prefix, lines, display)
+                merged[here] = src
+                self._merge(base[key], value, here, prefix, lines, display, merged)
                 continue
             base[key] = copy.deepcopy(value)
             # lines and display of everything below the replaced key come from the variant
@@ -135,6 +160,28 @@ class Source:
                 if p[: len(src)] == src:
                     lines[here + p[len(src) :]] = ln
             display[here] = src
+
+
+# Keys of one mapping that exclude each other: where a variant sets one of a group, the
+# base file's others are dropped. "*" stands for any name (a link, a joint, a load).
+EXCLUSIVE: dict[KeyPath, tuple[tuple[str, ...], ...]] = {
+    ("sweep",): (("range", "to", "duration"), ("step", "steps", "time_step")),
+    ("driver",): (("speed", "motion"),),
+    ("driver", "motion"): (("accelerate", "segments", "table", "law"),),
+    ("links", "*"): (("mass", "weight"),),
+    ("joints", "*"): (("revolute", "slider"),),
+    ("joints", "*", "line"): (("through", "offset"),),
+    ("loads", "*"): (("force", "torque", "spring", "damper", "drag"),),
+}
+
+
+def exclusive_groups(path: KeyPath) -> tuple[tuple[str, ...], ...]:
+    """The groups of mutually exclusive keys of the mapping at ``path`` (see
+    :data:`EXCLUSIVE`)."""
+    for pattern, groups in EXCLUSIVE.items():
+        if len(pattern) == len(path) and all(p in ("*", k) for p, k in zip(pattern, path)):
+            return groups
+    return ()
 
 
 def _scalar(node: yaml.ScalarNode) -> Any:
