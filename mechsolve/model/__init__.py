@@ -264,7 +264,11 @@ class Assembly:
 
 @dataclass
 class Outputs:
-    """What to report. ``None`` means all."""
+    """What to report. ``None`` means all.
+
+    ``relative``: pairs of links ``(a, b)`` whose relative angle (a's minus b's), angular
+    velocity and angular acceleration are reported as ``a/b.angle`` and so on.
+    """
 
     points: list[str] | None = None
     links: list[str] | None = None
@@ -272,6 +276,7 @@ class Outputs:
     velocity: bool = True
     acceleration: bool = True
     where: KeyPath = ()
+    relative: list[tuple[str, str]] = field(default_factory=list)
 
 
 @dataclass

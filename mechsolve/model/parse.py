@@ -614,14 +614,78 @@ def read_joint(r: Reader, name: str, value: Any, mech_points) -> PinJoint | Slid
     return SliderJoint(name, a, b, point, origin, angle, block_angle, where=path)
 
 
+def pin_names(name: str, count: int) -> list[str]:
+    """Names of the revolute joints a pin through ``count`` links stands for: ``E``,
+    ``E_2``, ``E_3``... (the first listed link with each other one)."""
+    return [name] + [f"{name}_{k}" for k in range(2, count)]
+
+
+def _pin_links(value: Any) -> list[Any] | None:
+    """The links of an entry that pins three or more links at one point, else ``None``."""
+    if isinstance(value, list) and len(value) > 2:
+        return value
+    if isinstance(value, dict) and isinstance(value.get("revolute"), list):
+        if len(value["revolute"]) > 2:
+            return value["revolute"]
+    return None
+
+
+def read_pin(r: Reader, name: str, value: Any, mech_points) -> list[PinJoint]:
+    """A pin joining three or more links at one point: ``E: [K2, K3, K4]`` or ``E:
+    {revolute: [K2, K3, K4], point: E}``; revolute joints between the first link and each
+    other one, named as :func:`pin_names` says (reactions on each by the first)."""
+    path: KeyPath = ("joints", name)
+    lpath = path
+    point = name
+    if isinstance(value, dict):
+        m = r.mapping(value, path, ("revolute", "point", "description"), f"joint {name!r}")
+        lpath = path + ("revolute",)
+        point = r.name(m.get("point", name), path + ("point",), "point")
+        value = m["revolute"]
+    names = r.names(value, lpath, "link")
+    for i, ln in enumerate(names):
+        here = lpath + (i,)
+        if ln not in mech_points:
+            raise r.fail(here, f"no link named {ln!r}" + suggest(ln, list(mech_points)))
+        if ln in names[:i]:
+            raise r.fail(here, f"joint {name!r} lists the link {ln!r} twice")
+        if point not in mech_points[ln]:
+            what = "the ground" if ln == GROUND else f"link {ln!r}"
+            raise r.fail(
+                here,
+                f"joint {name!r} pins {', '.join(names)} at point {point!r}, but {what} has "
+                f"no point {point!r}" + suggest(point, list(mech_points[ln])),
+            )
+    first = names[0]
+    return [
+        PinJoint(jn, first, other, point, where=path)
+        for jn, other in zip(pin_names(name, len(names)), names[1:])
+    ]
+
+
 def read_joints(r: Reader, value: Any, ground, links) -> list[PinJoint | SliderJoint]:
     if not isinstance(value, dict) or not value:
         raise r.fail(("joints",), "'joints' must map joint names to their definitions")
     pts = {GROUND: ground}
     pts.update({lk.name: lk.points for lk in links})
-    return [
-        read_joint(r, r.ident(str(n), ("joints", n), "joint"), v, pts) for n, v in value.items()
-    ]
+    out: list[PinJoint | SliderJoint] = []
+    for n, v in value.items():
+        name = r.ident(str(n), ("joints", n), "joint")
+        many = _pin_links(v)
+        if many is None:
+            out.append(read_joint(r, name, v, pts))
+            continue
+        extra = pin_names(name, len(many))[1:]
+        for jn in extra:
+            if jn in value:
+                raise r.fail(
+                    ("joints", n),
+                    f"joint {name!r} pins {len(many)} links: its pairs are named "
+                    f"{', '.join(pin_names(name, len(many)))}, but the file has a joint "
+                    f"{jn!r} too; rename one",
+                )
+        out += read_pin(r, name, v, pts)
+    return out
 
 
 def read_driver(r: Reader, value: Any, joints) -> Driver:
@@ -952,8 +1016,12 @@ def read_assembly(r: Reader, value: Any) -> Assembly:
 
 def read_outputs(r: Reader, value: Any) -> Outputs:
     path: KeyPath = ("outputs",)
-    m = r.mapping(value, path, ("points", "links", "sliders", "quantities"), "'outputs'")
+    m = r.mapping(
+        value, path, ("points", "links", "sliders", "quantities", "relative"), "'outputs'"
+    )
     out = Outputs(where=path)
+    if "relative" in m:
+        out.relative = read_relative(r, m["relative"], path + ("relative",))
     for key in ("points", "links", "sliders"):
         if key in m:
             v = m[key]
@@ -970,6 +1038,41 @@ def read_outputs(r: Reader, value: Any) -> Outputs:
             raise r.fail(path + ("quantities",), f"'quantities' is a list of {', '.join(allowed)}")
         out.velocity = "velocity" in q or "acceleration" in q
         out.acceleration = "acceleration" in q
+    return out
+
+
+def read_relative(r: Reader, value: Any, path: KeyPath) -> list[tuple[str, str]]:
+    """``relative: [[coupler, crank], rocker/coupler]``: pairs of links (``ground`` too)
+    whose relative angle, angular velocity and acceleration are reported (first minus
+    second)."""
+    if not isinstance(value, list):
+        raise r.fail(
+            path, f"'relative' is a list of link pairs such as [coupler, crank], got {_kind(value)}"
+        )
+    links = r.src.data.get("links")
+    pool = [GROUND] + (list(links) if isinstance(links, dict) else [])
+    out: list[tuple[str, str]] = []
+    for i, item in enumerate(value):
+        here = path + (i,)
+        if isinstance(item, str) and item.count("/") == 1:
+            item = [x.strip() for x in item.split("/")]
+        if not (
+            isinstance(item, list) and len(item) == 2 and all(isinstance(x, str) for x in item)
+        ):
+            raise r.fail(
+                here,
+                "a relative angle is a pair of links, [coupler, crank] or 'coupler/crank' "
+                f"(the first's angle minus the second's), got {_kind(item)}",
+            )
+        for ln in item:
+            if ln not in pool:
+                raise r.fail(here, f"no link named {ln!r}" + suggest(ln, pool))
+        if item[0] == item[1]:
+            raise r.fail(here, f"the angle of {item[0]!r} relative to itself is always zero")
+        pair = (item[0], item[1])
+        if pair in out:
+            raise r.fail(here, f"the relative angle {pair[0]}/{pair[1]} is listed twice")
+        out.append(pair)
     return out
 
 
