@@ -18,7 +18,6 @@ from .state import State
 
 if TYPE_CHECKING:
     from .groups import Group
-    from .sweep import Analysis
 
 SINGULAR_RCOND = 1e-10  # below this a block is treated as singular
 SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a toggle
@@ -61,7 +60,7 @@ def rcond(J: np.ndarray) -> np.ndarray:
     return out
 
 
-def jacobian_rcond(an: Analysis, st: State, indicator: np.ndarray | None = None) -> np.ndarray:
+def jacobian_rcond(plan: list[Group], st: State, indicator: np.ndarray | None = None) -> np.ndarray:
     """The smallest reciprocal condition number over the groups at each position.
 
     A group solved in closed form is determined by a 2x2 system in its two unknown rates
@@ -71,7 +70,7 @@ def jacobian_rcond(an: Analysis, st: State, indicator: np.ndarray | None = None)
     group's indicator. A Newton group's is that of its (equilibrated) block of Phi_q.
     """
     out = np.ones(st.n)
-    for gi, g in enumerate(an.plan):
+    for gi, g in enumerate(plan):
         if g.n_modes == 2 and indicator is not None and gi < len(indicator):
             s = np.clip(indicator[gi], 0.0, 1.0)
             out = np.minimum(out, s / (1.0 + np.sqrt(1.0 - s * s)))

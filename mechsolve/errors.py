@@ -9,10 +9,16 @@ Exit codes (also listed in ``mechsolve --help`` and the README):
 code   meaning
 =====  ==============================================================
 0      success
-1      completed with warnings: some positions could not be solved
-       (their rows are marked in the CSV), the rest was written
-2      input error: the file or the command line is wrong
+1      completed with warnings: some positions could not be solved, or
+       some values are not determined at singular positions, or a check
+       such as the power balance failed (the CSV rows say why); the
+       rest was written
+2      input error: the file, the command line, an output folder that
+       cannot be written
 3      solver failure: the mechanism cannot be assembled or solved
+4      internal error: a bug in mechsolve (``MECHSOLVE_DEBUG=1`` shows
+       the traceback)
+130    interrupted (Ctrl-C or SIGTERM); no half-written file is left
 =====  ==============================================================
 """
 

@@ -27,7 +27,27 @@ from .model import GROUND, PinJoint, SliderJoint
 from .numerics import brent_root
 
 if TYPE_CHECKING:
-    from .results import Results
+    from .solution import Solution
+
+
+def full_cycle(linear: bool, u) -> bool:
+    """Does a sweep of driver values ``u`` cover exactly one turn of a crank?"""
+    return (not linear) and len(u) > 0 and abs(abs(u[-1] - u[0]) - 2 * math.pi) < 1e-9
+
+
+class _Sweep:
+    """What the design figures read of a solved sweep."""
+
+    def __init__(self, sol: Solution) -> None:
+        self.solution = sol
+        self.analysis = sol.analysis
+        self.mechanism = sol.analysis.mech
+        self.u = sol.u
+        self.ok = sol.ok
+        self.events = sol.events
+
+    def is_full_cycle(self) -> bool:
+        return full_cycle(self.analysis.linear, self.u)
 
 
 @dataclass
@@ -58,7 +78,7 @@ class Transmission:
     u: float
 
 
-def _rate_root(res: Results, k: int, value_rate):
+def _rate_root(res: _Sweep, k: int, value_rate):
     """Driver value in (u_k, u_k+1) where the rate changes sign (Brent's method)."""
     an, sol = res.analysis, res.solution
 
@@ -78,7 +98,7 @@ def _rate_root(res: Results, k: int, value_rate):
     return x, float(value_rate(one.state)[0][0])
 
 
-def _edge_value(res: Results, k: int, value_rate, vk: float, angle: bool):
+def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool):
     """(driver value, value) where the motion next to solved sample ``k`` meets an
     unassemblable range: at the range's exact edge when known, else at the sample."""
     sol = res.solution
@@ -101,8 +121,9 @@ def _edge_value(res: Results, k: int, value_rate, vk: float, angle: bool):
     return x, v
 
 
-def limit_positions(res: Results) -> list[LimitPositions]:
+def limit_positions(sol: Solution) -> list[LimitPositions]:
     """Limit positions of the rockers and sliders, with the time ratio over a full turn."""
+    res = _Sweep(sol)
     mech, an = res.mechanism, res.analysis
     sys_ = an.system
     driven = mech.joint(mech.driver.joint)
@@ -186,7 +207,7 @@ def limit_positions(res: Results) -> list[LimitPositions]:
     return out
 
 
-def _exact_minimum(res: Results, gi: int, g, k: int):
+def _exact_minimum(res: _Sweep, gi: int, g, k: int):
     """The transmission angle's minimum next to sample ``k``, located exactly: the root of
     the rate of the loop's discriminant (which is least where the angle is) by Brent's method in an
     interval beside ``k`` where that rate changes sign (over a full turn the last sample
@@ -232,8 +253,9 @@ def _exact_minimum(res: Results, gi: int, g, k: int):
     return best
 
 
-def transmission_angles(res: Results) -> list[Transmission]:
+def transmission_angles(sol: Solution) -> list[Transmission]:
     """The smallest transmission angle of each two-branch loop over the sweep."""
+    res = _Sweep(sol)
     out = []
     sol = res.solution
     for gi, g in enumerate(res.analysis.plan):

@@ -254,7 +254,7 @@ class Results:
 
             with np.errstate(invalid="ignore", divide="ignore"):
                 sol = self.solution
-                self._rcond = jacobian_rcond(self.analysis, sol.state, sol.indicator)
+                self._rcond = jacobian_rcond(self.analysis.plan, sol.state, sol.indicator)
         return self._rcond
 
     def limit_positions(self):
@@ -262,14 +262,14 @@ class Results:
         if not hasattr(self, "_limits"):
             from .limits import limit_positions
 
-            self._limits = limit_positions(self)
+            self._limits = limit_positions(self.solution)
         return self._limits
 
     def transmission_angles(self):
         """The smallest transmission angle of each loop (see :mod:`mechsolve.limits`)."""
         from .limits import transmission_angles
 
-        return transmission_angles(self)
+        return transmission_angles(self.solution)
 
     @property
     def events(self):
@@ -467,7 +467,9 @@ class Results:
         return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
 
     def is_full_cycle(self) -> bool:
-        return (not self.linear) and abs(abs(self.u[-1] - self.u[0]) - 2 * math.pi) < 1e-9
+        from .limits import full_cycle
+
+        return full_cycle(self.linear, self.u)
 
     def status(self) -> list[str]:
         """Per position: ``ok`` or why it was not solved."""

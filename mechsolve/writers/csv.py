@@ -14,12 +14,18 @@ import io
 import os
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from ..results import Results
+if TYPE_CHECKING:  # what the writer reads of a table (mechsolve.results.Results has it)
+    from collections.abc import Sequence
+
+    class Results(Protocol):
+        def columns(self) -> Sequence: ...
+        def status(self) -> list[str]: ...
+        def methods(self) -> list[str]: ...
+        def __len__(self) -> int: ...
 
 
 def format_values(values: np.ndarray) -> list[str]:
