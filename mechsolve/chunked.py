@@ -162,6 +162,8 @@ def stream(
             if prev_res is not None:  # continue the link angles' unwrapping
                 for ln in res.link_names():
                     res.angle_origin[ln] = float(prev_res.link(ln).angle[-1])
+                for a, b in mech.outputs.relative:
+                    res.angle_origin[f"{a}/{b}"] = float(prev_res.relative(a, b).angle[-1])
             skip = 0 if prev is None else 1
             out.write(res, skip=skip)
             _accumulate(summary, res, first, skip)

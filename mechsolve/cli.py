@@ -225,7 +225,7 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
                 click.echo(f"  wrote {path}")
             if at:  # only the instants asked for
                 sys.exit(EXIT_WARNINGS if instants_failed else EXIT_OK)
-        if n > _stream_above():
+        if n > _stream_above() and mech.driver.motion is None:
             # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
             # sweep of the same range; a bar on a terminal, moved on after each chunk
             bar = _progress_bar(n, quiet)

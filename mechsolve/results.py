@@ -227,6 +227,13 @@ class Results:
                 cols.append(Column(f"{ln}.omega", "rad/s", m.omega))
             if acc:
                 cols.append(Column(f"{ln}.alpha", "rad/s^2", m.alpha))
+        for a, b in self.mechanism.outputs.relative:
+            m = self.relative(a, b)
+            cols.append(Column(f"{m.name}.angle", "deg", np.degrees(m.angle)))
+            if vel:
+                cols.append(Column(f"{m.name}.omega", "rad/s", m.omega))
+            if acc:
+                cols.append(Column(f"{m.name}.alpha", "rad/s^2", m.alpha))
         for sn in self.slider_names():
             m = self.slider(sn)
             cols.append(Column(f"{sn}.s", "m", m.s))
@@ -243,6 +250,29 @@ class Results:
             Column("solver.residual", "m", sol.residual),
         ]
         return cols
+
+    def relative(self, a: str, b: str) -> LinkMotion:
+        """Motion of link ``a`` relative to link ``b`` (either may be ``ground``), named
+        ``a/b``: the angle of a's frame minus b's (rad, unwrapped like a link's angle, the
+        first value in [0, 2 pi)), and the differences of their angular velocities and
+        accelerations."""
+        name = f"{a}/{b}"
+        zero = np.zeros(len(self.u))
+        rows = []
+        for ln in (a, b):
+            if ln == GROUND:
+                rows.append((zero, zero, zero))
+                continue
+            if ln not in self.analysis.system.index:
+                raise KeyError(f"no link named {ln!r}")
+            k = self.analysis.system.index[ln]
+            st = self.solution.state
+            om = st.w[k] if self.view.has_velocity else self._nan()
+            al = st.al[k] if self.view.has_acceleration else self._nan()
+            rows.append((st.th[k], om, al))
+        (tha, wa, ala), (thb, wb, alb) = rows
+        th = unwrap_angle(np.asarray(tha, float) - thb, self.angle_origin.get(name))
+        return LinkMotion(name, th, np.asarray(wa - wb, float), np.asarray(ala - alb, float))
 
     # -- conditioning and design figures --------------------------------------------------
     def jacobian_rcond(self) -> np.ndarray:
