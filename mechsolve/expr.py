@@ -17,19 +17,26 @@ Grammar (lowest precedence first)::
     unary   := ('-' | '+') unary | power
     power   := atom ('^' unary)?
     atom    := NUMBER [UNIT] | NAME '.' NAME | NAME '(' [expr (',' expr)*] ')' | '(' expr ')'
+             | VARIABLE                                       # only where allowed
 
 Numbers are SI unless a unit follows them (``0.5 m``, ``90 deg``). ``P.x`` reads a
-quantity of a point, link or slider (see :class:`Context`). Functions: ``abs``, ``sqrt``,
-``min``, ``max``, ``sin``, ``cos``, ``deg`` (radians to degrees) and, where the context
-supports it, ``stroke(q)``: the fraction (0..1) of ``q`` between its minimum and maximum
-over the sweep.
+quantity of a point, link or slider (see :class:`Context`). Functions: ``abs``, ``sign``,
+``sqrt``, ``min``, ``max``, ``sin``, ``cos``, ``tan``, ``atan``, ``exp``, ``log`` (natural),
+``deg`` (radians to degrees) and, where the context supports it, ``stroke(q)``: the
+fraction (0..1) of ``q`` between its minimum and maximum over the sweep.
+
+A driver's motion law is an expression of time: ``Expression("0.3 + 2 * t", variables=
+("t",))`` accepts the bare name ``t``; :meth:`Expression.derivative` differentiates it
+symbolically and :meth:`Expression.evaluate_at` evaluates it for arrays of ``t``.
 
 Expressions are read from files that nobody vetted (CI runs them on pull requests), so
 the language is bounded: a text of at most :data:`MAX_LENGTH` characters, nested at most
 :data:`MAX_DEPTH` levels (each parenthesis, function call, prefix ``-`` or ``not`` and
 ``^`` opens one), and only finite numbers. The parser is an operator-precedence parser
-with explicit stacks, and every walk of the tree (references, evaluation) is iterative:
-nothing depends on Python's recursion limit.
+with explicit stacks, and every walk of the tree (references, evaluation,
+differentiation, printing) is iterative: nothing depends on Python's recursion limit. A
+derivative shares sub-trees with its expression (it is a graph, not a tree) and is capped
+at :data:`MAX_NODES`.
 """
 
 from __future__ import annotations
@@ -46,6 +53,7 @@ from .units import UnitError, parse_unit
 
 MAX_LENGTH = 4000  # characters of one expression
 MAX_DEPTH = 64  # nesting levels: parentheses, function calls, prefix '-' and 'not', '^'
+MAX_NODES = 100_000  # nodes plus operand links one derivative may build
 
 
 class ExprError(ValueError):
@@ -134,6 +142,13 @@ class Ref:
 
 
 @dataclass(frozen=True)
+class Var:
+    """A bare variable name (``t`` in a motion law)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
 class Call:
     func: str
     args: tuple[Any, ...]
@@ -202,19 +217,31 @@ def children(node: Any) -> tuple[Any, ...]:
 
 
 def walk(tree: Any) -> Iterator[Any]:
-    """Every node of a tree, parents before children, left to right (no recursion)."""
+    """Every node of a tree, parents before children, left to right (no recursion).
+
+    A derivative shares sub-trees; a node reached twice is yielded once.
+    """
+    seen: set[int] = set()
     stack = [tree]
     while stack:
         node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
         yield node
         stack.extend(reversed(children(node)))
 
 
 _FUNCS: dict[str, tuple[int, Callable[..., Any]]] = {
     "abs": (1, np.abs),
+    "sign": (1, np.sign),
     "sqrt": (1, np.sqrt),
     "sin": (1, np.sin),
     "cos": (1, np.cos),
+    "tan": (1, np.tan),
+    "atan": (1, np.arctan),
+    "exp": (1, np.exp),
+    "log": (1, np.log),
     "deg": (1, np.degrees),
     "min": (2, np.minimum),
     "max": (2, np.maximum),
@@ -242,8 +269,9 @@ class _Frame:
 class _Parser:
     """An operator-precedence (shunting-yard) parser with explicit stacks."""
 
-    def __init__(self, text: str) -> None:
+    def __init__(self, text: str, variables: tuple[str, ...] = ()) -> None:
         self.text = text
+        self.variables = variables
         self.tokens = tokenize(text)
         self.i = 0
 
@@ -410,6 +438,12 @@ class _Parser:
                 and nxt.text not in (".", "(")
             ):
                 unit_tok = self.tok
+                if unit_tok.text in self.variables:  # "2 t" is not 2 tonnes here
+                    raise self.fail(
+                        f"a number followed by the variable {unit_tok.text!r} (write "
+                        f"'{tok.text} * {unit_tok.text}')",
+                        unit_tok,
+                    )
                 shown += " " + unit_tok.text
                 self.i += 1
                 try:
@@ -450,6 +484,16 @@ class _Parser:
                 attr = self.tok.text
                 self.i += 1
                 return Ref(tok.text, attr)
+            if tok.text in self.variables:
+                return Var(tok.text)
+            if self.variables:
+                v = self.variables
+                which = (
+                    f"a variable here is {v[0]}"
+                    if len(v) == 1
+                    else ("the variables here are " + ", ".join(v))
+                )
+                raise self.fail(f"unknown name {tok.text!r} ({which})", tok)
             raise self.fail(
                 f"{tok.text!r} needs a quantity, e.g. '{tok.text}.x' or '{tok.text}.vx'", tok
             )
@@ -465,16 +509,29 @@ class Expression:
     text
         The source text, e.g. ``"K.vx < 0"``; at most :data:`MAX_LENGTH` characters,
         nested at most :data:`MAX_DEPTH` levels.
+    variables
+        Bare names allowed as atoms, e.g. ``("t",)`` for a motion law of time; any other
+        bare name is an error. Variables get their values from :meth:`evaluate_at`.
     """
 
-    def __init__(self, text: str) -> None:
+    def __init__(self, text: str, variables: Sequence[str] = ()) -> None:
         if not isinstance(text, str):
             shown = repr(text)
             if len(shown) > 60:
                 shown = shown[:57] + "..."
             raise ExprError(f"a condition must be text, got {shown}")
+        self.variables = _check_variables(variables)
         self.text = text
-        self.tree = _Parser(text).parse()
+        self.tree = _Parser(text, self.variables).parse()
+
+    @classmethod
+    def _derived(cls, tree: Any, text: str, variables: tuple[str, ...]) -> Expression:
+        """An expression built from a tree (a derivative) rather than parsed."""
+        e = cls.__new__(cls)
+        e.variables = variables
+        e.text = text
+        e.tree = tree
+        return e
 
     def __repr__(self) -> str:
         return f"Expression({self.text!r})"
@@ -500,12 +557,115 @@ class Expression:
     def evaluate(self, ctx: Context, functions: dict[str, Callable[..., Any]] | None = None) -> Any:
         """Evaluate over the arrays the context provides (element-wise)."""
         funcs = functions or {}
+
+        def leaf(n: Any) -> Any:
+            return _leaf(n, ctx)
+
         with np.errstate(all="ignore"):  # inf and nan follow IEEE rules; no warnings
-            return _eval(self.tree, ctx, funcs)
+            return _eval(self.tree, leaf, funcs)
+
+    def evaluate_at(self, values: dict[str, Any]) -> np.ndarray:
+        """Evaluate with the variables bound to arrays (element-wise, no context).
+
+        Parameters
+        ----------
+        values
+            An array (or number) for each variable the expression uses, e.g.
+            ``{"t": np.linspace(0, 1, 11)}``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The value at each element, with the shape the arrays broadcast to (also when
+            the expression is a constant). Numbers with units are SI (``30 deg`` is
+            radians). Quantities (``P.x``), side tests and ``stroke()`` are errors here.
+        """
+        arrays = {k: np.asarray(v) for k, v in values.items()}
+
+        def leaf(n: Any) -> Any:
+            if isinstance(n, Num):
+                return n.value
+            if isinstance(n, Var):
+                if n.name not in arrays:
+                    raise ExprError(f"no value is given for the variable {n.name!r}")
+                return arrays[n.name]
+            if isinstance(n, Ref):
+                raise ExprError(
+                    f"'{n.name}.{n.attr}' is a quantity of the mechanism; it cannot be read "
+                    f"in {_show(self.text)}"
+                )
+            raise ExprError(f"'{n.point} {n.side} of ...' cannot be tested in {_show(self.text)}")
+
+        with np.errstate(all="ignore"):
+            out = np.asarray(_eval(self.tree, leaf, {}))
+        shape = np.broadcast_shapes(out.shape, *(a.shape for a in arrays.values()))
+        if out.shape != shape:
+            out = np.array(np.broadcast_to(out, shape))
+        return out
+
+    def derivative(self, var: str) -> Expression:
+        """The symbolic derivative with respect to the variable ``var``.
+
+        Sums, products, quotients, powers (``u^n``, ``a^u`` and ``u^v`` as
+        ``exp(v log u)``), unary minus and the chain rule for every function of the
+        language. ``abs(u)' = sign(u) u'``; ``sign`` is piecewise constant (derivative
+        0); ``min`` and ``max`` are differentiated piecewise,
+        ``min(a, b)' = (a' + b') / 2 - sign(a - b) (a' - b') / 2`` (the mean at a tie).
+        Constants are folded and ``0 * x``, ``1 * x``, ``x + 0``, ``x ^ 1`` simplified.
+
+        Returns
+        -------
+        Expression
+            With the same variables; its :attr:`text` is a rendering of the new tree
+            (which parses back to the same values) or, when that would be longer than
+            :data:`MAX_LENGTH` characters, ``"d/dt (<text of this expression>)"``.
+
+        Raises
+        ------
+        ExprError
+            If ``var`` is not a variable of the expression; if the expression reads a
+            quantity (``P.x``), calls ``stroke()`` or is a condition (comparisons,
+            ``and``/``or``/``not``, ``left of``); or if the derivative would need more
+            than :data:`MAX_NODES` nodes and links ("the law is too long to
+            differentiate").
+        """
+        if var not in self.variables:
+            have = ", ".join(self.variables) if self.variables else "none"
+            raise ExprError(
+                f"cannot differentiate with respect to {var!r}: it is not a variable of "
+                f"{_show(self.text)} (its variables: {have})"
+            )
+        for n in walk(self.tree):
+            _check_differentiable(n, var, self.text)
+        tree = _differentiate(self.tree, var, _Builder(MAX_NODES))
+        text = to_text(tree, MAX_LENGTH)
+        if text is None:
+            text = f"d/d{var} ({self.text})"
+        return Expression._derived(tree, text, self.variables)
+
+    def to_text(self, limit: int | None = None) -> str | None:
+        """The tree rendered as text of this language (``None`` if over ``limit``)."""
+        return to_text(self.tree, limit)
 
     def is_condition(self) -> bool:
         """True if the expression yields true/false (a comparison or logic)."""
         return isinstance(self.tree, (Compare, Side, BoolOp, Not))
+
+
+def _check_variables(variables: Sequence[str]) -> tuple[str, ...]:
+    if isinstance(variables, str):
+        variables = (variables,)
+    out = tuple(variables)
+    for v in out:
+        if (
+            not isinstance(v, str)
+            or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", v)
+            or v in _KEYWORDS
+            or v in _FUNCS
+            or v in CONTEXT_FUNCS
+        ):
+            raise ExprError(f"{v!r} cannot be a variable of an expression")
+    return out
 
 
 def _leaf(n: Any, ctx: Context) -> Any:
@@ -519,7 +679,9 @@ def _leaf(n: Any, ctx: Context) -> Any:
         bx, by = ctx.point_xy(n.end)
         cross = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
         return cross > 0 if n.side == "left" else cross < 0
-    raise AssertionError(f"unknown node {n!r}")
+    if isinstance(n, Var):
+        raise ExprError(f"the variable {n.name!r} has no value here")
+    raise AssertionError(f"unknown node {type(n).__name__}")
 
 
 _COMPARE = {
@@ -562,18 +724,35 @@ def _combine(n: Any, vals: list[Any], funcs: dict[str, Callable[..., Any]]) -> A
         if n.func in funcs:
             return funcs[n.func](*vals)
         raise ExprError(f"{n.func}() is not available here")
-    raise AssertionError(f"unknown node {n!r}")
+    raise AssertionError(f"unknown node {type(n).__name__}")
 
 
-def _eval(tree: Any, ctx: Context, funcs: dict[str, Callable[..., Any]]) -> Any:
-    """Evaluate a tree bottom-up with an explicit stack (no recursion)."""
+def _eval(tree: Any, leaf: Callable[[Any], Any], funcs: dict[str, Callable[..., Any]]) -> Any:
+    """Evaluate a tree bottom-up with an explicit stack (no recursion).
+
+    A node shared by several parents (derivatives share sub-trees) is evaluated once; its
+    value is kept only until its last parent has used it.
+    """
+    uses: dict[int, int] = {}  # parents of each node, counted per link
+    for n in walk(tree):
+        for kid in children(n):
+            uses[id(kid)] = uses.get(id(kid), 0) + 1
+    kept: dict[int, list[Any]] = {}  # id -> [value, uses left]
     vals: list[Any] = []
     stack: list[tuple[Any, bool]] = [(tree, False)]
     while stack:
         n, ready = stack.pop()
+        key = id(n)
+        if not ready and key in kept:
+            entry = kept[key]
+            vals.append(entry[0])
+            entry[1] -= 1
+            if entry[1] == 0:
+                del kept[key]
+            continue
         kids = children(n)
         if not kids:
-            vals.append(_leaf(n, ctx))
+            vals.append(leaf(n))
         elif ready:
             k = len(kids)
             args = vals[-k:]
@@ -582,8 +761,443 @@ def _eval(tree: Any, ctx: Context, funcs: dict[str, Callable[..., Any]]) -> Any:
         else:
             stack.append((n, True))
             stack.extend((kid, False) for kid in reversed(kids))
+            continue
+        if uses.get(key, 0) > 1:
+            kept[key] = [vals[-1], uses[key] - 1]
     assert len(vals) == 1
     return vals[0]
+
+
+# --- printing ------------------------------------------------------------------------
+# Binding power of each node as the parser reads it; a child that binds less tightly than
+# its place needs is put in parentheses.
+
+_ATOM = 9
+
+
+def _prec(n: Any) -> int:
+    if isinstance(n, Num):
+        return 7 if math.copysign(1.0, n.value) < 0 else _ATOM  # "-2" reads as '-' 2
+    if isinstance(n, Binary):
+        return 8
+    if isinstance(n, Unary):
+        return 7
+    if isinstance(n, Chain):
+        return 6 if n.ops[0] in ("*", "/") else 5
+    if isinstance(n, Compare):
+        return 4
+    if isinstance(n, (Not, Side)):
+        return 3
+    if isinstance(n, BoolOp):
+        return 2 if n.op == "and" else 1
+    return _ATOM  # Var, Ref, Call
+
+
+def _number(v: float) -> str:
+    if v.is_integer() and abs(v) < 1e15:
+        return str(int(v))
+    return repr(v)  # the shortest text that reads back to the same float
+
+
+def to_text(tree: Any, limit: int | None = None) -> str | None:
+    """Render a tree as text of this language that parses back to the same values.
+
+    Iterative; parentheses only where precedence needs them. Returns ``None`` as soon as
+    the text would be longer than ``limit`` characters (a derivative shares sub-trees,
+    so its text can be much longer than its tree is large).
+    """
+    out: list[str] = []
+    length = 0
+    # items: a string to emit, or (node, the binding power its place needs)
+    stack: list[Any] = [(tree, 0)]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            out.append(item)
+            length += len(item)
+            if limit is not None and length > limit:
+                return None
+            continue
+        n, need = item
+        parts: list[Any] = []
+        if _prec(n) < need:
+            parts.append("(")
+        if isinstance(n, Num):
+            parts.append(_number(n.value))
+        elif isinstance(n, Var):
+            parts.append(n.name)
+        elif isinstance(n, Ref):
+            parts.append(f"{n.name}.{n.attr}")
+        elif isinstance(n, Side):
+            parts.append(f"{n.point} {n.side} of {n.start} -> {n.end}")
+        elif isinstance(n, Call):
+            parts.append(n.func + "(")
+            for i, a in enumerate(n.args):
+                if i:
+                    parts.append(", ")
+                parts.append((a, 0))
+            parts.append(")")
+        elif isinstance(n, Unary):
+            parts += ["-", (n.arg, 7)]
+        elif isinstance(n, Not):
+            parts += ["not ", (n.arg, 3)]
+        elif isinstance(n, Binary):  # right-associative: the base must be an atom
+            parts += [(n.left, _ATOM), " ^ ", (n.right, 7)]
+        elif isinstance(n, (Chain, Compare)):
+            # a - (b + c), a / (b * c); (a < b) < c
+            first = _prec(n) if isinstance(n, Chain) else 5
+            later = first + 1
+            parts.append((n.operands[0], first))
+            for op, a in zip(n.ops, n.operands[1:]):
+                parts += [f" {op} ", (a, later)]
+        elif isinstance(n, BoolOp):
+            for i, a in enumerate(n.args):
+                if i:
+                    parts.append(f" {n.op} ")
+                parts.append((a, 3 if n.op == "and" else 2))
+        else:
+            raise AssertionError(f"unknown node {type(n).__name__}")
+        if _prec(n) < need:
+            parts.append(")")
+        stack.extend(reversed(parts))
+    return "".join(out)
+
+
+# --- differentiation -----------------------------------------------------------------
+
+_ZERO = Num(0.0)
+_ONE = Num(1.0)
+_TWO = Num(2.0)
+_HALF = Num(0.5)
+_TOO_LONG = "the law is too long to differentiate"
+_CONDITION_WORDS = {Compare: "a comparison", BoolOp: "'and'/'or'", Not: "'not'", Side: "'left of'"}
+
+
+def _check_differentiable(n: Any, var: str, text: str) -> None:
+    """Raise :class:`ExprError` for a node that has no derivative."""
+    where = _show(text)
+    if isinstance(n, Ref):
+        raise ExprError(
+            f"'{n.name}.{n.attr}' is a quantity of the mechanism, not a function of {var}: "
+            f"{where} cannot be differentiated"
+        )
+    if isinstance(n, (Compare, BoolOp, Not, Side)):
+        what = _CONDITION_WORDS[type(n)]
+        if isinstance(n, Side):
+            what = f"'{n.point} {n.side} of {n.start} -> {n.end}'"
+        raise ExprError(
+            f"{where} contains a condition ({what}): it is true or false and has no "
+            f"derivative; a law must give a number for each {var}"
+        )
+    if isinstance(n, Call) and n.func not in _FUNCS:
+        raise ExprError(f"{n.func}() cannot be differentiated (in {where})")
+
+
+def _is_num(n: Any, value: float | None = None) -> bool:
+    return isinstance(n, Num) and (value is None or n.value == value)
+
+
+def _var_power(n: Any) -> tuple[Var, float] | None:
+    """``(t, e)`` if ``n`` is a variable ``t`` or a power ``t ^ e`` with a modest number
+    ``e`` (so that sums of exponents stay finite), else ``None``."""
+    if isinstance(n, Var):
+        return n, 1.0
+    if (
+        isinstance(n, Binary)
+        and isinstance(n.left, Var)
+        and isinstance(n.right, Num)
+        and abs(n.right.value) <= 1e6
+    ):
+        return n.left, n.right.value
+    return None
+
+
+def _fold(value: Any) -> Num | None:
+    """A number node for a folded constant, or ``None`` if it is not finite."""
+    v = float(value)
+    return Num(v) if math.isfinite(v) else None
+
+
+class _Builder:
+    """Makes nodes for a derivative, simplifying as it goes and counting their size.
+
+    Every node made costs one plus its number of operands; past ``limit`` it raises
+    :class:`ExprError` ("the law is too long to differentiate").
+    """
+
+    def __init__(self, limit: int) -> None:
+        self.cost = 0
+        self.limit = limit
+
+    def made(self, node: Any) -> Any:
+        self.cost += 1 + len(children(node))
+        if self.cost > self.limit:
+            raise ExprError(_TOO_LONG)
+        return node
+
+    # sign handling: a node is a sign and a positive-looking rest
+    def split_sign(self, n: Any) -> tuple[bool, Any]:
+        """``(negative, rest)`` with ``n == -rest`` if negative, else ``n == rest``."""
+        if isinstance(n, Num) and math.copysign(1.0, n.value) < 0:
+            return True, Num(-n.value)
+        if isinstance(n, Unary):
+            return True, n.arg
+        if isinstance(n, Chain) and n.ops[0] in ("*", "/"):
+            first = n.operands[0]
+            neg, rest = self.split_sign(first) if isinstance(first, (Num, Unary)) else (False, n)
+            if neg:
+                if _is_num(rest, 1.0) and n.ops[0] == "*":
+                    if len(n.operands) == 2:
+                        return True, n.operands[1]
+                    return True, self.made(Chain(n.ops[1:], n.operands[1:]))
+                return True, self.made(Chain(n.ops, (rest,) + n.operands[1:]))
+        return False, n
+
+    def neg(self, n: Any) -> Any:
+        negative, rest = self.split_sign(n)
+        if negative:
+            return rest
+        if isinstance(n, Num):
+            return Num(-n.value) if n.value != 0 else _ZERO
+        return self.mul([Num(-1.0), n])
+
+    def add(self, terms: list[tuple[bool, Any]]) -> Any:
+        """The sum of ``terms``, each ``(negative, node)``; nested sums are flattened."""
+        flat: list[tuple[bool, Any]] = []
+        const = 0.0
+        consts: list[tuple[bool, Any]] = []  # kept apart if folding overflows
+        for negative, t in terms:
+            if isinstance(t, Chain) and t.ops[0] in ("+", "-"):
+                parts = [(negative, t.operands[0])]
+                parts += [(negative != (op == "-"), a) for op, a in zip(t.ops, t.operands[1:])]
+            else:
+                parts = [(negative, t)]
+            for ng, a in parts:
+                sign_neg, rest = self.split_sign(a)
+                ng = ng != sign_neg
+                if isinstance(rest, Num):
+                    folded = _fold(const - rest.value if ng else const + rest.value)
+                    if folded is None:
+                        consts.append((ng, rest))
+                    else:
+                        const = folded.value
+                else:
+                    flat.append((ng, rest))
+        if const != 0.0:
+            flat.append((const < 0, Num(abs(const))))
+        flat += consts
+        if not flat:
+            return _ZERO
+        first = next((i for i, (ng, _) in enumerate(flat) if not ng), 0)
+        flat.insert(0, flat.pop(first))  # start with a positive term if there is one
+        ng, head = flat[0]
+        if ng:
+            head = self.neg(head)
+        if len(flat) == 1:
+            return head
+        ops = tuple("-" if ng else "+" for ng, _ in flat[1:])
+        return self.made(Chain(ops, (head,) + tuple(a for _, a in flat[1:])))
+
+    def sub(self, a: Any, b: Any) -> Any:
+        return self.add([(False, a), (True, b)])
+
+    def mul(self, num: list[Any], den: list[Any] | None = None) -> Any:
+        """``num[0] * num[1] * ... / den[0] / den[1] ...``, flattened and folded."""
+        top: list[Any] = []
+        bottom: list[Any] = []
+        coef = 1.0
+        work = [(False, f) for f in num] + [(True, f) for f in den or ()]
+        for below, f in work:
+            if isinstance(f, Chain) and f.ops[0] in ("*", "/"):
+                parts = [(below, f.operands[0])]
+                parts += [(below != (op == "/"), a) for op, a in zip(f.ops, f.operands[1:])]
+            else:
+                parts = [(below, f)]
+            for bl, a in parts:
+                negative, rest = self.split_sign(a)
+                if negative:
+                    coef = -coef
+                if isinstance(rest, Num):
+                    if rest.value == 0.0 and not bl:
+                        return _ZERO  # 0 * x -> 0 (symbolically, whatever x is)
+                    if rest.value == 1.0:
+                        continue
+                    if rest.value != 0.0:  # x / 0 stays as it is
+                        folded = _fold(coef / rest.value if bl else coef * rest.value)
+                        if folded is not None:
+                            coef = folded.value
+                            continue
+                (bottom if bl else top).append(rest)
+        if sum(_var_power(f) is not None for f in top + bottom) > 1:  # t * t -> t ^ 2
+            both = top + bottom
+            below = [False] * len(top) + [True] * len(bottom)
+            grouped, _ = self.group_powers(both, below, [_ZERO] * len(both), "")
+            top = [f for bl, f in grouped if not bl]
+            bottom = [f for bl, f in grouped if bl]
+        if not top and not bottom:
+            return Num(coef)
+        factors: list[Any] = list(top)
+        if abs(coef) != 1.0 or not top:
+            factors.insert(0, Num(abs(coef)))
+        if coef < 0:
+            factors[0] = (
+                Num(-factors[0].value)
+                if isinstance(factors[0], Num)
+                else (self.made(Unary("-", factors[0])))
+            )
+        if not bottom and len(factors) == 1:
+            return factors[0]
+        ops = ("*",) * (len(factors) - 1) + ("/",) * len(bottom)
+        return self.made(Chain(ops, tuple(factors) + tuple(bottom)))
+
+    def group_powers(
+        self, operands: Sequence[Any], below: list[bool], d: list[Any], var: str
+    ) -> tuple[list[tuple[bool, Any]], list[Any]]:
+        """The factors of a product, ``(divides, factor)``, and their derivatives, with
+        the powers of each variable gathered into one: ``t * t / t ^ 3 -> t ^ -1``.
+
+        Without this the product rule on ``t * t * ... * t`` (n factors) would build n
+        terms of n - 1 factors each.
+        """
+        factors: list[tuple[bool, Any]] = []
+        derivs: list[Any] = []
+        total: dict[str, list[Any]] = {}  # name -> [Var node, exponent, index in factors]
+        for bl, a, da in zip(below, operands, d):
+            vp = _var_power(a)
+            if vp is None:
+                factors.append((bl, a))
+                derivs.append(da)
+                continue
+            v, e = vp
+            if v.name not in total:
+                total[v.name] = [v, 0.0, len(factors)]
+                factors.append((False, v))  # replaced below
+                derivs.append(_ZERO)
+            total[v.name][1] += -e if bl else e
+        drop: set[int] = set()
+        for v, e, i in total.values():
+            if e == 0.0:  # t / t: gone (symbolically)
+                drop.add(i)
+                continue
+            factors[i] = (False, self.power(v, Num(e)))
+            if v.name == var:  # (t^e)' = e t^(e-1)
+                derivs[i] = self.mul([Num(e), self.power(v, Num(e - 1.0))])
+        if drop:
+            factors = [f for i, f in enumerate(factors) if i not in drop]
+            derivs = [x for i, x in enumerate(derivs) if i not in drop]
+        self.cost += len(factors)
+        return factors, derivs
+
+    def power(self, base: Any, exponent: Any) -> Any:
+        if _is_num(exponent, 0.0):
+            return _ONE
+        if _is_num(exponent, 1.0):
+            return base
+        if isinstance(base, Num) and isinstance(exponent, Num):
+            with np.errstate(all="ignore"):
+                folded = _fold(np.power(base.value, exponent.value))
+            if folded is not None:
+                return folded
+        return self.made(Binary("^", base, exponent))
+
+    def call(self, func: str, *args: Any) -> Any:
+        if all(isinstance(a, Num) for a in args):
+            with np.errstate(all="ignore"):
+                folded = _fold(_FUNCS[func][1](*(a.value for a in args)))
+            if folded is not None:
+                return folded
+        return self.made(Call(func, args))
+
+    def rule(self, n: Any, d: list[Any], var: str) -> Any:
+        """The derivative of node ``n`` given the derivatives ``d`` of its operands."""
+        if isinstance(n, Num):
+            return _ZERO
+        if isinstance(n, Var):
+            return _ONE if n.name == var else _ZERO
+        if isinstance(n, Unary):
+            return self.neg(d[0])
+        if isinstance(n, Chain) and n.ops[0] in ("+", "-"):
+            return self.add([(False, d[0])] + [(op == "-", x) for op, x in zip(n.ops, d[1:])])
+        if isinstance(n, Chain):  # product rule; a divisor v contributes -v'/v^2
+            below = [False] + [op == "/" for op in n.ops]
+            factors, derivs = self.group_powers(n.operands, below, d, var)
+            terms: list[tuple[bool, Any]] = []
+            for i, di in enumerate(derivs):
+                if _is_num(di, 0.0):
+                    continue
+                num = [a for j, (bl, a) in enumerate(factors) if not bl and j != i]
+                den = [a for j, (bl, a) in enumerate(factors) if bl and j != i]
+                if factors[i][0]:
+                    den.append(self.power(factors[i][1], _TWO))
+                terms.append((factors[i][0], self.mul([di, *num], den)))
+            return self.add(terms)
+        if isinstance(n, Binary):  # u ^ v
+            u, v = n.left, n.right
+            du, dv = d
+            terms = []
+            if not _is_num(du, 0.0):  # v u^(v-1) u'
+                terms.append((False, self.mul([v, self.power(u, self.sub(v, _ONE)), du])))
+            if not _is_num(dv, 0.0):  # u^v log(u) v'
+                terms.append((False, self.mul([n, self.call("log", u), dv])))
+            return self.add(terms)
+        if isinstance(n, Call):
+            return self.chain_rule(n, d)
+        raise AssertionError(f"no derivative for {type(n).__name__}")
+
+    def chain_rule(self, n: Call, d: list[Any]) -> Any:
+        f = n.func
+        if f in ("min", "max"):
+            a, b = n.args
+            da, db = d
+            if _is_num(da, 0.0) and _is_num(db, 0.0):
+                return _ZERO
+            # min(a,b)' = (a'+b')/2 - sign(a-b) (a'-b')/2; max: + instead of -
+            mean = self.mul([_HALF, self.add([(False, da), (False, db)])])
+            jump = self.mul([_HALF, self.call("sign", self.sub(a, b)), self.sub(da, db)])
+            return self.add([(False, mean), (f == "min", jump)])
+        u, du = n.args[0], d[0]
+        if _is_num(du, 0.0) or f == "sign":
+            return _ZERO
+        if f == "deg":  # linear
+            return self.call("deg", du)
+        if f == "abs":
+            return self.mul([self.call("sign", u), du])
+        if f == "sqrt":
+            return self.mul([_HALF, du], [n])
+        if f == "sin":
+            return self.mul([self.call("cos", u), du])
+        if f == "cos":
+            return self.neg(self.mul([self.call("sin", u), du]))
+        if f == "tan":
+            return self.mul([du], [self.power(self.call("cos", u), _TWO)])
+        if f == "atan":
+            return self.mul([du], [self.add([(False, _ONE), (False, self.power(u, _TWO))])])
+        if f == "exp":
+            return self.mul([n, du])
+        if f == "log":
+            return self.mul([du], [u])
+        raise AssertionError(f"no derivative for {f}()")
+
+
+def _differentiate(tree: Any, var: str, b: _Builder) -> Any:
+    """The derivative of ``tree`` by ``var``, bottom-up with an explicit stack.
+
+    Each distinct node is differentiated once (second derivatives differentiate a graph
+    whose sub-trees are shared).
+    """
+    done: dict[int, Any] = {}
+    stack: list[tuple[Any, bool]] = [(tree, False)]
+    while stack:
+        n, ready = stack.pop()
+        if id(n) in done:
+            continue
+        kids = children(n)
+        if kids and not ready:
+            stack.append((n, True))
+            stack.extend((k, False) for k in reversed(kids) if id(k) not in done)
+            continue
+        done[id(n)] = b.rule(n, [done[id(k)] for k in kids], var)
+    return done[id(tree)]
 
 
 def parse_all(texts: Sequence[str]) -> list[Expression]:
