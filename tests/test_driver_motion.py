@@ -399,7 +399,8 @@ def test_instants_listed_in_the_file_are_solved_beside_the_sweep(tmp_path):
     f.write_text(
         FOURBAR
         + "sweep: {range: 360 deg, step: 10 deg}\n"
-        + "instants: [{theta: 30 deg, omega: 10 rad/s, alpha: 5 rad/s^2}, {theta: 123 deg, omega: -4 rad/s}]\n"
+        + "instants: [{theta: 30 deg, omega: 10 rad/s, alpha: 5 rad/s^2},\n"
+        + "           {theta: 123 deg, omega: -4 rad/s}]\n"
     )
     r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
     assert r.exit_code == 0, r.output
@@ -413,3 +414,48 @@ def test_instants_listed_in_the_file_are_solved_beside_the_sweep(tmp_path):
     k = head.index("input.torque [N*m]")
     for i in (0, 1):
         assert float(rows[i + 1].split(",")[k]) == pytest.approx(res.driving_effort[i], rel=1e-11)
+
+
+def test_expression_law_exact_and_against_a_dense_table():
+    """u(t) = 0.3 + 2 t + 0.5 sin(3 t): the driver's rates are the law's symbolic
+    derivatives (exact), the rocker's motion is the closed form at those rates, and a
+    dense table of the same law through a cubic spline agrees to the spline's accuracy."""
+    law = with_motion(
+        'driver: {joint: O2, motion: {law: "0.3 + 2 * t + 0.5 * sin(3 * t)"}}',
+        "sweep: {duration: 2 s, time_step: 0.05 s}",
+    )
+    res = ms.solve(ms.loads(law), forces=False)
+    t = res.t
+    th2, w2, al2 = 0.3 + 2 * t + 0.5 * np.sin(3 * t), 2 + 1.5 * np.cos(3 * t), -4.5 * np.sin(3 * t)
+    np.testing.assert_allclose(res.u, th2, rtol=1e-15)
+    np.testing.assert_allclose(res.link("crank").omega, w2, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(res.link("crank").alpha, al2, rtol=1e-14, atol=1e-14)
+    ref = np.array([fourbar_reference(*s) for s in zip(th2, w2, al2)]).T
+    np.testing.assert_allclose(res.link("rocker").alpha, ref[5], rtol=1e-10, atol=1e-10)
+    ts = np.linspace(0.0, 2.0, 801)
+    rows = ", ".join(
+        f"[{float(x)!r}, {float(0.3 + 2 * x + 0.5 * np.sin(3 * x))!r} rad]" for x in ts
+    )
+    table = with_motion(
+        f"driver: {{joint: O2, motion: {{table: [{rows}]}}}}",
+        "sweep: {duration: 2 s, time_step: 0.05 s}",
+    )
+    tab = ms.solve(ms.loads(table), forces=False)
+    # a cubic spline with h = 2.5 ms: errors of order h^4 u'''' (u) to h^2 u'''' (u'')
+    np.testing.assert_allclose(tab.u, res.u, atol=1e-9)
+    np.testing.assert_allclose(tab.link("rocker").omega, res.link("rocker").omega, atol=1e-6)
+    np.testing.assert_allclose(tab.link("rocker").alpha, res.link("rocker").alpha, atol=2e-3)
+
+
+@pytest.mark.parametrize(
+    "law, message",
+    [("2 * t +", "law"), ("2 * x", "unknown name 'x'"), ("B.x * t", "law")],
+)
+def test_bad_expression_laws(tmp_path, law, message):
+    f = tmp_path / "bad.yaml"
+    f.write_text(
+        with_motion(f'driver: {{joint: O2, motion: {{law: "{law}"}}}}', "sweep: {duration: 1 s}")
+    )
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert message in r.output and "bad.yaml:" in r.output and "Traceback" not in r.output

@@ -313,6 +313,10 @@ class Mechanism:
     source: Source | None = field(default=None, repr=False)
     # instants to solve besides the sweep: (u, u', u'', label), see mechsolve.instants
     instants: list[tuple[float, float, float, str]] = field(default_factory=list)
+    # forward dynamics (mechsolve.model.machine): the motor, a flywheel, the simulation
+    motor: object | None = None
+    flywheel: object | None = None
+    simulation: object | None = None
 
     # -- lookup --------------------------------------------------------------------
     def link(self, name: str) -> Link:

@@ -54,6 +54,9 @@ TOP_KEYS = (
     "loads",
     "variants",
     "instants",
+    "motor",
+    "flywheel",
+    "simulate",
 )
 
 METHODS = ("auto", "newton", "split-newton")  # solver.method and --method
@@ -1159,7 +1162,126 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
     )
     if "instants" in data:
         mech.instants = read_instants(r, data["instants"], linear)
+    if "motor" in data:
+        mech.motor = read_motor(r, data["motor"], driver, linear)
+    if "flywheel" in data:
+        mech.flywheel = read_flywheel(r, data["flywheel"], links)
+    if "simulate" in data:
+        mech.simulation = read_simulation(r, data["simulate"], linear)
     return mech.validate()
+
+
+def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
+    """``motor: {stall: 50 N m, slope: 1.25 N m s}``, ``{table: [[speed, torque], ...]}``
+    or ``{torque: "50 - 1.25 * omega"}`` (an expression of omega (or v) and t)."""
+    import numpy as np
+
+    from .machine import Motor
+
+    path: KeyPath = ("motor",)
+    m = r.mapping(value, path, ("joint", "stall", "slope", "table", "torque", "force"), "'motor'")
+    if driver is None:
+        raise r.fail(path, "a motor drives the driver joint: add a 'driver' section")
+    if "joint" in m:
+        j = r.name(m["joint"], path + ("joint",), "joint")
+        if j != driver.joint:
+            raise r.fail(
+                path + ("joint",),
+                f"the motor drives the driver joint {driver.joint!r}, not {j!r} "
+                "(move the driver to that joint)",
+            )
+    effort = "force" if linear else "torque"
+    speed = "speed" if linear else "angular speed"
+    slope = "damping" if linear else "rotational damping"
+    kinds = [k for k in ("stall", "table", "torque", "force") if k in m]
+    if len(kinds) != 1 or (kinds == ["stall"] and "slope" not in m):
+        raise r.fail(path, "give stall and slope (M = stall - slope * omega), table, or torque")
+    if "stall" in m:
+        return Motor(
+            "linear",
+            stall=r.quantity(m["stall"], path + ("stall",), effort),
+            slope=r.quantity(m["slope"], path + ("slope",), slope),
+        )
+    if "table" in m:
+        rows = m["table"]
+        if not isinstance(rows, list) or len(rows) < 2:
+            raise r.fail(path + ("table",), "'table' lists at least 2 points [speed, torque]")
+        ws, ts = [], []
+        for k, row in enumerate(rows):
+            if not isinstance(row, list) or len(row) != 2:
+                raise r.fail(path + ("table", k), "a point is [speed, torque]")
+            ws.append(r.quantity(row[0], path + ("table", k, 0), speed))
+            ts.append(r.quantity(row[1], path + ("table", k, 1), effort))
+        if any(not b > a for a, b in zip(ws, ws[1:])):
+            raise r.fail(path + ("table",), "the speeds must increase")
+        return Motor("table", speeds=np.array(ws), torques=np.array(ts))
+    key = kinds[0]
+    text = m[key]
+    if not isinstance(text, str):
+        raise r.fail(
+            path + (key,), f"'{key}' is an expression of omega and t, e.g. \"50 - 1.25 * omega\""
+        )
+    try:
+        e = Expression(text, variables=("omega", "v", "t"))
+    except (ExprError, TypeError) as exc:
+        raise r.fail(path + (key,), str(exc)) from None
+    return Motor("law", expr=e, text=text)
+
+
+def read_flywheel(r: Reader, value: Any, links):
+    from .machine import Flywheel
+
+    path: KeyPath = ("flywheel",)
+    m = r.mapping(value, path, ("on", "inertia"), "'flywheel'", ("on", "inertia"))
+    name = r.name(m["on"], path + ("on",), "link")
+    if name not in {lk.name for lk in links}:
+        raise r.fail(
+            path + ("on",), f"no link named {name!r}" + suggest(name, [lk.name for lk in links])
+        )
+    return Flywheel(name, r.positive(m["inertia"], path + ("inertia",), "moment of inertia"))
+
+
+def read_simulation(r: Reader, value: Any, linear: bool):
+    from .machine import INTEGRATORS, Simulation
+
+    path: KeyPath = ("simulate",)
+    m = r.mapping(
+        value,
+        path,
+        ("duration", "step", "method", "rtol", "atol", "from", "revolutions"),
+        "'simulate'",
+        ("duration",),
+    )
+    sim = Simulation(duration=r.positive(m["duration"], path + ("duration",), "time"), where=path)
+    if "method" in m:
+        if m["method"] not in INTEGRATORS:
+            raise r.fail(
+                path + ("method",),
+                f"unknown integrator {m['method']!r}: one of {', '.join(INTEGRATORS)}",
+            )
+        sim.method = m["method"]
+    if "step" in m:
+        sim.step = r.positive(m["step"], path + ("step",), "time")
+        if sim.step > sim.duration:
+            raise r.fail(path + ("step",), "the step is longer than the duration")
+    elif sim.method == "rk4":
+        raise r.fail(path, "rk4 integrates with a fixed step: give 'step'")
+    for key in ("rtol", "atol"):
+        if key in m:
+            x = m[key]
+            if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
+                raise r.fail(path + (key,), f"{key} must be a number between 0 and 1")
+            setattr(sim, key, float(x))
+    if "from" in m:
+        f = m["from"]
+        sim.speed0 = (
+            0.0
+            if f == "rest"
+            else r.quantity(f, path + ("from",), "speed" if linear else "angular speed")
+        )
+    if "revolutions" in m:
+        sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
+    return sim
 
 
 def read_instants(r: Reader, value: Any, linear: bool) -> list[tuple[float, float, float, str]]:

@@ -1,0 +1,382 @@
+"""Forward dynamics of a one-degree-of-freedom machine driven by a motor
+(``mechsolve simulate``).
+
+The equation of motion comes from the force analysis itself. At a state (phi, omega,
+epsilon) of the driver, the driver effort that the kinetostatic analysis returns
+(:func:`mechsolve.core.forces`: inertia of every body, gravity, springs, dampers,
+conditional loads) is, by Lagrange's equation of the reduced system,
+
+    E(phi, omega, epsilon) = J(phi) epsilon + 1/2 J'(phi) omega^2 - Q(phi, omega, t)
+
+which is linear in epsilon: ``J(phi) = E(phi, omega, 1) - E(phi, omega, 0)``. The motor
+supplies ``M(omega, t)``, so the driver's acceleration is
+
+    epsilon = (M(omega, t) - E(phi, omega, 0)) / J(phi).
+
+Nothing is reduced by hand: a model that the sweep can analyse can be simulated, with the
+same loads. ``J'(phi) = 2 dT/dt`` at omega = 1, epsilon = 0.
+
+The kinematics at a new angle is solved next to a reference sweep over one turn (which
+fixes the branches; a crank's configuration repeats every turn), and the integration is
+RK4 with a fixed step (Mathcad's ``rkfixed``) or scipy's ``solve_ivp``. Along the computed
+motion the states and every joint force follow from :mod:`mechsolve.core`.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import core
+from .errors import InputError
+from .model import Mechanism
+from .results import Column, Results
+from .sweep import Analysis
+
+__all__ = ["ReducedModel", "simulate", "SimulationResults"]
+
+
+class ReducedModel:
+    """The driver's equation of motion of a mechanism: J(phi), E(phi, omega, 0)."""
+
+    def __init__(self, mech: Mechanism, method: str | None = None) -> None:
+        self.mech = mech
+        self.an = Analysis(mech, method)
+        an = self.an
+        self.u0 = an.start_value()
+        d = mech.driver.direction
+        # the reference sweep: a turn of a crank (or the file's sweep), 1 degree apart
+        if an.linear:
+            u, _ = an.sweep_values(self.u0)
+        else:
+            u = self.u0 + d * np.radians(np.arange(0.0, 360.0 + 0.5, 1.0))
+        self.ref = core.states(an, u, 1.0, 0.0, velocity=True, acceleration=True)
+        self.full_turn = (not an.linear) and bool(self.ref.ok.all())
+        self.extremes = core.forces(an, self.ref).stroke_extremes
+        self.nfev = 0  # evaluations of the equation of motion
+
+    def _wrap(self, phi: float) -> float:
+        if not self.full_turn:
+            return phi
+        d = self.mech.driver.direction
+        return self.u0 + d * math.fmod(d * (phi - self.u0), 2 * math.pi) % (2 * math.pi)
+
+    def states(self, phi, omega, eps):
+        """Solved states at driver values ``phi`` (each solved next to the reference
+        sweep) with rates ``omega`` and ``eps`` (arrays)."""
+        phi = np.atleast_1d(np.asarray(phi, float))
+        an, ref = self.an, self.ref
+        w = np.array([self._wrap(p) for p in phi])
+        k = np.abs(ref.u[:, None] - w[None, :]).argmin(axis=0)
+        uniq, inv = np.unique(w, return_inverse=True)
+        parts = []
+        for j, wj in enumerate(uniq):
+            kj = int(k[np.flatnonzero(inv == j)[0]])
+            one = an.solve(
+                np.array([wj]), start=ref.start, near=(ref, kj), per_unit_driver=True, limits=False
+            )
+            parts.append(one)
+        sol = core._concat(parts) if len(parts) > 1 else parts[0]
+        if len(uniq) < len(w) or len(parts) > 1:
+            sol = core._take(sol, inv)
+        sol.u = phi
+        core.scale_rates(sol.state, np.asarray(omega, float), np.asarray(eps, float))
+        sol.ud = np.asarray(omega, float) * np.ones(len(phi))
+        sol.udd = np.asarray(eps, float) * np.ones(len(phi))
+        return sol
+
+    def tabulate(self, step: float = math.radians(0.05)) -> bool:
+        """Tabulate the equation of motion over one turn, where it allows: a crank that
+        turns fully, and loads that do not switch on and off (no ``when:``). Then
+        ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2`` exactly (gravity and
+        springs in a; dampers and drag in b; the kinetic term 1/2 J' omega^2 in c), and
+        J, a, b, c are periodic cubic splines through the grid (interpolation error about
+        1e-9 of their size at 0.05 degrees). Returns whether it did."""
+        if not self.full_turn or any(ld.when is not None for ld in self.mech.loads):
+            return False
+        from scipy.interpolate import CubicSpline
+
+        d = self.mech.driver.direction
+        x = np.arange(0.0, 2 * math.pi, step)
+        n = len(x)
+        u = self.u0 + d * x
+        U = np.tile(u, 4)
+        W = np.repeat([0.0, 0.0, 1.0, -1.0], n)
+        A = np.repeat([0.0, 1.0, 0.0, 0.0], n)
+        sol = core.states(self.an, U, W, A)
+        f = core.forces(self.an, sol, self.extremes)
+        E = f.effort.reshape(4, n)
+        if not np.all(np.isfinite(E)):
+            return False
+        a = E[0]
+        J = E[1] - E[0]
+        b = 0.5 * (E[2] - E[3])
+        c = 0.5 * (E[2] + E[3]) - a
+        xs = np.r_[x, 2 * math.pi]
+        self._table = CubicSpline(
+            xs,
+            np.c_[np.r_[J, J[0]], np.r_[a, a[0]], np.r_[b, b[0]], np.r_[c, c[0]]],
+            bc_type="periodic",
+        )
+        return True
+
+    def terms(self, phi: float, omega: float, t: float = 0.0):
+        """``(J, E0)``: the reduced inertia and the effort at zero driver acceleration."""
+        self.nfev += 1
+        tab = getattr(self, "_table", None)
+        if tab is not None:
+            d = self.mech.driver.direction
+            J, a, b, c = tab((d * (phi - self.u0)) % (2 * math.pi))
+            return float(J), float(a + b * omega + c * omega * omega)
+        sol = self.states([phi, phi], [omega, omega], [0.0, 1.0])
+        sol.t = np.array([t, t])
+        f = core.forces(self.an, sol, self.extremes)
+        e0, e1 = float(f.effort[0]), float(f.effort[1])
+        if not (np.isfinite(e0) and np.isfinite(e1)):
+            raise _LeftRange(phi)
+        return e1 - e0, e0
+
+    def inertia_curve(self):
+        """``(phi, J, J')`` over the reference sweep (one turn of a crank)."""
+        ref = self.ref
+        n = len(ref.u)
+        both = core._take(ref, np.r_[np.arange(n), np.arange(n)])
+        both.u = np.r_[ref.u, ref.u]
+        core.scale_rates(both.state, np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)])
+        both.ud, both.udd = np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)]
+        # the per-unit state of the reference is already scaled by 1: rates per radian
+        f = core.forces(self.an, both, self.extremes)
+        J = f.effort[n:] - f.effort[:n]
+        dJ = 2.0 * f.kinetic_rate[:n]
+        return ref.u, J, dJ
+
+
+class _LeftRange(Exception):
+    def __init__(self, phi: float) -> None:
+        self.phi = phi
+
+
+@dataclass
+class Trajectory:
+    t: np.ndarray
+    phi: np.ndarray
+    omega: np.ndarray
+    eps: np.ndarray
+    J: np.ndarray
+    stopped: str = ""  # why the integration ended early ("" if it did not)
+    nfev: int = 0
+
+
+def _with_flywheel(mech: Mechanism) -> Mechanism:
+    fw = mech.flywheel
+    if fw is None:
+        return mech
+    out = copy.copy(mech)
+    out.links = [copy.copy(lk) for lk in mech.links]
+    lk = out.link(fw.link)
+    lk.inertia = (lk.inertia or 0.0) + fw.inertia
+    if not lk.mass:
+        # an inertia alone: a balanced disc about the link's frame origin
+        lk.com = lk.com if lk.com is not None else (0.0, 0.0)
+    return out
+
+
+def integrate(model: ReducedModel, sim, motor) -> Trajectory:
+    """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start."""
+    d = model.mech.driver.direction
+    phi0 = model.u0
+    w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
+
+    def rhs(t, y):
+        J, e0 = model.terms(y[0], y[1], t)
+        M = float(motor.torque(np.array([y[1]]), t)[0])
+        return np.array([y[1], (M - e0) / J])
+
+    stop_turns = sim.revolutions
+    ts, ys = [0.0], [np.array([phi0, w0])]
+    stopped = ""
+    if sim.method == "rk4":
+        h = sim.step
+        n = max(1, math.ceil(sim.duration / h - 1e-9))
+        y = ys[0]
+        try:
+            for i in range(n):
+                t = i * h
+                k1 = rhs(t, y)
+                k2 = rhs(t + h / 2, y + h / 2 * k1)
+                k3 = rhs(t + h / 2, y + h / 2 * k2)
+                k4 = rhs(t + h, y + h * k3)
+                y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                ts.append((i + 1) * h)
+                ys.append(y)
+                if stop_turns and abs(y[0] - phi0) >= 2 * math.pi * stop_turns:
+                    stopped = f"after {stop_turns:g} revolutions"
+                    break
+        except _LeftRange as exc:
+            stopped = _left_text(model, exc.phi, ts[-1])
+    else:
+        from scipy.integrate import solve_ivp
+
+        events = None
+        if stop_turns:
+
+            def turns(t, y):
+                return abs(y[0] - phi0) - 2 * math.pi * stop_turns
+
+            turns.terminal = True
+            events = [turns]
+        step = sim.step or sim.duration / 500
+        grid = np.minimum(
+            np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration
+        )
+        try:
+            out = solve_ivp(
+                rhs,
+                (0.0, sim.duration),
+                ys[0],
+                method=sim.method,
+                t_eval=grid,
+                rtol=sim.rtol,
+                atol=sim.atol,
+                events=events,
+            )
+        except _LeftRange as exc:
+            raise InputError(_left_text(model, exc.phi, math.nan)) from None
+        ts = list(out.t)
+        ys = list(out.y.T)
+        if out.status == 1:
+            stopped = f"after {stop_turns:g} revolutions"
+        elif out.status < 0:
+            stopped = f"the integrator stopped: {out.message}"
+    ts = np.array(ts)
+    Y = np.array(ys)
+    eps = np.empty(len(ts))
+    J = np.empty(len(ts))
+    for i, (t, (p, w)) in enumerate(zip(ts, Y)):
+        try:
+            Ji, e0 = model.terms(p, w, t)
+            J[i] = Ji
+            eps[i] = (float(motor.torque(np.array([w]), t)[0]) - e0) / Ji
+        except _LeftRange:
+            J[i] = eps[i] = np.nan
+    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, stopped, model.nfev)
+
+
+def _left_text(model: ReducedModel, phi: float, t: float) -> str:
+    when = f"at t = {t:.6g} s, " if np.isfinite(t) else ""
+    return (
+        f"the motion left the range where the mechanism closes {when}"
+        f"{model.an.format_u(model._wrap(phi))}: the computed part is kept"
+    )
+
+
+class SimulationResults(Results):
+    """Results along a simulated motion: the sweep's columns, with the driver's speed,
+    acceleration, reduced inertia and the motor's torque and power first."""
+
+    def __init__(self, an, sol, forces, traj: Trajectory, motor) -> None:
+        super().__init__(an, sol, forces)
+        self.trajectory = traj
+        self.motor = motor
+
+    def motor_torque(self) -> np.ndarray:
+        return self.motor.torque(self.trajectory.omega, self.trajectory.t)
+
+    def columns(self) -> list[Column]:
+        tr = self.trajectory
+        lin = self.linear
+        cols = super().columns()
+        extra = [
+            Column("omega" if not lin else "v", "m/s" if lin else "rad/s", tr.omega),
+            Column("epsilon" if not lin else "a", "m/s^2" if lin else "rad/s^2", tr.eps),
+            Column("J", "kg" if lin else "kg*m^2", tr.J),
+            Column(
+                "motor.torque" if not lin else "motor.force",
+                "N" if lin else "N*m",
+                self.motor_torque(),
+            ),
+            Column("motor.power", "W", self.motor_torque() * tr.omega),
+        ]
+        return cols[:3] + extra + cols[3:]
+
+    def summary(self) -> str:
+        tr = self.trajectory
+        lines = [super().summary()]
+        k = int(np.nanargmax(tr.omega))
+        lines.append(
+            f"  simulation: {len(tr.t) - 1} steps to t = {tr.t[-1]:.6g} s "
+            f"({self.mechanism.simulation.method}); motor {self.motor.describe()}"
+        )
+        lines.append(
+            f"  max omega = {tr.omega[k]:.6g} rad/s at t = {tr.t[k]:.6g} s; "
+            f"epsilon from {np.nanmin(tr.eps):.8g} to {np.nanmax(tr.eps):.8g} rad/s^2; "
+            f"J from {np.nanmin(tr.J):.6g} to {np.nanmax(tr.J):.6g}"
+        )
+        dl = steady_fluctuation(tr)
+        if dl is not None:
+            mean, delta = dl
+            lines.append(
+                f"  last full revolution: mean speed {mean:.6g} rad/s, coefficient of "
+                f"fluctuation delta = {delta:.4g}"
+            )
+        if tr.stopped:
+            lines.append(f"  stopped {tr.stopped}")
+        return "\n".join(lines)
+
+    def incomplete(self) -> bool:
+        return super().incomplete() or bool(self.trajectory.stopped.startswith("the motion"))
+
+
+def steady_fluctuation(tr: Trajectory):
+    """(mean speed, delta = (max - min) / mean) over the last full revolution, or None."""
+    if len(tr.phi) < 3:
+        return None
+    turn = 2 * math.pi
+    end = tr.phi[-1]
+    k = np.flatnonzero(np.abs(tr.phi - end) >= turn)
+    if not k.size:
+        return None
+    w = tr.omega[k[-1] :]
+    t = tr.t[k[-1] :]
+    mean = float(np.trapezoid(w, t) / (t[-1] - t[0])) if t[-1] > t[0] else float(np.mean(w))
+    return mean, float((np.max(w) - np.min(w)) / mean)
+
+
+def simulate(
+    mech: Mechanism, *, method: str | None = None, exact: bool = False
+) -> SimulationResults:
+    """Simulate the motor-driven machine of ``mech`` (its ``motor:`` and ``simulate:``
+    sections) and solve the states and joint forces along the motion. ``exact``: solve
+    the equation of motion at every integrator stage instead of from its tabulation over
+    a turn (see :meth:`ReducedModel.tabulate`; always so with conditional loads)."""
+    if mech.motor is None:
+        raise mech.error(
+            ("motor",), "a simulation needs a 'motor' section (the driver's torque law)"
+        )
+    if mech.simulation is None:
+        raise mech.error(("simulate",), "a simulation needs a 'simulate' section (duration, step)")
+    machine = _with_flywheel(mech)
+    if machine.driver.motion is not None:
+        machine = copy.copy(machine)
+        machine.driver = dataclasses.replace(machine.driver, motion=None)
+    model = ReducedModel(machine, method)
+    if not model.ref.ok[0]:
+        raise mech.error(("driver", "start"), "the mechanism cannot close at the driver's start")
+    if not exact:
+        model.tabulate()
+    traj = integrate(model, mech.simulation, mech.motor)
+    good = np.isfinite(traj.J)
+    an = model.an
+    sol = core.states(an, traj.phi[good], traj.omega[good], traj.eps[good], t=traj.t[good])
+    if not good.all():
+        traj = Trajectory(
+            *(getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")),
+            traj.stopped,
+            traj.nfev,
+        )
+    forces = core.forces(an, sol, model.extremes)
+    return SimulationResults(an, sol, forces, traj, mech.motor)

@@ -1,0 +1,69 @@
+"""The machine around a mechanism, for forward dynamics: the motor's law, the flywheel,
+and how to simulate (``motor:``, ``flywheel:``, ``simulate:`` in a file).
+
+The motor drives the driver joint: a torque (a force for a linear driver) as a law of the
+driver's speed ``omega`` (``v``) and of time: ``M0 - nu * omega`` (``stall`` and
+``slope``), a table of (speed, torque) points (linear interpolation, constant beyond the
+ends), or an expression of ``omega`` and ``t``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+INTEGRATORS = ("rk4", "RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+
+
+@dataclass
+class Motor:
+    """``torque(omega, t)``: the motor's torque (N m) or force (N) on the driver."""
+
+    kind: str  # "linear", "table" or "law"
+    stall: float = 0.0
+    slope: float = 0.0
+    speeds: np.ndarray | None = None
+    torques: np.ndarray | None = None
+    expr: object = None
+    text: str = ""
+
+    def torque(self, omega, t=0.0):
+        omega = np.asarray(omega, float)
+        if self.kind == "linear":
+            return self.stall - self.slope * omega
+        if self.kind == "table":
+            return np.interp(omega, self.speeds, self.torques)
+        t = np.broadcast_to(np.asarray(t, float), omega.shape)
+        val = self.expr.evaluate_at({"omega": omega, "v": omega, "t": t})
+        return np.broadcast_to(np.asarray(val, float), omega.shape)
+
+    def describe(self) -> str:
+        if self.kind == "linear":
+            return f"M = {self.stall:.6g} - {self.slope:.6g} * omega"
+        if self.kind == "table":
+            return f"table of {len(self.speeds)} (speed, torque) points"
+        return f"M = {self.text}"
+
+
+@dataclass
+class Flywheel:
+    """An added moment of inertia (kg m^2) on a link, about the link's centre of mass
+    (a flywheel is balanced: its centre is on the link's axis of rotation)."""
+
+    link: str
+    inertia: float
+
+
+@dataclass
+class Simulation:
+    """How to integrate the equation of motion."""
+
+    duration: float
+    step: float | None = None  # rk4: the fixed step; adaptive: the output step
+    method: str = "rk4"
+    rtol: float = 1e-8
+    atol: float = 1e-10
+    speed0: float = 0.0  # the driver's speed at the start (rad/s or m/s)
+    revolutions: float | None = None  # stop after this many turns of the driver
+    where: tuple = field(default_factory=tuple)
