@@ -275,6 +275,120 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
 
 @main.command(epilog=EPILOG)
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option(
+    "-o",
+    "--outdir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Output folder (default: a folder named after FILE).",
+)
+@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@click.option("--no-plots", is_flag=True, help="Write the CSV only.")
+@click.option(
+    "--exact",
+    is_flag=True,
+    help="Solve the equation of motion at every integrator stage (no tabulation).",
+)
+@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
+    """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
+    write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
+    quantity and joint force) and plots."""
+    _interrupt_on_sigterm()
+    try:
+        import numpy as np
+
+        from . import api
+        from .dynamics import simulate as run_simulation
+
+        np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        mech = api.load(file, variant)
+        if outdir is None:
+            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+        output_folder(outdir)
+        res = run_simulation(mech, exact=exact)
+        written = [res.to_csv(outdir / "simulation.csv")]
+        if not no_plots:
+            from .writers.simulation import write_simulation_plots
+
+            written += write_simulation_plots(res, res.model, outdir)
+        if not quiet:
+            click.echo(res.summary())
+            click.echo(
+                f"  wrote {len(written)} file(s) to {outdir}/: "
+                + ", ".join(p.name for p in written)
+            )
+        sys.exit(EXIT_WARNINGS if res.incomplete() else EXIT_OK)
+    except KeyboardInterrupt:
+        click.echo("interrupted: the files not yet finished were not written", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        _fail((outdir is not None and _write_error(exc, outdir)) or exc)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        _fail(exc)
+
+
+@main.command(epilog=EPILOG)
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option(
+    "--delta",
+    default="1/40",
+    show_default=True,
+    help="Coefficient of speed fluctuation (omega_max - omega_min) / omega_mean.",
+)
+@click.option(
+    "--speed",
+    help="Mean speed (default: the steady speed with the file's motor, "
+    "else the driver's speed), e.g. '60 rpm'.",
+)
+@click.option(
+    "-o",
+    "--outdir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Folder for the energy plot (default: a folder named after FILE).",
+)
+@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@click.option("--no-check", is_flag=True, help="Do not verify the flywheel by simulation.")
+def flywheel(file: Path, delta, speed, outdir, variant, no_check) -> None:
+    """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
+    energy method over the steady cycle; with a motor and a simulate: section, check it
+    by simulating the machine with it."""
+    try:
+        import numpy as np
+
+        from . import api
+        from .errors import InputError
+        from .flywheel import size_flywheel
+        from .units import UnitError, parse_quantity
+
+        np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        try:
+            num, _, den = str(delta).partition("/")
+            dl = float(num) / float(den) if den else float(num)
+        except ValueError:
+            raise InputError(f"--delta {delta!r}: a number such as 0.025 or 1/40") from None
+        w = None
+        if speed is not None:
+            try:
+                w = parse_quantity(speed, "angular speed")
+            except UnitError as exc:
+                raise InputError(f"--speed {speed!r}: {exc}") from None
+        mech = api.load(file, variant)
+        if outdir is None:
+            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+        output_folder(outdir)
+        res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
+        from .writers.simulation import write_energy_plot
+
+        path = write_energy_plot(res, mech.name, outdir)
+        click.echo(res.text())
+        click.echo(f"  wrote {path}")
+        sys.exit(EXIT_OK)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        _fail(exc)
+
+
+@main.command(epilog=EPILOG)
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
 @click.option(
     "--draw",

@@ -379,4 +379,6 @@ def simulate(
             traj.nfev,
         )
     forces = core.forces(an, sol, model.extremes)
-    return SimulationResults(an, sol, forces, traj, mech.motor)
+    res = SimulationResults(an, sol, forces, traj, mech.motor)
+    res.model = model
+    return res

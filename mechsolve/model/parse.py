@@ -1269,6 +1269,11 @@ def read_simulation(r: Reader, value: Any, linear: bool):
     for key in ("rtol", "atol"):
         if key in m:
             x = m[key]
+            if isinstance(x, str):  # YAML reads 1e-10 (no dot) as text
+                try:
+                    x = float(x)
+                except ValueError:
+                    pass
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
                 raise r.fail(path + (key,), f"{key} must be a number between 0 and 1")
             setattr(sim, key, float(x))

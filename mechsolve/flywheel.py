@@ -1,0 +1,148 @@
+"""Flywheel sizing by the energy method (``mechsolve flywheel``).
+
+Over one steady cycle at the mean speed ``omega_m`` (the prescribed-speed analysis of the
+file: driving torque ``T(phi)`` with inertia, gravity and every load), the motor supplies a
+constant torque, the mean of ``T`` (or its law at ``omega_m``). The machine's kinetic
+energy then changes by the cumulative work
+
+    dE(phi) = integral from phi0 to phi of (M - T) dphi
+
+and its largest excursion ``dE_max = max dE - min dE`` (never the net work per cycle,
+which is zero for a steady cycle) must be absorbed with a speed fluctuation
+``delta = (omega_max - omega_min) / omega_m``:
+
+    J_F = dE_max / (omega_m^2 delta) - J_mean
+
+(``J_mean``: the mean of the mechanism's own reduced inertia, which already smooths the
+motion; the students' form ``J_F = 900 dE_max / (pi^2 n^2 delta)`` with n in rpm is the
+first term). The estimate treats the machine's inertia as constant; with a motor and a
+``simulate:`` section the flywheel is then checked by simulating the machine with it to
+steady state, and the fluctuation actually reached is reported.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import core
+from .errors import InputError
+from .model import Mechanism
+from .sweep import Analysis
+
+__all__ = ["FlywheelSizing", "size_flywheel"]
+
+
+@dataclass
+class FlywheelSizing:
+    omega_mean: float  # rad/s
+    delta: float
+    motor_torque: float  # the constant motor torque over the cycle (N m)
+    energy_max: float  # dE_max (J)
+    J_mean: float  # the mechanism's mean reduced inertia (kg m^2)
+    J_flywheel: float  # kg m^2 (0 when the mechanism's own inertia suffices)
+    phi: np.ndarray
+    energy: np.ndarray  # dE(phi) (J)
+    torque: np.ndarray  # T(phi) (N m)
+    delta_reached: float | None = None  # by simulation with the flywheel, when checked
+
+    def text(self) -> str:
+        n = self.omega_mean * 30 / math.pi
+        lines = [
+            f"flywheel by the energy method: mean speed {self.omega_mean:.6g} rad/s "
+            f"({n:.6g} rpm), delta = {self.delta:.6g}",
+            f"  motor torque (constant over the cycle): {self.motor_torque:.6g} N*m",
+            f"  largest energy excursion dE_max = {self.energy_max:.6g} J (the range of the "
+            "cumulative work of motor minus driving torque over a turn)",
+            f"  required inertia dE_max / (omega_m^2 delta) = "
+            f"{self.energy_max / (self.omega_mean**2 * self.delta):.6g} kg*m^2 "
+            f"(students' form 900 dE_max / (pi^2 n^2 delta) = "
+            f"{900 * self.energy_max / (math.pi**2 * n * n * self.delta):.6g})",
+            f"  mean reduced inertia of the mechanism J_mean = {self.J_mean:.6g} kg*m^2",
+            f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (on the crank's shaft)",
+        ]
+        if self.delta_reached is not None:
+            lines.append(
+                f"  checked by simulation with this flywheel: delta reached "
+                f"{self.delta_reached:.4g} (asked {self.delta:.4g}; the estimate takes the "
+                "machine's inertia as constant)"
+            )
+        return "\n".join(lines)
+
+
+def size_flywheel(
+    mech: Mechanism, delta: float, *, omega_mean: float | None = None, check: bool = True
+) -> FlywheelSizing:
+    """Size a flywheel on the driver's shaft for the coefficient of fluctuation ``delta``."""
+    if not 0 < delta < 1:
+        raise InputError(f"--delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
+    an = Analysis(mech)
+    if an.linear:
+        raise InputError("a flywheel turns: the driver must be a revolute joint")
+    d = mech.driver.direction
+    u0 = an.start_value()
+    x = np.radians(np.arange(0.0, 360.0 + 0.05, 0.1))
+    u = u0 + d * x
+
+    def cycle(w: float):
+        sol = core.states(an, u, d * w, 0.0)
+        if not sol.ok.all():
+            raise InputError("the mechanism does not turn fully: a flywheel needs a full cycle")
+        T = d * core.forces(an, sol).effort  # the torque along the motion
+        return T, float(np.trapezoid(T, x) / (2 * math.pi))
+
+    motor = mech.motor
+    if omega_mean is None and motor is not None:
+        # the steady speed with the motor: its torque equals the cycle's mean torque, which
+        # is affine in the speed (inertia terms average out over a cycle, dampers do not)
+        w1, w2 = 1.0, 2.0
+        m1 = d * float(motor.torque(np.array([d * w1]))[0]) - cycle(w1)[1]
+        m2 = d * float(motor.torque(np.array([d * w2]))[0]) - cycle(w2)[1]
+        for _ in range(30):  # secant (exact in one step for a linear motor)
+            if m2 == m1:
+                break
+            w1, w2, m1 = w2, w2 - m2 * (w2 - w1) / (m2 - m1), m2
+            m2 = d * float(motor.torque(np.array([d * w2]))[0]) - cycle(w2)[1]
+            if abs(m2) < 1e-12 * (1 + abs(cycle(w2)[1])):
+                break
+        w = abs(w2)
+    else:
+        w = abs(omega_mean if omega_mean is not None else mech.driver.speed)
+    if not w > 0:
+        raise InputError("the mean speed is zero: give the driver's speed or --speed")
+    T, M = cycle(w)
+    work = np.concatenate([[0.0], np.cumsum(0.5 * ((M - T[1:]) + (M - T[:-1])) * np.diff(x))])
+    dE = float(work.max() - work.min())
+    J_mean = float(np.mean(_reduced_inertia(an, u)))
+    need = dE / (w * w * delta)
+    out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u, work, T)
+    if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
+        from .dynamics import simulate, steady_fluctuation
+        from .model.machine import Flywheel
+
+        crank = an.system.body_names[an.plan[0].bodies[0]]
+        machine = copy.copy(mech)
+        machine.flywheel = Flywheel(crank, out.J_flywheel)
+        # to steady state: many time constants J / (-dM/domega) of the machine
+        slope = -d * float(mech.motor.torque(np.array([d * (w + 1e-3)]))[0]) + d * float(
+            mech.motor.torque(np.array([d * (w - 1e-3)]))[0]
+        )
+        slope /= 2e-3
+        tau = (J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
+        sim = copy.copy(mech.simulation)
+        sim.duration = min(max(sim.duration, 10 * tau), 120.0)
+        machine.simulation = sim
+        res = simulate(machine)
+        fl = steady_fluctuation(res.trajectory)
+        out.delta_reached = None if fl is None else fl[1]
+    return out
+
+
+def _reduced_inertia(an: Analysis, u: np.ndarray) -> np.ndarray:
+    n = len(u)
+    sol = core.states(an, np.r_[u, u], 0.0, np.r_[np.zeros(n), np.ones(n)])
+    e = core.forces(an, sol).effort
+    return e[n:] - e[:n]

@@ -1,0 +1,242 @@
+"""Forward dynamics (``mechsolve simulate``) against the seed's printed start-up, its
+recomputed reference data, conservation of energy and independently written ODEs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.integrate import solve_ivp
+
+import mechsolve as ms
+from mechsolve.cli import main
+from mechsolve.dynamics import ReducedModel, simulate
+
+from conftest import MECH, ref
+
+
+@pytest.fixture(scope="module")
+def seed004():
+    return simulate(ms.load(MECH / "motor-linkage.yaml"))
+
+
+def test_seed_004_startup_to_every_printed_digit(seed004):
+    """Start from rest, M = 50 - 1.25 omega, RK4 with h = 0.002 s to 2.2 s: the seed's
+    printed extremes are values on that grid (Бертяев et al., pp. 275-281)."""
+    tr = seed004.trajectory
+    printed = ref("004_mathcad_startup.json")["printed_in_seed"]
+    assert round(float(np.max(tr.omega)), 4) == printed["max_omega"]
+    assert round(float(np.min(tr.eps)), 4) == printed["min_eps"]
+    assert round(float(np.max(tr.eps)), 4) == printed["max_eps"]
+    assert tr.t[int(np.argmax(tr.omega))] == pytest.approx(1.682)
+    assert len(tr.t) == 1101 and seed004.ok.all()
+
+
+def test_seed_004_trajectory_and_reactions_against_the_re_solution(seed004):
+    data = ref("004_mathcad_startup.json")
+    rows = np.array(data["values_every_10th_step"])
+    cols = data["columns"]
+    tr = seed004.trajectory
+    k = np.arange(0, len(tr.t), 10)
+    np.testing.assert_allclose(tr.t[k], rows[:, cols.index("t")], atol=1e-12)
+    np.testing.assert_allclose(tr.phi[k], rows[:, cols.index("phi")], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(tr.omega[k], rows[:, cols.index("omega")], rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(tr.eps[k], rows[:, cols.index("eps")], rtol=1e-7, atol=1e-6)
+    O, O1 = seed004.reaction("O"), seed004.reaction("O1")
+    for name, r in (("R_Ox", O["Fx"]), ("R_Oy", O["Fy"]), ("R_O1x", O1["Fx"]), ("R_O1y", O1["Fy"])):
+        np.testing.assert_allclose(r[k], rows[:, cols.index(name)], rtol=1e-6, atol=1e-5)
+    s = data["recomputed_summary"]
+    assert np.max(O["F"]) == pytest.approx(s["max_abs_R_O_N"], rel=1e-6)
+    assert np.max(O1["F"]) == pytest.approx(s["max_abs_R_O1_N"], rel=1e-6)
+
+
+def test_seed_004_reduced_inertia_curve(seed004):
+    data = ref("004_mathcad_reduced_inertia.json")
+    phi, J, dJ = seed004.model.inertia_curve()
+    want = np.asarray(data["phi"])
+    got_J = np.interp(want, phi - phi[0], J)
+    got_dJ = np.interp(want, phi - phi[0], dJ)
+    # the reference is tabulated every 2 deg; the model every 1 deg (interpolated here)
+    np.testing.assert_allclose(got_J[::2], np.asarray(data["J"])[::2], rtol=1e-9)
+    np.testing.assert_allclose(got_dJ[::2], np.asarray(data["dJ"])[::2], atol=1e-9)
+
+
+def test_the_motor_law_is_the_driving_torque_of_the_force_analysis(seed004):
+    """Along the simulated motion, the driver torque that the kinetostatic analysis needs
+    is the motor's torque: the dynamics and the force analysis agree."""
+    M = seed004.motor_torque()
+    np.testing.assert_allclose(seed004.driving_effort, M, rtol=0, atol=1e-8 * np.max(np.abs(M)))
+
+
+def test_tabulated_and_exact_equations_of_motion_agree():
+    mech = ms.load(MECH / "motor-linkage.yaml")
+    mech.simulation.duration = 0.2
+    a = simulate(mech).trajectory
+    b = simulate(mech, exact=True).trajectory
+    np.testing.assert_allclose(a.omega, b.omega, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(a.eps, b.eps, rtol=1e-8, atol=1e-7)
+
+
+PENDULUM = """
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], A: [0.8, 0]}, mass: 3 kg, uniform_bar: [O, A]}
+joints: {O: [ground, bar]}
+driver: {joint: O, start: 10 deg}
+gravity: 9.81 m/s^2
+motor: {stall: 0 N m, slope: 0 N m s}
+simulate: {duration: 3 s, step: 0.01 s, method: DOP853, rtol: 1e-12, atol: 1e-12, from: 0 rad/s}
+"""
+
+
+def test_a_pendulum_against_its_own_equation():
+    """A uniform bar pivoted at one end, released at rest 10 deg above the horizontal:
+    (m l^2 / 3) theta'' = -m g (l / 2) cos theta, integrated here independently."""
+    res = simulate(ms.loads(PENDULUM))
+    tr = res.trajectory
+    m, l, g = 3.0, 0.8, 9.81
+
+    def f(t, y):
+        return [y[1], -(m * g * l / 2) * math.cos(y[0]) / (m * l * l / 3)]
+
+    sol = solve_ivp(f, (0, 3), [math.radians(10), 0.0], t_eval=tr.t, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(tr.phi, sol.y[0], atol=1e-8)
+    np.testing.assert_allclose(tr.omega, sol.y[1], atol=1e-8)
+
+
+FOURBAR_FREE = """
+ground: {O2: [0, 0], O4: [1.0, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.3, 0]}, mass: 2 kg, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [1.1, 0]}, mass: 5 kg, uniform_bar: [A, B]}
+  rocker: {points: {O4: [0, 0], B: [0.8, 0]}, mass: 3 kg, uniform_bar: [O4, B]}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, start: 0 deg}
+gravity: 9.81 m/s^2
+motor: {stall: 0 N m, slope: 0 N m s}
+simulate: {duration: 4 s, step: 0.01 s, method: DOP853, rtol: 1e-10, atol: 1e-12, from: 12 rad/s}
+"""
+
+
+def test_energy_is_conserved_without_motor_or_damping():
+    """No motor, no damping, gravity only: kinetic plus potential energy stays constant
+    over many revolutions (adaptive at rtol 1e-10: relative drift under 1e-8)."""
+    res = simulate(ms.loads(FOURBAR_FREE))
+    f = res.forces
+    E = f.kinetic + f.potential
+    turns = abs(res.trajectory.phi[-1] - res.trajectory.phi[0]) / (2 * math.pi)
+    assert turns > 5
+    assert np.max(np.abs(E - E[0])) <= 1e-8 * abs(E[0])
+
+
+def test_simulate_command(tmp_path):
+    r = CliRunner().invoke(
+        main, ["simulate", str(MECH / "motor-linkage.yaml"), "-o", str(tmp_path), "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["inertia.png", "motion.png", "reactions.png", "simulation.csv"]
+    head = (tmp_path / "simulation.csv").read_text().splitlines()[0].split(",")
+    for col in ("t [s]", "omega [rad/s]", "epsilon [rad/s^2]", "J [kg*m^2]", "motor.torque [N*m]"):
+        assert col in head
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        ("motor: {joint: A, stall: 1 N m, slope: 0}", "drives the driver joint"),
+        ("simulate: {duration: 1 s, step: 0.01 s, method: Euler}", "unknown integrator"),
+        ("simulate: {duration: -1 s, step: 0.01 s}", "positive"),
+        ("simulate: {duration: 1 s, step: 2 s}", "longer than the duration"),
+        ('motor: {torque: "50 - 1.25 * "}', "motor.torque"),
+        ("motor: {stall: 50 N m}", "give stall and slope"),
+    ],
+)
+def test_bad_simulation_input(tmp_path, edit, message):
+    text = (MECH / "motor-linkage.yaml").read_text()
+    key = edit.split(":")[0]
+    lines = [ln for ln in text.splitlines() if not ln.startswith(key + ":")]
+    f = tmp_path / "bad.yaml"
+    f.write_text("\n".join(lines) + "\n" + edit + "\n")
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert message in r.output and "Traceback" not in r.output
+
+
+def test_a_motor_given_as_an_expression():
+    text = (
+        (MECH / "motor-linkage.yaml")
+        .read_text()
+        .replace(
+            "motor: {stall: 50 N m, slope: 1.25 N m s}", 'motor: {torque: "50 - 1.25 * omega"}'
+        )
+    )
+    mech = ms.loads(text)
+    mech.simulation.duration = 0.1
+    law = simulate(mech).trajectory
+    mech2 = ms.load(MECH / "motor-linkage.yaml")
+    mech2.simulation.duration = 0.1
+    lin = simulate(mech2).trajectory
+    np.testing.assert_allclose(law.omega, lin.omega, rtol=1e-14, atol=1e-14)
+
+
+def test_reduced_model_needs_a_full_turn_for_its_table():
+    model = ReducedModel(ms.load(MECH / "motor-linkage.yaml"))
+    assert model.full_turn and model.tabulate()
+
+
+def test_a_flywheel_adds_its_inertia_and_smooths_the_speed():
+    base = ms.load(MECH / "motor-linkage.yaml")
+    with_fw = ms.loads(
+        (MECH / "motor-linkage.yaml").read_text() + "flywheel: {on: crank, inertia: 2 kg m^2}\n"
+    )
+    a = simulate(base)
+    b = simulate(with_fw)
+    phi, Ja, _ = a.model.inertia_curve()
+    _, Jb, _ = b.model.inertia_curve()
+    np.testing.assert_allclose(Jb - Ja, 2.0, atol=1e-9)  # on the crank: theta' = 1
+    from mechsolve.dynamics import steady_fluctuation
+
+    assert steady_fluctuation(b.trajectory)[1] < 0.25 * steady_fluctuation(a.trajectory)[1]
+
+
+CRANK = """
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], A: [0.8, 0]}, mass: 3 kg, uniform_bar: [O, A]}
+joints: {O: [ground, bar]}
+driver: {joint: O, speed: 10 rad/s, start: 0 deg}
+gravity: 9.81 m/s^2
+"""
+
+
+def test_flywheel_for_a_pure_sine_torque_against_the_hand_formula(tmp_path):
+    """A uniform crank under gravity at constant speed needs T = m g (l/2) cos(phi): mean
+    zero, so dE(phi) = -m g (l/2) sin(phi) and dE_max = m g l; J_F = m g l / (w^2 delta)
+    minus the crank's own m l^2 / 3."""
+    from mechsolve.flywheel import size_flywheel
+
+    m, g, l, w, delta = 3.0, 9.81, 0.8, 10.0, 1 / 40
+    fw = size_flywheel(ms.loads(CRANK), delta)
+    assert fw.motor_torque == pytest.approx(0.0, abs=1e-9)
+    assert fw.energy_max == pytest.approx(m * g * l, rel=1e-6)
+    assert fw.J_mean == pytest.approx(m * l * l / 3, rel=1e-12)
+    assert fw.J_flywheel == pytest.approx(m * g * l / (w * w * delta) - m * l * l / 3, rel=1e-6)
+    f = tmp_path / "crank.yaml"
+    f.write_text(CRANK)
+    r = CliRunner().invoke(main, ["flywheel", str(f), "--delta", "1/40", "-o", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    assert "dE_max = 23.544 J" in r.output and (tmp_path / "flywheel.png").exists()
+
+
+def test_flywheel_checked_by_simulation_on_seed_004():
+    """The energy method takes the machine's inertia as constant; simulating the machine
+    with the flywheel it gives, to steady state, reaches nearly the fluctuation asked."""
+    from mechsolve.flywheel import size_flywheel
+
+    fw = size_flywheel(ms.load(MECH / "motor-linkage.yaml"), 1 / 20)
+    assert fw.J_flywheel > 1.0
+    assert fw.delta_reached == pytest.approx(1 / 20, rel=0.1)
