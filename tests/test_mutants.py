@@ -258,3 +258,26 @@ def test_rocker_limits_at_a_folded_crank_and_at_a_dead_zone_edge(start):
     assert math.degrees(lp.high) == pytest.approx(high, abs=1e-5)
     assert math.degrees(lp.u_low) % 360 == pytest.approx(math.degrees(th_lo), abs=1e-7)
     assert math.degrees(lp.u_high) % 360 == pytest.approx(360 + math.degrees(th_hi), abs=1e-7)
+
+
+def test_transmission_minimum_between_samples_by_a_parabola(monkeypatch):
+    """limits.py:253 ReplaceBinaryOperator_Sub_Pow (transmission_angles: the fallback when
+    the minimum cannot be located exactly is a parabola through the three samples around
+    it). With the exact search switched off, the result must be the vertex of the parabola
+    through the closed-form transmission angles at those samples: for crank 2, coupler 5,
+    rocker 4, ground 6, cos(gamma) = (b^2 + c^2 - |A O4|^2) / (2 b c), least at 0°."""
+    import mechsolve.limits as limits
+
+    a, b, c, d = 2.0, 5.0, 4.0, 6.0
+    res = ms.solve(ms.loads(fourbar(a, b, c, d, start=-30, step=20)))
+    monkeypatch.setattr(limits, "_exact_minimum", lambda *args: None)
+    (t,) = limits.transmission_angles(res)
+    th = res.u
+    gam = np.arccos((b * b + c * c - (a * a + d * d - 2 * a * d * np.cos(th))) / (2 * b * c))
+    mu = np.minimum(gam, np.pi - gam)
+    k = int(np.argmin(mu))
+    assert 0 < k < len(mu) - 1
+    m0, m1, m2 = mu[k - 1 : k + 2]
+    s = 0.5 * (m0 - m2) / (m0 - 2 * m1 + m2)
+    assert t.angle == pytest.approx(m1 - 0.25 * (m0 - m2) * s, abs=1e-12)
+    assert t.u == pytest.approx(th[k] + s * (th[k + 1] - th[k]), abs=1e-12)
