@@ -271,7 +271,7 @@ def test_transmission_minimum_between_samples_by_a_parabola(monkeypatch):
     a, b, c, d = 2.0, 5.0, 4.0, 6.0
     res = ms.solve(ms.loads(fourbar(a, b, c, d, start=-30, step=20)))
     monkeypatch.setattr(limits, "_exact_minimum", lambda *args: None)
-    (t,) = limits.transmission_angles(res)
+    (t,) = res.transmission_angles()
     th = res.u
     gam = np.arccos((b * b + c * c - (a * a + d * d - 2 * a * d * np.cos(th))) / (2 * b * c))
     mu = np.minimum(gam, np.pi - gam)
