@@ -39,6 +39,8 @@ from .sweep import Analysis
 
 __all__ = ["ReducedModel", "simulate", "SimulationResults"]
 
+NEAR_SINGULAR = 1e-6  # sin of a loop's transmission angle below this: solved beside it
+
 
 class ReducedModel:
     """The driver's equation of motion of a mechanism: J(phi), E(phi, omega, 0)."""
@@ -110,8 +112,29 @@ class ReducedModel:
         sol = core.states(self.an, U, W, A)
         f = core.forces(self.an, sol, self.extremes)
         E = f.effort.reshape(4, n)
-        if not np.all(np.isfinite(E)):
-            return False
+        ind = sol.indicator.min(axis=0).reshape(4, n).min(axis=0) if sol.indicator.size else 1.0
+        # within rounding of a singular position the force analysis is not determined
+        good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
+        if not good.all():
+            # singular grid points (a bifurcation: the reactions are indeterminate there,
+            # the effort with them) are few; J and E0 are smooth through them on the
+            # followed motion, so they are filled from their neighbours
+            if good.sum() < 0.99 * n:
+                return False
+            bad = np.flatnonzero(~good)
+            h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
+            xb = np.r_[x[bad] - h, x[bad] + h]
+            m = len(xb)
+            sb = core.states(
+                self.an,
+                np.tile(self.u0 + d * xb, 4),
+                np.repeat([0.0, 0.0, 1.0, -1.0], m),
+                np.repeat([0.0, 1.0, 0.0, 0.0], m),
+            )
+            Eb = core.forces(self.an, sb, self.extremes).effort.reshape(4, 2, len(bad))
+            if not np.all(np.isfinite(Eb)):
+                return False
+            E[:, bad] = Eb.mean(axis=1)
         a = E[0]
         J = E[1] - E[0]
         b = 0.5 * (E[2] - E[3])
@@ -136,8 +159,18 @@ class ReducedModel:
         sol.t = np.array([t, t])
         f = core.forces(self.an, sol, self.extremes)
         e0, e1 = float(f.effort[0]), float(f.effort[1])
-        if not (np.isfinite(e0) and np.isfinite(e1)):
-            raise _LeftRange(phi)
+        ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
+        if not (np.isfinite(e0) and np.isfinite(e1)) or ind <= NEAR_SINGULAR:
+            if not (sol.ok.all() and getattr(self, "_beside", True)):
+                raise _LeftRange(phi)
+            # a singular position on the motion: the mean of the two sides next to it
+            self._beside = False
+            try:
+                sides = [self.terms(phi + s, omega, t) for s in (-1e-5, 1e-5)]
+            finally:
+                self._beside = True
+            self.nfev -= 2
+            return 0.5 * (sides[0][0] + sides[1][0]), 0.5 * (sides[0][1] + sides[1][1])
         return e1 - e0, e0
 
     def inertia_curve(self):
@@ -328,7 +361,8 @@ class SimulationResults(Results):
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return super().incomplete() or bool(self.trajectory.stopped.startswith("the motion"))
+        stop = self.trajectory.stopped
+        return super().incomplete() or bool(stop and not stop.startswith("after"))
 
 
 def steady_fluctuation(tr: Trajectory):

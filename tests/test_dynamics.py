@@ -240,3 +240,31 @@ def test_flywheel_checked_by_simulation_on_seed_004():
     fw = size_flywheel(ms.load(MECH / "motor-linkage.yaml"), 1 / 20)
     assert fw.J_flywheel > 1.0
     assert fw.delta_reached == pytest.approx(1 / 20, rel=0.1)
+
+
+PARALLELOGRAM_FREE = """
+ground: {O2: [0, 0], O4: [2, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [1, 0]}, mass: 2 kg, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [2, 0]}, mass: 4 kg, uniform_bar: [A, B]}
+  rocker: {points: {O4: [0, 0], B: [1, 0]}, mass: 2 kg, uniform_bar: [O4, B]}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: {sketch: {B: [2.7, 0.7]}}
+driver: {joint: O2, start: 30 deg}
+gravity: 9.81 m/s^2
+motor: {stall: 0 N m, slope: 0 N m s}
+simulate: {duration: 10 s, step: 0.01 s, method: DOP853, rtol: 1e-10, atol: 1e-12, from: 8 rad/s}
+"""
+
+
+def test_energy_is_conserved_through_bifurcations():
+    """A parallelogram turning freely under gravity passes its collinear (bifurcation)
+    positions twice a turn: it stays a parallelogram and its energy is conserved."""
+    res = simulate(ms.loads(PARALLELOGRAM_FREE))
+    tr = res.trajectory
+    assert abs(tr.phi[-1] - tr.phi[0]) / (2 * math.pi) > 10 and not tr.stopped
+    f = res.forces
+    E = f.kinetic + f.potential
+    assert np.max(np.abs(E - E[0])) <= 1e-8 * abs(E[0])
+    th2, th4 = res.link("crank").angle, res.link("rocker").angle
+    np.testing.assert_allclose(np.sin(th4 - th2), 0, atol=1e-9)
