@@ -430,6 +430,7 @@ def check(file: Path, variant, draw) -> None:
             "crane-kinematics",
             "fourbar-kinetostatics",
             "crane-kinetostatics",
+            "startup-dynamics",
             "chain-growth",
             "positions-growth",
             "stream",

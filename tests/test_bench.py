@@ -24,6 +24,7 @@ CASES = [
     "crane-kinematics",
     "fourbar-kinetostatics",
     "crane-kinetostatics",
+    "startup-dynamics",
     "chain-growth",
     "positions-growth",
     "stream",
@@ -66,6 +67,7 @@ def test_every_case_runs(quick):
         ("crane-kinematics", ["ratio mechsolve (whole call) / closed form:"]),
         ("fourbar-kinetostatics", ["ratio mechsolve (whole call) / free bodies by hand:"]),
         ("crane-kinetostatics", ["ratio mechsolve (whole call) / free bodies by hand:"]),
+        ("startup-dynamics", ["ratio mechsolve simulate / by hand:"]),
         ("chain-growth", ["fitted exponent of time against N:"]),
         ("positions-growth", ["fitted exponent of time against the number of positions:"]),
         ("stream", ["peak resident memory:"]),
@@ -129,7 +131,7 @@ def test_bench_data_is_package_data(tmp_path, monkeypatch):
     assert '"mechanisms"' not in src and "parents[2]" not in src
 
 
-@pytest.mark.parametrize("name", ["crane.yaml", "fourbar.yaml"])
+@pytest.mark.parametrize("name", ["crane.yaml", "fourbar.yaml", "motor-linkage.yaml"])
 def test_bench_data_matches_the_examples(name):
     """The bench's copies are the examples of mechanisms/ (update both together)."""
     from mechsolve import bench

@@ -457,6 +457,36 @@ def case_crane_forces(n: int, repeats: int) -> Case:
     return case
 
 
+def case_startup_dynamics(repeats: int) -> Case:
+    """Seed 004's motor-driven start-up (RK4, h = 0.002 s, 1100 steps): mechsolve
+    simulate (the equation of motion from its force analysis, then every state and joint
+    force along the motion) against the seed's reduced equation written by hand."""
+    from mechsolve.dynamics import simulate
+
+    mech = load_case("motor-linkage.yaml")
+
+    def ours():
+        return simulate(mech)
+
+    t = interleaved({"ref": R.seed004_startup, "call": ours}, repeats, batch_seconds=0.0)
+    _, _, w_ref, e_ref = t["ref"][1]
+    tr = t["call"][1].trajectory
+    errs = {
+        "max omega": abs(np.max(tr.omega) - np.max(w_ref)) / np.max(w_ref),
+        "eps": float(np.max(np.abs(tr.eps - e_ref)) / np.max(np.abs(e_ref))),
+    }
+    case = Case("startup-dynamics", "seed 004 start-up, RK4 h = 0.002 s to 2.2 s (1100 steps)")
+    case.rows = [
+        Row("reduced equation by hand, tabulated J, RK4 (reference)", t["ref"][0]),
+        Row("mechsolve simulate: whole call (with reactions at every step)", t["call"][0], errs),
+    ]
+    case.lines = [
+        f"ratio mechsolve simulate / by hand: {case.rows[1].seconds / case.rows[0].seconds:.2f}"
+        " (exudyn: not compared yet)"
+    ]
+    return case
+
+
 def case_chain(loops: list[int], positions: int, repeats: int) -> Case:
     import mechsolve as ms
 
@@ -667,6 +697,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         ("crane-kinematics", lambda: case_crane_kinematics(n, reps, 360 if quick else n)),
         ("fourbar-kinetostatics", lambda: case_fourbar_forces(n, reps)),
         ("crane-kinetostatics", lambda: case_crane_forces(n, reps)),
+        ("startup-dynamics", lambda: case_startup_dynamics(1 if quick else 3)),
         (
             "chain-growth",
             lambda: case_chain(

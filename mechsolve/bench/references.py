@@ -238,3 +238,75 @@ def crane_forces(th1, w1):
 def crane_limits():
     """Positions of the crane used by the benchmarks: crank angles of one turn."""
     return np.linspace(0.0, 2 * np.pi, 3600, endpoint=False)
+
+
+# --- seed 004: the motor-driven machine, as its Mathcad program reduces it ---------------
+def seed004_startup(h: float = 0.002, T: float = 2.2):
+    """The start-up of seed 004 written as its program does: the closed-form positions,
+    the velocity coefficients from the 3x3 system A(phi) x = B(phi), the reduced inertia
+    J(phi) and the reduced moment of gravity tabulated over a turn (periodic cubic
+    splines, J' their derivative), then ``rkfixed``: RK4 with a fixed step.
+
+    Returns (t, phi, omega, eps)."""
+    from scipy.interpolate import CubicSpline
+
+    OA, AB, O1B, O1K, KD = 0.15, 0.97, 0.66, 0.25, 0.86
+    a, b, g = 0.5, 0.37, 9.81
+    m0, m1, m2, m3, m4 = 1.5, 9.7, 6.6, 8.6, 2.0
+    JO, J1, J2, J3 = m0 * OA**2 / 3, m1 * AB**2 / 12, m2 * O1B**2 / 3, m3 * KD**2 / 12
+    M0, nu0, mu = 50.0, 1.25, 15.0
+    x = np.linspace(0.0, 2 * np.pi, 7201)
+    Ax, Ay = OA * np.cos(x), OA * np.sin(x)
+    dx, dy = Ax - a, Ay - b
+    O1A = np.hypot(dx, dy)
+    al = np.arctan2(dy, dx)
+    f2 = al + np.arccos((O1A**2 + O1B**2 - AB**2) / (2 * O1A * O1B))
+    Bx, By = a + O1B * np.cos(f2), b + O1B * np.sin(f2)
+    f1 = np.arctan2(By - Ay, Bx - Ax)
+    f3 = np.arccos(-O1K * np.cos(f2) / KD)
+    # velocity coefficients (per unit crank rate): A(phi) [f1', f2', f3'] = B(phi)
+    A = np.zeros((len(x), 3, 3))
+    A[:, 0, 0], A[:, 0, 1] = -AB * np.sin(f1), O1B * np.sin(f2)
+    A[:, 1, 0], A[:, 1, 1] = AB * np.cos(f1), -O1B * np.cos(f2)
+    A[:, 2, 1], A[:, 2, 2] = -O1K * np.sin(f2), -KD * np.sin(f3)
+    Bv = np.stack([OA * np.sin(x), -OA * np.cos(x), np.zeros_like(x)], axis=1)
+    w1, w2, w3 = np.linalg.solve(A, Bv[..., None])[..., 0].T
+    # centres of mass: velocity coefficients
+    vc1 = (-OA * np.sin(x) - AB / 2 * np.sin(f1) * w1, OA * np.cos(x) + AB / 2 * np.cos(f1) * w1)
+    vc2 = (-O1B / 2 * np.sin(f2) * w2, O1B / 2 * np.cos(f2) * w2)
+    vK = (-O1K * np.sin(f2) * w2, O1K * np.cos(f2) * w2)
+    vc3 = (vK[0] - KD / 2 * np.sin(f3) * w3, vK[1] + KD / 2 * np.cos(f3) * w3)
+    vD = vK[1] + KD * np.cos(f3) * w3  # the slider moves along y
+    vc0y = OA / 2 * np.cos(x)
+    J = (
+        JO
+        + m1 * (vc1[0] ** 2 + vc1[1] ** 2)
+        + J1 * w1**2
+        + J2 * w2**2
+        + m3 * (vc3[0] ** 2 + vc3[1] ** 2)
+        + J3 * w3**2
+        + m4 * vD**2
+    )
+    Mg = -g * (m0 * vc0y + m1 * vc1[1] + m2 * vc2[1] + m3 * vc3[1] + m4 * vD)
+    Js = CubicSpline(x, J, bc_type="periodic")
+    dJs = Js.derivative()
+    Ms = CubicSpline(x, Mg, bc_type="periodic")
+    Vs = CubicSpline(x, vD**2, bc_type="periodic")
+    tau = 2 * np.pi
+
+    def rhs(y):
+        p = y[0] % tau
+        w = y[1]
+        return np.array([w, (M0 + Ms(p) - (nu0 + mu * Vs(p)) * w - 0.5 * dJs(p) * w * w) / Js(p)])
+
+    n = int(round(T / h))
+    Y = np.zeros((n + 1, 2))
+    for i in range(n):
+        y = Y[i]
+        k1 = rhs(y)
+        k2 = rhs(y + h / 2 * k1)
+        k3 = rhs(y + h / 2 * k2)
+        k4 = rhs(y + h * k3)
+        Y[i + 1] = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    eps = np.array([rhs(y)[1] for y in Y])
+    return np.arange(n + 1) * h, Y[:, 0], Y[:, 1], eps
