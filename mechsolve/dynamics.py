@@ -188,6 +188,13 @@ class ReducedModel:
         return ref.u, J, dJ
 
 
+def drive_torque(motor, d: int, omega, t=0.0) -> np.ndarray:
+    """The motor's torque on the driver, counter-clockwise positive, at the signed speed
+    ``omega``. A motor's law is written along its direction of motion ``d``: its speed
+    and torque are positive when it drives the machine the way the driver turns."""
+    return d * motor.torque(d * np.asarray(omega, float), t)
+
+
 class _LeftRange(Exception):
     def __init__(self, phi: float) -> None:
         self.phi = phi
@@ -226,7 +233,7 @@ def integrate(model: ReducedModel, sim, motor) -> Trajectory:
 
     def rhs(t, y):
         J, e0 = model.terms(y[0], y[1], t)
-        M = float(motor.torque(np.array([y[1]]), t)[0])
+        M = float(drive_torque(motor, d, np.array([y[1]]), t)[0])
         return np.array([y[1], (M - e0) / J])
 
     stop_turns = sim.revolutions
@@ -293,7 +300,7 @@ def integrate(model: ReducedModel, sim, motor) -> Trajectory:
         try:
             Ji, e0 = model.terms(p, w, t)
             J[i] = Ji
-            eps[i] = (float(motor.torque(np.array([w]), t)[0]) - e0) / Ji
+            eps[i] = (float(drive_torque(motor, d, np.array([w]), t)[0]) - e0) / Ji
         except _LeftRange:
             J[i] = eps[i] = np.nan
     return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, stopped, model.nfev)
@@ -317,7 +324,10 @@ class SimulationResults(Results):
         self.motor = motor
 
     def motor_torque(self) -> np.ndarray:
-        return self.motor.torque(self.trajectory.omega, self.trajectory.t)
+        """The motor's torque on the driver (counter-clockwise positive, as the driving
+        torque of the force analysis)."""
+        d = self.mechanism.driver.direction
+        return drive_torque(self.motor, d, self.trajectory.omega, self.trajectory.t)
 
     def columns(self) -> list[Column]:
         tr = self.trajectory

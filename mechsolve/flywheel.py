@@ -99,13 +99,13 @@ def size_flywheel(
         # the steady speed with the motor: its torque equals the cycle's mean torque, which
         # is affine in the speed (inertia terms average out over a cycle, dampers do not)
         w1, w2 = 1.0, 2.0
-        m1 = d * float(motor.torque(np.array([d * w1]))[0]) - cycle(w1)[1]
-        m2 = d * float(motor.torque(np.array([d * w2]))[0]) - cycle(w2)[1]
+        m1 = float(motor.torque(np.array([w1]))[0]) - cycle(w1)[1]
+        m2 = float(motor.torque(np.array([w2]))[0]) - cycle(w2)[1]
         for _ in range(30):  # secant (exact in one step for a linear motor)
             if m2 == m1:
                 break
             w1, w2, m1 = w2, w2 - m2 * (w2 - w1) / (m2 - m1), m2
-            m2 = d * float(motor.torque(np.array([d * w2]))[0]) - cycle(w2)[1]
+            m2 = float(motor.torque(np.array([w2]))[0]) - cycle(w2)[1]
             if abs(m2) < 1e-12 * (1 + abs(cycle(w2)[1])):
                 break
         w = abs(w2)
@@ -127,10 +127,8 @@ def size_flywheel(
         machine = copy.copy(mech)
         machine.flywheel = Flywheel(crank, out.J_flywheel)
         # to steady state: many time constants J / (-dM/domega) of the machine
-        slope = -d * float(mech.motor.torque(np.array([d * (w + 1e-3)]))[0]) + d * float(
-            mech.motor.torque(np.array([d * (w - 1e-3)]))[0]
-        )
-        slope /= 2e-3
+        lo, hi = mech.motor.torque(np.array([w - 1e-3, w + 1e-3]))
+        slope = float(lo - hi) / 2e-3  # -dM/domega along the motion
         tau = (J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
         sim = copy.copy(mech.simulation)
         sim.duration = min(max(sim.duration, 10 * tau), 120.0)

@@ -2,7 +2,9 @@
 and how to simulate (``motor:``, ``flywheel:``, ``simulate:`` in a file).
 
 The motor drives the driver joint: a torque (a force for a linear driver) as a law of the
-driver's speed ``omega`` (``v``) and of time: ``M0 - nu * omega`` (``stall`` and
+driver's speed ``omega`` (``v``) and of time, both taken along the driver's direction of
+motion (a motor of a clockwise crank has a positive speed and drives with a positive
+torque): ``M0 - nu * omega`` (``stall`` and
 ``slope``), a table of (speed, torque) points (linear interpolation, constant beyond the
 ends), or an expression of ``omega`` and ``t``.
 """
