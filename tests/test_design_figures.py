@@ -275,3 +275,30 @@ def test_crane_jib_swing_and_transmission_angles():
     tr = {t.group.split()[1]: t for t in coarse.transmission_angles()}
     assert tr["B"].angle == pytest.approx(mu_B, abs=1e-8)
     assert tr["D"].angle == pytest.approx(mu_D, abs=1e-8)
+
+
+def test_transmission_minimum_next_to_a_near_singular_event_is_exact():
+    """A crank-rocker close to its change point (b + c = a + d + 3e-4): the transmission
+    angle dips to about 2.5 deg at a crank angle of 180 deg (a near-singular event of the
+    branch analysis). Swept at 7 deg from 3 deg, the minimum falls between samples; it is
+    located exactly there too, against the closed form at 180 deg."""
+    a, b, c, d = 0.3, 0.8, 0.5003, 1.0
+    text = f"""
+ground: {{O2: [0, 0], O4: [{d}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B left of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 3 deg}}
+sweep: {{range: 360 deg, step: 7 deg}}
+"""
+    res = ms.solve(ms.loads(text), forces=False)
+    assert any(e.kind == "near-singular" for e in res.events)
+    D2 = (a + d) ** 2
+    cos_mu = (b * b + c * c - D2) / (2 * b * c)
+    want = math.asin(math.sqrt(1 - cos_mu**2))
+    (tr,) = res.transmission_angles()
+    assert tr.angle == pytest.approx(want, abs=1e-9)
+    assert math.degrees(tr.u) % 360 == pytest.approx(180.0, abs=1e-6)
