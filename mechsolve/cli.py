@@ -305,7 +305,14 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         output_folder(outdir)
-        res = run_simulation(mech, exact=exact)
+        sim = mech.simulation
+        steps = int(sim.duration / sim.step) if sim is not None and sim.step else 0
+        bar = _progress_bar(steps, quiet) if sim is not None and sim.method == "rk4" else None
+        try:
+            res = run_simulation(mech, exact=exact, progress=None if bar is None else bar.update)
+        finally:
+            if bar is not None:
+                bar.close()
         written = [res.to_csv(outdir / "simulation.csv")]
         if not no_plots:
             from .writers.simulation import write_simulation_plots

@@ -225,8 +225,9 @@ def _with_flywheel(mech: Mechanism) -> Mechanism:
     return out
 
 
-def integrate(model: ReducedModel, sim, motor) -> Trajectory:
-    """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start."""
+def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
+    """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start;
+    ``progress(k)`` is called as k more steps are done (RK4)."""
     d = model.mech.driver.direction
     phi0 = model.u0
     w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
@@ -253,6 +254,8 @@ def integrate(model: ReducedModel, sim, motor) -> Trajectory:
                 y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
                 ts.append((i + 1) * h)
                 ys.append(y)
+                if progress is not None and (i + 1) % 50 == 0:
+                    progress(50)
                 if stop_turns and abs(y[0] - phi0) >= 2 * math.pi * stop_turns:
                     stopped = f"after {stop_turns:g} revolutions"
                     break
@@ -343,8 +346,22 @@ class SimulationResults(Results):
                 self.motor_torque(),
             ),
             Column("motor.power", "W", self.motor_torque() * tr.omega),
+            Column("energy.residual", "J", self.energy_residual()),
         ]
         return cols[:3] + extra + cols[3:]
+
+    def energy_residual(self) -> np.ndarray:
+        """The energy balance along the motion: the work of the motor and the loads since
+        the start (the trapezoid rule over the time steps) minus the change of kinetic and
+        potential energy (J). It measures the integration: zero to the step's accuracy."""
+        f = self.forces
+        if f is None:
+            return np.full(len(self.t), np.nan)
+        P = self.motor_torque() * self.trajectory.omega + f.power_loads
+        t = self.trajectory.t
+        work = np.concatenate([[0.0], np.cumsum(0.5 * (P[1:] + P[:-1]) * np.diff(t))])
+        E = f.kinetic + f.potential
+        return work - (E - E[0])
 
     def summary(self) -> str:
         tr = self.trajectory
@@ -391,7 +408,7 @@ def steady_fluctuation(tr: Trajectory):
 
 
 def simulate(
-    mech: Mechanism, *, method: str | None = None, exact: bool = False
+    mech: Mechanism, *, method: str | None = None, exact: bool = False, progress=None
 ) -> SimulationResults:
     """Simulate the motor-driven machine of ``mech`` (its ``motor:`` and ``simulate:``
     sections) and solve the states and joint forces along the motion. ``exact``: solve
@@ -412,7 +429,7 @@ def simulate(
         raise mech.error(("driver", "start"), "the mechanism cannot close at the driver's start")
     if not exact:
         model.tabulate()
-    traj = integrate(model, mech.simulation, mech.motor)
+    traj = integrate(model, mech.simulation, mech.motor, progress)
     good = np.isfinite(traj.J)
     an = model.an
     sol = core.states(an, traj.phi[good], traj.omega[good], traj.eps[good], t=traj.t[good])

@@ -268,3 +268,37 @@ def test_energy_is_conserved_through_bifurcations():
     assert np.max(np.abs(E - E[0])) <= 1e-8 * abs(E[0])
     th2, th4 = res.link("crank").angle, res.link("rocker").angle
     np.testing.assert_allclose(np.sin(th4 - th2), 0, atol=1e-9)
+
+
+def test_energy_balance_column_is_small_and_converges(seed004):
+    """The motor's and the loads' work since the start minus the change of energy: the
+    trapezoid rule over the steps makes it O(h^2), so it shrinks as the step does."""
+    r = seed004.energy_residual()
+    E = seed004.forces.kinetic + seed004.forces.potential
+    assert np.max(np.abs(r)) < 2e-2 * np.max(np.abs(E))
+    mech = ms.load(MECH / "motor-linkage.yaml")
+    mech.simulation.step = 0.0005
+    fine = simulate(mech)
+    ratio = np.max(np.abs(fine.energy_residual())) / np.max(np.abs(r))
+    assert ratio < 0.1  # 16 times smaller for O(h^2), allowing for the sampling of the peaks
+
+
+def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
+    import mechsolve.cli as cli
+
+    calls = []
+
+    class Bar:
+        def update(self, k):
+            calls.append(k)
+
+        def close(self):
+            calls.append("closed")
+
+    monkeypatch.setattr(cli, "_progress_bar", lambda total, quiet: Bar())
+    r = CliRunner().invoke(
+        main,
+        ["simulate", str(MECH / "motor-linkage.yaml"), "--no-plots", "-q", "-o", str(tmp_path)],
+    )
+    assert r.exit_code == 0, r.output
+    assert sum(c for c in calls if c != "closed") == 1100 and calls[-1] == "closed"
