@@ -93,11 +93,13 @@ class ReducedModel:
 
     def tabulate(self, step: float = math.radians(0.05)) -> bool:
         """Tabulate the equation of motion over one turn, where it allows: a crank that
-        turns fully, and loads that do not switch on and off (no ``when:``). Then
-        ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2`` exactly (gravity and
-        springs in a; dampers and drag in b; the kinetic term 1/2 J' omega^2 in c), and
-        J, a, b, c are periodic cubic splines through the grid (interpolation error about
-        1e-9 of their size at 0.05 degrees). Returns whether it did."""
+        turns fully. Then ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2``
+        exactly (gravity and springs in a; dampers and drag in b; the kinetic term
+        1/2 J' omega^2 in c), and J, a, b, c are periodic cubic splines through the grid
+        (interpolation error about 1e-9 of their size at 0.05 degrees). Loads that switch
+        on and off (``when:``) make E0 jump where they switch, which a spline would smear
+        over a grid cell (a 0.5 % error in the shaper's speed): such a machine is solved
+        at every integrator stage instead. Returns whether it tabulated."""
         if not self.full_turn or any(ld.when is not None for ld in self.mech.loads):
             return False
         from scipy.interpolate import CubicSpline
@@ -105,40 +107,46 @@ class ReducedModel:
         d = self.mech.driver.direction
         x = np.arange(0.0, 2 * math.pi, step)
         n = len(x)
-        u = self.u0 + d * x
-        U = np.tile(u, 4)
-        W = np.repeat([0.0, 0.0, 1.0, -1.0], n)
-        A = np.repeat([0.0, 1.0, 0.0, 0.0], n)
-        sol = core.states(self.an, U, W, A)
-        f = core.forces(self.an, sol, self.extremes)
-        E = f.effort.reshape(4, n)
-        ind = sol.indicator.min(axis=0).reshape(4, n).min(axis=0) if sol.indicator.size else 1.0
+        # columns: (speed, acceleration); the last three speeds fit a + b w + c w^2
+        cols = [(0.0, 0.0), (0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
+
+        def efforts(xx):
+            m = len(xx)
+            sol = core.states(
+                self.an,
+                np.tile(self.u0 + d * xx, len(cols)),
+                np.repeat([c[0] for c in cols], m),
+                np.repeat([c[1] for c in cols], m),
+            )
+            f = core.forces(self.an, sol, self.extremes)
+            E = f.effort.reshape(len(cols), m)
+            ind = (
+                sol.indicator.min(axis=0).reshape(len(cols), m).min(axis=0)
+                if sol.indicator.size
+                else np.ones(m)
+            )
+            return E, ind
+
+        E, ind = efforts(x)
         # within rounding of a singular position the force analysis is not determined
         good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
         if not good.all():
             # singular grid points (a bifurcation: the reactions are indeterminate there,
             # the effort with them) are few; J and E0 are smooth through them on the
-            # followed motion, so they are filled from their neighbours
+            # followed motion, so they are taken as the mean of the two sides
             if good.sum() < 0.99 * n:
                 return False
             bad = np.flatnonzero(~good)
             h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
-            xb = np.r_[x[bad] - h, x[bad] + h]
-            m = len(xb)
-            sb = core.states(
-                self.an,
-                np.tile(self.u0 + d * xb, 4),
-                np.repeat([0.0, 0.0, 1.0, -1.0], m),
-                np.repeat([0.0, 1.0, 0.0, 0.0], m),
-            )
-            Eb = core.forces(self.an, sb, self.extremes).effort.reshape(4, 2, len(bad))
+            Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h])
             if not np.all(np.isfinite(Eb)):
                 return False
-            E[:, bad] = Eb.mean(axis=1)
-        a = E[0]
+            E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
         J = E[1] - E[0]
-        b = 0.5 * (E[2] - E[3])
-        c = 0.5 * (E[2] + E[3]) - a
+        _check_inertia(self, J, self.u0 + d * x)
+        w = np.array([c[0] for c in cols[2:]])
+        coef = np.linalg.solve(np.vander(w, 3, increasing=True), E[2:])  # a, b, c
+        a, b, c = coef
         xs = np.r_[x, 2 * math.pi]
         self._table = CubicSpline(
             xs,
@@ -171,6 +179,7 @@ class ReducedModel:
                 self._beside = True
             self.nfev -= 2
             return 0.5 * (sides[0][0] + sides[1][0]), 0.5 * (sides[0][1] + sides[1][1])
+        _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
 
     def inertia_curve(self):
@@ -186,6 +195,19 @@ class ReducedModel:
         J = f.effort[n:] - f.effort[:n]
         dJ = 2.0 * f.kinetic_rate[:n]
         return ref.u, J, dJ
+
+
+def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray) -> None:
+    """The reduced moment of inertia must stay positive: where it vanishes (a massless
+    crank whose massive links stop at a limit position) the motion is not determined."""
+    k = int(np.argmin(J))
+    if not J[k] > 1e-12 * max(1.0, float(np.max(np.abs(J)))):
+        raise InputError(
+            f"the machine's reduced moment of inertia is {J[k]:.3g} kg*m^2 at "
+            f"{model.an.format_u(model._wrap(float(u[k])))}: its acceleration is not "
+            "determined there; give the driven link an inertia (the motor's rotor and the "
+            "gears reduced to its shaft), e.g. flywheel: {on: crank, inertia: 1 kg m^2}"
+        )
 
 
 def drive_torque(motor, d: int, omega, t=0.0) -> np.ndarray:
@@ -366,7 +388,8 @@ class SimulationResults(Results):
     def summary(self) -> str:
         tr = self.trajectory
         lines = [super().summary()]
-        k = int(np.nanargmax(tr.omega))
+        d = self.mechanism.driver.direction
+        k = int(np.nanargmax(d * tr.omega))  # the fastest along the motion
         lines.append(
             f"  simulation: {len(tr.t) - 1} steps to t = {tr.t[-1]:.6g} s "
             f"({self.mechanism.simulation.method}); motor {self.motor.describe()}"
@@ -401,7 +424,7 @@ def steady_fluctuation(tr: Trajectory):
     k = np.flatnonzero(np.abs(tr.phi - end) >= turn)
     if not k.size:
         return None
-    w = tr.omega[k[-1] :]
+    w = np.abs(tr.omega[k[-1] :])  # speeds along the motion (a clockwise crank too)
     t = tr.t[k[-1] :]
     mean = float(np.trapezoid(w, t) / (t[-1] - t[0])) if t[-1] > t[0] else float(np.mean(w))
     return mean, float((np.max(w) - np.min(w)) / mean)

@@ -42,7 +42,7 @@ class FlywheelSizing:
     delta: float
     motor_torque: float  # the constant motor torque over the cycle (N m)
     energy_max: float  # dE_max (J)
-    J_mean: float  # the mechanism's mean reduced inertia (kg m^2)
+    J_mean: float  # the mechanism's mean reduced inertia, with the file's flywheel (kg m^2)
     J_flywheel: float  # kg m^2 (0 when the mechanism's own inertia suffices)
     phi: np.ndarray
     energy: np.ndarray  # dE(phi) (J)
@@ -79,7 +79,9 @@ def size_flywheel(
     """Size a flywheel on the driver's shaft for the coefficient of fluctuation ``delta``."""
     if not 0 < delta < 1:
         raise InputError(f"--delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
-    an = Analysis(mech)
+    from .dynamics import _with_flywheel
+
+    an = Analysis(_with_flywheel(mech))  # with the file's own flywheel (or rotor), if any
     if an.linear:
         raise InputError("a flywheel turns: the driver must be a revolute joint")
     d = mech.driver.direction
@@ -125,7 +127,10 @@ def size_flywheel(
 
         crank = an.system.body_names[an.plan[0].bodies[0]]
         machine = copy.copy(mech)
-        machine.flywheel = Flywheel(crank, out.J_flywheel)
+        have = mech.flywheel.inertia if mech.flywheel is not None else 0.0
+        if mech.flywheel is not None:
+            crank = mech.flywheel.link
+        machine.flywheel = Flywheel(crank, have + out.J_flywheel)
         # to steady state: many time constants J / (-dM/domega) of the machine
         lo, hi = mech.motor.torque(np.array([w - 1e-3, w + 1e-3]))
         slope = float(lo - hi) / 2e-3  # -dM/domega along the motion

@@ -302,3 +302,33 @@ def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
     )
     assert r.exit_code == 0, r.output
     assert sum(c for c in calls if c != "closed") == 1100 and calls[-1] == "closed"
+
+
+def test_shaper_flywheel_with_its_conditional_cutting_force():
+    """The shaper's cutting force switches with the ram's stroke and direction, so its
+    equation of motion is solved at every stage (not tabulated); the flywheel by the
+    energy method needs the cycle's mean torque (its work per cycle over 2 pi)."""
+    from mechsolve.dynamics import ReducedModel
+    from mechsolve.flywheel import size_flywheel
+
+    mech = ms.load(MECH / "shaper.yaml")
+    assert not ReducedModel(mech).tabulate()
+    mech.simulation.duration = 0.1
+    tr = simulate(mech).trajectory
+    assert len(tr.t) == 21 and np.all(tr.omega < 0)  # clockwise, never stalling
+    fw = size_flywheel(ms.load(MECH / "shaper.yaml"), 1 / 40, check=False)
+    work = ms.solve(ms.load(MECH / "shaper.yaml"), step=np.radians(0.1)).work()
+    assert fw.motor_torque == pytest.approx(abs(work) / (2 * math.pi), rel=1e-4)
+    assert fw.J_flywheel > 1000
+
+
+def test_a_machine_without_inertia_where_it_stops_is_refused(tmp_path):
+    """Without the rotor's inertia the shaper's massless crank drives links that all stop
+    at the ram's limits: the reduced inertia vanishes there, and the message says so."""
+    text = (MECH / "shaper.yaml").read_text()
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("flywheel:"))
+    f = tmp_path / "shaper.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert "reduced moment of inertia" in r.output and "Traceback" not in r.output
