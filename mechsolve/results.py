@@ -406,7 +406,10 @@ class Results:
         """The driving torque (N m) or force (N) the driver applies to the driven link."""
         if self.forces is None:
             raise KeyError("no force analysis was run (the model has no masses or loads)")
-        return np.where(self.forces.ok, self.forces.effort, np.nan)
+        f = self.forces
+        ok = f.ok.copy()
+        ok[f.effort_by_limit] = True  # its limit along the motion at a singular position
+        return np.where(ok, f.effort, np.nan)
 
     def force_columns(self) -> list[Column]:
         f = self.forces
@@ -416,7 +419,7 @@ class Results:
             return np.where(ok, a, np.nan)
 
         kind, unit = self.effort_name
-        cols = [Column(f"input.{kind}", unit, m(f.effort), self._note("driver", "effort"))]
+        cols = [Column(f"input.{kind}", unit, self.driving_effort, self._note("driver", "effort"))]
         for j in self.mechanism.joints:
             lab = self.joint_label(j.name)
             r = f.reactions[j.name]
@@ -695,4 +698,10 @@ class Results:
                 f"  forces indeterminate at {len(f.singular)} singular position(s): {where}{more} "
                 f"({f.singular[0][1]})"
             )
+            if f.effort_by_limit:
+                kind = self.effort_name[0]
+                lines.append(
+                    f"  the driving {kind} at {len(f.effort_by_limit)} of them is its limit "
+                    "along the motion (smooth through the position); the reactions stay empty"
+                )
         return lines

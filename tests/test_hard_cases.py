@@ -327,6 +327,22 @@ def test_redundant_parallelogram_kinematics_and_unique_torque(tmp_path):
     assert "    3. " in r.output and "loop" in r.output
 
 
+def test_redundant_parallelogram_torque_at_collinearity_is_its_limit():
+    """Through its collinear positions the redundant parallelogram's reactions are not
+    determined, but its driving torque is (the hand solution holds at every angle): it is
+    given there as its limit along the motion."""
+    text = REDUNDANT.replace("start: 20 deg", "start: 30 deg").replace(
+        "range: 140 deg, step: 10 deg", "range: 360 deg, step: 30 deg"
+    )
+    res = ms.solve(ms.loads(text))
+    hand = 9.81 * np.cos(res.u) * (2 * 0.5 + 2 * 0.5 + 3 * 0.5 + 6 * 1.0)
+    singular = sorted(i for i, _ in res.forces.singular)
+    assert singular == [5, 11] and sorted(res.forces.effort_by_limit) == singular
+    np.testing.assert_allclose(res.driving_effort, hand, rtol=0, atol=1e-6)
+    assert np.isnan(res.reaction("O2")["Fx"][5])
+    assert "is its limit along the motion" in res.summary()
+
+
 def test_inconsistent_redundant_constraints_cannot_assemble():
     text = REDUNDANT.replace(
         "crank3: {points: {O6: [0, 0], C: [1, 0]}", "crank3: {points: {O6: [0, 0], C: [1.1, 0]}"

@@ -60,6 +60,8 @@ class ForceResult:
     nonunique: dict[str, set[str]] = field(default_factory=dict)  # joint -> components
     stroke_extremes: list[tuple[float, float]] = field(default_factory=list)
     speed: np.ndarray | float = 0.0  # the driver's speed at each position (rad/s or m/s)
+    # singular positions whose driver effort is its limit along the motion
+    effort_by_limit: list[int] = field(default_factory=list)
     # (kinetic, kinetic rate, potential, potential rate) on demand
     energy_terms: Callable[[], tuple] | None = field(default=None, repr=False)
     _energies: tuple | None = field(default=None, repr=False)
