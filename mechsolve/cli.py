@@ -384,11 +384,12 @@ def flywheel(file: Path, delta, speed, outdir, variant, no_check) -> None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         output_folder(outdir)
         res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
-        from .writers.simulation import write_energy_plot
+        from .writers.simulation import write_energy_mass_plot, write_energy_plot
 
-        path = write_energy_plot(res, mech.name, outdir)
+        paths = [write_energy_plot(res, mech.name, outdir)]
+        paths.append(write_energy_mass_plot(res, mech.name, outdir))
         click.echo(res.text())
-        click.echo(f"  wrote {path}")
+        click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
         sys.exit(EXIT_OK)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
         _fail(exc)

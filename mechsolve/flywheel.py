@@ -48,6 +48,8 @@ class FlywheelSizing:
     energy: np.ndarray  # dE(phi) (J)
     torque: np.ndarray  # T(phi) (N m)
     delta_reached: float | None = None  # by simulation with the flywheel, when checked
+    J_exact: float = float("nan")  # the energy-mass (Wittenbauer) method, J varying
+    energy_mass: tuple | None = None  # (J(phi), W(phi)) of that method
 
     def text(self) -> str:
         n = self.omega_mean * 30 / math.pi
@@ -63,6 +65,8 @@ class FlywheelSizing:
             f"{900 * self.energy_max / (math.pi**2 * n * n * self.delta):.6g})",
             f"  mean reduced inertia of the mechanism J_mean = {self.J_mean:.6g} kg*m^2",
             f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (on the crank's shaft)",
+            f"  energy-mass (Wittenbauer) method with the varying J(phi): J_F = "
+            f"{self.J_exact:.6g} kg*m^2",
         ]
         if self.delta_reached is not None:
             lines.append(
@@ -116,11 +120,22 @@ def size_flywheel(
     if not w > 0:
         raise InputError("the mean speed is zero: give the driver's speed or --speed")
     T, M = cycle(w)
-    work = np.concatenate([[0.0], np.cumsum(0.5 * ((M - T[1:]) + (M - T[:-1])) * np.diff(x))])
+    work = _cumulative(M - T, x)
     dE = float(work.max() - work.min())
-    J_mean = float(np.mean(_reduced_inertia(an, u)))
+    J, dJ = _reduced_inertia(an, u)
+    J_mean = float(np.mean(J))
     need = dE / (w * w * delta)
     out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u, work, T)
+    # the energy-mass (Wittenbauer) method, exact for a varying J: the kinetic energy is
+    # T0 + W(phi), W the work of the motor and the external loads (the driving torque at
+    # constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
+    # omega^2 = 2 (T0 + W) / (J + J_F) must stay between omega_min and omega_max
+    Q = 0.5 * d * dJ * w * w - T  # external loads' torque along the motion
+    W = _cumulative(M + Q, x)
+    wmax2, wmin2 = (w * (1 + delta / 2)) ** 2, (w * (1 - delta / 2)) ** 2
+    jf = (np.max(0.5 * wmin2 * J - W) - np.min(0.5 * wmax2 * J - W)) / (0.5 * (wmax2 - wmin2))
+    out.J_exact = max(0.0, float(jf))
+    out.energy_mass = (J, W)
     if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
         from .dynamics import simulate, steady_fluctuation
         from .model.machine import Flywheel
@@ -144,8 +159,21 @@ def size_flywheel(
     return out
 
 
-def _reduced_inertia(an: Analysis, u: np.ndarray) -> np.ndarray:
+def _cumulative(f: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The running integral of ``f`` over ``x`` (trapezoid rule), from 0."""
+    return np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(x))])
+
+
+def _reduced_inertia(an: Analysis, u: np.ndarray):
+    """J(phi) and dJ/dphi (per unit of the driver coordinate) from the force analysis:
+    J is the effort per unit driver acceleration, J' twice dT/dt at unit speed."""
     n = len(u)
-    sol = core.states(an, np.r_[u, u], 0.0, np.r_[np.zeros(n), np.ones(n)])
-    e = core.forces(an, sol).effort
-    return e[n:] - e[:n]
+    sol = core.states(
+        an,
+        np.r_[u, u, u],
+        np.r_[np.zeros(2 * n), np.ones(n)],
+        np.r_[np.zeros(n), np.ones(n), np.zeros(n)],
+    )
+    f = core.forces(an, sol)
+    e = f.effort
+    return e[n : 2 * n] - e[:n], 2.0 * f.kinetic_rate[2 * n :]

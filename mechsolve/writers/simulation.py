@@ -127,3 +127,38 @@ def write_energy_plot(sizing, name: str, outdir) -> Path:
     out = _save(fig, Path(outdir) / "flywheel.png")
     plt.close(fig)
     return out
+
+
+def write_energy_mass_plot(sizing, name: str, outdir) -> Path | None:
+    """The energy-mass (Wittenbauer) diagram: the work W(phi) against the reduced inertia
+    J(phi), with the lines of slopes omega_max^2 / 2 and omega_min^2 / 2 that touch it."""
+    if sizing.energy_mass is None:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    J, W = sizing.energy_mass
+    w, dl = sizing.omega_mean, sizing.delta
+    fig, ax = plt.subplots(figsize=(8, 6))
+    ax.plot(J, W, color="C0", label="W(phi) against J(phi) over a turn")
+    for w2, col, lab in (
+        ((w * (1 + dl / 2)) ** 2, "C3", "max"),
+        ((w * (1 - dl / 2)) ** 2, "C2", "min"),
+    ):
+        c = 0.5 * w2 * J - W  # the touching line: W = 1/2 w2 (J + J_F) - T0
+        k = int(np.argmin(c)) if lab == "max" else int(np.argmax(c))
+        jj = np.linspace(np.min(J), np.max(J), 50)
+        ax.plot(
+            jj, W[k] + 0.5 * w2 * (jj - J[k]), "--", color=col, label=f"slope omega_{lab}^2 / 2"
+        )
+    ax.set_xlabel("reduced moment of inertia J [kg*m^2]")
+    ax.set_ylabel("work of the motor and the loads W [J]")
+    ax.set_title(f"{name}\nenergy-mass diagram: J_F = {sizing.J_exact:.6g} kg*m^2", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    out = _save(fig, Path(outdir) / "energy-mass.png")
+    plt.close(fig)
+    return out
