@@ -338,9 +338,10 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option(
     "--delta",
-    default="1/40",
-    show_default=True,
-    help="Coefficient of speed fluctuation (omega_max - omega_min) / omega_mean.",
+    "delta_given",
+    default=None,
+    help="Coefficient of speed fluctuation (omega_max - omega_min) / omega_mean "
+    "[default: the file's, else 1/40].",
 )
 @click.option(
     "--speed",
@@ -355,19 +356,23 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
 )
 @click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
 @click.option("--no-check", is_flag=True, help="Do not verify the flywheel by simulation.")
-def flywheel(file: Path, delta, speed, outdir, variant, no_check) -> None:
+def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
-    energy method over the steady cycle; with a motor and a simulate: section, check it
-    by simulating the machine with it."""
+    energy method over the steady cycle (with a motor and a simulate: section, checked by
+    simulating the machine with it); FILE is a mechanism, or a torque curve over a cycle
+    as textbook flywheel problems give it (a 'torque:' section, no links)."""
     try:
         import numpy as np
 
         from . import api
         from .errors import InputError
-        from .flywheel import size_flywheel
+        from .flywheel import size_flywheel, size_from_torque
+        from .model.parse import is_torque_problem, read_torque_problem
+        from .model.source import load_file
         from .units import UnitError, parse_quantity
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        delta = delta_given if delta_given is not None else "1/40"
         try:
             num, _, den = str(delta).partition("/")
             dl = float(num) / float(den) if den else float(num)
@@ -379,15 +384,26 @@ def flywheel(file: Path, delta, speed, outdir, variant, no_check) -> None:
                 w = parse_quantity(speed, "angular speed")
             except UnitError as exc:
                 raise InputError(f"--speed {speed!r}: {exc}") from None
-        mech = api.load(file, variant)
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-        output_folder(outdir)
-        res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
+        src = load_file(file)
+        if is_torque_problem(src):  # a torque curve given directly, as textbooks do
+            p = read_torque_problem(src)
+            if delta_given is None and p["delta"] is not None:
+                dl = p["delta"]
+            output_folder(outdir)
+            res = size_from_torque(
+                p["angles"], p["torque"], speed=w or p["speed"], delta=dl, resisting=p["resisting"]
+            )
+            name = p["name"]
+        else:
+            mech = api.load(file, variant)
+            output_folder(outdir)
+            res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
+            name = mech.name
         from .writers.simulation import write_energy_mass_plot, write_energy_plot
 
-        paths = [write_energy_plot(res, mech.name, outdir)]
-        paths.append(write_energy_mass_plot(res, mech.name, outdir))
+        paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
         click.echo(res.text())
         click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
         sys.exit(EXIT_OK)

@@ -50,24 +50,36 @@ class FlywheelSizing:
     delta_reached: float | None = None  # by simulation with the flywheel, when checked
     J_exact: float = float("nan")  # the energy-mass (Wittenbauer) method, J varying
     energy_mass: tuple | None = None  # (J(phi), W(phi)) of that method
+    source: str = "mechanism"  # or "torque curve" (a table or law given directly)
 
     def text(self) -> str:
         n = self.omega_mean * 30 / math.pi
         lines = [
             f"flywheel by the energy method: mean speed {self.omega_mean:.6g} rad/s "
             f"({n:.6g} rpm), delta = {self.delta:.6g}",
-            f"  motor torque (constant over the cycle): {self.motor_torque:.6g} N*m",
+            f"  {'resisting' if self.source == 'torque curve' else 'motor'} torque "
+            f"(constant over the cycle): {self.motor_torque:.6g} N*m",
             f"  largest energy excursion dE_max = {self.energy_max:.6g} J (the range of the "
-            "cumulative work of motor minus driving torque over a turn)",
+            "cumulative work of the driving torque's excess over the resisting one over the "
+            "cycle, never the net work per cycle)",
             f"  required inertia dE_max / (omega_m^2 delta) = "
             f"{self.energy_max / (self.omega_mean**2 * self.delta):.6g} kg*m^2 "
             f"(students' form 900 dE_max / (pi^2 n^2 delta) = "
             f"{900 * self.energy_max / (math.pi**2 * n * n * self.delta):.6g})",
             f"  mean reduced inertia of the mechanism J_mean = {self.J_mean:.6g} kg*m^2",
             f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (on the crank's shaft)",
-            f"  energy-mass (Wittenbauer) method with the varying J(phi): J_F = "
-            f"{self.J_exact:.6g} kg*m^2",
         ]
+        if self.source == "torque curve":
+            lines[-2:] = [
+                f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (with the machine's own "
+                "inertia, which a torque curve does not give; the mean speed is "
+                "(omega_max + omega_min) / 2)"
+            ]
+        else:
+            lines.append(
+                f"  energy-mass (Wittenbauer) method with the varying J(phi): J_F = "
+                f"{self.J_exact:.6g} kg*m^2"
+            )
         if self.delta_reached is not None:
             lines.append(
                 f"  checked by simulation with this flywheel: delta reached "
@@ -177,3 +189,54 @@ def _reduced_inertia(an: Analysis, u: np.ndarray):
     f = core.forces(an, sol)
     e = f.effort
     return e[n : 2 * n] - e[:n], 2.0 * f.kinetic_rate[2 * n :]
+
+
+def size_from_torque(
+    angles: np.ndarray,
+    torque: np.ndarray,
+    *,
+    speed: float,
+    delta: float,
+    resisting: float | None = None,
+) -> FlywheelSizing:
+    """A flywheel from a torque curve over one cycle, as textbook problems state it.
+
+    Parameters
+    ----------
+    angles, torque
+        The driving torque (N m) over one cycle of the shaft (rad, increasing, the cycle
+        from the first angle to the last: 2 pi, or an engine's 4 pi); integrated exactly
+        as the piecewise-linear curve through the points.
+    speed
+        The mean speed omega_m = (omega_max + omega_min) / 2 (rad/s), the arithmetic mean
+        the texts use (to first order in delta the time mean too).
+    resisting
+        The constant resisting torque; its mean over the cycle when None (a steady cycle).
+    """
+    x = np.asarray(angles, float)
+    T = np.asarray(torque, float)
+    if x.ndim != 1 or len(x) < 2 or np.any(np.diff(x) <= 0):
+        raise InputError("the torque table's angles must increase")
+    if not 0 < delta < 1:
+        raise InputError(f"delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
+    span = x[-1] - x[0]
+    mean = float(np.trapezoid(T, x) / span)
+    Mr = mean if resisting is None else float(resisting)
+    # the running integral of the excess, exact for the piecewise-linear curve: its
+    # extremes lie where the excess changes sign, inside a segment too, so those points
+    # are added first
+    e = T - Mr
+    k = np.flatnonzero(e[:-1] * e[1:] < 0)
+    xc = x[k] - e[k] * (x[k + 1] - x[k]) / (e[k + 1] - e[k])
+    order = np.argsort(np.r_[x, xc], kind="stable")
+    x = np.r_[x, xc][order]
+    T = np.r_[T, np.full(len(xc), Mr)][order]
+    work = _cumulative(T - Mr, x)  # the driving torque's excess over the resisting one
+    dE = float(work.max() - work.min())
+    w = abs(float(speed))
+    need = dE / (w * w * delta)
+    out = FlywheelSizing(w, delta, Mr, dE, 0.0, need, x, work, T)
+    out.J_exact = need
+    out.energy_mass = None
+    out.source = "torque curve"
+    return out

@@ -360,3 +360,60 @@ def test_energy_mass_method_on_seed_004_reaches_the_fluctuation_asked():
     machine.simulation.duration = 60.0
     delta = steady_fluctuation(simulate(machine).trajectory)[1]
     assert delta == pytest.approx(1 / 20, rel=0.02)
+
+
+def test_flywheel_from_a_torque_curve_as_textbooks_state_it(tmp_path):
+    """T = 200 + 150 sin(2 phi) at 1500 rpm, delta = 1/80: dE_max = 150 J (the range of
+    -75 cos(2 phi)), J_F = dE_max / (omega^2 delta); the same from a table over an engine's
+    720 deg cycle (torque only in one half-turn of four), by the trapezoid rule by hand."""
+    f = tmp_path / "engine.yaml"
+    f.write_text(
+        'torque: {law: "200 + 150 * sin(2 * angle)", cycle: 360 deg}\n'
+        "speed: 1500 rpm\ndelta: 1/80\n"
+    )
+    r = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    w = 1500 * math.pi / 30
+    want = 150 / (w * w / 80)
+    assert f"flywheel J_F = {want:.6g} kg*m^2" in r.output
+    # a four-stroke cycle: 2000 N m over the power stroke, nothing else
+    rows = [[0, 0], [45, 2000], [135, 2000], [180, 0], [720, 0]]
+    table = ", ".join(f"[{a} deg, {t} N m]" for a, t in rows)
+    g = tmp_path / "four-stroke.yaml"
+    g.write_text(f"torque: {{table: [{table}], cycle: 720 deg}}\nspeed: 3000 rpm\n")
+    r = CliRunner().invoke(main, ["flywheel", str(g), "--delta", "0.02", "-o", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    x = np.radians([0, 45, 135, 180, 720])
+    T = np.array([0, 2000, 2000, 0, 0.0])
+    mean = np.trapezoid(T, x) / (4 * math.pi)
+    # the excess's running integral: piecewise quadratic, extremes at the table's points
+    xs = np.linspace(0, 4 * math.pi, 400001)
+    run = np.concatenate(
+        [
+            [0.0],
+            np.cumsum(
+                np.diff(xs) * (np.interp(xs[1:], x, T) + np.interp(xs[:-1], x, T)) / 2
+                - mean * np.diff(xs)
+            ),
+        ]
+    )
+    dE = run.max() - run.min()
+    wm = 3000 * math.pi / 30
+    assert f"dE_max = {dE:.6g} J" in r.output
+    assert f"flywheel J_F = {dE / (wm * wm * 0.02):.6g}" in r.output
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("torque: {table: [[0, 1], [90, 2], [45, 3]]}\nspeed: 10 rad/s\n", "must increase"),
+        ('torque: {law: "2 * x"}\nspeed: 10 rad/s\n', "unknown name 'x'"),
+        ("torque: {table: [[0, 1], [90, 2], [180, 3]]}\n", "speed"),
+    ],
+)
+def test_bad_torque_curves(tmp_path, text, message):
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2, r.output
+    assert message in r.output and "Traceback" not in r.output

@@ -1337,3 +1337,86 @@ def variants(path: str | Path) -> list[str]:
     src = load_file(path)
     v = src.data.get("variants")
     return list(v) if isinstance(v, dict) else []
+
+
+TORQUE_KEYS = ("name", "description", "units", "torque", "resisting", "speed", "delta")
+
+
+def is_torque_problem(src: Source) -> bool:
+    """A file that states a flywheel problem by its torque curve (no links)."""
+    return isinstance(src.data, dict) and "torque" in src.data and "links" not in src.data
+
+
+def read_torque_problem(src: Source) -> dict:
+    """A flywheel problem as textbooks state it::
+
+        name: four-stroke engine
+        torque: {table: [[0 deg, 0 N m], [30 deg, 300 N m], ...], cycle: 720 deg}
+        # or torque: {law: "200 + 150 * sin(2 * angle)", cycle: 360 deg}
+        resisting: mean              # or a constant torque, e.g. 180 N m
+        speed: 1500 rpm              # the mean speed (omega_max + omega_min) / 2
+        delta: 1/80                  # optional: --delta on the command line wins
+
+    The table's first angle starts the cycle; a table ends where the cycle does (its last
+    point is taken as the first one again when it stops short)."""
+    import numpy as np
+
+    r = Reader(src)
+    data = src.data
+    m = r.mapping(data, (), TORQUE_KEYS, "a torque problem", ("torque", "speed"))
+    if "units" in data:
+        read_units(r, data["units"])
+    path: KeyPath = ("torque",)
+    t = r.mapping(m["torque"], path, ("table", "law", "cycle"), "'torque'")
+    cycle = r.positive(t.get("cycle", "360 deg"), path + ("cycle",), "angle")
+    if ("table" in t) == ("law" in t):
+        raise r.fail(path, "give the torque as a table of [angle, torque] points or as a law")
+    if "table" in t:
+        rows = t["table"]
+        if not isinstance(rows, list) or len(rows) < 3:
+            raise r.fail(path + ("table",), "'table' lists at least 3 points [angle, torque]")
+        xs, ts = [], []
+        for k, row in enumerate(rows):
+            if not isinstance(row, list) or len(row) != 2:
+                raise r.fail(path + ("table", k), "a point is [angle, torque]")
+            xs.append(r.quantity(row[0], path + ("table", k, 0), "angle"))
+            ts.append(r.quantity(row[1], path + ("table", k, 1), "torque"))
+        x, T = np.array(xs), np.array(ts)
+        if np.any(np.diff(x) <= 0):
+            raise r.fail(path + ("table",), "the angles must increase")
+        end = x[0] + cycle
+        if x[-1] > end * (1 + 1e-12):
+            raise r.fail(path + ("table",), "the table runs past the cycle")
+        if x[-1] < end - 1e-12:  # close the cycle with its first point
+            x, T = np.r_[x, end], np.r_[T, T[0]]
+    else:
+        if not isinstance(t["law"], str):
+            raise r.fail(path + ("law",), "'law' is an expression of angle (rad)")
+        try:
+            e = Expression(t["law"], variables=("angle",))
+            x = np.linspace(0.0, cycle, 36001)
+            T = np.broadcast_to(np.asarray(e.evaluate_at({"angle": x}), float), x.shape)
+        except ExprError as exc:
+            raise r.fail(path + ("law",), str(exc)) from None
+        if not np.all(np.isfinite(T)):
+            raise r.fail(path + ("law",), "the law is not finite over the cycle")
+    res = m.get("resisting", "mean")
+    resisting = None if res == "mean" else r.quantity(res, ("resisting",), "torque")
+    delta = None
+    if "delta" in m:
+        d = m["delta"]
+        try:
+            num, _, den = str(d).partition("/")
+            delta = float(num) / float(den) if den else float(num)
+        except ValueError:
+            raise r.fail(
+                ("delta",), f"expected a number such as 0.025 or 1/40, got {d!r}"
+            ) from None
+    return {
+        "name": m.get("name", Path(src.file).stem if src.file else "torque curve"),
+        "angles": x,
+        "torque": np.asarray(T, float),
+        "speed": r.positive(m["speed"], ("speed",), "angular speed"),
+        "resisting": resisting,
+        "delta": delta,
+    }
