@@ -455,6 +455,7 @@ def check(file: Path, variant, draw) -> None:
             "fourbar-kinetostatics",
             "crane-kinetostatics",
             "startup-dynamics",
+            "dynamics-work-precision",
             "chain-growth",
             "positions-growth",
             "stream",
@@ -484,6 +485,11 @@ def bench(quick, cases, plot) -> None:
         if plot is not None:
             b.plot(done, plot)
             click.echo(f"wrote the work-precision diagram to {plot}")
+            dyn = [c for c in done if c.name == "dynamics-work-precision"]
+            if dyn:
+                p = Path(plot)
+                out = b.plot_dynamics(dyn[0], p.with_name(p.stem + "-dynamics" + p.suffix))
+                click.echo(f"wrote the integrators' work-precision diagram to {out}")
     except Exception as exc:  # noqa: BLE001
         _fail(exc)
 
