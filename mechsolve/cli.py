@@ -162,22 +162,40 @@ def main() -> None:
 
     \b
     mechsolve run mechanisms/crane.yaml      solve the sweep, write CSV and plots
+    mechsolve run FILE --at "theta=30 deg, omega=10 rad/s, alpha=5 rad/s^2"
+                                             every quantity and force at an instant
+    mechsolve simulate mechanisms/motor-linkage.yaml
+                                             a motor-driven start-up (forward dynamics)
+    mechsolve flywheel mechanisms/shaper.yaml --delta 1/40
+                                             size a flywheel by the energy method
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
     mechsolve bench --quick                  speed against error, in one run
     """
 
 
+# options that several commands share
+FILE_ARG = click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+VARIANT = click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+NO_PLOTS = click.option("--no-plots", is_flag=True, help="Write the CSV only.")
+QUIET = click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+
+
+def outdir_option(what: str = "results"):
+    return click.option(
+        "-o",
+        "--outdir",
+        type=click.Path(file_okay=False, path_type=Path),
+        help=f"Output folder for the {what} (default: a folder named after FILE in the "
+        "current directory).",
+    )
+
+
 @main.command(epilog=EPILOG)
-@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "-o",
-    "--outdir",
-    type=click.Path(file_okay=False, path_type=Path),
-    help="Output folder (default: a folder named after FILE in the current directory).",
-)
+@FILE_ARG
+@outdir_option("results")
 @click.option("--step", help="Sweep step, e.g. '1 deg', '2 mm' or '0.01 s' (overrides the file).")
-@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
-@click.option("--no-plots", is_flag=True, help="Write the CSV only.")
+@VARIANT
+@NO_PLOTS
 @click.option(
     "--method",
     type=click.Choice(["auto", "newton", "split-newton"]),
@@ -194,7 +212,7 @@ def main() -> None:
     "('s=..., v=..., a=...' for a linear driver; alpha defaults to 0); may be repeated. "
     "Prints every quantity and force and writes instants.csv.",
 )
-@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots."""
     _interrupt_on_sigterm()
@@ -274,21 +292,16 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
 
 
 @main.command(epilog=EPILOG)
-@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "-o",
-    "--outdir",
-    type=click.Path(file_okay=False, path_type=Path),
-    help="Output folder (default: a folder named after FILE).",
-)
-@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
-@click.option("--no-plots", is_flag=True, help="Write the CSV only.")
+@FILE_ARG
+@outdir_option("simulation's files")
+@VARIANT
+@NO_PLOTS
 @click.option(
     "--exact",
     is_flag=True,
     help="Solve the equation of motion at every integrator stage (no tabulation).",
 )
-@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
     """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
     write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
@@ -335,7 +348,7 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
 
 
 @main.command(epilog=EPILOG)
-@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@FILE_ARG
 @click.option(
     "--delta",
     "delta_given",
@@ -348,13 +361,8 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
     help="Mean speed (default: the steady speed with the file's motor, "
     "else the driver's speed), e.g. '60 rpm'.",
 )
-@click.option(
-    "-o",
-    "--outdir",
-    type=click.Path(file_okay=False, path_type=Path),
-    help="Folder for the energy plot (default: a folder named after FILE).",
-)
-@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@outdir_option("energy plots")
+@VARIANT
 @click.option("--no-check", is_flag=True, help="Do not verify the flywheel by simulation.")
 def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
@@ -412,8 +420,8 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
 
 
 @main.command(epilog=EPILOG)
-@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
+@FILE_ARG
+@VARIANT
 @click.option(
     "--draw",
     type=click.Path(dir_okay=False, path_type=Path),

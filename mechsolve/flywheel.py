@@ -116,22 +116,31 @@ def size_flywheel(
     if omega_mean is None and motor is not None:
         # the steady speed with the motor: its torque equals the cycle's mean torque, which
         # is affine in the speed (inertia terms average out over a cycle, dampers do not)
+
+        def mismatch(w: float):
+            T, M = cycle(w)  # one sweep and force analysis per speed tried
+            return float(motor.torque(np.array([w]))[0]) - M, T, M
+
         w1, w2 = 1.0, 2.0
-        m1 = float(motor.torque(np.array([w1]))[0]) - cycle(w1)[1]
-        m2 = float(motor.torque(np.array([w2]))[0]) - cycle(w2)[1]
+        m1 = mismatch(w1)[0]
+        m2, T, M = mismatch(w2)
         for _ in range(30):  # secant (exact in one step for a linear motor)
             if m2 == m1:
                 break
             w1, w2, m1 = w2, w2 - m2 * (w2 - w1) / (m2 - m1), m2
-            m2 = float(motor.torque(np.array([w2]))[0]) - cycle(w2)[1]
-            if abs(m2) < 1e-12 * (1 + abs(cycle(w2)[1])):
+            m2, T, M = mismatch(w2)
+            if abs(m2) < 1e-12 * (1 + abs(M)):
                 break
         w = abs(w2)
+        if not w > 0:
+            raise InputError("the steady speed with this motor is zero: check its law")
+        if w != w2:  # reached turning the other way: solve the cycle there
+            T, M = cycle(w)
     else:
         w = abs(omega_mean if omega_mean is not None else mech.driver.speed)
-    if not w > 0:
-        raise InputError("the mean speed is zero: give the driver's speed or --speed")
-    T, M = cycle(w)
+        if not w > 0:
+            raise InputError("the mean speed is zero: give the driver's speed or --speed")
+        T, M = cycle(w)
     work = _cumulative(M - T, x)
     dE = float(work.max() - work.min())
     J, dJ = _reduced_inertia(an, u)
