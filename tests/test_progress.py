@@ -17,11 +17,15 @@ import pytest
 
 import mechsolve as ms
 import mechsolve.cli as cli
+import mechsolve.clikit as kit
 
 from conftest import MECH
 
 # the command line with the bar's delay removed, so that a short run shows it
-RUN_NOW = "import sys, mechsolve.cli as c; c.PROGRESS_DELAY = 0; sys.exit(c.main())"
+RUN_NOW = (
+    "import sys, mechsolve.clikit as k, mechsolve.cli as c; "
+    "k.PROGRESS_DELAY = 0; sys.exit(c.main())"
+)
 
 
 class FakeTTY(io.StringIO):
@@ -31,22 +35,22 @@ class FakeTTY(io.StringIO):
 
 def test_decision():
     env: dict[str, str] = {}
-    assert cli.progress_wanted(False, FakeTTY(), env)
-    assert not cli.progress_wanted(True, FakeTTY(), env)  # -q
-    assert not cli.progress_wanted(False, io.StringIO(), env)  # not a terminal
+    assert kit.progress_wanted(False, FakeTTY(), env)
+    assert not kit.progress_wanted(True, FakeTTY(), env)  # -q
+    assert not kit.progress_wanted(False, io.StringIO(), env)  # not a terminal
     for ci in ("1", "true", "yes"):
-        assert not cli.progress_wanted(False, FakeTTY(), {"CI": ci})
+        assert not kit.progress_wanted(False, FakeTTY(), {"CI": ci})
     for ci in ("", "0", "false"):  # set but saying "not CI"
-        assert cli.progress_wanted(False, FakeTTY(), {"CI": ci})
+        assert kit.progress_wanted(False, FakeTTY(), {"CI": ci})
     with open(os.devnull) as closed:
         pass
-    assert not cli.progress_wanted(False, closed, env)  # isatty raises ValueError
+    assert not kit.progress_wanted(False, closed, env)  # isatty raises ValueError
 
 
 def test_without_tqdm_no_bar_and_no_error(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "tqdm", None)  # import tqdm raises ImportError
-    assert not cli.progress_wanted(False, FakeTTY(), {})
-    monkeypatch.setattr(cli, "progress_wanted", lambda quiet: True)  # pretend a terminal
+    assert not kit.progress_wanted(False, FakeTTY(), {})
+    monkeypatch.setattr(kit, "progress_wanted", lambda quiet, *a: True)  # pretend a terminal
     monkeypatch.setattr(cli, "_progress_bar", lambda total, quiet: None)
     monkeypatch.setenv("MECHSOLVE_STREAM_ABOVE", "100")
     from click.testing import CliRunner

@@ -58,9 +58,9 @@ def test_dead_zone_across_chunks(tmp_path):
 
 
 def test_cli_streams_long_sweeps(tmp_path, monkeypatch):
-    import mechsolve.cli as cli
+    import mechsolve.clikit as kit
 
-    monkeypatch.setattr(cli, "STREAM_ABOVE", 1000)
+    monkeypatch.setattr(kit, "STREAM_ABOVE", 1000)
     r = CliRunner().invoke(
         main, ["run", str(MECH / "fourbar.yaml"), "--step", "0.1 deg", "-o", str(tmp_path)]
     )
