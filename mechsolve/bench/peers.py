@@ -14,6 +14,10 @@ Two third-party packages solve it here, when they are installed:
   bodies, revolute joints, crank driven by a prescribed-rotation coordinate
   constraint, generalized-alpha time integration).
 
+exudyn also simulates seed 004's motor-driven start-up (:func:`exudyn_seed004`), the
+machine built from a loaded mechsolve model (masses, inertias, joints, motor, damper,
+gravity), so that ``mechsolve bench`` can time ``mechsolve simulate`` against it.
+
 Both are imported lazily; every public function works (returns ``None``) when
 its package is missing, and never raises: a failure inside a peer is returned
 as ``{"name": ..., "error": "<message>"}``.
@@ -35,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["available", "exudyn_fourbar", "pylinkage_fourbar"]
+__all__ = ["available", "exudyn_fourbar", "exudyn_seed004", "pylinkage_fourbar"]
 
 # --- the benchmark four-bar (SI units) ---------------------------------------------------------
 _O2 = (0.0, 0.0)
@@ -743,6 +747,358 @@ def exudyn_fourbar(n: int) -> dict | None:
             "torque": torque,
             "seconds": seconds,
             "import_seconds": _import_seconds("exudyn"),
+            "note": note,
+        }
+    except Exception as exc:
+        return _error(name, exc)
+
+
+# --- exudyn: seed 004's motor-driven start-up --------------------------------------------------
+
+_LOADS = ("native", "user functions")
+
+
+def _start_pose(mech: Any) -> dict[str, tuple[float, np.ndarray]]:
+    """Angle and origin of every link at the driver's start, from mechsolve's assembly.
+
+    Parameters
+    ----------
+    mech : mechsolve.model.Mechanism
+        The loaded model.
+
+    Returns
+    -------
+    dict
+        Link name to ``(theta, origin)``: a link point with local coordinates ``p`` is at
+        ``origin + R(theta) p``.
+    """
+    from mechsolve import api
+
+    res = api.solve(mech, forces=False)  # position 0 is the driver's start (assembly rules)
+    pose = {}
+    for lk in mech.links:
+        theta = float(res.link(lk.name).angle[0])
+        rot = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+        name, local = next(iter(lk.points.items()))
+        if name in mech.ground:
+            world = np.asarray(mech.ground[name], dtype=float)
+        else:
+            world = np.array([res.point(name).x[0], res.point(name).y[0]], dtype=float)
+        pose[lk.name] = (theta, world - rot @ np.asarray(local, dtype=float))
+    return pose
+
+
+def _exudyn_machine(
+    exu: Any,
+    mech: Any,
+    pose: dict[str, tuple[float, np.ndarray]],
+    h: float,
+    loads: str,
+    spectral_radius: float,
+) -> dict[str, Any]:
+    """Build a motor-driven planar machine from a mechsolve model as an exudyn system.
+
+    One ``ObjectRigidBody2D`` per link (node at the centre of mass, the link's mass and
+    centroidal inertia), an ``ObjectJointRevolute2D`` per pin, an ``ObjectJointPrismatic2D``
+    (rotation constrained) per slider on the ground, ``LoadMassProportional`` gravity on
+    every body, at rest at the driver's start. The motor torque ``M(omega, t)`` acts on the
+    driven link and a viscous damper on the slider:
+
+    * ``loads="user functions"``: a ``LoadTorqueVector`` whose Python user function
+      evaluates the model's motor law at the crank's angular velocity
+      (``mbs.GetNodeOutput``), and a ``LoadForceVector`` user function ``-c v`` along the
+      guide;
+    * ``loads="native"`` (linear motor and a guide along x or y only): the same forces
+      from exudyn's compiled elements, a constant torque ``M0`` plus
+      ``ObjectConnectorCoordinateSpringDamper`` of damping ``nu0`` on the crank's rotation
+      and of damping ``c`` on the slider's coordinate, no Python in the time loop.
+
+    Parameters
+    ----------
+    exu : module
+        The imported ``exudyn`` package.
+    mech : mechsolve.model.Mechanism
+        Model with a ``motor``, a ``simulate`` section starting from rest and only gravity
+        and slider dampers as loads.
+    pose : dict
+        From :func:`_start_pose`.
+    h : float
+        Fixed time step, s.
+    loads : str
+        ``"native"`` or ``"user functions"``.
+    spectral_radius : float
+        Generalized-alpha's spectral radius at infinity.
+
+    Returns
+    -------
+    dict
+        ``mbs``, ``container``, ``settings``, ``sensor`` (crank angular velocity),
+        ``sign`` (+1 if the crank's angle is the driver angle, -1 if reversed), ``steps``.
+
+    Raises
+    ------
+    NotImplementedError
+        For a model element this builder does not translate.
+    """
+    import exudyn.itemInterface as eii
+
+    from mechsolve.model import Damper, PinJoint, SliderJoint
+
+    sim, motor = mech.simulation, mech.motor
+    if motor is None or sim is None:
+        raise NotImplementedError("the model has no motor or no simulate section")
+    if sim.speed0:
+        raise NotImplementedError("only a start from rest is translated")
+    if loads not in _LOADS:
+        raise ValueError(f"loads must be one of {_LOADS}, got {loads!r}")
+    links = {lk.name: lk for lk in mech.links}
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground = mbs.AddObject(eii.ObjectGround())
+    ground_node = mbs.AddNode(eii.NodePointGround())
+    ground_coord = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
+    gx, gy = (float(g) for g in mech.gravity)
+    bodies: dict[str, tuple[Any, Any]] = {}
+    for lk in mech.links:
+        if not lk.mass or lk.mass <= 0:
+            raise NotImplementedError(f"link {lk.name!r} has no mass")
+        theta, origin = pose[lk.name]
+        rot = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+        com = origin + rot @ np.asarray(lk.com, dtype=float)
+        node = mbs.AddNode(
+            eii.NodeRigidBody2D(
+                referenceCoordinates=[com[0], com[1], theta], initialVelocities=[0, 0, 0]
+            )
+        )
+        body = mbs.AddObject(
+            eii.ObjectRigidBody2D(mass=lk.mass, inertia=lk.inertia or 0.0, nodeNumber=node)
+        )
+        mass_marker = mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=body))
+        mbs.AddLoad(eii.LoadMassProportional(markerNumber=mass_marker, loadVector=[gx, gy, 0]))
+        bodies[lk.name] = (body, node)
+
+    def marker(link: str, point: str, kind: Any = eii.MarkerBodyPosition) -> Any:
+        if link == "ground":
+            x, y = mech.ground[point]
+            return mbs.AddMarker(kind(bodyNumber=ground, localPosition=[x, y, 0]))
+        lk = links[link]
+        loc = np.asarray(lk.points[point], dtype=float) - np.asarray(lk.com, dtype=float)
+        return mbs.AddMarker(kind(bodyNumber=bodies[link][0], localPosition=[loc[0], loc[1], 0]))
+
+    sliders: dict[str, tuple[Any, str, float, float]] = {}
+    for joint in mech.joints:
+        if isinstance(joint, PinJoint):
+            pair = [marker(joint.a, joint.point), marker(joint.b, joint.point)]
+            mbs.AddObject(eii.ObjectJointRevolute2D(markerNumbers=pair))
+        elif isinstance(joint, SliderJoint) and joint.guide == "ground":
+            c, s = math.cos(joint.angle), math.sin(joint.angle)
+            on_guide = mbs.AddMarker(
+                eii.MarkerBodyRigid(
+                    bodyNumber=ground, localPosition=[joint.origin[0], joint.origin[1], 0]
+                )
+            )
+            block = marker(joint.block, joint.point, eii.MarkerBodyRigid)
+            mbs.AddObject(
+                eii.ObjectJointPrismatic2D(
+                    markerNumbers=[on_guide, block],
+                    axisMarker0=[c, s, 0],
+                    normalMarker1=[-s, c, 0],
+                    constrainRotation=True,
+                )
+            )
+            sliders[joint.name] = (bodies[joint.block][1], joint.block, c, s)
+        else:
+            raise NotImplementedError(f"joint {joint.name!r} ({type(joint).__name__})")
+
+    drive = next(j for j in mech.joints if j.name == mech.driver.joint)
+    if not isinstance(drive, PinJoint) or "ground" not in (drive.a, drive.b):
+        raise NotImplementedError("the motor must drive a pin to the ground")
+    crank = drive.b if drive.a == "ground" else drive.a
+    sign = 1.0 if drive.a == "ground" else -1.0
+    crank_body, crank_node = bodies[crank]
+    ovt = exu.OutputVariableType
+    crank_marker = mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=crank_body))
+    native = loads == "native"
+    if native:
+        if motor.kind != "linear":
+            raise NotImplementedError("native loads: only a linear motor law M0 - nu0 omega")
+        mbs.AddLoad(
+            eii.LoadTorqueVector(markerNumber=crank_marker, loadVector=[0, 0, sign * motor.stall])
+        )
+        crank_coord = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=crank_node, coordinate=2))
+        mbs.AddObject(
+            eii.ObjectConnectorCoordinateSpringDamper(
+                markerNumbers=[ground_coord, crank_coord], damping=motor.slope
+            )
+        )
+    else:
+
+        def motor_torque(mbs_: Any, t: float, load: Any) -> list[float]:
+            omega = sign * mbs_.GetNodeOutput(crank_node, ovt.AngularVelocity)[2]
+            return [0.0, 0.0, sign * float(motor.torque(omega, t))]
+
+        mbs.AddLoad(
+            eii.LoadTorqueVector(markerNumber=crank_marker, loadVectorUserFunction=motor_torque)
+        )
+    for load in mech.loads:
+        if not (isinstance(load, Damper) and load.slider in sliders and load.when is None):
+            raise NotImplementedError(f"load {load.name!r}: only dampers on a slider translate")
+        node, block, c, s = sliders[load.slider]
+        coef = float(load.coefficient)
+        if native:
+            axis = 0 if abs(s) < 1e-12 else 1 if abs(c) < 1e-12 else None
+            if axis is None:
+                raise NotImplementedError("native loads: a damped guide along x or y only")
+            coord = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=node, coordinate=axis))
+            mbs.AddObject(
+                eii.ObjectConnectorCoordinateSpringDamper(
+                    markerNumbers=[ground_coord, coord], damping=coef
+                )
+            )
+        else:
+
+            def drag(
+                mbs_: Any,
+                t: float,
+                load: Any,
+                node: Any = node,
+                c: float = c,
+                s: float = s,
+                coef: float = coef,
+            ) -> list[float]:
+                v = mbs_.GetNodeOutput(node, ovt.Velocity)
+                f = -coef * (v[0] * c + v[1] * s)
+                return [f * c, f * s, 0.0]
+
+            at = marker(block, next(iter(links[block].points)))
+            mbs.AddLoad(eii.LoadForceVector(markerNumber=at, loadVectorUserFunction=drag))
+    sensor = mbs.AddSensor(
+        eii.SensorNode(
+            nodeNumber=crank_node,
+            outputVariableType=ovt.AngularVelocity,
+            storeInternal=True,
+            writeToFile=False,
+        )
+    )
+    mbs.Assemble()
+
+    steps = int(round(sim.duration / h))
+    settings = exu.SimulationSettings()
+    integ = settings.timeIntegration
+    integ.endTime = steps * h
+    integ.numberOfSteps = steps
+    integ.verboseMode = 0
+    _set_setting(settings, ("timeIntegration.adaptiveStep",), False)
+    integ.generalizedAlpha.spectralRadius = spectral_radius
+    integ.generalizedAlpha.computeInitialAccelerations = True
+    integ.newton.useModifiedNewton = False  # full Newton: the modified one fails at 1.39 s
+    _set_setting(settings, ("solution.file.write", "solutionSettings.writeSolutionToFile"), False)
+    _set_setting(
+        settings, ("solution.sensors.writePeriod", "solutionSettings.sensorsWritePeriod"), h / 2
+    )
+    _set_setting(settings, ("show.computationTime", "displayComputationTime"), False)
+    _set_setting(settings, ("show.statistics", "displayStatistics"), False)
+    return {
+        "container": container,
+        "mbs": mbs,
+        "settings": settings,
+        "sensor": sensor,
+        "sign": sign,
+        "steps": steps,
+    }
+
+
+def exudyn_seed004(
+    mech: Any,
+    h: float | None = None,
+    loads: str = "native",
+    spectral_radius: float = 0.6,
+    repeats: int = _REPEATS,
+) -> dict | None:
+    """Simulate a motor-driven start-up (seed 004's machine) with exudyn.
+
+    The machine is built from the loaded mechsolve model (see :func:`_exudyn_machine`)
+    and integrated from rest over the model's duration with exudyn's implicit
+    generalized-alpha solver (index 3, full Newton, fixed step). exudyn's explicit
+    Runge-Kutta solvers (``RK44``) cannot be used: they accept no joints (only
+    coordinate constraints to the ground), and a closed-loop linkage needs them.
+    Generalized-alpha is second order, so at the same step its angular velocity is
+    further from the exact solution than RK4's; exudyn's default spectral radius 0.9
+    (and 1.0) lose Newton convergence near 1.39 s at h = 2 ms, hence 0.6.
+
+    Parameters
+    ----------
+    mech : mechsolve.model.Mechanism
+        The loaded model (e.g. ``motor-linkage.yaml``).
+    h : float, optional
+        Time step, s; the model's ``simulate.step`` by default.
+    loads : {"native", "user functions"}
+        How the motor torque and the slider's damper enter (see :func:`_exudyn_machine`).
+    spectral_radius : float
+        Generalized-alpha's spectral radius at infinity.
+    repeats : int
+        Timed solves; the time reported is their median (model building excluded).
+
+    Returns
+    -------
+    dict or None
+        ``None`` if exudyn is not importable; otherwise ``name``, ``t`` (s), ``omega``
+        (the driver's angular velocity at every step, rad/s), ``max_omega``,
+        ``t_max_omega``, ``seconds`` (median solve time), ``import_seconds``, ``h``,
+        ``steps`` and ``note``; or ``{"name", "error"}`` on failure.
+    """
+    exu = _import("exudyn")
+    if exu is None:
+        return None
+    name = f"exudyn {_version(exu, 'exudyn')}"
+    try:
+        step = float(mech.simulation.step if h is None else h)
+        if not (step > 0 and math.isfinite(step)):
+            raise ValueError(f"h must be a positive time step, got {h!r}")
+        pose = _start_pose(mech)
+
+        def build() -> dict[str, Any]:
+            return _exudyn_machine(exu, mech, pose, step, loads, spectral_radius)
+
+        def solve(model: dict[str, Any]) -> Any:
+            return model["mbs"].SolveDynamic(model["settings"])
+
+        times = []
+        model = success = None
+        for _ in range(max(1, int(repeats))):
+            model = build()
+            start = time.perf_counter()
+            success = solve(model)
+            times.append(time.perf_counter() - start)
+        if success is False:
+            raise RuntimeError("exudyn SolveDynamic reported failure")
+        data = np.asarray(model["mbs"].GetSensorStoredData(model["sensor"]))
+        t, omega = data[:, 0], model["sign"] * data[:, -1]
+        steps = model["steps"]
+        if len(t) != steps + 1 or not np.allclose(t, step * np.arange(steps + 1), atol=1e-9):
+            raise RuntimeError(f"exudyn stored {len(t)} sensor rows, expected {steps + 1}")
+        k = int(np.argmax(omega))
+        how = (
+            "motor and slider damper as compiled elements (constant torque + coordinate dampers)"
+            if loads == "native"
+            else "motor law and slider damper as Python load user functions"
+        )
+        note = (
+            f"{len(mech.links)} RigidBody2D, JointRevolute2D per pin, JointPrismatic2D "
+            f"(rotation constrained) for the slider, gravity; {how}; SolveDynamic "
+            f"generalized-alpha index 3, rho_inf {spectral_radius:g}, full Newton, "
+            f"{steps} steps of {step:g} s (explicit RK44 takes no joints)"
+        )
+        return {
+            "name": name,
+            "t": t.copy(),
+            "omega": omega.copy(),
+            "max_omega": float(omega[k]),
+            "t_max_omega": float(t[k]),
+            "seconds": statistics.median(times),
+            "import_seconds": _import_seconds("exudyn"),
+            "h": step,
+            "steps": steps,
             "note": note,
         }
     except Exception as exc:
