@@ -187,3 +187,90 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
     assert p.stdout.splitlines()[0].startswith(str(site))  # the installed copy ran
     assert "skipped" not in p.stdout
     assert "ratio mechsolve (whole call) / closed form:" in _section(p.stdout, "crane-kinematics")
+
+
+# --- exudyn's simulation of seed 004's start-up --------------------------------------------
+
+needs_exudyn = pytest.mark.skipif(
+    importlib.util.find_spec("exudyn") is None, reason="exudyn is not installed"
+)
+
+# seed 004 (problems.md): max omega printed for RK4 at h = 2 ms, and RK4 at h/4 (0.5 ms),
+# which is within 0.005 rad/s of the converged value (RK4's error falls as h^4)
+SEED004_MAX_OMEGA = 69.3093
+SEED004_MAX_OMEGA_FINE = 69.385
+
+
+@pytest.fixture(scope="module")
+def motor_linkage():
+    from mechsolve import bench
+
+    return bench.load_case("motor-linkage.yaml")
+
+
+@needs_exudyn
+def test_exudyn_seed004_agrees_on_max_omega(motor_linkage):
+    """exudyn's multibody model of the same machine (bodies, joints, motor, damper and
+    gravity translated from the YAML model) reaches the seed's max omega up to its
+    second-order integrator's error, and that difference shrinks with the step as h^2:
+    a model mismatch (a wrong mass, inertia, load or joint) would not shrink."""
+    from mechsolve.bench import peers
+
+    coarse = peers.exudyn_seed004(motor_linkage, repeats=1)
+    fine = peers.exudyn_seed004(motor_linkage, h=0.0005, repeats=1)
+    assert coarse is not None and "error" not in coarse, coarse
+    assert fine is not None and "error" not in fine, fine
+    assert coarse["steps"] == 1100 and len(coarse["omega"]) == 1101
+    # h = 2 ms: generalized-alpha's error is 1.3 % here (RK4's 0.1 %)
+    assert coarse["max_omega"] == pytest.approx(SEED004_MAX_OMEGA, rel=0.015)
+    # h = 0.5 ms: within 0.15 % of the converged value, and at least 8 times closer than
+    # at 2 ms (second order: 16)
+    err_coarse = abs(coarse["max_omega"] - SEED004_MAX_OMEGA_FINE)
+    err_fine = abs(fine["max_omega"] - SEED004_MAX_OMEGA_FINE)
+    assert err_fine < 1.5e-3 * SEED004_MAX_OMEGA_FINE
+    assert err_fine < err_coarse / 8
+    assert coarse["omega"][0] == 0.0 and coarse["seconds"] > 0
+
+
+@needs_exudyn
+def test_exudyn_seed004_user_function_motor_law(motor_linkage):
+    """The motor law M0 - nu0 omega evaluated by a Python load user function at the
+    crank's angular velocity gives the same motion as exudyn's compiled torque plus
+    rotational damper (and the slider's damper both ways)."""
+    from mechsolve.bench import peers
+
+    a = peers.exudyn_seed004(motor_linkage, loads="native", repeats=1)
+    b = peers.exudyn_seed004(motor_linkage, loads="user functions", repeats=1)
+    assert "error" not in a and "error" not in b, (a, b)
+    assert max(abs(a["omega"] - b["omega"])) < 1e-5  # rad/s, Newton's tolerance
+
+
+@needs_exudyn
+def test_exudyn_seed004_reports_errors_as_dicts(motor_linkage):
+    import copy
+
+    from mechsolve.bench import peers
+
+    mech = copy.deepcopy(motor_linkage)
+    mech.motor.kind = "table"
+    out = peers.exudyn_seed004(mech, loads="native", repeats=1)
+    assert "linear motor" in out["error"]
+    assert "error" in peers.exudyn_seed004(motor_linkage, h=-1.0, repeats=1)
+
+
+def test_exudyn_seed004_without_exudyn(monkeypatch, motor_linkage):
+    from mechsolve.bench import peers
+
+    monkeypatch.setattr(peers, "_import", lambda name: None)
+    assert peers.exudyn_seed004(motor_linkage) is None
+
+
+@needs_exudyn
+def test_startup_case_compares_exudyn(quick):
+    sec = _section(quick[0].stdout, "startup-dynamics")
+    m = re.search(r"ratio exudyn \(h = 2 ms, compiled loads\) / mechsolve simulate: ([0-9.]+)", sec)
+    assert m and float(m.group(1)) > 0, sec
+    rows = [r for r in sec.splitlines() if r.strip().startswith("exudyn")]
+    assert len(rows) == 3, sec
+    err = float(re.search(r"\d\.\de[+-]\d\d", rows[0]).group(0))
+    assert err < 0.015, sec
