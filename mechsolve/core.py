@@ -252,6 +252,6 @@ def _take(sol: Solution, idx: np.ndarray) -> Solution:
         sol.has_acceleration,
         events,
         sol.flips,
-        [j for j, k in enumerate(idx) if int(k) in by_limit],
-        [j for j, k in enumerate(idx) if int(k) in undetermined],
+        np.flatnonzero(np.isin(idx, list(by_limit))).tolist() if by_limit else [],
+        np.flatnonzero(np.isin(idx, list(undetermined))).tolist() if undetermined else [],
     )

@@ -96,21 +96,33 @@ class ReducedModel:
         turns fully. Then ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2``
         exactly (gravity and springs in a; dampers and drag in b; the kinetic term
         1/2 J' omega^2 in c), and J, a, b, c are periodic cubic splines through the grid
-        (interpolation error about 1e-9 of their size at 0.05 degrees). Loads that switch
-        on and off (``when:``) make E0 jump where they switch, which a spline would smear
-        over a grid cell (a 0.5 % error in the shaper's speed): such a machine is solved
-        at every integrator stage instead. Returns whether it tabulated."""
-        if not self.full_turn or any(ld.when is not None for ld in self.mech.loads):
+        (interpolation error about 1e-9 of their size at 0.05 degrees).
+
+        A load that switches on and off (``when:``) adds its own ``a_k + b_k omega +
+        c_k omega^2`` (tabulated with the load always on, so smooth) times where it acts.
+        Where it acts is a set of angle intervals, one set for each sense of motion,
+        whose ends are located exactly (bisection of the condition to rounding), so the
+        jump is where the load switches, not smeared over a grid cell. This holds when the
+        condition depends on the angle and the sense of motion only (a stroke fraction,
+        the sign of a velocity); a condition that reads the size of a speed or an
+        acceleration is solved at every integrator stage instead. Returns whether it
+        tabulated."""
+        if not self.full_turn:
             return False
         from scipy.interpolate import CubicSpline
 
+        conditional = [ld for ld in self.mech.loads if ld.when is not None]
         d = self.mech.driver.direction
         x = np.arange(0.0, 2 * math.pi, step)
         n = len(x)
-        # columns: (speed, acceleration); the last three speeds fit a + b w + c w^2
-        cols = [(0.0, 0.0), (0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
+        masks = self._condition_intervals(x, conditional)
+        if masks is None:
+            return False
+        # columns: (speed, acceleration). J = E(0, 1) - E(0, 0); the speeds 0, 1, -1 at
+        # zero acceleration fit E0 = a + b w + c w^2
+        cols = [(0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
 
-        def efforts(xx):
+        def efforts(xx, on=None):
             m = len(xx)
             sol = core.states(
                 self.an,
@@ -118,7 +130,8 @@ class ReducedModel:
                 np.repeat([c[0] for c in cols], m),
                 np.repeat([c[1] for c in cols], m),
             )
-            f = core.forces(self.an, sol, self.extremes)
+            with self._loads_forced(conditional, on):
+                f = core.forces(self.an, sol, self.extremes)
             E = f.effort.reshape(len(cols), m)
             ind = (
                 sol.indicator.min(axis=0).reshape(len(cols), m).min(axis=0)
@@ -127,42 +140,144 @@ class ReducedModel:
             )
             return E, ind
 
-        E, ind = efforts(x)
-        # within rounding of a singular position the force analysis is not determined
-        good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
-        if not good.all():
-            # singular grid points (a bifurcation: the reactions are indeterminate there,
-            # the effort with them) are few; J and E0 are smooth through them on the
-            # followed motion, so they are taken as the mean of the two sides
-            if good.sum() < 0.99 * n:
-                return False
-            bad = np.flatnonzero(~good)
-            h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
-            Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h])
-            if not np.all(np.isfinite(Eb)):
-                return False
-            E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
-        J = E[1] - E[0]
+        def tabulated(on=None):
+            E, ind = efforts(x, on)
+            # within rounding of a singular position the force analysis is not determined
+            good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
+            if not good.all():
+                # singular grid points (a bifurcation: the reactions are indeterminate
+                # there, the effort with them) are few; J and E0 are smooth through them
+                # on the followed motion, so they are taken as the mean of the two sides
+                if good.sum() < 0.99 * n:
+                    return None
+                bad = np.flatnonzero(~good)
+                h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
+                Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h], on)
+                if not np.all(np.isfinite(Eb)):
+                    return None
+                E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
+            return E
+
+        E = tabulated()  # the conditional loads off
+        if E is None:
+            return False
+        J = E[0] - E[1]
         _check_inertia(self, J, self.u0 + d * x)
-        w = np.array([c[0] for c in cols[2:]])
-        coef = np.linalg.solve(np.vander(w, 3, increasing=True), E[2:])  # a, b, c
-        a, b, c = coef
-        xs = np.r_[x, 2 * math.pi]
-        self._table = CubicSpline(
-            xs,
-            np.c_[np.r_[J, J[0]], np.r_[a, a[0]], np.r_[b, b[0]], np.r_[c, c[0]]],
+        vander = np.vander(np.array([c[0] for c in cols[1:]]), 3, increasing=True)
+        table = [J, *np.linalg.solve(vander, E[1:])]  # J, a, b, c
+        for load in conditional:  # each alone and always on, less the machine without it
+            Ek = tabulated(load)
+            if Ek is None:
+                return False
+            table += list(np.linalg.solve(vander, Ek[1:] - E[1:]))
+        spline = CubicSpline(
+            np.r_[x, 2 * math.pi],
+            np.column_stack([np.r_[v, v[0]] for v in table]),
             bc_type="periodic",
         )
+        self._table = _Table(spline, step)
+        # J is a sum of squares: where it vanishes (between grid points) it touches zero,
+        # so its minima are looked for on the curve, not only at the grid
+        Jc = CubicSpline(np.r_[x, 2 * math.pi], np.r_[J, J[0]], bc_type="periodic")
+        xm = np.r_[x, Jc.derivative().roots(extrapolate=False)]
+        _check_inertia(self, Jc(xm), self.u0 + d * xm, rel=1e-8)
+        self._masks = masks
         return True
+
+    def _loads_forced(self, conditional, on):
+        """A context in which the conditional loads are left out, except ``on`` (if
+        given), which acts everywhere."""
+        import contextlib
+
+        mech = self.an.mech
+
+        @contextlib.contextmanager
+        def forced():
+            saved = mech.loads
+            keep = [ld for ld in saved if ld.when is None]
+            if on is not None:
+                keep.append(dataclasses.replace(on, when=None))
+            mech.loads = keep
+            try:
+                yield
+            finally:
+                mech.loads = saved
+
+        return forced() if conditional else contextlib.nullcontext()
+
+    def _condition_intervals(self, x: np.ndarray, conditional) -> dict | None:
+        """Where each conditional load acts, for each sense of motion ``s`` (+1: the
+        driver coordinate increasing): ``{(name, s): (on_at_0, switch_angles)}`` with the
+        angles measured from the start along the driver's direction, in [0, 2 pi). None
+        when a condition depends on more than the angle and the sense of motion."""
+        from .solution import StateView
+        from .solvers.forces import stroke_function
+
+        if not conditional:
+            return {}
+        d = self.mech.driver.direction
+        n = len(x)
+
+        def acts(xx, speed, acc):
+            sol = core.states(self.an, self.u0 + d * xx, speed, acc)
+            view = StateView(self.an, sol.state)
+            # stroke(q) replays the reference sweep's extremes, in the loads' order
+            funcs = {"stroke": stroke_function(list(self.extremes), True)}
+            out = []
+            for ld in conditional:
+                with np.errstate(invalid="ignore"):
+                    val = ld.when.evaluate(view, funcs)
+                out.append(np.broadcast_to(np.asarray(val, bool), (len(xx),)))
+            return out
+
+        out = {}
+        for s in (1.0, -1.0):
+            base = acts(x, s, 0.0)
+            faster, accelerating = acts(x, 2 * s, 0.0), acts(x, s, 3.0 * s)
+            for k, (ld, m0, m1, m2) in enumerate(zip(conditional, base, faster, accelerating)):
+                if not (np.array_equal(m0, m1) and np.array_equal(m0, m2)):
+                    return None
+                switches = []
+                for i in np.flatnonzero(m0 != np.roll(m0, -1)):  # switches in (x_i, x_i+1]
+                    lo, hi = float(x[i]), float(x[i + 1]) if i + 1 < n else 2 * math.pi
+                    for _ in range(60):
+                        mid = 0.5 * (lo + hi)
+                        if mid in (lo, hi):
+                            break
+                        now = acts(np.array([mid]), s, 0.0)[k]
+                        if bool(now[0]) == bool(m0[i]):
+                            lo = mid
+                        else:
+                            hi = mid
+                    switches.append(hi)  # the first angle where the load has switched
+                out[ld.name, s] = (bool(m0[0]), np.array(sorted(switches)))
+        return out
+
+    def _acting(self, x: float, omega: float) -> list[bool]:
+        """Whether each conditional load acts at angle ``x`` from the start (along the
+        driver's direction) with driver speed ``omega`` (not zero)."""
+        s = 1.0 if omega > 0 else -1.0
+        out = []
+        for (_, sign), (on0, sw) in self._masks.items():
+            if sign == s:
+                out.append(on0 ^ bool(np.searchsorted(sw, x, side="right") % 2))
+        return out
 
     def terms(self, phi: float, omega: float, t: float = 0.0):
         """``(J, E0)``: the reduced inertia and the effort at zero driver acceleration."""
         self.nfev += 1
         tab = getattr(self, "_table", None)
-        if tab is not None:
+        if tab is not None and (omega != 0.0 or not self._masks):
             d = self.mech.driver.direction
-            J, a, b, c = tab((d * (phi - self.u0)) % (2 * math.pi))
-            return float(J), float(a + b * omega + c * omega * omega)
+            x = (d * (phi - self.u0)) % (2 * math.pi)
+            v = tab(x)
+            w2 = omega * omega
+            e0 = v[1] + v[2] * omega + v[3] * w2
+            if self._masks:
+                for k, on in enumerate(self._acting(x, omega)):
+                    if on:
+                        e0 += v[4 + 3 * k] + v[5 + 3 * k] * omega + v[6 + 3 * k] * w2
+            return v[0], e0
         sol = self.states([phi, phi], [omega, omega], [0.0, 1.0])
         sol.t = np.array([t, t])
         f = core.forces(self.an, sol, self.extremes)
@@ -197,11 +312,41 @@ class ReducedModel:
         return ref.u, J, dJ
 
 
-def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray) -> None:
+class _Table:
+    """A periodic cubic spline over [0, 2 pi) on a uniform grid, evaluated at one angle
+    in plain Python (the integrator's inner loop: scipy's general evaluation costs more
+    than the rest of a step)."""
+
+    def __init__(self, spline, step: float) -> None:
+        self.spline = spline  # kept for vectorised use
+        self.step = step
+        self.knots = spline.x.tolist()
+        c = spline.c  # (4, intervals, columns): highest power first
+        self.intervals, self.columns = c.shape[1], c.shape[2]
+        # one flat list (a nested one costs more to build than a whole simulation)
+        self.coef = np.ascontiguousarray(c.transpose(1, 2, 0)).ravel().tolist()
+
+    def __call__(self, x: float) -> list[float]:
+        knots, last = self.knots, self.intervals - 1
+        i = min(int(x / self.step), last)
+        while i > 0 and x < knots[i]:  # rounding of x / step
+            i -= 1
+        while i < last and x >= knots[i + 1]:
+            i += 1
+        h = x - knots[i]
+        c = self.coef
+        k = 4 * self.columns * i
+        return [
+            ((c[j] * h + c[j + 1]) * h + c[j + 2]) * h + c[j + 3]
+            for j in range(k, k + 4 * self.columns, 4)
+        ]
+
+
+def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray, rel: float = 1e-12) -> None:
     """The reduced moment of inertia must stay positive: where it vanishes (a massless
     crank whose massive links stop at a limit position) the motion is not determined."""
     k = int(np.argmin(J))
-    if not J[k] > 1e-12 * max(1.0, float(np.max(np.abs(J)))):
+    if not J[k] > rel * max(1.0, float(np.max(np.abs(J)))):
         raise InputError(
             f"the machine's reduced moment of inertia is {J[k]:.3g} kg*m^2 at "
             f"{model.an.format_u(model._wrap(float(u[k])))}: its acceleration is not "
@@ -254,10 +399,14 @@ def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
     phi0 = model.u0
     w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
 
+    def torque(w, t):
+        if motor.kind == "linear":  # the common law, without numpy's overhead
+            return d * (motor.stall - motor.slope * d * w)
+        return float(drive_torque(motor, d, np.array([w]), t)[0])
+
     def rhs(t, y):
         J, e0 = model.terms(y[0], y[1], t)
-        M = float(drive_torque(motor, d, np.array([y[1]]), t)[0])
-        return np.array([y[1], (M - e0) / J])
+        return np.array([y[1], (torque(y[1], t) - e0) / J])
 
     stop_turns = sim.revolutions
     ts, ys = [0.0], [np.array([phi0, w0])]
@@ -269,11 +418,20 @@ def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
         try:
             for i in range(n):
                 t = i * h
-                k1 = rhs(t, y)
-                k2 = rhs(t + h / 2, y + h / 2 * k1)
-                k3 = rhs(t + h / 2, y + h / 2 * k2)
-                k4 = rhs(t + h, y + h * k3)
-                y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                with np.errstate(over="ignore", invalid="ignore"):  # checked below
+                    k1 = rhs(t, y)
+                    k2 = rhs(t + h / 2, y + h / 2 * k1)
+                    k3 = rhs(t + h / 2, y + h / 2 * k2)
+                    k4 = rhs(t + h, y + h * k3)
+                y_new = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                if not (np.all(np.isfinite(y_new)) and abs(y_new[0] - y[0]) < math.pi):
+                    stopped = (
+                        f"stopped at t = {t:.6g} s: the step {h:.6g} s is too large for "
+                        "this motion (the driver would turn more than half a turn in one "
+                        "step, or its speed grows without bound)"
+                    )
+                    break
+                y = y_new
                 ts.append((i + 1) * h)
                 ys.append(y)
                 if progress is not None and (i + 1) % 50 == 0:

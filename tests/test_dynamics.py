@@ -305,14 +305,12 @@ def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
 
 
 def test_shaper_flywheel_with_its_conditional_cutting_force():
-    """The shaper's cutting force switches with the ram's stroke and direction, so its
-    equation of motion is solved at every stage (not tabulated); the flywheel by the
-    energy method needs the cycle's mean torque (its work per cycle over 2 pi)."""
-    from mechsolve.dynamics import ReducedModel
+    """The shaper's cutting force switches with the ram's stroke and direction; the
+    flywheel by the energy method needs the cycle's mean torque (its work per cycle over
+    2 pi)."""
     from mechsolve.flywheel import size_flywheel
 
     mech = ms.load(MECH / "shaper.yaml")
-    assert not ReducedModel(mech).tabulate()
     mech.simulation.duration = 0.1
     tr = simulate(mech).trajectory
     assert len(tr.t) == 21 and np.all(tr.omega < 0)  # clockwise, never stalling
@@ -320,6 +318,62 @@ def test_shaper_flywheel_with_its_conditional_cutting_force():
     work = ms.solve(ms.load(MECH / "shaper.yaml"), step=np.radians(0.1)).work()
     assert fw.motor_torque == pytest.approx(abs(work) / (2 * math.pi), rel=1e-4)
     assert fw.J_flywheel > 1000
+
+
+def test_switching_loads_are_tabulated_with_exact_switch_angles():
+    """The cutting force acts while the ram moves right (C.vx > 0) between 5 % and 95 % of
+    its stroke. Tabulated, it must switch exactly there: at the switch angles, the ram's
+    position (solved here by the sweep, not by the table) is at 5 % and 95 % of the
+    stroke's ends (the ram's limit positions, from the closed-form stroke 2 l r / d), and
+    the tabulated motion equals the one solved at every stage."""
+    from mechsolve.dynamics import ReducedModel, _with_flywheel
+
+    mech = ms.load(MECH / "shaper.yaml")
+    model = ReducedModel(_with_flywheel(mech))  # the rotor's inertia, as simulate adds it
+    assert model.tabulate()
+    d = mech.driver.direction
+    on0, switches = model._masks["cutting", float(d)]  # the crank's own sense
+    assert not on0 and len(switches) == 2
+    angles = model.u0 + d * switches
+    from mechsolve import core
+
+    an = model.an
+    ram, c = an.system.index["ram"], mech.local_point("ram", "C")
+
+    def ram_x(u):
+        st = core.states(an, u, np.full(len(u), float(d)), np.zeros(len(u))).state
+        return st.point(ram, c)[0]
+
+    xs = ram_x(model.u0 + d * np.radians(np.arange(0.0, 360.0, 0.01)))
+    lo, hi = xs.min(), xs.max()
+    assert hi - lo == pytest.approx(2 * 0.540 * 0.110 / 0.380, abs=1e-8)  # the stroke
+    frac = (ram_x(angles) - lo) / (hi - lo)
+    np.testing.assert_allclose(np.sort(frac), [0.05, 0.95], atol=1e-7)
+
+    mech.simulation.duration = 0.4
+    a = simulate(mech).trajectory
+    b = simulate(ms.load(MECH / "shaper.yaml"), exact=True).trajectory
+    b_t = b.t <= 0.4 + 1e-12
+    np.testing.assert_allclose(a.omega, b.omega[b_t], rtol=1e-9)
+    np.testing.assert_allclose(a.eps, b.eps[b_t], rtol=1e-7, atol=1e-6)
+
+
+def test_a_condition_on_the_size_of_a_speed_is_solved_at_every_stage():
+    """Whether ``C.vx > 0.3`` holds depends on how fast the crank turns, not only on its
+    angle: such a load cannot be tabulated over the angle, and the simulation solves it at
+    every stage (the same motion as --exact)."""
+    from mechsolve.dynamics import ReducedModel
+
+    text = (MECH / "shaper.yaml").read_text().replace("when: C.vx > 0 and", "when: C.vx > 0.3 and")
+    assert "C.vx > 0.3" in text
+    mech = ms.loads(text)
+    assert not ReducedModel(mech).tabulate()
+    mech.simulation.duration = 0.05
+    a = simulate(mech).trajectory
+    mech2 = ms.loads(text)
+    mech2.simulation.duration = 0.05
+    b = simulate(mech2, exact=True).trajectory
+    np.testing.assert_array_equal(a.omega, b.omega)
 
 
 def test_a_machine_without_inertia_where_it_stops_is_refused(tmp_path):
