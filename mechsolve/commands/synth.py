@@ -1,0 +1,61 @@
+"""``mechsolve synth PROBLEM``: design a linkage from what it must do."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..clikit import EPILOG, FILE_ARG, QUIET, fail
+
+
+@click.command(epilog=EPILOG)
+@FILE_ARG
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write the chosen design as a mechanism file (for mechsolve run).",
+)
+@click.option(
+    "--pick",
+    type=click.Choice(["transmission", "shortest-crank", "smallest"]),
+    help="Rule choosing among the solutions: the largest minimum transmission angle "
+    "(default, or the file's 'pick'), the shortest input link, the smallest sum of lengths.",
+)
+@QUIET
+def synth(file: Path, output, pick, quiet) -> None:
+    """Solve the synthesis problem in FILE: list every solution, pick one, and with -o
+    write it as a mechanism file, checked by solving it (its limit positions).
+
+    \b
+    Methods (one section of FILE): crank-rocker (extreme distances or time ratio),
+    slider-crank, guide-bar, three-positions (motion generation), window (the input
+    window that makes a point's path straightest). See mechanisms/synth/.
+    """
+    try:
+        from ..synth.problem import confirm, solve_problem
+
+        out = solve_problem(file, pick)
+        if not quiet:
+            click.echo(out.text)
+        if out.yaml is not None:
+            if not quiet:
+                click.echo(confirm(out))
+            if output is not None:
+                try:
+                    output.write_text(out.yaml)
+                except OSError as exc:
+                    from ..errors import InputError
+
+                    raise InputError(
+                        f"-o {output}: cannot write the file: {exc.strerror or exc}"
+                    ) from None
+                if not quiet:
+                    click.echo(f"  wrote {output}")
+        elif output is not None:
+            from ..errors import InputError
+
+            raise InputError("-o: a window problem chooses a range and writes no mechanism")
+    except Exception as exc:  # noqa: BLE001
+        fail(exc)
