@@ -179,7 +179,8 @@ class ReducedModel:
         # J is a sum of squares: where it vanishes (between grid points) it touches zero,
         # so its minima are looked for on the curve, not only at the grid
         Jc = CubicSpline(np.r_[x, 2 * math.pi], np.r_[J, J[0]], bc_type="periodic")
-        xm = np.r_[x, Jc.derivative().roots(extrapolate=False)]
+        roots = Jc.derivative().roots(extrapolate=False)
+        xm = np.r_[x, roots[np.isfinite(roots)]]  # (nan where J is constant on a piece)
         _check_inertia(self, Jc(xm), self.u0 + d * xm, rel=1e-8)
         self._masks = masks
         return True
@@ -392,6 +393,74 @@ def _with_flywheel(mech: Mechanism) -> Mechanism:
     return out
 
 
+class _Turns:
+    """The driver's completed revolutions along the integration, and whether to stop:
+    after ``revolutions`` turns, or when ``steady`` (the mean speed over the last
+    revolution, 2 pi over its time, differs from the one before by at most this
+    fraction)."""
+
+    def __init__(self, phi0: float, revolutions: float | None, steady: float | None) -> None:
+        self.phi0, self.revolutions, self.steady = phi0, revolutions, steady
+        self.times = [0.0]  # when each revolution ended (the start: 0)
+
+    @property
+    def wanted(self) -> bool:
+        return bool(self.revolutions or self.steady)
+
+    def next_angle(self) -> float:
+        """The angle travelled at the end of the next revolution (or of the stop)."""
+        k = len(self.times)
+        if self.revolutions and self.revolutions < k:
+            return 2 * math.pi * self.revolutions
+        return 2 * math.pi * k
+
+    def passed(self, t: float) -> str:
+        """Record that the angle of :meth:`next_angle` was reached at ``t``; the reason
+        to stop, or ''."""
+        self.times.append(t)
+        n = len(self.times) - 1
+        if self.revolutions and n >= self.revolutions:
+            return f"after {self.revolutions:g} revolutions"
+        if self.steady and n >= 2:
+            t0, t1, t2 = self.times[-3:]
+            w_last, w_before = 2 * math.pi / (t2 - t1), 2 * math.pi / (t1 - t0)
+            if abs(w_last - w_before) <= self.steady * abs(w_last):
+                return (
+                    f"steady after {n} revolutions (t = {t:.6g} s): the mean speed over a "
+                    f"revolution changed by {abs(w_last - w_before) / abs(w_last):.2g} "
+                    f"(asked: at most {self.steady:g})"
+                )
+        return ""
+
+
+def _crossing(y0, y1, h: float, phi0: float, turns: _Turns) -> float:
+    """Where in a step (0..1) the travelled angle reaches ``turns.next_angle()``: the root
+    of the cubic Hermite interpolant of the angle through the step's ends (angles and
+    speeds), whose error is O(h^4) like the step's own."""
+    sign = 1.0 if y1[0] >= phi0 else -1.0
+    goal = phi0 + sign * turns.next_angle()
+    p0, p1, m0, m1 = y0[0], y1[0], h * y0[1], h * y1[1]
+    s = min(max((goal - p0) / (p1 - p0), 0.0), 1.0) if p1 != p0 else 0.5
+    for _ in range(30):
+        s2, s3 = s * s, s * s * s
+        f = (
+            (2 * s3 - 3 * s2 + 1) * p0
+            + (s3 - 2 * s2 + s) * m0
+            + (-2 * s3 + 3 * s2) * p1
+            + (s3 - s2) * m1
+            - goal
+        )
+        df = (6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (6 * s - 6 * s2) * p1
+        df += (3 * s2 - 2 * s) * m1
+        if df == 0:
+            break
+        step = f / df
+        s = min(max(s - step, 0.0), 1.0)
+        if abs(step) < 1e-15:
+            break
+    return s
+
+
 def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
     """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start;
     ``progress(k)`` is called as k more steps are done (RK4)."""
@@ -408,7 +477,7 @@ def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
         J, e0 = model.terms(y[0], y[1], t)
         return np.array([y[1], (torque(y[1], t) - e0) / J])
 
-    stop_turns = sim.revolutions
+    turns = _Turns(phi0, sim.revolutions, sim.steady)
     ts, ys = [0.0], [np.array([phi0, w0])]
     stopped = ""
     if sim.method == "rk4":
@@ -436,45 +505,58 @@ def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
                 ys.append(y)
                 if progress is not None and (i + 1) % 50 == 0:
                     progress(50)
-                if stop_turns and abs(y[0] - phi0) >= 2 * math.pi * stop_turns:
-                    stopped = f"after {stop_turns:g} revolutions"
+                while turns.wanted and abs(y[0] - phi0) >= turns.next_angle() and not stopped:
+                    stopped = turns.passed(t + h * _crossing(ys[-2], y, h, phi0, turns))
+                if stopped:
                     break
         except _LeftRange as exc:
             stopped = _left_text(model, exc.phi, ts[-1])
     else:
         from scipy.integrate import solve_ivp
 
-        events = None
-        if stop_turns:
-
-            def turns(t, y):
-                return abs(y[0] - phi0) - 2 * math.pi * stop_turns
-
-            turns.terminal = True
-            events = [turns]
         step = sim.step or sim.duration / 500
         grid = np.minimum(
             np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration
         )
-        try:
-            out = solve_ivp(
-                rhs,
-                (0.0, sim.duration),
-                ys[0],
-                method=sim.method,
-                t_eval=grid,
-                rtol=sim.rtol,
-                atol=sim.atol,
-                events=events,
-            )
-        except _LeftRange as exc:
-            raise InputError(_left_text(model, exc.phi, math.nan)) from None
-        ts = list(out.t)
-        ys = list(out.y.T)
-        if out.status == 1:
-            stopped = f"after {stop_turns:g} revolutions"
-        elif out.status < 0:
-            stopped = f"the integrator stopped: {out.message}"
+        t0, y0 = 0.0, ys[0]
+        while True:  # one revolution at a time when revolutions are counted
+            events = None
+            if turns.wanted:
+                target = turns.next_angle()
+
+                def turn(t, y, target=target):
+                    return abs(y[0] - phi0) - target
+
+                turn.terminal = True
+                events = [turn]
+            try:
+                out = solve_ivp(
+                    rhs,
+                    (t0, sim.duration),
+                    y0,
+                    method=sim.method,
+                    t_eval=grid[grid > t0] if t0 > 0 else grid,
+                    rtol=sim.rtol,
+                    atol=sim.atol,
+                    events=events,
+                )
+            except _LeftRange as exc:
+                raise InputError(_left_text(model, exc.phi, math.nan)) from None
+            start = 1 if t0 == 0 else 0
+            ts += list(out.t[start:])
+            ys += list(out.y.T[start:])
+            if out.status == 1:
+                te, ye = float(out.t_events[0][0]), out.y_events[0][0]
+                stopped = turns.passed(te)
+                if not stopped and te < sim.duration:
+                    t0, y0 = te, ye
+                    continue
+                if stopped and te > ts[-1]:
+                    ts.append(te)
+                    ys.append(ye)
+            elif out.status < 0:
+                stopped = f"the integrator stopped: {out.message}"
+            break
     ts = np.array(ts)
     Y = np.array(ys)
     eps = np.empty(len(ts))

@@ -471,3 +471,52 @@ def test_bad_torque_curves(tmp_path, text, message):
     r = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2, r.output
     assert message in r.output and "Traceback" not in r.output
+
+
+FLYWHEEL_SPINUP = """
+ground: {O: [0, 0]}
+links:
+  disk: {points: {O: [0, 0], A: [0.3, 0]}, mass: 5 kg, com: O, inertia: 0.4 kg m^2}
+joints: {O: [ground, disk]}
+driver: {joint: O, start: 0 deg}
+motor: {stall: 2 N m, slope: 0.05 N m s}
+simulate: {duration: 200 s, step: 0.05 s, method: METHOD, rtol: 1e-11, atol: 1e-11,
+           steady: 1e-4}
+"""
+
+
+@pytest.mark.parametrize("method", ["DOP853", "rk4"])
+def test_stop_when_steady_against_the_closed_form_spin_up(method):
+    """A disk of inertia J spun up by M = M0 - nu omega: omega = (M0/nu)(1 - exp(-nu t/J)),
+    so the angle is (M0/nu)(t - (J/nu)(1 - exp(-nu t/J))). The revolutions end where it
+    reaches 2 pi k (solved here by brentq); the simulation must stop at the first
+    revolution whose mean speed differs from the one before by at most 1e-4, at its time."""
+    from scipy.optimize import brentq
+
+    M0, nu, J = 2.0, 0.05, 0.4
+    w_inf = M0 / nu
+
+    def angle(t):
+        return w_inf * (t - J / nu * (1 - math.exp(-nu * t / J)))
+
+    times = [0.0]
+    while True:
+        k = len(times)
+        times.append(brentq(lambda t, k=k: angle(t) - 2 * math.pi * k, times[-1], 1e4, xtol=1e-14))
+        if k >= 2:
+            w1 = 2 * math.pi / (times[-1] - times[-2])
+            w0 = 2 * math.pi / (times[-2] - times[-3])
+            if abs(w1 - w0) <= 1e-4 * w1:
+                break
+    tr = simulate(ms.loads(FLYWHEEL_SPINUP.replace("METHOD", method))).trajectory
+    assert tr.stopped.startswith(f"steady after {len(times) - 1} revolutions"), tr.stopped
+    assert tr.t[-1] == pytest.approx(times[-1], abs=0.05 if method == "rk4" else 1e-6)
+    assert abs(tr.phi[-1] - tr.phi[0]) >= 2 * math.pi * (len(times) - 1) - 1e-6
+
+
+def test_bad_steady_tolerance(tmp_path):
+    text = FLYWHEEL_SPINUP.replace("METHOD", "rk4").replace("steady: 1e-4", "steady: fast")
+    f = tmp_path / "spin.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "spin.yaml:9: simulate.steady" in r.output, r.output

@@ -68,4 +68,5 @@ class Simulation:
     atol: float = 1e-10
     speed0: float = 0.0  # the driver's speed at the start (rad/s or m/s)
     revolutions: float | None = None  # stop after this many turns of the driver
+    steady: float | None = None  # stop when a revolution's mean speed changes by this fraction
     where: tuple = field(default_factory=tuple)

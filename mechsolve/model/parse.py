@@ -1248,7 +1248,7 @@ def read_simulation(r: Reader, value: Any, linear: bool):
     m = r.mapping(
         value,
         path,
-        ("duration", "step", "method", "rtol", "atol", "from", "revolutions"),
+        ("duration", "step", "method", "rtol", "atol", "from", "revolutions", "steady"),
         "'simulate'",
         ("duration",),
     )
@@ -1286,6 +1286,20 @@ def read_simulation(r: Reader, value: Any, linear: bool):
         )
     if "revolutions" in m:
         sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
+    if "steady" in m:
+        x = m["steady"]
+        if isinstance(x, str):
+            try:
+                x = float(x.strip().rstrip("%")) / (100 if x.strip().endswith("%") else 1)
+            except ValueError:
+                pass
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
+            raise r.fail(
+                path + ("steady",),
+                "steady: the largest change of a revolution's mean speed from the one "
+                "before, as a fraction between 0 and 1 (e.g. 1e-4 or 0.01 %)",
+            )
+        sim.steady = float(x)
     return sim
 
 
