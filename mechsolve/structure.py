@@ -265,6 +265,12 @@ def _structure_error(system, free, extra, row_con) -> StructureError:
                 "the motion of " + ", ".join(repr(b) for b in bodies) + " is not determined "
                 "(a joint or link is missing?)"
             )
+            if getattr(mech, "motor", None) is not None:
+                msg += (
+                    "; mechsolve simulate handles machines of one degree of freedom (the "
+                    "motor's driver moves every link); a free, spring-loaded link is not "
+                    "supported yet"
+                )
         else:
             msg = (
                 "the motion of " + ", ".join(repr(b) for b in bodies) + " is not determined "

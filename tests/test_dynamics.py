@@ -520,3 +520,22 @@ def test_bad_steady_tolerance(tmp_path):
     f.write_text(text)
     r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o")])
     assert r.exit_code == 2 and "spin.yaml:9: simulate.steady" in r.output, r.output
+
+
+def test_a_machine_of_two_degrees_of_freedom_is_refused_saying_what_is_supported(tmp_path):
+    """A crank with a free arm hanging from it: two independent motions, one motor."""
+    f = tmp_path / "two.yaml"
+    f.write_text(
+        "ground: {O: [0, 0]}\n"
+        "links:\n"
+        "  crank: {points: {O: [0, 0], A: [0.2, 0]}, mass: 1 kg, uniform_bar: [O, A]}\n"
+        "  arm: {points: {A: [0, 0], B: [0.5, 0]}, mass: 1 kg, uniform_bar: [A, B]}\n"
+        "joints: {O: [ground, crank], A: [crank, arm]}\n"
+        "driver: {joint: O, start: 0 deg}\n"
+        "motor: {stall: 2 N m, slope: 0.05 N m s}\n"
+        "simulate: {duration: 1 s, step: 0.01 s}\n"
+    )
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 2, r.output
+    assert "2 degrees of freedom" in r.output and "'arm'" in r.output
+    assert "one degree of freedom" in r.output and "Traceback" not in r.output
