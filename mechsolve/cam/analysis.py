@@ -248,7 +248,8 @@ def _summary(res: CamResult) -> str:
         i = int(np.argmin(prof.rho_profile))
         lines.append(
             f"  radius of curvature of the profile: smallest {prof.rho_profile[i] * mm:.3f} mm "
-            f"at {math.degrees(prof.theta[i]):.1f} deg (r0 + s + s'' for a flat face)"
+            f"at {math.degrees(prof.theta[i]):.1f} deg "
+            + ("(h + d2h/dmu2 of the face's envelope)" if osc else "(r0 + s + s'')")
         )
     und = res.undercut_ranges()
     margin = f" (margin {allow.rho_min * mm:g} mm)" if allow.rho_min else ""
