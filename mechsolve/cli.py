@@ -29,6 +29,7 @@ from .clikit import interrupt_on_sigterm as _interrupt_on_sigterm
 from .clikit import progress_bar as _progress_bar
 from .clikit import stream_above as _stream_above
 from .clikit import write_error as _write_error
+from .commands.cam import cam
 from .commands.synth import synth
 from .errors import InputError
 
@@ -46,6 +47,8 @@ def main() -> None:
                                              a motor-driven start-up (forward dynamics)
     mechsolve flywheel mechanisms/shaper.yaml --delta 1/40
                                              size a flywheel by the energy method
+    mechsolve cam mechanisms/shaper-cam.yaml design and check a cam: profile, pressure
+                                             angle, curvature, DXF
     mechsolve synth mechanisms/synth/crane-crank-rocker.yaml -o design.yaml
                                              design a linkage (crank-rocker, slider-crank,
                                              guide bar, three positions, input window)
@@ -367,6 +370,7 @@ def bench(quick, cases, plot) -> None:
 
 
 # commands with a module of their own (mechsolve/commands/)
+main.add_command(cam)
 main.add_command(synth)
 
 if __name__ == "__main__":  # pragma: no cover

@@ -246,7 +246,26 @@ _FUNCS: dict[str, tuple[int, Callable[..., Any]]] = {
     "min": (2, np.minimum),
     "max": (2, np.maximum),
 }
-CONTEXT_FUNCS = {"stroke": 1}
+# functions that only some contexts provide, with their number of arguments: stroke() in
+# load conditions; the reductions over a run (one argument: min, max; mean, rms, range;
+# at(q, u): q at a driver value) in requirements
+CONTEXT_FUNCS = {"stroke": 1, "min": 1, "max": 1, "mean": 1, "rms": 1, "range": 1, "at": 2}
+REDUCTIONS = ("min", "max", "mean", "rms", "range", "at")
+
+
+def _builtin(func: str, nargs: int) -> bool:
+    """Whether ``func`` with ``nargs`` arguments is an element-wise built-in function."""
+    return func in _FUNCS and _FUNCS[func][0] == nargs
+
+
+def _arities(func: str) -> list[int]:
+    out = set()
+    if func in _FUNCS:
+        out.add(_FUNCS[func][0])
+    if func in CONTEXT_FUNCS:
+        out.add(CONTEXT_FUNCS[func])
+    return sorted(out)
+
 
 # binding power of the infix operators, lowest first; prefix 'not' binds at 3, '-' at 7
 _PREC = {"or": 1, "and": 2, **dict.fromkeys(_CMP, 4), "+": 5, "-": 5, "*": 6, "/": 6, "^": 8}
@@ -419,10 +438,47 @@ class _Parser:
 
     def call(self, tok: Token, args: tuple[Any, ...]) -> Call:
         func = tok.text
-        want = _FUNCS[func][0] if func in _FUNCS else CONTEXT_FUNCS[func]
-        if len(args) != want:
-            raise self.fail(f"{func}() takes {want} argument(s), got {len(args)}", tok)
+        want = _arities(func)
+        if len(args) not in want:
+            counts = " or ".join(str(w) for w in sorted(want))
+            raise self.fail(f"{func}() takes {counts} argument(s), got {len(args)}", tok)
         return Call(func, args)
+
+    def unit_run(self) -> tuple[str, int]:
+        """The longest unit after a number, as textbooks write it (``kN m``, ``kg m^2``,
+        ``m/s^2``, ``N*m``), from the current token; ``(text, index after it)``. When no
+        longer run is a unit, the single name (whose error the caller reports)."""
+        toks = self.tokens
+
+        def unit_name(k: int) -> bool:
+            t = toks[k]
+            return (
+                t.kind == "name"
+                and t.text not in _KEYWORDS
+                and t.text not in self.variables
+                and toks[min(k + 1, len(toks) - 1)].text not in (".", "(")
+            )
+
+        j = self.i
+        text = toks[j].text
+        best = (text, j + 1)
+        j += 1
+        while True:
+            t = toks[j]
+            if t.text == "^" and toks[j + 1].kind == "num":
+                text, j = text + "^" + toks[j + 1].text, j + 2
+            elif t.text in ("*", "/") and unit_name(j + 1):
+                text, j = text + t.text + toks[j + 1].text, j + 2
+            elif unit_name(j):
+                text, j = text + " " + t.text, j + 1
+            else:
+                break
+            try:
+                parse_unit(text)
+            except UnitError:
+                continue
+            best = (text, j)
+        return best
 
     def operand(self, logic_ok: bool, push: Callable[[_Frame], None]) -> Any:
         """Read a number, a quantity or a side test; or open a function call (``None``)."""
@@ -444,12 +500,13 @@ class _Parser:
                         f"'{tok.text} * {unit_tok.text}')",
                         unit_tok,
                     )
-                shown += " " + unit_tok.text
-                self.i += 1
+                text, end = self.unit_run()
+                shown += " " + text
                 try:
-                    value *= parse_unit(unit_tok.text).factor
+                    value *= parse_unit(text).factor
                 except UnitError as exc:
                     raise self.fail(str(exc), unit_tok) from None
+                self.i = end
             if not math.isfinite(value):
                 if len(shown) > 30:
                     shown = shown[:20] + "..."
@@ -473,9 +530,8 @@ class _Parser:
                 push(_Frame("call", tok=tok))
                 self.i += 1
                 if self.tok.text == ")":
-                    raise self.fail(
-                        f"{func}() takes {_FUNCS.get(func, (1,))[0]} argument(s), got 0", tok
-                    )
+                    counts = " or ".join(str(w) for w in _arities(func))
+                    raise self.fail(f"{func}() takes {counts} argument(s), got 0", tok)
                 return None
             if nxt.text == ".":
                 self.i += 1
@@ -553,6 +609,19 @@ class Expression:
     def uses(self, func: str) -> bool:
         """True if the expression calls the function ``func``."""
         return any(isinstance(n, Call) and n.func == func for n in walk(self.tree))
+
+    def reductions(self) -> list[str]:
+        """The reductions over a run it calls (``max(q)``, ``mean(q)``, ``at(q, u)``...;
+        not the element-wise ``max(a, b)``)."""
+        return sorted(
+            {
+                n.func
+                for n in walk(self.tree)
+                if isinstance(n, Call)
+                and n.func in REDUCTIONS
+                and not _builtin(n.func, len(n.args))
+            }
+        )
 
     def evaluate(self, ctx: Context, functions: dict[str, Callable[..., Any]] | None = None) -> Any:
         """Evaluate over the arrays the context provides (element-wise)."""
@@ -719,7 +788,7 @@ def _combine(n: Any, vals: list[Any], funcs: dict[str, Callable[..., Any]]) -> A
             out = f(out, v)
         return out
     if isinstance(n, Call):
-        if n.func in _FUNCS:
+        if _builtin(n.func, len(vals)):
             return _FUNCS[n.func][1](*vals)
         if n.func in funcs:
             return funcs[n.func](*vals)
@@ -889,7 +958,7 @@ def _check_differentiable(n: Any, var: str, text: str) -> None:
             f"{where} contains a condition ({what}): it is true or false and has no "
             f"derivative; a law must give a number for each {var}"
         )
-    if isinstance(n, Call) and n.func not in _FUNCS:
+    if isinstance(n, Call) and not _builtin(n.func, len(n.args)):
         raise ExprError(f"{n.func}() cannot be differentiated (in {where})")
 
 

@@ -13,7 +13,13 @@ from mechsolve.cli import main
 
 from conftest import MECH
 
-EXAMPLES = sorted(p.name for p in MECH.glob("*.yaml"))
+# the mechanisms (a cam design, mechsolve cam's, has no links)
+EXAMPLES = sorted(p.name for p in MECH.glob("*.yaml") if "\nlinks:" in p.read_text())
+
+
+def test_a_cam_file_given_to_run_says_what_it_is(tmp_path):
+    r = CliRunner().invoke(main, ["run", str(MECH / "shaper-cam.yaml"), "-o", str(tmp_path)])
+    assert r.exit_code == 2 and "it is a cam design (mechsolve cam FILE)" in r.output, r.output
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

@@ -317,6 +317,7 @@ class Mechanism:
     motor: object | None = None
     flywheel: object | None = None
     simulation: object | None = None
+    requirements: list = field(default_factory=list)  # mechsolve.requirements.Requirement
 
     # -- lookup --------------------------------------------------------------------
     def link(self, name: str) -> Link:

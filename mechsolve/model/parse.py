@@ -57,6 +57,9 @@ TOP_KEYS = (
     "motor",
     "flywheel",
     "simulate",
+    "requirements",
+    "study",  # a design study (mechsolve sweep); not read by run
+    "cam",  # a cam design (mechsolve cam); not read by run
 )
 
 METHODS = ("auto", "newton", "split-newton")  # solver.method and --method
@@ -152,9 +155,16 @@ class Reader:
 
     def expression(self, value: Any, path: KeyPath) -> Expression:
         try:
-            return Expression(value)
+            e = Expression(value)
         except ExprError as exc:
             raise self.fail(path, f"cannot read the condition: {exc}") from None
+        if e.reductions():
+            raise self.fail(
+                path,
+                f"{e.reductions()[0]}() reduces a whole run to one number: it belongs in "
+                "'requirements', not in a condition that holds position by position",
+            )
+        return e
 
     def flag(self, value: Any, path: KeyPath) -> bool:
         if not isinstance(value, bool):
@@ -1129,7 +1139,19 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         read_units(r, data["units"])
     for key in ("links", "joints"):
         if key not in data:
-            raise src.error((), f"the file has no '{key}' section")
+            other = [
+                f"a {what} (mechsolve {cmd} FILE)"
+                for sec, what, cmd in (
+                    ("cam", "cam design", "cam"),
+                    ("torque", "torque curve", "flywheel"),
+                )
+                if sec in data
+            ]
+            raise src.error(
+                (),
+                f"the file has no '{key}' section"
+                + (f": it is {other[0]}, not a mechanism" if other else ""),
+            )
     gravity = read_gravity(r, data["gravity"]) if "gravity" in data else None
     g = math.hypot(*gravity) if gravity is not None and any(gravity) else STANDARD_G
     ground = read_ground(r, data.get("ground"))
@@ -1168,7 +1190,30 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         mech.flywheel = read_flywheel(r, data["flywheel"], links)
     if "simulate" in data:
         mech.simulation = read_simulation(r, data["simulate"], linear)
+    if "requirements" in data:
+        mech.requirements = read_requirements(r, data["requirements"])
     return mech.validate()
+
+
+def read_requirements(r: Reader, value: Any) -> list:
+    """``requirements: {name: "max(abs(input.torque)) <= 300 kN m", ...}`` (see
+    :mod:`mechsolve.requirements`)."""
+    from ..requirements import parse_requirement
+
+    path: KeyPath = ("requirements",)
+    if not isinstance(value, dict) or not value:
+        raise r.fail(
+            path,
+            "'requirements' maps names to checks, e.g. "
+            "{peak torque: 'max(abs(input.torque)) <= 300 kN m'}",
+        )
+    out = []
+    for name, text in value.items():
+        try:
+            out.append(parse_requirement(str(name), text))
+        except ExprError as exc:
+            raise r.fail(path + (name,), f"cannot read the requirement: {exc}") from None
+    return out
 
 
 def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
