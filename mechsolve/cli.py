@@ -31,7 +31,7 @@ from .clikit import stream_above as _stream_above
 from .clikit import write_error as _write_error
 from .commands.cam import cam
 from .commands.synth import synth
-from .errors import InputError
+from .errors import EXIT_REQUIREMENTS, InputError
 
 
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
@@ -79,9 +79,14 @@ def main() -> None:
     "('s=..., v=..., a=...' for a linear driver; alpha defaults to 0); may be repeated. "
     "Prints every quantity and force and writes instants.csv.",
 )
+@click.option(
+    "--junit",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write the file's requirements as a JUnit XML report (one test case each).",
+)
 @QUIET
-def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
-    """Solve the sweep of FILE and write results.csv and plots."""
+def run(file: Path, outdir, step, variant, no_plots, method, at, junit, quiet) -> None:
+    """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
     _interrupt_on_sigterm()
     bar = None
     try:
@@ -126,7 +131,9 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
                 bar = None
             text, failed = summary.text(res), summary.incomplete()
             written = [summary.path]
+            streamed = True
         else:
+            streamed = False
             res = api.solve(mech, step=st, method=method)
             text = res.summary()
             failed = res.incomplete()
@@ -135,12 +142,19 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
             from .writers.plots import write_plots
 
             written += write_plots(res, outdir)
+        verdicts = _requirements(mech, res, junit, streamed=streamed)
         if not quiet:
             click.echo(text)
             click.echo(
                 f"  wrote {len(written)} file(s) to {outdir}/: "
                 + ", ".join(p.name for p in written)
             )
+        if verdicts:
+            from .requirements import verdict_table
+
+            click.echo(verdict_table(verdicts))
+        if any(not v.passed for v in verdicts):
+            sys.exit(EXIT_REQUIREMENTS)
         sys.exit(EXIT_WARNINGS if failed or instants_failed else EXIT_OK)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
@@ -156,6 +170,28 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, quiet) -> None:
         if bar is not None:
             bar.close()
         _fail(exc)
+
+
+def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
+    """Check the file's requirements on the run (and write the JUnit report)."""
+    from .requirements import check_requirements, junit_xml
+
+    if not mech.requirements:
+        if junit is not None:
+            raise InputError(f"--junit {junit}: the file has no 'requirements' section")
+        return []
+    if streamed:
+        raise InputError(
+            "the requirements are checked on a run held in memory; this sweep is long "
+            "enough to be streamed (raise MECHSOLVE_STREAM_ABOVE or use a coarser --step)"
+        )
+    verdicts = check_requirements(mech, res)
+    if junit is not None:
+        try:
+            junit.write_text(junit_xml(verdicts, mech.name, str(mech.source.file or "")))
+        except OSError as exc:
+            raise InputError(f"--junit {junit}: cannot write it: {exc.strerror or exc}") from None
+    return verdicts
 
 
 @main.command(epilog=EPILOG)

@@ -30,6 +30,8 @@ Exit codes:
   2  input error: the file or the command line is wrong
   3  solver failure: the mechanism cannot be assembled or solved
   4  internal error (a bug in mechsolve; please report it)
+  5  a requirement of the file failed (run: its table says which;
+     everything was written)
   130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
 """
 

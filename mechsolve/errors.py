@@ -28,6 +28,7 @@ EXIT_OK = 0
 EXIT_WARNINGS = 1
 EXIT_INPUT = 2
 EXIT_SOLVER = 3
+EXIT_REQUIREMENTS = 5  # the run completed and a requirement of the file failed
 
 
 class MechsolveError(Exception):
