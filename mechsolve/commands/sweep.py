@@ -1,0 +1,272 @@
+"""``mechsolve sweep FILE``: vary numbers of a mechanism file, solve every design, and
+tabulate the figures that decide it (see :mod:`mechsolve.study`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from .. import clikit
+from ..clikit import (
+    EPILOG,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_WARNINGS,
+    FILE_ARG,
+    NO_PLOTS,
+    QUIET,
+    VARIANT,
+    fail,
+    interrupt_on_sigterm,
+    outdir_option,
+    output_folder,
+    progress_wanted,
+    write_error,
+)
+
+EXIT_REQUIREMENTS = getattr(clikit, "EXIT_REQUIREMENTS", 5)
+
+SWEEP_EPILOG = (
+    EPILOG.rstrip("\n")
+    + "\n  (sweep: 1 when some designs are invalid or cannot be solved, their rows\n"
+    "   say why; 5 when the file has requirements and no design meets them all;\n"
+    "   130 keeps the rows finished before Ctrl-C in the table)\n"
+)
+
+
+def _bar(total: int, quiet: bool):
+    if not progress_wanted(quiet):
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        desc="designs",
+        unit=" designs",
+        delay=clikit.PROGRESS_DELAY,
+        leave=False,
+        dynamic_ncols=True,
+        file=sys.stderr,
+    )
+
+
+@click.command(epilog=SWEEP_EPILOG)
+@FILE_ARG
+@click.option(
+    "-p",
+    "--param",
+    "params",
+    multiple=True,
+    metavar="KEYPATH=VALUES",
+    help="Vary a number of FILE (may be repeated), e.g. "
+    '-p "links.crank.points.A[0]=20..30 mm:5" (a range with a count), '
+    '-p "ground.O4[1]=8, 8.1, 8.2" (a list), -p "links.jib.mass=normal(3500 kg, 100 kg)". '
+    "Adds to the file's study.parameters (replacing one of the same key path).",
+)
+@click.option(
+    "--design",
+    help="grid (every combination; the default), one-at-a-time (each parameter on its own, "
+    "the others at the file's value), random or latin-hypercube (--samples designs).",
+)
+@click.option("--samples", type=int, help="Designs of a random or Latin-hypercube study (50).")
+@click.option(
+    "--seed", type=int, help="Seed of the random designs (0): the same designs each time."
+)
+@click.option(
+    "--best",
+    metavar='"min|max EXPR"',
+    help='Pick the best design, e.g. --best "min range(K.y)", and write it as best.yaml.',
+)
+@click.option(
+    "--figure",
+    "figures",
+    multiple=True,
+    metavar="EXPR",
+    help='An extra figure per design, e.g. --figure "range(K.y)" (may be repeated).',
+)
+@click.option("--step", help="Sweep step of every design, e.g. '5 deg' (overrides the file).")
+@VARIANT
+@click.option(
+    "-j", "--jobs", type=int, help="Worker processes (default: all cores; 1: in this process)."
+)
+@click.option(
+    "--dask", "use_dask", is_flag=True, help="Run on a Dask local cluster (--jobs workers)."
+)
+@click.option(
+    "--scheduler",
+    metavar="tcp://HOST:PORT",
+    help="Run on the Dask scheduler at this address (workers must have mechsolve installed).",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["csv", "parquet"]),
+    default="csv",
+    show_default=True,
+    help="The table's format (parquet needs pyarrow).",
+)
+@click.option(
+    "--keep-results",
+    is_flag=True,
+    help="Also write each design's full results CSV to OUTDIR/designs/.",
+)
+@outdir_option("study's table and plots")
+@NO_PLOTS
+@QUIET
+def sweep(
+    file: Path,
+    params,
+    design,
+    samples,
+    seed,
+    best,
+    figures,
+    step,
+    variant,
+    jobs,
+    use_dask,
+    scheduler,
+    fmt,
+    keep_results,
+    outdir,
+    no_plots,
+    quiet,
+) -> None:
+    """Solve every design of a study of FILE and write one row per design to
+    OUTDIR/study.csv: the parameters, a status, and the figures that decide a design
+    (swing or stroke, time ratio, minimum transmission angle, peak driving torque, peak
+    reactions, work per cycle, whether it assembles at every position), with the
+    requirements' values and verdicts when FILE has requirements.
+
+    \b
+    Parameters come from -p options and/or FILE's study section:
+      study:
+        design: grid          # or one-at-a-time, random, latin-hypercube
+        parameters:
+          links.crank.points.A[0]: 20..30 mm:5     # 5 values, ends included
+          ground.O4[1]: 80, 85, 90 mm              # a list
+          links.jib.mass: normal(3500 kg, 100 kg)  # random studies
+        best: min range(K.y)
+    """
+    interrupt_on_sigterm()
+    bar = None
+    try:
+        import numpy as np
+
+        from .. import api
+        from ..errors import InputError
+        from ..model.parse import from_source
+        from ..model.source import load_file
+        from ..study.best import pick_best, write_best
+        from ..study.designs import make_study
+        from ..study.execute import execute, precheck
+        from ..study.table import write_table
+
+        np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        if jobs is not None and jobs < 1:
+            raise InputError(f"--jobs {jobs}: give 1 or more workers")
+        if use_dask and scheduler:
+            raise InputError("give --dask (a local cluster) or --scheduler ADDRESS, not both")
+        src = load_file(file)
+        study = make_study(
+            src,
+            list(params),
+            variant=variant,
+            design=design,
+            samples=samples,
+            seed=seed,
+            best=best,
+            figures=list(figures),
+        )
+        nominal = from_source(study.source)  # the file itself must be valid
+        if step is not None:
+            study.step = api.parse_step(nominal, step)
+        precheck(study, nominal)
+        if outdir is None:
+            outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
+        output_folder(outdir)
+        results_dir = None
+        if keep_results:
+            results_dir = output_folder(outdir / "designs")
+        n = len(study)
+        if not quiet:
+            shape = " x ".join(str(len(p.values)) for p in study.params)
+            what = f"a grid of {shape}" if study.design == "grid" else study.design
+            click.echo(
+                f"{nominal.name}: {n} designs ({what}) of "
+                + ", ".join(p.name for p in study.params)
+            )
+        bar = _bar(n, quiet)
+        outcome = execute(
+            study,
+            jobs=jobs,
+            dask=use_dask,
+            scheduler=scheduler,
+            progress=None if bar is None else bar.update,
+            results_dir=results_dir,
+        )
+        if bar is not None:
+            bar.close()
+            bar = None
+        rows = outcome.rows
+        written = [write_table(study, rows, outdir, fmt)]
+        if outcome.interrupted:
+            click.echo(
+                f"interrupted: {len(rows)} of {n} designs were finished; their rows are in "
+                f"{written[0]}",
+                err=True,
+            )
+            sys.exit(EXIT_INTERRUPTED)
+        pick = pick_best(study, rows) if study.best is not None else None
+        if pick is not None:
+            written.append(write_best(study, pick, outdir / "best.yaml"))
+        if not no_plots:
+            from ..study.plots import write_plots
+
+            written += write_plots(study, rows, outdir)
+        ok = sum(r["status"] == "ok" for r in rows)
+        invalid = sum(r["status"].startswith("invalid") for r in rows)
+        has_req = any("requirements.pass [-]" in r for r in rows)
+        passing = sum(r.get("requirements.pass [-]") is True for r in rows)
+        if not quiet:
+            click.echo(
+                f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
+                f"position"
+                + (f", {invalid} invalid" if invalid else "")
+                + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
+            )
+            if has_req:
+                click.echo(f"  requirements: {passing} of {n} designs meet every requirement")
+            if study.best is not None:
+                sense, expr = study.best
+                if pick is None:
+                    click.echo(f"  best ({sense} {expr}): no design has this figure")
+                else:
+                    click.echo(
+                        f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
+                        f"{pick.value:.6g}: {study.describe(pick.design)}"
+                        + (f" ({pick.note})" if pick.note else "")
+                    )
+            click.echo(
+                f"  wrote {len(written)} file(s) to {outdir}/: "
+                + ", ".join(p.name for p in written)
+                + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
+            )
+        if has_req and passing == 0:
+            sys.exit(EXIT_REQUIREMENTS)
+        sys.exit(EXIT_WARNINGS if ok < n else EXIT_OK)
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+        click.echo("interrupted before any design was finished", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        if bar is not None:
+            bar.close()
+        fail((outdir is not None and write_error(exc, outdir)) or exc)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        if bar is not None:
+            bar.close()
+        fail(exc)

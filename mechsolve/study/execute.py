@@ -1,0 +1,301 @@
+"""Solve the designs of a study: in this process, on a local process pool, or on Dask.
+
+Designs go out in chunks (a few tens at most), so that what each task costs to send and
+to start is small beside the solving; every executor runs the same function on the same
+designs, so the table does not depend on which one ran it. Rows come back as chunks
+finish; Ctrl-C stops the study and keeps the rows already finished.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..errors import AssemblyError, InputError, MechsolveError
+from .designs import Study
+from .figures import Row, design_row
+
+SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
+
+
+def status_of(row: Row) -> str:
+    n, solved = row.get("positions [-]"), row.get("solved [-]")
+    if n is None:
+        return "ok"
+    if solved == n:
+        return "ok"
+    if solved == 0:
+        return "not assemblable at any position"
+    return f"not assemblable at {n - solved} of {n} positions"
+
+
+def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
+    """One design's row: its parameters, a status, and its figures (see
+    :mod:`mechsolve.study.figures`). An invalid design or one that cannot be solved is a
+    row that says why; nothing is raised but KeyboardInterrupt."""
+    import numpy as np
+
+    from .. import api
+
+    row: Row = {"design [-]": k}
+    for p, x in zip(study.params, study.values(k)):
+        row[p.header] = x
+    try:
+        mech = study.mechanism(k)
+    except InputError as exc:
+        row["status"] = f"invalid: {exc}"
+        return row
+    figures = list(study.figures)
+    if study.best is not None and study.best[1] not in figures:
+        figures.append(study.best[1])
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = api.solve(mech, step=study.step, method=study.method)
+            fig = design_row(res, mech, figures)
+            if results_dir is not None:
+                res.to_csv(Path(results_dir) / f"design-{k:05d}.csv")
+    except AssemblyError as exc:
+        row["status"] = f"not assemblable: {exc}"
+        row["assembles [-]"] = False
+        return row
+    except MechsolveError as exc:
+        row["status"] = f"failed: {exc}"
+        return row
+    except Exception as exc:  # noqa: BLE001 - one design's bug must not end the study
+        row["status"] = f"internal error: {type(exc).__name__}: {exc}"
+        return row
+    row["status"] = status_of(fig)
+    row.update(fig)
+    return row
+
+
+def precheck(study: Study, nominal) -> None:
+    """Solve the file as it is once and read the study's figures and the requirements
+    there, so that a figure naming something the run does not have is one input error
+    before the study starts, not a message in every row. Nothing is checked when the
+    file's own design cannot be solved."""
+    import numpy as np
+
+    from .. import api
+    from ..requirements import check_requirements, evaluate_figure
+
+    figures = list(study.figures)
+    if study.best is not None:
+        figures.append(study.best[1])
+    if not figures and not getattr(nominal, "requirements", None):
+        return
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = api.solve(nominal, step=study.step, method=study.method)
+    except MechsolveError:
+        return
+    if not res.ok.any():
+        return
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for text in figures:
+            try:
+                evaluate_figure(text, nominal, res)
+            except InputError as exc:
+                what = "--best" if study.best is not None and text == study.best[1] else "figure"
+                raise InputError(f"{what} {exc.message}") from None
+        check_requirements(nominal, res)
+
+
+def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None) -> list[Row]:
+    return [solve_design(study, k, results_dir) for k in indices]
+
+
+# the study of a pool worker: sent once, when the worker starts
+_WORKER_STUDY: Study | None = None
+
+
+def _init_worker(study: Study) -> None:
+    import signal
+
+    global _WORKER_STUDY
+    _WORKER_STUDY = study
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+
+
+def _pool_chunk(indices: list[int], results_dir: str | None) -> list[Row]:
+    assert _WORKER_STUDY is not None
+    return solve_chunk(_WORKER_STUDY, indices, results_dir)
+
+
+def chunks(n: int, workers: int, size: int | None = None) -> list[list[int]]:
+    """Design indices in chunks: about eight per worker, between 1 and 32 designs each
+    (the progress bar moves, the overhead per design stays small)."""
+    if size is None:
+        size = max(1, min(32, math.ceil(n / (8 * max(workers, 1)))))
+    return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
+
+
+def cpu_count() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+class Outcome:
+    """The rows of a study, in design order, and whether it was interrupted."""
+
+    def __init__(self, rows: list[Row], total: int, interrupted: bool, executor: str) -> None:
+        self.rows = sorted(rows, key=lambda r: r["design [-]"])
+        self.total = total
+        self.interrupted = interrupted
+        self.executor = executor
+
+
+def execute(
+    study: Study,
+    *,
+    jobs: int | None = None,
+    dask: bool = False,
+    scheduler: str | None = None,
+    dask_processes: bool = True,
+    chunk: int | None = None,
+    progress: Callable[[int], Any] | None = None,
+    results_dir: str | Path | None = None,
+) -> Outcome:
+    """Solve every design of ``study``.
+
+    Parameters
+    ----------
+    jobs
+        Workers: processes of the local pool (default: all cores; 1 solves in this
+        process), or Dask workers of ``dask``'s local cluster.
+    dask, scheduler
+        Run on a Dask local cluster, or on the scheduler at ``tcp://host:port``.
+    chunk
+        Designs per task (default: see :func:`chunks`).
+    progress
+        Called with the number of designs each finished chunk holds.
+    results_dir
+        Write each design's results CSV there (``design-00007.csv``).
+    """
+    n = len(study)
+    rd = None if results_dir is None else str(results_dir)
+    if scheduler is not None or dask:
+        return _run_dask(study, jobs, scheduler, dask_processes, chunk, progress, rd)
+    workers = min(jobs or cpu_count(), max(n, 1))
+    rows: list[Row] = []
+    if workers <= 1:
+        try:
+            for idx in chunks(n, 1, chunk):
+                rows += solve_chunk(study, idx, rd)
+                if progress is not None:
+                    progress(len(idx))
+        except KeyboardInterrupt:
+            return Outcome(rows, n, True, "this process")
+        return Outcome(rows, n, False, "this process")
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(study,))
+    interrupted = False
+    try:
+        futures = [pool.submit(_pool_chunk, idx, rd) for idx in chunks(n, workers, chunk)]
+        for fut in as_completed(futures):
+            got = fut.result()
+            rows += got
+            if progress is not None:
+                progress(len(got))
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        pool.shutdown(wait=not interrupted, cancel_futures=True)
+    return Outcome(rows, n, interrupted, f"a pool of {workers} processes")
+
+
+def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
+    """A Dask client of the scheduler at ``scheduler``; an :class:`InputError` naming it
+    when it does not answer within ``timeout`` seconds."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError(
+            '--scheduler needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
+        ) from None
+    t0 = time.monotonic()
+    try:
+        return Client(scheduler, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        waited = time.monotonic() - t0
+        raise InputError(
+            f"--scheduler {scheduler}: no Dask scheduler answers there (gave up after "
+            f"{waited:.1f} s: {type(exc).__name__}: {exc}). Is it running (dask scheduler) "
+            "and is the address tcp://HOST:PORT?"
+        ) from None
+    except ValueError as exc:
+        raise InputError(f"--scheduler {scheduler}: {exc}") from None
+
+
+def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome:
+    n = len(study)
+    cluster = None
+    if scheduler is not None:
+        client = connect(scheduler)
+        where = f"the Dask scheduler at {scheduler}"
+    else:
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise InputError(
+                '--dask needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
+            ) from None
+        workers = jobs or cpu_count()
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=processes,
+            dashboard_address=None,
+            silence_logs=50,
+        )
+        client = Client(cluster)
+        where = f"a Dask local cluster of {workers} workers"
+    from dask.distributed import as_completed
+
+    rows: list[Row] = []
+    interrupted = False
+    futures = []
+    try:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        shared = client.scatter(study, broadcast=True)
+        futures = [
+            client.submit(solve_chunk, shared, idx, rd, pure=False)
+            for idx in chunks(n, workers, chunk)
+        ]
+        for fut in as_completed(futures):
+            got = fut.result()
+            rows += got
+            if progress is not None:
+                progress(len(got))
+    except KeyboardInterrupt:
+        interrupted = True
+        client.cancel(futures)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return Outcome(rows, n, interrupted, where)
+
+
+__all__ = [
+    "Outcome",
+    "chunks",
+    "connect",
+    "cpu_count",
+    "execute",
+    "precheck",
+    "solve_chunk",
+    "solve_design",
+    "status_of",
+]
