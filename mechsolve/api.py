@@ -114,6 +114,56 @@ def solve(
     return Results(an, sol, force_result)
 
 
+PLOT_STEP = math.radians(1.0)  # plots are drawn from a sweep at least this fine
+
+
+def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Results:
+    """The results that plots are drawn from: the same sweep at 1 degree or finer (a 360th
+    of a linear driver's range), whatever step the file gives for its table, plus the
+    exact driver values of its events: each rocker's and slider's limit positions, and
+    where a conditional load switches, sampled on both sides (1e-9 apart) so that a curve
+    jumps there instead of joining the samples around it. ``res`` itself when it is
+    already that fine and has no events to add, or has a motion law of time."""
+    if mech.driver.motion is not None or len(res.u) < 2 or not np.all(res.ok[[0, -1]]):
+        return res
+    an = res.analysis
+    travel = abs(float(res.u[-1] - res.u[0]))
+    fine = travel / 360 if an.linear else PLOT_STEP
+    coarse = travel / max(len(res.u) - 1, 1)
+    switching = res.forces is not None and any(
+        np.any(on[1:] != on[:-1]) for on in res.forces.active.values()
+    )
+    if coarse <= fine * (1 + 1e-9) and not switching:
+        return res
+    step = min(fine, coarse)
+    u, t = an.sweep_values(an.start_value(), step=step, travel=travel)
+    vel, acc = res.solution.has_velocity, res.solution.has_acceleration
+    sol = core.states(an, u, t=t, velocity=vel, acceleration=acc)
+    f = core.forces(an, sol) if res.forces is not None else None
+    first = Results(an, sol, f)
+    extra: list[float] = []
+    for lp in first.limit_positions():
+        extra += [lp.u_low, lp.u_high]
+    if f is not None:
+        from .solvers.forces import switch_points
+
+        h = 1e-9 * (an.scale if an.linear else 1.0)
+        for us in switch_points(an, sol, f):
+            extra += [us - h, us + h]
+    d = mech.driver.direction
+    lo, hi = (u[0], u[-1]) if d > 0 else (u[-1], u[0])
+    extra = [x for x in extra if lo < x < hi]
+    if not extra:
+        return first
+    uu = np.concatenate([u, extra])
+    order = np.argsort(d * (uu - u[0]), kind="stable")
+    uu = uu[order]
+    tt = np.interp(d * (uu - u[0]), d * (u - u[0]), t)
+    sol = core.states(an, uu, t=tt, velocity=vel, acceleration=acc)
+    f = core.forces(an, sol, f.stroke_extremes) if f is not None else None
+    return Results(an, sol, f)
+
+
 def positions(mech: Mechanism, step: float | None = None) -> int:
     """How many positions the sweep has (without solving it)."""
     sw = mech.sweep

@@ -141,7 +141,9 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, quiet) -
         if not no_plots:
             from .writers.plots import write_plots
 
-            written += write_plots(res, outdir)
+            # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
+            # the file's step
+            written += write_plots(api.for_plots(mech, res, method), outdir)
         verdicts = _requirements(mech, res, junit, streamed=streamed)
         if not quiet:
             click.echo(text)

@@ -90,6 +90,10 @@ def _rate_root(res: _Sweep, k: int, value_rate):
     flo, fhi = f(lo), f(hi)
     if not (np.isfinite(flo) and np.isfinite(fhi)) or flo * fhi > 0:
         return None
+    if flo == 0.0 or fhi == 0.0:  # a sample exactly at the extreme
+        x = lo if flo == 0.0 else hi
+        one = an.solve(np.array([x]), start=sol.start, near=(sol, k), per_unit_driver=True)
+        return x, float(value_rate(one.state)[0][0])
     try:
         x = brent_root(f, lo, hi, xtol=1e-14, rtol=1e-15, fa=flo, fb=fhi)
     except (ValueError, RuntimeError):  # a position that cannot close, or no convergence
@@ -160,6 +164,11 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
             if np.nanmax(val) - np.nanmin(val) >= 2 * math.pi - 1e-9:
                 continue  # it turns fully: not a rocker
         sgn = np.sign(rate * res.mechanism.driver.direction * np.sign(an.speed or 1.0))
+        # a sample exactly at an extreme (rate 0) takes the sign before it, so that the
+        # change of sign is still seen between two samples
+        for i in np.flatnonzero(sgn == 0):
+            if i > 0 and np.isfinite(sgn[i - 1]):
+                sgn[i] = sgn[i - 1]
         extremes = []  # (u, value, is_max)
         gaps = {e.after for e in res.events if e.kind == "dead zone"}
         for k in np.flatnonzero(ok[:-1] & ok[1:] & (sgn[:-1] * sgn[1:] < 0)):

@@ -16,7 +16,7 @@ import mechsolve as ms
 from mechsolve.cli import main
 
 from closed_form import slider_crank
-from conftest import MECH, ref
+from conftest import MECH, MECHANISMS, ref
 from handcalc import fourbar_forces, slider_crank_forces
 
 RTOL = 1e-9
@@ -265,7 +265,7 @@ def test_shaper_cutting_force_rule():
     assert np.all(on[inner]) and not np.any(on[outer])
 
 
-@pytest.mark.parametrize("name", sorted(p.name for p in MECH.glob("*.yaml")))
+@pytest.mark.parametrize("name", MECHANISMS)
 def test_power_balance_on_every_example(name):
     res = ms.solve(ms.load(MECH / name), step=np.radians(3), forces=True)
     f = res.forces

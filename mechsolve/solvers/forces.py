@@ -514,6 +514,20 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     return float(work)
 
 
+def switch_points(an: Analysis, sol: Solution, fr: ForceResult) -> list[float]:
+    """The driver values, bisected to rounding, where a conditional load switches between
+    two samples of ``sol``."""
+    out = []
+    for load in an.mech.loads:
+        on = fr.active.get(load.name)
+        if on is None:
+            continue
+        for k in np.flatnonzero(on[1:] != on[:-1]):
+            if sol.ok[k] and sol.ok[k + 1]:
+                out.append(_switch(an, sol, fr, load, int(k))[0])
+    return sorted(out)
+
+
 def _switch(an: Analysis, sol: Solution, fr: ForceResult, load, k: int, iters: int = 60):
     """Bisect the driver coordinate between samples k and k+1 where ``load`` switches."""
     from ..sweep import StateView

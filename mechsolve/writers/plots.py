@@ -298,9 +298,15 @@ def _switches(res: Results) -> np.ndarray:
 
 
 def _broken(res: Results, *arrays: np.ndarray) -> list[np.ndarray]:
-    """Copies of ``arrays`` with NaN inserted where a load switches, so that a plotted line
-    shows the jump instead of joining the two sides."""
+    """Copies of ``arrays`` with NaN inserted where a load switches between two samples,
+    so that a plotted line does not join the two sides with a slope. Where the sweep has
+    samples on both sides of the exact switch (:func:`mechsolve.api.for_plots`), the line
+    joins them: a vertical jump at its angle."""
     k = _switches(res)
+    u = np.asarray(res.u, float)
+    if k.size:
+        gap = np.abs(u[k + 1] - u[k])
+        k = k[gap > 1e-6 * (res.analysis.scale if res.linear else 1.0)]
     if k.size == 0:
         return [np.asarray(a, float) for a in arrays]
     return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
