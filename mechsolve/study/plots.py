@@ -27,7 +27,10 @@ def figure_columns(study: Study, rows: list[Row]) -> list[str]:
         if vals and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
             if any(math.isfinite(v) for v in vals):
                 out.append(c)
-    return out[:MAX_FIGURES]
+    # the study's own figures first: they are what it was asked for
+    own = list(study.figures) + ([study.best[1]] if study.best is not None else [])
+    first = [c for c in out if c.rsplit(" [", 1)[0] in own]
+    return (first + [c for c in out if c not in first])[:MAX_FIGURES]
 
 
 def _num(v) -> float:
@@ -118,7 +121,7 @@ def _against(plt, study: Study, rows: list[Row], figs: list[str], i: int, outdir
 def _pass_fail(plt, study: Study, rows: list[Row], outdir: Path) -> Path:
     p, q = study.params[0], study.params[1]
     by_req = any("requirements.pass [-]" in r for r in rows)
-    fig, ax = plt.subplots(figsize=(6, 4.8))
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
     marks = [
         (True, "o", "tab:green", "meets every requirement" if by_req else "assembles"),
         (False, "x", "tab:red", "fails a requirement" if by_req else "does not assemble"),
@@ -139,8 +142,8 @@ def _pass_fail(plt, study: Study, rows: list[Row], outdir: Path) -> Path:
     ax.set_xlabel(p.header)
     ax.set_ylabel(q.header)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{study.file}: pass/fail over {p.name} and {q.name}", fontsize=9)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    ax.set_title(f"{study.file}:\npass/fail over {p.name} and {q.name}", fontsize=9)
     fig.tight_layout()
     path = outdir / "study-pass-fail.png"
     fig.savefig(path, dpi=100)
