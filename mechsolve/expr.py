@@ -63,7 +63,7 @@ class ExprError(ValueError):
 _SPACE_RE = re.compile(r"\s*")
 _TOKEN_RE = re.compile(
     r"(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
-    r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+    r"|(?P<name>[^\W\d]\w*)"  # letters of any script: 曲柄.angle, кривошип.omega
     r"|(?P<op>->|<=|>=|==|!=|\*\*|[-+*/^<>().,])"
 )
 
@@ -728,7 +728,7 @@ def _check_variables(variables: Sequence[str]) -> tuple[str, ...]:
     for v in out:
         if (
             not isinstance(v, str)
-            or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", v)
+            or not re.fullmatch(r"[^\W\d]\w*", v)
             or v in _KEYWORDS
             or v in _FUNCS
             or v in CONTEXT_FUNCS

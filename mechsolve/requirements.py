@@ -86,7 +86,7 @@ class Verdict:
 
 def _rewrite(text: str) -> str:
     """``time_ratio(ram)`` is the figure ``ram.time_ratio``; likewise swing and stroke."""
-    return re.sub(r"\b(time_ratio|swing|stroke)\(\s*([A-Za-z_]\w*)\s*\)", r"\2.\1", text)
+    return re.sub(r"\b(time_ratio|swing|stroke)\(\s*([^\W\d]\w*)\s*\)", r"\2.\1", text)
 
 
 def parse_requirement(name: str, text: Any) -> Requirement:

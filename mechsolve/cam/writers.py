@@ -112,12 +112,9 @@ def write_dxf(res: CamResult, path: Path) -> Path | None:
 
 
 def _plt():
-    import matplotlib
+    from ..writers.fonts import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 def write_plots(res: CamResult, outdir: Path) -> list[Path]:

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 
 GROUND = "ground"
 STANDARD_G = 9.81  # m/s^2, the textbooks' value
-NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+NAME_RE = re.compile(r"^[^\W\d]\w*$")  # letters of any script (曲柄, кривошип), digits, _
 KeyPath = tuple[Any, ...]
 
 

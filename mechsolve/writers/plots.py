@@ -48,12 +48,18 @@ def _save(fig, path: Path, dpi: int) -> None:
 
 
 def _plt():
-    import matplotlib
+    from .fonts import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    return pyplot()
 
-    return plt
+
+def names_of(mech) -> list[str]:
+    """Every name a plot of ``mech`` may show (for the font check of :mod:`.fonts`)."""
+    out = [mech.name, *(lk.name for lk in mech.links), *(j.name for j in mech.joints)]
+    out += [ld.name for ld in mech.loads]
+    for lk in mech.links:
+        out += list(lk.points)
+    return out
 
 
 def driver_axis(res: Results) -> tuple[np.ndarray, str]:
@@ -430,6 +436,9 @@ def plot_reactions(res: Results, path: Path) -> Path:
 
 def write_plots(res: Results, outdir: Path) -> list[Path]:
     """Write all plots into ``outdir``; return the files written."""
+    from .fonts import pyplot
+
+    pyplot(names_of(res.mechanism))  # fonts for the names; one note if some cannot be drawn
     outdir.mkdir(parents=True, exist_ok=True)
     written = [plot_trajectories(res, outdir / "trajectories.png")]
     for p in res.point_names():
@@ -448,7 +457,9 @@ def write_plots(res: Results, outdir: Path) -> list[Path]:
 
 def draw_start(analysis, state, path: Path, title: str) -> Path:
     """Draw the assembled start position alone (``mechsolve check --draw``)."""
-    plt = _plt()
+    from .fonts import pyplot
+
+    plt = pyplot([title, *names_of(analysis.mech)])
     fig, ax = plt.subplots(figsize=(7, 6))
     draw_mechanism(ax, analysis, state, 0)
     ax.set_aspect("equal", adjustable="datalim")

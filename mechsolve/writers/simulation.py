@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .fonts import pyplot
+
 if TYPE_CHECKING:
     from ..dynamics import ReducedModel, SimulationResults
 
@@ -35,10 +37,9 @@ def revolution_means(t: np.ndarray, phi: np.ndarray, w: np.ndarray):
 
 
 def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) -> list[Path]:
-    import matplotlib
+    from .plots import names_of
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot(names_of(res.mechanism))
 
     outdir = Path(outdir)
     tr = res.trajectory
@@ -103,10 +104,7 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
 
 def write_energy_plot(sizing, name: str, outdir) -> Path:
     """The energy excursion over the cycle (the flywheel's energy method)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot([name])
 
     x = np.degrees(np.abs(sizing.phi - sizing.phi[0]))
     fig, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
@@ -134,10 +132,7 @@ def write_energy_mass_plot(sizing, name: str, outdir) -> Path | None:
     J(phi), with the lines of slopes omega_max^2 / 2 and omega_min^2 / 2 that touch it."""
     if sizing.energy_mass is None:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot([name])
 
     J, W = sizing.energy_mass
     w, dl = sizing.omega_mean, sizing.delta
