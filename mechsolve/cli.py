@@ -30,6 +30,7 @@ from .clikit import progress_bar as _progress_bar
 from .clikit import stream_above as _stream_above
 from .clikit import write_error as _write_error
 from .commands.cam import cam
+from .commands.sweep import sweep
 from .commands.synth import synth
 from .errors import EXIT_REQUIREMENTS, InputError
 
@@ -52,6 +53,10 @@ def main() -> None:
     mechsolve synth mechanisms/synth/crane-crank-rocker.yaml -o design.yaml
                                              design a linkage (crank-rocker, slider-crank,
                                              guide bar, three positions, input window)
+    mechsolve sweep mechanisms/studies/fourbar-study.yaml
+                                             a design study: one row per design, on
+                                             all cores or a Dask cluster
+    mechsolve run FILE --watch               run again whenever FILE is saved
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
     mechsolve bench --quick                  speed against error, in one run
     """
@@ -84,41 +89,70 @@ def main() -> None:
     type=click.Path(dir_okay=False, path_type=Path),
     help="Write the file's requirements as a JUnit XML report (one test case each).",
 )
+@click.option(
+    "--watch",
+    is_flag=True,
+    help="Run again whenever FILE is saved, printing what changed; Ctrl-C stops "
+    '(needs watchfiles: pip install "mechsolve[watch]").',
+)
 @QUIET
-def run(file: Path, outdir, step, variant, no_plots, method, at, junit, quiet) -> None:
+def run(file: Path, outdir, step, variant, no_plots, method, at, junit, watch, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
     _interrupt_on_sigterm()
-    bar = None
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet)
+    if watch:
+        try:
+            from .watch import watch_file
+
+            watch_file(file, lambda: _run_job(*args), echo=click.echo)
+        except Exception as exc:  # noqa: BLE001 - no watchfiles, a missing folder
+            _fail(exc)
+        sys.exit(EXIT_OK)
     try:
-        import numpy as np
+        code, _ = _run_job(*args)
+        sys.exit(code)
+    except KeyboardInterrupt:
+        # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
+        click.echo("interrupted: the files not yet finished were not written", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        _fail(_write_error(exc, outdir) or exc)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        _fail(exc)
 
-        from . import api
 
-        # singular positions give inf and NaN on purpose; the summary reports them
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        mech = api.load(file, variant)
-        st = api.parse_step(mech, step) if step is not None else None
-        if outdir is None:
-            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-        output_folder(outdir)
-        n = api.positions(mech, st)
-        instants_failed = False
-        if at or mech.instants:
-            from .instants import Instant, instants_table, parse_instant, solve_instants
+def _run_job(file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet):
+    """One run: solve, write, print; ``(exit code, results or None)``. Errors raise."""
+    import numpy as np
 
-            todo = [parse_instant(mech, a) for a in at] or [Instant(*i) for i in mech.instants]
-            ires = solve_instants(mech, todo, method=method)
-            path = ires.to_csv(outdir / "instants.csv")
-            instants_failed = ires.incomplete()
-            if not quiet:
-                click.echo(instants_table(ires))
-                click.echo(f"  wrote {path}")
-            if at:  # only the instants asked for
-                sys.exit(EXIT_WARNINGS if instants_failed else EXIT_OK)
-        if n > _stream_above() and mech.driver.motion is None:
-            # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
-            # sweep of the same range; a bar on a terminal, moved on after each chunk
-            bar = _progress_bar(n, quiet)
+    from . import api
+
+    # singular positions give inf and NaN on purpose; the summary reports them
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    mech = api.load(file, variant)
+    st = api.parse_step(mech, step) if step is not None else None
+    output_folder(outdir)
+    n = api.positions(mech, st)
+    instants_failed = False
+    if at or mech.instants:
+        from .instants import Instant, instants_table, parse_instant, solve_instants
+
+        todo = [parse_instant(mech, a) for a in at] or [Instant(*i) for i in mech.instants]
+        ires = solve_instants(mech, todo, method=method)
+        path = ires.to_csv(outdir / "instants.csv")
+        instants_failed = ires.incomplete()
+        if not quiet:
+            click.echo(instants_table(ires))
+            click.echo(f"  wrote {path}")
+        if at:  # only the instants asked for
+            return (EXIT_WARNINGS if instants_failed else EXIT_OK), None
+    if n > _stream_above() and mech.driver.motion is None:
+        # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
+        # sweep of the same range; a bar on a terminal, moved on after each chunk
+        bar = _progress_bar(n, quiet)
+        try:
             summary, res = api.stream(
                 mech,
                 outdir / "results.csv",
@@ -126,52 +160,37 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, quiet) -
                 method=method,
                 progress=None if bar is None else bar.update,
             )
+        finally:
             if bar is not None:
                 bar.close()
-                bar = None
-            text, failed = summary.text(res), summary.incomplete()
-            written = [summary.path]
-            streamed = True
-        else:
-            streamed = False
-            res = api.solve(mech, step=st, method=method)
-            text = res.summary()
-            failed = res.incomplete()
-            written = [res.to_csv(outdir / "results.csv")]
-        if not no_plots:
-            from .writers.plots import write_plots
+        text, failed = summary.text(res), summary.incomplete()
+        written = [summary.path]
+        streamed = True
+    else:
+        streamed = False
+        res = api.solve(mech, step=st, method=method)
+        text = res.summary()
+        failed = res.incomplete()
+        written = [res.to_csv(outdir / "results.csv")]
+    if not no_plots:
+        from .writers.plots import write_plots
 
-            # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
-            # the file's step
-            written += write_plots(api.for_plots(mech, res, method), outdir)
-        verdicts = _requirements(mech, res, junit, streamed=streamed)
-        if not quiet:
-            click.echo(text)
-            click.echo(
-                f"  wrote {len(written)} file(s) to {outdir}/: "
-                + ", ".join(p.name for p in written)
-            )
-        if verdicts:
-            from .requirements import verdict_table
+        # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
+        # the file's step
+        written += write_plots(api.for_plots(mech, res, method), outdir)
+    verdicts = _requirements(mech, res, junit, streamed=streamed)
+    if not quiet:
+        click.echo(text)
+        click.echo(
+            f"  wrote {len(written)} file(s) to {outdir}/: " + ", ".join(p.name for p in written)
+        )
+    if verdicts:
+        from .requirements import verdict_table
 
-            click.echo(verdict_table(verdicts))
-        if any(not v.passed for v in verdicts):
-            sys.exit(EXIT_REQUIREMENTS)
-        sys.exit(EXIT_WARNINGS if failed or instants_failed else EXIT_OK)
-    except KeyboardInterrupt:
-        # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
-        if bar is not None:
-            bar.close()
-        click.echo("interrupted: the files not yet finished were not written", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except OSError as exc:
-        if bar is not None:
-            bar.close()
-        _fail((outdir is not None and _write_error(exc, outdir)) or exc)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        if bar is not None:
-            bar.close()
-        _fail(exc)
+        click.echo(verdict_table(verdicts))
+    if any(not v.passed for v in verdicts):
+        return EXIT_REQUIREMENTS, res
+    return (EXIT_WARNINGS if failed or instants_failed else EXIT_OK), res
 
 
 def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
@@ -410,6 +429,7 @@ def bench(quick, cases, plot) -> None:
 # commands with a module of their own (mechsolve/commands/)
 main.add_command(cam)
 main.add_command(synth)
+main.add_command(sweep)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

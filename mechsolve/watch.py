@@ -1,0 +1,137 @@
+"""Watch mode (``mechsolve run FILE --watch``): run again whenever the file is saved.
+
+Editing a design is a loop: change a length, save, look. The watcher runs the job once,
+then after every save of the file (editors that save by writing a new file and renaming
+it are seen too), prints the summary and the figures that moved since the last good run,
+and on a mistake in the file prints the message (file, key path, line) and keeps waiting:
+a user's error never ends the watch; Ctrl-C does. File events come from ``watchfiles``
+(an optional dependency: ``pip install "mechsolve[watch]"``), not from a polling loop.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .errors import InputError, MechsolveError
+
+__all__ = ["figures_of", "changes", "watch_file"]
+
+
+def figures_of(res: Any) -> dict[str, tuple[float, str]]:
+    """The figures a designer watches, ``{name: (value, unit)}`` in display units:
+    positions solved, each rocker's swing and slider's stroke, time ratios, each loop's
+    smallest transmission angle, the peak driving effort, the work per cycle, the peak
+    reaction of each joint."""
+    out: dict[str, tuple[float, str]] = {}
+    if res is None:
+        return out
+    out["positions solved"] = (float(sum(bool(x) for x in res.ok)), "")
+    for lp in res.limit_positions():
+        if lp.kind == "slider":
+            out[f"{lp.name} stroke"] = ((lp.high - lp.low) * 1e3, "mm")
+        else:
+            out[f"{lp.name} swing"] = (math.degrees(lp.high - lp.low), "deg")
+        if lp.time_ratio is not None:
+            out[f"{lp.name} time ratio"] = (lp.time_ratio, "")
+    for t in res.transmission_angles():
+        out[f"min transmission angle, {t.group}"] = (math.degrees(t.angle), "deg")
+    if res.forces is not None:
+        import numpy as np
+
+        e = np.asarray(res.driving_effort, float)
+        if np.any(np.isfinite(e)):
+            kind, unit = res.effort_name
+            out[f"peak driving {kind}"] = (float(np.nanmax(np.abs(e))), unit)
+        out["work of the driver"] = (float(res.work()), "J")
+        for c in res.force_columns() if hasattr(res, "force_columns") else []:
+            name = getattr(c, "name", "")
+            if name.endswith(".F"):
+                v = np.asarray(c.values, float)
+                if np.any(np.isfinite(v)):
+                    out[f"peak reaction {name[:-2]}"] = (float(np.nanmax(v)), c.unit)
+    return out
+
+
+def changes(before: dict, after: dict, rel: float = 1e-9) -> list[str]:
+    """Lines saying which figures moved, by how much, and which appeared or went."""
+    lines = []
+    for name, (v, unit) in after.items():
+        u = f" {unit}" if unit else ""
+        if name not in before:
+            lines.append(f"  new: {name} = {v:.6g}{u}")
+            continue
+        v0 = before[name][0]
+        if math.isfinite(v) and math.isfinite(v0) and abs(v - v0) <= rel * max(abs(v), abs(v0)):
+            continue
+        if v0 == v:
+            continue
+        pct = f" ({(v - v0) / abs(v0):+.2%})" if v0 and math.isfinite(v0) else ""
+        lines.append(f"  {name}: {v0:.6g} -> {v:.6g}{u}{pct}")
+    for name in before:
+        if name not in after:
+            lines.append(f"  gone: {name}")
+    return lines
+
+
+def watch_file(
+    path: Path,
+    job: Callable[[], tuple[int, Any]],
+    echo: Callable[[str], None] = print,
+    stop: Callable[[], bool] | None = None,
+) -> None:
+    """Run ``job`` now and after every save of ``path`` until Ctrl-C (or ``stop()``)."""
+    try:
+        from watchfiles import watch
+    except ImportError:
+        raise InputError(
+            '--watch needs the watchfiles package: pip install "mechsolve[watch]"'
+        ) from None
+    path = Path(path)
+    folder = path.resolve().parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: its folder does not exist, there is nothing to watch")
+    target = path.resolve()
+    last: dict[str, tuple[float, str]] | None = None
+
+    def once() -> None:
+        nonlocal last
+        try:
+            code, res = job()
+        except KeyboardInterrupt:
+            raise
+        except MechsolveError as exc:
+            echo(f"error: {exc}")
+            echo(f"watching {path}: fix it and save")
+            return
+        except OSError as exc:
+            echo(f"error: {exc.strerror or exc}: {exc.filename or path}")
+            echo(f"watching {path}: fix it and save")
+            return
+        except Exception as exc:  # noqa: BLE001 - a bug must not end the user's session
+            echo(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)")
+            echo(f"watching {path}")
+            return
+        figs = figures_of(res)
+        if last is not None and figs:
+            moved = changes(last, figs)
+            echo("changed since the last run:" if moved else "no figure changed")
+            for line in moved:
+                echo(line)
+        if figs:
+            last = figs
+        echo(f"watching {path} (exit code of this run: {code}); Ctrl-C stops")
+
+    def is_target(change: Any, name: str) -> bool:  # noqa: ARG001
+        return Path(name).resolve() == target
+
+    try:
+        once()
+        for _ in watch(folder, watch_filter=is_target, debounce=200, step=50, recursive=False):
+            once()
+            if stop is not None and stop():
+                break
+    except KeyboardInterrupt:
+        echo("stopped watching")
