@@ -528,31 +528,41 @@ def switch_points(an: Analysis, sol: Solution, fr: ForceResult) -> list[float]:
     return sorted(out)
 
 
-def _switch(an: Analysis, sol: Solution, fr: ForceResult, load, k: int, iters: int = 60):
-    """Bisect the driver coordinate between samples k and k+1 where ``load`` switches."""
+def _switch(an: Analysis, sol: Solution, fr: ForceResult, load, k: int, points: int = 127):
+    """The driver coordinate between samples k and k+1 where ``load`` switches, to
+    rounding: the interval is cut into ``points + 1`` parts per round, all solved at once
+    (about 8 vectorised solves instead of some 50 single ones of a bisection)."""
     from ..sweep import StateView
 
     lo, hi = float(sol.u[k]), float(sol.u[k + 1])
     on_lo = bool(fr.active[load.name][k])
+    conditional = [ld for ld in an.mech.loads if ld.when is not None]
+    which = conditional.index(load)
     state = None
-    for _ in range(iters):
-        mid = 0.5 * (lo + hi)
-        if mid in (lo, hi):
+    frac = np.arange(1, points + 1) / (points + 1)
+    for _ in range(40):
+        xs = lo + (hi - lo) * frac
+        keep = (xs != lo) & (xs != hi) & np.r_[True, np.diff(xs) != 0]
+        xs = xs[keep]
+        if xs.size == 0:
             break
-        one = an.solve(np.array([mid]), start=sol.start, near=(sol, k))
-        view = StateView(an, one.state)
+        many = an.solve(xs, start=sol.start, near=(sol, k))
+        view = StateView(an, many.state)
+        # stroke(q) replays the sweep's extremes in the order of the conditional loads
+        funcs = {"stroke": stroke_function(list(fr.stroke_extremes), True)}
         with np.errstate(invalid="ignore"):
-            val = bool(
-                np.asarray(
-                    load.when.evaluate(
-                        view, {"stroke": stroke_function(list(fr.stroke_extremes), True)}
-                    )
-                ).ravel()[0]
-            )
-        if val == on_lo:
-            lo = mid
-        else:
-            hi = mid
-        state = one.state
+            vals = [
+                np.broadcast_to(np.asarray(ld.when.evaluate(view, funcs), bool), xs.shape)
+                for ld in conditional
+            ]
+        flip = np.flatnonzero((vals[which] != on_lo) & many.ok)
+        if flip.size == 0:
+            lo = float(xs[-1])
+            continue
+        j = int(flip[0])
+        hi = float(xs[j])
+        state = many.state.take(np.array([j]))
+        if j > 0:
+            lo = float(xs[j - 1])
     one = an.solve(np.array([0.5 * (lo + hi)]), start=sol.start, near=(sol, k))
     return 0.5 * (lo + hi), one.state if one.ok[0] else state
