@@ -112,16 +112,19 @@ def progress_wanted(
     return True
 
 
-def progress_bar(total: int, quiet: bool) -> Any | None:
-    """A tqdm bar over ``total`` positions on stderr, or None (see :func:`progress_wanted`)."""
+def progress_bar(
+    total: int, quiet: bool, desc: str = "solving", unit: str = " positions"
+) -> Any | None:
+    """A tqdm bar over ``total`` items (positions, designs) on stderr, or None (see
+    :func:`progress_wanted`)."""
     if not progress_wanted(quiet):
         return None
     from tqdm import tqdm
 
     return tqdm(
         total=total,
-        desc="solving",
-        unit=" positions",
+        desc=desc,
+        unit=unit,
         unit_scale=True,
         delay=PROGRESS_DELAY,
         leave=False,  # the summary follows; the bar has done its job

@@ -22,7 +22,6 @@ from ..clikit import (
     interrupt_on_sigterm,
     outdir_option,
     output_folder,
-    progress_wanted,
     write_error,
 )
 
@@ -37,19 +36,7 @@ SWEEP_EPILOG = (
 
 
 def _bar(total: int, quiet: bool):
-    if not progress_wanted(quiet):
-        return None
-    from tqdm import tqdm
-
-    return tqdm(
-        total=total,
-        desc="designs",
-        unit=" designs",
-        delay=clikit.PROGRESS_DELAY,
-        leave=False,
-        dynamic_ncols=True,
-        file=sys.stderr,
-    )
+    return clikit.progress_bar(total, quiet, desc="designs", unit=" designs")
 
 
 @click.command(epilog=SWEEP_EPILOG)
