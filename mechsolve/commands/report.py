@@ -1,0 +1,71 @@
+"""``mechsolve report FILE``: one self-contained HTML report (and a PDF with --pdf)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..clikit import (
+    EPILOG,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_WARNINGS,
+    FILE_ARG,
+    QUIET,
+    VARIANT,
+    fail,
+    interrupt_on_sigterm,
+)
+
+
+@click.command("report", epilog=EPILOG)
+@FILE_ARG
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="The HTML file (default: FILE's name with .html, in the current directory).",
+)
+@VARIANT
+@click.option(
+    "--pdf",
+    is_flag=True,
+    help="Also print the report to PDF beside the HTML, with a headless Chromium or Chrome "
+    "(MECHSOLVE_BROWSER names another).",
+)
+@click.option(
+    "--frames",
+    type=click.IntRange(min=2),
+    help="Frames of the embedded animation (default: one per degree of the driver).",
+)
+@QUIET
+def report(file: Path, output, variant, pdf, frames, quiet) -> None:
+    """Write one HTML file about FILE that opens in any browser without a network: the
+    model's tables with units, degrees of freedom and Assur groups with their branches,
+    the mechanism drawn to scale, the figures of the motion, the position tables at the
+    file's step, every plot of `run`, the requirements, the dynamics (with a motor), the
+    cam (a cam file) and the mechanism in motion (play, pause, a slider)."""
+    interrupt_on_sigterm()
+    try:
+        import numpy as np
+
+        from ..errors import EXIT_REQUIREMENTS
+        from ..report import write_report
+
+        np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        if output is None:
+            output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
+        done = write_report(file, variant, output, pdf=pdf, frames=frames)
+        if not quiet:
+            click.echo(done.text())
+            click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
+        if done.failed_requirements:
+            sys.exit(EXIT_REQUIREMENTS)
+        sys.exit(EXIT_WARNINGS if done.incomplete else EXIT_OK)
+    except KeyboardInterrupt:
+        click.echo("interrupted: the report was not written", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except Exception as exc:  # noqa: BLE001 - every error becomes a message
+        fail(exc)

@@ -1,0 +1,181 @@
+"""``mechsolve report``: one self-contained HTML file with the model, the drawing, the
+tables, the plots, the requirements, the dynamics, and the mechanism in motion.
+
+The page is rendered from a jinja2 template shipped with the package (autoescaped: a
+name or description in the file is shown as text, never read as HTML). Images are
+embedded as data URIs and the animation is plain numbers drawn by a small inline script
+on a canvas, so the file opens in any browser without a network. ``--pdf`` prints it with
+a headless Chromium (:mod:`.browser`).
+
+:func:`write_report` does the whole job and may be called again on the same file (the
+watch mode calls it after each save): the HTML is replaced only when complete.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import InputError
+from .build import Content, cam_content, mechanism_content
+
+JINJA_HINT = (
+    "mechsolve report renders its page with jinja2, which is not installed: "
+    "pip install 'mechsolve[report]' (or pip install jinja2)"
+)
+
+
+@dataclass
+class ReportOutcome:
+    """What :func:`write_report` wrote and what the command's exit status depends on."""
+
+    html: Path
+    pdf: Path | None
+    content: Content
+
+    @property
+    def incomplete(self) -> bool:
+        return self.content.incomplete
+
+    @property
+    def failed_requirements(self) -> int:
+        return self.content.failed_requirements
+
+    def text(self) -> str:
+        c = self.content
+        lines = [f"{c.title}: report of {c.file or 'the model'}"]
+        if c.kind == "mechanism" and c.summary_text:
+            lines.append(c.summary_text)
+        elif c.cam_text:
+            lines.append(c.cam_text)
+        if c.verdicts:
+            from ..requirements import verdict_table
+
+            lines.append(verdict_table(c.verdicts))
+        return "\n".join(lines)
+
+
+def _environment():
+    try:
+        import jinja2
+    except ImportError:
+        raise InputError(JINJA_HINT) from None
+    return jinja2.Environment(
+        loader=jinja2.PackageLoader("mechsolve.report", "templates"),
+        autoescape=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        undefined=jinja2.StrictUndefined,
+    )
+
+
+def render(content: Content) -> str:
+    """The report's HTML."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        ver = version("mechsolve")
+    except PackageNotFoundError:  # run from a source tree
+        ver = "dev"
+    env = _environment()
+    return env.get_template("report.html.j2").render(
+        c=content,
+        version=ver,
+        generated=datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
+    )
+
+
+def is_cam_file(path: Path) -> bool:
+    """Whether ``path`` is a cam design (a ``cam:`` section and no ``links:``)."""
+    from ..model.source import load_file
+
+    data = load_file(path).data
+    return isinstance(data, dict) and "cam" in data and "links" not in data
+
+
+def build(
+    file: str | Path,
+    variant: str | None = None,
+    *,
+    frames: int | None = None,
+    method: str | None = None,
+) -> Content:
+    """Solve ``file`` every way the report shows it."""
+    from .. import api
+
+    file = Path(file)
+    _environment()  # say that jinja2 is missing before solving anything
+    if is_cam_file(file):
+        return cam_content(file, variant)
+    mech = api.load(file, variant)
+    content = mechanism_content(mech, frames=frames, method=method)
+    content.variant = variant
+    content.file = str(file)
+    return content
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def write_report(
+    file: str | Path,
+    variant: str | None = None,
+    out: str | Path | None = None,
+    *,
+    pdf: bool | str | Path = False,
+    frames: int | None = None,
+    method: str | None = None,
+) -> ReportOutcome:
+    """Write the HTML report of ``file`` to ``out`` (default: ``<file stem>.html`` in the
+    current folder) and, with ``pdf``, print it to PDF beside it (or to the path given).
+
+    Raises :class:`~mechsolve.errors.InputError` for a wrong file or option, or for
+    ``pdf`` without a headless browser (the HTML is written first, so it is there
+    either way)."""
+    file = Path(file)
+    if out is None:
+        out = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
+    out = Path(out)
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise InputError(f"-o {out}: the report is an HTML file (NAME.html)")
+    if not out.parent.is_dir():
+        raise InputError(f"-o {out}: the folder {out.parent} does not exist")
+    pdf_path = None
+    if pdf:
+        pdf_path = Path(pdf) if not isinstance(pdf, bool) else out.with_suffix(".pdf")
+    content = build(file, variant, frames=frames, method=method)
+    html = render(content)
+    try:
+        _write_atomic(out, html)
+    except OSError as exc:
+        raise InputError(f"-o {out}: cannot write it: {exc.strerror or exc}") from None
+    outcome = ReportOutcome(out, None, content)
+    if pdf_path is not None:
+        from .browser import print_pdf
+
+        try:
+            outcome.pdf = print_pdf(out, pdf_path)
+        except InputError as exc:
+            raise InputError(f"{exc.message} (the HTML report {out} is written)") from None
+    return outcome
+
+
+__all__ = ["JINJA_HINT", "ReportOutcome", "build", "is_cam_file", "render", "write_report"]

@@ -1,0 +1,557 @@
+"""What the report shows, gathered from the stages as plain values for the template.
+
+Every number is formatted here (with its unit); the template only lays them out. The
+images are written by the same writers as ``run``, ``check --draw``, ``simulate`` and
+``cam`` into a temporary folder and embedded as data URIs.
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..units import parse_quantity
+
+PLOT_TITLES = {
+    "trajectories": "The mechanism at the start and the paths of its points",
+    "links": "Links: angle, angular velocity, angular acceleration",
+    "sliders": "Sliders: displacement, velocity, acceleration along their guides",
+    "torque": "Driving torque over the cycle",
+    "reactions": "Joint reactions",
+    "hodographs": "Hodographs of the reactions on the ground",
+    "motion": "Follower motion: displacement, velocity, acceleration, jerk",
+    "pressure": "Pressure angle for both senses of rotation",
+    "cam": "Cam profile",
+}
+
+
+@dataclass
+class Image:
+    """An embedded image: a title and a data URI."""
+
+    title: str
+    uri: str
+    name: str = ""
+
+
+@dataclass
+class Table:
+    """A table of text cells: a caption, header cells (each with its unit) and rows."""
+
+    caption: str
+    header: list[str]
+    rows: list[list[str]]
+    numeric: list[bool] = field(default_factory=list)
+    note: str = ""
+
+
+def embed(path: Path, title: str | None = None) -> Image:
+    """``path`` (PNG, SVG, JPEG) as a data URI."""
+    path = Path(path)
+    mime = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}.get(
+        path.suffix.lower(), "application/octet-stream"
+    )
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return Image(title or plot_title(path), f"data:{mime};base64,{data}", path.name)
+
+
+def plot_title(path: Path) -> str:
+    stem = Path(path).stem
+    if stem in PLOT_TITLES:
+        return PLOT_TITLES[stem]
+    if stem.startswith("point_"):
+        return f"Point {stem[6:]}: position, velocity and acceleration"
+    return stem.replace("_", " ").capitalize()
+
+
+def num(x: float | None, digits: int = 5) -> str:
+    """A number as an engineer writes it: ``digits`` significant figures, no exponent for
+    ordinary sizes; a dash for a missing value."""
+    if x is None or not math.isfinite(x):
+        return "–"
+    if x == 0:
+        return "0"
+    if 1e-4 <= abs(x) < 1e7:
+        dec = max(0, digits - 1 - math.floor(math.log10(abs(x))))
+        text = f"{x:.{dec}f}"
+        if "." in text:
+            text = text.rstrip("0").rstrip(".")
+        return text
+    return f"{x:.{digits - 1}e}"
+
+
+def column_format(values: np.ndarray, digits: int = 5) -> list[str]:
+    """One column of a table with a common number of decimals (``digits`` significant
+    figures of its largest value), as printed tables align them."""
+    v = np.asarray(values, float)
+    good = v[np.isfinite(v)]
+    big = float(np.max(np.abs(good))) if good.size else 0.0
+    if big == 0:
+        dec = 3
+    elif 1e-4 <= big < 1e7:
+        dec = max(0, digits - 1 - math.floor(math.log10(big)))
+    else:
+        return [num(float(x), digits) for x in v]
+    return ["–" if not math.isfinite(x) else f"{x:.{dec}f}" for x in v]
+
+
+# -- the model ------------------------------------------------------------------------
+def _unit_factor(unit: str) -> float:
+    return parse_quantity(f"1 {unit}", "length")
+
+
+def model_tables(mech, check_report) -> list[Table]:
+    """Ground points, links (points, lengths, angles, masses, inertias), joints, loads."""
+    from ..model import (
+        Damper,
+        Limit,
+        PinJoint,
+        PointForce,
+        Spring,
+        Torque,
+    )
+
+    lu = mech.length_unit
+    f = _unit_factor(lu)
+    tables = []
+    tables.append(
+        Table(
+            "Fixed points (ground)",
+            ["point", f"x [{lu}]", f"y [{lu}]"],
+            [[p, num(x / f), num(y / f)] for p, (x, y) in mech.ground.items()],
+            [False, True, True],
+        )
+    )
+    rows = []
+    for lk in mech.links:
+        names = list(lk.points)
+        first = True
+        for p in names:
+            x, y = lk.points[p]
+            r = math.hypot(x, y)
+            ang = math.degrees(math.atan2(y, x)) if r > 0 else float("nan")
+            mass = inertia = com = ""
+            if first:
+                mass = num(lk.mass) if lk.mass else "–"
+                inertia = num(lk.inertia) if lk.inertia is not None else "–"
+                if lk.mass:
+                    cx, cy = lk.com if lk.com is not None else (0.0, 0.0)
+                    com = f"({num(cx / f)}, {num(cy / f)})"
+            rows.append(
+                [
+                    lk.name if first else "",
+                    p,
+                    num(x / f),
+                    num(y / f),
+                    num(r / f) if r > 0 else "0",
+                    num(ang, 4) if r > 0 else "–",
+                    mass,
+                    com,
+                    inertia,
+                ]
+            )
+            first = False
+    tables.append(
+        Table(
+            "Links: points in each link's frame (its x axis is the angle 0)",
+            [
+                "link",
+                "point",
+                f"x [{lu}]",
+                f"y [{lu}]",
+                f"distance from the frame origin [{lu}]",
+                "angle from the x axis [deg]",
+                "mass [kg]",
+                f"centre of mass [{lu}]",
+                "inertia about the centre of mass [kg m²]",
+            ],
+            rows,
+            [False, False, True, True, True, True, True, False, True],
+            "A link with a mass and no inertia is a point mass at its centre of mass.",
+        )
+    )
+    rows = []
+    for j in mech.joints:
+        if isinstance(j, PinJoint):
+            rows.append([j.name, "revolute", f"{j.a} – {j.b}", j.point, ""])
+        else:
+            ox, oy = j.origin
+            rows.append(
+                [
+                    j.name,
+                    "slider",
+                    f"{j.guide} (guide) – {j.block} (block)",
+                    j.point,
+                    f"line through ({num(ox / f)}, {num(oy / f)}) {lu} at "
+                    f"{num(math.degrees(j.angle), 4)}° in the guide's frame",
+                ]
+            )
+    tables.append(
+        Table(
+            "Joints (a reaction is the force on the second link by the first)",
+            ["joint", "kind", "links", "point", "guide"],
+            rows,
+        )
+    )
+    rows = []
+    for ld in mech.loads:
+        if isinstance(ld, PointForce):
+            what = (
+                f"force ({num(ld.force[0])}, {num(ld.force[1])}) N at {ld.point} on {ld.link}"
+                + (" (in the link's frame)" if ld.frame == "link" else "")
+            )
+            kind = "force"
+        elif isinstance(ld, Torque):
+            kind, what = "torque", f"{num(ld.torque)} N m on {ld.link} (counter-clockwise +)"
+        elif isinstance(ld, Spring):
+            (la, pa), (lb, pb) = ld.ends
+            kind = "spring"
+            what = (
+                f"k = {num(ld.stiffness)} N/m, free length {num(ld.free_length / f)} {lu}, "
+                f"between {pa} of {la} and {pb} of {lb}"
+            )
+        elif isinstance(ld, Damper):
+            kind = "damper"
+            if ld.slider is not None:
+                where = f"along slider {ld.slider}"
+            elif ld.drag is not None:
+                where = f"against the velocity of {ld.drag[1]} on {ld.drag[0]}"
+            else:
+                (la, pa), (lb, pb) = ld.ends
+                where = f"between {pa} of {la} and {pb} of {lb}"
+            what = f"c = {num(ld.coefficient)} N s/m {where}"
+        else:
+            kind, what = type(ld).__name__.lower(), ""
+        rows.append([ld.name, kind, what, ld.when.text if ld.when is not None else "always"])
+    g = tuple(0.0 if abs(v) < 1e-12 * math.hypot(*mech.gravity_vector()) else v
+              for v in mech.gravity_vector())  # fmt: skip
+    if g != (0.0, 0.0):
+        rows.append(["gravity", "field", f"({num(g[0])}, {num(g[1])}) m/s²", "always"])
+    if rows:
+        tables.append(Table("Loads", ["load", "kind", "value", "acts when"], rows))
+    # the driver and the sweep
+    d = mech.driver
+    an = check_report.analysis
+    rows = [["joint", d.joint + (f" (line {d.line[0]} → {d.line[1]})" if d.line else "")]]
+    if d.motion is not None:
+        from ..model.motion import describe
+
+        rows.append(["motion", describe(d.motion)])
+    elif an.linear:
+        rows.append(["speed", f"{num(d.speed)} m/s"])
+    else:
+        rows.append(["speed", f"{num(d.speed)} rad/s = {num(d.speed * 30 / math.pi)} rpm"])
+    rows.append(["direction of the sweep", "+" if d.direction > 0 else "−"])
+    if isinstance(d.start, Limit):
+        start = f"the {d.start.extreme} of {d.start.quantity.text}: "
+    else:
+        start = ""
+    rows.append(["start", start + an.format_u(check_report.start_u)])
+    sw = mech.sweep
+    if sw.duration is not None:
+        rows.append(["sweep", f"{num(sw.duration)} s in steps of {num(sw.time_step)} s"])
+    else:
+        travel = sw.travel if sw.travel is not None else 2 * math.pi
+        if an.linear:
+            text = f"{num(travel / f)} {lu}"
+            if sw.step:
+                text += f" in steps of {num(sw.step / f)} {lu}"
+        else:
+            text = f"{num(math.degrees(travel))}°"
+            if sw.step:
+                text += f" in steps of {num(math.degrees(sw.step))}°"
+        rows.append(["sweep", text])
+    tables.append(Table("Driver", ["", ""], rows))
+    return tables
+
+
+# -- results ----------------------------------------------------------------------------
+def figures_table(res) -> Table:
+    """Limit positions, stroke, time ratio, transmission angles, peak torque, work per
+    cycle and the power balance."""
+    an = res.analysis
+    rows: list[list[str]] = []
+    for lp in res.limit_positions():
+        a, b = an.format_u(lp.u_low), an.format_u(lp.u_high)
+        if lp.kind == "rocker":
+            rows.append(
+                [
+                    f"limit positions of rocker {lp.name}",
+                    f"{num(math.degrees(lp.low))}° to {num(math.degrees(lp.high))}°",
+                    f"at {a} and {b}",
+                ]
+            )
+            rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing))}°", ""])
+        else:
+            rows.append(
+                [
+                    f"limit positions of slider {lp.name}",
+                    f"{num(lp.low)} m to {num(lp.high)} m",
+                    f"at {a} and {b}",
+                ]
+            )
+            rows.append([f"stroke of {lp.name}", f"{num(lp.swing)} m", ""])
+        if lp.time_ratio is not None:
+            rows.append(
+                [
+                    f"time ratio of {lp.name}",
+                    f"K = {num(lp.time_ratio, 4)}",
+                    f"{num(math.degrees(max(lp.forward, lp.back)))}° / "
+                    f"{num(math.degrees(min(lp.forward, lp.back)))}° of the driver",
+                ]
+            )
+    for t in res.transmission_angles():
+        rows.append(
+            [
+                f"minimum transmission angle, {t.group}",
+                f"{num(math.degrees(t.angle), 4)}°",
+                f"at {an.format_u(t.u)}",
+            ]
+        )
+    f = res.forces
+    if f is not None and np.any(f.ok):
+        kind, unit = res.effort_name
+        unit = unit.replace("*", " ")
+        e = res.driving_effort
+        if np.any(np.isfinite(e)):
+            imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
+            rows.append([f"largest driving {kind}", f"{num(e[imax])} {unit}", res.describe_u(imax)])
+            rows.append(
+                [f"smallest driving {kind}", f"{num(e[imin])} {unit}", res.describe_u(imin)]
+            )
+            mean, what = res.mean_effort()
+            rows.append([f"{what} driving {kind}", f"{num(mean)} {unit}", ""])
+        rows.append(["work of the driver", res.work_text().split(": ", 1)[-1],
+                     "per cycle" if res.is_full_cycle() else "over the sweep"])  # fmt: skip
+        resid = np.where(f.ok, f.residual, np.nan)
+        if np.any(np.isfinite(resid)):
+            big = float(np.nanmax(np.abs(resid)))
+            ps = res.power_scale()
+            rows.append(
+                [
+                    "power balance",
+                    f"max residual {num(big, 3)} W",
+                    f"{num(big / ps, 2) if ps > 0 else '0'} of the largest power term",
+                ]
+            )
+    return Table("Figures of the motion", ["figure", "value", "where / note"], rows)
+
+
+def _groups(res) -> dict[str, list]:
+    """The columns of ``res`` sorted into the tables a printed report has."""
+    pts = set(res.point_names())
+    links = set(res.link_names()) | {f"{a}/{b}" for a, b in res.mechanism.outputs.relative}
+    sliders = set(res.slider_names())
+    out: dict[str, list] = {
+        "driver": [],
+        "positions": [],
+        "velocities": [],
+        "accelerations": [],
+        "links": [],
+        "sliders": [],
+        "forces": [],
+    }
+    for c in res.columns():
+        head, _, q = c.name.rpartition(".")
+        if c.name in ("t", "input.angle", "input.s"):
+            out["driver"].append(c)
+        elif head in pts and q in ("x", "y"):
+            out["positions"].append(c)
+        elif head in pts and q in ("vx", "vy"):
+            out["velocities"].append(c)
+        elif head in pts and q in ("ax", "ay"):
+            out["accelerations"].append(c)
+        elif head in links:
+            out["links"].append(c)
+        elif head in sliders:
+            out["sliders"].append(c)
+        elif c.name.startswith("input.torque") or c.name.startswith("input.force"):
+            out["forces"].insert(0, c)
+        elif q in ("Fx", "Fy", "F", "N", "M") and "(" in head:
+            out["forces"].append(c)
+    return out
+
+
+CAPTIONS = {
+    "positions": "Positions of the points",
+    "velocities": "Velocities of the points",
+    "accelerations": "Accelerations of the points",
+    "links": "Angles, angular velocities and angular accelerations of the links",
+    "sliders": "Sliders along their guides",
+    "forces": "Driving effort and joint reactions",
+}
+
+
+def position_tables(res) -> list[Table]:
+    """The tables at the file's step, the driver's columns first in each."""
+    groups = _groups(res)
+    lead = groups.pop("driver")
+    status = res.status()
+    tables = []
+    for key, cols in groups.items():
+        cols = [c for c in cols if np.any(np.isfinite(c.values))]
+        if not cols:
+            continue
+        allc = lead + cols
+        formatted = [column_format(c.values) for c in allc]
+        rows = []
+        for i in range(len(res.u)):
+            row = [str(i + 1)] + [f[i] for f in formatted]
+            rows.append(row)
+        notes = sorted({s for s in status if s != "ok"})
+        tables.append(
+            Table(
+                CAPTIONS[key],
+                ["#"] + [c.header.replace("*", " ").replace("^2", "²") for c in allc],
+                rows,
+                [True] * (len(allc) + 1),
+                "Not solved or not determined: " + "; ".join(notes) if notes else "",
+            )
+        )
+    return tables
+
+
+def verdict_rows(verdicts) -> Table:
+    rows = []
+    for v in verdicts:
+        rows.append([v.name, v.text, v.message.rsplit(": ", 1)[0], "pass" if v.passed else "FAIL"])
+    failed = sum(not v.passed for v in verdicts)
+    return Table(
+        f"Requirements: {len(verdicts) - failed} of {len(verdicts)} pass",
+        ["requirement", "as written", "measured", "verdict"],
+        rows,
+    )
+
+
+@dataclass
+class Content:
+    """Everything the template shows."""
+
+    title: str
+    description: str
+    file: str
+    variant: str | None
+    kind: str  # "mechanism" or "cam"
+    sections: list[str] = field(default_factory=list)
+    model_tables: list[Table] = field(default_factory=list)
+    structure: dict[str, Any] = field(default_factory=dict)
+    drawing: Image | None = None
+    figures: Table | None = None
+    summary_text: str = ""
+    tables: list[Table] = field(default_factory=list)
+    table_step: str = ""
+    plots: list[Image] = field(default_factory=list)
+    requirements: Table | None = None
+    dynamics_text: str = ""
+    dynamics_plots: list[Image] = field(default_factory=list)
+    cam_text: str = ""
+    cam_plots: list[Image] = field(default_factory=list)
+    polygons_text: str = ""
+    polygons_images: list[Image] = field(default_factory=list)
+    animation: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+    # for the command's exit status
+    incomplete: bool = False
+    failed_requirements: int = 0
+    verdicts: list = field(default_factory=list)
+
+
+def _description(source) -> str:
+    data = getattr(source, "data", None) or {}
+    text = data.get("description") if isinstance(data, dict) else None
+    return " ".join(str(text).split()) if text else ""
+
+
+def mechanism_content(
+    mech, *, frames: int | None = None, method: str | None = None, simulate: bool = True
+) -> Content:
+    """Solve ``mech`` every way the report shows it and gather the results."""
+    from .. import api
+    from ..animate import solve_frames
+    from ..requirements import check_requirements
+    from ..writers.plots import draw_start, write_plots
+
+    file = str(mech.source.file) if mech.source is not None and mech.source.file else ""
+    c = Content(mech.name, _description(mech.source), file, None, "mechanism")
+    rep = api.check(mech, method)
+    c.model_tables = model_tables(mech, rep)
+    c.structure = {
+        "grubler": rep.grubler,
+        "jacobian": rep.jacobian_dof,
+        "links": len(mech.links),
+        "joints": len(mech.joints),
+        "groups": list(zip(rep.groups, rep.branches)),
+        "redundant": rep.analysis.redundant,
+        "notes": rep.notes,
+    }
+    res = api.solve(mech, method=method)
+    fine = api.for_plots(mech, res, method)
+    summary = res.summary()  # also runs the checks that add warnings
+    c.summary_text = summary
+    c.incomplete = res.incomplete()
+    c.figures = figures_table(fine)
+    c.tables = position_tables(res)
+    n = len(res.u)
+    if mech.driver.motion is not None or mech.sweep.duration is not None:
+        c.table_step = f"{n} positions in time"
+    elif len(res.u) > 1:
+        step = abs(float(res.u[1] - res.u[0]))
+        c.table_step = (
+            f"{n} positions, every {num(step)} m"
+            if res.linear
+            else f"{n} positions, every {num(math.degrees(step))}° of the driver"
+        )
+    with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
+        d = Path(tmp)
+        draw_start(
+            rep.analysis, rep.assembly.state, d / "start.png", f"{mech.name}: start position"
+        )
+        c.drawing = embed(d / "start.png", "The mechanism at the start position, to scale")
+        pdir = d / "plots"
+        pdir.mkdir()
+        c.plots = [embed(p) for p in write_plots(fine, pdir)]
+        if mech.motor is not None and mech.simulation is not None and simulate:
+            from ..dynamics import simulate as run_simulation
+            from ..writers.simulation import write_simulation_plots
+
+            sim = run_simulation(mech)
+            c.dynamics_text = sim.summary()
+            sdir = d / "simulation"
+            sdir.mkdir()
+            c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
+            c.incomplete = c.incomplete or sim.incomplete()
+        if mech.requirements:
+            c.verdicts = check_requirements(mech, res)
+            c.requirements = verdict_rows(c.verdicts)
+            c.failed_requirements = sum(not v.passed for v in c.verdicts)
+    fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method)
+    c.animation = fr.to_json()
+    return c
+
+
+def cam_content(path: Path, variant: str | None) -> Content:
+    """A cam file (a ``cam:`` section, no links): the cam's summary and plots."""
+    from ..cam.analysis import analyse
+    from ..cam.model import load
+    from ..cam.writers import write_plots
+    from ..errors import InputError
+    from ..model.source import load_file
+
+    model = load(path, variant)
+    try:
+        res = analyse(model)
+    except ValueError as exc:
+        raise InputError(str(exc), file=str(path), keypath="cam") from None
+    c = Content(model.name, _description(load_file(path)), str(path), variant, "cam")
+    c.cam_text = res.summary()
+    c.incomplete = bool(res.problems)
+    with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
+        d = Path(tmp)
+        c.cam_plots = [embed(p) for p in write_plots(res, d)]
+    return c
