@@ -84,6 +84,10 @@ class Frames:
     def __len__(self) -> int:
         return len(self.u)
 
+    def names(self) -> list[str]:
+        """Every name a frame shows (for the font check of :mod:`.writers.fonts`)."""
+        return [self.name, *(o.name for o in self.outlines), *self.points, *self.forces]
+
     def bounds(self, margin: float = 0.08) -> tuple[float, float, float, float]:
         """xmin, xmax, ymin, ymax over every frame (and the force arrows), with a margin."""
         xs = [o.x for o in self.outlines] + [p[0] for p in self.points.values()]
@@ -357,21 +361,14 @@ def ffmpeg_available() -> bool:
     return shutil.which(path) is not None
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def render(fr: Frames, size: tuple[int, int] = (800, 600), dpi: int = 100):
     """Yield each frame as an RGB image (an array of shape (height, width, 3), uint8).
 
     The axes, grid, guides, pivots and faint full paths are drawn once; each frame
     redraws only what moves (blitting), which keeps a 361-frame animation to seconds."""
-    plt = _pyplot()
+    from .writers.fonts import pyplot
+
+    plt = pyplot(fr.names())
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     try:
         yield from _render(fr, fig)
