@@ -90,18 +90,26 @@ def main() -> None:
     help="Write the file's requirements as a JUnit XML report (one test case each).",
 )
 @click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["png", "svg"]),
+    default="png",
+    show_default=True,
+    help="Image format of the plots (svg keeps the text as text).",
+)
+@click.option(
     "--watch",
     is_flag=True,
     help="Run again whenever FILE is saved, printing what changed; Ctrl-C stops "
     '(needs watchfiles: pip install "mechsolve[watch]").',
 )
 @QUIET
-def run(file: Path, outdir, step, variant, no_plots, method, at, junit, watch, quiet) -> None:
+def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
     _interrupt_on_sigterm()
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet)
+    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt)
     if watch:
         try:
             from .watch import watch_file
@@ -123,7 +131,9 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, watch, q
         _fail(exc)
 
 
-def _run_job(file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet):
+def _run_job(
+    file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet, fmt="png"
+):
     """One run: solve, write, print; ``(exit code, results or None)``. Errors raise."""
     import numpy as np
 
@@ -177,7 +187,7 @@ def _run_job(file: Path, outdir: Path, step, variant, no_plots, method, at, juni
 
         # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
         # the file's step
-        written += write_plots(api.for_plots(mech, res, method), outdir)
+        written += write_plots(api.for_plots(mech, res, method), outdir, fmt)
     verdicts = _requirements(mech, res, junit, streamed=streamed)
     if not quiet:
         click.echo(text)

@@ -121,3 +121,23 @@ def test_names_in_any_script_in_conditions_and_requirements():
 
     v = check_requirements(mech, ms.solve(mech))
     assert [x.passed for x in v] == [True, True], [x.message for x in v]
+
+
+def test_svg_plots_keep_names_as_text(tmp_path):
+    """--format svg: every plot as SVG whose text is text (a browser draws the names with
+    its own fonts, whatever this machine has)."""
+    from click.testing import CliRunner
+
+    from mechsolve.cli import main
+
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "crane-zh.yaml"), "--format", "svg", "-o", str(tmp_path), "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    svgs = sorted(p.name for p in tmp_path.glob("*.svg"))
+    assert "links.svg" in svgs and "torque.svg" in svgs and not list(tmp_path.glob("*.png"))
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(tmp_path / "links.svg").getroot()
+    texts = "".join(t.text or "" for t in root.iter("{http://www.w3.org/2000/svg}text"))
+    assert "码头吊车机构" in texts and "曲柄" in texts

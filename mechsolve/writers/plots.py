@@ -434,22 +434,31 @@ def plot_reactions(res: Results, path: Path) -> Path:
     return path
 
 
-def write_plots(res: Results, outdir: Path) -> list[Path]:
-    """Write all plots into ``outdir``; return the files written."""
+PLOT_FORMATS = ("png", "svg")
+
+
+def write_plots(res: Results, outdir: Path, fmt: str = "png") -> list[Path]:
+    """Write all plots into ``outdir`` as ``fmt`` (png, or svg with its text kept as text);
+    return the files written."""
     from .fonts import pyplot
 
+    if fmt not in PLOT_FORMATS:
+        raise ValueError(f"plot format {fmt!r}: one of {', '.join(PLOT_FORMATS)}")
     pyplot(names_of(res.mechanism))  # fonts for the names; one note if some cannot be drawn
     outdir.mkdir(parents=True, exist_ok=True)
-    written = [plot_trajectories(res, outdir / "trajectories.png")]
+    written = [plot_trajectories(res, outdir / f"trajectories.{fmt}")]
     for p in res.point_names():
-        written.append(plot_point(res, p, outdir / f"point_{p}.png"))
-    for f in (plot_links(res, outdir / "links.png"), plot_sliders(res, outdir / "sliders.png")):
+        written.append(plot_point(res, p, outdir / f"point_{p}.{fmt}"))
+    for f in (
+        plot_links(res, outdir / f"links.{fmt}"),
+        plot_sliders(res, outdir / f"sliders.{fmt}"),
+    ):
         if f is not None:
             written.append(f)
     if res.forces is not None and np.any(res.forces.ok):
-        written.append(plot_effort(res, outdir / "torque.png"))
-        written.append(plot_reactions(res, outdir / "reactions.png"))
-        h = plot_hodographs(res, outdir / "hodographs.png")
+        written.append(plot_effort(res, outdir / f"torque.{fmt}"))
+        written.append(plot_reactions(res, outdir / f"reactions.{fmt}"))
+        h = plot_hodographs(res, outdir / f"hodographs.{fmt}")
         if h is not None:
             written.append(h)
     return written
