@@ -283,20 +283,20 @@ def figures_table(res) -> Table:
             rows.append(
                 [
                     f"limit positions of rocker {lp.name}",
-                    f"{num(math.degrees(lp.low))}° to {num(math.degrees(lp.high))}°",
+                    f"{num(math.degrees(lp.low), 6)}° to {num(math.degrees(lp.high), 6)}°",
                     f"at {a} and {b}",
                 ]
             )
-            rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing))}°", ""])
+            rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing), 6)}°", ""])
         else:
             rows.append(
                 [
                     f"limit positions of slider {lp.name}",
-                    f"{num(lp.low)} m to {num(lp.high)} m",
+                    f"{num(lp.low, 6)} m to {num(lp.high, 6)} m",
                     f"at {a} and {b}",
                 ]
             )
-            rows.append([f"stroke of {lp.name}", f"{num(lp.swing)} m", ""])
+            rows.append([f"stroke of {lp.name}", f"{num(lp.swing, 6)} m", ""])
         if lp.time_ratio is not None:
             rows.append(
                 [
@@ -317,16 +317,17 @@ def figures_table(res) -> Table:
     f = res.forces
     if f is not None and np.any(f.ok):
         kind, unit = res.effort_name
-        unit = unit.replace("*", " ")
         e = res.driving_effort
         if np.any(np.isfinite(e)):
+            sc, unit = (1e3, "k" + unit) if np.nanmax(np.abs(e)) >= 1e4 else (1.0, unit)
+            unit = unit.replace("*", " ")
             imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
-            rows.append([f"largest driving {kind}", f"{num(e[imax])} {unit}", res.describe_u(imax)])
-            rows.append(
-                [f"smallest driving {kind}", f"{num(e[imin])} {unit}", res.describe_u(imin)]
-            )
+            for what, i in (("largest", imax), ("smallest", imin)):
+                rows.append(
+                    [f"{what} driving {kind}", f"{num(e[i] / sc, 6)} {unit}", res.describe_u(i)]
+                )
             mean, what = res.mean_effort()
-            rows.append([f"{what} driving {kind}", f"{num(mean)} {unit}", ""])
+            rows.append([f"{what} driving {kind}", f"{num(mean / sc, 6)} {unit}", ""])
         rows.append(["work of the driver", res.work_text().split(": ", 1)[-1],
                      "per cycle" if res.is_full_cycle() else "over the sweep"])  # fmt: skip
         resid = np.where(f.ok, f.residual, np.nan)
