@@ -34,35 +34,14 @@ from . import (
     Spring,
     Sweep,
     Torque,
+    keys,
 )
 from .source import KeyPath, Source, load_file, load_text
 from .validate import suggest
 
-TOP_KEYS = (
-    "name",
-    "description",
-    "units",
-    "ground",
-    "links",
-    "joints",
-    "driver",
-    "sweep",
-    "assembly",
-    "outputs",
-    "solver",
-    "gravity",
-    "loads",
-    "variants",
-    "instants",
-    "motor",
-    "flywheel",
-    "simulate",
-    "requirements",
-    "study",  # a design study (mechsolve sweep); not read by run
-    "cam",  # a cam design (mechsolve cam); not read by run
-)
+TOP_KEYS = keys.TOP.allowed  # "study" and "cam" are read by their own commands, not run
 
-METHODS = ("auto", "newton", "split-newton")  # solver.method and --method
+METHODS = keys.METHODS  # solver.method and --method
 
 
 class Reader:
@@ -187,7 +166,7 @@ def _kind(value: Any) -> str:
 
 
 def read_units(r: Reader, value: Any) -> None:
-    m = r.mapping(value, ("units",), ("length", "angle"), "'units'")
+    m = r.mapping(value, ("units",), keys.UNITS.allowed, "'units'")
     for key, kind in (("length", "length"), ("angle", "angle")):
         if key in m:
             text = m[key]
@@ -217,7 +196,7 @@ def read_point(
     """Local coordinates of a point; ``None`` if it refers to a point not read yet."""
     if not isinstance(value, dict):
         return r.xy(value, path)
-    m = r.mapping(value, path, ("length", "angle", "from", "ref"), "a point", ("length", "angle"))
+    m = r.mapping(value, path, keys.POINT.allowed, "a point", keys.POINT.required)
     length = r.positive(m["length"], path + ("length",), "length", allow_zero=False)
     angle = r.quantity(m["angle"], path + ("angle",), "angle")
     origin = (0.0, 0.0)
@@ -241,16 +220,7 @@ def read_point(
     return (origin[0] + length * math.cos(a), origin[1] + length * math.sin(a))
 
 
-LINK_KEYS = (
-    "points",
-    "mass",
-    "weight",
-    "com",
-    "inertia",
-    "uniform_bar",
-    "point_masses",
-    "description",
-)
+LINK_KEYS = keys.LINK.allowed
 
 
 def read_link(r: Reader, name: str, value: Any, g: float = STANDARD_G) -> Link:
@@ -390,7 +360,7 @@ def read_gravity(r: Reader, value: Any) -> tuple[float, float]:
     if value is False or value in ("off", "none", 0, 0.0):
         return (0.0, 0.0)
     if isinstance(value, dict):
-        m = r.mapping(value, path, ("g", "direction"), "'gravity'", ("g",))
+        m = r.mapping(value, path, keys.GRAVITY.allowed, "'gravity'", keys.GRAVITY.required)
         g = r.quantity(m["g"], path + ("g",), "acceleration")
         ang = r.quantity(m.get("direction", -90.0), path + ("direction",), "angle")
     else:
@@ -401,14 +371,8 @@ def read_gravity(r: Reader, value: Any) -> tuple[float, float]:
     return (g * math.cos(ang), g * math.sin(ang))
 
 
-LOAD_KINDS = {
-    "force": {"force", "direction", "at", "on", "frame"},
-    "torque": {"torque", "on"},
-    "spring": {"spring", "stiffness", "free_length", "on"},
-    "damper": {"damper", "coefficient", "on"},
-    "drag": {"drag", "coefficient", "on"},
-}
-LOAD_KEYS = tuple(sorted(set().union(*LOAD_KINDS.values()) | {"when", "description"}))
+LOAD_KINDS = keys.LOAD_KINDS
+LOAD_KEYS = keys.LOAD.allowed
 
 
 class _Owners:
@@ -569,9 +533,7 @@ def read_line(
         bad = [v for v in value if v not in points]
         if bad and not any(ch.isdigit() for ch in bad[0][:1]) and " " not in bad[0]:
             raise r.fail(path, f"{where} has no point {bad[0]!r}" + suggest(bad[0], list(points)))
-    m = r.mapping(
-        value, path, ("through", "angle", "offset"), "a guide line ([P, Q] or {through, angle})"
-    )
+    m = r.mapping(value, path, keys.GUIDE_LINE.allowed, "a guide line ([P, Q] or {through, angle})")
     angle = r.quantity(m.get("angle", 0.0), path + ("angle",), "angle")
     if "through" in m and "offset" in m:
         raise r.fail(path, "give either 'through' or 'offset', not both")
@@ -596,12 +558,7 @@ def read_joint(r: Reader, name: str, value: Any, mech_points) -> PinJoint | Slid
     if isinstance(value, list):  # shorthand: A: [crank, coupler]
         a, b = r.names(value, path, "link", 2)
         return PinJoint(name, a, b, name, where=path)
-    m = r.mapping(
-        value,
-        path,
-        ("revolute", "slider", "point", "line", "block_angle", "description"),
-        f"joint {name!r}",
-    )
+    m = r.mapping(value, path, keys.JOINT.allowed, f"joint {name!r}")
     kinds = [k for k in ("revolute", "slider") if k in m]
     if len(kinds) != 1:
         raise r.fail(
@@ -651,7 +608,7 @@ def read_pin(r: Reader, name: str, value: Any, mech_points) -> list[PinJoint]:
     lpath = path
     point = name
     if isinstance(value, dict):
-        m = r.mapping(value, path, ("revolute", "point", "description"), f"joint {name!r}")
+        m = r.mapping(value, path, keys.PIN.allowed, f"joint {name!r}")
         lpath = path + ("revolute",)
         point = r.name(m.get("point", name), path + ("point",), "point")
         value = m["revolute"]
@@ -703,13 +660,7 @@ def read_joints(r: Reader, value: Any, ground, links) -> list[PinJoint | SliderJ
 
 def read_driver(r: Reader, value: Any, joints) -> Driver:
     path: KeyPath = ("driver",)
-    m = r.mapping(
-        value,
-        path,
-        ("joint", "speed", "direction", "start", "line", "description", "motion"),
-        "'driver'",
-        ("joint",),
-    )
+    m = r.mapping(value, path, keys.DRIVER.allowed, "'driver'", keys.DRIVER.required)
     jname = r.name(m["joint"], path + ("joint",), "joint")
     joint = next((j for j in joints if j.name == jname), None)
     linear = isinstance(joint, SliderJoint)
@@ -732,7 +683,13 @@ def read_driver(r: Reader, value: Any, joints) -> Driver:
     if "start" in m:
         s = m["start"]
         if isinstance(s, dict):
-            sm = r.mapping(s, path + ("start",), ("limit", "at"), "a limit start", ("limit", "at"))
+            sm = r.mapping(
+                s,
+                path + ("start",),
+                keys.LIMIT_START.allowed,
+                "a limit start",
+                keys.LIMIT_START.required,
+            )
             q = r.expression(sm["limit"], path + ("start", "limit"))
             if sm["at"] not in ("min", "max"):
                 raise r.fail(path + ("start", "at"), f"'at' must be min or max, got {sm['at']!r}")
@@ -757,9 +714,7 @@ def read_motion(
     from .motion import ConstantAcceleration, Segments, TableMotion
 
     path: KeyPath = ("driver", "motion")
-    m = r.mapping(
-        value, path, ("accelerate", "from", "segments", "table", "end", "law"), "'motion'"
-    )
+    m = r.mapping(value, path, keys.MOTION.allowed, "'motion'")
     kinds = [k for k in ("accelerate", "segments", "table", "law") if k in m]
     if len(kinds) != 1:
         raise r.fail(
@@ -802,7 +757,7 @@ def read_motion(
         spec = []
         for k, seg in enumerate(segs):
             sp = path + ("segments", k)
-            sm = r.mapping(seg, sp, ("accelerate", "run", "decelerate", "dwell", "to"), "a segment")
+            sm = r.mapping(seg, sp, keys.SEGMENT.allowed, "a segment")
             which = [x for x in ("accelerate", "run", "decelerate", "dwell") if x in sm]
             if len(which) != 1:
                 raise r.fail(
@@ -884,7 +839,7 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
     path: KeyPath = ("sweep",)
     if value is None:
         value = {}
-    m = r.mapping(value, path, ("range", "to", "step", "steps", "duration", "time_step"), "'sweep'")
+    m = r.mapping(value, path, keys.SWEEP.allowed, "'sweep'")
     if driver is not None and driver.motion is not None:
         from .motion import ConstantAcceleration
 
@@ -999,7 +954,7 @@ def read_assembly(r: Reader, value: Any) -> Assembly:
         lines_path = path
     else:
         lines_path = path + ("conditions",)
-    m = r.mapping(value, path, ("conditions", "sketch"), "'assembly'")
+    m = r.mapping(value, path, keys.ASSEMBLY.allowed, "'assembly'")
     asm = Assembly(where=path)
     conds = m.get("conditions", [])
     if isinstance(conds, str):
@@ -1029,9 +984,7 @@ def read_assembly(r: Reader, value: Any) -> Assembly:
 
 def read_outputs(r: Reader, value: Any) -> Outputs:
     path: KeyPath = ("outputs",)
-    m = r.mapping(
-        value, path, ("points", "links", "sliders", "quantities", "relative"), "'outputs'"
-    )
+    m = r.mapping(value, path, keys.OUTPUTS.allowed, "'outputs'")
     out = Outputs(where=path)
     if "relative" in m:
         out.relative = read_relative(r, m["relative"], path + ("relative",))
@@ -1091,7 +1044,7 @@ def read_relative(r: Reader, value: Any, path: KeyPath) -> list[tuple[str, str]]
 
 def read_solver(r: Reader, value: Any) -> SolverOptions:
     path: KeyPath = ("solver",)
-    m = r.mapping(value, path, ("method", "tolerance", "max_iterations"), "'solver'")
+    m = r.mapping(value, path, keys.SOLVER.allowed, "'solver'")
     opts = SolverOptions(where=path)
     if "method" in m:
         if m["method"] not in METHODS:
@@ -1224,7 +1177,7 @@ def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
     from .machine import Motor
 
     path: KeyPath = ("motor",)
-    m = r.mapping(value, path, ("joint", "stall", "slope", "table", "torque", "force"), "'motor'")
+    m = r.mapping(value, path, keys.MOTOR.allowed, "'motor'")
     if driver is None:
         raise r.fail(path, "a motor drives the driver joint: add a 'driver' section")
     if "joint" in m:
@@ -1277,7 +1230,7 @@ def read_flywheel(r: Reader, value: Any, links):
     from .machine import Flywheel
 
     path: KeyPath = ("flywheel",)
-    m = r.mapping(value, path, ("on", "inertia"), "'flywheel'", ("on", "inertia"))
+    m = r.mapping(value, path, keys.FLYWHEEL.allowed, "'flywheel'", keys.FLYWHEEL.required)
     name = r.name(m["on"], path + ("on",), "link")
     if name not in {lk.name for lk in links}:
         raise r.fail(
@@ -1290,13 +1243,7 @@ def read_simulation(r: Reader, value: Any, linear: bool):
     from .machine import INTEGRATORS, Simulation
 
     path: KeyPath = ("simulate",)
-    m = r.mapping(
-        value,
-        path,
-        ("duration", "step", "method", "rtol", "atol", "from", "revolutions", "steady"),
-        "'simulate'",
-        ("duration",),
-    )
+    m = r.mapping(value, path, keys.SIMULATE.allowed, "'simulate'", keys.SIMULATE.required)
     sim = Simulation(duration=r.positive(m["duration"], path + ("duration",), "time"), where=path)
     if "method" in m:
         if m["method"] not in INTEGRATORS:
@@ -1354,7 +1301,7 @@ def read_instants(r: Reader, value: Any, linear: bool) -> list[tuple[float, floa
     path: KeyPath = ("instants",)
     if not isinstance(value, list) or not value:
         raise r.fail(path, "'instants' must be a list of driver states")
-    keys = ("s", "v", "a") if linear else ("theta", "omega", "alpha")
+    sec = keys.INSTANT_LINEAR if linear else keys.INSTANT
     kinds = (
         ("length", "speed", "acceleration")
         if linear
@@ -1363,12 +1310,12 @@ def read_instants(r: Reader, value: Any, linear: bool) -> list[tuple[float, floa
     out = []
     for k, item in enumerate(value):
         ip = path + (k,)
-        m = r.mapping(item, ip, keys, "an instant", keys[:2])
+        m = r.mapping(item, ip, sec.allowed, "an instant", sec.required)
         vals = [
             r.quantity(m[key], ip + (key,), kind) if key in m else 0.0
-            for key, kind in zip(keys, kinds)
+            for key, kind in zip(sec.allowed, kinds)
         ]
-        label = ", ".join(f"{key}={m[key]}" for key in keys if key in m)
+        label = ", ".join(f"{key}={m[key]}" for key in sec.allowed if key in m)
         out.append((vals[0], vals[1], vals[2], label))
     return out
 
@@ -1398,7 +1345,7 @@ def variants(path: str | Path) -> list[str]:
     return list(v) if isinstance(v, dict) else []
 
 
-TORQUE_KEYS = ("name", "description", "units", "torque", "resisting", "speed", "delta")
+TORQUE_KEYS = keys.TORQUE_PROBLEM.allowed
 
 
 def is_torque_problem(src: Source) -> bool:
@@ -1422,11 +1369,11 @@ def read_torque_problem(src: Source) -> dict:
 
     r = Reader(src)
     data = src.data
-    m = r.mapping(data, (), TORQUE_KEYS, "a torque problem", ("torque", "speed"))
+    m = r.mapping(data, (), TORQUE_KEYS, "a torque problem", keys.TORQUE_PROBLEM.required)
     if "units" in data:
         read_units(r, data["units"])
     path: KeyPath = ("torque",)
-    t = r.mapping(m["torque"], path, ("table", "law", "cycle"), "'torque'")
+    t = r.mapping(m["torque"], path, keys.TORQUE_CURVE.allowed, "'torque'")
     cycle = r.positive(t.get("cycle", "360 deg"), path + ("cycle",), "angle")
     if ("table" in t) == ("law" in t):
         raise r.fail(path, "give the torque as a table of [angle, torque] points or as a law")
