@@ -92,6 +92,8 @@ def column_format(values: np.ndarray, digits: int = 5) -> list[str]:
     v = np.asarray(values, float)
     good = v[np.isfinite(v)]
     big = float(np.max(np.abs(good))) if good.size else 0.0
+    if big < 1e-9:  # zero but for rounding (SI values: nm, nm/s)
+        return ["–" if not math.isfinite(x) else "0" for x in v]
     if big == 0:
         dec = 3
     elif 1e-4 <= big < 1e7:
