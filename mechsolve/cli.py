@@ -29,7 +29,9 @@ from .clikit import interrupt_on_sigterm as _interrupt_on_sigterm
 from .clikit import progress_bar as _progress_bar
 from .clikit import stream_above as _stream_above
 from .clikit import write_error as _write_error
+from .commands.animate import animate
 from .commands.cam import cam
+from .commands.report import report
 from .commands.sweep import sweep
 from .commands.synth import synth
 from .errors import EXIT_REQUIREMENTS, InputError
@@ -57,6 +59,10 @@ def main() -> None:
                                              a design study: one row per design, on
                                              all cores or a Dask cluster
     mechsolve run FILE --watch               run again whenever FILE is saved
+    mechsolve report mechanisms/crane.yaml -o crane.html
+                                             one self-contained HTML report
+    mechsolve animate mechanisms/crane.yaml -o crane.gif
+                                             the mechanism in motion
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
     mechsolve bench --quick                  speed against error, in one run
     """
@@ -440,6 +446,8 @@ def bench(quick, cases, plot) -> None:
 main.add_command(cam)
 main.add_command(synth)
 main.add_command(sweep)
+main.add_command(report)
+main.add_command(animate)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

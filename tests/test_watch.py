@@ -93,3 +93,32 @@ def test_watch_runs_again_on_save_and_survives_a_broken_file(tmp_path):
             if proc.poll() is None:
                 proc.kill()
     assert proc.returncode == 0
+
+
+def test_report_watch_rewrites_the_report_on_save(tmp_path):
+    f = tmp_path / "slider.yaml"
+    good = (MECH / "slider-crank.yaml").read_text()
+    f.write_text(good)
+    html = tmp_path / "r.html"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mechsolve", "report", str(f), "--watch", "-o", str(html)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    try:
+        lines = Lines(proc)
+        lines.until("Ctrl-C stops", timeout=180)
+        first = html.stat().st_mtime_ns
+        time.sleep(0.5)
+        f.write_text(good.replace("name: slider-crank", "name: watched slider-crank"))
+        lines.until("Ctrl-C stops", timeout=180)
+        assert html.stat().st_mtime_ns > first
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=20)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+    assert proc.returncode == 0

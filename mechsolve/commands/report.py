@@ -40,8 +40,13 @@ from ..clikit import (
     type=click.IntRange(min=2),
     help="Frames of the embedded animation (default: one per degree of the driver).",
 )
+@click.option(
+    "--watch",
+    is_flag=True,
+    help="Write the report again whenever FILE is saved; Ctrl-C stops (needs watchfiles).",
+)
 @QUIET
-def report(file: Path, output, variant, pdf, frames, quiet) -> None:
+def report(file: Path, output, variant, pdf, frames, watch, quiet) -> None:
     """Write one HTML file about FILE that opens in any browser without a network: the
     model's tables with units, degrees of freedom and Assur groups with their branches,
     the mechanism drawn to scale, the figures of the motion, the position tables at the
@@ -57,13 +62,22 @@ def report(file: Path, output, variant, pdf, frames, quiet) -> None:
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
         if output is None:
             output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
-        done = write_report(file, variant, output, pdf=pdf, frames=frames)
-        if not quiet:
-            click.echo(done.text())
-            click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
-        if done.failed_requirements:
-            sys.exit(EXIT_REQUIREMENTS)
-        sys.exit(EXIT_WARNINGS if done.incomplete else EXIT_OK)
+
+        def once():
+            done = write_report(file, variant, output, pdf=pdf, frames=frames)
+            if not quiet:
+                click.echo(done.text())
+                click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
+            if done.failed_requirements:
+                return EXIT_REQUIREMENTS, None
+            return (EXIT_WARNINGS if done.incomplete else EXIT_OK), None
+
+        if watch:
+            from ..watch import watch_file
+
+            watch_file(file, once, echo=click.echo)
+            sys.exit(EXIT_OK)
+        sys.exit(once()[0])
     except KeyboardInterrupt:
         click.echo("interrupted: the report was not written", err=True)
         sys.exit(EXIT_INTERRUPTED)
