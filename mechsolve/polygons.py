@@ -635,6 +635,7 @@ class _Construction:
             )
         )
         ta = self.ap.add(Arrow(f"a^t_{r4}", nn, key4, al * e, "tangential", f"⟂ {qn}{an_}"))
+        self.absolute(self.ap, key4, f"a_{a4}", f"= a^n_{r4} + a^t_{r4}")
         self.ap.add(
             Arrow(f"a^k_{rs}", key4, kk, cor, "coriolis", f"= 2 ω{self.num[bar]} v_{rs}, ⟂ {joint}")
         )
@@ -661,9 +662,16 @@ class _Construction:
         self.alias[(mn, x2)] = mlab
         self.vp.nodes[mlab] = va_ + r1 * da
         self.where[mlab] = (x1, M)
+        vsides, asides = [], []
+        for (_, sl, k, _, _), nd in zip(sides, nodes):
+            if k == self.nb:
+                vsides.append(f"v_{mlab} (∥ {sl.name})")
+                asides.append(f"a_{mlab} (∥ {sl.name})")
+            else:
+                vsides.append(f"v_{nd} + v_{mlab}{nd} (∥ {sl.name})")
+                asides.append(f"a_{nd} + a^k_{mlab}{nd} + a^r_{mlab}{nd} (∥ {sl.name})")
         self.vp.equations.append(
-            f"{mn} (PRP, sliders {sa.name} and {sb.name}): v_{mlab} = v_{nodes[0]} + v_rel "
-            f"(∥ {sa.name}) = v_{nodes[1]} + v_rel (∥ {sb.name})"
+            f"{mn} (PRP, sliders {sa.name} and {sb.name}): v_{mlab} = " + " = ".join(vsides)
         )
         rels = (r1, r2)
         accs = []
@@ -684,12 +692,13 @@ class _Construction:
             an_ = self.anode(k, mn, M)
             cor = 2 * _k_cross(self.kv[k][2], vr * d)
             accs.append((an_, self.ap.nodes[an_] + cor, cor, d))
-        (na, ba, ca, _), (nb2, bb, cb, _) = accs
+        (_, ba, _, _), (_, bb, _, _) = accs
         q1, q2 = _intersect(ba, da, bb, db, f"acceleration of {mn}")
         key = mlab + "'"
         self.ap.nodes[key] = ba + q1 * da
-        self.ap.equations.append(f"{mn}: a_{mlab} = a_K1 + a^k + a^r = a_K2 + a^k + a^r")
-        for (x, sl, k, sg, d), (an_, base, cor, _), q, vr in zip(sides, accs, (q1, q2), rels):
+        self.ap.equations.append(f"{mn}: a_{mlab} = " + " = ".join(asides))
+        for side, (an_, base, cor, _), q, nd, vr in zip(sides, accs, (q1, q2), nodes, rels):
+            x, sl, k, sg, d = side
             g = k == self.nb
             if g:
                 self.ap.add(
@@ -698,9 +707,9 @@ class _Construction:
             else:
                 kk = f"k{self.num[x]}'"
                 self.ap.nodes[kk] = base
-                self.ap.add(Arrow(f"a^k_{mlab}", an_, kk, cor, "coriolis", f"⟂ {sl.name}"))
+                self.ap.add(Arrow(f"a^k_{mlab}{nd}", an_, kk, cor, "coriolis", f"⟂ {sl.name}"))
                 self.ap.add(
-                    Arrow(f"a^r_{mlab}", kk, key, q * d, "sliding", f"∥ {sl.name}", along=q)
+                    Arrow(f"a^r_{mlab}{nd}", kk, key, q * d, "sliding", f"∥ {sl.name}", along=q)
                 )
             self.ka[x] = (M, self.ap.nodes[key], self.ka[k][2])
             self.sliding.append((sl.name, sg * vr, sg * q))
