@@ -1108,7 +1108,7 @@ def _aspect(poly: Polygon) -> float:
     return float(min(max(h / w, 0.35), 2.5))
 
 
-def _legend(fig) -> None:
+def _legend(fig, *polys: Polygon) -> None:
     from matplotlib.lines import Line2D
 
     names = {
@@ -1119,7 +1119,10 @@ def _legend(fig) -> None:
         "coriolis": "Coriolis aᵏ",
         "sliding": "sliding along a guide",
     }
-    handles = [Line2D([], [], color=COLOURS[k], lw=2, label=v) for k, v in names.items()]
+    used = {a.kind for p in polys for a in p.arrows}
+    handles = [
+        Line2D([], [], color=COLOURS[k], lw=2, label=v) for k, v in names.items() if k in used
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8, frameon=False)
 
 
@@ -1172,7 +1175,7 @@ def draw_polygons(
             fig, ax = plt.subplots(figsize=(7.5, 6.5 * _aspect(poly) + 2.2))
             _draw_polygon(ax, poly)
             fig.suptitle(title, fontsize=9)
-            _legend(fig)
+            _legend(fig, poly)
             fig.tight_layout(rect=(0, 0.07, 1, 1))
             for ext in exts:
                 path = outdir / f"{stem}.{ext}"
@@ -1187,7 +1190,7 @@ def draw_polygons(
     _draw_polygon(axes[1], res.velocity)
     _draw_polygon(axes[2], res.acceleration)
     fig.suptitle(title, fontsize=11)
-    _legend(fig)
+    _legend(fig, res.velocity, res.acceleration)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     if sheet is not None:
         path = Path(sheet)
