@@ -12,9 +12,7 @@ link by its first, the convention of the CSV), all arrows on one scale.
 from __future__ import annotations
 
 import math
-import os
 import shutil
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -22,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import InputError
+from .writers.atomic import replacing
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -503,23 +502,11 @@ def write_animation(
         raise InputError(f"--fps {fps}: the frame rate must be a positive number")
     if suffix == ".mp4" and not ffmpeg_available():
         raise InputError(f"-o {path}: {FFMPEG_HINT}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    with replacing(path, suffix) as tmp:  # Pillow and ffmpeg go by the suffix
         if suffix == ".gif":
             _write_gif(render(fr, size, dpi), tmp, fps)
         else:
             _write_mp4(render(fr, size, dpi), tmp, fps, size)
-        mask = os.umask(0)  # mkstemp makes the file private; give it the usual mode
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
     return path
 
 

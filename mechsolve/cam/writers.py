@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import csv
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from ..writers.atomic import replacing
 from .analysis import CamResult
 from .design import extremes
 
@@ -19,18 +18,11 @@ DXF_HINT = 'the DXF needs ezdxf: pip install "mechsolve[cam]" (or pip install ez
 
 
 def _atomic_csv(path: Path, header: list[str], rows) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(header)
-            for r in rows:
-                w.writerow(["" if not np.isfinite(v) else format(float(v), ".12g") for v in r])
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with replacing(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for r in rows:
+            w.writerow(["" if not np.isfinite(v) else format(float(v), ".12g") for v in r])
     return path
 
 
@@ -99,15 +91,8 @@ def write_dxf(res: CamResult, path: Path) -> Path | None:
     r = 0.05 * res.follower.base_radius * MM
     msp.add_line((-r, 0), (r, 0), dxfattribs={"layer": "CENTRE"})
     msp.add_line((0, -r), (0, r), dxfattribs={"layer": "CENTRE"})
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    os.close(fd)
-    try:
+    with replacing(path) as tmp:
         doc.saveas(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path
 
 
@@ -192,15 +177,9 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
 
 
 def _save(fig, path: Path, plt) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, dpi=120, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        with replacing(path) as tmp:
+            fig.savefig(tmp, dpi=120, format="png")
     finally:
         plt.close(fig)
     return path

@@ -70,9 +70,9 @@ def print_pdf(html: Path, pdf: Path, browser: str | None = None) -> Path:
     if browser is None:
         raise InputError(f"--pdf: no headless browser found to print the PDF: {INSTALL_HINT}")
     html, pdf = Path(html).resolve(), Path(pdf)
-    fd, tmp = tempfile.mkstemp(prefix=f".{pdf.name}.", suffix=".pdf", dir=pdf.parent or ".")
-    os.close(fd)
-    try:
+    from ..writers.atomic import replacing
+
+    with replacing(pdf, ".pdf") as tmp:
         with tempfile.TemporaryDirectory(prefix="mechsolve-browser-") as profile:
             cmd = headless_command(
                 browser,
@@ -94,14 +94,4 @@ def print_pdf(html: Path, pdf: Path, browser: str | None = None) -> Path:
         if proc.returncode != 0 or os.path.getsize(tmp) == 0:
             tail = "\n".join(proc.stderr.strip().splitlines()[-3:])
             raise InputError(f"--pdf: {browser} could not print the report: {tail}")
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, pdf)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
     return pdf

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
+from ..writers.atomic import replacing
 from .designs import Study
 from .figures import Row
 
@@ -44,13 +44,11 @@ def cell(value: Any) -> str:
 def write_csv(study: Study, rows: list[Row], path: Path) -> Path:
     """Write the table (atomically: a file half written is never left)."""
     cols = columns(study, rows)
-    tmp = path.with_name(path.name + ".part")
-    with open(tmp, "w", newline="") as f:
+    with replacing(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(cols)
         for r in sorted(rows, key=lambda r: r["design [-]"]):
             w.writerow([cell(r.get(c)) for c in cols])
-    os.replace(tmp, path)
     return path
 
 
@@ -74,9 +72,8 @@ def write_parquet(study: Study, rows: list[Row], path: Path) -> Path:
             data[c] = pa.array([None if v is None else float(v) for v in vals], type=pa.float64())
         else:
             data[c] = pa.array([None if v is None else str(v) for v in vals], type=pa.string())
-    tmp = path.with_name(path.name + ".part")
-    pq.write_table(pa.table(data), tmp)
-    os.replace(tmp, path)
+    with replacing(path) as tmp:
+        pq.write_table(pa.table(data), tmp)
     return path
 
 

@@ -16,35 +16,22 @@ Every axis names its quantity and unit. matplotlib is imported only here.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from .atomic import replacing
 
 if TYPE_CHECKING:
     from ..results import Results
 
 
 def _save(fig, path: Path, dpi: int) -> None:
-    """Save ``fig`` to a temporary file beside ``path`` and move it into place, so that
-    an interrupted run (Ctrl-C, SIGTERM) never leaves a half-written image."""
+    """Save ``fig`` so that an interrupted run never leaves a half-written image."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
-        mask = os.umask(0)  # mkstemp makes the file private; give it the usual mode
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    with replacing(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
 
 
 def _plt():
