@@ -31,7 +31,9 @@ from .clikit import stream_above as _stream_above
 from .clikit import write_error as _write_error
 from .commands.animate import animate
 from .commands.cam import cam
+from .commands.polygons import polygons
 from .commands.report import report
+from .commands.schema import schema
 from .commands.sweep import sweep
 from .commands.synth import synth
 from .errors import EXIT_REQUIREMENTS, InputError
@@ -63,6 +65,10 @@ def main() -> None:
                                              one self-contained HTML report
     mechsolve animate mechanisms/crane.yaml -o crane.gif
                                              the mechanism in motion
+    mechsolve polygons mechanisms/shaper.yaml --variant graphical --at 7
+                                             velocity and acceleration polygons
+    mechsolve schema -o mechanism.schema.json
+                                             the file format's JSON Schema (editors)
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
     mechsolve bench --quick                  speed against error, in one run
     """
@@ -448,6 +454,8 @@ main.add_command(synth)
 main.add_command(sweep)
 main.add_command(report)
 main.add_command(animate)
+main.add_command(polygons)
+main.add_command(schema)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -1155,7 +1155,7 @@ def draw_polygons(
     text). ``sheet``: write the sheet to this file only (``.png`` or ``.svg``) instead.
     The result's ``images`` lists the files written."""
     from .writers.fonts import pyplot
-    from .writers.plots import _save, names_of
+    from .writers.plots import names_of, save_figure
 
     res = build_polygons(
         mech, at, scale_v=scale_v, scale_a=scale_a, per_turn=per_turn, method=method
@@ -1179,7 +1179,7 @@ def draw_polygons(
             fig.tight_layout(rect=(0, 0.07, 1, 1))
             for ext in exts:
                 path = outdir / f"{stem}.{ext}"
-                _save(fig, path, 120)
+                save_figure(fig, path, 120)
                 written.append(path)
             plt.close(fig)
     asp = [_aspect(res.velocity), _aspect(res.acceleration)]
@@ -1194,12 +1194,12 @@ def draw_polygons(
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     if sheet is not None:
         path = Path(sheet)
-        _save(fig, path, 120)
+        save_figure(fig, path, 120)
         written.append(path)
     else:
         for ext in exts:
             path = outdir / f"polygons.{ext}"
-            _save(fig, path, 120)
+            save_figure(fig, path, 120)
             written.append(path)
     plt.close(fig)
     res.images = written

@@ -41,12 +41,18 @@ from ..clikit import (
     help="Frames of the embedded animation (default: one per degree of the driver).",
 )
 @click.option(
+    "--polygons-at",
+    help="Position of the velocity and acceleration polygons: a position number (12 per "
+    "turn from the start, as course designs count them) or a driver angle such as "
+    "'196.8 deg' [default: position 2].",
+)
+@click.option(
     "--watch",
     is_flag=True,
     help="Write the report again whenever FILE is saved; Ctrl-C stops (needs watchfiles).",
 )
 @QUIET
-def report(file: Path, output, variant, pdf, frames, watch, quiet) -> None:
+def report(file: Path, output, variant, pdf, frames, polygons_at, watch, quiet) -> None:
     """Write one HTML file about FILE that opens in any browser without a network: the
     model's tables with units, degrees of freedom and Assur groups with their branches,
     the mechanism drawn to scale, the figures of the motion, the position tables at the
@@ -64,7 +70,8 @@ def report(file: Path, output, variant, pdf, frames, watch, quiet) -> None:
             output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
 
         def once():
-            done = write_report(file, variant, output, pdf=pdf, frames=frames)
+            at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
+            done = write_report(file, variant, output, pdf=pdf, frames=frames, polygons_at=at)
             if not quiet:
                 click.echo(done.text())
                 click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))

@@ -100,6 +100,7 @@ def build(
     *,
     frames: int | None = None,
     method: str | None = None,
+    polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``file`` every way the report shows it."""
     from .. import api
@@ -109,7 +110,7 @@ def build(
     if is_cam_file(file):
         return cam_content(file, variant)
     mech = api.load(file, variant)
-    content = mechanism_content(mech, frames=frames, method=method)
+    content = mechanism_content(mech, frames=frames, method=method, polygons_at=polygons_at)
     content.variant = variant
     content.file = str(file)
     return content
@@ -130,6 +131,7 @@ def write_report(
     pdf: bool | str | Path = False,
     frames: int | None = None,
     method: str | None = None,
+    polygons_at: str | int | None = None,
 ) -> ReportOutcome:
     """Write the HTML report of ``file`` to ``out`` (default: ``<file stem>.html`` in the
     current folder) and, with ``pdf``, print it to PDF beside it (or to the path given).
@@ -148,7 +150,7 @@ def write_report(
     pdf_path = None
     if pdf:
         pdf_path = Path(pdf) if not isinstance(pdf, bool) else out.with_suffix(".pdf")
-    content = build(file, variant, frames=frames, method=method)
+    content = build(file, variant, frames=frames, method=method, polygons_at=polygons_at)
     html = render(content)
     try:
         _write_atomic(out, html)

@@ -472,7 +472,12 @@ def _description(source) -> str:
 
 
 def mechanism_content(
-    mech, *, frames: int | None = None, method: str | None = None, simulate: bool = True
+    mech,
+    *,
+    frames: int | None = None,
+    method: str | None = None,
+    simulate: bool = True,
+    polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``mech`` every way the report shows it and gather the results."""
     from .. import api
@@ -529,6 +534,21 @@ def mechanism_content(
             sdir.mkdir()
             c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
             c.incomplete = c.incomplete or sim.incomplete()
+        if mech.driver is not None and not res.linear:
+            # the graphical check at one position (default: position 2 of 12, 30 deg
+            # after the start, where a mechanism that starts at a limit already moves)
+            from ..errors import InputError
+            from ..polygons import draw_polygons
+
+            try:
+                pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
+            except InputError as exc:  # a group the graphical method here does not draw
+                if polygons_at is not None:
+                    raise
+                c.polygons_text = f"(no polygons: {exc})"
+            else:
+                c.polygons_text = pol.text()
+                c.polygons_images = [embed(p) for p in pol.images if p.suffix == ".png"]
         if mech.requirements:
             c.verdicts = check_requirements(mech, res)
             c.requirements = verdict_rows(c.verdicts)

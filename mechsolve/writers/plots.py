@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from ..results import Results
 
 
-def _save(fig, path: Path, dpi: int) -> None:
+def save_figure(fig, path: Path, dpi: int) -> None:
     """Save ``fig`` so that an interrupted run never leaves a half-written image."""
     path = Path(path)
     with replacing(path) as tmp:
@@ -191,7 +191,7 @@ def plot_trajectories(res: Results, path: Path) -> Path:
     if res.point_names():
         ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    _save(fig, path, 120)
+    save_figure(fig, path, 120)
     plt.close(fig)
     return path
 
@@ -219,7 +219,7 @@ def plot_point(res: Results, name: str, path: Path) -> Path:
         axes[-1][c].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: point {name}")
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -249,7 +249,7 @@ def plot_links(res: Results, path: Path) -> Path | None:
     axes[-1][0].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: links")
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -277,7 +277,7 @@ def plot_sliders(res: Results, path: Path) -> Path | None:
     axes[-1][0].set_xlabel(xlabel)
     fig.suptitle(f"{res.mechanism.name}: sliders (along their guides)")
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -336,7 +336,7 @@ def plot_effort(res: Results, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -390,7 +390,7 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         ax.axis("off")
     fig.suptitle(f"{res.mechanism.name}: hodographs of the reactions on the ground")
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -416,7 +416,7 @@ def plot_reactions(res: Results, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    _save(fig, path, 110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -464,6 +464,6 @@ def draw_start(analysis, state, path: Path, title: str) -> Path:
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    _save(fig, path, 120)
+    save_figure(fig, path, 120)
     plt.close(fig)
     return path
