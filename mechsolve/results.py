@@ -297,9 +297,11 @@ class Results:
 
     def transmission_angles(self):
         """The smallest transmission angle of each loop (see :mod:`mechsolve.limits`)."""
-        from .limits import transmission_angles
+        if not hasattr(self, "_transmission"):
+            from .limits import transmission_angles
 
-        return transmission_angles(self.solution)
+            self._transmission = transmission_angles(self.solution)
+        return self._transmission
 
     @property
     def events(self):
