@@ -60,6 +60,68 @@ def rcond(J: np.ndarray) -> np.ndarray:
     return out
 
 
+def rcond_lower(J: np.ndarray) -> np.ndarray:
+    """A lower bound of :func:`rcond` for square matrices (N, n, n), at the cost of one
+    inverse: ``1 / (|A|_F |A^-1|_F)`` of the same equilibrated ``A``. As ``|A|_2 <=
+    |A|_F <= sqrt(n) |A|_2``, it is between ``rcond / n`` and ``rcond``. NaN where the
+    matrix is not finite or is exactly singular."""
+    out = np.full(J.shape[0], np.nan)
+    good = np.all(np.isfinite(J), axis=(1, 2))
+    if not np.any(good):
+        return out
+    Jg = J[good]
+    cs = np.linalg.norm(Jg, axis=1, keepdims=True)
+    cs[cs == 0] = 1.0
+    Js = Jg / cs
+    rs = np.linalg.norm(Js, axis=2, keepdims=True)
+    rs[rs == 0] = 1.0
+    A = Js / rs
+    inv = _inverse(A)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[good] = 1.0 / (
+            np.sqrt(np.einsum("nij,nij->n", A, A)) * np.sqrt(np.einsum("nij,nij->n", inv, inv))
+        )
+    return out
+
+
+def _inverse(A: np.ndarray) -> np.ndarray:
+    try:
+        return np.linalg.inv(A)
+    except np.linalg.LinAlgError:  # some are exactly singular: those stay NaN
+        out = np.full(A.shape, np.nan)
+        d = np.linalg.det(A)
+        ok = np.isfinite(d) & (d != 0)
+        if np.any(ok):
+            out[ok] = np.linalg.inv(A[ok])
+        return out
+
+
+def near_singular(g: Group, st: State, threshold: float) -> np.ndarray:
+    """Where the reciprocal condition number of a group's block of Phi_q (:func:`rcond`)
+    is at most ``threshold``, exactly as :func:`rcond` says, without its singular value
+    decomposition at every position.
+
+    A cheap lower bound of ``rcond`` is computed at every position: the group's own
+    (:meth:`~mechsolve.groups.NewtonGroup.rcond_bound`, from the inverse its velocities
+    use) or :func:`rcond_lower`. Only where the bound is at most ``threshold`` (or not
+    finite) can the exact value be, and only there is it computed; a position the exact
+    measure flags is never missed. Rectangular blocks (redundant constraints) get the
+    exact measure everywhere.
+    """
+    bound = getattr(g, "rcond_bound", None)
+    lower = bound(st) if bound is not None else None
+    if lower is None:
+        J, _ = group_block(g, st)
+        if J.shape[1] != J.shape[2]:
+            return rcond(J) <= threshold
+        lower = rcond_lower(J)
+    cand = np.flatnonzero(~(lower > threshold))
+    out = np.zeros(st.n, bool)
+    if cand.size:
+        out[cand] = rcond(group_block(g, st.take(cand))[0]) <= threshold
+    return out
+
+
 def jacobian_rcond(plan: list[Group], st: State, indicator: np.ndarray | None = None) -> np.ndarray:
     """The smallest reciprocal condition number over the groups at each position.
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .conditioning import SINGULAR_INDICATOR, group_block, rcond
+from .conditioning import SINGULAR_INDICATOR, near_singular
 from .groups import NewtonGroup
 from .solution import Solution
 from .state import State
@@ -69,7 +69,7 @@ class SingularRates:
             elif isinstance(g, NewtonGroup):
                 # a Newton solve stops within the square root of the rounding error of
                 # a singular point, so its block is only nearly singular there
-                where = rcond(group_block(g, st)[0]) <= NEWTON_SINGULAR_RCOND
+                where = near_singular(g, st, NEWTON_SINGULAR_RCOND)
                 newton |= where & sol.ok
             else:
                 continue

@@ -10,17 +10,20 @@ started on. Velocities and accelerations solve the group's block of
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ..constraints import AngleDriverConstraint, RevoluteConstraint
 from ..errors import SolverError
-from ..solvers.newton import SolveStats, solve
+from ..solvers.newton import SolveStats, newton_lean, solve
 from ..state import State
 from .base import Drive, Group
 
 MAX_JUMP = 0.05  # largest accepted Newton correction: 5 % of the size, or 0.05 rad
 MAX_DEPTH = 10  # at most 2**10 substeps per interval
 BATCH_MIN = 64  # sweeps of at least this many positions are refined in one batch
-COARSE = 48  # positions of the coarse continuation that predicts a batched sweep
+COARSE = 32  # positions of the coarse continuation that predicts a batched sweep
 
 
 class NewtonGroup(Group):
@@ -38,6 +41,12 @@ class NewtonGroup(Group):
         self.batched = True
         self.predictor = "hermite"  # batched prediction between coarse positions: or "linear"
         self.max_iterations = max_iterations
+        try:  # revolute groups: the links' angles are the only unknowns of the sweep
+            self.red: _Angles | None = _Angles(bodies, constraints) if self.m == self.n else None
+        except ValueError:
+            self.red = None
+        self._inv_cache: tuple | None = None
+        self._bound: tuple[float, float, float] | None = None
         super().__init__(bodies, constraints, names)
 
     def describe(self) -> str:
@@ -88,6 +97,62 @@ class NewtonGroup(Group):
         q, stats = solve(fun, jac, q0, self.atol, self.max_iterations)
         self.set_q(st1, 0, q)
         return q, stats
+
+    def _solve_one(self, st1: State | None, u1: np.ndarray, q0: np.ndarray, K=None):
+        """One position of a sweep from the guess ``q0`` (body coordinates, as
+        :meth:`solve_at`): a revolute group by Newton in its links' angles alone (the
+        guess's angles; its frames' positions follow from them), else :meth:`solve_at`.
+        The scipy fallback of :func:`~mechsolve.solvers.newton.solve` applies to both.
+        ``K``: the solved bodies' terms at this position (:meth:`_Angles.known`), when
+        known already; ``st1`` (a one-position state, updated) may then be None."""
+        red = self.red
+        if red is None:
+            return self.solve_at(st1, u1, q0)
+        if K is None:
+            K = red.known(st1)
+        Ku = red.with_driver(K[0], u1)[0]
+        M1, M2, M3, MT = red.M1, red.M2, red.M3 if red.nd else 0.0, red.MT
+
+        def fun_jac(th):
+            C, S = np.cos(th), np.sin(th)
+            return Ku + np.concatenate([C, S, th]) @ MT, M2 * C - M1 * S + M3
+
+        th0 = np.asarray(q0, float)[2::3]
+        th, stats = newton_lean(fun_jac, th0, self.atol, self.max_iterations)
+        if not stats.converged:  # the full Newton with its scipy fallback
+
+            def fun(th):
+                return fun_jac(th)[0]
+
+            def jac(th):
+                return fun_jac(th)[1]
+
+            th, stats = solve(fun, jac, th0, self.atol, self.max_iterations)
+        if stats.converged and red.pinned:
+            th = th[None].copy()
+            red.pin(th, K[0], u1)
+            th = th[0]
+        x, y = red.poses(np.cos(th)[None], np.sin(th)[None], K[1], K[2])
+        q = np.empty(self.n)
+        q[0::3], q[1::3], q[2::3] = x[0], y[0], th
+        if st1 is not None:
+            self.set_q(st1, 0, q)
+        return q, stats
+
+    def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
+        """Place the group's links at all positions of ``st`` from their angles (N, n)."""
+        C, S = np.cos(th), np.sin(th)
+        x, y = self.red.poses(C, S, Px, Py)
+        for b, k in self.col.items():
+            st.x[b], st.y[b], st.th[b] = x[:, k], y[:, k], th[:, k]
+            st.c[b], st.s[b] = C[:, k], S[:, k]
+
+    def _q_rows(self, st: State) -> np.ndarray:
+        """The group's body coordinates at every position (N, 3 links)."""
+        q = np.empty((st.n, self.n))
+        for b, k in self.col.items():
+            q[:, 3 * k], q[:, 3 * k + 1], q[:, 3 * k + 2] = st.x[b], st.y[b], st.th[b]
+        return q
 
     # -- the sweep ----------------------------------------------------------------------
     def get_qdot(self, st: State, i: int) -> np.ndarray:
@@ -164,6 +229,76 @@ class NewtonGroup(Group):
             h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
             h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
             pred = h00 * qc[seg] + h10 * h * dqc[seg] + h01 * qc[seg + 1] + h11 * h * dqc[seg + 1]
+        if self.red is not None:
+            iters = self._refine_angles(st, u, pred, coarse, qc)
+            if iters is None:
+                return None
+            q = self._q_rows(st)
+        else:
+            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
+            if q is None:
+                return None
+        d = np.abs(q - pred)
+        d[:, 0::3] /= self.scale
+        d[:, 1::3] /= self.scale
+        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
+            return None
+        if self.red is None:
+            self._set_q_rows_into(st, q)
+        iters[coarse] = itc
+        methods = np.full(n, "newton (batched)", dtype=object)
+        return np.ones(n, bool), iters, methods
+
+    def _refine_angles(self, st: State, u, pred, coarse, qc):
+        """Batched Newton in the links' angles from the prediction; the poses are written
+        into ``st``. Returns the iterations per position, or None."""
+        red = self.red
+        n = st.n
+        K, Px, Py = red.known(st)
+        Ku = red.with_driver(K, u)
+        th = pred[:, 2::3].copy()
+        th[coarse] = qc[:, 2::3]
+        iters = np.zeros(n, int)
+        todo = np.ones(n, bool)
+        todo[coarse] = False
+        last = np.full(n, np.inf)
+        J = np.empty((n, red.nb, red.nb))
+        tol = 1e-3 * self.atol
+        for _ in range(self.max_iterations):
+            idx = np.flatnonzero(todo)
+            if idx.size == 0:
+                break
+            t = th[idx]
+            C, S = np.cos(t), np.sin(t)
+            f = red.residual(t, C, S, Ku[idx])
+            r = np.max(np.abs(f), axis=1)
+            Jk = red.jacobian(C, S, out=J[: idx.size])
+            if red.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
+                dq = -(_batch_inverse(Jk) @ f[..., None])[..., 0]
+            else:
+                try:
+                    dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
+                except np.linalg.LinAlgError:
+                    return None
+            step = np.max(np.abs(dq), axis=1)
+            # as below: converged when the residual is small and the step tiny or no
+            # longer shrinking (the rounding level); that last step is not taken
+            done = (r <= self.atol) & ((step <= tol) | (step >= last[idx]))
+            take = ~done | (step <= tol)
+            th[idx[take]] += dq[take]
+            iters[idx] += 1
+            last[idx] = step
+            todo[idx[done]] = False
+        if todo.any() or not np.all(np.isfinite(th)):
+            return None
+        red.pin(th, K, u)
+        self._put_angles(st, th, Px, Py)
+        return iters
+
+    def _refine_bodies(self, st: State, u, pred, coarse, qc):
+        """Batched Newton in body coordinates from the prediction. Returns ``(q,
+        iterations)``, or ``(None, None)``."""
+        n = st.n
         q = pred.copy()
         iters = np.zeros(n, int)
         todo = np.ones(n, bool)
@@ -182,7 +317,7 @@ class NewtonGroup(Group):
             try:
                 dq = np.linalg.solve(J, -f[..., None])[..., 0]
             except np.linalg.LinAlgError:
-                return None
+                return None, None
             step = np.max(np.abs(dq), axis=1)
             # converged: the residual was already small and the step tiny, or no longer
             # shrinking (the rounding level); the last step is then not taken
@@ -193,16 +328,8 @@ class NewtonGroup(Group):
             last[idx] = step
             todo[idx[done]] = False
         if todo.any():
-            return None
-        d = np.abs(q - pred)
-        d[:, 0::3] /= self.scale
-        d[:, 1::3] /= self.scale
-        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
-            return None
-        self._set_q_rows_into(st, q)
-        iters[coarse] = itc
-        methods = np.full(n, "newton (batched)", dtype=object)
-        return np.ones(n, bool), iters, methods
+            return None, None
+        return q, iters
 
     def _set_q_rows(self, st1: State, q: np.ndarray) -> None:
         for b, k in self.col.items():
@@ -246,12 +373,15 @@ class NewtonGroup(Group):
         hu: list[float] = []
         hq: list[np.ndarray] = []
         last_good = np.asarray(q_start, float)
+        # a revolute group needs only the solved bodies' terms at each position
+        Kall = self.red.known(st) if self.red is not None else None
         for i in range(n):
             if not ok_in[i]:
                 self._nan(st, i)
                 hu, hq = [], []
                 continue
-            st1 = st.take([i])
+            Ki = None if Kall is None else [k[i : i + 1] for k in Kall]
+            st1 = st.take([i]) if Ki is None else None
             ui = float(drive.u[i])
             if not hq:  # the start, or the first position after a gap
                 guess = restart(i) if (restart is not None and i > 0) else None
@@ -260,10 +390,10 @@ class NewtonGroup(Group):
                     methods[i] = "failed"
                     continue
                 q0 = guess if guess is not None else last_good
-                q, stats = self.solve_at(st1, drive.u[i : i + 1], q0)
+                q, stats = self._solve_one(st1, drive.u[i : i + 1], q0, Ki)
                 good = stats.converged
             else:
-                q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix)
+                q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki)
             iters[i] = stats.iterations
             methods[i] = stats.method
             if good:
@@ -276,10 +406,11 @@ class NewtonGroup(Group):
                 hu, hq = [], []
         return ok, iters, methods
 
-    def _advance(self, st1: State, ui: float, hu, hq, k: int, prefix):
-        """One continuation step to ``ui``; substeps when the full step jumps."""
+    def _advance(self, st1: State | None, ui: float, hu, hq, k: int, prefix, K1=None):
+        """One continuation step to ``ui``; substeps when the full step jumps. ``K1``:
+        the solved bodies' terms at ``ui`` for a revolute group (``st1`` is then None)."""
         q_pred = _extrapolate(hu, hq, ui)
-        q, stats = self.solve_at(st1, np.array([ui]), q_pred)
+        q, stats = self._solve_one(st1, np.array([ui]), q_pred, K1)
         if stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
             return q, stats, True
         converged_somewhere = stats.converged
@@ -288,13 +419,19 @@ class NewtonGroup(Group):
             m = 2**depth
             us = u0 + (ui - u0) * np.arange(1, m + 1) / m
             sub = prefix(us[:-1], k) if (prefix is not None and m > 1) else None
+            Ks = None if (K1 is None or sub is None) else self.red.known(sub)
             lu, lq = list(hu), list(hq)
             total = 0
             ok_all = True
             for j, uj in enumerate(us):
-                stj = st1 if j == m - 1 else (sub.take([j]) if sub is not None else st1)
+                if K1 is not None:  # a revolute group: the solved bodies' terms
+                    stj = None
+                    Kj = K1 if (j == m - 1 or Ks is None) else [a[j : j + 1] for a in Ks]
+                else:
+                    stj = st1 if j == m - 1 else (sub.take([j]) if sub is not None else st1)
+                    Kj = None
                 qp = _extrapolate(lu, lq, uj)
-                qj, sj = self.solve_at(stj, np.array([uj]), qp)
+                qj, sj = self._solve_one(stj, np.array([uj]), qp, Kj)
                 total += sj.iterations
                 converged_somewhere |= sj.converged
                 if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP):
@@ -370,15 +507,339 @@ class NewtonGroup(Group):
                     out[i] = np.linalg.lstsq(J[i], rhs[i], rcond=None)[0]
         return out
 
+    # revolute groups: the rates of the links' angles, the frames' from the tree
+    def _angle_inverse(self, st: State) -> np.ndarray:
+        """The inverse of ``F_theta`` at every position of ``st`` (NaN where it is not
+        finite or exactly singular), computed once for the velocities, accelerations and
+        the singularity measure of the same poses."""
+        th = st.th[self.bodies].T
+        c = self._inv_cache
+        if c is not None and c[0] == st.token and np.array_equal(c[1], th, equal_nan=True):
+            return c[2]
+        J = self.red.jacobian(st.c[self.bodies].T, st.s[self.bodies].T)
+        inv = _batch_inverse(J)
+        self._inv_cache = (st.token, th, inv)
+        return inv
+
+    def _angle_solve(self, st: State, rhs: np.ndarray) -> np.ndarray:
+        inv = self._angle_inverse(st)
+        out = (inv @ rhs[..., None])[..., 0]
+        # exactly singular positions: least squares, as a singular body block would get
+        for i in np.flatnonzero(np.isnan(inv[:, 0, 0]) & np.all(np.isfinite(rhs), axis=1)):
+            t = st.th[self.bodies, i][None]
+            J = self.red.jacobian(np.cos(t), np.sin(t))[0]
+            if np.all(np.isfinite(J)):
+                out[i] = np.linalg.lstsq(J, rhs[i], rcond=None)[0]
+        return out
+
+    def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
+        red = self.red
+        K, Px, Py = red.known(st, order)
+        rhs = -red.with_driver(K, drive.ud if order == 1 else drive.udd)
+        C, S = st.c[self.bodies].T, st.s[self.bodies].T
+        if order == 1:
+            w = self._angle_solve(st, rhs)
+            Sw, Cw = S * w, C * w
+            vx = Px - Sw @ red.Wx.T - Cw @ red.Wy.T
+            vy = Py + Cw @ red.Wx.T - Sw @ red.Wy.T
+            out = (st.vx, st.vy, st.w)
+        else:
+            w = st.w[self.bodies].T
+            w2 = w * w
+            rhs += red.accel_terms(C, S, w2)
+            al = self._angle_solve(st, rhs)
+            Sa, Ca, Sw2, Cw2 = S * al, C * al, S * w2, C * w2
+            vx = Px - Sa @ red.Wx.T - Ca @ red.Wy.T - Cw2 @ red.Wx.T + Sw2 @ red.Wy.T
+            vy = Py + Ca @ red.Wx.T - Sa @ red.Wy.T - Sw2 @ red.Wx.T - Cw2 @ red.Wy.T
+            w = al
+            out = (st.ax, st.ay, st.al)
+        for b, k in self.col.items():
+            out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
+
+    def rcond_bound(self, st: State) -> np.ndarray | None:
+        """A lower bound of :func:`mechsolve.conditioning.rcond` of the group's block of
+        Phi_q at every position, from the inverse of ``F_theta`` (revolute groups; None
+        for others).
+
+        With the group's block ordered as ``[[T_P, T_th], [L_P, L_th]]`` (the tree's
+        joints and the others; the frames' positions and the angles), ``T_P`` is constant
+        and unimodular and ``F_theta`` is the Schur complement ``S = L_th - L_P T_P^-1
+        T_th``, so the block's inverse is ``[[T_P^-1 + M S^-1 K, -M S^-1], [-S^-1 K,
+        S^-1]]`` with ``M = T_P^-1 T_th``, ``K = L_P T_P^-1``. In Frobenius norms,
+        ``|J^-1| <= |T_P^-1| + (1 + |M|)(1 + |K|) |S^-1|``, where ``|T_P^-1|``, ``|K|`` and
+        the bound ``|T_P^-1| |T_th|`` of ``|M|`` do not depend on the angles (the entries
+        are 0, +-1 or rotated constant vectors). The equilibration's column norms are
+        constant too and its row norms bounded, so that with ``A = D_r^-1 J D_c^-1``,
+        ``rcond(A) >= 1 / (|A|_F |A^-1|_F) >= 1 / (sqrt(m) max D_c max D_r |J^-1|)``.
+        The bound is within a constant factor of the exact value, so it separates the
+        near-singular positions from the others at the cost of the inverse the
+        velocities already use.
+        """
+        if self.red is None:
+            return None
+        if self._bound is None:
+            self._bound = self._bound_constants(st)
+        c, a0, a1 = self._bound
+        inv = self._angle_inverse(st)
+        nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
+        return 1.0 / (c * (a0 + a1 * nf))
+
+    def _bound_constants(self, st: State) -> tuple[float, float, float]:
+        st1 = st.take([0])
+        for b, k in self.col.items():  # any poses: the constants do not depend on them
+            st1.x[b, 0] = st1.y[b, 0] = 0.0
+            st1.set_angle(b, 0.3 + 0.7 * k, 0)
+        J = self.jacobian(st1)[0]
+        red = self.red
+        rows, r = {}, 0
+        for c in self.constraints:
+            rows[id(c)] = list(range(r, r + c.m))
+            r += c.m
+        tree = [i for c in red.tree for i in rows[id(c)]]
+        loop = [i for i in range(self.m) if i not in set(tree)]
+        P = [i for i in range(self.n) if i % 3 != 2]
+        T = list(range(2, self.n, 3))
+        tpi = np.linalg.inv(J[np.ix_(tree, P)])
+        a0 = float(np.linalg.norm(tpi))
+        m_norm = a0 * float(np.linalg.norm(J[np.ix_(tree, T)]))
+        k_norm = float(np.linalg.norm(J[np.ix_(loop, P)] @ tpi))
+        cs = np.linalg.norm(J, axis=0)
+        cs[cs == 0] = 1.0
+        ub = np.abs(J)
+        for c in self.constraints:  # a joint's two rows: (-r_y, r_x) has the norm |s|
+            if type(c) is RevoluteConstraint:
+                i = rows[id(c)][0]
+                ub[i : i + 2, T] = np.hypot(J[i, T], J[i + 1, T])
+        rs = float(np.max(np.sqrt(np.sum((ub / cs) ** 2, axis=1))))
+        scale = math.sqrt(self.m) * float(np.max(cs)) * rs
+        return scale, a0, (1.0 + m_norm) * (1.0 + k_norm)
+
     def velocity(self, st: State, drive: Drive) -> None:
+        if self.red is not None:
+            self._angle_rates(st, drive, 1)
+            return
         qd = self._solve_batch(st, self._rhs(st, drive, 1))
         for b, k in self.col.items():
             st.vx[b], st.vy[b], st.w[b] = qd[:, 3 * k], qd[:, 3 * k + 1], qd[:, 3 * k + 2]
 
     def acceleration(self, st: State, drive: Drive) -> None:
+        if self.red is not None:
+            self._angle_rates(st, drive, 2)
+            return
         qdd = self._solve_batch(st, self._rhs(st, drive, 2))
         for b, k in self.col.items():
             st.ax[b], st.ay[b], st.al[b] = qdd[:, 3 * k], qdd[:, 3 * k + 1], qdd[:, 3 * k + 2]
+
+
+# -- revolute-only groups: the angles as the only unknowns ------------------------------
+
+
+class _Angles:
+    """A group of revolute joints (and angle drivers) written in its links' angles alone.
+
+    A spanning tree of the group's joints, grown from the bodies solved before it (the
+    ground among them), places every link's frame from its angles: a child ``c`` pinned
+    to its parent ``p`` at local points ``s_p``, ``s_c`` has ``r_c = r_p + A_p s_p -
+    A_c s_c``, so that ``r_b = P_b + sum_k A(theta_k) W[b, k]`` with ``P_b`` a point of a
+    solved body (the root of its branch of the tree) and constant local vectors ``W``.
+    The tree's joints then hold identically; the others (the loops' closing joints, two
+    equations each, and the drivers, one each) are as many equations as angles::
+
+        F_e = K_e + sum_k A(theta_k) V[e, k]          (a closing joint)
+        F_d = K_d + sum_k D[d, k] theta_k - u          (a driver)
+
+    ``K`` collects the points (angles) of solved bodies. The Jacobian ``F_theta`` is the
+    Schur complement of the tree's (constant, unimodular) block in the group's block of
+    Phi_q, so both are singular at the same positions; see :meth:`rcond_bound`.
+    """
+
+    def __init__(self, bodies, constraints) -> None:
+        self.k = {b: i for i, b in enumerate(bodies)}
+        nb = len(bodies)
+        self.nb = nb
+        W = np.zeros((nb, nb, 2))
+        anchor: dict[int, tuple[int, np.ndarray]] = {}
+        revs = [c for c in constraints if type(c) is RevoluteConstraint]
+        drivers = [c for c in constraints if type(c) is AngleDriverConstraint]
+        if len(revs) + len(drivers) != len(constraints):
+            raise ValueError("not a revolute group")
+        inside = set(bodies)
+        tree: list[int] = []
+        grown = True
+        while grown:
+            grown = False
+            for j, c in enumerate(revs):
+                if j in tree:
+                    continue
+                for child, s_c, par, s_p in ((c.b, c.sb, c.a, c.sa), (c.a, c.sa, c.b, c.sb)):
+                    if child not in inside or child in anchor:
+                        continue
+                    if par in inside and par not in anchor:
+                        continue
+                    kc = self.k[child]
+                    if par in inside:
+                        anchor[child] = anchor[par]
+                        W[kc] = W[self.k[par]]
+                        W[kc, self.k[par]] += s_p
+                    else:
+                        anchor[child] = (par, np.asarray(s_p, float))
+                    W[kc, kc] -= s_c
+                    tree.append(j)
+                    grown = True
+                    break
+        if len(anchor) != nb:
+            raise ValueError("a link is not reached through revolute joints")
+        loops = [c for j, c in enumerate(revs) if j not in tree]
+        if 2 * len(loops) + len(drivers) != nb:
+            raise ValueError("not square")
+        self.tree = [revs[j] for j in tree]
+        self.loops = loops
+        self.drivers = drivers
+        self.anchor = [anchor[b] for b in bodies]
+        self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
+        ne = len(loops)
+        V = np.zeros((ne, nb, 2))
+        self.kterms: list[list[tuple[float, int, np.ndarray]]] = []
+        for e, c in enumerate(loops):
+            terms = []
+            for sign, body, s in ((1.0, c.a, c.sa), (-1.0, c.b, c.sb)):
+                if body in inside:
+                    kb = self.k[body]
+                    V[e] += sign * W[kb]
+                    V[e, kb] += sign * np.asarray(s, float)
+                    terms.append((sign,) + anchor[body])
+                else:
+                    terms.append((sign, body, np.asarray(s, float)))
+            self.kterms.append(terms)
+        self.Vx, self.Vy = V[..., 0].copy(), V[..., 1].copy()  # (equation, angle)
+        self.ne = ne
+        D = np.zeros((len(drivers), nb))
+        self.dterms: list[list[tuple[float, int]]] = []
+        for d, c in enumerate(drivers):  # theta_b + delta - theta_a - u
+            terms = []
+            for sign, body in ((1.0, c.b), (-1.0, c.a)):
+                if body in inside:
+                    D[d, self.k[body]] += sign
+                else:
+                    terms.append((sign, body))
+            self.dterms.append(terms)
+        self.D = D
+        self.delta = np.array([c.delta for c in drivers])
+        # a driver on one link of the group fixes its angle: theta_k = sign (u - K_d),
+        # set exactly so (as the closed-form driver link does) after each solve
+        self.pinned = [
+            (int(np.flatnonzero(row)[0]), float(row[np.flatnonzero(row)[0]]), 2 * ne + d)
+            for d, row in enumerate(D)
+            if np.count_nonzero(row) == 1
+        ]
+        # F = K + [M1 M2 M3] (cos, sin, theta): one product for all equations
+        nd = len(drivers)
+        M = np.zeros((nb, 3 * nb))
+        M[:ne, :nb], M[:ne, nb : 2 * nb] = self.Vx, -self.Vy
+        M[ne : 2 * ne, :nb], M[ne : 2 * ne, nb : 2 * nb] = self.Vy, self.Vx
+        M[2 * ne :, 2 * nb :] = D
+        self.MT = M.T.copy()
+        self.M1, self.M2, self.M3 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy(), M[:, 2 * nb :]
+        self.nd = nd
+
+    # -- the solved bodies' part ---------------------------------------------------------
+    def known(self, st: State, order: int = 0):
+        """The solved bodies' terms ``K`` (N, n) in the order of the equations (closing
+        joints' x, their y, drivers; order 0), or their first or second time derivatives,
+        and the tree's root points ``(Px, Py)`` (N, links), or their derivatives."""
+        f = (st.point, st.point_velocity, st.point_acceleration)[order]
+        ang = (st.th, st.w, st.al)[order]
+        n, ne = st.n, self.ne
+        K = np.zeros((n, self.nb))
+        for e, terms in enumerate(self.kterms):
+            for sign, body, s in terms:
+                px, py = f(body, s)
+                K[:, e] += sign * px
+                K[:, ne + e] += sign * py
+        for d, terms in enumerate(self.dterms):
+            if order == 0:
+                K[:, 2 * ne + d] = self.delta[d]
+            for sign, body in terms:
+                if body != st.nb:
+                    K[:, 2 * ne + d] += sign * ang[body]
+        Px = np.empty((n, self.nb))
+        Py = np.empty((n, self.nb))
+        for kb, (body, s) in enumerate(self.anchor):
+            Px[:, kb], Py[:, kb] = f(body, s)
+        return K, Px, Py
+
+    def pin(self, th: np.ndarray, K: np.ndarray, u: np.ndarray) -> None:
+        """Set the angles a driver fixes alone to their exact values, in place (a Newton
+        solution has them to rounding, which can put a zero angle at -1e-32)."""
+        for k, sign, row in self.pinned:
+            th[:, k] = sign * (u - K[:, row])
+
+    def with_driver(self, K: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """``K`` with the driver values ``u`` (N,) taken off the drivers' equations."""
+        if not self.nd:
+            return K
+        out = K.copy()
+        out[:, 2 * self.ne :] -= u[:, None]
+        return out
+
+    # -- equations -----------------------------------------------------------------------
+    def residual(self, th, C, S, Ku) -> np.ndarray:
+        """``F`` (N, n) at angles ``th`` (with their cosines ``C`` and sines ``S``);
+        ``Ku``: :meth:`known` with :meth:`with_driver`."""
+        return Ku + np.concatenate([C, S, th], axis=1) @ self.MT
+
+    def jacobian(self, C, S, out=None) -> np.ndarray:
+        """``F_theta`` (N, n, n), into ``out`` when given."""
+        J = np.empty((C.shape[0], self.nb, self.nb)) if out is None else out
+        np.multiply(C[:, None, :], self.M2, out=J)
+        J -= S[:, None, :] * self.M1
+        if self.nd:
+            J += self.M3
+        return J
+
+    def poses(self, C, S, Px, Py):
+        """The links' frame origins (N, links) from their angles."""
+        x = Px + C @ self.Wx.T - S @ self.Wy.T
+        y = Py + S @ self.Wx.T + C @ self.Wy.T
+        return x, y
+
+    def accel_terms(self, C, S, wd2) -> np.ndarray:
+        """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
+        closing joints' second derivative (zero for drivers)."""
+        return np.concatenate([C * wd2, S * wd2, np.zeros_like(C)], axis=1) @ self.MT
+
+
+def _batch_inverse(J: np.ndarray) -> np.ndarray:
+    """Inverses of the matrices (N, n, n); NaN where one is not finite or is exactly
+    singular (a zero pivot in its LU factorisation, a zero determinant up to 2 x 2).
+    Up to 2 x 2 by the adjugate, elementwise (a stacked LAPACK call costs more there)."""
+    n = J.shape[1]
+    if n <= 2:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if n == 1:
+                out = 1.0 / J
+            else:
+                a, b, c, d = J[:, 0, 0], J[:, 0, 1], J[:, 1, 0], J[:, 1, 1]
+                det = a * d - b * c
+                out = np.empty_like(J)
+                out[:, 0, 0], out[:, 0, 1] = d / det, -b / det
+                out[:, 1, 0], out[:, 1, 1] = -c / det, a / det
+        out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
+        return out
+    good = np.all(np.isfinite(J), axis=(1, 2))
+    if good.all():
+        try:
+            return np.linalg.inv(J)
+        except np.linalg.LinAlgError:
+            pass
+    out = np.full(J.shape, np.nan)
+    idx = np.flatnonzero(good)
+    if idx.size:
+        d = np.linalg.det(J[idx])
+        idx = idx[np.isfinite(d) & (d != 0)]
+        if idx.size:
+            out[idx] = np.linalg.inv(J[idx])
+    return out
 
 
 def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:

@@ -140,3 +140,42 @@ def solve(
     r = float(np.max(np.abs(fun(xs))))
     ok = r <= atol
     return xs, SolveStats(ok, "scipy-lsq" if ok else "failed", its, nfev, njev, r)
+
+
+def newton_lean(
+    fun_jac: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    x0: np.ndarray,
+    atol: float,
+    max_iterations: int = 30,
+) -> tuple[np.ndarray, SolveStats]:
+    """:func:`newton` for a small square system whose residual and Jacobian come from one
+    evaluation ``fun_jac(x) -> (f, J)``, with the same convergence test (``max |f| <=
+    atol`` and a step below ``1e-3 atol``, or a step that no longer shrinks) and a few
+    array operations per iteration. It does not fall back to scipy: callers use
+    :func:`solve` when it fails."""
+    x = np.array(x0, dtype=float)
+    xtol = 1e-3 * atol
+    last = np.inf
+    r = r_prev = np.inf
+    for it in range(max_iterations + 1):
+        f, J = fun_jac(x)
+        r = float(np.max(np.abs(f)))
+        if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, or diverging
+            break
+        r_prev = r
+        if r <= atol and (last <= xtol or r == 0.0):
+            return x, SolveStats(True, "newton", it, it + 1, it + 1, r)
+        if it == max_iterations:
+            break
+        try:
+            dx = np.linalg.solve(J, -f)
+        except np.linalg.LinAlgError:
+            break
+        step = float(np.max(np.abs(dx)))
+        if not step <= 1e300:
+            break
+        if r <= atol and step >= last:  # converged already: rounding level
+            return x, SolveStats(True, "newton", it, it + 1, it + 1, r)
+        x = x + dx
+        last = step
+    return x, SolveStats(r <= atol, "newton", max_iterations, max_iterations, max_iterations, r)
