@@ -406,6 +406,7 @@ def check(file: Path, variant, draw) -> None:
         [
             "fourbar-kinematics",
             "crane-kinematics",
+            "newton-groups",
             "fourbar-kinetostatics",
             "crane-kinetostatics",
             "startup-dynamics",

@@ -306,6 +306,176 @@ def case_fourbar_kinematics(n: int, repeats: int, newton_n: int) -> Case:
     return case
 
 
+def triad_yaml(n: int) -> str:
+    """The Stephenson III six-bar of :data:`references.TRIAD_G1` ...: its triad (L1, L2,
+    L3, T) is one Newton group; a sweep of ``n`` positions over the crank's turn."""
+    (l1, l2, l3), _ = R.triad_geometry()
+    (g1x, g1y), (g2x, g2y) = R.TRIAD_G1, R.TRIAD_G2
+    p1, p2, p3 = R.TRIAD_T
+    return f"""
+name: Stephenson III six-bar (a triad)
+ground: {{O: [0, 0], G1: [{g1x}, {g1y}], G2: [{g2x}, {g2y}]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [{R.TRIAD_R}, 0]}}}}
+  L1: {{points: {{G1: [0, 0], P1: [{l1!r}, 0]}}}}
+  L2: {{points: {{G2: [0, 0], P2: [{l2!r}, 0]}}}}
+  L3: {{points: {{A: [0, 0], P3: [{l3!r}, 0]}}}}
+  T: {{points: {{P1: {list(p1)}, P2: {list(p2)}, P3: {list(p3)}}}}}
+joints:
+  O: [ground, crank]
+  A: [crank, L3]
+  P3: [L3, T]
+  P1: [L1, T]
+  G1: [ground, L1]
+  P2: [T, L2]
+  G2: [ground, L2]
+assembly:
+  sketch: SKETCH
+driver: {{joint: O, speed: 1 rad/s, start: {R.TRIAD_START} rad}}
+sweep: {{range: {360 * (n - 1) / n!r} deg, steps: {n - 1}}}
+outputs: {{points: [], links: [], sliders: []}}
+"""
+
+
+def _triad_mech(n: int):
+    import mechsolve as ms
+
+    (l1, _, _), x = R.triad_geometry()
+    P1 = np.asarray(R.TRIAD_G1) + l1 * np.array([np.cos(x[0]), np.sin(x[0])])
+    c, s = np.cos(x[1]), np.sin(x[1])
+    pts = {"P1": P1}
+    for name, p in (("P2", R.TRIAD_T[1]), ("P3", R.TRIAD_T[2])):
+        d = np.subtract(p, R.TRIAD_T[0])
+        pts[name] = P1 + np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
+    sketch = "{" + ", ".join(f"{k}: [{float(v[0])!r}, {float(v[1])!r}]" for k, v in pts.items()) + "}"
+    return ms.loads(triad_yaml(n).replace("SKETCH", sketch))
+
+
+def case_newton(n: int, repeats: int) -> Case:
+    """Issue 17: the Newton path against a batched Newton written by hand (angles as
+    unknowns, coarse continuation, Hermite prediction, two batched updates) on the same
+    mechanism, in one run; with one-position calls."""
+    import mechsolve as ms
+    from mechsolve.sweep import Analysis
+
+    th2 = np.arange(n) * 2 * np.pi / n
+    tht = R.TRIAD_START + th2
+    fourbar = ms.loads(fourbar_yaml(n))
+    runs = {}
+    for key, mech, method in (
+        ("fb-split", fourbar, "split-newton"),
+        ("fb-newton", fourbar, "newton"),
+        ("tr-auto", _triad_mech(n), "auto"),
+        ("tr-newton", _triad_mech(n), "newton"),
+    ):
+        an = Analysis(mech, method)
+        u0 = an.start_value()
+        u, _ = an.sweep_values(u0)
+        runs[key] = (an, u, an.assemble(u0))
+    assert [g.kind for g in runs["tr-auto"][0].plan] == ["driver link", "Newton"]
+    fns = {"ref-fb": lambda: R.fourbar_newton(th2), "ref-tr": lambda: R.triad_newton(tht)}
+    for key, (an, u, start) in runs.items():
+        fns[key] = lambda an=an, u=u, start=start: an.solve(u, start=start)
+    t = interleaved(fns, repeats)
+    # one position (an instant, a step of forward dynamics): next to a solved sweep
+    one = {
+        "ref-fb": lambda: R.fourbar_newton(th2[1:2]),
+        "ref-tr": lambda: R.triad_newton(tht[1:2]),
+    }
+    for key in ("fb-split", "tr-auto"):
+        an, u, start = runs[key]
+        sol = t[key][1]
+        one[key] = lambda an=an, u=u, start=start, sol=sol: an.solve(
+            u[1:2], start=start, near=(sol, 0)
+        )
+    t1 = interleaved(one, repeats)
+    want_fb = R.fourbar_textbook(th2)
+    fbh = t["ref-fb"][1]
+    trh = t["ref-tr"][1]
+    idx = [runs["tr-auto"][0].system.index[k] for k in ("L1", "T", "L2", "L3")]
+
+    def errs_tr(st):
+        th, w, al = st.th[idx].T, st.w[idx].T, st.al[idx].T
+        return {
+            "angle": float(np.max(np.abs(wrap(th - trh[0])))),
+            "omega": rel(w, trh[1]),
+            "alpha": rel(al, trh[2]),
+        }
+
+    def note(key, ref_key):
+        sol = t[key][1]
+        us = t[key][0] / n * 1e6
+        return (
+            f"{us:.2f} us/position, {np.mean(sol.iterations):.2f} Newton iterations/position, "
+            f"{t[key][0] / t[ref_key][0]:.1f}x the hand-written Newton"
+        )
+
+    ref_fb_err = {
+        "angle": max(float(np.max(np.abs(wrap(fbh[k] - want_fb[k])))) for k in (0, 1)),
+        "omega": max(rel(fbh[k], want_fb[k]) for k in (2, 3)),
+        "alpha": max(rel(fbh[k], want_fb[k]) for k in (4, 5)),
+    }
+    case = Case(
+        "newton-groups",
+        f"Newton groups against a hand-written batched Newton, {n} positions, "
+        "positions + velocities + accelerations",
+    )
+    case.rows = [
+        Row(
+            "four-bar: batched Newton by hand (reference)",
+            t["ref-fb"][0],
+            ref_fb_err,
+            f"{t['ref-fb'][0] / n * 1e6:.2f} us/position; errors against Norton's closed form",
+        ),
+        Row(
+            "four-bar: mechsolve split-newton",
+            t["fb-split"][0],
+            _compare_fourbar(t["fb-split"][1], want_fb),
+            note("fb-split", "ref-fb"),
+        ),
+        Row(
+            "four-bar: mechsolve newton (whole system)",
+            t["fb-newton"][0],
+            _compare_fourbar(t["fb-newton"][1], want_fb),
+            note("fb-newton", "ref-fb"),
+        ),
+        Row(
+            "triad six-bar: batched Newton by hand (reference)",
+            t["ref-tr"][0],
+            {},
+            f"{t['ref-tr'][0] / n * 1e6:.2f} us/position; its loop residual "
+            f"{float(np.max(trh[3])):.1e} m",
+        ),
+        Row(
+            "triad six-bar: mechsolve auto (a Newton group)",
+            t["tr-auto"][0],
+            errs_tr(t["tr-auto"][1].state),
+            note("tr-auto", "ref-tr") + "; errors against the hand-written Newton",
+        ),
+        Row(
+            "triad six-bar: mechsolve newton (whole system)",
+            t["tr-newton"][0],
+            errs_tr(t["tr-newton"][1].state),
+            note("tr-newton", "ref-tr"),
+        ),
+    ]
+
+    def ratio(key, ref_key, target):
+        r = t[key][0] / t[ref_key][0]
+        return f"{r:.1f} (target {target}: {'met' if r <= target else 'NOT met'})"
+
+    case.lines = [
+        f"ratio split-newton / by hand (four-bar): {ratio('fb-split', 'ref-fb', 5)}",
+        f"ratio newton / by hand (four-bar): {ratio('fb-newton', 'ref-fb', 10)}",
+        f"ratio auto / by hand (triad): {ratio('tr-auto', 'ref-tr', 5)}",
+        f"ratio newton / by hand (triad): {ratio('tr-newton', 'ref-tr', 10)}",
+        "one position next to a solved sweep: four-bar split-newton "
+        f"{_fmt_time(t1['fb-split'][0])} (by hand {_fmt_time(t1['ref-fb'][0])}), triad auto "
+        f"{_fmt_time(t1['tr-auto'][0])} (by hand {_fmt_time(t1['ref-tr'][0])})",
+    ]
+    return case
+
+
 def _errs_ref(vec, n):
     want = R.fourbar_textbook(np.linspace(0, 2 * np.pi, n, endpoint=False))
     th3, th4, w3, w4, al3, al4 = vec
@@ -805,6 +975,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
     plan: list[tuple[str, Callable[[], Case | None]]] = [
         ("fourbar-kinematics", lambda: case_fourbar_kinematics(n, reps, 360 if quick else n)),
         ("crane-kinematics", lambda: case_crane_kinematics(n, reps, 360 if quick else n)),
+        ("newton-groups", lambda: case_newton(n, reps)),
         ("fourbar-kinetostatics", lambda: case_fourbar_forces(n, reps)),
         ("crane-kinetostatics", lambda: case_crane_forces(n, reps)),
         ("startup-dynamics", lambda: case_startup_dynamics(1 if quick else 3)),

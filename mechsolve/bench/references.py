@@ -17,6 +17,8 @@ are measured.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 # --- the four-bar of the benchmarks ---------------------------------------------------
@@ -310,3 +312,233 @@ def seed004_startup(h: float = 0.002, T: float = 2.2):
         Y[i + 1] = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     eps = np.array([rhs(y)[1] for y in Y])
     return np.arange(n + 1) * h, Y[:, 0], Y[:, 1], eps
+
+
+# --- a Stephenson III six-bar whose triad has no closed form ----------------------------
+# The triad of tests/test_hard_cases.py with a 0.2 crank: the crank O-A drives the
+# ternary link T (points P1, P2, P3) through the binary link L3 (A-P3); T is held by
+# L1 (G1-P1) and L2 (G2-P2). The lengths are those of a configuration built first (link
+# L1 at -60 deg, T turned 0.2 rad, the crank at 0.3 rad), so that it closes there.
+TRIAD_G1, TRIAD_G2 = (0.0, 1.2), (0.96, 1.63)
+TRIAD_R = 0.2
+TRIAD_T = ((0.0, 0.0), (0.9, 0.1), (0.4, -0.5))  # P1, P2, P3 in T's frame
+TRIAD_START = 0.3  # rad, the crank at the built configuration
+TRIAD_L1 = 0.7
+
+
+def triad_geometry():
+    """Lengths ``l1, l2, l3`` and the start angles ``(phi1, psi, phi2, phi3)`` (L1, T, L2,
+    L3, each a link's direction from its ground or crank end) of the triad six-bar."""
+    (g1x, g1y), (g2x, g2y) = TRIAD_G1, TRIAD_G2
+    p1, p2, p3 = (np.asarray(p, float) for p in TRIAD_T)
+    phi1, psi = np.radians(-60.0), 0.2
+    P1 = np.array([g1x, g1y]) + TRIAD_L1 * np.array([np.cos(phi1), np.sin(phi1)])
+    c, s = np.cos(psi), np.sin(psi)
+    rot = np.array([[c, -s], [s, c]])
+    P2, P3 = P1 + rot @ (p2 - p1), P1 + rot @ (p3 - p1)
+    A = TRIAD_R * np.array([np.cos(TRIAD_START), np.sin(TRIAD_START)])
+    l2 = float(np.hypot(*(P2 - (g2x, g2y))))
+    l3 = float(np.hypot(*(P3 - A)))
+    phi2 = float(np.arctan2(P2[1] - g2y, P2[0] - g2x))
+    phi3 = float(np.arctan2(P3[1] - A[1], P3[0] - A[0]))
+    return (TRIAD_L1, l2, l3), np.array([phi1, psi, phi2, phi3])
+
+
+def _triad_parts():
+    """The loop equations ``F(x, th) = c(th) + sum_k R(x_k) v_k`` in the angles ``x =
+    (phi1, psi, phi2, phi3)``: rows 0-1 close G1-P1-P2-G2, rows 2-3 close G1-P1-P3-A-O.
+    Returns ``v`` (2 equations, 4 angles, 2) and the constant part of ``c``."""
+    (l1, l2, l3), _ = triad_geometry()
+    p1, p2, p3 = (np.asarray(p, float) for p in TRIAD_T)
+    v = np.zeros((2, 4, 2))
+    v[:, 0] = (l1, 0.0)
+    v[0, 1], v[1, 1] = p2 - p1, p3 - p1
+    v[0, 2] = (-l2, 0.0)
+    v[1, 3] = (-l3, 0.0)
+    c0 = np.array([np.subtract(TRIAD_G1, TRIAD_G2), np.asarray(TRIAD_G1, float)])
+    return v, c0
+
+
+def _triad_eval(x, th, v, c0):
+    """Residual (N, 4) and Jacobian (N, 4, 4) at angles ``x`` (N, 4), crank ``th`` (N,),
+    written out for this mechanism; also the rotated vectors ``R(x_k) v_k`` (for the
+    accelerations) as ``rx, ry`` (N, 2, 4)."""
+    n = len(th)
+    c, s = np.cos(x), np.sin(x)
+    rx = np.empty((n, 2, 4))
+    ry = np.empty((n, 2, 4))
+    for e in range(2):
+        for k in range(4):
+            a, b = v[e, k]
+            if a == 0.0 and b == 0.0:
+                rx[:, e, k] = ry[:, e, k] = 0.0
+            elif b == 0.0:
+                rx[:, e, k], ry[:, e, k] = a * c[:, k], a * s[:, k]
+            else:
+                rx[:, e, k] = a * c[:, k] - b * s[:, k]
+                ry[:, e, k] = a * s[:, k] + b * c[:, k]
+    f = np.empty((n, 4))
+    f[:, 0] = c0[0, 0] + rx[:, 0, 0] + rx[:, 0, 1] + rx[:, 0, 2]
+    f[:, 1] = c0[0, 1] + ry[:, 0, 0] + ry[:, 0, 1] + ry[:, 0, 2]
+    f[:, 2] = c0[1, 0] + rx[:, 1, 0] + rx[:, 1, 1] + rx[:, 1, 3] - TRIAD_R * np.cos(th)
+    f[:, 3] = c0[1, 1] + ry[:, 1, 0] + ry[:, 1, 1] + ry[:, 1, 3] - TRIAD_R * np.sin(th)
+    J = np.empty((n, 4, 4))
+    J[:, 0::2] = -ry
+    J[:, 1::2] = rx
+    return f, J, rx, ry
+
+
+def _triad_scalar(x, v, c00, c01, c10, c11):
+    """Residual and Jacobian at one position, in floats (``c1`` with the crank point)."""
+    f = [c00, c01, c10, c11]
+    J = [[0.0] * 4 for _ in range(4)]
+    for k in range(4):
+        c, s = math.cos(x[k]), math.sin(x[k])
+        for e in range(2):
+            a, b = v[e][k]
+            rx, ry = c * a - s * b, s * a + c * b
+            f[2 * e] += rx
+            f[2 * e + 1] += ry
+            J[2 * e][k] = -ry
+            J[2 * e + 1][k] = rx
+    return f, J
+
+
+def _solve4(J, b) -> list[float]:
+    return np.linalg.solve(np.array(J), np.array(b)).tolist()
+
+
+def triad_newton(th, w2: float = 1.0, coarse: int = 25, updates: int = 2):
+    """The triad six-bar by a batched Newton written by hand in the links' angles.
+
+    ``th`` is a sweep of crank angles from :data:`TRIAD_START`, in order. Every k-th
+    position (``coarse`` of them) is solved by continuation (Newton from the previous
+    one, predicted along its tangent); cubic Hermite interpolation of the angles and
+    their rates predicts the positions in between, which ``updates`` batched Newton
+    steps refine. Rates and accelerations by the differentiated loop equations. Returns
+    the angles (N, 4) of L1, T, L2, L3, their rates and accelerations."""
+    th = np.asarray(th, float)
+    n = len(th)
+    v, c0 = _triad_parts()
+    _, x = triad_geometry()
+    dA = np.zeros((n, 4))  # -dF/dth: the crank point's rate on rows 2-3
+    dA[:, 2], dA[:, 3] = -TRIAD_R * np.sin(th), TRIAD_R * np.cos(th)
+    ks = np.unique(np.linspace(0, n - 1, min(coarse, n)).round().astype(int))
+    xc = np.empty((len(ks), 4))
+    dxc = np.empty((len(ks), 4))
+    # the coarse continuation one position at a time: plain floats, no arrays
+    vv = [[(float(a), float(b)) for a, b in row] for row in v]
+    c00, c01, c10, c11 = (float(z) for z in c0.ravel())
+    xs = [float(z) for z in x]
+    dx = [0.0] * 4
+    prev_t = float(th[0])
+    for j, k in enumerate(ks):
+        t = float(th[k])
+        xs = [xs[i] + dx[i] * (t - prev_t) for i in range(4)]
+        ca, sa = math.cos(t), math.sin(t)
+        for _ in range(20):
+            f, J = _triad_scalar(xs, vv, c00, c01, c10 - TRIAD_R * ca, c11 - TRIAD_R * sa)
+            step = _solve4(J, [-z for z in f])
+            xs = [xs[i] + step[i] for i in range(4)]
+            if max(abs(z) for z in step) < 1e-13:
+                break
+        _, J = _triad_scalar(xs, vv, c00, c01, c10 - TRIAD_R * ca, c11 - TRIAD_R * sa)
+        dx = _solve4(J, [0.0, 0.0, -TRIAD_R * sa, TRIAD_R * ca])
+        xc[j], dxc[j], prev_t = xs, dx, t
+    if len(ks) > 1:
+        seg = np.clip(np.searchsorted(ks, np.arange(n), side="right") - 1, 0, len(ks) - 2)
+        t0, t1 = th[ks[seg]], th[ks[seg + 1]]
+        h = (t1 - t0)[:, None]
+        t = ((th - t0) / (t1 - t0))[:, None]
+        x = (
+            (2 * t**3 - 3 * t**2 + 1) * xc[seg]
+            + (t**3 - 2 * t**2 + t) * h * dxc[seg]
+            + (-2 * t**3 + 3 * t**2) * xc[seg + 1]
+            + (t**3 - t**2) * h * dxc[seg + 1]
+        )
+    else:
+        x = xc[[0] * n]
+    for _ in range(updates):
+        f, J, _, _ = _triad_eval(x, th, v, c0)
+        x = x + np.linalg.solve(J, -f[..., None])[..., 0]
+    f, J, rx, ry = _triad_eval(x, th, v, c0)
+    inv = np.linalg.inv(J)
+    w = (inv @ (dA * w2)[..., None])[..., 0]
+    w_sq = w * w
+    g = np.empty((n, 4))  # sum_k R(x_k) v_k w_k^2 - A'' w2^2 on rows 2-3
+    g[:, 0::2] = (rx * w_sq[:, None, :]).sum(axis=2)
+    g[:, 1::2] = (ry * w_sq[:, None, :]).sum(axis=2)
+    g[:, 2] -= TRIAD_R * np.cos(th) * w2 * w2
+    g[:, 3] -= TRIAD_R * np.sin(th) * w2 * w2
+    al = (inv @ g[..., None])[..., 0]
+    return x, w, al, np.max(np.abs(f), axis=1)
+
+
+def fourbar_newton(th2, w2: float = 1.0, coarse: int = 25, updates: int = 2):
+    """The benchmark four-bar by a batched Newton written by hand in the coupler's and
+    rocker's angles (as :func:`triad_newton`: a coarse continuation at ``coarse``
+    positions, cubic Hermite prediction, ``updates`` batched Newton steps), for the
+    open branch. ``th2`` is a sweep of crank angles from 0, in order. Returns
+    ``th3, th4, w3, w4, al3, al4`` and the largest loop residual at each position."""
+    a, b, c, d = A2, B3, C4, D1
+    th2 = np.asarray(th2, float)
+    n = len(th2)
+    # the start: the open branch's closed form at th2[0], for the first guess only
+    t30, t40, *_ = fourbar_vector(th2[:1])
+    ks = np.unique(np.linspace(0, n - 1, min(coarse, n)).round().astype(int))
+    xc = np.empty((len(ks), 2))
+    dxc = np.empty((len(ks), 2))
+    x3, x4 = float(t30[0]), float(t40[0])
+    d3 = d4 = 0.0
+    prev = float(th2[0])
+    for j, k in enumerate(ks):
+        t = float(th2[k])
+        x3, x4 = x3 + d3 * (t - prev), x4 + d4 * (t - prev)
+        ca, sa = a * math.cos(t), a * math.sin(t)
+        for _ in range(20):  # a + b e3 - c e4 - d = 0, in floats
+            c3, s3, c4, s4 = math.cos(x3), math.sin(x3), math.cos(x4), math.sin(x4)
+            f0, f1 = ca + b * c3 - c * c4 - d, sa + b * s3 - c * s4
+            j00, j01, j10, j11 = -b * s3, c * s4, b * c3, -c * c4
+            det = j00 * j11 - j01 * j10
+            s_3 = -(j11 * f0 - j01 * f1) / det
+            s_4 = -(-j10 * f0 + j00 * f1) / det
+            x3, x4 = x3 + s_3, x4 + s_4
+            if max(abs(s_3), abs(s_4)) < 1e-13:
+                break
+        c3, s3, c4, s4 = math.cos(x3), math.sin(x3), math.cos(x4), math.sin(x4)
+        j00, j01, j10, j11 = -b * s3, c * s4, b * c3, -c * c4
+        det = j00 * j11 - j01 * j10
+        r0, r1 = sa, -ca  # -d/dth2 of the crank's point
+        d3, d4 = (j11 * r0 - j01 * r1) / det, (-j10 * r0 + j00 * r1) / det
+        xc[j], dxc[j], prev = (x3, x4), (d3, d4), t
+    seg = np.clip(np.searchsorted(ks, np.arange(n), side="right") - 1, 0, max(len(ks) - 2, 0))
+    if len(ks) > 1:
+        t0, t1 = th2[ks[seg]], th2[ks[seg + 1]]
+        h = (t1 - t0)[:, None]
+        t = ((th2 - t0) / (t1 - t0))[:, None]
+        x = (
+            (2 * t**3 - 3 * t**2 + 1) * xc[seg]
+            + (t**3 - 2 * t**2 + t) * h * dxc[seg]
+            + (-2 * t**3 + 3 * t**2) * xc[seg + 1]
+            + (t**3 - t**2) * h * dxc[seg + 1]
+        )
+    else:
+        x = xc[[0] * n]
+    th3, th4 = x[:, 0].copy(), x[:, 1].copy()
+    ca, sa = a * np.cos(th2), a * np.sin(th2)
+    for it in range(updates + 1):
+        c3, s3, c4, s4 = np.cos(th3), np.sin(th3), np.cos(th4), np.sin(th4)
+        f0, f1 = ca + b * c3 - c * c4 - d, sa + b * s3 - c * s4
+        j00, j01, j10, j11 = -b * s3, c * s4, b * c3, -c * c4
+        det = j00 * j11 - j01 * j10
+        if it == updates:
+            break
+        th3 = th3 - (j11 * f0 - j01 * f1) / det
+        th4 = th4 - (-j10 * f0 + j00 * f1) / det
+    r0, r1 = sa * w2, -ca * w2
+    w3, w4 = (j11 * r0 - j01 * r1) / det, (-j10 * r0 + j00 * r1) / det
+    # second derivative: J al = a w2^2 e2 + b w3^2 e3 - c w4^2 e4
+    g0 = ca * w2 * w2 + b * c3 * w3 * w3 - c * c4 * w4 * w4
+    g1 = sa * w2 * w2 + b * s3 * w3 * w3 - c * s4 * w4 * w4
+    al3, al4 = (j11 * g0 - j01 * g1) / det, (-j10 * g0 + j00 * g1) / det
+    return th3, th4, w3, w4, al3, al4, np.maximum(np.abs(f0), np.abs(f1))
