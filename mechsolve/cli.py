@@ -415,6 +415,7 @@ def check(file: Path, variant, draw) -> None:
             "positions-growth",
             "stream",
             "startup",
+            "study",
             "peers",
         ]
     ),

@@ -22,6 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CASES = [
     "fourbar-kinematics",
     "crane-kinematics",
+    "newton-groups",
     "fourbar-kinetostatics",
     "crane-kinetostatics",
     "startup-dynamics",
@@ -30,6 +31,7 @@ CASES = [
     "positions-growth",
     "stream",
     "startup",
+    "study",
     "peers",
 ]
 
@@ -74,6 +76,8 @@ def test_every_case_runs(quick):
         ("positions-growth", ["fitted exponent of time against the number of positions:"]),
         ("stream", ["peak resident memory:"]),
         ("startup", ["targets:"]),
+        ("newton-groups", ["ratio auto / by hand (triad):"]),
+        ("study", ["pool of 2 / 1 process: speed-up", "per design: mechsolve"]),
     ],
 )
 def test_case_prints_its_final_line(quick, name, lines):

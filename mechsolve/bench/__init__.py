@@ -347,7 +347,9 @@ def _triad_mech(n: int):
     for name, p in (("P2", R.TRIAD_T[1]), ("P3", R.TRIAD_T[2])):
         d = np.subtract(p, R.TRIAD_T[0])
         pts[name] = P1 + np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
-    sketch = "{" + ", ".join(f"{k}: [{float(v[0])!r}, {float(v[1])!r}]" for k, v in pts.items()) + "}"
+    sketch = (
+        "{" + ", ".join(f"{k}: [{float(v[0])!r}, {float(v[1])!r}]" for k, v in pts.items()) + "}"
+    )
     return ms.loads(triad_yaml(n).replace("SKETCH", sketch))
 
 
@@ -968,6 +970,12 @@ def case_peers(n: int) -> Case | None:
     return case
 
 
+def _case_study(quick: bool) -> Case:
+    from .study import case_study
+
+    return case_study(quick)
+
+
 def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list[Case]:
     """Run the benchmark cases; ``quick`` uses few repetitions and small sizes (for CI)."""
     reps = 5 if quick else 25
@@ -994,6 +1002,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         ),
         ("stream", lambda: case_stream(20_000 if quick else 1_000_000, 5_000 if quick else None)),
         ("startup", lambda: case_startup(2 if quick else 7)),
+        ("study", lambda: _case_study(quick)),
         ("peers", lambda: case_peers(n)),
     ]
     out = []
