@@ -12,6 +12,7 @@ from __future__ import annotations
 import html
 import json
 import re
+import os
 import subprocess
 import tempfile
 
@@ -24,6 +25,9 @@ from mechsolve.report.browser import find_browser, headless_command
 from conftest import MECH
 
 BROWSER = find_browser()
+IN_CI = os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
+if BROWSER is None and IN_CI:  # CI installs chromium (.ci/run): never skip there
+    raise RuntimeError("CI must install a Chromium-based browser (.ci/run: chromium)")
 pytestmark = pytest.mark.skipif(
     BROWSER is None, reason="no Chromium-based browser (apt-get install -y chromium)"
 )
