@@ -190,6 +190,15 @@ class RunContext:
     def quantity(self, name: str, attr: str) -> Any:
         key = f"{name}.{attr}"
         if key not in self.values:
+            mech = self.res.mechanism
+            links = {lk.name for lk in mech.links}
+            joints = {j.name for j in mech.joints}
+            if (attr in ("swing", "time_ratio") and name in links) or (
+                attr in ("stroke", "time_ratio") and name in joints
+            ):
+                # a figure the run does not reach (a rocker that turns, or a sweep that
+                # ends before its limit positions): not determined, so it fails
+                return math.nan
             raise _Unknown(key)
         return self.values[key]
 

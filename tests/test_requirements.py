@@ -196,3 +196,19 @@ def test_exit_code_five_in_a_real_process(tmp_path):
     )
     assert p.returncode == 5, p.stderr
     assert "FAIL  swing" in p.stdout and (tmp_path / "o" / "results.csv").exists()
+
+
+def test_a_figure_the_run_does_not_reach_fails_as_not_determined():
+    """Over 30..90 deg of crank the rocker reaches neither limit position (they are at
+    20.7 and 221.1 deg): its swing is not determined; the requirement fails and says so,
+    while a misspelt name is still an input error."""
+    part = FOURBAR.replace(
+        "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}",
+        "driver: {joint: O2, speed: 1 rad/s, start: 30 deg}",
+    ).replace("sweep: {range: 360 deg, step: 2 deg}", "sweep: {range: 60 deg, step: 2 deg}")
+    mech = ms.loads(with_requirements(part, {"swing": "rocker.swing >= 10 deg"}))
+    [v] = check_requirements(mech, ms.solve(mech))
+    assert not v.passed and "not determined" in v.message
+    bad = ms.loads(with_requirements(part, {"swing": "rockr.swing >= 10 deg"}))
+    with pytest.raises(InputError, match="no quantity 'rockr.swing'"):
+        check_requirements(bad, ms.solve(bad))
