@@ -110,31 +110,36 @@ class NewtonGroup(Group):
             return self.solve_at(st1, u1, q0)
         if K is None:
             K = red.known(st1)
-        Ku = red.with_driver(K[0], u1)[0]
-        M1, M2, M3, MT = red.M1, red.M2, red.M3 if red.nd else 0.0, red.MT
+        Kr, thp = red.reduce(red.with_driver(K[0], u1))
+        sub = red.sub
+        th0 = np.asarray(q0, float)[2::3][red.free]
+        if sub.nb == 0:  # every angle fixed by a driver: nothing to iterate
+            thf, stats = th0, SolveStats(True, "newton", 0, 0, 0, 0.0)
+        else:
+            Kr0 = Kr[0]
+            M1, M2, M3, MT = sub.M1, sub.M2, sub.M3 if sub.nd else 0.0, sub.MT
 
-        def fun_jac(th):
-            C, S = np.cos(th), np.sin(th)
-            return Ku + np.concatenate([C, S, th]) @ MT, M2 * C - M1 * S + M3
+            def fun_jac(th):
+                C, S = np.cos(th), np.sin(th)
+                return Kr0 + np.concatenate([C, S, th]) @ MT, M2 * C - M1 * S + M3
 
-        th0 = np.asarray(q0, float)[2::3]
-        th, stats = newton_lean(fun_jac, th0, self.atol, self.max_iterations)
-        if not stats.converged:  # the full Newton with its scipy fallback
+            if sub.nb <= 3:
+                thf, stats = sub.newton_floats(Kr0, th0, self.atol, self.max_iterations)
+            else:
+                thf, stats = newton_lean(fun_jac, th0, self.atol, self.max_iterations)
+            if not stats.converged:  # the full Newton with its scipy fallback
 
-            def fun(th):
-                return fun_jac(th)[0]
+                def fun(th):
+                    return fun_jac(th)[0]
 
-            def jac(th):
-                return fun_jac(th)[1]
+                def jac(th):
+                    return fun_jac(th)[1]
 
-            th, stats = solve(fun, jac, th0, self.atol, self.max_iterations)
-        if stats.converged and red.pinned:
-            th = th[None].copy()
-            red.pin(th, K[0], u1)
-            th = th[0]
-        x, y = red.poses(np.cos(th)[None], np.sin(th)[None], K[1], K[2])
+                thf, stats = solve(fun, jac, th0, self.atol, self.max_iterations)
+        th = red.join(thf[None], thp)
+        x, y = red.poses(np.cos(th), np.sin(th), K[1], K[2])
         q = np.empty(self.n)
-        q[0::3], q[1::3], q[2::3] = x[0], y[0], th
+        q[0::3], q[1::3], q[2::3] = x[0], y[0], th[0]
         if st1 is not None:
             self.set_q(st1, 0, q)
         return q, stats
@@ -180,11 +185,26 @@ class NewtonGroup(Group):
     ):
         """Solve positions 0..N-1: batched when possible (:meth:`sweep_batched`), else by
         continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``."""
+        if self.red is not None and self.red.sub.nb == 0:
+            return self._sweep_fixed(st, drive, ok_in)
         if self.batched and st.n >= BATCH_MIN and self.m == self.n and ok_in.all():
             out = self.sweep_batched(st, drive, q_start, prefix)
             if out is not None:
                 return out
         return self.sweep_sequential(st, drive, q_start, ok_in, prefix, restart)
+
+    def _sweep_fixed(self, st: State, drive: Drive, ok_in: np.ndarray):
+        """A group whose every angle a driver fixes alone (a driven crank): its poses
+        follow from the driver values directly, at every position."""
+        red = self.red
+        K, Px, Py = red.known(st)
+        _, thp = red.reduce(red.with_driver(K, drive.u))
+        self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
+        ok = ok_in & np.all(np.isfinite(thp), axis=1)
+        for i in np.flatnonzero(~ok):
+            self._nan(st, i)
+        methods = np.where(ok, "newton", np.where(ok_in, "failed", "")).astype(object)
+        return ok, np.zeros(st.n, int), methods
 
     def sweep_batched(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """Predict every position from a coarse continuation, then refine all positions
@@ -253,16 +273,19 @@ class NewtonGroup(Group):
         """Batched Newton in the links' angles from the prediction; the poses are written
         into ``st``. Returns the iterations per position, or None."""
         red = self.red
+        sub = red.sub
         n = st.n
         K, Px, Py = red.known(st)
-        Ku = red.with_driver(K, u)
-        th = pred[:, 2::3].copy()
-        th[coarse] = qc[:, 2::3]
+        Kr, thp = red.reduce(red.with_driver(K, u))
+        th = pred[:, 2::3][:, red.free]
+        th[coarse] = qc[:, 2::3][:, red.free]
         iters = np.zeros(n, int)
         todo = np.ones(n, bool)
         todo[coarse] = False
+        if sub.nb == 0:
+            todo[:] = False
         last = np.full(n, np.inf)
-        J = np.empty((n, red.nb, red.nb))
+        J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
         for _ in range(self.max_iterations):
             idx = np.flatnonzero(todo)
@@ -270,12 +293,12 @@ class NewtonGroup(Group):
                 break
             t = th[idx]
             C, S = np.cos(t), np.sin(t)
-            f = red.residual(t, C, S, Ku[idx])
+            f = sub.residual(t, C, S, Kr[idx])
             r = np.max(np.abs(f), axis=1)
-            Jk = red.jacobian(C, S, out=J[: idx.size])
-            if red.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
-                dq = -(_batch_inverse(Jk) @ f[..., None])[..., 0]
+            if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
+                dq = sub.step_small(C, S, f)
             else:
+                Jk = sub.jacobian(C, S, out=J[: idx.size])
                 try:
                     dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
                 except np.linalg.LinAlgError:
@@ -291,8 +314,7 @@ class NewtonGroup(Group):
             todo[idx[done]] = False
         if todo.any() or not np.all(np.isfinite(th)):
             return None
-        red.pin(th, K, u)
-        self._put_angles(st, th, Px, Py)
+        self._put_angles(st, red.join(th, thp), Px, Py)
         return iters
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
@@ -634,7 +656,105 @@ class NewtonGroup(Group):
 # -- revolute-only groups: the angles as the only unknowns ------------------------------
 
 
-class _Angles:
+class _Eqs:
+    """Equations ``F = K + [M1 M2 M3] (cos theta, sin theta, theta)`` in angles."""
+
+    def __init__(self, M: np.ndarray) -> None:
+        nb = M.shape[0]
+        self.nb = nb
+        self.MT = M.T.copy()
+        self.M1, self.M2 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy()
+        self.M3 = M[:, 2 * nb :].copy()
+        self.nd = bool(np.any(self.M3))
+        # rows of (M1, M2, M3) as Python floats, for one small position at a time
+        self._rows = [
+            tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
+            for e in range(nb)
+        ]
+
+    def newton_floats(
+        self, K, th0, atol: float, max_iterations: int
+    ) -> tuple[np.ndarray, SolveStats]:
+        """:func:`~mechsolve.solvers.newton.newton_lean` on ``F = 0`` at one position,
+        with ``K`` (n,) the constant part, in Python floats (up to 3 angles: a stacked
+        NumPy call per operation costs more than the arithmetic there). Same
+        convergence test; no scipy fallback (the caller's)."""
+        nb, rows = self.nb, self._rows
+        x = [float(v) for v in th0]
+        K = [float(v) for v in K]
+        xtol = 1e-3 * atol
+        last = r = r_prev = math.inf
+        cos, sin = math.cos, math.sin
+        for it in range(max_iterations + 1):
+            c = [cos(v) for v in x]
+            s = [sin(v) for v in x]
+            f = []
+            J = []
+            for e in range(nb):
+                fe = K[e]
+                Je = []
+                for k, (m1, m2, m3) in enumerate(rows[e]):
+                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
+                    Je.append(m2 * c[k] - m1 * s[k] + m3)
+                f.append(fe)
+                J.append(Je)
+            r = max(abs(v) for v in f)
+            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, or diverging
+                break
+            r_prev = r
+            if r <= atol and (last <= xtol or r == 0.0):
+                return np.array(x), SolveStats(True, "newton", it, it + 1, it + 1, r)
+            if it == max_iterations:
+                break
+            dx = _solve_small(J, f)
+            if dx is None:
+                break
+            step = max(abs(v) for v in dx)
+            if not step <= 1e300:
+                break
+            if r <= atol and step >= last:  # converged already: rounding level
+                return np.array(x), SolveStats(True, "newton", it, it + 1, it + 1, r)
+            x = [a + b for a, b in zip(x, dx)]
+            last = step
+        return np.array(x), SolveStats(
+            r <= atol, "newton", max_iterations, max_iterations, max_iterations, r
+        )
+
+    def step_small(self, C, S, f) -> np.ndarray:
+        """The Newton step ``-F_theta^-1 F`` (N, n) for one or two angles, elementwise
+        (NaN where ``F_theta`` is exactly singular)."""
+        M1, M2, M3 = self.M1, self.M2, self.M3
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if self.nb == 1:
+                return -f / (M2[0, 0] * C - M1[0, 0] * S + M3[0, 0])
+            c0, c1, s0, s1 = C[:, 0], C[:, 1], S[:, 0], S[:, 1]
+            a = M2[0, 0] * c0 - M1[0, 0] * s0 + M3[0, 0]
+            b = M2[0, 1] * c1 - M1[0, 1] * s1 + M3[0, 1]
+            c = M2[1, 0] * c0 - M1[1, 0] * s0 + M3[1, 0]
+            d = M2[1, 1] * c1 - M1[1, 1] * s1 + M3[1, 1]
+            det = a * d - b * c
+            out = np.empty_like(f)
+            out[:, 0] = (b * f[:, 1] - d * f[:, 0]) / det
+            out[:, 1] = (c * f[:, 0] - a * f[:, 1]) / det
+        out[det == 0] = np.nan
+        return out
+
+    def residual(self, th, C, S, Ku) -> np.ndarray:
+        """``F`` (N, n) at angles ``th`` (with their cosines ``C`` and sines ``S``);
+        ``Ku``: the constant part (:meth:`_Angles.known` with :meth:`_Angles.with_driver`)."""
+        return Ku + np.concatenate([C, S, th], axis=1) @ self.MT
+
+    def jacobian(self, C, S, out=None) -> np.ndarray:
+        """``F_theta`` (N, n, n), into ``out`` when given."""
+        J = np.empty((C.shape[0], self.nb, self.nb)) if out is None else out
+        np.multiply(C[:, None, :], self.M2, out=J)
+        J -= S[:, None, :] * self.M1
+        if self.nd:
+            J += self.M3
+        return J
+
+
+class _Angles(_Eqs):
     """A group of revolute joints (and angle drivers) written in its links' angles alone.
 
     A spanning tree of the group's joints, grown from the bodies solved before it (the
@@ -733,14 +853,51 @@ class _Angles:
             if np.count_nonzero(row) == 1
         ]
         # F = K + [M1 M2 M3] (cos, sin, theta): one product for all equations
-        nd = len(drivers)
         M = np.zeros((nb, 3 * nb))
         M[:ne, :nb], M[:ne, nb : 2 * nb] = self.Vx, -self.Vy
         M[ne : 2 * ne, :nb], M[ne : 2 * ne, nb : 2 * nb] = self.Vy, self.Vx
         M[2 * ne :, 2 * nb :] = D
-        self.MT = M.T.copy()
-        self.M1, self.M2, self.M3 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy(), M[:, 2 * nb :]
-        self.nd = nd
+        _Eqs.__init__(self, M)
+        self.nd = len(drivers)
+        # what a Newton solve iterates on: the angles no driver fixes alone, in the other
+        # equations (the fixed angles' terms move into the constant part, see reduce())
+        fixed = [k for k, _, _ in self.pinned]
+        if len(set(fixed)) != len(fixed):  # one angle fixed twice: iterate on all
+            fixed = []
+        frows = [row for k, _, row in self.pinned] if fixed else []
+        self.fixed = np.array(fixed, int)
+        self.fsign = np.array([sign for _, sign, _ in self.pinned] if fixed else [])
+        self.frows = np.array(frows, int)
+        self.free = np.array([k for k in range(nb) if k not in fixed], int)
+        rows = [r for r in range(nb) if r not in frows]
+
+        def cols(ks):
+            return [k for k in ks] + [nb + k for k in ks] + [2 * nb + k for k in ks]
+
+        self.sub = _Eqs(M[np.ix_(rows, cols(self.free))]) if fixed else self
+        self.rows = np.array(rows, int)
+        self.MTf = M[np.ix_(rows, cols(fixed))].T.copy()
+
+    def reduce(self, Ku: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The constant part ``Kr`` (N, free) of :attr:`sub`'s equations and the angles
+        the drivers fix alone (N, fixed), exactly, from ``Ku`` (:meth:`with_driver`): a
+        driver ``sign theta_k + K_d - u = 0`` gives ``theta_k = sign (u - K_d)``, and the
+        Jacobian of the whole is that of :attr:`sub` bordered by those rows (+-1 on the
+        diagonal), so both are singular together."""
+        if not self.fixed.size:
+            return Ku, Ku[:, :0]
+        thp = -Ku[:, self.frows] * self.fsign
+        Kr = Ku[:, self.rows] + np.concatenate([np.cos(thp), np.sin(thp), thp], axis=1) @ self.MTf
+        return Kr, thp
+
+    def join(self, thf: np.ndarray, thp: np.ndarray) -> np.ndarray:
+        """All angles (N, links) from the free ones and the fixed ones."""
+        if not self.fixed.size:
+            return thf
+        th = np.empty((thf.shape[0], self.nb))
+        th[:, self.free] = thf
+        th[:, self.fixed] = thp
+        return th
 
     # -- the solved bodies' part ---------------------------------------------------------
     def known(self, st: State, order: int = 0):
@@ -782,21 +939,6 @@ class _Angles:
         out[:, 2 * self.ne :] -= u[:, None]
         return out
 
-    # -- equations -----------------------------------------------------------------------
-    def residual(self, th, C, S, Ku) -> np.ndarray:
-        """``F`` (N, n) at angles ``th`` (with their cosines ``C`` and sines ``S``);
-        ``Ku``: :meth:`known` with :meth:`with_driver`."""
-        return Ku + np.concatenate([C, S, th], axis=1) @ self.MT
-
-    def jacobian(self, C, S, out=None) -> np.ndarray:
-        """``F_theta`` (N, n, n), into ``out`` when given."""
-        J = np.empty((C.shape[0], self.nb, self.nb)) if out is None else out
-        np.multiply(C[:, None, :], self.M2, out=J)
-        J -= S[:, None, :] * self.M1
-        if self.nd:
-            J += self.M3
-        return J
-
     def poses(self, C, S, Px, Py):
         """The links' frame origins (N, links) from their angles."""
         x = Px + C @ self.Wx.T - S @ self.Wy.T
@@ -807,6 +949,33 @@ class _Angles:
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
         return np.concatenate([C * wd2, S * wd2, np.zeros_like(C)], axis=1) @ self.MT
+
+
+def _solve_small(J: list, f: list) -> list | None:
+    """``J dx = -f`` for 1 to 3 unknowns by Cramer's rule in floats; None when ``J`` is
+    exactly singular."""
+    n = len(f)
+    if n == 1:
+        return None if J[0][0] == 0 else [-f[0] / J[0][0]]
+    if n == 2:
+        (a, b), (c, d) = J
+        det = a * d - b * c
+        if det == 0:
+            return None
+        return [-(d * f[0] - b * f[1]) / det, -(a * f[1] - c * f[0]) / det]
+    (a, b, c), (d, e, g), (h, i, k) = J
+    A, B, C = e * k - g * i, g * h - d * k, d * i - e * h
+    det = a * A + b * B + c * C
+    if det == 0:
+        return None
+    D, E, G = c * i - b * k, a * k - c * h, b * h - a * i
+    H, I, L = b * g - c * e, c * d - a * g, a * e - b * d
+    f0, f1, f2 = f
+    return [
+        -(A * f0 + D * f1 + H * f2) / det,
+        -(B * f0 + E * f1 + I * f2) / det,
+        -(C * f0 + G * f1 + L * f2) / det,
+    ]
 
 
 def _batch_inverse(J: np.ndarray) -> np.ndarray:

@@ -1,0 +1,129 @@
+"""Issue 17: the Newton path's reduced unknowns and its small solves.
+
+* a driver that fixes one link's angle alone is eliminated from the Newton unknowns (the
+  angle set exactly from the driver value); the whole-system ``newton`` and the
+  ``split-newton`` four-bar against the four-bar's circle intersection written here;
+* the reduced Jacobian is singular exactly where the whole ``F_theta`` is (its
+  determinant up to sign);
+* the small solves in floats (Cramer's rule, one position's Newton) against NumPy's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mechsolve as ms
+from mechsolve.groups import NewtonGroup
+from mechsolve.groups.generic import _solve_small
+from mechsolve.sweep import Analysis
+
+A, B, C, D = 0.0265, 0.1056, 0.059, 0.0875  # crank, coupler, rocker, ground (m)
+N = 360
+
+
+def _fourbar(n: int) -> str:
+    return f"""
+ground: {{O2: [0, 0], O4: [{D}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{A}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{B}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{C}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B left of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 0}}
+sweep: {{range: {360 * (n - 1) / n!r} deg, steps: {n - 1}}}
+"""
+
+
+def _by_circles(th2: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
+    """Coupler and rocker angles: B on the circles (A, b) and (O4, c), on the side
+    ``side`` of the line A -> O4."""
+    ax, ay = A * np.cos(th2), A * np.sin(th2)
+    dx, dy = D - ax, -ay
+    L = np.hypot(dx, dy)
+    along = (B**2 - C**2 + L**2) / (2 * L)
+    h = np.sqrt(B**2 - along**2)
+    ex, ey = dx / L, dy / L
+    bx = ax + along * ex - side * h * ey
+    by = ay + along * ey + side * h * ex
+    return np.arctan2(by - ay, bx - ax), np.arctan2(by, bx - D)
+
+
+def _wrap(a):
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+@pytest.mark.parametrize("method", ["newton", "split-newton"])
+def test_fourbar_with_the_driven_angle_eliminated(method):
+    mech = ms.loads(_fourbar(N))
+    an = Analysis(mech, method)
+    groups = [g for g in an.plan if isinstance(g, NewtonGroup)]
+    assert groups and all(g.red is not None for g in groups)
+    # the crank's angle is no Newton unknown: two angles left for the loop
+    assert sum(g.red.sub.nb for g in groups) == 2
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0)
+    sol = an.solve(u, start=an.assemble(u0))
+    assert sol.ok.all()
+    st, ix = sol.state, an.system.index
+    th2 = st.th[ix["crank"]]
+    assert np.array_equal(th2, u)  # set from the driver value, not iterated
+    # the side of A -> O4 the solver's B is on, at the start; then the whole turn
+    bx, by = st.point(ix["rocker"], np.array([C, 0.0]))
+    side = math.copysign(1.0, (D - A) * by[0] - 0.0 * (bx[0] - A))
+    t3, t4 = _by_circles(th2, side)
+    assert np.max(np.abs(_wrap(st.th[ix["coupler"]] - t3))) < 1e-12
+    assert np.max(np.abs(_wrap(st.th[ix["rocker"]] - t4))) < 1e-12
+    # velocities from the loop's derivative written here: J (w3, w4) = -dF/dth2
+    c3, s3, c4, s4 = np.cos(t3), np.sin(t3), np.cos(t4), np.sin(t4)
+    det = (-B * s3) * (-C * c4) - (C * s4) * (B * c3)
+    r0, r1 = A * np.sin(th2), -A * np.cos(th2)
+    w3 = ((-C * c4) * r0 - (C * s4) * r1) / det
+    w4 = (-(B * c3) * r0 + (-B * s3) * r1) / det
+    assert np.max(np.abs(st.w[ix["coupler"]] - w3)) < 1e-10 * np.max(np.abs(w3))
+    assert np.max(np.abs(st.w[ix["rocker"]] - w4)) < 1e-10 * np.max(np.abs(w4))
+
+
+def test_reduced_jacobian_singular_with_the_whole():
+    an = Analysis(ms.loads(_fourbar(8)), "newton")
+    (g,) = an.plan
+    red = g.red
+    assert red.nb == 3 and red.sub.nb == 2 and red.fixed.size == 1
+    rng = np.random.default_rng(1)
+    th = rng.uniform(-np.pi, np.pi, (50, 3))
+    full = np.linalg.det(red.jacobian(np.cos(th), np.sin(th)))
+    tf = th[:, red.free]
+    part = np.linalg.det(red.sub.jacobian(np.cos(tf), np.sin(tf)))
+    assert np.allclose(np.abs(full), np.abs(part), rtol=1e-12, atol=1e-18)
+
+
+def test_solve_small_against_numpy():
+    rng = np.random.default_rng(2)
+    for n in (1, 2, 3):
+        for _ in range(20):
+            J = rng.normal(size=(n, n))
+            f = rng.normal(size=n)
+            got = _solve_small(J.tolist(), f.tolist())
+            assert np.allclose(got, np.linalg.solve(J, -f), rtol=1e-10, atol=1e-12)
+        assert _solve_small(np.zeros((n, n)).tolist(), [1.0] * n) is None
+
+
+def test_newton_floats_against_the_numpy_newton():
+    an = Analysis(ms.loads(_fourbar(8)), "newton")
+    (g,) = an.plan
+    sub = g.red.sub
+    rng = np.random.default_rng(3)
+    th_true = np.array([0.4, 1.9])
+    C_, S_ = np.cos(th_true)[None], np.sin(th_true)[None]
+    K = -sub.residual(th_true[None], C_, S_, np.zeros((1, 2)))[0]  # F(th_true) = 0
+    for _ in range(10):
+        th0 = th_true + rng.uniform(-0.05, 0.05, 2)
+        th, stats = sub.newton_floats(K, th0, 1e-12, 30)
+        assert stats.converged and stats.method == "newton"
+        assert np.max(np.abs(th - th_true)) < 1e-12
+    # no solution near a guess far off: it reports failure (the caller's scipy fallback)
+    th, stats = sub.newton_floats(K + 10.0, th_true, 1e-12, 30)
+    assert not stats.converged
