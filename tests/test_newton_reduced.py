@@ -127,3 +127,24 @@ def test_newton_floats_against_the_numpy_newton():
     # no solution near a guess far off: it reports failure (the caller's scipy fallback)
     th, stats = sub.newton_floats(K + 10.0, th_true, 1e-12, 30)
     assert not stats.converged
+
+
+def test_one_position_poses_by_hand():
+    """The frames placed from the angles at one position: the crank's and the rocker's
+    at their ground pivots, the coupler's at the crank pin A."""
+    an = Analysis(ms.loads(_fourbar(8)), "newton")
+    (g,) = an.plan
+    st = an.assemble(0.0).state
+    _, Px, Py = g.red.known(st)
+    order = {b: k for k, b in enumerate(g.bodies)}
+    ix = an.system.index
+    th_c = 0.7  # a closed loop (the tree's frames then meet at its closing joint too)
+    t3, t4 = _by_circles(np.array([th_c]), 1.0)
+    th = np.empty(3)
+    th[order[ix["crank"]]], th[order[ix["coupler"]]], th[order[ix["rocker"]]] = th_c, t3[0], t4[0]
+    xs, ys = g.red.poses_one(th, Px[0], Py[0])
+    want = {"crank": (0.0, 0.0), "coupler": (A * math.cos(th_c), A * math.sin(th_c))}
+    want["rocker"] = (D, 0.0)
+    for name, (x, y) in want.items():
+        k = order[ix[name]]
+        assert abs(xs[k] - x) < 1e-14 and abs(ys[k] - y) < 1e-14

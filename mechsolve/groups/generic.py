@@ -47,6 +47,7 @@ class NewtonGroup(Group):
             self.red = None
         self._inv_cache: tuple | None = None
         self._bound: tuple[float, float, float] | None = None
+        self._jump_w: tuple[float, np.ndarray] | None = None
         super().__init__(bodies, constraints, names)
 
     def describe(self) -> str:
@@ -137,9 +138,9 @@ class NewtonGroup(Group):
 
                 thf, stats = solve(fun, jac, th0, self.atol, self.max_iterations)
         th = red.join(thf[None], thp)
-        x, y = red.poses(np.cos(th), np.sin(th), K[1], K[2])
         q = np.empty(self.n)
-        q[0::3], q[1::3], q[2::3] = x[0], y[0], th[0]
+        q[2::3] = th[0]
+        q[0::3], q[1::3] = red.poses_one(th[0], K[1][0], K[2][0])
         if st1 is not None:
             self.set_q(st1, 0, q)
         return q, stats
@@ -169,10 +170,14 @@ class NewtonGroup(Group):
     def _jump(self, q: np.ndarray, q_pred: np.ndarray) -> float:
         """Size of the Newton correction from the prediction: lengths over the mechanism's
         size, angles in radians."""
-        d = np.abs(q - q_pred)
-        d[0::3] /= self.scale
-        d[1::3] /= self.scale
-        return float(d.max()) if d.size else 0.0
+        if not q.size:
+            return 0.0
+        w = self._jump_w
+        if w is None or w[0] != self.scale:
+            v = np.ones(self.n)
+            v[0::3] = v[1::3] = 1.0 / self.scale
+            w = self._jump_w = (self.scale, v)
+        return float(np.max(np.abs(q - q_pred) * w[1]))
 
     def sweep(
         self,
@@ -685,20 +690,35 @@ class _Eqs:
         xtol = 1e-3 * atol
         last = r = r_prev = math.inf
         cos, sin = math.cos, math.sin
+        two = nb == 2
+        if two:
+            ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
         for it in range(max_iterations + 1):
-            c = [cos(v) for v in x]
-            s = [sin(v) for v in x]
-            f = []
-            J = []
-            for e in range(nb):
-                fe = K[e]
-                Je = []
-                for k, (m1, m2, m3) in enumerate(rows[e]):
-                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
-                    Je.append(m2 * c[k] - m1 * s[k] + m3)
-                f.append(fe)
-                J.append(Je)
-            r = max(abs(v) for v in f)
+            if two:  # unrolled: the four-bar's loop, the commonest group
+                x0, x1 = x
+                C0, C1, S0, S1 = cos(x0), cos(x1), sin(x0), sin(x1)
+                f = [
+                    K[0] + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1,
+                    K[1] + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1,
+                ]
+                J = [
+                    [a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3],
+                    [c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3],
+                ]
+            else:
+                c = [cos(v) for v in x]
+                s = [sin(v) for v in x]
+                f = []
+                J = []
+                for e in range(nb):
+                    fe = K[e]
+                    Je = []
+                    for k, (m1, m2, m3) in enumerate(rows[e]):
+                        fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
+                        Je.append(m2 * c[k] - m1 * s[k] + m3)
+                    f.append(fe)
+                    J.append(Je)
+            r = max(abs(f[0]), abs(f[1])) if two else max(abs(v) for v in f)
             if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, or diverging
                 break
             r_prev = r
@@ -817,6 +837,7 @@ class _Angles(_Eqs):
         self.drivers = drivers
         self.anchor = [anchor[b] for b in bodies]
         self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
+        self._wx, self._wy = self.Wx.tolist(), self.Wy.tolist()
         ne = len(loops)
         V = np.zeros((ne, nb, 2))
         self.kterms: list[list[tuple[float, int, np.ndarray]]] = []
@@ -945,6 +966,17 @@ class _Angles(_Eqs):
         y = Py + S @ self.Wx.T + C @ self.Wy.T
         return x, y
 
+    def poses_one(self, th, Px, Py) -> tuple[list, list]:
+        """:meth:`poses` at one position, in floats (the angles ``th``, the roots'
+        points ``Px``, ``Py``: (links,))."""
+        c = [math.cos(v) for v in th.tolist()]
+        s = [math.sin(v) for v in th.tolist()]
+        xs, ys = [], []
+        for px, py, wx, wy in zip(Px.tolist(), Py.tolist(), self._wx, self._wy):
+            xs.append(px + sum(ck * a - sk * b for ck, sk, a, b in zip(c, s, wx, wy)))
+            ys.append(py + sum(sk * a + ck * b for ck, sk, a, b in zip(c, s, wx, wy)))
+        return xs, ys
+
     def accel_terms(self, C, S, wd2) -> np.ndarray:
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
@@ -1016,7 +1048,7 @@ def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:
     k = len(qs)
     if k == 1:
         return qs[0].copy()
-    out = np.zeros_like(qs[0])
+    out = None
     for i in range(k):
         w = 1.0
         for j in range(k):
@@ -1025,5 +1057,5 @@ def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:
                 if den == 0:
                     return qs[-1].copy()
                 w *= (u - us[j]) / den
-        out += w * qs[i]
+        out = w * qs[i] if out is None else out + w * qs[i]
     return out
