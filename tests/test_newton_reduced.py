@@ -17,7 +17,7 @@ import pytest
 
 import mechsolve as ms
 from mechsolve.groups import NewtonGroup
-from mechsolve.groups.generic import _solve_small
+from mechsolve.groups.generic import _rowmax_abs, _solve_small
 from mechsolve.sweep import Analysis
 
 A, B, C, D = 0.0265, 0.1056, 0.059, 0.0875  # crank, coupler, rocker, ground (m)
@@ -148,3 +148,12 @@ def test_one_position_poses_by_hand():
     for name, (x, y) in want.items():
         k = order[ix[name]]
         assert abs(xs[k] - x) < 1e-14 and abs(ys[k] - y) < 1e-14
+
+
+def test_rowmax_abs_keeps_nan():
+    """A position whose step is NaN (an exactly singular Jacobian) must stay NaN, so that
+    it never counts as converged."""
+    a = np.array([[1.0, -3.0, 2.0], [np.nan, 0.0, 1.0], [0.5, -0.25, np.nan], [-7.0, 0, 0]])
+    got = _rowmax_abs(a)
+    assert got[0] == 3.0 and got[3] == 7.0
+    assert np.isnan(got[1]) and np.isnan(got[2])

@@ -293,30 +293,41 @@ class NewtonGroup(Group):
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
         for _ in range(self.max_iterations):
-            idx = np.flatnonzero(todo)
-            if idx.size == 0:
+            count = np.count_nonzero(todo)
+            if count == 0:
                 break
-            t = th[idx]
+            if 2 * count >= n:  # most positions still iterate: whole arrays, masked
+                idx, t, Kk, lastk = None, th, Kr, last
+            else:
+                idx = np.flatnonzero(todo)
+                t, Kk, lastk = th[idx], Kr[idx], last[idx]
             C, S = np.cos(t), np.sin(t)
-            f = sub.residual(t, C, S, Kr[idx])
-            r = np.max(np.abs(f), axis=1)
+            f = sub.residual(t, C, S, Kk)
+            r = _rowmax_abs(f)
             if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
                 dq = sub.step_small(C, S, f)
             else:
-                Jk = sub.jacobian(C, S, out=J[: idx.size])
+                Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
                 try:
                     dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
                 except np.linalg.LinAlgError:
                     return None
-            step = np.max(np.abs(dq), axis=1)
+            step = _rowmax_abs(dq)
             # as below: converged when the residual is small and the step tiny or no
             # longer shrinking (the rounding level); that last step is not taken
-            done = (r <= self.atol) & ((step <= tol) | (step >= last[idx]))
+            done = (r <= self.atol) & ((step <= tol) | (step >= lastk))
             take = ~done | (step <= tol)
-            th[idx[take]] += dq[take]
-            iters[idx] += 1
-            last[idx] = step
-            todo[idx[done]] = False
+            if idx is None:
+                take &= todo
+                th += np.where(take[:, None], dq, 0.0)
+                iters += todo
+                last = np.where(todo, step, last)
+                todo &= ~done
+            else:
+                th[idx[take]] += dq[take]
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
         if todo.any() or not np.all(np.isfinite(th)):
             return None
         self._put_angles(st, red.join(th, thp), Px, Py)
@@ -550,7 +561,9 @@ class NewtonGroup(Group):
 
     def _angle_solve(self, st: State, rhs: np.ndarray) -> np.ndarray:
         inv = self._angle_inverse(st)
-        out = (inv @ rhs[..., None])[..., 0]
+        out = inv[:, :, 0] * rhs[:, None, 0]  # inv @ rhs, elementwise: small matrices
+        for j in range(1, rhs.shape[1]):
+            out += inv[:, :, j] * rhs[:, None, j]
         # exactly singular positions: least squares, as a singular body block would get
         for i in np.flatnonzero(np.isnan(inv[:, 0, 0]) & np.all(np.isfinite(rhs), axis=1)):
             t = st.th[self.bodies, i][None]
@@ -981,6 +994,15 @@ class _Angles(_Eqs):
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
         return np.concatenate([C * wd2, S * wd2, np.zeros_like(C)], axis=1) @ self.MT
+
+
+def _rowmax_abs(a: np.ndarray) -> np.ndarray:
+    """``max |a|`` along the rows of ``a`` (N, k), k small, NaN kept (a reduction along a
+    short last axis costs more than k elementwise maxima)."""
+    m = np.abs(a[:, 0])
+    for k in range(1, a.shape[1]):
+        np.maximum(m, np.abs(a[:, k]), out=m)
+    return m
 
 
 def _solve_small(J: list, f: list) -> list | None:
