@@ -448,13 +448,19 @@ class _Methods:
     def __init__(self, n: int) -> None:
         self.n = n
         self.arr: np.ndarray | None = None
+        self.same = "closed form"  # the text of every position while arr is None
 
     def _materialise(self) -> np.ndarray:
         if self.arr is None:
-            self.arr = np.full(self.n, "closed form", dtype=object)
+            self.arr = np.full(self.n, self.same, dtype=object)
         return self.arr
 
     def merge(self, meth: np.ndarray) -> None:
+        if self.arr is None and meth.size:  # one text everywhere (a whole batched sweep)
+            m0 = meth[0]
+            if isinstance(m0, str) and m0 and bool(np.all(meth == m0)):
+                self.same = m0 if self.same == "closed form" else self.same + "+" + m0
+                return
         mask = meth != ""
         if not np.any(mask):
             return
@@ -466,6 +472,8 @@ class _Methods:
         a[i] = a[i] + "+" + text
 
     def array(self) -> np.ndarray | None:
+        if self.arr is None and self.same != "closed form":
+            return self._materialise()
         return self.arr
 
 

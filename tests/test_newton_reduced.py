@@ -157,3 +157,23 @@ def test_rowmax_abs_keeps_nan():
     got = _rowmax_abs(a)
     assert got[0] == 3.0 and got[3] == 7.0
     assert np.isnan(got[1]) and np.isnan(got[2])
+
+
+def test_methods_text_uniform_and_mixed():
+    """How each position was solved: one text for a whole batched sweep is kept as one
+    string until a position differs; the result is the same as position by position."""
+    from mechsolve.sweep import _Methods
+
+    m = _Methods(4)
+    assert m.array() is None  # all closed form
+    m.merge(np.array(["newton"] * 4, dtype=object))
+    m.merge(np.array(["newton (batched)"] * 4, dtype=object))
+    assert list(m.array()) == ["newton+newton (batched)"] * 4
+    m = _Methods(3)
+    m.merge(np.array(["newton"] * 3, dtype=object))
+    m.merge(np.array(["newton", "", "scipy-hybr"], dtype=object))
+    m.append(1, "newton polish")
+    assert list(m.array()) == ["newton+newton", "newton+newton polish", "newton+scipy-hybr"]
+    m = _Methods(2)
+    m.merge(np.array(["", ""], dtype=object))
+    assert m.array() is None
