@@ -177,3 +177,28 @@ def test_methods_text_uniform_and_mixed():
     m = _Methods(2)
     m.merge(np.array(["", ""], dtype=object))
     assert m.array() is None
+
+
+def test_coarse_continuation_in_floats_hands_hard_steps_to_the_general_step(monkeypatch):
+    """The four-bar's coarse continuation over 3600 positions has steps that move more
+    than MAX_JUMP from their prediction (the rocker's fast return): those go through
+    the general step (substeps), and the whole turn still matches the circles."""
+    calls = []
+    advance = NewtonGroup._advance
+
+    def counting(self, *args, **kwargs):
+        calls.append(args[1])
+        return advance(self, *args, **kwargs)
+
+    monkeypatch.setattr(NewtonGroup, "_advance", counting)
+    n = 3600
+    an = Analysis(ms.loads(_fourbar(n)), "split-newton")
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0)
+    sol = an.solve(u, start=an.assemble(u0))
+    assert sol.ok.all()
+    assert 0 < len(calls) < 10  # a few hard steps, not every coarse position
+    st, ix = sol.state, an.system.index
+    t3, t4 = _by_circles(st.th[ix["crank"]], 1.0)
+    assert np.max(np.abs(_wrap(st.th[ix["coupler"]] - t3))) < 1e-12
+    assert np.max(np.abs(_wrap(st.th[ix["rocker"]] - t4))) < 1e-12

@@ -153,11 +153,12 @@ class NewtonGroup(Group):
             st.x[b], st.y[b], st.th[b] = x[:, k], y[:, k], th[:, k]
             st.c[b], st.s[b] = C[:, k], S[:, k]
 
-    def _q_rows(self, st: State) -> np.ndarray:
-        """The group's body coordinates at every position (N, 3 links)."""
+    def _q_rows(self, st: State, rates: bool = False) -> np.ndarray:
+        """The group's body coordinates at every position (N, 3 links), or their rates."""
+        x, y, th = (st.vx, st.vy, st.w) if rates else (st.x, st.y, st.th)
         q = np.empty((st.n, self.n))
         for b, k in self.col.items():
-            q[:, 3 * k], q[:, 3 * k + 1], q[:, 3 * k + 2] = st.x[b], st.y[b], st.th[b]
+            q[:, 3 * k], q[:, 3 * k + 1], q[:, 3 * k + 2] = x[b], y[b], th[b]
         return q
 
     # -- the sweep ----------------------------------------------------------------------
@@ -203,9 +204,11 @@ class NewtonGroup(Group):
         follow from the driver values directly, at every position."""
         red = self.red
         K, Px, Py = red.known(st)
-        _, thp = red.reduce(red.with_driver(K, drive.u))
+        thp = red.fixed_angles(red.with_driver(K, drive.u))
         self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
-        ok = ok_in & np.all(np.isfinite(thp), axis=1)
+        ok = ok_in & np.isfinite(_rowmax_abs(thp))
+        if ok.all():
+            return ok, np.zeros(st.n, int), np.full(st.n, "newton", dtype=object)
         for i in np.flatnonzero(~ok):
             self._nan(st, i)
         methods = np.where(ok, "newton", np.where(ok_in, "failed", "")).astype(object)
@@ -232,14 +235,19 @@ class NewtonGroup(Group):
         dsub = drive.take(coarse)
         # the coarse pass counts its own positions; prefix() wants the sweep's sample
         sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
-        okc, itc, _ = self.sweep_sequential(
-            sub, dsub, q_start, np.ones(len(coarse), bool), prefix=sub_prefix
-        )
-        if not okc.all():
-            return None
+        if self.red is not None and self.red.sub.nb <= 3:
+            itc = self._coarse_floats(sub, dsub, q_start, sub_prefix)
+            if itc is None:
+                return None
+        else:
+            okc, itc, _ = self.sweep_sequential(
+                sub, dsub, q_start, np.ones(len(coarse), bool), prefix=sub_prefix
+            )
+            if not okc.all():
+                return None
         self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
-        qc = np.stack([self.get_q(sub, j) for j in range(len(coarse))])
-        dqc = np.stack([self.get_qdot(sub, j) for j in range(len(coarse))])
+        qc = self._q_rows(sub)
+        dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
             return None
         # cubic Hermite between coarse positions, in the driver coordinate
@@ -273,6 +281,65 @@ class NewtonGroup(Group):
         iters[coarse] = itc
         methods = np.full(n, "newton (batched)", dtype=object)
         return np.ones(n, bool), iters, methods
+
+    def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
+        group, its plain steps in floats: a step that converges by Newton from the
+        extrapolated prediction and moves less than :data:`MAX_JUMP` from it is taken as
+        the general code would take it; any other goes through :meth:`_advance` (its
+        substeps, scipy, its error) with the same history. Returns the iterations per
+        position (the poses written into ``st``), or None when a position fails."""
+        red = self.red
+        sub = red.sub
+        Kall = red.known(st)
+        u = drive.u
+        Kr, thp = red.reduce(red.with_driver(Kall[0], u))
+        Kr, thp = Kr.tolist(), thp.tolist()
+        Px, Py = Kall[1].tolist(), Kall[2].tolist()
+        free, fixed, nb = red.free.tolist(), red.fixed.tolist(), red.nb
+        inv_scale = 1.0 / self.scale
+        hu: list[float] = []
+        hq: list[list[float]] = []
+        q_pred = [float(v) for v in q_start]
+        rows = np.empty((st.n, self.n))
+        iters = np.zeros(st.n, int)
+        th = [0.0] * nb
+        for i, ui in enumerate(u.tolist()):
+            if hq:
+                q_pred = _extrapolate_floats(hu, hq, ui)
+            thf, stats = sub.newton_floats(
+                Kr[i], [q_pred[3 * k + 2] for k in free], self.atol, self.max_iterations
+            )
+            plain = stats.converged
+            if plain:
+                for j, k in enumerate(free):
+                    th[k] = float(thf[j])
+                for j, k in enumerate(fixed):
+                    th[k] = thp[i][j]
+                xs, ys = red.poses_one(th, Px[i], Py[i])
+                q = [v for k in range(nb) for v in (xs[k], ys[k], th[k])]
+                if hq:
+                    jump = 0.0
+                    for j, (a, b) in enumerate(zip(q, q_pred)):
+                        d = abs(a - b) * (1.0 if j % 3 == 2 else inv_scale)
+                        jump = d if d > jump else jump
+                    plain = jump <= MAX_JUMP
+            if not plain:  # the general step, as sweep_sequential takes it
+                Ki = [k[i : i + 1] for k in Kall]
+                if hq:
+                    hqa = [np.array(v) for v in hq]
+                    qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
+                else:
+                    qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+                    good = stats.converged
+                if not good:
+                    return None
+                q = qa.tolist()
+            rows[i] = q
+            iters[i] = stats.iterations
+            hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
+        self._set_q_rows(st, rows)
+        return iters
 
     def _refine_angles(self, st: State, u, pred, coarse, qc):
         """Batched Newton in the links' angles from the prediction; the poses are written
@@ -565,7 +632,8 @@ class NewtonGroup(Group):
         for j in range(1, rhs.shape[1]):
             out += inv[:, :, j] * rhs[:, None, j]
         # exactly singular positions: least squares, as a singular body block would get
-        for i in np.flatnonzero(np.isnan(inv[:, 0, 0]) & np.all(np.isfinite(rhs), axis=1)):
+        sing = np.isnan(inv[:, 0, 0])
+        for i in np.flatnonzero(sing & np.all(np.isfinite(rhs), axis=1)) if sing.any() else ():
             t = st.th[self.bodies, i][None]
             J = self.red.jacobian(np.cos(t), np.sin(t))[0]
             if np.all(np.isfinite(J)):
@@ -920,9 +988,13 @@ class _Angles(_Eqs):
         diagonal), so both are singular together."""
         if not self.fixed.size:
             return Ku, Ku[:, :0]
-        thp = -Ku[:, self.frows] * self.fsign
+        thp = self.fixed_angles(Ku)
         Kr = Ku[:, self.rows] + np.concatenate([np.cos(thp), np.sin(thp), thp], axis=1) @ self.MTf
         return Kr, thp
+
+    def fixed_angles(self, Ku: np.ndarray) -> np.ndarray:
+        """The angles the drivers fix alone (N, fixed), from ``Ku``: ``sign (u - K_d)``."""
+        return -Ku[:, self.frows] * self.fsign
 
     def join(self, thf: np.ndarray, thp: np.ndarray) -> np.ndarray:
         """All angles (N, links) from the free ones and the fixed ones."""
@@ -981,11 +1053,13 @@ class _Angles(_Eqs):
 
     def poses_one(self, th, Px, Py) -> tuple[list, list]:
         """:meth:`poses` at one position, in floats (the angles ``th``, the roots'
-        points ``Px``, ``Py``: (links,))."""
-        c = [math.cos(v) for v in th.tolist()]
-        s = [math.sin(v) for v in th.tolist()]
+        points ``Px``, ``Py``: (links,), arrays or lists)."""
+        if isinstance(th, np.ndarray):
+            th, Px, Py = th.tolist(), Px.tolist(), Py.tolist()
+        c = [math.cos(v) for v in th]
+        s = [math.sin(v) for v in th]
         xs, ys = [], []
-        for px, py, wx, wy in zip(Px.tolist(), Py.tolist(), self._wx, self._wy):
+        for px, py, wx, wy in zip(Px, Py, self._wx, self._wy):
             xs.append(px + sum(ck * a - sk * b for ck, sk, a, b in zip(c, s, wx, wy)))
             ys.append(py + sum(sk * a + ck * b for ck, sk, a, b in zip(c, s, wx, wy)))
         return xs, ys
@@ -1063,6 +1137,28 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
         if idx.size:
             out[idx] = np.linalg.inv(J[idx])
     return out
+
+
+def _extrapolate_floats(us: list[float], qs: list[list[float]], u: float) -> list[float]:
+    """:func:`_extrapolate` on lists of floats."""
+    k = len(qs)
+    if k == 1:
+        return list(qs[0])
+    ws = []
+    for i in range(k):
+        w = 1.0
+        for j in range(k):
+            if j != i:
+                den = us[i] - us[j]
+                if den == 0:
+                    return list(qs[-1])
+                w *= (u - us[j]) / den
+        ws.append(w)
+    if k == 2:
+        (w0, w1), (q0, q1) = ws, qs
+        return [w0 * a + w1 * b for a, b in zip(q0, q1)]
+    (w0, w1, w2), (q0, q1, q2) = ws, qs
+    return [w0 * a + w1 * b + w2 * c for a, b, c in zip(q0, q1, q2)]
 
 
 def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:
