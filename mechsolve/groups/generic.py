@@ -305,7 +305,9 @@ class NewtonGroup(Group):
         iters = np.zeros(st.n, int)
         th = [0.0] * nb
         for i, ui in enumerate(u.tolist()):
-            if hq:
+            if len(hq) == 1:  # the first step: along the tangent, not from the start's pose
+                q_pred = self._tangent_floats(hq[0], Kr[i], thp[i], Px[i], Py[i])
+            elif hq:
                 q_pred = _extrapolate_floats(hu, hq, ui)
             thf, stats = sub.newton_floats(
                 Kr[i], [q_pred[3 * k + 2] for k in free], self.atol, self.max_iterations
@@ -340,6 +342,26 @@ class NewtonGroup(Group):
             hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
         self._set_q_rows(st, rows)
         return iters
+
+    def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
+        """A prediction of the next position from the pose ``q0`` (body coordinates) of
+        the previous one: the first Newton iterate from ``q0`` with the next position's
+        constant part ``Kr`` (the tangent step, ``-F_theta^-1 dF``, with the driver's
+        increment of the solved bodies' terms), the frames placed from those angles.
+        ``q0`` itself when that step cannot be taken (an exactly singular Jacobian)."""
+        red = self.red
+        free, fixed = red.free.tolist(), red.fixed.tolist()
+        th0 = [q0[3 * k + 2] for k in free]
+        thf, _ = red.sub.newton_floats(Kr, th0, self.atol, 1)
+        th = [q0[3 * k + 2] for k in range(red.nb)]
+        for j, k in enumerate(free):
+            th[k] = float(thf[j])
+        for j, k in enumerate(fixed):
+            th[k] = thp[j]
+        if not all(math.isfinite(v) for v in th):
+            return list(q0)
+        xs, ys = red.poses_one(th, Px, Py)
+        return [v for k in range(red.nb) for v in (xs[k], ys[k], th[k])]
 
     def _refine_angles(self, st: State, u, pred, coarse, qc):
         """Batched Newton in the links' angles from the prediction; the poses are written
