@@ -85,6 +85,18 @@ def test_fourbar_with_the_driven_angle_eliminated(method):
     w4 = (-(B * c3) * r0 + (-B * s3) * r1) / det
     assert np.max(np.abs(st.w[ix["coupler"]] - w3)) < 1e-10 * np.max(np.abs(w3))
     assert np.max(np.abs(st.w[ix["rocker"]] - w4)) < 1e-10 * np.max(np.abs(w4))
+    # the frames' rates: the coupler's origin is the crank pin A (w2 = 1, al2 = 0), the
+    # rocker's point B turns about O4
+    k = ix["coupler"]
+    assert np.max(np.hypot(st.vx[k] + A * np.sin(th2), st.vy[k] - A * np.cos(th2))) < 1e-15
+    assert np.max(np.hypot(st.ax[k] + A * np.cos(th2), st.ay[k] + A * np.sin(th2))) < 1e-15
+    al4 = np.gradient(w4, th2[1] - th2[0])  # a difference quotient: to its own error
+    vb = st.point_velocity(ix["rocker"], np.array([C, 0.0]))
+    ab = st.point_acceleration(ix["rocker"], np.array([C, 0.0]))
+    assert np.max(np.hypot(vb[0] + C * w4 * s4, vb[1] - C * w4 * c4)) < 1e-12
+    want_ax = -C * al4 * s4 - C * w4**2 * c4
+    want_ay = C * al4 * c4 - C * w4**2 * s4
+    assert np.max(np.hypot(ab[0] - want_ax, ab[1] - want_ay)[1:-1]) < 1e-3 * C
 
 
 def test_reduced_jacobian_singular_with_the_whole():

@@ -667,24 +667,25 @@ class NewtonGroup(Group):
         K, Px, Py = red.known(st, order)
         rhs = -red.with_driver(K, drive.ud if order == 1 else drive.udd)
         C, S = st.c[self.bodies].T, st.s[self.bodies].T
+        # the frames' rates: r_b = P_b + sum_k A(theta_k) W[b, k] differentiated, with
+        # A' = w A(theta + 90 deg) and A'' = al A(theta + 90 deg) - w^2 A: both are
+        # [P, Q] @ Wr, P = S w, Q = C w (velocities) or P = S al + C w^2, Q = C al - S w^2
         if order == 1:
             w = self._angle_solve(st, rhs)
-            Sw, Cw = S * w, C * w
-            vx = Px - Sw @ red.Wx.T - Cw @ red.Wy.T
-            vy = Py + Cw @ red.Wx.T - Sw @ red.Wy.T
+            PQ = np.concatenate([S * w, C * w], axis=1)
             out = (st.vx, st.vy, st.w)
         else:
             w = st.w[self.bodies].T
             w2 = w * w
             rhs += red.accel_terms(C, S, w2)
             al = self._angle_solve(st, rhs)
-            Sa, Ca, Sw2, Cw2 = S * al, C * al, S * w2, C * w2
-            vx = Px - Sa @ red.Wx.T - Ca @ red.Wy.T - Cw2 @ red.Wx.T + Sw2 @ red.Wy.T
-            vy = Py + Ca @ red.Wx.T - Sa @ red.Wy.T - Sw2 @ red.Wx.T - Cw2 @ red.Wy.T
+            PQ = np.concatenate([S * al + C * w2, C * al - S * w2], axis=1)
             w = al
             out = (st.ax, st.ay, st.al)
+        v = PQ @ red.Wr
+        nb = red.nb
         for b, k in self.col.items():
-            out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
+            out[0][b], out[1][b], out[2][b] = Px[:, k] + v[:, k], Py[:, k] + v[:, nb + k], w[:, k]
 
     def rcond_bound(self, st: State) -> np.ndarray | None:
         """A lower bound of :func:`mechsolve.conditioning.rcond` of the group's block of
@@ -941,6 +942,7 @@ class _Angles(_Eqs):
         self.anchor = [anchor[b] for b in bodies]
         self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
         self._wx, self._wy = self.Wx.tolist(), self.Wy.tolist()
+        self.Wr = np.block([[-self.Wx.T, -self.Wy.T], [-self.Wy.T, self.Wx.T]])
         ne = len(loops)
         V = np.zeros((ne, nb, 2))
         self.kterms: list[list[tuple[float, int, np.ndarray]]] = []
