@@ -189,6 +189,17 @@ def test_methods_text_uniform_and_mixed():
     m = _Methods(2)
     m.merge(np.array(["", ""], dtype=object))
     assert m.array() is None
+    # a group's sweep gives one text for all positions as a plain string
+    m = _Methods(3)
+    m.merge("")
+    assert m.array() is None
+    m.merge("newton")
+    m.merge("newton (batched)")
+    assert list(m.array()) == ["newton+newton (batched)"] * 3
+    m = _Methods(3)
+    m.merge(np.array(["", "newton", ""], dtype=object))
+    m.merge("newton (batched)")
+    assert list(m.array()) == ["newton (batched)", "newton+newton (batched)", "newton (batched)"]
 
 
 @pytest.mark.parametrize("max_jump", [None, 0.004])

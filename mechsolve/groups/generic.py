@@ -190,7 +190,9 @@ class NewtonGroup(Group):
         restart=None,
     ):
         """Solve positions 0..N-1: batched when possible (:meth:`sweep_batched`), else by
-        continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``."""
+        continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``
+        (the text of each position, or one text when every position has it: an array of
+        text costs ~0.1 ms to build and to compare on a sweep of thousands)."""
         if self.red is not None and self.red.sub.nb == 0:
             return self._sweep_fixed(st, drive, ok_in)
         if self.batched and st.n >= BATCH_MIN and self.m == self.n and ok_in.all():
@@ -208,7 +210,7 @@ class NewtonGroup(Group):
         self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
         ok = ok_in & np.isfinite(_rowmax_abs(thp))
         if ok.all():
-            return ok, np.zeros(st.n, int), np.full(st.n, "newton", dtype=object)
+            return ok, np.zeros(st.n, int), "newton"
         for i in np.flatnonzero(~ok):
             self._nan(st, i)
         methods = np.where(ok, "newton", np.where(ok_in, "failed", "")).astype(object)
@@ -250,18 +252,30 @@ class NewtonGroup(Group):
         dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
             return None
-        # cubic Hermite between coarse positions, in the driver coordinate
+        # cubic Hermite between coarse positions, in the driver coordinate: each
+        # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
+        # segment are consecutive (the last position belongs to the last segment), so its
+        # coefficients are repeated rather than gathered (a fancy index costs 6x more)
         u = drive.u
-        seg = np.clip(np.searchsorted(coarse, np.arange(n), side="right") - 1, 0, len(coarse) - 2)
-        u0, u1 = u[coarse[seg]], u[coarse[seg + 1]]
-        h = (u1 - u0)[:, None]
-        t = ((u - u0) / (u1 - u0))[:, None]
+        counts = np.diff(coarse)
+        counts[-1] += 1
+        uc = u[coarse]
+        hc = (uc[1:] - uc[:-1])[:, None]
+        q0, q1 = qc[:-1], qc[1:]
+        t = ((u - np.repeat(uc[:-1], counts)) / np.repeat(hc[:, 0], counts))[:, None]
         if self.predictor == "linear":  # first order: the chord between coarse positions
-            pred = (1 - t) * qc[seg] + t * qc[seg + 1]
-        else:
-            h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
-            h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
-            pred = h00 * qc[seg] + h10 * h * dqc[seg] + h01 * qc[seg + 1] + h11 * h * dqc[seg + 1]
+            pred = np.repeat(q1 - q0, counts, axis=0)
+            pred *= t
+            pred += np.repeat(q0, counts, axis=0)
+        else:  # q0 + t (m0 + t (3 (q1 - q0) - 2 m0 - m1 + t (2 (q0 - q1) + m0 + m1)))
+            m0, m1 = hc * dqc[:-1], hc * dqc[1:]
+            dq = q1 - q0
+            c2 = 3 * dq - 2 * m0 - m1
+            c3 = m0 + m1 - 2 * dq
+            pred = np.repeat(c3, counts, axis=0)
+            for c in (c2, m0, q0):
+                pred *= t
+                pred += np.repeat(c, counts, axis=0)
         if self.red is not None:
             iters = self._refine_angles(st, u, pred, coarse, qc)
             if iters is None:
@@ -279,8 +293,7 @@ class NewtonGroup(Group):
         if self.red is None:
             self._set_q_rows_into(st, q)
         iters[coarse] = itc
-        methods = np.full(n, "newton (batched)", dtype=object)
-        return np.ones(n, bool), iters, methods
+        return np.ones(n, bool), iters, "newton (batched)"
 
     def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
@@ -378,6 +391,11 @@ class NewtonGroup(Group):
         todo[coarse] = False
         if sub.nb == 0:
             todo[:] = False
+        if sub.nb == 2:
+            if not self._refine2(th, Kr, iters, todo):
+                return None
+            self._put_angles(st, red.join(th, thp), Px, Py)
+            return iters
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
@@ -421,6 +439,89 @@ class NewtonGroup(Group):
             return None
         self._put_angles(st, red.join(th, thp), Px, Py)
         return iters
+
+    def _refine2(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo: np.ndarray):
+        """:meth:`_refine_angles`'s iterations for two angles (the four-bar's loop), on
+        each angle's own 1-D array: the same residual, step (by the adjugate), tests and
+        updates, without the (N, 2) products and reductions, which cost more than the
+        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place; False when a
+        position does not converge."""
+        n = th.shape[0]
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red.sub._rows
+        nd = self.red.sub.nd
+        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
+        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        last = np.full(n, np.inf)
+        tol = 1e-3 * self.atol
+        cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
+        for _ in range(self.max_iterations):
+            count = np.count_nonzero(todo)
+            if count == 0:
+                break
+            if 2 * count >= n:  # most positions still iterate: whole arrays, masked
+                idx, t0, t1, k0, k1, lastk = None, x0, x1, K0, K1, last
+            else:
+                idx = np.flatnonzero(todo)
+                t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
+            C0, S0, C1, S1 = cos(t0), sin(t0), cos(t1), sin(t1)
+            f0 = k0 + a1 * C0
+            f0 += a2 * S0
+            f0 += b1 * C1
+            f0 += b2 * S1
+            f1 = k1 + c1 * C0
+            f1 += c2 * S0
+            f1 += d1 * C1
+            f1 += d2 * S1
+            ja = a2 * C0
+            ja -= a1 * S0
+            jb = b2 * C1
+            jb -= b1 * S1
+            jc = c2 * C0
+            jc -= c1 * S0
+            jd = d2 * C1
+            jd -= d1 * S1
+            if nd:
+                f0 += a3 * t0
+                f0 += b3 * t1
+                f1 += c3 * t0
+                f1 += d3 * t1
+                ja += a3
+                jb += b3
+                jc += c3
+                jd += d3
+            r = maximum(absolute(f0), absolute(f1))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                det = ja * jd
+                det -= jb * jc
+                dq0 = jb * f1
+                dq0 -= jd * f0
+                dq0 /= det
+                dq1 = jc * f0
+                dq1 -= ja * f1
+                dq1 /= det
+            step = maximum(absolute(dq0), absolute(dq1))
+            step[det == 0] = np.nan  # exactly singular: not converged, fails below
+            # as _refine_angles: converged when the residual is small and the step tiny
+            # or no longer shrinking (the rounding level); that last step is not taken
+            small = step <= tol
+            done = (r <= self.atol) & (small | (step >= lastk))
+            take = ~done | small
+            if idx is None:
+                take &= todo
+                x0 += np.where(take, dq0, 0.0)
+                x1 += np.where(take, dq1, 0.0)
+                iters += todo
+                last = np.where(todo, step, last)
+                todo &= ~done
+            else:
+                it = idx[take]
+                x0[it] += dq0[take]
+                x1[it] += dq1[take]
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+        th[:, 0], th[:, 1] = x0, x1
+        return not todo.any() and bool(np.isfinite(x0).all() and np.isfinite(x1).all())
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,
@@ -641,7 +742,12 @@ class NewtonGroup(Group):
         the singularity measure of the same poses."""
         th = st.th[self.bodies].T
         c = self._inv_cache
-        if c is not None and c[0] == st.token and np.array_equal(c[1], th, equal_nan=True):
+        if (
+            c is not None
+            and c[0] == st.token
+            and c[1].shape == th.shape
+            and (np.array_equal(c[1], th) or np.array_equal(c[1], th, equal_nan=True))
+        ):  # the exact test first: the one with NaN costs ~15 us on thousands
             return c[2]
         J = self.red.jacobian(st.c[self.bodies].T, st.s[self.bodies].T)
         inv = _batch_inverse(J)
@@ -866,7 +972,11 @@ class _Eqs:
     def residual(self, th, C, S, Ku) -> np.ndarray:
         """``F`` (N, n) at angles ``th`` (with their cosines ``C`` and sines ``S``);
         ``Ku``: the constant part (:meth:`_Angles.known` with :meth:`_Angles.with_driver`)."""
-        return Ku + np.concatenate([C, S, th], axis=1) @ self.MT
+        f = Ku + C @ self.M1.T  # three small products: concatenating costs more
+        f += S @ self.M2.T
+        if self.nd:
+            f += th @ self.M3.T
+        return f
 
     def jacobian(self, C, S, out=None) -> np.ndarray:
         """``F_theta`` (N, n, n), into ``out`` when given."""
@@ -1091,7 +1201,7 @@ class _Angles(_Eqs):
     def accel_terms(self, C, S, wd2) -> np.ndarray:
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
-        return np.concatenate([C * wd2, S * wd2, np.zeros_like(C)], axis=1) @ self.MT
+        return (C * wd2) @ self.M1.T + (S * wd2) @ self.M2.T
 
 
 def _rowmax_abs(a: np.ndarray) -> np.ndarray:
@@ -1145,7 +1255,8 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
                 out = np.empty_like(J)
                 out[:, 0, 0], out[:, 0, 1] = d / det, -b / det
                 out[:, 1, 0], out[:, 1, 1] = -c / det, a / det
-        out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
+        if not np.isfinite(out).all():  # (a reduction over two short axes costs ~50 us)
+            out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
         return out
     good = np.all(np.isfinite(J), axis=(1, 2))
     if good.all():
