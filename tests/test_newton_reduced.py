@@ -99,6 +99,37 @@ def test_fourbar_with_the_driven_angle_eliminated(method):
     assert np.max(np.hypot(ab[0] - want_ax, ab[1] - want_ay)[1:-1]) < 1e-3 * C
 
 
+@pytest.mark.parametrize("method", ["newton", "split-newton"])
+def test_fourbar_few_positions_next_to_a_sweep(method):
+    """Small calls (an instant, a dynamics step): 1 to 4 positions next to a solved
+    sweep, against the circles and the loop's derivative written here; the driven
+    crank's rates exactly the driver's (a constant signed permutation, no inverse)."""
+    mech = ms.loads(_fourbar(N))
+    an = Analysis(mech, method)
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0)
+    start = an.assemble(u0)
+    sol = an.solve(u, start=start)
+    ix = an.system.index
+    bx, by = sol.state.point(ix["rocker"], np.array([C, 0.0]))
+    side = math.copysign(1.0, (D - A) * by[0])
+    for k, x in ((0, [0.3]), (100, [1.71, 1.72]), (200, [3.4, 3.5, 3.6, 3.7])):
+        one = an.solve(np.array(x), start=start, near=(sol, k))
+        st = one.state
+        assert one.ok.all()
+        t3, t4 = _by_circles(np.array(x), side)
+        assert np.max(np.abs(_wrap(st.th[ix["coupler"]] - t3))) < 1e-12
+        assert np.max(np.abs(_wrap(st.th[ix["rocker"]] - t4))) < 1e-12
+        assert np.all(st.w[ix["crank"]] == 1.0) and np.all(st.al[ix["crank"]] == 0.0)
+        c3, s3, c4, s4 = np.cos(t3), np.sin(t3), np.cos(t4), np.sin(t4)
+        det = (-B * s3) * (-C * c4) - (C * s4) * (B * c3)
+        r0, r1 = A * np.sin(x), -A * np.cos(x)
+        w4 = (-(B * c3) * r0 + (-B * s3) * r1) / det
+        assert np.max(np.abs(st.w[ix["rocker"]] - w4)) < 1e-10 * np.max(np.abs(w4))
+        k2 = ix["coupler"]
+        assert np.max(np.hypot(st.ax[k2] + A * np.cos(x), st.ay[k2] + A * np.sin(x))) < 1e-15
+
+
 def test_reduced_jacobian_singular_with_the_whole():
     an = Analysis(ms.loads(_fourbar(8)), "newton")
     (g,) = an.plan

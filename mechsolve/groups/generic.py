@@ -740,6 +740,9 @@ class NewtonGroup(Group):
         """The inverse of ``F_theta`` at every position of ``st`` (NaN where it is not
         finite or exactly singular), computed once for the velocities, accelerations and
         the singularity measure of the same poses."""
+        red = self.red
+        if red.sub.nb == 0:  # every angle fixed by a driver: a constant signed permutation
+            return np.broadcast_to(red.inv_fixed, (st.n, red.nb, red.nb))
         th = st.th[self.bodies].T
         c = self._inv_cache
         if (
@@ -755,6 +758,11 @@ class NewtonGroup(Group):
         return inv
 
     def _angle_solve(self, st: State, rhs: np.ndarray) -> np.ndarray:
+        red = self.red
+        if red.sub.nb == 0:  # every angle fixed by a driver: theta_k' = sign (u' - K_d')
+            out = np.empty((rhs.shape[0], red.nb))
+            out[:, red.fixed] = rhs[:, red.frows] * red.fsign
+            return out
         inv = self._angle_inverse(st)
         out = inv[:, :, 0] * rhs[:, None, 0]  # inv @ rhs, elementwise: small matrices
         for j in range(1, rhs.shape[1]):
@@ -770,28 +778,35 @@ class NewtonGroup(Group):
 
     def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
         red = self.red
-        K, Px, Py = red.known(st, order)
-        rhs = -red.with_driver(K, drive.ud if order == 1 else drive.udd)
+        nb = red.nb
+        K, Px, Py = red.known(st, order)  # fresh arrays: the right-hand side in place
+        if red.nd:  # the driver values' rates off the drivers' equations
+            K[:, 2 * red.ne :] -= (drive.ud if order == 1 else drive.udd)[:, None]
+        rhs = np.negative(K, out=K)
         C, S = st.c[self.bodies].T, st.s[self.bodies].T
         # the frames' rates: r_b = P_b + sum_k A(theta_k) W[b, k] differentiated, with
         # A' = w A(theta + 90 deg) and A'' = al A(theta + 90 deg) - w^2 A: both are
-        # [P, Q] @ Wr, P = S w, Q = C w (velocities) or P = S al + C w^2, Q = C al - S w^2
+        # P @ Wr[:nb] + Q @ Wr[nb:], P = S w, Q = C w (velocities) or P = S al + C w^2,
+        # Q = C al - S w^2
         if order == 1:
             w = self._angle_solve(st, rhs)
-            PQ = np.concatenate([S * w, C * w], axis=1)
+            P, Q = S * w, C * w
             out = (st.vx, st.vy, st.w)
         else:
-            w = st.w[self.bodies].T
-            w2 = w * w
-            rhs += red.accel_terms(C, S, w2)
-            al = self._angle_solve(st, rhs)
-            PQ = np.concatenate([S * al + C * w2, C * al - S * w2], axis=1)
-            w = al
+            wd = st.w[self.bodies].T
+            w2 = wd * wd
+            if red.ne:  # the closing joints' centripetal terms (none for drivers)
+                rhs += red.accel_terms(C, S, w2)
+            w = self._angle_solve(st, rhs)
+            P, Q = S * w, C * w
+            P += C * w2
+            Q -= S * w2
             out = (st.ax, st.ay, st.al)
-        v = PQ @ red.Wr
-        nb = red.nb
+        v = P @ red.Wr[:nb]
+        v += Q @ red.Wr[nb:]
+        vx, vy = Px + v[:, :nb], Py + v[:, nb:]
         for b, k in self.col.items():
-            out[0][b], out[1][b], out[2][b] = Px[:, k] + v[:, k], Py[:, k] + v[:, nb + k], w[:, k]
+            out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
 
     def rcond_bound(self, st: State) -> np.ndarray | None:
         """A lower bound of :func:`mechsolve.conditioning.rcond` of the group's block of
@@ -817,6 +832,9 @@ class NewtonGroup(Group):
         if self._bound is None:
             self._bound = self._bound_constants(st)
         c, a0, a1 = self._bound
+        red = self.red
+        if red.sub.nb == 0:  # all angles fixed: F_theta^-1 is constant
+            return np.full(st.n, 1.0 / (c * (a0 + a1 * float(np.linalg.norm(red.inv_fixed)))))
         inv = self._angle_inverse(st)
         nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
         return 1.0 / (c * (a0 + a1 * nf))
@@ -1050,6 +1068,7 @@ class _Angles(_Eqs):
         self.loops = loops
         self.drivers = drivers
         self.anchor = [anchor[b] for b in bodies]
+        self._kplan: tuple | None = None  # see _known_plan()
         self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
         self._wx, self._wy = self.Wx.tolist(), self.Wy.tolist()
         self.Wr = np.block([[-self.Wx.T, -self.Wy.T], [-self.Wy.T, self.Wx.T]])
@@ -1113,6 +1132,8 @@ class _Angles(_Eqs):
         self.sub = _Eqs(M[np.ix_(rows, cols(self.free))]) if fixed else self
         self.rows = np.array(rows, int)
         self.MTf = M[np.ix_(rows, cols(fixed))].T.copy()
+        # all angles fixed: F_theta is the drivers' signed permutation, its inverse exact
+        self.inv_fixed = np.linalg.inv(self.D) if not self.free.size else None
 
     def reduce(self, Ku: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The constant part ``Kr`` (N, free) of :attr:`sub`'s equations and the angles
@@ -1146,24 +1167,53 @@ class _Angles(_Eqs):
         and the tree's root points ``(Px, Py)`` (N, links), or their derivatives."""
         f = (st.point, st.point_velocity, st.point_acceleration)[order]
         ang = (st.th, st.w, st.al)[order]
+        kc, pxc, pyc, kmov, dmov, pmov = self._known_plan(st.nb)
         n, ne = st.n, self.ne
-        K = np.zeros((n, self.nb))
-        for e, terms in enumerate(self.kterms):
-            for sign, body, s in terms:
-                px, py = f(body, s)
-                K[:, e] += sign * px
-                K[:, ne + e] += sign * py
-        for d, terms in enumerate(self.dterms):
-            if order == 0:
-                K[:, 2 * ne + d] = self.delta[d]
-            for sign, body in terms:
-                if body != st.nb:
-                    K[:, 2 * ne + d] += sign * ang[body]
+        K = np.empty((n, self.nb))
+        K[:] = kc if order == 0 else 0.0
+        for e, sign, body, s in kmov:
+            px, py = f(body, s)
+            K[:, e] += sign * px
+            K[:, ne + e] += sign * py
+        for col, sign, body in dmov:
+            K[:, col] += sign * ang[body]
         Px = np.empty((n, self.nb))
         Py = np.empty((n, self.nb))
-        for kb, (body, s) in enumerate(self.anchor):
+        Px[:] = pxc if order == 0 else 0.0
+        Py[:] = pyc if order == 0 else 0.0
+        for kb, body, s in pmov:
             Px[:, kb], Py[:, kb] = f(body, s)
         return K, Px, Py
+
+    def _known_plan(self, ground: int):
+        """:meth:`known`'s terms split once: the ground's points (fixed local vectors) and
+        the drivers' offsets as constant rows of ``K`` and ``(Px, Py)`` at order 0 (zero
+        at orders 1 and 2), and the moving bodies' terms, evaluated at each call."""
+        plan = self._kplan
+        if plan is not None and plan[0] == ground:
+            return plan[1]
+        ne = self.ne
+        kc = np.zeros(self.nb)
+        pxc, pyc = np.zeros(self.nb), np.zeros(self.nb)
+        kmov, dmov, pmov = [], [], []
+        for e, terms in enumerate(self.kterms):
+            for sign, body, s in terms:
+                if body == ground and s.ndim == 1:
+                    kc[e] += sign * s[0]
+                    kc[ne + e] += sign * s[1]
+                else:
+                    kmov.append((e, sign, body, s))
+        for d, terms in enumerate(self.dterms):
+            kc[2 * ne + d] = self.delta[d]
+            dmov += [(2 * ne + d, sign, body) for sign, body in terms if body != ground]
+        for kb, (body, s) in enumerate(self.anchor):
+            if body == ground and s.ndim == 1:
+                pxc[kb], pyc[kb] = s[0], s[1]
+            else:
+                pmov.append((kb, body, s))
+        out = (kc, pxc, pyc, kmov, dmov, pmov)
+        self._kplan = (ground, out)
+        return out
 
     def pin(self, th: np.ndarray, K: np.ndarray, u: np.ndarray) -> None:
         """Set the angles a driver fixes alone to their exact values, in place (a Newton
