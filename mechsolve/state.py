@@ -8,6 +8,10 @@ over N positions; the last row is the ground (always at rest, ``theta = 0``).
 Point kinematics follow from the body's: for a point with local coordinates ``s``,
 ``r = r_body + A(theta) s``, ``v = v_body + omega k x (A s)``,
 ``a = a_body + alpha k x (A s) - omega^2 (A s)``.
+
+A local vector ``s`` is a pair ``(2,)``, or ``(2, N)`` with one vector per position when
+designs that differ only in their numbers are solved as one batch
+(:mod:`mechsolve.batch`).
 """
 
 from __future__ import annotations
@@ -132,6 +136,13 @@ class State:
 
     def rotated(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
         """Global components of the local vector ``s`` on body ``i``."""
+        if s.ndim > 1:  # one local vector per position (designs solved as one batch)
+            s0, s1 = s[0, idx], s[1, idx]
+            if i == self.nb:
+                return s0, s1
+            c = self.c[i, idx]
+            sn = self.s[i, idx]
+            return c * s0 - sn * s1, sn * s0 + c * s1
         if i == self.nb:
             return self._const(s[0], idx), self._const(s[1], idx)
         if s[0] == 0.0 and s[1] == 0.0:
@@ -144,8 +155,8 @@ class State:
     def point(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
         """Global position of the point with local coordinates ``s`` on body ``i``."""
         if i == self.nb:
-            return self._const(s[0], idx), self._const(s[1], idx)
-        if s[0] == 0.0 and s[1] == 0.0:
+            return self.rotated(i, s, idx)
+        if s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0:
             return self.x[i, idx], self.y[i, idx]
         rx, ry = self.rotated(i, s, idx)
         return self.x[i, idx] + rx, self.y[i, idx] + ry
@@ -156,7 +167,7 @@ class State:
         if i == self.nb:
             z = self._const(0.0, idx)
             return z, z
-        if s[0] == 0.0 and s[1] == 0.0:
+        if s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0:
             return self.vx[i, idx], self.vy[i, idx]
         rx, ry = self.rotated(i, s, idx)
         w = self.w[i, idx]
@@ -168,7 +179,7 @@ class State:
         if i == self.nb:
             z = self._const(0.0, idx)
             return z, z
-        if s[0] == 0.0 and s[1] == 0.0:
+        if s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0:
             return self.ax[i, idx], self.ay[i, idx]
         rx, ry = self.rotated(i, s, idx)
         w2 = self.w[i, idx] ** 2

@@ -101,6 +101,25 @@ class Group:
         return "the loop cannot close"
 
 
+def is_zero(s) -> bool:
+    """Whether the local vector ``s`` is the frame's origin (False for a batch of
+    vectors, one per position: see :mod:`mechsolve.state`)."""
+    return s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0
+
+
+def diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a - b`` of two local vectors, either of which may be a batch ``(2, N)``."""
+    if a.ndim == b.ndim:
+        return a - b
+    return a.reshape(2, -1) - b.reshape(2, -1)
+
+
+def length(v):
+    """``|v|`` of a local vector (a float), or of a batch of them (an array)."""
+    r = np.hypot(v[0], v[1])
+    return float(r) if np.ndim(r) == 0 else r
+
+
 def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
     """Place body ``b`` so that its local vector ``sm - s0`` maps to global ``(gx, gy)``
     and its local point ``s0`` lies at ``(px, py)``.
@@ -110,7 +129,7 @@ def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
     """
     ex, ey = sm[0] - s0[0], sm[1] - s0[1]
     l2 = ex * ex + ey * ey
-    if ey == 0.0:  # the usual frame: x along the segment
+    if np.ndim(ey) == 0 and ey == 0.0:  # the usual frame: x along the segment
         c = st.c[b]
         s = st.s[b]
         np.multiply(gx, ex / l2, out=c)
@@ -121,7 +140,7 @@ def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
         st.c[b] = c
         st.s[b] = s
     np.arctan2(s, c, out=st.th[b])
-    if s0[0] == 0.0 and s0[1] == 0.0:
+    if is_zero(s0):
         st.x[b] = px
         st.y[b] = py
     else:
@@ -132,7 +151,7 @@ def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
 def body_velocity_from_point(st: State, b: int, s0, vpx, vpy, w) -> None:
     """Body ``b``'s frame velocity from its point ``s0``'s velocity and angular velocity."""
     st.w[b] = w
-    if s0[0] == 0.0 and s0[1] == 0.0:
+    if is_zero(s0):
         st.vx[b] = vpx
         st.vy[b] = vpy
         return
@@ -143,7 +162,7 @@ def body_velocity_from_point(st: State, b: int, s0, vpx, vpy, w) -> None:
 
 def body_acceleration_from_point(st: State, b: int, s0, apx, apy, al) -> None:
     st.al[b] = al
-    if s0[0] == 0.0 and s0[1] == 0.0:
+    if is_zero(s0):
         st.ax[b] = apx
         st.ay[b] = apy
         return

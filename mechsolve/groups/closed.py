@@ -24,6 +24,8 @@ from .base import (
     add_force,
     body_acceleration_from_point,
     body_velocity_from_point,
+    diff,
+    length,
     pin_multiplier,
     resultant_about,
     set_pose_from_vectors,
@@ -188,9 +190,10 @@ class RRR(Group):
         self.sP1, self.sPk = _local(j1, b1), _local(j1, self.k1)
         self.sQ2, self.sQk = _local(j3, b2), _local(j3, self.k2)
         self.sM1, self.sM2 = _local(j2, b1), _local(j2, b2)
-        self.L1 = float(np.hypot(*(self.sM1 - self.sP1)))
-        self.L2 = float(np.hypot(*(self.sM2 - self.sQ2)))
-        self.equal_arms = abs(self.L1 - self.L2) <= 1e-12 * max(self.L1, self.L2)
+        self.L1 = length(diff(self.sM1, self.sP1))
+        self.L2 = length(diff(self.sM2, self.sQ2))
+        self.Lmax2 = np.maximum(self.L1, self.L2) ** 2
+        self.equal_arms = bool(np.any(np.abs(self.L1 - self.L2) <= 1e-12 * np.sqrt(self.Lmax2)))
         self.direction = 1.0  # the sweep's direction along the driver; the analysis sets it
         super().__init__([b1, b2], [j1, j2, j3], names)
 
@@ -237,7 +240,7 @@ class RRR(Group):
                 aD2 = 0.5 * (L1s - L2s + D2)
                 H = (L1s * D2 - aD2 * aD2) * (1.0 / (L1s * L2s))
                 # a toggle position (h = 0) within rounding still closes
-                tol = (1e-12 * max(L1, L2) ** 2) * inv
+                tol = (1e-12 * self.Lmax2) * inv
                 ok = (h2 >= -tol) & (D2 > 0)
                 coincident = None
                 if self.equal_arms:
@@ -315,8 +318,8 @@ class RRR(Group):
     def _g(self, st: State):
         c = self.cache(st)
         if "g" not in c:
-            g1x, g1y = st.rotated(self.b1, self.sM1 - self.sP1)
-            g2x, g2y = st.rotated(self.b2, self.sM2 - self.sQ2)
+            g1x, g1y = st.rotated(self.b1, diff(self.sM1, self.sP1))
+            g2x, g2y = st.rotated(self.b2, diff(self.sM2, self.sQ2))
             c["g"] = (g1x, g1y, g2x, g2y)
         return c["g"]
 
@@ -409,7 +412,7 @@ class RRP(Group):
         self.g = sl.a  # the guide (solved)
         self.sP1, self.sPk = _local(j1, rod), _local(j1, self.k1)
         self.sMr, self.sMb = _local(j2, rod), _local(j2, block)
-        self.L = float(np.hypot(*(self.sMr - self.sP1)))
+        self.L = length(diff(self.sMr, self.sP1))
         super().__init__([rod, block], [j1, j2, sl], names)
 
     def describe(self) -> str:
@@ -465,7 +468,7 @@ class RRP(Group):
         g = self.g
         ux, uy = st.rotated(g, self.sl.u_loc)
         nx, ny = -uy, ux
-        g1x, g1y = st.rotated(self.rod, self.sMr - self.sP1)
+        g1x, g1y = st.rotated(self.rod, diff(self.sMr, self.sP1))
         mx, my = st.point(self.blk, self.sMb)
         vpx, vpy = st.point_velocity(self.k1, self.sPk)
         vkx, vky = _carried_velocity(st, g, mx, my)
@@ -480,7 +483,7 @@ class RRP(Group):
         g = self.g
         ux, uy = st.rotated(g, self.sl.u_loc)
         nx, ny = -uy, ux
-        g1x, g1y = st.rotated(self.rod, self.sMr - self.sP1)
+        g1x, g1y = st.rotated(self.rod, diff(self.sMr, self.sP1))
         mx, my = st.point(self.blk, self.sMb)
         vmx, vmy = st.point_velocity(self.blk, self.sMb)
         vkx, vky = _carried_velocity(st, g, mx, my)
@@ -560,14 +563,17 @@ class RPR(Group):
             self.beta = sl.beta
             self.sgn = 1.0
             cb, sb = np.cos(sl.beta), np.sin(sl.beta)
-            w = sl.sb - self.sPb
+            w = diff(sl.sb, self.sPb)
             self.w_loc = np.array([cb * w[0] - sb * w[1], sb * w[0] + cb * w[1]])
-            self.c_loc = sl.o - self.sQb
+            self.c_loc = diff(sl.o, self.sQb)
         else:  # the line is on the pinned "block" and the point on the "bar": swap roles
             raise ValueError("RPR with the line on the pinned block is solved generically")
         self.u_loc = sl.u_loc
         self.n_loc = np.array([-sl.u_loc[1], sl.u_loc[0]])
-        self.e = float(self.n_loc @ (self.c_loc - self.w_loc))
+        e = self.n_loc[0] * (self.c_loc[0] - self.w_loc[0]) + self.n_loc[1] * (
+            self.c_loc[1] - self.w_loc[1]
+        )
+        self.e = float(e) if np.ndim(e) == 0 else e
         # a length scale for the discriminant; the analysis sets the mechanism's size
         self.lref = 1.0
         super().__init__([block, bar], [jp, jq, sl], names)

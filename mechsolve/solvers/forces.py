@@ -124,19 +124,38 @@ class _Q:
             self.Q[3 * b + 2] += t
 
 
-def stroke_function(extremes: list[tuple[float, float]], replay: bool = False):
+def stroke_function(
+    extremes: list[tuple[float, float]], replay: bool = False, blocks: int | None = None
+):
     """``stroke(q)``: the fraction of ``q`` between its extremes over the sweep.
 
     Over the sweep, the extremes are found from the samples and refined by a parabola
     through the three samples around each one (so that a coarse sweep still finds the true
     ends of the stroke), and recorded in ``extremes``. With ``replay``, the recorded
     extremes are used again, in the same order: for evaluating a condition at a single
-    position between samples.
+    position between samples. With ``blocks``, the positions are that many sweeps one
+    after another (designs solved as one batch, :mod:`mechsolve.batch`): each has its own
+    extremes, recorded as arrays over the blocks.
     """
     calls = iter(extremes) if replay else None
 
     def stroke(q):
         q = np.asarray(q, float)
+        if blocks is not None and calls is None:
+            rows = np.broadcast_to(q, (q.size,)).reshape(blocks, -1)
+            lo, hi = np.empty(blocks), np.empty(blocks)
+            for j, r in enumerate(rows):
+                good = np.flatnonzero(np.isfinite(r))
+                if good.size < 2:
+                    lo[j] = hi[j] = np.nan
+                else:
+                    lo[j] = _extreme(r, good, np.argmin, -1.0)
+                    hi[j] = _extreme(r, good, np.argmax, 1.0)
+            extremes.append((lo, hi))
+            span = hi - lo
+            with np.errstate(invalid="ignore", divide="ignore"):
+                frac = (rows - lo[:, None]) / np.where(span > 0, span, np.inf)[:, None]
+            return frac.ravel()
         if calls is not None:
             lo, hi = next(calls)
         else:
@@ -169,7 +188,7 @@ def condition_masks(
 ) -> dict[str, np.ndarray]:
     """Where each conditional load acts (False where a position was not solved)."""
     out = {}
-    funcs = {"stroke": stroke_function(extremes, replay)}
+    funcs = {"stroke": stroke_function(extremes, replay, getattr(an, "blocks", None))}
     n = len(sol.u)
     for load in an.mech.loads:
         if load.when is None:
@@ -204,15 +223,16 @@ def solve_forces(
     # inertia and gravity, at each body's centre of mass
     massive = []
     for lk in mech.links:
-        if not lk.mass and not lk.inertia:
+        # numbers, or arrays over the positions of designs solved as one batch
+        m = 0.0 if lk.mass is None else lk.mass
+        J = 0.0 if lk.inertia is None else lk.inertia
+        if not np.any(m) and not np.any(J):
             continue
         b = sys_.index[lk.name]
-        m = lk.mass or 0.0
-        J = lk.inertia or 0.0
         s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
         ax, ay = st.point_acceleration(b, s)
         acc.force(b, s, m * (gx - ax), m * (gy - ay))
-        if J:
+        if np.any(J):
             acc.torque(b, -J * st.al[b])
         massive.append((b, m, J, s))
 
