@@ -752,8 +752,7 @@ class NewtonGroup(Group):
             and (np.array_equal(c[1], th) or np.array_equal(c[1], th, equal_nan=True))
         ):  # the exact test first: the one with NaN costs ~15 us on thousands
             return c[2]
-        J = self.red.jacobian(st.c[self.bodies].T, st.s[self.bodies].T)
-        inv = _batch_inverse(J)
+        inv = red.inverse(st.c[self.bodies].T, st.s[self.bodies].T)
         self._inv_cache = (st.token, th, inv)
         return inv
 
@@ -996,6 +995,22 @@ class _Eqs:
             f += th @ self.M3.T
         return f
 
+    def inverse(self, C, S) -> np.ndarray:
+        """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
+        from the entries directly (a broadcast product over (N, n, n) costs more)."""
+        if self.nb != 2:
+            return _batch_inverse(self.jacobian(C, S))
+        (a1, b1), (c1, d1) = self.M1.tolist()
+        (a2, b2), (c2, d2) = self.M2.tolist()
+        (a3, b3), (c3, d3) = self.M3.tolist()
+        c0, c1_, s0, s1 = C[:, 0], C[:, 1], S[:, 0], S[:, 1]
+        J = np.empty((C.shape[0], 2, 2))
+        J[:, 0, 0] = a2 * c0 - a1 * s0 + a3
+        J[:, 0, 1] = b2 * c1_ - b1 * s1 + b3
+        J[:, 1, 0] = c2 * c0 - c1 * s0 + c3
+        J[:, 1, 1] = d2 * c1_ - d1 * s1 + d3
+        return _batch_inverse(J)
+
     def jacobian(self, C, S, out=None) -> np.ndarray:
         """``F_theta`` (N, n, n), into ``out`` when given."""
         J = np.empty((C.shape[0], self.nb, self.nb)) if out is None else out
@@ -1167,12 +1182,13 @@ class _Angles(_Eqs):
         and the tree's root points ``(Px, Py)`` (N, links), or their derivatives."""
         f = (st.point, st.point_velocity, st.point_acceleration)[order]
         ang = (st.th, st.w, st.al)[order]
-        kc, pxc, pyc, kmov, dmov, pmov = self._known_plan(st.nb)
+        kc, pxc, pyc, points, kmov, dmov, pmov = self._known_plan(st.nb)
         n, ne = st.n, self.ne
+        pts = [f(body, s) for body, s in points]  # each moving point once
         K = np.empty((n, self.nb))
         K[:] = kc if order == 0 else 0.0
-        for e, sign, body, s in kmov:
-            px, py = f(body, s)
+        for e, sign, j in kmov:
+            px, py = pts[j]
             K[:, e] += sign * px
             K[:, ne + e] += sign * py
         for col, sign, body in dmov:
@@ -1181,8 +1197,8 @@ class _Angles(_Eqs):
         Py = np.empty((n, self.nb))
         Px[:] = pxc if order == 0 else 0.0
         Py[:] = pyc if order == 0 else 0.0
-        for kb, body, s in pmov:
-            Px[:, kb], Py[:, kb] = f(body, s)
+        for kb, j in pmov:
+            Px[:, kb], Py[:, kb] = pts[j]
         return K, Px, Py
 
     def _known_plan(self, ground: int):
@@ -1196,13 +1212,22 @@ class _Angles(_Eqs):
         kc = np.zeros(self.nb)
         pxc, pyc = np.zeros(self.nb), np.zeros(self.nb)
         kmov, dmov, pmov = [], [], []
+        points: list[tuple[int, np.ndarray]] = []  # the moving points, each once
+
+        def point(body, s):
+            for j, (b, v) in enumerate(points):
+                if b == body and v.shape == s.shape and np.array_equal(v, s):
+                    return j
+            points.append((body, s))
+            return len(points) - 1
+
         for e, terms in enumerate(self.kterms):
             for sign, body, s in terms:
                 if body == ground and s.ndim == 1:
                     kc[e] += sign * s[0]
                     kc[ne + e] += sign * s[1]
                 else:
-                    kmov.append((e, sign, body, s))
+                    kmov.append((e, sign, point(body, s)))
         for d, terms in enumerate(self.dterms):
             kc[2 * ne + d] = self.delta[d]
             dmov += [(2 * ne + d, sign, body) for sign, body in terms if body != ground]
@@ -1210,8 +1235,8 @@ class _Angles(_Eqs):
             if body == ground and s.ndim == 1:
                 pxc[kb], pyc[kb] = s[0], s[1]
             else:
-                pmov.append((kb, body, s))
-        out = (kc, pxc, pyc, kmov, dmov, pmov)
+                pmov.append((kb, point(body, s)))
+        out = (kc, pxc, pyc, points, kmov, dmov, pmov)
         self._kplan = (ground, out)
         return out
 
