@@ -314,30 +314,28 @@ class NewtonGroup(Group):
         hu: list[float] = []
         hq: list[list[float]] = []
         q_pred = [float(v) for v in q_start]
-        rows = np.empty((st.n, self.n))
         iters = np.zeros(st.n, int)
         th = [0.0] * nb
+        jw = [1.0 if j % 3 == 2 else inv_scale for j in range(self.n)]  # the jump's weights
+        out: list[list[float]] = []
+        atol, its = self.atol, self.max_iterations
         for i, ui in enumerate(u.tolist()):
             if len(hq) == 1:  # the first step: along the tangent, not from the start's pose
                 q_pred = self._tangent_floats(hq[0], Kr[i], thp[i], Px[i], Py[i])
             elif hq:
                 q_pred = _extrapolate_floats(hu, hq, ui)
-            thf, stats = sub.newton_floats(
-                Kr[i], [q_pred[3 * k + 2] for k in free], self.atol, self.max_iterations
+            thf, plain, it, _, _ = sub.newton_list(
+                Kr[i], [q_pred[3 * k + 2] for k in free], atol, its
             )
-            plain = stats.converged
             if plain:
                 for j, k in enumerate(free):
-                    th[k] = float(thf[j])
+                    th[k] = thf[j]
                 for j, k in enumerate(fixed):
                     th[k] = thp[i][j]
                 xs, ys = red.poses_one(th, Px[i], Py[i])
                 q = [v for k in range(nb) for v in (xs[k], ys[k], th[k])]
                 if hq:
-                    jump = 0.0
-                    for j, (a, b) in enumerate(zip(q, q_pred)):
-                        d = abs(a - b) * (1.0 if j % 3 == 2 else inv_scale)
-                        jump = d if d > jump else jump
+                    jump = max(abs(a - b) * w for a, b, w in zip(q, q_pred, jw))
                     plain = jump <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
                 Ki = [k[i : i + 1] for k in Kall]
@@ -350,10 +348,14 @@ class NewtonGroup(Group):
                 if not good:
                     return None
                 q = qa.tolist()
-            rows[i] = q
-            iters[i] = stats.iterations
-            hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
-        self._set_q_rows(st, rows)
+                it = stats.iterations
+            out.append(q)
+            iters[i] = it
+            if len(hq) == 3:
+                hu, hq = [hu[1], hu[2], ui], [hq[1], hq[2], q]
+            else:
+                hu, hq = hu + [ui], hq + [q]
+        self._set_q_rows(st, np.array(out))
         return iters
 
     def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
@@ -365,10 +367,10 @@ class NewtonGroup(Group):
         red = self.red
         free, fixed = red.free.tolist(), red.fixed.tolist()
         th0 = [q0[3 * k + 2] for k in free]
-        thf, _ = red.sub.newton_floats(Kr, th0, self.atol, 1)
+        thf = red.sub.newton_list(Kr, th0, self.atol, 1)[0]
         th = [q0[3 * k + 2] for k in range(red.nb)]
         for j, k in enumerate(free):
-            th[k] = float(thf[j])
+            th[k] = thf[j]
         for j, k in enumerate(fixed):
             th[k] = thp[j]
         if not all(math.isfinite(v) for v in th):
@@ -911,46 +913,68 @@ class _Eqs:
         with ``K`` (n,) the constant part, in Python floats (up to 3 angles: a stacked
         NumPy call per operation costs more than the arithmetic there). Same
         convergence test; no scipy fallback (the caller's)."""
+        x, ok, it, r, nfev = self.newton_list(K, th0, atol, max_iterations)
+        return np.array(x), SolveStats(ok, "newton", it, nfev, nfev, r)
+
+    def newton_list(self, K, th0, atol: float, max_iterations: int):
+        """:meth:`newton_floats` as ``(angles (list), converged, iterations, residual,
+        evaluations)``:
+        the coarse continuation's form, without an array and a record per position."""
         nb, rows = self.nb, self._rows
         x = [float(v) for v in th0]
         K = [float(v) for v in K]
         xtol = 1e-3 * atol
         last = r = r_prev = math.inf
         cos, sin = math.cos, math.sin
-        two = nb == 2
-        if two:
+        if nb == 2:  # unrolled: the four-bar's loop, the commonest group
             ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
-        for it in range(max_iterations + 1):
-            if two:  # unrolled: the four-bar's loop, the commonest group
-                x0, x1 = x
+            k0, k1 = K
+            x0, x1 = x
+            for it in range(max_iterations + 1):
                 C0, C1, S0, S1 = cos(x0), cos(x1), sin(x0), sin(x1)
-                f = [
-                    K[0] + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1,
-                    K[1] + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1,
-                ]
-                J = [
-                    [a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3],
-                    [c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3],
-                ]
-            else:
-                c = [cos(v) for v in x]
-                s = [sin(v) for v in x]
-                f = []
-                J = []
-                for e in range(nb):
-                    fe = K[e]
-                    Je = []
-                    for k, (m1, m2, m3) in enumerate(rows[e]):
-                        fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
-                        Je.append(m2 * c[k] - m1 * s[k] + m3)
-                    f.append(fe)
-                    J.append(Je)
-            r = max(abs(f[0]), abs(f[1])) if two else max(abs(v) for v in f)
+                f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
+                f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
+                r = max(abs(f0), abs(f1))
+                if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, diverging
+                    break
+                r_prev = r
+                if r <= atol and (last <= xtol or r == 0.0):
+                    return [x0, x1], True, it, r, it + 1
+                if it == max_iterations:
+                    break
+                ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+                jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+                det = ja * jd - jb * jc  # as _solve_small
+                if det == 0:
+                    break
+                dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
+                step = max(abs(dx0), abs(dx1))
+                if not step <= 1e300:
+                    break
+                if r <= atol and step >= last:  # converged already: rounding level
+                    return [x0, x1], True, it, r, it + 1
+                x0, x1 = x0 + dx0, x1 + dx1
+                last = step
+            return [x0, x1], r <= atol, max_iterations, r, max_iterations
+        for it in range(max_iterations + 1):
+            c = [cos(v) for v in x]
+            s = [sin(v) for v in x]
+            f = []
+            J = []
+            for e in range(nb):
+                fe = K[e]
+                Je = []
+                for k, (m1, m2, m3) in enumerate(rows[e]):
+                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
+                    Je.append(m2 * c[k] - m1 * s[k] + m3)
+                f.append(fe)
+                J.append(Je)
+            r = max(abs(v) for v in f)
             if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, or diverging
                 break
             r_prev = r
             if r <= atol and (last <= xtol or r == 0.0):
-                return np.array(x), SolveStats(True, "newton", it, it + 1, it + 1, r)
+                return x, True, it, r, it + 1
             if it == max_iterations:
                 break
             dx = _solve_small(J, f)
@@ -960,12 +984,10 @@ class _Eqs:
             if not step <= 1e300:
                 break
             if r <= atol and step >= last:  # converged already: rounding level
-                return np.array(x), SolveStats(True, "newton", it, it + 1, it + 1, r)
+                return x, True, it, r, it + 1
             x = [a + b for a, b in zip(x, dx)]
             last = step
-        return np.array(x), SolveStats(
-            r <= atol, "newton", max_iterations, max_iterations, max_iterations, r
-        )
+        return x, r <= atol, max_iterations, r, max_iterations
 
     def step_small(self, C, S, f) -> np.ndarray:
         """The Newton step ``-F_theta^-1 F`` (N, n) for one or two angles, elementwise
@@ -1086,6 +1108,10 @@ class _Angles(_Eqs):
         self._kplan: tuple | None = None  # see _known_plan()
         self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
         self._wx, self._wy = self.Wx.tolist(), self.Wy.tolist()
+        self._wterms = [
+            [(k, a, b) for k, (a, b) in enumerate(zip(wx, wy)) if a or b]
+            for wx, wy in zip(self._wx, self._wy)
+        ]
         self.Wr = np.block([[-self.Wx.T, -self.Wy.T], [-self.Wy.T, self.Wx.T]])
         ne = len(loops)
         V = np.zeros((ne, nb, 2))
@@ -1268,9 +1294,13 @@ class _Angles(_Eqs):
         c = [math.cos(v) for v in th]
         s = [math.sin(v) for v in th]
         xs, ys = [], []
-        for px, py, wx, wy in zip(Px, Py, self._wx, self._wy):
-            xs.append(px + sum(ck * a - sk * b for ck, sk, a, b in zip(c, s, wx, wy)))
-            ys.append(py + sum(sk * a + ck * b for ck, sk, a, b in zip(c, s, wx, wy)))
+        for px, py, terms in zip(Px, Py, self._wterms):
+            for k, a, b in terms:  # the tree's nonzero local vectors only
+                ck, sk = c[k], s[k]
+                px += ck * a - sk * b
+                py += sk * a + ck * b
+            xs.append(px)
+            ys.append(py)
         return xs, ys
 
     def accel_terms(self, C, S, wd2) -> np.ndarray:
