@@ -49,7 +49,7 @@ __all__ = ["DesignBatch", "solve_designs"]
 NEAR = math.sin(math.radians(5.0))  # indicators below this: the design's own sweep
 
 
-CHUNK_COLUMNS = 8192  # columns per pass: the arrays of a pass stay in the CPU's caches
+CHUNK_COLUMNS = 16384  # columns per pass: the arrays of a pass stay in the CPU's caches
 
 
 @dataclass
@@ -224,11 +224,14 @@ class _Columns:
         return col[self.cols]
 
     def pair(self):
+        """A point or vector: a pair of floats, or one array (2, N) (which ``np.asarray``
+        takes as it is, where the model's pairs are read)."""
         a, b = self.one(), self.one()
         if isinstance(a, float) and isinstance(b, float):
             return (a, b)
-        n = len(self.cols)
-        return (np.broadcast_to(a, (n,)).copy(), np.broadcast_to(b, (n,)).copy())
+        out = np.empty((2, len(self.cols)))
+        out[0], out[1] = a, b
+        return out
 
 
 def _with_numbers(m: Mechanism, cols: _Columns) -> Mechanism:

@@ -34,29 +34,26 @@ def status_of(row: Row) -> str:
     return f"not assemblable at {n - solved} of {n} positions"
 
 
-def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
-    """One design's row: its parameters, a status, and its figures (see
-    :mod:`mechsolve.study.figures`). An invalid design or one that cannot be solved is a
-    row that says why; nothing is raised but KeyboardInterrupt."""
-    import numpy as np
-
-    from .. import api
-
+def _head(study: Study, k: int) -> Row:
     row: Row = {"design [-]": k}
     for p, x in zip(study.params, study.values(k)):
         row[p.header] = x
-    try:
-        mech = study.mechanism(k)
-    except InputError as exc:
-        row["status"] = f"invalid: {exc}"
-        return row
+    return row
+
+
+def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
+    """Complete design ``row``: solve it (``solved()`` gives its Results, or raises what
+    ``mechsolve.solve`` raises) and add its figures, or say why there are none."""
+    import numpy as np
+
     figures = list(study.figures)
     if study.best is not None and study.best[1] not in figures:
         figures.append(study.best[1])
+    k = row["design [-]"]
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = api.solve(mech, step=study.step, method=study.method)
+            res = solved()
             fig = design_row(res, mech, figures)
             if results_dir is not None:
                 res.to_csv(Path(results_dir) / f"design-{k:05d}.csv")
@@ -73,6 +70,23 @@ def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
     row["status"] = status_of(fig)
     row.update(fig)
     return row
+
+
+def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
+    """One design's row: its parameters, a status, and its figures (see
+    :mod:`mechsolve.study.figures`). An invalid design or one that cannot be solved is a
+    row that says why; nothing is raised but KeyboardInterrupt."""
+    from .. import api
+
+    row = _head(study, k)
+    try:
+        mech = study.mechanism(k)
+    except InputError as exc:
+        row["status"] = f"invalid: {exc}"
+        return row
+    return _fill(
+        study, row, mech, lambda: api.solve(mech, step=study.step, method=study.method), results_dir
+    )
 
 
 def precheck(study: Study, nominal) -> None:
@@ -110,7 +124,33 @@ def precheck(study: Study, nominal) -> None:
 
 
 def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None) -> list[Row]:
-    return [solve_design(study, k, results_dir) for k in indices]
+    """The rows of designs ``indices``, as :func:`solve_design` gives them; the valid
+    designs are solved as one batch (:func:`mechsolve.batch.solve_designs`, the same
+    results as separate solves), then each row's figures come from its own results."""
+    import numpy as np
+
+    from ..batch import solve_designs
+
+    heads: dict[int, Row] = {}
+    mechs: dict = {}
+    for k in indices:
+        heads[k] = _head(study, k)
+        try:
+            mechs[k] = study.mechanism(k)
+        except InputError as exc:
+            heads[k]["status"] = f"invalid: {exc}"
+    if len(mechs) < 2:
+        return [solve_design(study, k, results_dir) for k in indices]
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            batch = solve_designs(list(mechs.values()), step=study.step, method=study.method)
+    except Exception:  # noqa: BLE001 - then each design is solved on its own, as always
+        return [solve_design(study, k, results_dir) for k in indices]
+    slot = {k: j for j, k in enumerate(mechs)}
+    for k, mech in mechs.items():
+        _fill(study, heads[k], mech, lambda j=slot[k]: batch.results(j), results_dir)
+    return [heads[k] for k in indices]
 
 
 # the study of a pool worker: sent once, when the worker starts
@@ -131,10 +171,13 @@ def _pool_chunk(indices: list[int], results_dir: str | None) -> list[Row]:
 
 
 def chunks(n: int, workers: int, size: int | None = None) -> list[list[int]]:
-    """Design indices in chunks: about eight per worker, between 1 and 32 designs each
-    (the progress bar moves, the overhead per design stays small)."""
+    """Design indices in chunks: at least sixteen chunks where there are designs enough,
+    between 1 and 32 designs each (the progress bar moves, the overhead per design stays
+    small, two workers share the work). The chunks do not depend on ``workers``: a chunk
+    is solved as one batch, and the same chunks give the same table to the last digit,
+    whichever executor runs them."""
     if size is None:
-        size = max(1, min(32, math.ceil(n / (8 * max(workers, 1)))))
+        size = max(1, min(32, math.ceil(n / 16)))
     return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
 
 
