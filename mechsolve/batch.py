@@ -49,7 +49,7 @@ __all__ = ["DesignBatch", "solve_designs"]
 NEAR = math.sin(math.radians(5.0))  # indicators below this: the design's own sweep
 
 
-CHUNK_COLUMNS = 16384  # columns per pass: the arrays of a pass stay in the CPU's caches
+CHUNK_COLUMNS = 32768  # columns per pass: the arrays of a pass stay in the CPU's caches
 
 
 @dataclass

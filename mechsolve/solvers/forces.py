@@ -110,11 +110,12 @@ class _Q:
         self.nb = an.system.nb
         self.Q = np.zeros((3 * self.nb, sol.state.n))
 
-    def force(self, b: int, s, fx, fy) -> None:
-        """A force (fx, fy) at the local point ``s`` of body ``b``."""
+    def force(self, b: int, s, fx, fy, r=None) -> None:
+        """A force (fx, fy) at the local point ``s`` of body ``b`` (``r``: the point's
+        arm from the frame's origin, global components, when known)."""
         if b == self.nb:
             return
-        rx, ry = self.st.rotated(b, np.asarray(s, float))
+        rx, ry = self.st.rotated(b, np.asarray(s, float)) if r is None else r
         self.Q[3 * b] += fx
         self.Q[3 * b + 1] += fy
         self.Q[3 * b + 2] += rx * fy - ry * fx
@@ -230,8 +231,15 @@ def solve_forces(
             continue
         b = sys_.index[lk.name]
         s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
-        ax, ay = st.point_acceleration(b, s)
-        acc.force(b, s, m * (gx - ax), m * (gy - ay))
+        if s.ndim == 1 and not s.any():  # the centre at the frame's origin
+            acc.force(b, s, m * (gx - st.ax[b]), m * (gy - st.ay[b]))
+        else:
+            r = st.rotated(b, s)  # the centre's arm: for its acceleration and moment
+            rx, ry = r
+            w2 = st.w[b] * st.w[b]
+            ax = st.ax[b] - st.al[b] * ry - w2 * rx
+            ay = st.ay[b] + st.al[b] * rx - w2 * ry
+            acc.force(b, s, m * (gx - ax), m * (gy - ay), r)
         if np.any(J):
             acc.torque(b, -J * st.al[b])
         massive.append((b, m, J, s))
@@ -383,7 +391,9 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
     """
     sys_ = an.system
     n = st.n
-    lam = np.full((n, sys_.nc), np.nan)
+    # stored equation-major: each joint's multipliers are rows of N values (a group
+    # writes and the reactions read them whole); lam itself is the (N, nc) view
+    lam = np.full((sys_.nc, n), np.nan).T
     R = Q.copy()  # applied + inertia + reactions of the groups solved so far
     row_of = {id(r.constraint): r.start for r in sys_.rows}
     singular: list[tuple[int, str]] = []
