@@ -27,6 +27,7 @@ _API = {
     "run": "api",
     "check": "api",
     "stream": "api",
+    "solve_designs": "batch",
     "Mechanism": "model",
     "Link": "model",
     "PinJoint": "model",
