@@ -498,8 +498,18 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
             inds.append(ind)
             bad = ~ok | ~(ind > NEAR)
             if two:
+                # the discriminant stays clear of zero at and between the samples: no
+                # toggle, bifurcation or dead zone that the sweep's branch analysis meets
                 H, dH = g.disc(st)
                 bad |= ~(H - h * np.abs(dH) > 0)
+                if P > 1:
+                    # a lower bound of the cubic Hermite interpolant on each step (the
+                    # sweep's branch analysis interpolates so): its value weights are
+                    # positive and sum to 1, its slope weights are at most 4/27 in size
+                    Hd, dHd = H.reshape(nd, P), (h * np.abs(dH)).reshape(nd, P)
+                    low = np.minimum(Hd[:, :-1], Hd[:, 1:])
+                    low -= (4.0 / 27.0) * (dHd[:, :-1] + dHd[:, 1:])
+                    bad.reshape(nd, P)[:, 1:] |= ~(low > 0)
                 co = getattr(g, "coincident", None)
                 c = co(st) if co is not None else None
                 if c is not None:

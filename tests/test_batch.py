@@ -199,3 +199,22 @@ def test_kinematics_only_and_empty():
         assert batch.results(k).forces is None and want.forces is None
         _same(batch.results(k), want, f"fourbar {k}")
     assert len(solve_designs([])) == 0
+
+
+def test_a_dead_zone_between_samples_is_left_to_the_sweep():
+    # crank 29 mm, ground 87.5 mm: |O4 A| peaks at 116.5 mm at 180 deg; coupler 57.45 mm
+    # and rocker 59 mm reach 116.45 mm only, so the loop opens for about 2 deg around
+    # 180 deg, between the samples 165 and 195 deg of a 30-deg sweep from 15 deg, where
+    # the angle at B is still 12.5 deg from straight: only the discriminant's slopes
+    # tell, and the sweep reports the dead zone
+    text = _FOURBAR.replace("step: 1 deg", "step: 30 deg").replace("start: 0 deg", "start: 15 deg")
+    text = text.replace("A: [26.5, 0]", "A: [29, 0]")
+    study = _study(text, ["links.coupler.points.B[0]=57.45, 100 mm"])
+    mechs = [study.mechanism(k) for k in range(len(study))]
+    batch = solve_designs(mechs)
+    assert list(batch.batched) == [False, True], batch.why
+    want = ms.solve(mechs[0])
+    assert want.ok.all() and any(e.kind == "dead zone" for e in want.solution.events)
+    got = batch.results(0)
+    assert [e.kind for e in got.solution.events] == [e.kind for e in want.solution.events]
+    _same(batch.results(1), ms.solve(mechs[1]), "regular")
