@@ -509,16 +509,22 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     energy = fr.kinetic + fr.potential
     work = energy[-1] - energy[0]
     for load in mech.loads:
+        # "pos" is the load's potential-like function: its work is a difference of it;
+        # "phi" its values at every sample
         if isinstance(load, PointForce) and load.frame == "global":
             b = sys_.index[load.link]
             s = mech.local_point(load.link, load.point)
+            f = load.force
+            x, y = st.point(b, s)
+            phi = f[0] * x + f[1] * y
 
-            def pos(state, i, b=b, s=s, f=load.force):
+            def pos(state, i, b=b, s=s, f=f):
                 x, y = state.point(b, s, [i])
                 return f[0] * float(x[0]) + f[1] * float(y[0])
 
         elif isinstance(load, Torque):
             b = sys_.index[load.link]
+            phi = load.torque * st.th[b]
 
             def pos(state, i, b=b, t=load.torque):
                 return t * float(state.th[b, i])
@@ -527,20 +533,19 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
             p = fr.load_power[load.name]
             work -= float(simpson(p, x=sol.t))
             continue
-        # "pos" is the load's potential-like function: its work is a difference of it
         on = fr.active.get(load.name)
         if on is None:
-            work -= pos(st, -1) - pos(st, 0)
+            work -= float(phi[-1] - phi[0])
             continue
-        for k in range(len(sol.u) - 1):
-            if on[k] and on[k + 1]:
-                work -= pos(st, k + 1) - pos(st, k)
-            elif on[k] != on[k + 1]:
-                us, ss = _switch(an, sol, fr, load, k)
-                if on[k]:
-                    work -= pos(ss, 0) - pos(st, k)
-                else:
-                    work -= pos(st, k + 1) - pos(ss, 0)
+        both = on[:-1] & on[1:]
+        work -= float(np.sum(np.diff(phi)[both]))  # the intervals where it acts throughout
+        for k in np.flatnonzero(on[:-1] != on[1:]):  # and the parts where it switches
+            k = int(k)
+            us, ss = _switch(an, sol, fr, load, k)
+            if on[k]:
+                work -= pos(ss, 0) - float(phi[k])
+            else:
+                work -= float(phi[k + 1]) - pos(ss, 0)
     return float(work)
 
 
