@@ -398,30 +398,56 @@ class StartAssembler:
     def _choose(self, g: Group, st2: State, ok2: np.ndarray, ready) -> tuple[int, str]:
         """The column (0: branch +, 1: branch -) to keep: the conditions that apply, then
         the sketch, then branch +."""
-        if ok2.sum() == 1:
-            return int(np.flatnonzero(ok2)[0]), "the only branch that closes"
-        if ready:
+        take_m, why, conflict, texts = self._choose_branches(g, st2, ok2, ready)
+        if conflict[0]:
+            raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
+        return int(take_m[0]), str(why[0])
+
+    def _choose_branches(self, g: Group, st2: State, ok2: np.ndarray, ready):
+        """The branch of a two-branch group for each of n designs (one, or many solved as
+        a batch, :mod:`mechsolve.batch`), from a state of 2 n columns: branch + of each
+        design, then branch - of each. The only branch that closes, else the conditions
+        that apply, else the sketch, else branch +.
+
+        Returns where branch - is taken and why (arrays over the designs), the designs
+        whose two branches close but neither satisfies the conditions, and the
+        conditions' text."""
+        n = len(ok2) // 2
+        okp, okm = ok2[:n], ok2[n:]
+        take_m = np.zeros(n, bool)
+        why = np.full(n, "default branch (+)", dtype=object)
+        only = okp ^ okm
+        take_m[only] = okm[only]
+        why[only] = "the only branch that closes"
+        both = okp & okm
+        conflict = np.zeros(n, bool)
+        texts = ""
+        if ready and both.any():
             view = StateView(self, st2)
             view.has_velocity = view.has_acceleration = False
-            sat = np.ones(2, bool)
+            sat = np.ones(2 * n, bool)
             for _, c in ready:
-                sat &= np.broadcast_to(np.asarray(c.evaluate(view), bool), (2,))
+                sat &= np.broadcast_to(np.asarray(c.evaluate(view), bool), (2 * n,))
+            sp, sm = sat[:n], sat[n:]
             texts = ", ".join(repr(c.text) for _, c in ready)
-            if not sat.any():
-                raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
-            if sat.sum() == 1:
-                return int(np.flatnonzero(sat)[0]), f"assembly condition {texts}"
+            conflict = both & ~sp & ~sm
+            one = both & (sp ^ sm)
+            take_m[one] = sm[one]
+            why[one] = f"assembly condition {texts}"
+            both &= sp & sm
         sketch = {
             p: xy for p, xy in self.mech.assembly.sketch.items() if self.points[p].body in g.bodies
         }
-        if sketch:
-            dist = np.zeros(2)
+        if sketch and both.any():
+            dist = np.zeros(2 * n)
             for p, (sx, sy) in sketch.items():
                 ref = self.points[p]
                 x, y = st2.point(ref.body, ref.local)
                 dist += (x - sx) ** 2 + (y - sy) ** 2
-            return int(np.argmin(dist)), "nearest to the sketch"
-        return 0, "default branch (+)"
+            near_m = dist[n:] < dist[:n]  # a tie keeps branch +
+            take_m[both] = near_m[both]
+            why[both] = "nearest to the sketch"
+        return take_m, why, conflict, texts
 
     def _initial_guess(
         self, g: NewtonGroup, st: State, turn: np.ndarray | None = None

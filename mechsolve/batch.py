@@ -90,11 +90,11 @@ class DesignBatch:
             if isinstance(out, BaseException):
                 raise out
             return out
-        b, j = self._where[k]
-        b = self._passes[b]
+        pi, j = self._where[k]
+        b = self._passes[pi]
         P = len(self.u)
         sl = slice(j * P, (j + 1) * P)
-        an = Analysis(self.mechanisms[k], b["method"])
+        an = Analysis(self.mechanisms[k], "auto")  # the only method the batch takes
         sol_b: Solution = b["solution"]
         modes = [float(m) for m in b["modes"][:, j]]
         start = StartAssembly(
@@ -130,7 +130,7 @@ def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
     return ForceResult(
         f.lam[sl],
         f.effort[sl],
-        {j: cut(v) for j, v in f.reactions.items()},
+        {joint: cut(v) for joint, v in f.reactions.items()},
         cut(f.active),
         f.power_loads[sl],
         [(i - sl.start, g) for i, g in f.singular if sl.start <= i < sl.stop],
@@ -341,38 +341,8 @@ def _assemble(ab, u0: float, nd: int):
         c = co(st2) if co is not None else None
         if c is not None:
             undecided |= c[:nd] | c[nd:]
-        undecided |= ~(okp | okm)
-        take_m = np.zeros(nd, bool)
-        why = np.full(nd, "default branch (+)", dtype=object)
-        open_ = okp & okm
-        only = okp ^ okm
-        take_m[only] = okm[only]
-        why[only] = "the only branch that closes"
-        if ready:
-            view = StateView(ab, st2)
-            view.has_velocity = view.has_acceleration = False
-            sat = np.ones(n2, bool)
-            for _, cond in ready:
-                sat &= np.broadcast_to(np.asarray(cond.evaluate(view), bool), (n2,))
-            sp, sm = sat[:nd], sat[nd:]
-            texts = ", ".join(repr(cond.text) for _, cond in ready)
-            undecided |= open_ & ~sp & ~sm
-            one = open_ & (sp ^ sm)
-            take_m[one] = sm[one]
-            why[one] = f"assembly condition {texts}"
-            open_ = open_ & sp & sm
-        sketch = {
-            p: xy for p, xy in ab.mech.assembly.sketch.items() if ab.points[p].body in g.bodies
-        }
-        if sketch and open_.any():
-            dist = np.zeros(n2)
-            for p, (sx, sy) in sketch.items():
-                ref = ab.points[p]
-                x, y = st2.point(ref.body, ref.local)
-                dist += (x - sx) ** 2 + (y - sy) ** 2
-            near_m = dist[nd:] < dist[:nd]
-            take_m[open_] = near_m[open_]
-            why[open_] = "nearest to the sketch"
+        take_m, why, conflict, _ = ab._choose_branches(g, st2, ok2, ready)
+        undecided |= ~(okp | okm) | conflict
         modes[gi] = np.where(take_m, -1.0, 1.0)
         reasons[gi] = list(why)
         # keep the chosen branch in both halves
@@ -569,7 +539,6 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
             "u0": u0,
             "solution": sol,
             "forces": forces,
-            "method": None,
         }
     )
     for slot, j in enumerate(keep):
