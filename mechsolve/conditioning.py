@@ -42,20 +42,29 @@ def group_block(g: Group, st: State):
     return J, blocks
 
 
-def rcond(J: np.ndarray) -> np.ndarray:
-    """Reciprocal 2-norm condition numbers of equilibrated matrices (N, m, n); 0 where the
-    matrix has non-finite entries."""
-    out = np.zeros(J.shape[0])
+def _equilibrated(J: np.ndarray):
+    """Which matrices (N, m, n) are finite, and those scaled to unit column then unit row
+    norms (None if none is finite)."""
     good = np.all(np.isfinite(J), axis=(1, 2))
     if not np.any(good):
-        return out
+        return good, None
     Jg = J[good]
     cs = np.linalg.norm(Jg, axis=1, keepdims=True)
     cs[cs == 0] = 1.0
     Js = Jg / cs
     rs = np.linalg.norm(Js, axis=2, keepdims=True)
     rs[rs == 0] = 1.0
-    sv = np.linalg.svd(Js / rs, compute_uv=False)
+    return good, Js / rs
+
+
+def rcond(J: np.ndarray) -> np.ndarray:
+    """Reciprocal 2-norm condition numbers of equilibrated matrices (N, m, n); 0 where the
+    matrix has non-finite entries."""
+    out = np.zeros(J.shape[0])
+    good, A = _equilibrated(J)
+    if A is None:
+        return out
+    sv = np.linalg.svd(A, compute_uv=False)
     out[good] = np.where(sv[:, 0] > 0, sv[:, -1] / sv[:, 0], 0.0)
     return out
 
@@ -66,16 +75,9 @@ def rcond_lower(J: np.ndarray) -> np.ndarray:
     |A|_F <= sqrt(n) |A|_2``, it is between ``rcond / n`` and ``rcond``. NaN where the
     matrix is not finite or is exactly singular."""
     out = np.full(J.shape[0], np.nan)
-    good = np.all(np.isfinite(J), axis=(1, 2))
-    if not np.any(good):
+    good, A = _equilibrated(J)
+    if A is None:
         return out
-    Jg = J[good]
-    cs = np.linalg.norm(Jg, axis=1, keepdims=True)
-    cs[cs == 0] = 1.0
-    Js = Jg / cs
-    rs = np.linalg.norm(Js, axis=2, keepdims=True)
-    rs[rs == 0] = 1.0
-    A = Js / rs
     inv = _inverse(A)
     with np.errstate(divide="ignore", invalid="ignore"):
         out[good] = 1.0 / (

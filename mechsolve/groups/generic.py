@@ -1379,11 +1379,10 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
     return out
 
 
-def _extrapolate_floats(us: list[float], qs: list[list[float]], u: float) -> list[float]:
-    """:func:`_extrapolate` on lists of floats."""
-    k = len(qs)
-    if k == 1:
-        return list(qs[0])
+def _lagrange_weights(us: list[float], u: float) -> list[float] | None:
+    """The weights of the Lagrange extrapolation from the driver values ``us`` to ``u``
+    (None where two of them coincide)."""
+    k = len(us)
     ws = []
     for i in range(k):
         w = 1.0
@@ -1391,9 +1390,20 @@ def _extrapolate_floats(us: list[float], qs: list[list[float]], u: float) -> lis
             if j != i:
                 den = us[i] - us[j]
                 if den == 0:
-                    return list(qs[-1])
+                    return None
                 w *= (u - us[j]) / den
         ws.append(w)
+    return ws
+
+
+def _extrapolate_floats(us: list[float], qs: list[list[float]], u: float) -> list[float]:
+    """:func:`_extrapolate` on lists of floats."""
+    k = len(qs)
+    if k == 1:
+        return list(qs[0])
+    ws = _lagrange_weights(us[:k], u)
+    if ws is None:
+        return list(qs[-1])
     if k == 2:
         (w0, w1), (q0, q1) = ws, qs
         return [w0 * a + w1 * b for a, b in zip(q0, q1)]
@@ -1406,14 +1416,10 @@ def _extrapolate(us: list[float], qs: list[np.ndarray], u: float) -> np.ndarray:
     k = len(qs)
     if k == 1:
         return qs[0].copy()
-    out = None
-    for i in range(k):
-        w = 1.0
-        for j in range(k):
-            if j != i:
-                den = us[i] - us[j]
-                if den == 0:
-                    return qs[-1].copy()
-                w *= (u - us[j]) / den
-        out = w * qs[i] if out is None else out + w * qs[i]
+    ws = _lagrange_weights(us[:k], u)
+    if ws is None:
+        return qs[-1].copy()
+    out = ws[0] * qs[0]
+    for w, q in zip(ws[1:], qs[1:]):
+        out = out + w * q
     return out
