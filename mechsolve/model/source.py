@@ -283,6 +283,22 @@ def _check_events(text: str, file: str | None) -> None:
     parser is lazy, so a hostile file is refused after reading only its beginning.
     """
     stack: list[_Open] = []
+    try:
+        _walk_events(text, file, stack)
+    except yaml.MarkedYAMLError as exc:
+        # libyaml 0.2.6 (PyYAML 6.0.4's wheels) refuses nesting beyond 1000 flow levels
+        # itself, while scanning ahead of the events that reach us
+        if "nesting depth" not in str(exc.problem) or exc.problem_mark is None:
+            raise
+        raise InputError(
+            f"nesting deeper than {MAX_DEPTH} levels",
+            file=file,
+            keypath=format_keypath(f.here for f in stack) or None,
+            line=exc.problem_mark.line + 1,
+        ) from None
+
+
+def _walk_events(text: str, file: str | None, stack: list[_Open]) -> None:
     node_events = (yaml.ScalarEvent, yaml.AliasEvent, yaml.CollectionStartEvent)
     nodes = 0
     for n, ev in enumerate(yaml.parse(text, Loader=_LOADER)):
