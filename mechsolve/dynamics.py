@@ -40,6 +40,8 @@ from .sweep import Analysis
 __all__ = ["ReducedModel", "simulate", "SimulationResults"]
 
 NEAR_SINGULAR = 1e-6  # sin of a loop's transmission angle below this: solved beside it
+SWITCH_GRID = math.radians(0.05)  # where a switching load's switches are looked for first
+TABLE_MIN, TABLE_MAX = 360, 7680  # intervals of the integrator's table over a turn
 
 
 class ReducedModel:
@@ -57,8 +59,14 @@ class ReducedModel:
         else:
             u = self.u0 + d * np.radians(np.arange(0.0, 360.0 + 0.5, 1.0))
         self.ref = core.states(an, u, 1.0, 0.0, velocity=True, acceleration=True)
-        self.full_turn = (not an.linear) and bool(self.ref.ok.all())
-        self.extremes = core.forces(an, self.ref).stroke_extremes
+        # a crank that turns fully and whose linkage comes back as it started after a
+        # turn (not, say, on its other branch): its motion is periodic in the angle
+        self.full_turn = (
+            (not an.linear) and bool(self.ref.ok.all()) and _repeats(self.ref.state, an.scale)
+        )
+        # the extremes that stroke(q) in load conditions means (none without conditions)
+        conditions = any(ld.when is not None for ld in mech.loads)
+        self.extremes = core.forces(an, self.ref).stroke_extremes if conditions else []
         self.nfev = 0  # evaluations of the equation of motion
 
     def _wrap(self, phi: float) -> float:
@@ -91,12 +99,21 @@ class ReducedModel:
         sol.udd = np.asarray(eps, float) * np.ones(len(phi))
         return sol
 
-    def tabulate(self, step: float = math.radians(0.05)) -> bool:
+    def tabulate(self, rtol: float = 1e-11) -> bool:
         """Tabulate the equation of motion over one turn, where it allows: a crank that
         turns fully. Then ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2``
         exactly (gravity and springs in a; dampers and drag in b; the kinetic term
-        1/2 J' omega^2 in c), and J, a, b, c are periodic cubic splines through the grid
-        (interpolation error about 1e-9 of their size at 0.05 degrees).
+        1/2 J' omega^2 in c), and J, a, b, c are periodic functions of the angle.
+
+        They are sampled by the force analysis on uniform grids that double (120 angles,
+        240, ...) until the trigonometric interpolant of one grid predicts the next grid's
+        new samples to ``rtol`` of the largest effort (:func:`_spectral_samples`); a
+        linkage's J is analytic in the angle, so a few hundred samples usually give it to
+        rounding. The integrator then reads a cubic Hermite table whose values and slopes
+        come from that interpolant, on a grid fine enough for its own error to stay below
+        the same tolerance. Where the samples do not converge (a sharp peak of J next to
+        a toggle position), periodic cubic splines through 7680 samples (0.047 degrees)
+        are used instead.
 
         A load that switches on and off (``when:``) adds its own ``a_k + b_k omega +
         c_k omega^2`` (tabulated with the load always on, so smooth) times where it acts.
@@ -109,27 +126,35 @@ class ReducedModel:
         tabulated."""
         if not self.full_turn:
             return False
-        from scipy.interpolate import CubicSpline
-
         conditional = [ld for ld in self.mech.loads if ld.when is not None]
         d = self.mech.driver.direction
-        x = np.arange(0.0, 2 * math.pi, step)
-        n = len(x)
-        masks = self._condition_intervals(x, conditional)
+        masks = self._condition_intervals(np.arange(0.0, 2 * math.pi, SWITCH_GRID), conditional)
         if masks is None:
             return False
         # columns: (speed, acceleration). J = E(0, 1) - E(0, 0); the speeds 0, 1, -1 at
         # zero acceleration fit E0 = a + b w + c w^2
         cols = [(0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
+        variants = [None, *conditional]  # the machine without its conditional loads; each
 
-        def efforts(xx, on=None):
+        speeds, accelerations = [c[0] for c in cols], [c[1] for c in cols]
+        nref = len(self.ref.u) - 1  # the reference sweep's turn: its own states, rescaled
+        at_ref = self.rates_at(
+            np.tile(np.arange(nref), len(cols)),
+            np.repeat(speeds, nref),
+            np.repeat(accelerations, nref),
+        )
+
+        def efforts(xx, on, ref=False):
             m = len(xx)
-            sol = core.states(
-                self.an,
-                np.tile(self.u0 + d * xx, len(cols)),
-                np.repeat([c[0] for c in cols], m),
-                np.repeat([c[1] for c in cols], m),
-            )
+            if ref:
+                sol = at_ref
+            else:
+                sol = core.states(
+                    self.an,
+                    np.tile(self.u0 + d * xx, len(cols)),
+                    np.repeat(speeds, m),
+                    np.repeat(accelerations, m),
+                )
             with self._loads_forced(conditional, on):
                 f = core.forces(self.an, sol, self.extremes)
             E = f.effort.reshape(len(cols), m)
@@ -140,48 +165,60 @@ class ReducedModel:
             )
             return E, ind
 
-        def tabulated(on=None):
-            E, ind = efforts(x, on)
-            # within rounding of a singular position the force analysis is not determined
-            good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
-            if not good.all():
-                # singular grid points (a bifurcation: the reactions are indeterminate
-                # there, the effort with them) are few; J and E0 are smooth through them
-                # on the followed motion, so they are taken as the mean of the two sides
-                if good.sum() < 0.99 * n:
-                    return None
-                bad = np.flatnonzero(~good)
-                h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
-                Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h], on)
-                if not np.all(np.isfinite(Eb)):
-                    return None
-                E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
-            return E
+        def sample(x):
+            """Every variant's efforts at the angles ``x`` (None: the reference sweep's
+            angles, 2 pi k / nref): (4 * variants, len(x))."""
+            out = []
+            ref = x is None
+            if ref:
+                x = 2 * math.pi * np.arange(nref) / nref
+            for on in variants:
+                E, ind = efforts(x, on, ref)
+                # within rounding of a singular position the force analysis is not
+                # determined, and the effort with it
+                good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
+                if not good.all():
+                    # singular samples (a bifurcation: the reactions are indeterminate
+                    # there) are few; J and E0 are smooth through them on the followed
+                    # motion, so they are taken as the mean of the two sides
+                    bad = np.flatnonzero(~good)
+                    if len(bad) > max(4, 0.01 * len(x)):
+                        raise _NoTable
+                    h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
+                    Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h], on)
+                    if not np.all(np.isfinite(Eb)):
+                        raise _NoTable
+                    E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
+                out.append(E)
+            return np.concatenate(out)
 
-        E = tabulated()  # the conditional loads off
-        if E is None:
+        try:
+            V, converged = _spectral_samples(sample, sample(None), rtol)
+        except _NoTable:
             return False
-        J = E[0] - E[1]
-        _check_inertia(self, J, self.u0 + d * x)
         vander = np.vander(np.array([c[0] for c in cols[1:]]), 3, increasing=True)
+        E = V[:4]
+        J = E[0] - E[1]
+        n = V.shape[1]
+        x = 2 * math.pi * np.arange(n) / n
+        _check_inertia(self, J, self.u0 + d * x)
         table = [J, *np.linalg.solve(vander, E[1:])]  # J, a, b, c
-        for load in conditional:  # each alone and always on, less the machine without it
-            Ek = tabulated(load)
-            if Ek is None:
-                return False
-            table += list(np.linalg.solve(vander, Ek[1:] - E[1:]))
-        spline = CubicSpline(
-            np.r_[x, 2 * math.pi],
-            np.column_stack([np.r_[v, v[0]] for v in table]),
-            bc_type="periodic",
-        )
-        self._table = _Table(spline, step)
+        for k in range(1, len(variants)):  # each load alone and always on, less the rest
+            table += list(np.linalg.solve(vander, V[4 * k + 1 : 4 * k + 4] - E[1:]))
+        table = np.array(table)
+        if converged:
+            self._table = _Table.trigonometric(table, rtol)
+        else:
+            from scipy.interpolate import CubicSpline
+
+            spline = CubicSpline(
+                np.r_[x, 2 * math.pi], np.c_[table, table[:, :1]].T, bc_type="periodic"
+            )
+            self._table = _Table(spline.c, 2 * math.pi / n)
         # J is a sum of squares: where it vanishes (between grid points) it touches zero,
-        # so its minima are looked for on the curve, not only at the grid
-        Jc = CubicSpline(np.r_[x, 2 * math.pi], np.r_[J, J[0]], bc_type="periodic")
-        roots = Jc.derivative().roots(extrapolate=False)
-        xm = np.r_[x, roots[np.isfinite(roots)]]  # (nan where J is constant on a piece)
-        _check_inertia(self, Jc(xm), self.u0 + d * xm, rel=1e-8)
+        # so its minima are looked for on the curve, not only at the samples
+        xm = self._table.minima(0)
+        _check_inertia(self, self._table.evaluate(xm)[0], self.u0 + d * xm, rel=1e-8)
         self._masks = masks
         return True
 
@@ -298,15 +335,22 @@ class ReducedModel:
         _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
 
+    def rates_at(self, idx: np.ndarray, omega: np.ndarray, eps: np.ndarray):
+        """The reference sweep's positions ``idx`` (repeats allowed) with the driver's
+        speeds ``omega`` and accelerations ``eps``: its states are per unit of the driver
+        coordinate, so the rates follow by the chain rule, without solving again."""
+        out = core._take(self.ref, idx)
+        core.scale_rates(out.state, omega, eps)
+        out.ud, out.udd = omega, eps
+        return out
+
     def inertia_curve(self):
         """``(phi, J, J')`` over the reference sweep (one turn of a crank)."""
         ref = self.ref
         n = len(ref.u)
-        both = core._take(ref, np.r_[np.arange(n), np.arange(n)])
-        both.u = np.r_[ref.u, ref.u]
-        core.scale_rates(both.state, np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)])
-        both.ud, both.udd = np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)]
-        # the per-unit state of the reference is already scaled by 1: rates per radian
+        both = self.rates_at(
+            np.r_[np.arange(n), np.arange(n)], np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)]
+        )
         f = core.forces(self.an, both, self.extremes)
         J = f.effort[n:] - f.effort[:n]
         dJ = 2.0 * f.kinetic_rate[:n]
@@ -314,33 +358,122 @@ class ReducedModel:
 
 
 class _Table:
-    """A periodic cubic spline over [0, 2 pi) on a uniform grid, evaluated at one angle
-    in plain Python (the integrator's inner loop: scipy's general evaluation costs more
-    than the rest of a step)."""
+    """Piecewise cubic functions of the angle over [0, 2 pi) on a uniform grid, evaluated
+    at one angle in plain Python (the integrator's inner loop: scipy's general evaluation
+    costs more than the rest of a step) or at many with numpy.
 
-    def __init__(self, spline, step: float) -> None:
-        self.spline = spline  # kept for vectorised use
+    ``c`` has the layout of scipy's ``PPoly.c``: (4, intervals, columns), the highest
+    power first, in powers of the distance from the interval's start."""
+
+    def __init__(self, c: np.ndarray, step: float) -> None:
+        self.c = np.asarray(c, float)
         self.step = step
-        self.knots = spline.x.tolist()
-        c = spline.c  # (4, intervals, columns): highest power first
-        self.intervals, self.columns = c.shape[1], c.shape[2]
-        # one flat list (a nested one costs more to build than a whole simulation)
-        self.coef = np.ascontiguousarray(c.transpose(1, 2, 0)).ravel().tolist()
+        self.intervals, self.columns = self.c.shape[1], self.c.shape[2]
+        # a list per interval of its columns' coefficients, unpacked in one step
+        self.rows = self.c.transpose(1, 2, 0).reshape(self.intervals, -1).tolist()
+
+    @classmethod
+    def trigonometric(cls, samples: np.ndarray, rtol: float) -> _Table:
+        """The cubic Hermite table of the trigonometric interpolants of ``samples``
+        (columns, n) at n uniform angles from 0: values and slopes exact at the table's
+        grid, whose step h keeps the Hermite error bound h^4 / 384 max|f^(4)| (the
+        fourth derivative bounded by the sum of k^4 times the harmonics' sizes) within
+        ``rtol / 2`` of the largest sample."""
+        ncol, n = samples.shape
+        F = np.fft.rfft(samples, axis=1) / n
+        k = np.arange(F.shape[1])
+        if n % 2 == 0:
+            F[:, -1] = 0.0  # the Nyquist term: below the tolerance once converged
+        scale = max(float(np.max(np.abs(samples))), 1e-300)
+        d4 = 2.0 * float(np.max(np.abs(F) @ k.astype(float) ** 4))
+        h = (192.0 * rtol * scale / d4) ** 0.25 if d4 > 0 else 2 * math.pi
+        m = int(min(max(math.ceil(2 * math.pi / h), TABLE_MIN), TABLE_MAX))
+        pad = np.zeros((ncol, m // 2 + 1), complex)
+        kk = min(F.shape[1], m // 2 + 1)
+        pad[:, :kk] = F[:, :kk]
+        f = np.fft.irfft(pad, m, axis=1) * m
+        df = np.fft.irfft(pad * (1j * np.arange(m // 2 + 1)), m, axis=1) * m
+        step = 2 * math.pi / m
+        f1, df1 = np.roll(f, -1, axis=1), np.roll(df, -1, axis=1)
+        slope = (f1 - f) / step
+        c = np.stack(
+            [
+                (df + df1 - 2.0 * slope) / step**2,
+                (3.0 * slope - 2.0 * df - df1) / step,
+                df,
+                f,
+            ]
+        ).transpose(0, 2, 1)
+        return cls(c, step)
 
     def __call__(self, x: float) -> list[float]:
-        knots, last = self.knots, self.intervals - 1
-        i = min(int(x / self.step), last)
-        while i > 0 and x < knots[i]:  # rounding of x / step
-            i -= 1
-        while i < last and x >= knots[i + 1]:
-            i += 1
-        h = x - knots[i]
-        c = self.coef
-        k = 4 * self.columns * i
+        i = min(int(x / self.step), self.intervals - 1)
+        h = x - i * self.step
+        c = self.rows[i]
         return [
             ((c[j] * h + c[j + 1]) * h + c[j + 2]) * h + c[j + 3]
-            for j in range(k, k + 4 * self.columns, 4)
+            for j in range(0, 4 * self.columns, 4)
         ]
+
+    def evaluate(self, x) -> np.ndarray:
+        """Every column at the angles ``x`` (in [0, 2 pi)): (columns, len(x))."""
+        x = np.asarray(x, float)
+        i = np.clip((x / self.step).astype(int), 0, self.intervals - 1)
+        h = (x - i * self.step)[:, None]
+        c = self.c[:, i]  # (4, len(x), columns)
+        return (((c[0] * h + c[1]) * h + c[2]) * h + c[3]).T
+
+    def minima(self, col: int) -> np.ndarray:
+        """Candidate angles of the smallest value of column ``col``: the grid and the
+        zeros of each piece's slope inside its interval."""
+        a, b, c = 3 * self.c[0, :, col], 2 * self.c[1, :, col], self.c[2, :, col]
+        disc = b * b - 4 * a * c
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+            roots = np.concatenate([(-b + sq) / (2 * a), (-b - sq) / (2 * a), -c / b])
+        start = np.tile(np.arange(self.intervals) * self.step, 3)
+        inside = np.isfinite(roots) & (roots > 0) & (roots < self.step)
+        return np.r_[np.arange(self.intervals) * self.step, start[inside] + roots[inside]]
+
+
+class _NoTable(Exception):
+    """The equation of motion cannot be tabulated over the angle."""
+
+
+def _spectral_samples(sample, V: np.ndarray, rtol: float, nmax: int = 5760):
+    """Samples of smooth periodic functions over a turn at uniform grids that double
+    until the trigonometric interpolant of every other sample predicts the samples
+    between them to ``rtol`` of the largest sample.
+
+    ``V`` holds the functions (rows) at ``x = 2 pi k / n`` (n even), and ``sample(x)``
+    returns them at other angles. Returns the samples at the last grid and whether they
+    converged (then their own interpolant, on twice the grid that met the test, is far
+    more accurate still); at ``nmax`` samples they are returned unconverged."""
+    while True:
+        n = V.shape[1] // 2
+        F = np.fft.rfft(V[:, 0::2], axis=1)
+        shifted = F * np.exp(1j * np.arange(F.shape[1]) * math.pi / n)
+        if n % 2 == 0:
+            shifted[:, -1] = 0.0  # the Nyquist term vanishes at the midpoints
+        err = float(np.max(np.abs(np.fft.irfft(shifted, n, axis=1) - V[:, 1::2])))
+        if not np.isfinite(err):
+            raise _NoTable
+        if err <= rtol * float(np.max(np.abs(V))):
+            return V, True
+        if 2 * n >= nmax:
+            return V, False
+        Vm = sample(2 * math.pi * (np.arange(2 * n) + 0.5) / (2 * n))
+        both = np.empty((V.shape[0], 4 * n))
+        both[:, 0::2], both[:, 1::2] = V, Vm
+        V = both
+
+
+def _repeats(st, scale: float) -> bool:
+    """Whether the first and last positions of a state are the same configuration
+    (poses and rates per unit of the driver)."""
+    rows = [0, 1, 3, 4, 5, 6, 7]  # x, y, cos, sin, vx, vy, w
+    blk = st.block
+    return bool(np.allclose(blk[rows, :, 0], blk[rows, :, -1], rtol=0, atol=1e-8 * max(1, scale)))
 
 
 def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray, rel: float = 1e-12) -> None:
@@ -461,104 +594,124 @@ def _crossing(y0, y1, h: float, phi0: float, turns: _Turns) -> float:
     return s
 
 
+def _acceleration(model: ReducedModel, motor, d: int):
+    """The driver's acceleration ``f(t, phi, omega)`` in plain floats. With a table, no
+    switching loads and the linear motor law, the table's polynomials are evaluated in
+    line (the inner loop of RK4, four times a step); otherwise through
+    :meth:`ReducedModel.terms`."""
+    tab = getattr(model, "_table", None)
+    if tab is not None and tab.columns == 4 and motor.kind == "linear":
+        rows, step, last, u0 = tab.rows, tab.step, tab.intervals - 1, model.u0
+        turn = 2 * math.pi
+        m0, nu = d * motor.stall, motor.slope  # d M(d w) = d M0 - nu w
+
+        def fast(t: float, p: float, w: float) -> float:
+            x = (d * (p - u0)) % turn
+            i = int(x / step)
+            if i > last:
+                i = last
+            h = x - i * step
+            j3, j2, j1, j0, a3, a2, a1, a0, b3, b2, b1, b0, c3, c2, c1, c0 = rows[i]
+            J = ((j3 * h + j2) * h + j1) * h + j0
+            a = ((a3 * h + a2) * h + a1) * h + a0
+            b = ((b3 * h + b2) * h + b1) * h + b0
+            c = ((c3 * h + c2) * h + c1) * h + c0
+            return (m0 - a - (nu + b + c * w) * w) / J
+
+        fast.counted = False  # the integrator counts its calls
+        return fast
+
+    def torque(w: float, t: float) -> float:
+        if motor.kind == "linear":  # the common law, without numpy's overhead
+            return d * (motor.stall - motor.slope * d * w)
+        return float(drive_torque(motor, d, np.array([w]), t)[0])
+
+    def general(t: float, p: float, w: float) -> float:
+        J, e0 = model.terms(p, w, t)
+        return (torque(w, t) - e0) / J
+
+    general.counted = True  # terms() counts
+    return general
+
+
+def _rk4(model, sim, accel, y0, turns: _Turns, progress):
+    """Fixed-step RK4 (Mathcad's ``rkfixed``) in plain floats: the times, the states
+    (phi, omega) and why it stopped early ('' if it did not)."""
+    h = sim.step
+    n = max(1, math.ceil(sim.duration / h - 1e-9))
+    h2, h6 = h / 2, h / 6
+    phi0 = y0[0]
+    p, w = y0
+    ts, ys = [0.0], [(p, w)]
+    stopped = ""
+    too_large = ""
+    try:
+        for i in range(n):
+            t = i * h
+            a1 = accel(t, p, w)
+            w2 = w + h2 * a1
+            a2 = accel(t + h2, p + h2 * w, w2)
+            w3 = w + h2 * a2
+            a3 = accel(t + h2, p + h2 * w2, w3)
+            w4 = w + h * a3
+            a4 = accel(t + h, p + h * w3, w4)
+            p_new = p + h6 * (w + 2 * w2 + 2 * w3 + w4)
+            w_new = w + h6 * (a1 + 2 * a2 + 2 * a3 + a4)
+            if not (math.isfinite(p_new) and math.isfinite(w_new) and abs(p_new - p) < math.pi):
+                too_large = f"{t:.6g}"
+                break
+            p, w = p_new, w_new
+            ts.append(t + h)
+            ys.append((p, w))
+            if progress is not None and (i + 1) % 50 == 0:
+                progress(50)
+            while turns.wanted and abs(p - phi0) >= turns.next_angle() and not stopped:
+                stopped = turns.passed(t + h * _crossing(ys[-2], ys[-1], h, phi0, turns))
+            if stopped:
+                break
+    except (OverflowError, ValueError):  # a speed beyond float range: int(inf) and the like
+        too_large = f"{ts[-1]:.6g}"
+    except _LeftRange as exc:
+        stopped = _left_text(model, exc.phi, ts[-1])
+    if too_large:
+        stopped = (
+            f"stopped at t = {too_large} s: the step {h:.6g} s is too large for this motion "
+            "(the driver would turn more than half a turn in one step, or its speed grows "
+            "without bound)"
+        )
+    if not accel.counted:
+        model.nfev += 4 * (len(ts) - 1)
+    return ts, ys, stopped
+
+
 def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
     """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start;
     ``progress(k)`` is called as k more steps are done (RK4)."""
     d = model.mech.driver.direction
     phi0 = model.u0
     w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
-
-    def torque(w, t):
-        if motor.kind == "linear":  # the common law, without numpy's overhead
-            return d * (motor.stall - motor.slope * d * w)
-        return float(drive_torque(motor, d, np.array([w]), t)[0])
-
-    def rhs(t, y):
-        J, e0 = model.terms(y[0], y[1], t)
-        return np.array([y[1], (torque(y[1], t) - e0) / J])
-
+    accel = _acceleration(model, motor, d)
     turns = _Turns(phi0, sim.revolutions, sim.steady)
-    ts, ys = [0.0], [np.array([phi0, w0])]
-    stopped = ""
     if sim.method == "rk4":
-        h = sim.step
-        n = max(1, math.ceil(sim.duration / h - 1e-9))
-        y = ys[0]
-        try:
-            for i in range(n):
-                t = i * h
-                with np.errstate(over="ignore", invalid="ignore"):  # checked below
-                    k1 = rhs(t, y)
-                    k2 = rhs(t + h / 2, y + h / 2 * k1)
-                    k3 = rhs(t + h / 2, y + h / 2 * k2)
-                    k4 = rhs(t + h, y + h * k3)
-                y_new = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-                if not (np.all(np.isfinite(y_new)) and abs(y_new[0] - y[0]) < math.pi):
-                    stopped = (
-                        f"stopped at t = {t:.6g} s: the step {h:.6g} s is too large for "
-                        "this motion (the driver would turn more than half a turn in one "
-                        "step, or its speed grows without bound)"
-                    )
-                    break
-                y = y_new
-                ts.append((i + 1) * h)
-                ys.append(y)
-                if progress is not None and (i + 1) % 50 == 0:
-                    progress(50)
-                while turns.wanted and abs(y[0] - phi0) >= turns.next_angle() and not stopped:
-                    stopped = turns.passed(t + h * _crossing(ys[-2], y, h, phi0, turns))
-                if stopped:
-                    break
-        except _LeftRange as exc:
-            stopped = _left_text(model, exc.phi, ts[-1])
+        ts, ys, stopped = _rk4(model, sim, accel, (phi0, w0), turns, progress)
     else:
-        from scipy.integrate import solve_ivp
-
-        step = sim.step or sim.duration / 500
-        grid = np.minimum(
-            np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration
-        )
-        t0, y0 = 0.0, ys[0]
-        while True:  # one revolution at a time when revolutions are counted
-            events = None
-            if turns.wanted:
-                target = turns.next_angle()
-
-                def turn(t, y, target=target):
-                    return abs(y[0] - phi0) - target
-
-                turn.terminal = True
-                events = [turn]
-            try:
-                out = solve_ivp(
-                    rhs,
-                    (t0, sim.duration),
-                    y0,
-                    method=sim.method,
-                    t_eval=grid[grid > t0] if t0 > 0 else grid,
-                    rtol=sim.rtol,
-                    atol=sim.atol,
-                    events=events,
-                )
-            except _LeftRange as exc:
-                raise InputError(_left_text(model, exc.phi, math.nan)) from None
-            start = 1 if t0 == 0 else 0
-            ts += list(out.t[start:])
-            ys += list(out.y.T[start:])
-            if out.status == 1:
-                te, ye = float(out.t_events[0][0]), out.y_events[0][0]
-                stopped = turns.passed(te)
-                if not stopped and te < sim.duration:
-                    t0, y0 = te, ye
-                    continue
-                if stopped and te > ts[-1]:
-                    ts.append(te)
-                    ys.append(ye)
-            elif out.status < 0:
-                stopped = f"the integrator stopped: {out.message}"
-            break
+        ts, ys, stopped = _adaptive(model, sim, accel, (phi0, w0), turns)
     ts = np.array(ts)
-    Y = np.array(ys)
+    Y = np.array(ys, float).reshape(-1, 2)
+    eps, J = _along(model, motor, d, ts, Y)
+    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, stopped, model.nfev)
+
+
+def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
+    """The driver's acceleration and the reduced inertia at the integrated states (nan
+    where the mechanism does not close)."""
+    tab = getattr(model, "_table", None)
+    phi, omega = Y[:, 0], Y[:, 1]
+    if tab is not None and not model._masks:
+        x = np.mod(d * (phi - model.u0), 2 * math.pi)
+        J, a, b, c = tab.evaluate(x)[:4]
+        model.nfev += len(ts)
+        return (drive_torque(motor, d, omega, ts) - (a + (b + c * omega) * omega)) / J, J
     eps = np.empty(len(ts))
     J = np.empty(len(ts))
     for i, (t, (p, w)) in enumerate(zip(ts, Y)):
@@ -568,7 +721,65 @@ def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
             eps[i] = (float(drive_torque(motor, d, np.array([w]), t)[0]) - e0) / Ji
         except _LeftRange:
             J[i] = eps[i] = np.nan
-    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, stopped, model.nfev)
+    return eps, J
+
+
+def _adaptive(model, sim, accel, y0, turns: _Turns):
+    """scipy's ``solve_ivp`` on a grid of output times, one revolution at a time when
+    revolutions are counted (a terminal event at each)."""
+    from scipy.integrate import solve_ivp
+
+    phi0 = y0[0]
+
+    def rhs(t, y):
+        return np.array([y[1], accel(t, y[0], y[1])])
+
+    step = sim.step or sim.duration / 500
+    grid = np.minimum(np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration)
+    ts, ys = [0.0], [tuple(y0)]
+    t0, y = 0.0, np.array(y0, float)
+    stopped = ""
+    while True:
+        events = None
+        if turns.wanted:
+            target = turns.next_angle()
+
+            def turn(t, y, target=target):
+                return abs(y[0] - phi0) - target
+
+            turn.terminal = True
+            events = [turn]
+        try:
+            out = solve_ivp(
+                rhs,
+                (t0, sim.duration),
+                y,
+                method=sim.method,
+                t_eval=grid[grid > t0] if t0 > 0 else grid,
+                rtol=sim.rtol,
+                atol=sim.atol,
+                events=events,
+            )
+        except _LeftRange as exc:
+            raise InputError(_left_text(model, exc.phi, math.nan)) from None
+        if not accel.counted:
+            model.nfev += out.nfev
+        start = 1 if t0 == 0 else 0
+        ts += list(out.t[start:])
+        ys += [tuple(v) for v in out.y.T[start:]]
+        if out.status == 1:
+            te, ye = float(out.t_events[0][0]), out.y_events[0][0]
+            stopped = turns.passed(te)
+            if not stopped and te < sim.duration:
+                t0, y = te, ye
+                continue
+            if stopped and te > ts[-1]:
+                ts.append(te)
+                ys.append(tuple(ye))
+        elif out.status < 0:
+            stopped = f"the integrator stopped: {out.message}"
+        break
+    return ts, ys, stopped
 
 
 def _left_text(model: ReducedModel, phi: float, t: float) -> str:
@@ -695,7 +906,12 @@ def simulate(
     traj = integrate(model, mech.simulation, mech.motor, progress)
     good = np.isfinite(traj.J)
     an = model.an
-    sol = core.states(an, traj.phi[good], traj.omega[good], traj.eps[good], t=traj.t[good])
+    d = machine.driver.direction
+    phi = traj.phi[good]
+    # the linkage repeats each turn: solved over the first (one continuation, not many)
+    u = model.u0 + d * np.mod(d * (phi - model.u0), 2 * math.pi) if model.full_turn else phi
+    sol = core.states(an, u, traj.omega[good], traj.eps[good], t=traj.t[good])
+    sol.u = phi
     if not good.all():
         traj = Trajectory(
             *(getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")),

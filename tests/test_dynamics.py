@@ -75,8 +75,81 @@ def test_tabulated_and_exact_equations_of_motion_agree():
     mech.simulation.duration = 0.2
     a = simulate(mech).trajectory
     b = simulate(mech, exact=True).trajectory
-    np.testing.assert_allclose(a.omega, b.omega, rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(a.eps, b.eps, rtol=1e-8, atol=1e-7)
+    # the table is the trigonometric interpolant of the force analysis's samples, to
+    # 1e-11 of the largest effort: the motion agrees with the exact one to about that
+    scale_w, scale_e = np.max(np.abs(b.omega)), np.max(np.abs(b.eps))
+    np.testing.assert_allclose(a.omega, b.omega, rtol=0, atol=1e-10 * scale_w)
+    np.testing.assert_allclose(a.eps, b.eps, rtol=0, atol=3e-10 * scale_e)
+
+
+def test_the_tables_interpolant_against_closed_forms():
+    """A smooth periodic function is found to rounding from a few hundred samples
+    (exp(cos x): its harmonics fall faster than geometrically), and the integrator's
+    Hermite table reproduces it and its slope between the grid points; a function with a
+    kink in its third derivative (|sin x|^3) never converges and is returned unconverged
+    at the largest grid."""
+    from mechsolve.dynamics import _spectral_samples, _Table
+
+    def smooth(x):
+        return np.array([np.exp(np.cos(x)), 3.0 + np.sin(2 * x)])
+
+    calls = []
+
+    def sample(x):
+        calls.append(len(x))
+        return smooth(x)
+
+    n0 = 360
+    V, converged = _spectral_samples(sample, smooth(2 * np.pi * np.arange(n0) / n0), 1e-11)
+    assert converged and V.shape == (2, n0) and calls == []
+    tab = _Table.trigonometric(V, 1e-11)
+    x = np.random.default_rng(1).uniform(0, 2 * np.pi, 2000)
+    np.testing.assert_allclose(tab.evaluate(x), smooth(x), rtol=0, atol=1e-11 * np.e)
+    one = np.array([tab(float(xi)) for xi in x[:50]]).T
+    np.testing.assert_allclose(one, smooth(x[:50]), rtol=0, atol=1e-11 * np.e)
+    # the minima of exp(cos x) (at pi) found between the grid points
+    xm = tab.minima(0)
+    assert np.min(tab.evaluate(xm)[0]) == pytest.approx(np.exp(-1), abs=1e-12)
+
+    def rough(x):
+        return np.abs(np.sin(x))[None] ** 3
+
+    V, converged = _spectral_samples(rough, rough(2 * np.pi * np.arange(n0) / n0), 1e-11)
+    assert not converged and V.shape == (1, 5760)
+    np.testing.assert_allclose(V[0], rough(2 * np.pi * np.arange(5760) / 5760)[0], atol=1e-15)
+
+
+def test_a_linkage_that_does_not_come_back_after_a_turn_is_not_periodic():
+    """A crank's motion is tabulated over one turn only if the whole linkage comes back
+    as it started (poses and rates per unit angle); otherwise it is solved at every
+    stage."""
+    from mechsolve.dynamics import _repeats
+    from mechsolve.state import State
+
+    st = State(2, 3)
+    st.x[0] = [0.1, 0.5, 0.1]
+    st.w[1] = [1.0, 2.0, 1.0]
+    assert _repeats(st, 1.0)
+    st.y[1, -1] = 1e-6  # a body elsewhere at the end of the turn
+    assert not _repeats(st, 1.0)
+
+
+def test_the_integrators_inline_equation_equals_the_models_terms():
+    """The RK4 inner loop evaluates the table in line; it must be the equation of
+    motion (M(omega) - E0(phi, omega)) / J(phi) that ReducedModel.terms gives."""
+    from mechsolve.dynamics import _acceleration, _with_flywheel, drive_torque
+
+    mech = ms.load(MECH / "motor-linkage.yaml")
+    model = ReducedModel(_with_flywheel(mech))
+    assert model.tabulate()
+    d = mech.driver.direction
+    fast = _acceleration(model, mech.motor, d)
+    assert fast.__name__ == "fast"
+    rng = np.random.default_rng(7)
+    for p, w in zip(rng.uniform(-20, 20, 30), rng.uniform(-80, 80, 30)):
+        J, e0 = model.terms(float(p), float(w))
+        want = (float(drive_torque(mech.motor, d, w)) - e0) / J
+        assert fast(0.0, float(p), float(w)) == pytest.approx(want, rel=1e-13, abs=1e-12)
 
 
 PENDULUM = """
