@@ -207,7 +207,7 @@ class ReducedModel:
             table += list(np.linalg.solve(vander, V[4 * k + 1 : 4 * k + 4] - E[1:]))
         table = np.array(table)
         if converged:
-            self._table = _Table.trigonometric(table, rtol)
+            self._table = _Table.trigonometric(_harmonics(table), rtol, np.max(np.abs(table)))
         else:
             from scipy.interpolate import CubicSpline
 
@@ -369,45 +369,46 @@ class _Table:
         self.c = np.asarray(c, float)
         self.step = step
         self.intervals, self.columns = self.c.shape[1], self.c.shape[2]
-        # a list per interval of its columns' coefficients, unpacked in one step
-        self.rows = self.c.transpose(1, 2, 0).reshape(self.intervals, -1).tolist()
+        self._rows: list | None = None
+
+    @property
+    def rows(self) -> list[list[float]]:
+        """A list per interval of its columns' coefficients (unpacked in one step by the
+        integrator), and the first interval's again for an angle that rounds to 2 pi."""
+        if self._rows is None:
+            self._rows = self.c.transpose(1, 2, 0).reshape(self.intervals, -1).tolist()
+            self._rows.append(self._rows[0])
+        return self._rows
 
     @classmethod
-    def trigonometric(cls, samples: np.ndarray, rtol: float) -> _Table:
-        """The cubic Hermite table of the trigonometric interpolants of ``samples``
-        (columns, n) at n uniform angles from 0: values and slopes exact at the table's
-        grid, whose step h keeps the Hermite error bound h^4 / 384 max|f^(4)| (the
-        fourth derivative bounded by the sum of k^4 times the harmonics' sizes) within
-        ``rtol / 2`` of the largest sample."""
-        ncol, n = samples.shape
-        F = np.fft.rfft(samples, axis=1) / n
-        k = np.arange(F.shape[1])
-        if n % 2 == 0:
-            F[:, -1] = 0.0  # the Nyquist term: below the tolerance once converged
-        scale = max(float(np.max(np.abs(samples))), 1e-300)
-        d4 = 2.0 * float(np.max(np.abs(F) @ k.astype(float) ** 4))
-        h = (192.0 * rtol * scale / d4) ** 0.25 if d4 > 0 else 2 * math.pi
-        m = int(min(max(math.ceil(2 * math.pi / h), TABLE_MIN), TABLE_MAX))
-        pad = np.zeros((ncol, m // 2 + 1), complex)
-        kk = min(F.shape[1], m // 2 + 1)
-        pad[:, :kk] = F[:, :kk]
-        f = np.fft.irfft(pad, m, axis=1) * m
-        df = np.fft.irfft(pad * (1j * np.arange(m // 2 + 1)), m, axis=1) * m
-        step = 2 * math.pi / m
+    def hermite(cls, f: np.ndarray, df: np.ndarray) -> _Table:
+        """The cubic Hermite table through values ``f`` and slopes ``df`` (columns, m) at
+        m uniform angles over a turn."""
+        step = 2 * math.pi / f.shape[1]
         f1, df1 = np.roll(f, -1, axis=1), np.roll(df, -1, axis=1)
         slope = (f1 - f) / step
-        c = np.stack(
-            [
-                (df + df1 - 2.0 * slope) / step**2,
-                (3.0 * slope - 2.0 * df - df1) / step,
-                df,
-                f,
-            ]
-        ).transpose(0, 2, 1)
+        c = np.empty((4, f.shape[1], f.shape[0]))
+        c[0] = ((df + df1 - 2.0 * slope) / step**2).T
+        c[1] = ((3.0 * slope - 2.0 * df - df1) / step).T
+        c[2], c[3] = df.T, f.T
         return cls(c, step)
 
+    @classmethod
+    def trigonometric(cls, spectrum: np.ndarray, rtol: float, scale: float) -> _Table:
+        """The cubic Hermite table of trigonometric interpolants (their harmonics
+        ``spectrum``, see :func:`_harmonics`): values and slopes exact at the table's
+        grid, whose step h keeps the Hermite error bound h^4 / 384 max|f^(4)| (the
+        fourth derivative bounded by the sum of k^4 times the harmonics' sizes) within
+        ``rtol / 2`` of ``scale``."""
+        k = np.arange(spectrum.shape[1], dtype=float)
+        d4 = 2.0 * float(np.max(np.abs(spectrum) @ k**4))
+        h = (192.0 * rtol * scale / d4) ** 0.25 if d4 > 0 else 2 * math.pi
+        m = int(min(max(math.ceil(2 * math.pi / h), TABLE_MIN), TABLE_MAX))
+        m += -m % 24  # a size the FFT factors well
+        return cls.hermite(*_on_grid(spectrum, m))
+
     def __call__(self, x: float) -> list[float]:
-        i = min(int(x / self.step), self.intervals - 1)
+        i = int(x / self.step)
         h = x - i * self.step
         c = self.rows[i]
         return [
@@ -416,7 +417,7 @@ class _Table:
         ]
 
     def evaluate(self, x) -> np.ndarray:
-        """Every column at the angles ``x`` (in [0, 2 pi)): (columns, len(x))."""
+        """Every column at the angles ``x`` (in [0, 2 pi]): (columns, len(x))."""
         x = np.asarray(x, float)
         i = np.clip((x / self.step).astype(int), 0, self.intervals - 1)
         h = (x - i * self.step)[:, None]
@@ -434,6 +435,26 @@ class _Table:
         start = np.tile(np.arange(self.intervals) * self.step, 3)
         inside = np.isfinite(roots) & (roots > 0) & (roots < self.step)
         return np.r_[np.arange(self.intervals) * self.step, start[inside] + roots[inside]]
+
+
+def _harmonics(samples: np.ndarray) -> np.ndarray:
+    """The harmonics F_k (k = 0 .. n/2 - 1) of the trigonometric interpolants of
+    ``samples`` (rows, n) at ``x = 2 pi j / n``: f(x) = Re sum_k F_k (2 - [k = 0]) e^(ikx),
+    the Nyquist term left out (below the tolerance once the samples converged)."""
+    n = samples.shape[1]
+    return (np.fft.rfft(samples, axis=1) / n)[:, : (n + 1) // 2]
+
+
+def _on_grid(spectrum: np.ndarray, m: int, shift: float = 0.0):
+    """Values and slopes of the interpolants with harmonics ``spectrum`` at the m
+    uniform angles ``2 pi (j + shift) / m``: two arrays (rows, m)."""
+    kk = min(spectrum.shape[1], m // 2)
+    pad = np.zeros((spectrum.shape[0], m // 2 + 1), complex)
+    k = np.arange(kk)
+    pad[:, :kk] = spectrum[:, :kk] * (np.exp(2j * math.pi * shift * k / m) if shift else 1.0)
+    f = np.fft.irfft(pad, m, axis=1) * m
+    pad[:, :kk] *= 1j * k
+    return f, np.fft.irfft(pad, m, axis=1) * m
 
 
 class _NoTable(Exception):
@@ -598,18 +619,19 @@ def _acceleration(model: ReducedModel, motor, d: int):
     """The driver's acceleration ``f(t, phi, omega)`` in plain floats. With a table, no
     switching loads and the linear motor law, the table's polynomials are evaluated in
     line (the inner loop of RK4, four times a step); otherwise through
-    :meth:`ReducedModel.terms`."""
+    :meth:`ReducedModel.terms`.
+
+    (A table of the acceleration itself, ``A + B omega + C omega^2`` with A = (M0 - a) / J
+    and so on, would save a division and a polynomial, but 1 / J is far less smooth than
+    J: on seed 004 it needs four times the intervals for the same error.)"""
     tab = getattr(model, "_table", None)
     if tab is not None and tab.columns == 4 and motor.kind == "linear":
-        rows, step, last, u0 = tab.rows, tab.step, tab.intervals - 1, model.u0
-        turn = 2 * math.pi
+        rows, step, u0, turn = tab.rows, tab.step, model.u0, 2 * math.pi
         m0, nu = d * motor.stall, motor.slope  # d M(d w) = d M0 - nu w
 
         def fast(t: float, p: float, w: float) -> float:
             x = (d * (p - u0)) % turn
             i = int(x / step)
-            if i > last:
-                i = last
             h = x - i * step
             j3, j2, j1, j0, a3, a2, a1, a0, b3, b2, b1, b0, c3, c2, c1, c0 = rows[i]
             J = ((j3 * h + j2) * h + j1) * h + j0

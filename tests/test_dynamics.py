@@ -88,7 +88,7 @@ def test_the_tables_interpolant_against_closed_forms():
     Hermite table reproduces it and its slope between the grid points; a function with a
     kink in its third derivative (|sin x|^3) never converges and is returned unconverged
     at the largest grid."""
-    from mechsolve.dynamics import _spectral_samples, _Table
+    from mechsolve.dynamics import _harmonics, _spectral_samples, _Table
 
     def smooth(x):
         return np.array([np.exp(np.cos(x)), 3.0 + np.sin(2 * x)])
@@ -102,11 +102,13 @@ def test_the_tables_interpolant_against_closed_forms():
     n0 = 360
     V, converged = _spectral_samples(sample, smooth(2 * np.pi * np.arange(n0) / n0), 1e-11)
     assert converged and V.shape == (2, n0) and calls == []
-    tab = _Table.trigonometric(V, 1e-11)
+    tab = _Table.trigonometric(_harmonics(V), 1e-11, np.max(np.abs(V)))
+    assert tab.intervals % 24 == 0
     x = np.random.default_rng(1).uniform(0, 2 * np.pi, 2000)
     np.testing.assert_allclose(tab.evaluate(x), smooth(x), rtol=0, atol=1e-11 * np.e)
-    one = np.array([tab(float(xi)) for xi in x[:50]]).T
-    np.testing.assert_allclose(one, smooth(x[:50]), rtol=0, atol=1e-11 * np.e)
+    x1 = np.r_[x[:50], 0.0, 2 * np.pi, np.nextafter(2 * np.pi, 0)]  # the turn's ends too
+    one = np.array([tab(float(xi)) for xi in x1]).T
+    np.testing.assert_allclose(one, smooth(x1), rtol=0, atol=1e-11 * np.e)
     # the minima of exp(cos x) (at pi) found between the grid points
     xm = tab.minima(0)
     assert np.min(tab.evaluate(xm)[0]) == pytest.approx(np.exp(-1), abs=1e-12)
