@@ -25,6 +25,7 @@ import dataclasses
 
 import numpy as np
 
+from .groups.generic import NewtonGroup
 from .solvers.forces import ForceResult, solve_forces
 from .state import State
 from .sweep import Analysis, Failure, Solution
@@ -63,6 +64,7 @@ def states(
     t=None,
     velocity: bool = True,
     acceleration: bool = True,
+    within: Solution | None = None,
 ) -> Solution:
     """Every body's state at driver values ``u`` with rates ``ud``, ``udd``.
 
@@ -78,6 +80,12 @@ def states(
     t
         Times of the positions (s), for the results' time column; default the time at the
         file's constant speed from the start.
+    within
+        A sweep from the driver's start, solved per unit of the driver coordinate, whose
+        range holds every value of ``u``: the positions are solved on its branches (its
+        start assembly and the branch switches it found), with no new start assembly
+        or branch analysis. A model with Newton groups is solved as without it (their
+        guesses come from continuation).
 
     Returns
     -------
@@ -97,7 +105,9 @@ def states(
     tol = 1e-12 * (an.scale if an.linear else 1.0)
     kw = dict(velocity=velocity or acceleration, acceleration=acceleration, per_unit_driver=True)
     behind = travel < -tol
-    if n and u[0] == u0 and np.all(np.diff(travel) > 0):
+    if within is not None and _inside(an, within, travel, tol):
+        out = an.solve(u, start=within.start, near=(within, 0), **kw)
+    elif n and u[0] == u0 and np.all(np.diff(travel) > 0):
         out = an.solve_sweep(u, **kw)  # a sweep from the start: solved as it is
     elif not behind.any():
         out = _on_one_side(an, u, np.maximum(travel, 0.0), u0, d, kw)
@@ -120,6 +130,16 @@ def states(
     else:
         out.t = np.asarray(t, float)
     return out
+
+
+def _inside(an: Analysis, sweep: Solution, travel: np.ndarray, tol: float) -> bool:
+    """Whether positions ``travel`` from the start can be solved on the branches of
+    ``sweep``: it starts at the driver's start and covers them, and no group of the
+    model needs continuation (Newton)."""
+    if any(isinstance(g, NewtonGroup) for g in an.plan) or sweep.u[0] != an.start_value():
+        return False
+    end = an.mech.driver.direction * (sweep.u[-1] - sweep.u[0])
+    return bool(np.all((travel >= -tol) & (travel <= end + tol)))
 
 
 def _on_one_side(an: Analysis, u, travel, u0: float, d: int, kw) -> Solution:

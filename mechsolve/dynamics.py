@@ -154,6 +154,7 @@ class ReducedModel:
                     np.tile(self.u0 + d * xx, len(cols)),
                     np.repeat(speeds, m),
                     np.repeat(accelerations, m),
+                    within=self.ref,
                 )
             with self._loads_forced(conditional, on):
                 f = core.forces(self.an, sol, self.extremes)
@@ -257,7 +258,7 @@ class ReducedModel:
         n = len(x)
 
         def acts(xx, speed, acc):
-            sol = core.states(self.an, self.u0 + d * xx, speed, acc)
+            sol = core.states(self.an, self.u0 + d * xx, speed, acc, within=self.ref)
             view = StateView(self.an, sol.state)
             # stroke(q) replays the reference sweep's extremes, in the loads' order
             funcs = {"stroke": stroke_function(list(self.extremes), True)}
@@ -932,7 +933,8 @@ def simulate(
     phi = traj.phi[good]
     # the linkage repeats each turn: solved over the first (one continuation, not many)
     u = model.u0 + d * np.mod(d * (phi - model.u0), 2 * math.pi) if model.full_turn else phi
-    sol = core.states(an, u, traj.omega[good], traj.eps[good], t=traj.t[good])
+    within = model.ref if model.full_turn else None  # on the reference turn's branches
+    sol = core.states(an, u, traj.omega[good], traj.eps[good], t=traj.t[good], within=within)
     sol.u = phi
     if not good.all():
         traj = Trajectory(

@@ -734,3 +734,30 @@ sweep: {range: 360 deg, step: 5 deg}
     # the minimum is a true extreme: the closed form's rocker rate vanishes there
     w4 = [fourbar(2.0, 2.0, 2.5, 3.0, lp.u_low, 1.0, br)[3] for br in (1, -1)]
     assert min(abs(float(w)) for w in w4) < 1e-7
+
+
+def test_states_on_a_solved_turns_branches_stay_a_parallelogram():
+    """``core.states(..., within=sweep)`` solves positions in any order on the branches a
+    sweep from the start found, without a new branch analysis: through the parallelogram's
+    bifurcations (0 and 180 deg) it must stay a parallelogram (closed form: the coupler
+    translates, the rocker turns with the crank), as the full path does."""
+    from mechsolve import core
+    from mechsolve.sweep import Analysis
+
+    an = Analysis(ms.loads(parallelogram("auto", 1, 10)))
+    u0 = an.start_value()
+    turn = core.states(an, u0 + np.radians(np.arange(0.0, 360.5, 1.0)), 1.0, 0.0)
+    u = u0 + np.r_[np.random.default_rng(3).uniform(0, 2 * np.pi, 300), np.pi - u0, 2 * np.pi]
+    w, e = np.full(len(u), 2.0), np.full(len(u), 0.5)
+    fast = core.states(an, u, w, e, within=turn)
+    full = core.states(an, u, w, e)
+    assert fast.ok.all()
+    crank, coupler, rocker = (an.system.index[k] for k in ("crank", "coupler", "rocker"))
+    np.testing.assert_allclose(wrap(fast.state.th[coupler]), 0.0, atol=1e-12)
+    np.testing.assert_allclose(wrap(fast.state.th[rocker] - u), 0.0, atol=1e-12)
+    np.testing.assert_allclose(fast.state.w[rocker], 2.0, atol=1e-9)
+    np.testing.assert_allclose(fast.state.al[rocker], 0.5, atol=1e-6)
+    np.testing.assert_allclose(fast.state.block, full.state.block, rtol=0, atol=1e-9)
+    # beyond the solved turn: solved as without it
+    out = core.states(an, u0 + np.array([1.0, 7.0]), 2.0, 0.0, within=turn)
+    np.testing.assert_allclose(wrap(out.state.th[coupler]), 0.0, atol=1e-12)
