@@ -92,6 +92,22 @@ def test_fourbar_grid_equals_separate_solves_and_the_closed_form():
             assert np.max(np.abs(fx - frc[j + ".Fx"][k])[calm]) < 1e-11 * ref, j
 
 
+def test_designs_split_over_several_passes_equal_separate_solves(monkeypatch):
+    """A batch larger than a pass (CHUNK_COLUMNS) is solved pass by pass: each design
+    lands in its own pass and slot and equals its separate solve."""
+    import mechsolve.batch as mb
+
+    study = _grid_study()
+    mechs = [study.mechanism(k) for k in range(len(study))]
+    positions = len(solve_designs(mechs[:1]).u)  # 73: every 5 degrees
+    monkeypatch.setattr(mb, "CHUNK_COLUMNS", 2 * positions + 1)
+    batch = solve_designs(mechs)
+    assert batch.batched.all(), batch.why
+    assert len(batch._passes) == 5  # 9 designs, 2 per pass
+    for k, m in enumerate(mechs):
+        _same(batch.results(k), ms.solve(m), f"design {k}")
+
+
 def test_designs_near_a_toggle_or_unassemblable_are_solved_alone():
     # ground 87.5 mm, rocker 59 mm: a coupler of 50 mm cannot reach across |O4 A| = 87.5 + a
     # mm (a part of the turn does not close); with crank 29 mm and coupler 57.6 mm, coupler
