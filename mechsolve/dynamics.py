@@ -35,6 +35,7 @@ from . import core
 from .errors import InputError
 from .model import Mechanism
 from .results import Column, Results
+from .state import State
 from .sweep import Analysis
 
 __all__ = ["ReducedModel", "simulate", "SimulationResults"]
@@ -335,6 +336,25 @@ class ReducedModel:
             return 0.5 * (sides[0][0] + sides[1][0]), 0.5 * (sides[0][1] + sides[1][1])
         _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
+
+    def states_by_turn(self, phi, omega, eps, t):
+        """States at driver angles ``phi`` (any number of turns from the start) with rates
+        ``omega``, ``eps`` at times ``t``, for a linkage that repeats each turn: solved at
+        the same angle within the reference turn, on its branches
+        (``core.states(within=...)``), then each body's angle carried on by the turns
+        it makes per turn of the crank (0 for a rocker, one for a body that turns with
+        it), so that angles run on continuously as a sweep over many turns gives them."""
+        d = self.mech.driver.direction
+        travel = d * (np.asarray(phi, float) - self.u0)
+        turns = np.floor(travel / (2 * math.pi))
+        u = self.u0 + d * (travel - 2 * math.pi * turns)
+        sol = core.states(self.an, u, omega, eps, t=t, within=self.ref)
+        th = self.ref.state.th
+        per_turn = 2 * math.pi * np.round((th[:, -1] - th[:, 0]) / (2 * math.pi))
+        sol.state.th += per_turn[:, None] * turns[None, :]
+        sol.state.token = State.new_token()
+        sol.u = np.asarray(phi, float)
+        return sol
 
     def rates_at(self, idx: np.ndarray, omega: np.ndarray, eps: np.ndarray):
         """The reference sweep's positions ``idx`` (repeats allowed) with the driver's
@@ -929,13 +949,11 @@ def simulate(
     traj = integrate(model, mech.simulation, mech.motor, progress)
     good = np.isfinite(traj.J)
     an = model.an
-    d = machine.driver.direction
     phi = traj.phi[good]
-    # the linkage repeats each turn: solved over the first (one continuation, not many)
-    u = model.u0 + d * np.mod(d * (phi - model.u0), 2 * math.pi) if model.full_turn else phi
-    within = model.ref if model.full_turn else None  # on the reference turn's branches
-    sol = core.states(an, u, traj.omega[good], traj.eps[good], t=traj.t[good], within=within)
-    sol.u = phi
+    if model.full_turn:  # the linkage repeats each turn: solved on the reference turn
+        sol = model.states_by_turn(phi, traj.omega[good], traj.eps[good], traj.t[good])
+    else:
+        sol = core.states(an, phi, traj.omega[good], traj.eps[good], t=traj.t[good])
     if not good.all():
         traj = Trajectory(
             *(getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")),

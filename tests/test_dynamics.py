@@ -70,6 +70,22 @@ def test_the_motor_law_is_the_driving_torque_of_the_force_analysis(seed004):
     np.testing.assert_allclose(seed004.driving_effort, M, rtol=0, atol=1e-8 * np.max(np.abs(M)))
 
 
+def test_the_states_along_the_motion_are_a_sweep_over_its_turns(seed004):
+    """The states along the motion are solved within the reference turn and carried on
+    by whole turns: they must equal the sweep's own continuation over the many turns of
+    the start-up (angles running on, not wrapped), and close the constraints."""
+    from mechsolve import core
+
+    tr, sol = seed004.trajectory, seed004.solution
+    assert tr.phi[-1] - tr.phi[0] > 10 * 2 * np.pi
+    full = core.states(seed004.model.an, tr.phi, tr.omega, tr.eps, t=tr.t)
+    for k in range(11):  # x, y, angle, cos, sin, and the rates
+        a, b = sol.state.block[k], full.state.block[k]
+        assert np.max(np.abs(a - b)) <= 1e-9 * (1 + np.max(np.abs(b))), k
+    assert np.nanmax(sol.residual) < 1e-12
+    np.testing.assert_array_equal(sol.u, tr.phi)
+
+
 def test_tabulated_and_exact_equations_of_motion_agree():
     mech = ms.load(MECH / "motor-linkage.yaml")
     mech.simulation.duration = 0.2
