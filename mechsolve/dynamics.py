@@ -41,8 +41,13 @@ from .sweep import Analysis
 __all__ = ["ReducedModel", "simulate", "SimulationResults"]
 
 NEAR_SINGULAR = 1e-6  # sin of a loop's transmission angle below this: solved beside it
+# the exact path (every stage solved): within this indicator of a singular position, the
+# equation of motion is its limit from points BESIDE_STEP and twice that away
+NEAR_EXACT, BESIDE_STEP = 3e-4, 1e-3
 SWITCH_GRID = math.radians(0.05)  # where a switching load's switches are looked for first
-TABLE_MIN, TABLE_MAX = 360, 7680  # intervals of the integrator's table over a turn
+TABLE_MIN, TABLE_MAX = 360, 61440  # intervals of the integrator's table over a turn
+TABLE_FLOOR = 1e-13  # the tables' tolerance for a column, at least this of the largest's
+SPLINE_FLOOR = 1e-8  # splines through unconverged samples: good to this of the largest
 
 
 class ReducedModel:
@@ -78,10 +83,11 @@ class ReducedModel:
 
     def states(self, phi, omega, eps):
         """Solved states at driver values ``phi`` (each solved next to the reference
-        sweep) with rates ``omega`` and ``eps`` (arrays)."""
+        sweep, on its branches) with rates ``omega`` and ``eps`` (arrays)."""
         phi = np.atleast_1d(np.asarray(phi, float))
-        an, ref = self.an, self.ref
+        an = self.an
         w = np.array([self._wrap(p) for p in phi])
+        ref = self._reaching(w)
         k = np.abs(ref.u[:, None] - w[None, :]).argmin(axis=0)
         uniq, inv = np.unique(w, return_inverse=True)
         parts = []
@@ -100,21 +106,42 @@ class ReducedModel:
         sol.udd = np.asarray(eps, float) * np.ones(len(phi))
         return sol
 
+    def _reaching(self, u: np.ndarray):
+        """A sweep from the start whose branches hold at the driver values ``u``: the
+        reference turn, or, for a crank whose linkage does not come back after one turn
+        (a kite four-bar changes branch each turn), a sweep over as many whole turns as
+        the motion has gone forward (extended as it goes; behind the start, the
+        reference turn's start branches)."""
+        span = getattr(self, "_span", self.ref)
+        if self.full_turn or self.an.linear or not len(u):
+            return span
+        d = self.mech.driver.direction
+        ahead = float(np.max(d * (u - self.u0)))
+        if ahead <= d * (span.u[-1] - self.u0) + 1e-12:
+            return span
+        turns = math.ceil(ahead / (2 * math.pi)) + 1
+        grid = self.u0 + d * np.radians(np.arange(0.0, 360.0 * turns + 0.5, 1.0))
+        self._span = core.states(self.an, grid, 1.0, 0.0)
+        return self._span
+
     def tabulate(self, rtol: float = 1e-11) -> bool:
         """Tabulate the equation of motion over one turn, where it allows: a crank that
         turns fully. Then ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2``
         exactly (gravity and springs in a; dampers and drag in b; the kinetic term
         1/2 J' omega^2 in c), and J, a, b, c are periodic functions of the angle.
 
-        They are sampled by the force analysis on uniform grids that double (120 angles,
-        240, ...) until the trigonometric interpolant of one grid predicts the next grid's
-        new samples to ``rtol`` of the largest effort (:func:`_spectral_samples`); a
-        linkage's J is analytic in the angle, so a few hundred samples usually give it to
-        rounding. The integrator then reads a cubic Hermite table whose values and slopes
-        come from that interpolant, on a grid fine enough for its own error to stay below
-        the same tolerance. Where the samples do not converge (a sharp peak of J next to
-        a toggle position), periodic cubic splines through 7680 samples (0.047 degrees)
-        are used instead.
+        They are sampled by the force analysis at the reference sweep's 360 angles (its
+        own states, rescaled), then on grids that double until, for every column, the
+        trigonometric interpolant of every other sample predicts the samples between to
+        ``rtol`` of the column's size (:func:`_spectral_samples`); a linkage's J is
+        analytic in the angle, so a few hundred samples usually give it to rounding. The
+        integrator then reads a cubic Hermite table whose values and slopes come from
+        that interpolant, on a grid fine enough for its own error bound to stay within
+        the same tolerance (:meth:`_Table.trigonometric`). Where the samples do not
+        converge by 5760 angles (a sharp peak of J next to a toggle position), periodic
+        cubic splines through them are used if they are good to ``1000 rtol``
+        (:meth:`_Table.spline`); otherwise nothing is tabulated and the equation is
+        solved at every stage.
 
         A load that switches on and off (``when:``) adds its own ``a_k + b_k omega +
         c_k omega^2`` (tabulated with the load always on, so smooth) times where it acts.
@@ -182,41 +209,34 @@ class ReducedModel:
                 if not good.all():
                     # singular samples (a bifurcation: the reactions are indeterminate
                     # there) are few; J and E0 are smooth through them on the followed
-                    # motion, so they are taken as the mean of the two sides
+                    # motion, so they are taken as its limit from both sides
                     bad = np.flatnonzero(~good)
                     if len(bad) > max(4, 0.01 * len(x)):
                         raise _NoTable
-                    h = 1e-5  # the mean of the two sides: O(h^2) off the smooth value
-                    Eb, _ = efforts(np.r_[x[bad] - h, x[bad] + h], on)
-                    if not np.all(np.isfinite(Eb)):
-                        raise _NoTable
-                    E[:, bad] = Eb.reshape(len(cols), 2, len(bad)).mean(axis=1)
+                    E[:, bad] = _limit(lambda xx, on=on: efforts(xx, on)[0], x[bad], len(cols))
                 out.append(E)
-            return np.concatenate(out)
+            # the table's columns: J, a, b, c, then each conditional load alone and always
+            # on, less the machine without it (a_k, b_k, c_k)
+            E = out[0]
+            table = [E[0] - E[1], *np.linalg.solve(vander, E[1:])]
+            for Ek in out[1:]:
+                table += list(np.linalg.solve(vander, Ek[1:] - E[1:]))
+            return np.array(table)
 
+        vander = np.vander(np.array(speeds[1:]), 3, increasing=True)
         try:
-            V, converged = _spectral_samples(sample, sample(None), rtol)
+            table, converged = _spectral_samples(sample, sample(None), rtol)
         except _NoTable:
             return False
-        vander = np.vander(np.array([c[0] for c in cols[1:]]), 3, increasing=True)
-        E = V[:4]
-        J = E[0] - E[1]
-        n = V.shape[1]
+        n = table.shape[1]
         x = 2 * math.pi * np.arange(n) / n
-        _check_inertia(self, J, self.u0 + d * x)
-        table = [J, *np.linalg.solve(vander, E[1:])]  # J, a, b, c
-        for k in range(1, len(variants)):  # each load alone and always on, less the rest
-            table += list(np.linalg.solve(vander, V[4 * k + 1 : 4 * k + 4] - E[1:]))
-        table = np.array(table)
-        if converged:
-            self._table = _Table.trigonometric(_harmonics(table), rtol, np.max(np.abs(table)))
-        else:
-            from scipy.interpolate import CubicSpline
-
-            spline = CubicSpline(
-                np.r_[x, 2 * math.pi], np.c_[table, table[:, :1]].T, bc_type="periodic"
-            )
-            self._table = _Table(spline.c, 2 * math.pi / n)
+        _check_inertia(self, table[0], self.u0 + d * x)
+        tab = _Table.trigonometric(_harmonics(table), rtol) if converged else None
+        if tab is None:
+            tab = _Table.spline(table, rtol)
+        if tab is None:
+            return False  # J too sharp for a table: solved at every stage
+        self._table = tab
         # J is a sum of squares: where it vanishes (between grid points) it touches zero,
         # so its minima are looked for on the curve, not only at the samples
         xm = self._table.minima(0)
@@ -323,17 +343,25 @@ class ReducedModel:
         f = core.forces(self.an, sol, self.extremes)
         e0, e1 = float(f.effort[0]), float(f.effort[1])
         ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
-        if not (np.isfinite(e0) and np.isfinite(e1)) or ind <= NEAR_SINGULAR:
-            if not (sol.ok.all() and getattr(self, "_beside", True)):
+        finite = np.isfinite(e0) and np.isfinite(e1)
+        if not finite or ind <= NEAR_EXACT:
+            beside = getattr(self, "_beside", True)
+            if not sol.ok.all() or not (beside or finite):
                 raise _LeftRange(phi)
-            # a singular position on the motion: the mean of the two sides next to it
-            self._beside = False
-            try:
-                sides = [self.terms(phi + s, omega, t) for s in (-1e-5, 1e-5)]
-            finally:
-                self._beside = True
-            self.nfev -= 2
-            return 0.5 * (sides[0][0] + sides[1][0]), 0.5 * (sides[0][1] + sides[1][1])
+            if beside:
+                # next to a singular position on the motion the force analysis loses
+                # accuracy (as 1 / distance^2): the limit from both sides a little away
+                # (Richardson, O(h^4)), through which J and E0 are smooth
+                self._beside = False
+                try:
+                    h = BESIDE_STEP
+                    pts = [self.terms(phi + s, omega, t) for s in (-h, h, -2 * h, 2 * h)]
+                finally:
+                    self._beside = True
+                self.nfev -= 4
+                J1, J2 = pts[0][0] + pts[1][0], pts[2][0] + pts[3][0]
+                E1, E2 = pts[0][1] + pts[1][1], pts[2][1] + pts[3][1]
+                return (4.0 * J1 - J2) / 6.0, (4.0 * E1 - E2) / 6.0
         _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
 
@@ -415,18 +443,49 @@ class _Table:
         return cls(c, step)
 
     @classmethod
-    def trigonometric(cls, spectrum: np.ndarray, rtol: float, scale: float) -> _Table:
+    def trigonometric(cls, spectrum: np.ndarray, rtol: float) -> _Table | None:
         """The cubic Hermite table of trigonometric interpolants (their harmonics
         ``spectrum``, see :func:`_harmonics`): values and slopes exact at the table's
-        grid, whose step h keeps the Hermite error bound h^4 / 384 max|f^(4)| (the
-        fourth derivative bounded by the sum of k^4 times the harmonics' sizes) within
-        ``rtol / 2`` of ``scale``."""
+        grid, whose step h keeps each column's Hermite error bound h^4 / 384 max|f^(4)|
+        (the fourth derivative bounded by the sum of k^4 times the harmonics' sizes)
+        within half its tolerance (:func:`_tolerances`). None if that needs more than
+        ``TABLE_MAX`` intervals."""
         k = np.arange(spectrum.shape[1], dtype=float)
-        d4 = 2.0 * float(np.max(np.abs(spectrum) @ k**4))
-        h = (192.0 * rtol * scale / d4) ** 0.25 if d4 > 0 else 2 * math.pi
-        m = int(min(max(math.ceil(2 * math.pi / h), TABLE_MIN), TABLE_MAX))
+        size = 2.0 * np.abs(spectrum).sum(axis=1)  # bounds each column's largest size
+        tol = rtol * size + TABLE_FLOOR * float(np.max(size))
+        d4 = 2.0 * (np.abs(spectrum) @ k**4)
+        with np.errstate(divide="ignore"):
+            h = float(np.min((192.0 * tol / d4) ** 0.25))
+        m = max(math.ceil(2 * math.pi / h), TABLE_MIN) if h > 0 else TABLE_MIN
         m += -m % 24  # a size the FFT factors well
+        if m > TABLE_MAX:
+            return None
         return cls.hermite(*_on_grid(spectrum, m))
+
+    @classmethod
+    def spline(cls, samples: np.ndarray, rtol: float) -> _Table | None:
+        """Periodic cubic splines through ``samples`` (columns, n) at n uniform angles,
+        where the trigonometric interpolant did not converge; None unless each column
+        is good to 1000 times its tolerance or to ``SPLINE_FLOOR`` of the largest
+        column (samples next to a singular position carry the force analysis's
+        rounding, amplified there: a parallelogram's J' is zero but for about 1e-7).
+        Their error is estimated as that of the splines through every other sample at
+        the samples between, divided by 16 (the error of a cubic spline falls as h^4)."""
+        from scipy.interpolate import CubicSpline
+
+        def through(V):
+            n = V.shape[1]
+            x = 2 * math.pi * np.arange(n + 1) / n
+            return CubicSpline(x, np.c_[V, V[:, :1]].T, bc_type="periodic")
+
+        n = samples.shape[1]
+        half = through(samples[:, 0::2])
+        between = half(2 * math.pi * (np.arange(0, n, 2) + 1) / n).T
+        err = np.max(np.abs(between - samples[:, 1::2]), axis=1) / 16
+        largest = float(np.max(np.abs(samples)))
+        if not np.all(err <= np.maximum(1000 * _tolerances(samples, rtol), SPLINE_FLOOR * largest)):
+            return None
+        return cls(through(samples).c, 2 * math.pi / n)
 
     def __call__(self, x: float) -> list[float]:
         i = int(x / self.step)
@@ -482,10 +541,31 @@ class _NoTable(Exception):
     """The equation of motion cannot be tabulated over the angle."""
 
 
+def _limit(f, x: np.ndarray, rows: int, h: float = 1e-3) -> np.ndarray:
+    """The values at singular angles ``x`` of functions smooth through them, from
+    ``f`` (rows, len) at ``x -+ h`` and ``x -+ 2 h``: Richardson's extrapolation of the
+    two sides' means, O(h^4). (Next to a singular position the force analysis loses
+    accuracy as 1 / distance^2: at 1e-5 its accelerations carry errors of 1e-6; at h =
+    1e-3, about 1e-10.)"""
+    E = f(np.r_[x - h, x + h, x - 2 * h, x + 2 * h])
+    if not np.all(np.isfinite(E)):
+        raise _NoTable
+    m1, m2 = E.reshape(rows, 2, 2, len(x)).mean(axis=2).transpose(1, 0, 2)
+    return (4.0 * m1 - m2) / 3.0
+
+
+def _tolerances(V: np.ndarray, rtol: float) -> np.ndarray:
+    """Each row's absolute tolerance: ``rtol`` of its largest size, and not below
+    ``TABLE_FLOOR`` of the largest row's (a row that is zero but for rounding, such as
+    the damping column of a machine without dampers, meets it at once)."""
+    size = np.max(np.abs(V), axis=1)
+    return rtol * size + TABLE_FLOOR * float(np.max(size))
+
+
 def _spectral_samples(sample, V: np.ndarray, rtol: float, nmax: int = 5760):
     """Samples of smooth periodic functions over a turn at uniform grids that double
-    until the trigonometric interpolant of every other sample predicts the samples
-    between them to ``rtol`` of the largest sample.
+    until, for every function, the trigonometric interpolant of every other sample
+    predicts the samples between them to its tolerance (:func:`_tolerances`).
 
     ``V`` holds the functions (rows) at ``x = 2 pi k / n`` (n even), and ``sample(x)``
     returns them at other angles. Returns the samples at the last grid and whether they
@@ -497,10 +577,10 @@ def _spectral_samples(sample, V: np.ndarray, rtol: float, nmax: int = 5760):
         shifted = F * np.exp(1j * np.arange(F.shape[1]) * math.pi / n)
         if n % 2 == 0:
             shifted[:, -1] = 0.0  # the Nyquist term vanishes at the midpoints
-        err = float(np.max(np.abs(np.fft.irfft(shifted, n, axis=1) - V[:, 1::2])))
-        if not np.isfinite(err):
+        err = np.max(np.abs(np.fft.irfft(shifted, n, axis=1) - V[:, 1::2]), axis=1)
+        if not np.all(np.isfinite(err)):
             raise _NoTable
-        if err <= rtol * float(np.max(np.abs(V))):
+        if np.all(err <= _tolerances(V, rtol)):
             return V, True
         if 2 * n >= nmax:
             return V, False
@@ -930,7 +1010,9 @@ def simulate(
     """Simulate the motor-driven machine of ``mech`` (its ``motor:`` and ``simulate:``
     sections) and solve the states and joint forces along the motion. ``exact``: solve
     the equation of motion at every integrator stage instead of from its tabulation over
-    a turn (see :meth:`ReducedModel.tabulate`; always so with conditional loads)."""
+    a turn (see :meth:`ReducedModel.tabulate`; always so where it cannot tabulate: a
+    crank that does not turn fully or whose linkage does not come back after a turn, a
+    condition that reads the size of a speed, a J too sharp for a table)."""
     if mech.motor is None:
         raise mech.error(
             ("motor",), "a simulation needs a 'motor' section (the driver's torque law)"

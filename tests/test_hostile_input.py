@@ -241,3 +241,15 @@ def test_a_fifo(tmp_path):
     r = _limited(["check", str(fifo)])
     assert r.returncode == 0, r.stderr
     t.join(10)
+
+
+def test_nesting_beyond_libyamls_own_limit_names_a_clean_key_path():
+    """libyaml (PyYAML 6.0.4) refuses more than 1000 flow levels while scanning ahead;
+    the message is ours, with the key path read so far and no placeholder in it."""
+    import mechsolve as ms
+    from mechsolve.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        ms.loads("a: " + "[" * 1200 + "]" * 1200)
+    text = str(exc.value)
+    assert "nesting deeper than 64 levels" in text and "None" not in text

@@ -293,7 +293,8 @@ def _check_events(text: str, file: str | None) -> None:
         raise InputError(
             f"nesting deeper than {MAX_DEPTH} levels",
             file=file,
-            keypath=format_keypath(f.here for f in stack) or None,
+            # the collection being scanned has no entry read yet (its ``here`` is None)
+            keypath=format_keypath(f.here for f in stack if f.here is not None) or None,
             line=exc.problem_mark.line + 1,
         ) from None
 
