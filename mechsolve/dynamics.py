@@ -82,19 +82,22 @@ class ReducedModel:
         return self.u0 + d * math.fmod(d * (phi - self.u0), 2 * math.pi) % (2 * math.pi)
 
     def states(self, phi, omega, eps):
-        """Solved states at driver values ``phi`` (each solved next to the reference
-        sweep, on its branches) with rates ``omega`` and ``eps`` (arrays)."""
+        """Solved states at driver values ``phi`` (each solved next to a sweep from the
+        start, on its branches: see :meth:`_reaching`) with rates ``omega`` and ``eps``
+        (arrays)."""
         phi = np.atleast_1d(np.asarray(phi, float))
-        an = self.an
         w = np.array([self._wrap(p) for p in phi])
-        ref = self._reaching(w)
-        k = np.abs(ref.u[:, None] - w[None, :]).argmin(axis=0)
         uniq, inv = np.unique(w, return_inverse=True)
         parts = []
-        for j, wj in enumerate(uniq):
-            kj = int(k[np.flatnonzero(inv == j)[0]])
+        for wj in uniq:
+            an, span = self._reaching(float(wj))
+            kj = int(np.abs(span.u - wj).argmin())
             one = an.solve(
-                np.array([wj]), start=ref.start, near=(ref, kj), per_unit_driver=True, limits=False
+                np.array([wj]),
+                start=span.start,
+                near=(span, kj),
+                per_unit_driver=True,
+                limits=False,
             )
             parts.append(one)
         sol = core._concat(parts) if len(parts) > 1 else parts[0]
@@ -106,23 +109,31 @@ class ReducedModel:
         sol.udd = np.asarray(eps, float) * np.ones(len(phi))
         return sol
 
-    def _reaching(self, u: np.ndarray):
-        """A sweep from the start whose branches hold at the driver values ``u``: the
-        reference turn, or, for a crank whose linkage does not come back after one turn
-        (a kite four-bar changes branch each turn), a sweep over as many whole turns as
-        the motion has gone forward (extended as it goes; behind the start, the
-        reference turn's start branches)."""
-        span = getattr(self, "_span", self.ref)
-        if self.full_turn or self.an.linear or not len(u):
-            return span
+    def _reaching(self, u: float):
+        """``(analysis, sweep)``: a sweep from the start whose branches hold at the driver
+        value ``u``, and the analysis that solved it. The reference turn, where the
+        linkage repeats each turn; otherwise (a kite four-bar changes branch each turn)
+        a sweep over as many whole turns as the motion has gone from the start, ahead of
+        it or behind it (the latter by the analysis with the driver reversed, as
+        :func:`mechsolve.core.states` reaches positions behind the start), extended as
+        the motion goes on."""
+        if self.full_turn or self.an.linear:
+            return self.an, self.ref
         d = self.mech.driver.direction
-        ahead = float(np.max(d * (u - self.u0)))
-        if ahead <= d * (span.u[-1] - self.u0) + 1e-12:
-            return span
-        turns = math.ceil(ahead / (2 * math.pi)) + 1
-        grid = self.u0 + d * np.radians(np.arange(0.0, 360.0 * turns + 0.5, 1.0))
-        self._span = core.states(self.an, grid, 1.0, 0.0)
-        return self._span
+        travel = d * (u - self.u0)
+        key = "_ahead" if travel >= 0 else "_behind"
+        known = getattr(self, key, None)
+        if known is None and travel >= 0:
+            known = self.an, self.ref
+        if known is not None and abs(travel) <= abs(known[1].u[-1] - self.u0) + 1e-12:
+            return known
+        turns = math.ceil(abs(travel) / (2 * math.pi)) + 1
+        grid = np.radians(np.arange(0.0, 360.0 * turns + 0.5, 1.0))
+        an = self.an if travel >= 0 else self.an.reversed()
+        sense = d if travel >= 0 else -d
+        span = an.solve_sweep(self.u0 + sense * grid, per_unit_driver=True)
+        setattr(self, key, (an, span))
+        return an, span
 
     def tabulate(self, rtol: float = 1e-11) -> bool:
         """Tabulate the equation of motion over one turn, where it allows: a crank that
@@ -203,9 +214,9 @@ class ReducedModel:
                 x = 2 * math.pi * np.arange(nref) / nref
             for on in variants:
                 E, ind = efforts(x, on, ref)
-                # within rounding of a singular position the force analysis is not
-                # determined, and the effort with it
-                good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_SINGULAR)
+                # next to a singular position the force analysis loses accuracy (as
+                # 1 / distance^2), and at it the effort is not determined
+                good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_EXACT)
                 if not good.all():
                     # singular samples (a bifurcation: the reactions are indeterminate
                     # there) are few; J and E0 are smooth through them on the followed
@@ -213,7 +224,9 @@ class ReducedModel:
                     bad = np.flatnonzero(~good)
                     if len(bad) > max(4, 0.01 * len(x)):
                         raise _NoTable
-                    E[:, bad] = _limit(lambda xx, on=on: efforts(xx, on)[0], x[bad], len(cols))
+                    E[:, bad] = _limit(
+                        lambda xx, on=on: efforts(xx, on)[0], x[bad], len(cols), BESIDE_STEP
+                    )
                 out.append(E)
             # the table's columns: J, a, b, c, then each conditional load alone and always
             # on, less the machine without it (a_k, b_k, c_k)

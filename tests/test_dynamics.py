@@ -670,15 +670,27 @@ simulate: {duration: 0.8 s, step: 0.002 s, method: rk4, from: rest}
 """
 
 
-def test_a_kite_that_changes_branch_each_turn_is_followed_over_many_turns():
+@pytest.mark.parametrize(
+    "variant",
+    [
+        "ahead",
+        "behind",  # the motor turns it backward from its start: reached by the reversed driver
+    ],
+)
+def test_a_kite_that_changes_branch_each_turn_is_followed_over_many_turns(variant):
     """A kite four-bar (ground = crank, coupler = rocker) passes a bifurcation each turn
     and comes back only after two: it is not tabulated over one turn, and its equation
     of motion must be solved on the branches the sweep follows over every turn. Check:
     the driving torque that the force analysis needs along the motion (its states
     solved by the sweep's own continuation over all the turns) is the motor's torque."""
-    res = simulate(ms.loads(KITE))
+    text = KITE if variant == "ahead" else KITE.replace("stall: 200 N m", "stall: -200 N m")
+    res = simulate(ms.loads(text))
     tr = res.trajectory
     assert not res.model.full_turn
+    if variant == "behind":  # the same machine as a clockwise driver with the law mirrored
+        assert tr.phi[-1] < tr.phi[0]
+        cw = KITE.replace("start: 30 deg}", "start: 30 deg, direction: cw}")
+        np.testing.assert_allclose(tr.phi, simulate(ms.loads(cw)).trajectory.phi, atol=1e-9)
     assert abs(tr.phi[-1] - tr.phi[0]) > 3 * 2 * np.pi  # several turns, both branches
     M = res.motor_torque()
     # the bifurcation samples themselves: the effort there is a limit along the motion
@@ -728,3 +740,19 @@ def test_a_motor_driven_parallelogram_against_its_closed_form(exact):
     assert tr.phi[-1] > 2 * math.pi + math.radians(30)  # both singular positions passed
     np.testing.assert_allclose(tr.phi, ps, rtol=0, atol=1e-6)
     np.testing.assert_allclose(tr.J, J, rtol=1e-8)
+
+
+@pytest.mark.parametrize("start", ["30 deg", "30.37 deg", "100 deg"])
+def test_a_parallelogram_is_tabulated_whatever_its_start(start):
+    """Samples next to the parallelogram's singular positions (where the force analysis
+    loses accuracy) are taken as the limit from both sides, as the path solved at every
+    stage takes them: its equation is tabulated from any start (it had fallen back to
+    solving every stage, a hundred times slower, unless a sample hit the singular angle
+    exactly), with J at its closed-form 0.6 kg m^2."""
+    from mechsolve.dynamics import _with_flywheel
+
+    mech = ms.loads(PARALLELOGRAM_MOTOR.replace("start: 30 deg", f"start: {start}"))
+    model = ReducedModel(_with_flywheel(mech))
+    assert model.tabulate()
+    x = np.linspace(0.0, 2 * np.pi, 1001)
+    np.testing.assert_allclose(model._table.evaluate(x)[0], 0.6, rtol=1e-9)
