@@ -273,9 +273,15 @@ class BranchEvents:
         if cand.size:
             us, hs = self._refine_minima(gi, g, ctx, cand, u, H, Hs, near)
             found += list(zip(near[cand].tolist(), us.tolist(), hs.tolist()))
-        # minima exactly at a grid point
+        # minima exactly at a grid point (one that a refined minimum next to it already
+        # is, a sample 1e-5 past a bifurcation that touches zero to rounding, is not a
+        # second event: two would flip the branch twice)
+        refined = list(found)
         for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
             if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
+                span = abs(u[k + 1] - u[k - 1])
+                if any(1e-9 * (1.0 + abs(f[1])) < abs(f[1] - u[k]) <= span for f in refined):
+                    continue
                 found.append((int(near[k - 1]), float(u[k]), float(H[k])))
         # near-singular minima seen at the grid points themselves (where the group closes)
         closable = good & (H >= -TOUCH)

@@ -761,3 +761,18 @@ def test_states_on_a_solved_turns_branches_stay_a_parallelogram():
     # beyond the solved turn: solved as without it
     out = core.states(an, u0 + np.array([1.0, 7.0]), 2.0, 0.0, within=turn)
     np.testing.assert_allclose(wrap(out.state.th[coupler]), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("offset", [1e-5, -1e-5, 1e-8, 3e-7])
+def test_a_sample_just_past_a_bifurcation_is_not_a_second_event(offset):
+    """With the start a hair off the grid that would hit the collinear positions, a
+    sample falls 1e-5 rad (or less) past each bifurcation, where the discriminant touches
+    zero to rounding. The refined minimum next to it and the sample are one event: two
+    would flip the branch twice and fold the parallelogram (the coupler swung 1 rad)."""
+    start = 10.0 + math.degrees(offset)
+    res = ms.solve(ms.loads(parallelogram("auto", 1, start)))
+    assert res.ok.all()
+    np.testing.assert_allclose(wrap(res.link("coupler").angle), 0.0, atol=1e-7)
+    np.testing.assert_allclose(wrap(res.link("rocker").angle - res.u), 0.0, atol=1e-7)
+    angles = sorted(round(math.degrees(e.u) % 360, 3) for e in res.events)
+    assert angles == [0.0, 0.0, 180.0, 180.0], angles  # twice round: each position once a turn
