@@ -26,6 +26,7 @@ import dataclasses
 import numpy as np
 
 from .groups.generic import NewtonGroup
+from .numerics import limit_from_both_sides
 from .solvers.forces import ForceResult, solve_forces
 from .state import State
 from .sweep import Analysis, Failure, Solution
@@ -228,7 +229,7 @@ def _effort_limits(an: Analysis, sol: Solution, f: ForceResult, extremes) -> Non
         # efforts next to a singular position carry rounding of about 1e-9 of their size)
         if abs((hi2 - lo2) - 2 * (hi1 - lo1)) > 0.1 * abs(hi2 - lo2) + 1e-6 * (1 + abs(e).max()):
             continue  # not smooth through the position: no limit
-        f.effort[i] = (4.0 * (lo1 + hi1) - (lo2 + hi2)) / 6.0
+        f.effort[i] = limit_from_both_sides(lo1, hi1, lo2, hi2)
         f.effort_by_limit.append(int(i))
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from . import core
 from .errors import InputError
 from .model import Mechanism
+from .numerics import limit_from_both_sides
 from .results import Column, Results
 from .state import State
 from .sweep import Analysis
@@ -378,9 +379,8 @@ class ReducedModel:
                 finally:
                     self._beside = True
                 self.nfev -= 4
-                J1, J2 = pts[0][0] + pts[1][0], pts[2][0] + pts[3][0]
-                E1, E2 = pts[0][1] + pts[1][1], pts[2][1] + pts[3][1]
-                return (4.0 * J1 - J2) / 6.0, (4.0 * E1 - E2) / 6.0
+                J, E0 = zip(*pts)
+                return limit_from_both_sides(*J), limit_from_both_sides(*E0)
         _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
 
@@ -444,8 +444,7 @@ class _Table:
         """A list per interval of its columns' coefficients (unpacked in one step by the
         integrator), and the first interval's again for an angle that rounds to 2 pi."""
         if self._rows is None:
-            self._rows = self.c.transpose(1, 2, 0).reshape(self.intervals, -1).tolist()
-            self._rows.append(self._rows[0])
+            self._rows = _rows(self.c)
         return self._rows
 
     @classmethod
@@ -471,7 +470,7 @@ class _Table:
         ``TABLE_MAX`` intervals."""
         k = np.arange(spectrum.shape[1], dtype=float)
         size = 2.0 * np.abs(spectrum).sum(axis=1)  # bounds each column's largest size
-        tol = rtol * size + TABLE_FLOOR * float(np.max(size))
+        tol = _tolerances(size, rtol)
         d4 = 2.0 * (np.abs(spectrum) @ k**4)
         with np.errstate(divide="ignore"):
             h = float(np.min((192.0 * tol / d4) ** 0.25))
@@ -501,8 +500,8 @@ class _Table:
         half = through(samples[:, 0::2])
         between = half(2 * math.pi * (np.arange(0, n, 2) + 1) / n).T
         err = np.max(np.abs(between - samples[:, 1::2]), axis=1) / 16
-        largest = float(np.max(np.abs(samples)))
-        if not np.all(err <= np.maximum(1000 * _tolerances(samples, rtol), SPLINE_FLOOR * largest)):
+        size = np.max(np.abs(samples), axis=1)
+        if not np.all(err <= np.maximum(1000 * _tolerances(size, rtol), SPLINE_FLOOR * size.max())):
             return None
         return cls(through(samples).c, 2 * math.pi / n)
 
@@ -556,6 +555,15 @@ def _on_grid(spectrum: np.ndarray, m: int, shift: float = 0.0):
     return f, np.fft.irfft(pad, m, axis=1) * m
 
 
+def _rows(c: np.ndarray) -> list[list[float]]:
+    """Coefficients ``c`` (4, intervals, columns) as a list per interval of its
+    columns' four coefficients, highest power first (unpacked in one step by the
+    integrator), and the first interval's again for an angle that rounds to 2 pi."""
+    rows = c.transpose(1, 2, 0).reshape(c.shape[1], -1).tolist()
+    rows.append(rows[0])
+    return rows
+
+
 class _NoTable(Exception):
     """The equation of motion cannot be tabulated over the angle."""
 
@@ -563,21 +571,19 @@ class _NoTable(Exception):
 def _limit(f, x: np.ndarray, rows: int, h: float = 1e-3) -> np.ndarray:
     """The values at singular angles ``x`` of functions smooth through them, from
     ``f`` (rows, len) at ``x -+ h`` and ``x -+ 2 h``: Richardson's extrapolation of the
-    two sides' means, O(h^4). (Next to a singular position the force analysis loses
-    accuracy as 1 / distance^2: at 1e-5 its accelerations carry errors of 1e-6; at h =
-    1e-3, about 1e-10.)"""
+    two sides' means, O(h^4) (:func:`~mechsolve.numerics.limit_from_both_sides`). Next
+    to a singular position the force analysis loses accuracy as 1 / distance^2: at 1e-5
+    its accelerations carry errors of 1e-6; at h = 1e-3, about 1e-10."""
     E = f(np.r_[x - h, x + h, x - 2 * h, x + 2 * h])
     if not np.all(np.isfinite(E)):
         raise _NoTable
-    m1, m2 = E.reshape(rows, 2, 2, len(x)).mean(axis=2).transpose(1, 0, 2)
-    return (4.0 * m1 - m2) / 3.0
+    return limit_from_both_sides(*E.reshape(rows, 4, len(x)).transpose(1, 0, 2))
 
 
-def _tolerances(V: np.ndarray, rtol: float) -> np.ndarray:
-    """Each row's absolute tolerance: ``rtol`` of its largest size, and not below
+def _tolerances(size: np.ndarray, rtol: float) -> np.ndarray:
+    """Each row's absolute tolerance from its largest size: ``rtol`` of it, and not below
     ``TABLE_FLOOR`` of the largest row's (a row that is zero but for rounding, such as
     the damping column of a machine without dampers, meets it at once)."""
-    size = np.max(np.abs(V), axis=1)
     return rtol * size + TABLE_FLOOR * float(np.max(size))
 
 
@@ -599,7 +605,7 @@ def _spectral_samples(sample, V: np.ndarray, rtol: float, nmax: int = 5760):
         err = np.max(np.abs(np.fft.irfft(shifted, n, axis=1) - V[:, 1::2]), axis=1)
         if not np.all(np.isfinite(err)):
             raise _NoTable
-        if np.all(err <= _tolerances(V, rtol)):
+        if np.all(err <= _tolerances(np.max(np.abs(V), axis=1), rtol)):
             return V, True
         if 2 * n >= nmax:
             return V, False
@@ -753,8 +759,7 @@ def _acceleration(model: ReducedModel, motor, d: int):
         cm[3, :, 1] -= d * motor.stall
         cm[3, :, 2] += motor.slope
         cm[:, :, 0] *= -1.0
-        rows = cm.transpose(1, 2, 0).reshape(tab.intervals, -1).tolist()
-        rows.append(rows[0])  # an angle that rounds to 2 pi
+        rows = _rows(cm)
         step, u0, turn = tab.step, model.u0, 2 * math.pi
 
         def fast(t: float, p: float, w: float) -> float:

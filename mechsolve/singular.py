@@ -11,6 +11,7 @@ import numpy as np
 
 from .conditioning import SINGULAR_INDICATOR, near_singular
 from .groups import NewtonGroup
+from .numerics import limit_from_both_sides
 from .solution import Solution
 from .state import State
 
@@ -136,7 +137,7 @@ class SingularRates:
             smooth = np.abs((hi2 - lo2) - 2.0 * (hi1 - lo1)) <= (
                 0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
             )
-            est = (4.0 * (lo1 + hi1) - (lo2 + hi2)) / 6.0
+            est = limit_from_both_sides(lo1, hi1, lo2, hi2)
             if smooth.all():
                 st.block[rows, :, i] = est
                 sol.rates_by_limit.append(int(i))
