@@ -145,8 +145,12 @@ class StartAssembler:
             if not ok2.any():
                 raise self._cannot_close(g, st2, u0)
             g.velocity(st2, unit2)
+            H0 = g.disc(st2)[0][0]
             j, reason = self._choose(
-                g, *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0), ready
+                g,
+                *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0),
+                ready,
+                bool(np.isfinite(H0) and H0 <= TOUCH),
             )
             mode = 1.0 if j == 0 else -1.0
             if _coincident_at(g, st2, 0):  # the limit from the side the motion goes to
@@ -168,7 +172,14 @@ class StartAssembler:
                     f"{c.text!r}, and no loop's branch can change that"
                 )
         if self.redundant:
-            self.redundancy = self._check_redundancy(st, drive)
+            # the dependencies are those of the motion: at a singular start (a redundant
+            # parallelogram started collinear) the Jacobian loses rank there only, so
+            # they are read just past it, on the side the motion goes to
+            d = self.mech.driver.direction * START_PROBE * 10 * (self.scale if self.linear else 1.0)
+            past = self._groups_at(u0 + d, len(self.groups), modes, q_start)
+            self.redundancy = self._check_redundancy(
+                st, drive, None if past is None else (past.take([0]), u0 + d)
+            )
         group_modes = list(modes)
         if self.plan is not self.groups:  # monolithic Newton starts from the assembled pose
             q_start = {
@@ -280,11 +291,16 @@ class StartAssembler:
         ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
         if not ok2.any():
             raise self._cannot_close(g, two, u0)
-        if not ready and not has_sketch and ok2[0]:
+        H = g.disc(two)[0]
+        singular = bool(np.isfinite(H[0]) and H[0] <= TOUCH)
+        if not ready and not has_sketch and ok2[0] and not singular:
             start.reasons[gi] = "default branch (+)"
             return
         j, reason = self._choose(
-            g, *self._where_to_choose(gi, g, two, ok2, start.modes, start.q_start, u0), ready
+            g,
+            *self._where_to_choose(gi, g, two, ok2, start.modes, start.q_start, u0),
+            ready,
+            singular,
         )
         start.reasons[gi] = reason
         start.modes[gi] = 1.0 if j == 0 else -1.0
@@ -347,9 +363,13 @@ class StartAssembler:
         """Can the branches be chosen inside the sweep (no separate assembly pass)?"""
         return self.plan is self.groups and not any(isinstance(g, NewtonGroup) for g in self.plan)
 
-    def _check_redundancy(self, st: State, drive: Drive) -> Redundancy:
+    def _check_redundancy(
+        self, st: State, drive: Drive, past: tuple[State, float] | None = None
+    ) -> Redundancy:
         """At the assembled start: are the surplus equations consistent, and which ones
-        take part in a dependency (the left null space of Phi_q)?"""
+        take part in a dependency (the left null space of Phi_q)? Where the start is
+        singular (the rank is short there), the dependencies are read at ``past``, a
+        position just past it along the motion."""
         sys_ = self.system
         res = np.abs(sys_.residual(st, drive.u)[:, 0])
         names = sys_.equation_names()
@@ -364,6 +384,11 @@ class StartAssembler:
         J = sys_.jacobian(st)[0]
         U, sv, _ = np.linalg.svd(J)
         rank = int(np.sum(sv > 1e-9 * sv[0]))
+        if rank < sys_.nq and past is not None:
+            J = sys_.jacobian(past[0])[0]
+            U, sv, _ = np.linalg.svd(J)
+            rank = int(np.sum(sv > 1e-9 * sv[0]))
+            drive = self.drive(np.array([past[1]]))
         if rank < sys_.nq:
             raise AssemblyError(
                 f"{self._file()}the constraints leave {sys_.nq - rank} coordinate(s) free at "
@@ -395,12 +420,35 @@ class StartAssembler:
                 removable += [names[k] for k in sorted(rows & set(gone))]
         return Redundancy(sys_.nc - rank, rank, [names[k] for k in involved], removable)
 
-    def _choose(self, g: Group, st2: State, ok2: np.ndarray, ready) -> tuple[int, str]:
+    def _choose(
+        self, g: Group, st2: State, ok2: np.ndarray, ready, singular: bool = False
+    ) -> tuple[int, str]:
         """The column (0: branch +, 1: branch -) to keep: the conditions that apply, then
-        the sketch, then branch +."""
+        the sketch, then branch +; at a start where the group is singular (its branches
+        meet there, so that branch + means nothing), the branch nearest to the drawn pose
+        just past the start, or an error asking for a sketch where the two are equally
+        near."""
         take_m, why, conflict, texts = self._choose_branches(g, st2, ok2, ready)
         if conflict[0]:
             raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
+        if singular and why[0] == "default branch (+)" and ok2.all():
+            # the drawn pose: every link along its own x axis (its angle 0)
+            ang = np.stack([st2.block[2, b, :] for b in g.bodies])
+            ang = (ang + np.pi) % (2 * np.pi) - np.pi
+            dist = np.sum(ang * ang, axis=0)
+            if abs(dist[0] - dist[1]) <= 1e-6 * max(dist.max(), 1e-300):
+                raise AssemblyError(
+                    f"{self._file()}the start is a singular position of the {g.label} (its "
+                    "two branches meet there) and neither the assembly conditions nor the "
+                    "drawn pose tell which branch the motion takes from it: give "
+                    "'assembly: {sketch: ...}' with a point of the loop a little past the "
+                    "start, or start the driver elsewhere"
+                )
+            j = int(dist[1] < dist[0])
+            return j, (
+                "nearest to the drawn pose just past the start (the start is singular: "
+                "the branches meet there)"
+            )
         return int(take_m[0]), str(why[0])
 
     def _choose_branches(self, g: Group, st2: State, ok2: np.ndarray, ready):

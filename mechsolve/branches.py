@@ -215,17 +215,20 @@ class BranchEvents:
         apart than :data:`EVENT_STEP`, on points in between (evaluating the groups before
         this one there), so that no minimum hides between two samples.
 
-        Returns ``u, H, Hs, good, near, at_sample``: the grid's driver values, H and its
-        rate along the sweep, where both are known, the sweep sample each point lies
-        next to (the interval it is in), and which grid points are samples.
+        Returns ``u, H, Hs, good, near, at_sample, known``: the grid's driver values, H
+        and its rate along the sweep, where both are known, the sweep sample each point
+        lies next to (the interval it is in), which grid points are samples, and where H
+        alone is known (at a sample where an earlier group is singular too, as in a chain
+        of parallelograms at its collinear position, H is known but not its rate).
         """
         H, dH = g.disc(ctx.st)
         d = self.mech.driver.direction
         u = ctx.u
         n = len(u)
-        good = ok_prev & np.isfinite(H) & np.isfinite(dH)
+        known = ok_prev & np.isfinite(H)
+        good = known & np.isfinite(dH)
         if ctx.grid is None:
-            return u, H, dH * d, good, np.arange(n), np.ones(n, bool)
+            return u, H, dH * d, good, np.arange(n), np.ones(n, bool), known
         ug, at_sample, near, gst = ctx.grid
         Hg = np.empty(len(ug))
         dHg = np.empty(len(ug))
@@ -237,8 +240,12 @@ class BranchEvents:
         goodg = np.empty(len(ug), bool)
         goodg[idx] = good
         k = near[mid]
-        goodg[mid] = np.isfinite(hm) & np.isfinite(dm) & good[k] & good[k + 1]
-        return ug, Hg, dHg * d, goodg, near, at_sample
+        between = np.isfinite(hm) & known[k] & known[k + 1]
+        goodg[mid] = between & np.isfinite(dm)
+        knowng = goodg.copy()
+        knowng[idx] = known
+        knowng[mid] = between
+        return ug, Hg, dHg * d, goodg, near, at_sample, knowng
 
     def _branch_events(self, gi: int, g: Group, ctx: _Context, ok_prev: np.ndarray):
         """Find where a two-branch group meets a singular configuration along the sweep.
@@ -255,7 +262,7 @@ class BranchEvents:
         """
         d = self.mech.driver.direction
         u_s = ctx.u
-        u, H, Hs, good, near, at_sample = self._analysis_grid(gi, g, ctx, ok_prev)
+        u, H, Hs, good, near, at_sample, known = self._analysis_grid(gi, g, ctx, ok_prev)
         # intervals between two samples where the group closes (a minimum elsewhere is
         # part of a range where it cannot close, reported as such)
         hs_ = H[at_sample]
@@ -277,8 +284,8 @@ class BranchEvents:
         # is, a sample 1e-5 past a bifurcation that touches zero to rounding, is not a
         # second event: two would flip the branch twice)
         refined = list(found)
-        for k in np.flatnonzero(good[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
-            if good[k - 1] and good[k + 1] and H[k - 1] > H[k] < H[k + 1]:
+        for k in np.flatnonzero(known[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
+            if known[k - 1] and known[k + 1] and H[k - 1] > H[k] < H[k + 1]:
                 span = abs(u[k + 1] - u[k - 1])
                 if any(1e-9 * (1.0 + abs(f[1])) < abs(f[1] - u[k]) <= span for f in refined):
                     continue

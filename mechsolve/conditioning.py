@@ -19,8 +19,26 @@ from .state import State
 if TYPE_CHECKING:
     from .groups import Group
 
-SINGULAR_RCOND = 1e-10  # below this a block is treated as singular
-SINGULAR_INDICATOR = 1e-9  # sin of a loop's transmission angle below this: a toggle
+# How near a singular position the computed rates and forces are still right.
+#
+# Next to a singular position (a toggle, a bifurcation) the pose carries the rounding
+# of its closure amplified by 1/s (s the sine of the loop's transmission angle, or the
+# reciprocal condition of a Newton group's block), the rates solved from it eps/s^2 of
+# their natural size and the accelerations and the forces eps/s^3. Measured on a
+# parallelogram 0.01 to 1e-5 deg from its collinear position (s = 1.7e-4 to 1.7e-7):
+# accelerations off by 2e-4 to 2e5 of omega^2, the driving torque by 4e-7 to 3e2 of its
+# size; at s = 2e-3 both are good to about 1e-8 (at rcond 5e-4 the torque of a redundant
+# parallelogram likewise). So within NEAR_SINGULAR_* of a singular position the rates
+# and the driver's effort are taken as their limit along the motion wherever the motion
+# is smooth through it (a bifurcation), from points d = 5e-3 rad away (which then lie
+# outside that zone); where it is not (a limit position), the computed values are kept
+# down to SINGULAR_*, below which they are rounding noise: left blank, as the
+# reactions are. A pose whose rounding alone puts it 4e-8 off an exact bifurcation is
+# thus singular, not a regular position with rates of 1e16.
+SINGULAR_RCOND = 2.5e-7  # a block's reciprocal condition below this: singular
+SINGULAR_INDICATOR = 1e-6  # sin of a loop's transmission angle below this: singular
+NEAR_SINGULAR_RCOND = 2.5e-4  # below this: rates and effort by their limit where smooth
+NEAR_SINGULAR_INDICATOR = 1e-3
 
 
 def group_block(g: Group, st: State):

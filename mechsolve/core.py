@@ -200,37 +200,105 @@ def forces(
     and stay empty; the driver's effort, where the motion is smooth through it, is its
     limit along the motion (see :func:`_effort_limits`)."""
     f = solve_forces(an, sol, stroke_extremes)
-    if f.singular and len(sol.u) > 1:
+    if (f.singular or f.near_singular) and len(sol.u) > 1:
         _effort_limits(an, sol, f, f.stroke_extremes)
     return f
 
 
 def _effort_limits(an: Analysis, sol: Solution, f: ForceResult, extremes) -> None:
-    """The driver's effort at singular positions as its limit along the motion: at
-    ``u -+ h`` and ``u -+ 2h`` (h = 5e-3 rad, or of the size) with the position's own
-    rates, extrapolated (Richardson, O(h^4)), when both sides agree (a smooth motion);
-    else it stays empty."""
+    """The driver's effort at and next to singular positions as its limit along the
+    motion: at ``u -+ h`` and ``u -+ 2h`` (h = 5e-3 rad, or of the size) with the
+    position's own rates, extrapolated (Richardson, O(h^4)), when both sides agree (a
+    smooth motion). Otherwise it stays empty at a singular position and as computed next
+    to one (see :mod:`mechsolve.conditioning` for how near is near)."""
     ud, udd = sol.driver_rates()
     h = 5e-3 * (an.scale if an.linear else 1.0)
-    for i in sorted({i for i, _ in f.singular}):
-        if np.isfinite(f.effort[i]) or not sol.ok[i]:
+    singular = {i for i, _ in f.singular}
+    newton = any(isinstance(g, NewtonGroup) for g in an.plan)
+    n = len(sol.u)
+    for i in sorted(singular | set(f.near_singular)):
+        at = i in singular
+        if not sol.ok[i]:
             continue
-        x = float(sol.u[i]) + h * np.array([-1.0, 1.0, -2.0, 2.0])
-        near = an.solve(x, start=sol.start, near=(sol, int(i)), per_unit_driver=True, limits=False)
-        if not near.ok.all():
+        ui = float(sol.u[i])
+        if i in (0, n - 1):  # the first or last sample: the motion lies on one side
+            into = np.sign(sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
+            x = ui + into * h * np.arange(1.0, 5.0)
+            k = i + 1 if i == 0 else i - 1
+            near = _near(an, sol, [(k, x)]) if newton else _near(an, sol, [(i, x)], False)
+        elif newton:  # each side by continuation from the neighbouring sample there
+            near = _near(
+                an,
+                sol,
+                [(i - 1, ui - h * np.array([2.0, 1.0])), (i + 1, ui + h * np.array([1.0, 2.0]))],
+            )
+            if near is not None:  # as (lo1, hi1, lo2, hi2)
+                near = _take(near, np.array([1, 2, 0, 3]))
+        else:
+            near = _near(an, sol, [(i, ui + h * np.array([-1.0, 1.0, -2.0, 2.0]))], False)
+        if near is None:
             continue
         scale_rates(near.state, np.full(4, ud[i]), np.full(4, udd[i]))
         near.ud, near.udd = np.full(4, ud[i]), np.full(4, udd[i])
         e = solve_forces(an, near, extremes).effort
         if not np.all(np.isfinite(e)):
             continue
-        lo1, hi1, lo2, hi2 = e
-        # a smooth motion changes twice as much over 4h as over 2h; a jump does not (the
-        # efforts next to a singular position carry rounding of about 1e-9 of their size)
-        if abs((hi2 - lo2) - 2 * (hi1 - lo1)) > 0.1 * abs(hi2 - lo2) + 1e-6 * (1 + abs(e).max()):
-            continue  # not smooth through the position: no limit
-        f.effort[i] = limit_from_both_sides(lo1, hi1, lo2, hi2)
-        f.effort_by_limit.append(int(i))
+        if i in (0, n - 1):  # cubic extrapolation, checked against the quadratic one
+            est = float(e @ np.array([4.0, -6.0, 4.0, -1.0]))
+            quad = float(e[:3] @ np.array([3.0, -3.0, 1.0]))
+            if abs(est - quad) > 1e-3 * abs(est) + 1e-6 * (1 + abs(e).max()):
+                continue
+            f.effort[i] = est
+        else:
+            lo1, hi1, lo2, hi2 = e
+            # a smooth motion changes twice as much over 4h as over 2h; a jump does not
+            # (the efforts next to a singular position carry rounding of about 1e-9 of
+            # their size)
+            if abs((hi2 - lo2) - 2 * (hi1 - lo1)) > 0.1 * abs(hi2 - lo2) + 1e-6 * (
+                1 + abs(e).max()
+            ):
+                continue  # not smooth through the position: no limit
+            est = limit_from_both_sides(lo1, hi1, lo2, hi2)
+            if not at:
+                # near (not at) a singular position: the computed effort is kept
+                # where it agrees with the limit to within the limit's own error
+                # (bounded by its difference from the plain mean of the two sides)
+                err_lim = abs(est - 0.5 * (lo1 + hi1)) + 1e-6 * (1.0 + float(np.max(np.abs(e))))
+                if abs(f.effort[i] - est) <= err_lim:
+                    continue
+            f.effort[i] = est
+        (f.effort_by_limit if at else f.effort_near_limit).append(int(i))
+
+
+def _near(
+    an: Analysis, sol: Solution, parts: list[tuple[int, np.ndarray]], march: bool = True
+) -> Solution | None:
+    """Positions ``x`` reached from solved sample ``k`` of ``sol`` (each ``(k, x)`` in
+    turn; with ``march``, the sample solved again first so that a Newton group's march
+    starts on its pose), concatenated; None if one of them does not close."""
+    out = []
+    for k, x in parts:
+        if not (0 <= k < len(sol.u)) or not sol.ok[k]:
+            return None
+        if not march:
+            near = an.solve(
+                x, start=sol.start, near=(sol, int(k)), per_unit_driver=True, limits=False
+            )
+            if not near.ok.all():
+                return None
+            out.append(near)
+            continue
+        near = an.solve(
+            np.r_[sol.u[k], x],
+            start=sol.start,
+            near=(sol, int(k)),
+            per_unit_driver=True,
+            limits=False,
+        )
+        if not near.ok.all():
+            return None
+        out.append(_take(near, np.arange(1, len(x) + 1)))
+    return out[0] if len(out) == 1 else _concat(out)
 
 
 def _take(sol: Solution, idx: np.ndarray) -> Solution:

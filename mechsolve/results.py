@@ -694,11 +694,13 @@ class Results:
                 + (f"; the driving {kind} is unique" if unique else "")
             )
         if f.singular:
-            where = ", ".join(self.describe_u(i) for i, _ in f.singular[:5])
-            more = f" and {len(f.singular) - 5} more" if len(f.singular) > 5 else ""
+            at = sorted({i for i, _ in f.singular})
+            where = ", ".join(self.describe_u(i) for i in at[:5])
+            more = f" and {len(at) - 5} more" if len(at) > 5 else ""
+            groups = list(dict.fromkeys(label for _, label in f.singular))
             lines.append(
-                f"  forces indeterminate at {len(f.singular)} singular position(s): {where}{more} "
-                f"({f.singular[0][1]})"
+                f"  forces indeterminate at {len(at)} singular position(s): {where}{more} "
+                f"({'; '.join(groups)})"
             )
             if f.effort_by_limit:
                 kind = self.effort_name[0]
@@ -706,4 +708,11 @@ class Results:
                     f"  the driving {kind} at {len(f.effort_by_limit)} of them is its limit "
                     "along the motion (smooth through the position); the reactions stay empty"
                 )
+        if f.effort_near_limit:
+            kind = self.effort_name[0]
+            lines.append(
+                f"  the driving {kind} at {len(f.effort_near_limit)} position(s) next to a "
+                "singular one is its limit along the motion (computed there, it would carry "
+                "the pose's rounding amplified by the near-singular loop)"
+            )
         return lines

@@ -755,4 +755,6 @@ def test_a_parallelogram_is_tabulated_whatever_its_start(start):
     model = ReducedModel(_with_flywheel(mech))
     assert model.tabulate()
     x = np.linspace(0.0, 2 * np.pi, 1001)
-    np.testing.assert_allclose(model._table.evaluate(x)[0], 0.6, rtol=1e-9)
+    # (samples next to the collinear positions are the rates' limit along the motion,
+    # Richardson at 5 mrad: O(h^4), within a few 1e-9)
+    np.testing.assert_allclose(model._table.evaluate(x)[0], 0.6, rtol=5e-9)

@@ -32,7 +32,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..conditioning import SINGULAR_INDICATOR, SINGULAR_RCOND, group_block, rcond
+from ..conditioning import (
+    NEAR_SINGULAR_INDICATOR,
+    NEAR_SINGULAR_RCOND,
+    SINGULAR_INDICATOR,
+    SINGULAR_RCOND,
+    group_block,
+    rcond,
+)
 from ..groups.generic import NewtonGroup
 from ..model import GROUND, Damper, PointForce, Spring, Torque
 from ..numerics import simpson
@@ -62,6 +69,11 @@ class ForceResult:
     speed: np.ndarray | float = 0.0  # the driver's speed at each position (rad/s or m/s)
     # singular positions whose driver effort is its limit along the motion
     effort_by_limit: list[int] = field(default_factory=list)
+    # positions next to a singular one (see mechsolve.conditioning), where the computed
+    # effort carries rounding amplified by 1/s^3; and those of them whose effort is its
+    # limit along the motion
+    near_singular: dict[int, float] = field(default_factory=dict)  # position -> s
+    effort_near_limit: list[int] = field(default_factory=list)
     # (kinetic, kinetic rate, potential, potential rate) on demand
     energy_terms: Callable[[], tuple] | None = field(default=None, repr=False)
     _energies: tuple | None = field(default=None, repr=False)
@@ -331,7 +343,7 @@ def solve_forces(
                 acc.force(ba, sa, t * ex, t * ey)
             load_power[load.name] = power_loads - before
 
-    lam, singular, nonunique = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
+    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
@@ -350,6 +362,7 @@ def solve_forces(
         nonunique=_nonunique_components(an, nonunique),
         speed=sol.driver_rates()[0],
         energy_terms=energy_terms,
+        near_singular=near,
     )
 
 
@@ -397,16 +410,26 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
     R = Q.copy()  # applied + inertia + reactions of the groups solved so far
     row_of = {id(r.constraint): r.start for r in sys_.rows}
     singular: list[tuple[int, str]] = []
+    near = np.full(n, np.inf)  # how near a singular position: smallest indicator/rcond
     nonunique = np.zeros(sys_.nc, bool)
     for gi in reversed(range(len(an.plan))):
         g = an.plan[gi]
         if hasattr(g, "forces") and not isinstance(g, NewtonGroup):
             out: dict = {}
-            with np.errstate(invalid="ignore", divide="ignore"):
-                g.forces(st, R, out)
             ind = indicator[gi] if len(indicator) > gi else np.ones(n)
             sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
+            close = np.isfinite(ind) & (ind <= NEAR_SINGULAR_INDICATOR) & solved
+            near = np.where(close, np.minimum(near, ind), near)
             any_sing = bool(sing.any())
+            before = R[:, sing].copy() if any_sing else None
+            with np.errstate(invalid="ignore", divide="ignore"):
+                g.forces(st, R, out)
+            if any_sing:
+                # what the group passes on to the links it hangs on is not determined
+                # either (it was +-inf or rounding noise): those reactions stay empty
+                Rs = R[:, sing]
+                Rs[Rs != before] = np.nan
+                R[:, sing] = Rs
             for c, comps in out.items():
                 r0 = row_of[id(c)]
                 for k, v in enumerate(comps):
@@ -434,6 +457,8 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
                 JT = np.transpose(J[idx], (0, 2, 1))
                 x[idx] = np.linalg.solve(JT, rhs[idx][..., None])[..., 0]
         singular += [(int(i), g.label) for i in np.flatnonzero(good & ~regular & solved)]
+        close = good & (rc <= NEAR_SINGULAR_RCOND) & solved
+        near = np.where(close, np.minimum(near, rc), near)
         for c, r0, jac in blocks:
             lc = x[:, r0 : r0 + c.m]  # (N, m_c)
             lam[:, row_of[id(c)] : row_of[id(c)] + c.m] = lc
@@ -443,7 +468,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
                 for k in range(3):
                     R[3 * body + k] -= np.einsum("mn,nm->n", blk[:, k, :], lc)
     singular.sort()
-    return lam, singular, nonunique
+    return lam, singular, nonunique, {int(i): float(near[i]) for i in np.flatnonzero(near < 1)}
 
 
 def _min_norm(J: np.ndarray, rhs: np.ndarray, good: np.ndarray):
