@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,7 +114,8 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
     items: dict[str, object] = {}
     spelled: dict[str, str] = {}
     for name, value in pairs:
-        key = names.get(name)
+        # compatibility forms are the same letters: ϑ is θ, 𝜃 (mathematical italic) is θ
+        key = names.get(name) or names.get(unicodedata.normalize("NFKC", name))
         if key is None:
             raise InputError(
                 f"{where}: unknown name {name!r} in {label!r} (an instant of this driver "
@@ -192,11 +194,10 @@ def _against_the_file(mech: Mechanism, speed: float, linear: bool) -> str:
     if speed == 0 or (d.speed == 0 and d.motion is None) or np.sign(speed) == d.direction:
         return ""
     if linear:
-        given = f"{speed:.6g} m/s moves the slider {'back' if speed * d.direction < 0 else ''}"
         return (
-            f"v = {given.strip()} against the file's driver (its speed is "
-            f"{d.speed:.6g} m/s): velocities and the loads whose conditions read them are "
-            "those of the reversed motion"
+            f"v = {speed:.6g} m/s moves the slider against the file's driver ({d.speed:.6g} "
+            "m/s): velocities and the loads whose conditions read them are those of the "
+            "reversed motion"
         )
     return (
         f"omega = {speed:.6g} rad/s turns the crank {_sense(speed)}, against the file's "
@@ -213,7 +214,8 @@ def _file_rates(
     d = mech.driver
     law = d.motion
     if law is None:
-        return float(d.speed), 0.0, "the file's driver (a constant speed)"
+        what = "a constant speed" if d.speed else "at rest: positions quasi-static"
+        return float(d.speed), 0.0, f"the file's driver ({what})"
     t = _first_time(mech, law, u, linear)
     if t is None:
         vel, acc = ("v", "a") if linear else ("omega", "alpha")

@@ -243,6 +243,7 @@ def test_speed_default_of_a_motion_law():
         "φ=100 deg, ω=-60 rpm, ε=0",
         "theta=100 deg, omega=-60 rpm, epsilon=0 rad/s^2",
         "ϑ=100 deg, omega=-60 rpm, ϵ=0",
+        "𝜃=100 deg, 𝜔=-60 rpm, 𝛼=0",  # mathematical italic letters (NFKC: θ, ω, α)
     ],
 )
 def test_greek_names_are_the_same_names(text):
@@ -320,6 +321,9 @@ def test_linear_driver_speed_defaults_to_the_files():
     # the angle names are not this driver's: refused, naming the ones it takes
     with pytest.raises(InputError, match="s, v, a"):
         parse_instant(mech, "θ=30 deg")
+    # a speed against the file's direction is said
+    assert "against the file's driver" in parse_instant(mech, "s=0.45 m, v=0.5 m/s").note
+    assert "against" not in parse_instant(mech, "s=0.45 m, v=-0.5 m/s").note
 
 
 def test_unknown_name_is_refused_with_the_names_it_takes(tmp_path):
