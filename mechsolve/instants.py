@@ -148,7 +148,13 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
     u = vals[pos]
     notes = []
     if vel not in vals or acc not in vals:
-        ud, udd, source = _file_rates(mech, u, linear, label, where)
+        try:
+            ud, udd, source = _file_rates(mech, u, linear, label, where)
+        except InputError:
+            if vel not in vals:
+                raise
+            # the speed is given, the law never reaches the position: no acceleration
+            ud, udd, source = vals[vel], 0.0, "the file's motion law does not reach here"
         filled = []
         if vel not in vals:
             vals[vel] = ud

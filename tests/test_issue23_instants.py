@@ -379,15 +379,20 @@ def test_speed_default_of_a_law_of_time():
         assert i.ud == pytest.approx(2 + 1.5 * math.cos(3 * t), rel=1e-10)
         assert i.udd == pytest.approx(-4.5 * math.sin(3 * t), rel=1e-9)
         assert f"t = {t:.6g} s" in i.note
-    # beyond the sweep's 5 s (u(5) = 10.6 rad): no speed to take, ask for it
+    # beyond the sweep's 5 s (u(5) = 0.8 rad): no speed to take, ask for it; with the
+    # speed given, no acceleration
+    slow = _fourbar_with(
+        'driver: {joint: O2, motion: {law: "0.3 + 0.1 * t"}}',
+        "sweep: {duration: 5 s, time_step: 0.05 s}",
+    )
     with pytest.raises(InputError, match="give omega"):
-        parse_instant(
-            _fourbar_with(
-                'driver: {joint: O2, motion: {law: "0.3 + 0.1 * t"}}',
-                "sweep: {duration: 5 s, time_step: 0.05 s}",
-            ),
-            "theta=90 deg",
-        )
+        parse_instant(slow, "theta=90 deg")
+    i = parse_instant(slow, "theta=90 deg, omega=2 rad/s")
+    assert (i.ud, i.udd) == (2.0, 0.0) and "does not reach" in i.note
+    # within it: the law's acceleration with the given speed
+    i = parse_instant(mech, "theta=80 deg, ω=3 rad/s")
+    t = brentq(lambda s: 0.3 + 2 * s + 0.5 * math.sin(3 * s) - math.radians(80), 0, 5)
+    assert i.ud == 3.0 and i.udd == pytest.approx(-4.5 * math.sin(3 * t), rel=1e-9)
 
 
 def test_speed_default_of_segments():
