@@ -93,8 +93,9 @@ def main() -> None:
     multiple=True,
     metavar="STATE",
     help="Solve only this instant, e.g. 'theta=30 deg, omega=10 rad/s, alpha=5 rad/s^2' "
-    "('s=..., v=..., a=...' for a linear driver; alpha defaults to 0); may be repeated. "
-    "Prints every quantity and force and writes instants.csv.",
+    "('s=..., v=..., a=...' for a linear driver; θ/φ, ω, α/ε are the same names; signed, "
+    "counter-clockwise positive); omega and alpha default to the file's driver; may be "
+    "repeated. Prints every quantity and force and writes instants.csv.",
 )
 @click.option(
     "--junit",

@@ -218,10 +218,10 @@ def test_cli_at_prints_a_table_and_writes_csv(tmp_path):
 @pytest.mark.parametrize(
     "spec, message",
     [
-        ("theta=30 deg, alpha=5 rad/s^2", "has no 'omega'"),
+        ("omega=10 rad/s, alpha=5 rad/s^2", "has no 'theta'"),  # omega, alpha: the file's
         ("theta=30 deg, omega=10 m/s", "omega"),
         ("theta=30 deg; omega=1", "is not 'name=value'"),
-        ("theta=30 deg, omega=1 rad/s, jerk=2", "unknown jerk"),
+        ("theta=30 deg, omega=1 rad/s, jerk=2", "unknown name 'jerk'"),
     ],
 )
 def test_bad_instants(tmp_path, spec, message):
