@@ -320,18 +320,13 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
 
         from . import api
         from .errors import InputError
-        from .flywheel import size_flywheel, size_from_torque
+        from .flywheel import parse_delta, size_flywheel, size_from_torque
         from .model.parse import is_torque_problem, read_torque_problem
         from .model.source import load_file
         from .units import UnitError, parse_quantity
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        delta = delta_given if delta_given is not None else "1/40"
-        try:
-            num, _, den = str(delta).partition("/")
-            dl = float(num) / float(den) if den else float(num)
-        except ValueError:
-            raise InputError(f"--delta {delta!r}: a number such as 0.025 or 1/40") from None
+        dl = parse_delta(delta_given if delta_given is not None else "1/40")
         w = None
         if speed is not None:
             try:
@@ -360,7 +355,7 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
         paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
         click.echo(res.text())
         click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
-        sys.exit(EXIT_OK)
+        sys.exit(EXIT_REQUIREMENTS if res.check_missed() else EXIT_OK)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
         _fail(exc)
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,7 +33,41 @@ from .errors import InputError
 from .model import Mechanism
 from .sweep import Analysis
 
-__all__ = ["FlywheelSizing", "size_flywheel"]
+__all__ = ["CHECK_TOLERANCE", "FlywheelSizing", "parse_delta", "size_flywheel"]
+
+# The simulation's check of a flywheel passes when the coefficient of fluctuation it
+# reaches is within this factor of the one asked (either way): the energy method takes
+# the machine's inertia and the motor's torque as constant, which is good to a few per
+# cent for a flywheel that dominates the machine's inertia and a motor whose torque varies
+# little over the speed's fluctuation; a larger miss means the estimate does not apply.
+CHECK_TOLERANCE = 1.25
+
+
+def parse_delta(text: object, where: str = "--delta") -> float:
+    """The coefficient of fluctuation from ``0.025`` or ``1/40``: strictly between 0 and 1.
+
+    Raises :class:`~mechsolve.errors.InputError` (naming ``where``) for anything else."""
+    num, _, den = str(text).strip().partition("/")
+    try:
+        value = float(num) / float(den) if den else float(num)
+    except (ValueError, ZeroDivisionError):
+        raise InputError(
+            f"{where} {text!r}: expected a number such as 0.025 or 1/40"
+            + (" (division by zero)" if den and _is_zero(den) else "")
+        ) from None
+    if not (math.isfinite(value) and 0 < value < 1):
+        raise InputError(
+            f"{where} {text!r}: the coefficient of fluctuation (omega_max - omega_min) / "
+            "omega_m is between 0 and 1, e.g. 1/40"
+        )
+    return value
+
+
+def _is_zero(text: str) -> bool:
+    try:
+        return float(text) == 0.0
+    except ValueError:
+        return False
 
 
 @dataclass
@@ -51,6 +85,17 @@ class FlywheelSizing:
     J_exact: float = float("nan")  # the energy-mass (Wittenbauer) method, J varying
     energy_mass: tuple | None = None  # (J(phi), W(phi)) of that method
     source: str = "mechanism"  # or "torque curve" (a table or law given directly)
+    notes: list[str] = field(default_factory=list)  # printed under the figures
+    check_note: str | None = None  # why the simulation could not check the flywheel
+    none_needed: bool = False  # the driving torque does not fluctuate: J_F = 0 exactly
+
+    def check_missed(self) -> bool:
+        """True when the simulation with the flywheel reached a coefficient of fluctuation
+        off the one asked by more than :data:`CHECK_TOLERANCE` (a factor either way)."""
+        if self.delta_reached is None:
+            return False
+        ratio = self.delta_reached / self.delta
+        return not (1 / CHECK_TOLERANCE <= ratio <= CHECK_TOLERANCE)
 
     def text(self) -> str:
         n = self.omega_mean * 30 / math.pi
@@ -80,12 +125,34 @@ class FlywheelSizing:
                 f"  energy-mass (Wittenbauer) method with the varying J(phi): J_F = "
                 f"{self.J_exact:.6g} kg*m^2"
             )
+        if self.none_needed:
+            lines = lines[:3] + [
+                "  no flywheel is needed: the driving torque does not fluctuate over the "
+                "cycle (dE_max = 0 J), so the speed stays constant without one"
+            ]
+        lines += [f"  note: {n}" for n in self.notes]
         if self.delta_reached is not None:
             lines.append(
                 f"  checked by simulation with this flywheel: delta reached "
                 f"{self.delta_reached:.4g} (asked {self.delta:.4g}; the estimate takes the "
-                "machine's inertia as constant)"
+                "machine's inertia and the motor's torque as constant)"
             )
+            if self.check_missed():
+                ratio = self.delta_reached / self.delta
+                how = (
+                    "the flywheel is too small"
+                    if ratio > 1
+                    else "the flywheel is larger than needed"
+                )
+                lines.append(
+                    f"  WARNING: the simulation misses the asked delta by a factor "
+                    f"{max(ratio, 1 / ratio):.3g} (more than the {CHECK_TOLERANCE:g} "
+                    f"allowed): {how}; the energy method does not apply to this machine "
+                    "(a motor whose torque changes much with the speed, or an inertia "
+                    "that varies much over the turn): size it by simulation"
+                )
+        elif self.check_note:
+            lines.append(f"  not checked by simulation: {self.check_note}")
         return "\n".join(lines)
 
 
@@ -145,8 +212,30 @@ def size_flywheel(
     dE = float(work.max() - work.min())
     J, dJ = _reduced_inertia(an, u)
     J_mean = float(np.mean(J))
+    scale = float(np.max(np.abs(T))) * 2 * math.pi  # the work a torque this size does
+    if not dE > 1e-9 * scale:  # no fluctuation (to rounding)
+        if not mech.has_masses and not mech.loads and mech.flywheel is None:
+            raise mech.error(
+                ("links",),
+                "nothing to size: the file gives no masses and no loads, so the driving "
+                "torque is zero over the whole cycle; give the links' 'mass' (and "
+                "'inertia') and the loads the machine works against",
+            )
+        out = FlywheelSizing(w, delta, M, 0.0, J_mean, 0.0, u, work, T, none_needed=True)
+        out.J_exact = 0.0
+        return out
     need = dE / (w * w * delta)
     out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u, work, T)
+    if not mech.has_masses and mech.flywheel is None:
+        out.notes.append(
+            "the file gives no masses: the machine's own inertia is taken as zero and "
+            "J_F is the whole inertia the crank's shaft needs"
+        )
+    elif out.J_flywheel == 0.0:
+        out.notes.append(
+            f"the mechanism's own mean inertia ({J_mean:.6g} kg*m^2) exceeds the "
+            f"{need:.6g} kg*m^2 required: no flywheel is needed"
+        )
     # the energy-mass (Wittenbauer) method, exact for a varying J: the kinetic energy is
     # T0 + W(phi), W the work of the motor and the external loads (the driving torque at
     # constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
@@ -173,10 +262,19 @@ def size_flywheel(
         tau = (J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
         sim = copy.copy(mech.simulation)
         sim.duration = min(max(sim.duration, 10 * tau), 120.0)
+        # from the steady mean speed, so that only the periodic part has to settle
+        sim.speed0 = w
+        sim.revolutions = None
+        sim.steady = None
         machine.simulation = sim
         res = simulate(machine)
         fl = steady_fluctuation(res.trajectory)
-        out.delta_reached = None if fl is None else fl[1]
+        if fl is None:
+            out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
+        else:
+            out.delta_reached = fl[1]
+    elif check and mech.motor is not None and mech.simulation is None:
+        out.check_note = "the file has no 'simulate:' section"
     return out
 
 

@@ -1,0 +1,112 @@
+"""Issue 23, the design tools (flywheel, synth, cam): inputs they could not take, and
+exit codes and messages that were wrong. Every figure is checked against an independent
+hand calculation or closed form."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mechsolve.cli import main
+
+MECH = Path(__file__).resolve().parent.parent / "mechanisms"
+
+
+def _run(*args: str):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+# --- flywheel: exit codes and messages (issue 23, section 4) --------------------------
+
+
+@pytest.mark.parametrize("delta", ["1/0", "0/0", "2", "0", "-1/40", "nan", "x/40"])
+def test_flywheel_bad_delta_is_an_input_error(tmp_path, delta):
+    r = _run("flywheel", MECH / "crane.yaml", "--delta", delta, "-o", tmp_path)
+    assert r.exit_code == 2, r.output
+    assert "--delta" in r.output and "Traceback" not in r.output
+    assert "internal error" not in r.output
+
+
+def test_flywheel_on_a_file_without_masses_or_loads_has_nothing_to_size(tmp_path):
+    r = _run("flywheel", MECH / "sixbar.yaml", "-o", tmp_path)
+    assert r.exit_code == 2, r.output
+    assert "nothing to size" in r.output and "J_F" not in r.output
+
+
+CRANK_LOADED = """
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], A: [0.8, 0]}}
+joints: {O: [ground, bar]}
+driver: {joint: O, speed: 10 rad/s, start: 0 deg}
+loads:
+  weight: {force: [0, -29.43 N], at: A, on: bar}
+"""
+
+
+def test_flywheel_without_masses_but_with_a_load_sizes_the_whole_inertia(tmp_path):
+    """A massless crank of length l carrying a constant vertical force F at its tip: the
+    driving torque is F l cos(phi), its mean zero, so dE_max = 2 F l; the machine has no
+    inertia of its own, J_F = 2 F l / (omega^2 delta) is all of it (hand calculation)."""
+    f = tmp_path / "crank.yaml"
+    f.write_text(CRANK_LOADED)
+    r = _run("flywheel", f, "--delta", "1/40", "-o", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    F, l, w, d = 29.43, 0.8, 10.0, 1 / 40
+    assert f"dE_max = {2 * F * l:.6g} J" in r.output
+    assert f"flywheel J_F = {2 * F * l / (w * w * d):.6g} kg*m^2" in r.output
+    assert "no masses" in r.output
+
+
+CRANK_BALANCED = """
+ground: {O: [0, 0]}
+links:
+  disc: {points: {O: [0, 0], A: [0.2, 0]}, mass: 5 kg, com: O, inertia: 0.1 kg m^2}
+joints: {O: [ground, disc]}
+driver: {joint: O, speed: 10 rad/s, start: 0 deg}
+gravity: 9.81 m/s^2
+"""
+
+
+def test_flywheel_with_no_fluctuation_says_none_is_needed(tmp_path):
+    """A balanced disc turning at constant speed needs no torque at all: no fluctuation,
+    no flywheel; the command says so and prints no J_F formula."""
+    f = tmp_path / "disc.yaml"
+    f.write_text(CRANK_BALANCED)
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    assert "no flywheel is needed" in r.output
+    assert "required inertia" not in r.output
+
+
+def _stiff_motor(tmp_path: Path, slope: float) -> Path:
+    """seed 004 with a motor law of the given slope giving the same steady speed."""
+    text = (MECH / "motor-linkage.yaml").read_text()
+    # the cycle's mean torque at 39.23 rad/s is 0.961 N m (the file's own steady state)
+    stall = 0.9611 + slope * 39.2304
+    text = text.replace(
+        "motor: {stall: 50 N m, slope: 1.25 N m s}",
+        f"motor: {{stall: {stall:.6f} N m, slope: {slope:g} N m s}}",
+    )
+    f = tmp_path / f"stiff-{slope:g}.yaml"
+    f.write_text(text)
+    return f
+
+
+def test_flywheel_check_by_simulation_that_misses_is_flagged(tmp_path):
+    """A stiff motor (3000 N m s per rad/s) damps the fluctuation itself: the energy
+    method's flywheel, checked by simulation, reaches a delta several times smaller than
+    asked. That is flagged (a WARNING line) and exits 5; the file's own soft motor
+    (1.25 N m s) reaches the target within the tolerance and exits 0."""
+    from mechsolve.flywheel import CHECK_TOLERANCE
+
+    r = _run("flywheel", _stiff_motor(tmp_path, 3000), "--delta", "0.05", "-o", tmp_path / "a")
+    assert r.exit_code == 5, r.output
+    assert "WARNING: the simulation misses the asked delta" in r.output
+    reached = float(r.output.split("delta reached ")[1].split()[0])
+    assert reached < 0.05 / CHECK_TOLERANCE
+    r = _run("flywheel", MECH / "motor-linkage.yaml", "--delta", "0.05", "-o", tmp_path / "b")
+    assert r.exit_code == 0, r.output
+    assert "WARNING" not in r.output
