@@ -4,6 +4,7 @@ hand calculation or closed form."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -110,3 +111,48 @@ def test_flywheel_check_by_simulation_that_misses_is_flagged(tmp_path):
     r = _run("flywheel", MECH / "motor-linkage.yaml", "--delta", "0.05", "-o", tmp_path / "b")
     assert r.exit_code == 0, r.output
     assert "WARNING" not in r.output
+
+
+# --- synth: key paths and numbers (issue 23, section 4) -------------------------------
+
+
+def _window_problem(tmp_path: Path, width: str) -> Path:
+    text = (MECH / "synth" / "crane-window.yaml").read_text()
+    text = text.replace("../crane.yaml", str(MECH / "crane.yaml"))
+    text = text.replace("width: 41 deg", f"width: {width}")
+    f = tmp_path / "window.yaml"
+    f.write_text(text)
+    return f
+
+
+@pytest.mark.parametrize("width", ["-41 deg", "300 deg"])
+def test_synth_window_errors_name_the_width_and_its_line(tmp_path, width):
+    f = _window_problem(tmp_path, width)
+    line = 1 + f.read_text().splitlines().index(f"  width: {width}")
+    r = _run("synth", f)
+    assert r.exit_code == 2, r.output
+    assert f"window.yaml:{line}: window.width:" in r.output
+    assert "window.point" not in r.output
+
+
+def test_synth_reads_1e6_style_numbers(tmp_path):
+    """YAML 1.1 reads 14e-1 and 1e2 (no dot) as strings: they are numbers. The design
+    with K = 14e-1 has the time ratio 1.4 by the offset slider-crank's closed form
+    theta = asin(e / (l - r)) - asin(e / (l + r)), K = (180 + theta) / (180 - theta)."""
+    f = tmp_path / "sc.yaml"
+    f.write_text(
+        "name: s\nunits: {length: mm, angle: deg}\n"
+        "slider-crank: {stroke: 1e2, time_ratio: 14e-1, offset: 20}\n"
+    )
+    out = tmp_path / "sc-design.yaml"
+    r = _run("synth", f, "-o", out)
+    assert r.exit_code == 0, r.output
+    from mechsolve.synth.problem import solve_problem
+
+    d = solve_problem(f).chosen
+    a, b, e = d.lengths["crank"], d.lengths["rod"], 0.020
+    theta = math.asin(e / (b - a)) - math.asin(e / (b + a))
+    K = (math.pi + theta) / (math.pi - theta)
+    assert K == pytest.approx(1.4, rel=1e-9)
+    stroke = math.sqrt((a + b) ** 2 - e * e) - math.sqrt((b - a) ** 2 - e * e)
+    assert stroke == pytest.approx(0.1, rel=1e-9)

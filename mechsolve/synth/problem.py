@@ -93,6 +93,11 @@ class _Reader:
             if optional:
                 return None
             raise self.err(key, "missing: give a number")
+        if isinstance(v, str):  # YAML 1.1 reads 1e6 (no dot) as a string
+            try:
+                v = float(v.strip())
+            except ValueError:
+                raise self.err(key, f"expected a number, got {v!r}") from None
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise self.err(key, f"expected a number, got {v!r}")
         return float(v)
@@ -117,7 +122,7 @@ class _Reader:
         except InputError as exc:
             if exc.file:
                 raise
-            raise self.err(key, exc.message) from None
+            raise self.err(getattr(exc, "problem_key", key), exc.message) from None
 
 
 def read(path: str | Path) -> tuple[Source, str]:
