@@ -156,3 +156,65 @@ def test_synth_reads_1e6_style_numbers(tmp_path):
     assert K == pytest.approx(1.4, rel=1e-9)
     stroke = math.sqrt((a + b) ** 2 - e * e) - math.sqrt((b - a) ** 2 - e * e)
     assert stroke == pytest.approx(0.1, rel=1e-9)
+
+
+# --- cam: the geometry is checked first (issue 23, section 4) -------------------------
+
+
+def _cam_file(tmp_path: Path, **subs: str) -> Path:
+    text = (MECH / "shaper-cam.yaml").read_text()
+    for a, b in subs.items():
+        assert a in text
+        text = text.replace(a, b)
+    f = tmp_path / "cam.yaml"
+    f.write_text(text)
+    return f
+
+
+def _designed(text: str) -> str:
+    """The shaper's cam with its base values left out (to be designed)."""
+    for k in ("pivot_distance: 135 mm", "start_angle: 12.5 deg", "base_radius: 30 mm"):
+        text = "\n".join(ln for ln in text.splitlines() if not ln.strip().startswith(k))
+    return text + "\n"
+
+
+@pytest.mark.parametrize("designed", [False, True])
+def test_cam_impossible_swing_is_refused_from_the_geometry(tmp_path, designed):
+    """An oscillating roller follower's distance from the cam's centre,
+    sqrt(a^2 + l^2 - 2 a l cos(phi)), grows only for phi below 180 deg: a 359 deg swing
+    cannot be a rise. Said at once, at the swing's key, not blamed on the pressure angle."""
+    import time
+
+    f = _cam_file(tmp_path, **{"swing: 15 deg": "swing: 359 deg"})
+    if designed:
+        f.write_text(_designed(f.read_text()))
+    line = 1 + next(i for i, ln in enumerate(f.read_text().splitlines()) if "359 deg" in ln)
+    t0 = time.perf_counter()
+    r = _run("cam", f, "-o", tmp_path / "o", "--no-plots")
+    assert time.perf_counter() - t0 < 1.0
+    assert r.exit_code == 2, r.output
+    assert f"cam.yaml:{line}: cam.motion[0].swing:" in r.output
+    assert "180 deg" in r.output and "pressure" not in r.output
+
+
+def test_cam_swing_past_the_line_of_centres_with_the_given_start_angle(tmp_path):
+    """phi0 = 12.5 deg given: a swing of 170 deg reaches 182.5 deg; at most 167.5 deg."""
+    f = _cam_file(tmp_path, **{"swing: 15 deg": "swing: 170 deg"})
+    r = _run("cam", f, "-o", tmp_path / "o", "--no-plots")
+    assert r.exit_code == 2, r.output
+    assert "cam.start_angle:" in r.output and "167.5 deg" in r.output
+
+
+def test_cam_flat_face_swing_limit_is_90_deg(tmp_path):
+    """An oscillating flat face's distance from the cam's centre a sin(phi) - f grows
+    only for phi below 90 deg."""
+    text = _designed((MECH / "shaper-cam.yaml").read_text())
+    text = text.replace(
+        "{type: oscillating roller, arm: 125 mm, roller_radius: 15 mm}",
+        "{type: oscillating flat-faced, arm: 125 mm}",
+    ).replace("swing: 15 deg", "swing: 95 deg")
+    f = tmp_path / "flat.yaml"
+    f.write_text(text)
+    r = _run("cam", f, "-o", tmp_path / "o", "--no-plots")
+    assert r.exit_code == 2, r.output
+    assert "cam.motion[0].swing:" in r.output and "90 deg" in r.output

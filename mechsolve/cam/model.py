@@ -161,7 +161,12 @@ def from_source(src: Source) -> CamModel:
         raise r.fail(p, "'cam' needs the key 'speed' (e.g. '60 rpm')")
     speed = r.positive(cam["speed"], p + ("speed",), "angular speed")
 
-    program = _read_motion(r, cam, osc)
+    # the geometry first: an arm's contact moves away from the cam's centre only while the
+    # arm's angle from the line of centres stays below 180 deg (a roller or knife edge;
+    # the distance is sqrt(a^2 + l^2 - 2 a l cos(phi))), below 90 deg for a flat face (the
+    # face's distance a sin(phi) - face_offset)
+    limit = None if not osc else (math.pi / 2 if contact == "flat-faced" else math.pi)
+    program = _read_motion(r, cam, osc, limit)
 
     # base values
     given: dict[str, float] = {}
@@ -174,6 +179,17 @@ def from_source(src: Source) -> CamModel:
             if key in given:
                 raise r.fail(p + (key,), "only an oscillating follower has a " + key)
     follower, designed, notes = _base(r, p, kind, contact, roller, offset, arm, given)
+    if limit is not None and not designed:
+        top = follower.start_angle + program.stroke
+        if top >= limit:
+            raise r.fail(
+                p + ("start_angle" if "start_angle" in given else "base_radius",),
+                f"the arm starts {math.degrees(follower.start_angle):.6g} deg from the line "
+                f"of centres (phi0) and swings {math.degrees(program.stroke):.6g} deg: at "
+                f"{math.degrees(top):.6g} deg it passes {math.degrees(limit):g} deg, where "
+                "its contact stops moving away from the cam's centre; the swing must stay "
+                f"below {math.degrees(limit - follower.start_angle):.6g} deg with this phi0",
+            )
 
     allow = _allowance(r, cam, p, program)
     step = math.radians(1.0)
@@ -197,7 +213,7 @@ def from_source(src: Source) -> CamModel:
     )
 
 
-def _read_motion(r: Reader, cam: dict, osc: bool) -> Program:
+def _read_motion(r: Reader, cam: dict, osc: bool, limit: float | None = None) -> Program:
     p = ("cam", "motion")
     seq = cam["motion"]
     if not isinstance(seq, list) or not seq:
@@ -244,6 +260,16 @@ def _read_motion(r: Reader, cam: dict, osc: bool) -> Program:
                 raise r.fail(q, "the segment needs a 'law' (or give 'law' for all under 'cam')")
             if kind == "rise":
                 level += lift  # type: ignore[operator]
+                if limit is not None and level >= limit:
+                    what = "a flat face" if limit < math.pi else "a roller or knife edge"
+                    raise r.fail(
+                        q + (lift_key,),
+                        f"the follower would swing {math.degrees(level):.6g} deg from its "
+                        f"lowest position: impossible for an oscillating follower with {what}, "
+                        "whose distance from the cam's centre grows only while the arm's "
+                        "angle from the line of centres (phi0 + swing) stays below "
+                        f"{math.degrees(limit):g} deg",
+                    )
             else:
                 if lift is not None and lift > level * (1 + 1e-9):
                     raise r.fail(
