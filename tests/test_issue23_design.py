@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -218,3 +219,167 @@ def test_cam_flat_face_swing_limit_is_90_deg(tmp_path):
     r = _run("cam", f, "-o", tmp_path / "o", "--no-plots")
     assert r.exit_code == 2, r.output
     assert "cam.motion[0].swing:" in r.output and "90 deg" in r.output
+
+
+# --- cam: face width, base circle, the file's units (issue 23, 1.9) --------------------
+
+FLAT_IN = """
+name: flat face in inches
+units: {length: in, angle: deg}
+cam:
+  follower: {type: translating flat-faced, offset: 0.25, face_margin: 0.125}
+  rotation: ROT
+  speed: 100 rpm
+  base_radius: 2
+  motion:
+    - {rise: 100 deg, lift: 1, law: simple harmonic}
+    - {dwell: 80 deg}
+    - {return: 120 deg, law: cycloidal}
+    - {dwell: 60 deg}
+"""
+
+
+def _csv(path: Path) -> list[dict[str, str]]:
+    import csv
+
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("rot", ["ccw", "cw"])
+def test_cam_flat_face_width_against_the_closed_form(tmp_path, rot):
+    """A translating flat face touches the cam at sigma ds/dtheta from the cam's centre
+    line (Norton): with a harmonic rise h over beta1, ds/dtheta runs to
+    pi h / (2 beta1), with a cycloidal return over beta2 down to -2 h / beta2, so the face
+    needs pi h / (2 beta1) + 2 h / beta2 (plus the margin at each end)."""
+    f = tmp_path / "flat.yaml"
+    f.write_text(FLAT_IN.replace("ROT", rot))
+    r = _run("cam", f, "-o", tmp_path / "o", "--no-plots", "--no-dxf")
+    assert r.exit_code == 0, r.output
+    h, b1, b2, e, c = 1.0, math.radians(100), math.radians(120), 0.25, 0.125
+    up, down = math.pi * h / (2 * b1), 2 * h / b2
+    sg = 1 if rot == "ccw" else -1
+    lo, hi = sorted((sg * up - e, -sg * down - e))
+    assert f"runs from {lo:.4f} in" in r.output and f"to {hi:.4f} in" in r.output
+    assert f"at least {up + down:.4f} in" in r.output
+    assert f"2 max|offset| = {2 * max(abs(lo), abs(hi)):.4f} in" in r.output
+    assert f"at each end: {up + down + 2 * c:.4f} in" in r.output
+    # the table's column, sample by sample, against sigma ds/dtheta - e of the laws
+    rows = _csv(tmp_path / "o" / "cam_motion.csv")
+    th = np.radians([float(x["cam angle [deg]"]) for x in rows])
+    got = np.array([float(x["contact offset from the axis [in]"]) for x in rows])
+    ds = np.where(th < b1, math.pi * h / (2 * b1) * np.sin(math.pi * th / b1), 0.0)
+    u = (th - math.radians(180)) / b2
+    ds = np.where((u >= 0) & (u <= 1), -h / b2 * (1 - np.cos(2 * math.pi * u)), ds)
+    np.testing.assert_allclose(got, sg * ds - e, atol=1e-9)
+
+
+def test_cam_oscillating_flat_face_length_against_intersecting_face_lines(tmp_path):
+    """An oscillating flat face: the contact is where the face's line meets its
+    neighbour's (the envelope, by intersecting the lines at theta -+ 0.001 deg in the
+    cam's frame, no derivative used); its distance along the face from the foot of the
+    pivot's perpendicular over the turn gives the face length printed."""
+    text = """
+name: oscillating flat face
+units: {length: mm, angle: deg}
+cam:
+  follower: {type: oscillating flat-faced, arm: 120 mm, face_offset: 5 mm}
+  pivot_distance: 100 mm
+  start_angle: 25 deg
+  rotation: cw
+  speed: 60 rpm
+  motion:
+    - {rise: 150 deg, swing: 15 deg, law: cycloidal}
+    - {dwell: 30 deg}
+    - {return: 150 deg, law: simple harmonic}
+    - {dwell: 30 deg}
+"""
+    f = tmp_path / "osc.yaml"
+    f.write_text(text)
+    r = _run("cam", f, "-o", tmp_path / "o", "--no-plots", "--no-dxf")
+    assert r.exit_code == 0, r.output
+    from mechsolve.cam.model import load
+
+    model = load(f)
+    a, phi0, fo, sg = 0.100, math.radians(25), 0.005, -1
+    th = np.linspace(0, 2 * math.pi, 36000, endpoint=False)
+    d = math.radians(0.001)
+    psi = [model.program.eval(th + k * d)[0] for k in (-1, 1)]
+    # in the cam's frame: the face's normal n at angle g - cam rotation, the line
+    # n . x = a sin(g) - f (the pivot A = (a, 0) fixed, seen from the turning cam)
+    lines = []
+    for k, s in zip((-1, 1), psi):
+        g = phi0 + s
+        rot = -sg * (th + k * d)
+        m = np.stack([np.sin(g), np.cos(g)], -1)
+        n = np.stack([np.cos(rot) * m[:, 0] - np.sin(rot) * m[:, 1],
+                      np.sin(rot) * m[:, 0] + np.cos(rot) * m[:, 1]], -1)  # fmt: skip
+        lines.append((n, a * np.sin(g) - fo))
+    (n1, h1), (n2, h2) = lines
+    det = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]
+    x = (h1 * n2[:, 1] - h2 * n1[:, 1]) / det
+    y = (n1[:, 0] * h2 - n2[:, 0] * h1) / det
+    # back to the fixed frame at theta, then along the face from the pivot's foot
+    rot = sg * th
+    X = np.cos(rot) * x - np.sin(rot) * y
+    Y = np.sin(rot) * x + np.cos(rot) * y
+    g = phi0 + model.program.eval(th)[0]
+    t = (X - a) * -np.cos(g) + Y * np.sin(g)
+    line = next(ln for ln in r.output.splitlines() if "face length" in ln)
+    lo = float(line.split("along the face from ")[1].split()[0])
+    hi = float(line.split(" deg) to ")[1].split()[0])
+    need = float(line.split("needs at least ")[1].split()[0])
+    assert lo == pytest.approx(t.min() * 1e3, abs=2e-4)  # mm, as printed
+    assert hi == pytest.approx(t.max() * 1e3, abs=2e-4)
+    assert need == pytest.approx((t.max() - t.min()) * 1e3, abs=2e-4)
+
+
+def test_cam_roller_base_circle_beside_the_prime_circle(tmp_path):
+    """seed 001's roller (15 mm) on the prime circle r0 = 30.0002 mm: the base circle,
+    the smallest circle touching the profile, is 15.0002 mm; the drawn profile's nearest
+    point to the centre says so too (independent of the printed line)."""
+    r = _run("cam", MECH / "shaper-cam.yaml", "-o", tmp_path, "--no-plots", "--no-dxf")
+    assert "r0 = 30.0002 mm" in r.output
+    assert "base circle r0 - roller = 15.0002 mm" in r.output
+    rows = _csv(tmp_path / "cam_profile.csv")
+    rad = [math.hypot(float(x["profile x [mm]"]), float(x["profile y [mm]"])) for x in rows]
+    assert min(rad) == pytest.approx(15.0002, abs=5e-5)
+    # the designed base for the allowances gives both circles too
+    assert "r0 = 27.799 mm (prime circle; base circle 12.799 mm)" in r.output
+
+
+def test_cam_results_in_the_files_unit(tmp_path):
+    """The translating roller cam of tests/data written in inches: every length in the
+    terminal and the CSV files in inches (the mm file's values / 25.4), speeds in in/s."""
+    mm = (Path(__file__).parent / "data" / "cam_translating.yaml").read_text()
+    mm = mm.replace("  min_curvature_radius: 2 mm\n", "  base_radius: 40 mm\n")
+    inch = mm.replace("{length: mm, angle: deg}", "{length: in, angle: deg}")
+    for k in ("25", "40", "8", "5"):
+        inch = inch.replace(f"{k} mm", f"{float(k) / 25.4!r}")
+    plain = inch.replace("units: {length: in, angle: deg}\n", "")
+    for k in ("25", "40", "8", "5"):  # no units section: the lengths say their unit
+        plain = plain.replace(f"{float(k) / 25.4!r}", f"{float(k) / 25.4!r} in")
+    out = {}
+    for name, text in (("mm", mm), ("in", inch), ("plain", plain)):
+        f = tmp_path / f"{name}.yaml"
+        f.write_text(text)
+        r = _run("cam", f, "-o", tmp_path / name, "--no-plots", "--no-dxf")
+        assert r.exit_code == 0, r.output
+        out[name] = (r.output, _csv(tmp_path / name / "cam_motion.csv"))
+    for name in ("in", "plain"):
+        text, rows = out[name]
+        assert f"r0 = {40 / 25.4:.4f} in" in text and " mm" not in text
+        assert "roller radius 0.314961 in" in text
+        for a, b in zip(out["mm"][1], rows):
+            assert float(b["displacement [in]"]) == pytest.approx(
+                float(a["displacement [mm]"]) / 25.4, rel=1e-10, abs=1e-12
+            )
+            assert float(b["profile x [in]"]) == pytest.approx(
+                float(a["profile x [mm]"]) / 25.4, rel=1e-10, abs=1e-12
+            )
+            assert float(b["velocity [in/s]"]) == pytest.approx(
+                float(a["velocity [m/s]"]) / 0.0254, rel=1e-9, abs=1e-9
+            )
+        # at the end of the rise the follower is up by its lift, 25 mm = 0.984252 in
+        top = next(x for x in rows if float(x["cam angle [deg]"]) == 120.0)
+        assert float(top["displacement [in]"]) == pytest.approx(25 / 25.4, rel=1e-11)
