@@ -383,3 +383,84 @@ def test_cam_results_in_the_files_unit(tmp_path):
         # at the end of the rise the follower is up by its lift, 25 mm = 0.984252 in
         top = next(x for x in rows if float(x["cam angle [deg]"]) == 120.0)
         assert float(top["displacement [in]"]) == pytest.approx(25 / 25.4, rel=1e-11)
+
+
+# --- flywheel from a power diagram (issue 23, 1.9) -------------------------------------
+
+
+def _power_file(tmp_path: Path, body: str, name: str = "p.yaml") -> Path:
+    f = tmp_path / name
+    f.write_text("name: power diagram\n" + body)
+    return f
+
+
+@pytest.mark.parametrize(
+    "start, alpha, p_work, p_idle, rpm",
+    [(0, 220, 3.5, 0.5, 60), (40, 200, 5.0, 0.8, 90), (300, 150, 2.0, 0.0, 45)],
+)
+def test_flywheel_from_a_piecewise_constant_power_diagram(tmp_path, start, alpha, p_work,
+                                                          p_idle, rpm):  # fmt: skip
+    """The shaper as course books pose it: a motor of constant power; the resistance
+    P_work over the working stroke's alpha degrees and P_idle over the rest. With
+    f = alpha / 360, the mean is P_m = f P_w + (1 - f) P_i and the energy excursion the
+    surplus over the working stroke, dE_max = (P_w - P_m) alpha / omega
+    = (P_w - P_i) f (1 - f) 2 pi / omega; J_F = dE_max / (omega^2 delta)."""
+    end = (start + alpha) % 360
+    steps = [[start, p_work], [end, p_idle]]
+    steps.sort()
+    rows = ", ".join(f"[{a} deg, {p} kW]" for a, p in steps)
+    f = _power_file(
+        tmp_path,
+        f"power:\n  resisting: {{steps: [{rows}]}}\n  driving: mean\n"
+        f"speed: {rpm} rpm\ndelta: 1/40\n",
+    )
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    w = rpm * math.pi / 30
+    fr = alpha / 360
+    dE = (p_work - p_idle) * 1e3 * fr * (1 - fr) * 2 * math.pi / w
+    assert f"dE_max = {dE:.6g} J" in r.output
+    assert f"flywheel J_F = dE_max / (omega_m^2 delta) = {dE / (w * w / 40):.6g} kg*m^2" in (
+        r.output
+    )
+    pm = fr * p_work + (1 - fr) * p_idle
+    assert f"mean power over the cycle {pm:.6g} kW" in r.output
+    assert (tmp_path / "o" / "flywheel.png").exists()
+
+
+def test_flywheel_from_a_power_law_and_a_power_table(tmp_path):
+    """A law P_r = 2000 + 500 sin(angle) W against a constant motor: the surplus
+    -500 sin(phi) / omega integrates to 500 (cos(phi) - 1) / omega, range 1000 / omega.
+    A triangle table 0 -> 2 kW (at 180 deg) -> 0: the surplus (1 kW - P) / omega runs
+    to +-(pi / 4) kW / omega, range (pi / 2) kW / omega. Also a driving curve against a
+    constant resistance, and --delta over the file's."""
+    w = 100 * math.pi / 30
+    f = _power_file(tmp_path, "power:\n  resisting: {law: '2000 + 500 * sin(angle)'}\n"
+                    "  driving: mean\nspeed: 100 rpm\n", "law.yaml")  # fmt: skip
+    r = _run("flywheel", f, "--delta", "0.02", "-o", tmp_path / "a")
+    assert r.exit_code == 0, r.output
+    got = float(r.output.split("dE_max = ")[1].split()[0])
+    assert got == pytest.approx(1000 / w, rel=1e-6)  # the law sampled at 36001 points
+    f = _power_file(tmp_path, "power:\n  driving: {table: [[0 deg, 0 W], [180 deg, 2 kW]]}\n"
+                    "  resisting: 1 kW\nspeed: 100 rpm\ndelta: 0.02\n", "table.yaml")  # fmt: skip
+    r = _run("flywheel", f, "-o", tmp_path / "b")
+    assert r.exit_code == 0, r.output
+    assert f"dE_max = {1000 * math.pi / 2 / w:.6g} J" in r.output
+    assert f"= {1000 * math.pi / 2 / w / (w * w * 0.02):.6g} kg*m^2" in r.output
+
+
+def test_flywheel_power_diagram_that_is_not_steady_or_flat(tmp_path):
+    """A motor of 2 kW against a resistance whose mean is 2.333 kW is not a steady cycle:
+    refused, at 'power', with both means. Equal constant powers need no flywheel."""
+    f = _power_file(tmp_path, "power:\n  resisting: {steps: [[0 deg, 3.5 kW], "
+                    "[220 deg, 0.5 kW]]}\n  driving: 2 kW\nspeed: 60 rpm\n")  # fmt: skip
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 2, r.output
+    assert "p.yaml:2: power:" in r.output and "2.33333 kW" in r.output
+    f = _power_file(tmp_path, "power: {resisting: 2 kW, driving: mean}\nspeed: 60 rpm\n")
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    assert "no flywheel is needed" in r.output and "J_F" not in r.output
+    f = _power_file(tmp_path, "power: {resisting: 2 kN, driving: mean}\nspeed: 60 rpm\n")
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 2 and "power.resisting" in r.output, r.output
