@@ -464,3 +464,83 @@ def test_flywheel_power_diagram_that_is_not_steady_or_flat(tmp_path):
     f = _power_file(tmp_path, "power: {resisting: 2 kN, driving: mean}\nspeed: 60 rpm\n")
     r = _run("flywheel", f, "-o", tmp_path / "o")
     assert r.exit_code == 2 and "power.resisting" in r.output, r.output
+
+
+# --- synth: a crank-rocker from K, the rocker, the frame and one limit (issue 23, 1.9) --
+
+ONE_LIMIT = """
+name: crank-rocker K 1.2, one limit
+units: {length: mm, angle: deg}
+crank-rocker:
+  rocker_pivot: [100, 0]      # D
+  PIVOT
+  rocker: 75                  # CD
+  limit: 135                  # the rocker 45 deg from the frame DA at one limit
+  time_ratio: 1.2
+"""
+
+
+def _closed_form_limits(a: float, b: float, c: float, d: float):
+    """A crank-rocker with O1 at the origin and O3 at (d, 0), the rocker above the frame:
+    at its limits the crank and coupler are in line, |O1 B| = b + a and b - a; the
+    rocker's angle (from +x) is 180 deg - gamma, cos gamma = (c^2 + d^2 - r^2) / (2 c d),
+    and O1 sees the two positions under theta, the difference of the angles
+    cos beta = (r^2 + d^2 - c^2) / (2 r d); K = (180 + theta) / (180 - theta)."""
+    psi, beta = [], []
+    for r in (b + a, b - a):
+        psi.append(180 - math.degrees(math.acos((c * c + d * d - r * r) / (2 * c * d))))
+        beta.append(math.degrees(math.acos((r * r + d * d - c * c) / (2 * r * d))))
+    theta = abs(beta[0] - beta[1])
+    return sorted(psi), (180 + theta) / (180 - theta)
+
+
+@pytest.mark.parametrize("pivot", ["crank_pivot: [0, 0]", "frame: 100"])
+def test_synth_crank_rocker_from_one_limit_gives_both_solutions(tmp_path, pivot):
+    """K = 1.2, rocker 75 mm, frame 100 mm, one limit 45 deg from the frame: two
+    crank-rockers. Each, written with --solution N and solved by mechsolve's own run,
+    and by the closed form of its lengths, has K = 1.2 and the given limit 135 deg."""
+    from mechsolve import api
+    from mechsolve.synth.problem import solve_problem
+
+    f = tmp_path / "one.yaml"
+    f.write_text(ONE_LIMIT.replace("PIVOT", pivot))
+    r = _run("synth", f)
+    assert r.exit_code == 0, r.output
+    assert "2 solution(s)" in r.output
+    out = solve_problem(f)
+    assert [d.valid for d in out.designs] == [True, True]
+    others = set()
+    for n, d in enumerate(out.designs, 1):
+        L = d.lengths
+        psi, K = _closed_form_limits(L["crank"], L["coupler"], L["rocker"], L["frame"])
+        assert K == pytest.approx(1.2, rel=1e-9)
+        assert min(abs(p - 135) for p in psi) < 1e-7
+        other = max(psi, key=lambda p: abs(p - 135))
+        others.add(round(other, 6))
+        assert f"other limit at {other:.6f} deg" in r.output
+        written = tmp_path / f"design-{n}.yaml"
+        r2 = _run("synth", f, "--solution", n, "-o", written)
+        assert r2.exit_code == 0, r2.output
+        res = api.solve(api.load(written))
+        (lp,) = [x for x in res.limit_positions() if x.name == "rocker"]
+        lims = sorted(math.degrees(x) for x in (lp.low, lp.high))
+        assert lims == pytest.approx(sorted(psi), abs=1e-6)
+        assert lp.time_ratio == pytest.approx(1.2, rel=1e-6)
+    assert len(others) == 2  # two different designs
+    r = _run("synth", MECH / "synth" / "crank-rocker-one-limit.yaml")  # the shipped example
+    assert r.exit_code == 0 and "2 solution(s)" in r.output, r.output
+
+
+def test_synth_one_limit_input_errors(tmp_path):
+    f = tmp_path / "one.yaml"
+    f.write_text(ONE_LIMIT.replace("PIVOT", "crank_pivot: [0, 0]\n  frame: 100"))
+    r = _run("synth", f)
+    assert r.exit_code == 2 and "crank_pivot" in r.output, r.output
+    f.write_text(ONE_LIMIT.replace("PIVOT", "crank_pivot: [0, 0]"))
+    r = _run("synth", f, "--solution", "3")
+    assert r.exit_code == 2 and "2 solution(s)" in r.output, r.output
+    f.write_text(
+        ONE_LIMIT.replace("PIVOT", "crank_pivot: [0, 0]").replace("rocker: 75", "rocker: 5")
+    )
+    r = _run("synth", f)
+    assert r.exit_code == 2 and "Traceback" not in r.output, r.output
