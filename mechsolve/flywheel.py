@@ -571,7 +571,10 @@ def read_power_problem(src) -> dict:
         raise r.fail(("power",), "only one side can be 'mean': give the other's power")
     delta = None
     if "delta" in m:
-        delta = parse_delta(m["delta"], "delta")
+        try:
+            delta = parse_delta(m["delta"], "delta")
+        except InputError as exc:
+            raise r.fail(("delta",), exc.message) from None
     return {
         "name": m.get("name", Path(src.file).stem if src.file else "power diagram"),
         "driving": sides["driving"],

@@ -544,3 +544,18 @@ def test_synth_one_limit_input_errors(tmp_path):
     )
     r = _run("synth", f)
     assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "torque: {table: [[0 deg, 0 N m], [90 deg, 100 N m], [180 deg, 0 N m]]}\n",
+        "power: {resisting: {steps: [[0 deg, 3 kW], [90 deg, 1 kW]]}, driving: mean}\n",
+    ],
+)
+def test_flywheel_problem_files_with_delta_1_over_0(tmp_path, body):
+    f = tmp_path / "d.yaml"
+    f.write_text(f"name: d\n{body}speed: 60 rpm\ndelta: 1/0\n")
+    r = _run("flywheel", f, "-o", tmp_path / "o")
+    assert r.exit_code == 2, r.output
+    assert "d.yaml:4: delta:" in r.output
