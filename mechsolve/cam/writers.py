@@ -243,6 +243,7 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
                       for g in res.model.program.segments if g.kind == "rise"})  # fmt: skip
     picks = picks[: max(positions, 1)]
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    face = res.face_extent() if f.contact == "flat-faced" else None
     for c, i in zip(colors, picks):
         ang = -p.sense * p.theta[i]
         R = np.array([[math.cos(ang), -math.sin(ang)], [math.sin(ang), math.cos(ang)]])
@@ -258,10 +259,14 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
         if f.contact == "roller":
             ax.add_patch(plt.Circle(tuple(pt), f.roller * MM, fill=False, color=c, lw=1.0))
         if f.contact == "flat-faced":
-            tdir = R @ np.array([-p.normal[i, 1], p.normal[i, 0]])
-            half = 0.5 * f.base_radius * MM
-            cp = R @ p.contact[i] * MM
-            ends = np.array([cp - half * tdir, cp + half * tdir])
+            # the face as wide as it needs to be (the contact's range along it), drawn
+            # from its reference point: the axis, or the foot of the pivot's perpendicular
+            m = p.normal[i]
+            if f.oscillating:  # as face_offsets measures: along J m from the foot
+                ref, along = np.array([f.pivot, 0.0]) - f.offset * m, np.array([-m[1], m[0]])
+            else:  # x - e from the axis x = e
+                ref, along = np.array([f.offset, p.contact[i, 1]]), np.array([1.0, 0.0])
+            ends = np.array([R @ (ref + k * along) * MM for k in (face[0], face[1])])
             ax.plot(ends[:, 0], ends[:, 1], "-", color=c, lw=2)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
