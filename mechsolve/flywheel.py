@@ -248,8 +248,10 @@ def size_flywheel(
     dE = float(work.max() - work.min())
     J, dJ = _reduced_inertia(an, u)
     J_mean = float(np.mean(J))
-    scale = float(np.max(np.abs(T))) * 2 * math.pi  # the work a torque this size does
-    if not dE > 1e-9 * scale:  # no fluctuation (to rounding)
+    # the machine's energy scale: its kinetic energy and the work its largest torque does
+    # over a turn; an excursion below 1e-9 of it is rounding: no fluctuation
+    scale = J_mean * w * w + float(np.max(np.abs(T))) * 2 * math.pi
+    if not dE > 1e-9 * scale:
         if not mech.has_masses and not mech.loads and mech.flywheel is None:
             raise mech.error(
                 ("links",),
