@@ -315,24 +315,27 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
     energy method over the steady cycle (with a motor and a simulate: section, checked by
     simulating the machine with it); FILE is a mechanism, or a torque curve over a cycle
-    as textbook flywheel problems give it (a 'torque:' section, no links)."""
+    as textbook flywheel problems give it (a 'torque:' section, no links), or a power
+    diagram (a 'power:' section: the driving and resisting powers over the cycle)."""
     try:
         import numpy as np
 
         from . import api
         from .errors import InputError
-        from .flywheel import size_flywheel, size_from_torque
+        from .flywheel import (
+            is_power_problem,
+            parse_delta,
+            read_power_problem,
+            size_flywheel,
+            size_from_power,
+            size_from_torque,
+        )
         from .model.parse import is_torque_problem, read_torque_problem
         from .model.source import load_file
         from .units import UnitError, parse_quantity
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        delta = delta_given if delta_given is not None else "1/40"
-        try:
-            num, _, den = str(delta).partition("/")
-            dl = float(num) / float(den) if den else float(num)
-        except ValueError:
-            raise InputError(f"--delta {delta!r}: a number such as 0.025 or 1/40") from None
+        dl = parse_delta(delta_given if delta_given is not None else "1/40")
         w = None
         if speed is not None:
             try:
@@ -342,7 +345,20 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         src = load_file(file)
-        if is_torque_problem(src):  # a torque curve given directly, as textbooks do
+        if is_power_problem(src.data):  # a power diagram, as course books pose the shaper
+            q = read_power_problem(src)
+            if delta_given is None and q["delta"] is not None:
+                dl = q["delta"]
+            output_folder(outdir)
+            try:
+                res = size_from_power(
+                    q["driving"], q["resisting"], cycle=q["cycle"], speed=w or q["speed"],
+                    delta=dl,
+                )  # fmt: skip
+            except InputError as exc:
+                raise q["reader"].fail(("power",), exc.message) from None
+            name = q["name"]
+        elif is_torque_problem(src):  # a torque curve given directly, as textbooks do
             p = read_torque_problem(src)
             if delta_given is None and p["delta"] is not None:
                 dl = p["delta"]
@@ -361,7 +377,7 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
         paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
         click.echo(res.text())
         click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
-        sys.exit(EXIT_OK)
+        sys.exit(EXIT_REQUIREMENTS if res.check_missed() else EXIT_OK)
     except Exception as exc:  # noqa: BLE001 - every error becomes a message
         _fail(exc)
 

@@ -60,6 +60,47 @@ class CamResult:
     def summary(self) -> str:
         return _summary(self)
 
+    def face_extent(self) -> tuple[float, float, float, float] | None:
+        """A flat face's contact range along the face (see :func:`face_offsets`): (least,
+        largest offset (m), cam angle of each (rad)), the extremes located exactly (each
+        refined from the densest sample by a bounded search on the law); None for a
+        roller or knife edge."""
+        if self.follower.contact != "flat-faced":
+            return None
+        from scipy.optimize import minimize_scalar
+
+        p = self.profile
+        t = face_offsets(p)
+        h = float(p.theta[1] - p.theta[0])
+        out = []
+        for sign in (1.0, -1.0):  # the least, then the largest
+            i = int(np.argmin(sign * t))
+
+            def f(x: float, sign: float = sign) -> float:
+                one = solve(self.model.program, p.follower, p.sense, np.array([x]))
+                return sign * float(face_offsets(one)[0])
+
+            r = minimize_scalar(f, bounds=(p.theta[i] - h, p.theta[i] + h), method="bounded",
+                                options={"xatol": 1e-12})  # fmt: skip
+            best = (r.fun, r.x) if r.fun < sign * t[i] else (sign * t[i], p.theta[i])
+            out.append((sign * best[0], float(best[1]) % (2 * math.pi)))
+        (lo, at_lo), (hi, at_hi) = out
+        return lo, hi, at_lo, at_hi
+
+
+def face_offsets(prof: Profile) -> np.ndarray:
+    """Where a flat face touches the cam, along the face (m), at each cam angle: for a
+    translating follower the contact's offset from the follower's axis (x - e: the
+    contact lies at x = sigma ds/dtheta, so this is sigma ds/dtheta - e); for an
+    oscillating one its distance along the face from the foot of the perpendicular from
+    the pivot, toward the cam."""
+    f = prof.follower
+    if f.oscillating:
+        m = prof.normal  # the face's normal
+        along = np.stack([-m[:, 1], m[:, 0]], axis=-1)
+        return np.sum((prof.contact - np.array([f.pivot, 0.0])) * along, axis=-1)
+    return prof.contact[:, 0] - f.offset
+
 
 def _ranges(mask: np.ndarray, theta: np.ndarray) -> list[tuple[float, float]]:
     out = []
@@ -146,12 +187,13 @@ def _summary(res: CamResult) -> str:
     f = res.follower
     osc = f.oscillating
     prog = m.program
-    mm = 1e3
+    L = m.unit  # lengths in the file's unit
+    u = L.name
 
     def disp(x: float) -> str:
-        return f"{math.degrees(x):.6g} deg" if osc else f"{x * mm:.6g} mm"
+        return f"{math.degrees(x):.6g} deg" if osc else f"{L(x):.6g} {u}"
 
-    lines = [f"{m.name}: cam with {f.describe()}"]
+    lines = [f"{m.name}: cam with {f.describe(u, L.factor)}"]
     lines.append(
         f"  cam turns {_sense_name(m.sense)} at {m.speed * 30 / math.pi:.6g} rpm "
         f"({m.speed:.6g} rad/s)"
@@ -173,14 +215,19 @@ def _summary(res: CamResult) -> str:
         lines.append(f"    at {math.degrees(r.angle):7.2f} deg: {r.text}")
     # base values
     if osc:
-        base = (f"a = {f.pivot * mm:.4f} mm, phi0 = {math.degrees(f.start_angle):.4f} deg, "
-                f"r0 = {f.base_radius * mm:.4f} mm")  # fmt: skip
+        base = (f"a = {L(f.pivot):.4f} {u}, phi0 = {math.degrees(f.start_angle):.4f} deg, "
+                f"r0 = {L(f.base_radius):.4f} {u}")  # fmt: skip
     else:
-        base = f"r0 = {f.base_radius * mm:.4f} mm"
+        base = f"r0 = {L(f.base_radius):.4f} {u}"
         if f.contact != "flat-faced":
             s0 = math.sqrt(max(f.base_radius**2 - f.offset**2, 0.0))
-            base += f", s0 = sqrt(r0^2 - e^2) = {s0 * mm:.4f} mm"
+            base += f", s0 = sqrt(r0^2 - e^2) = {L(s0):.4f} {u}"
     lines.append(f"  base values ({'designed' if m.designed else 'as given'}): {base}")
+    if f.contact == "roller":
+        lines.append(
+            f"    r0 is the prime circle's radius (the roller centre's); the cam's base "
+            f"circle r0 - roller = {L(f.base_radius - f.roller):.4f} {u}"
+        )
     for note in m.notes:
         lines.append(f"    {note}")
     # table of the moving segments, as textbooks print it
@@ -196,8 +243,8 @@ def _summary(res: CamResult) -> str:
         th = g.start + np.arange(n + 1) * m.table_step
         s = prog.eval(th)[0]
         s[-1] = g.s0 + g.lift  # the end value itself (theta = end is the next segment's)
-        vals = [math.degrees(x) if osc else x * mm for x in s]
-        unit = "deg" if osc else "mm"
+        vals = [math.degrees(x) if osc else L(x) for x in s]
+        unit = "deg" if osc else u
         lines.append(f"    {g.kind} at {math.degrees(g.start):g} deg, delta [deg] / s [{unit}]:")
         for k in range(0, n + 1, 8):
             row = range(k, min(k + 8, n + 1))
@@ -237,22 +284,48 @@ def _summary(res: CamResult) -> str:
         i = int(np.argmin(np.where(cv, prof.rho_pitch, np.inf)))
         lines.append(
             f"  radius of curvature: pitch curve, smallest on convex parts "
-            f"{prof.rho_pitch[i] * mm:.3f} mm at {math.degrees(prof.theta[i]):.1f} deg"
+            f"{L(prof.rho_pitch[i]):.3f} {u} at {math.degrees(prof.theta[i]):.1f} deg"
         )
         if f.contact == "roller":
             lines.append(
-                f"    working profile there {prof.rho_profile[i] * mm:.3f} mm (pitch radius "
-                f"- roller {f.roller * mm:g} mm)"
+                f"    working profile there {L(prof.rho_profile[i]):.3f} {u} (pitch radius "
+                f"- roller {L(f.roller):g} {u})"
             )
     else:
         i = int(np.argmin(prof.rho_profile))
         lines.append(
-            f"  radius of curvature of the profile: smallest {prof.rho_profile[i] * mm:.3f} mm "
+            f"  radius of curvature of the profile: smallest {L(prof.rho_profile[i]):.3f} {u} "
             f"at {math.degrees(prof.theta[i]):.1f} deg "
             + ("(h + d2h/dmu2 of the face's envelope)" if osc else "(r0 + s + s'')")
         )
+    ext = res.face_extent()
+    if ext is not None:
+        lo, hi, a_lo, a_hi = ext
+        where = (f"{L(lo):.4f} {u} (at {math.degrees(a_lo):.1f} deg) to {L(hi):.4f} {u} "
+                 f"(at {math.degrees(a_hi):.1f} deg)")  # fmt: skip
+        if osc:
+            lines.append(
+                f"  face length: the contact runs along the face from {where} from the foot "
+                f"of the perpendicular from the pivot: the face needs at least "
+                f"{L(hi - lo):.4f} {u}"
+            )
+        else:
+            lines.append(
+                f"  face width: the contact runs from {where} off the follower's axis "
+                f"(sigma ds/dtheta - e): the face needs at least {L(hi - lo):.4f} {u} "
+                f"(the range of ds/dtheta); centred on the axis 2 max|offset| = "
+                f"{L(2 * max(abs(lo), abs(hi))):.4f} {u}"
+            )
+        if m.face_margin is not None:
+            c = m.face_margin
+            lines.append(
+                f"    with the face_margin {L(c):g} {u} at each end: {L(hi - lo + 2 * c):.4f} {u}"
+                + ("" if osc else f" (centred: {L(2 * max(abs(lo), abs(hi)) + 2 * c):.4f} {u})")
+            )
+        else:
+            lines.append("    no clearance added at the ends (give follower.face_margin)")
     und = res.undercut_ranges()
-    margin = f" (margin {allow.rho_min * mm:g} mm)" if allow.rho_min else ""
+    margin = f" (margin {L(allow.rho_min):g} {u})" if allow.rho_min else ""
     lines.append(
         "  undercut" + margin + ": "
         + ("no" if not und else "YES at " + ", ".join(_range_text(a, b) for a, b in und))
@@ -266,10 +339,12 @@ def _summary(res: CamResult) -> str:
     if res.sizing is not None and not m.designed:
         sz = res.sizing.follower
         if osc:
-            txt = (f"a = {sz.pivot * mm:.3f} mm, phi0 = {math.degrees(sz.start_angle):.3f} deg, "
-                   f"r0 = {sz.base_radius * mm:.3f} mm")  # fmt: skip
+            txt = (f"a = {L(sz.pivot):.3f} {u}, phi0 = {math.degrees(sz.start_angle):.3f} deg, "
+                   f"r0 = {L(sz.base_radius):.3f} {u}")  # fmt: skip
         else:
-            txt = f"r0 = {sz.base_radius * mm:.3f} mm"
+            txt = f"r0 = {L(sz.base_radius):.3f} {u}"
+        if f.contact == "roller":
+            txt += f" (prime circle; base circle {L(sz.base_radius - f.roller):.3f} {u})"
         reach = ", ".join(f"{k} {math.degrees(v[0]):.2f} deg" for k, v in res.sizing.reached.items()
                           if k != "dwell")  # fmt: skip
         lines.append(f"  smallest base for the allowances ({_sense_name(m.sense)}): {txt} "

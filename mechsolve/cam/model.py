@@ -49,7 +49,7 @@ CAM_KEYS = (
     "min_curvature_radius",
     "table_step",
 )
-FOLLOWER_KEYS = ("type", "arm", "roller_radius", "offset", "face_offset")
+FOLLOWER_KEYS = ("type", "arm", "roller_radius", "offset", "face_offset", "face_margin")
 SENSES = {
     "cw": -1,
     "clockwise": -1,
@@ -67,6 +67,67 @@ TYPES = [
 TOL_BASE = 0.005  # relative: a, phi0 and r0 as printed (rounded) must agree this well
 
 
+@dataclass(frozen=True)
+class LengthUnit:
+    """The unit the results' lengths are given in: the file's (``factor`` metres each)."""
+
+    name: str = "mm"
+    factor: float = 1e-3
+
+    def __call__(self, x):
+        """``x`` (m) in this unit."""
+        return x / self.factor
+
+    @property
+    def metric(self) -> bool:
+        return self.name in METRIC
+
+    @property
+    def speed(self) -> str:
+        """The unit of the follower's velocity (its acceleration adds ^2, jerk ^3): m/s
+        for a metric file, as textbooks give it; in/s, ft/s for the others."""
+        return "m" if self.metric else self.name
+
+
+METRIC = ("m", "mm", "cm", "dm", "km", "um")
+MM = LengthUnit()
+
+
+def file_length_unit(src: Source, r: Reader) -> LengthUnit:
+    """The length unit the cam's file uses: its ``units: {length: ...}``; else the one
+    unit its cam's lengths are written in (``2 in`` ...), plain numbers counting as
+    metres; mm when they mix units."""
+    from ..units import _QUANTITY_RE, _UNITS, parse_unit
+
+    data = src.data
+    units = data.get("units") if isinstance(data, dict) else None
+    if isinstance(units, dict) and "length" in units:
+        name = str(units["length"]).strip()
+        name = "in" if name == "inch" else name
+        return LengthUnit(name, parse_unit(name).factor)
+    found: set[str] = set()
+
+    def scan(v: Any) -> None:
+        if isinstance(v, dict):
+            for x in v.values():
+                scan(x)
+        elif isinstance(v, list):
+            for x in v:
+                scan(x)
+        elif isinstance(v, str):
+            m = _QUANTITY_RE.match(v)
+            if m and m.group(2) in _UNITS and _UNITS[m.group(2)][1] == (1, 0, 0, 0):
+                found.add("in" if m.group(2) == "inch" else m.group(2))
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            pass  # plain numbers: the default unit, m (counted below where lengths are)
+
+    scan(data.get("cam") if isinstance(data, dict) else None)
+    if len(found) == 1:
+        name = found.pop()
+        return LengthUnit(name, _UNITS[name][0])
+    return MM
+
+
 @dataclass
 class CamModel:
     """A cam as the file gives it (SI units)."""
@@ -82,6 +143,8 @@ class CamModel:
     designed: bool  # True: no base values given, the command designs them
     given: dict[str, float] = field(default_factory=dict)  # base values as written
     notes: list[str] = field(default_factory=list)
+    unit: LengthUnit = MM  # the results' lengths: in the file's unit
+    face_margin: float | None = None  # a flat face's clearance at each end (m), if given
 
 
 def load(path: str | Path, variant: str | None = None) -> CamModel:
@@ -146,6 +209,13 @@ def from_source(src: Source) -> CamModel:
         if not (osc and contact == "flat-faced"):
             raise r.fail(fp + ("face_offset",), "only an oscillating flat face has a face_offset")
         offset = r.quantity(fm["face_offset"], fp + ("face_offset",), "length")
+    face_margin = None
+    if "face_margin" in fm:
+        if contact != "flat-faced":
+            raise r.fail(fp + ("face_margin",), "only a flat face has a face_margin")
+        face_margin = r.positive(fm["face_margin"], fp + ("face_margin",), "length",
+                                 allow_zero=True)  # fmt: skip
+    unit = file_length_unit(src, r)
 
     # rotation and speed
     sense = -1
@@ -161,7 +231,12 @@ def from_source(src: Source) -> CamModel:
         raise r.fail(p, "'cam' needs the key 'speed' (e.g. '60 rpm')")
     speed = r.positive(cam["speed"], p + ("speed",), "angular speed")
 
-    program = _read_motion(r, cam, osc)
+    # the geometry first: an arm's contact moves away from the cam's centre only while the
+    # arm's angle from the line of centres stays below 180 deg (a roller or knife edge;
+    # the distance is sqrt(a^2 + l^2 - 2 a l cos(phi))), below 90 deg for a flat face (the
+    # face's distance a sin(phi) - face_offset)
+    limit = None if not osc else (math.pi / 2 if contact == "flat-faced" else math.pi)
+    program = _read_motion(r, cam, osc, limit)
 
     # base values
     given: dict[str, float] = {}
@@ -173,7 +248,18 @@ def from_source(src: Source) -> CamModel:
         for key in ("pivot_distance", "start_angle"):
             if key in given:
                 raise r.fail(p + (key,), "only an oscillating follower has a " + key)
-    follower, designed, notes = _base(r, p, kind, contact, roller, offset, arm, given)
+    follower, designed, notes = _base(r, p, kind, contact, roller, offset, arm, given, unit)
+    if limit is not None and not designed:
+        top = follower.start_angle + program.stroke
+        if top >= limit:
+            raise r.fail(
+                p + ("start_angle" if "start_angle" in given else "base_radius",),
+                f"the arm starts {math.degrees(follower.start_angle):.6g} deg from the line "
+                f"of centres (phi0) and swings {math.degrees(program.stroke):.6g} deg: at "
+                f"{math.degrees(top):.6g} deg it passes {math.degrees(limit):g} deg, where "
+                "its contact stops moving away from the cam's centre; the swing must stay "
+                f"below {math.degrees(limit - follower.start_angle):.6g} deg with this phi0",
+            )
 
     allow = _allowance(r, cam, p, program)
     step = math.radians(1.0)
@@ -194,10 +280,12 @@ def from_source(src: Source) -> CamModel:
         designed=designed,
         given=given,
         notes=notes,
+        unit=unit,
+        face_margin=face_margin,
     )
 
 
-def _read_motion(r: Reader, cam: dict, osc: bool) -> Program:
+def _read_motion(r: Reader, cam: dict, osc: bool, limit: float | None = None) -> Program:
     p = ("cam", "motion")
     seq = cam["motion"]
     if not isinstance(seq, list) or not seq:
@@ -244,6 +332,16 @@ def _read_motion(r: Reader, cam: dict, osc: bool) -> Program:
                 raise r.fail(q, "the segment needs a 'law' (or give 'law' for all under 'cam')")
             if kind == "rise":
                 level += lift  # type: ignore[operator]
+                if limit is not None and level >= limit:
+                    what = "a flat face" if limit < math.pi else "a roller or knife edge"
+                    raise r.fail(
+                        q + (lift_key,),
+                        f"the follower would swing {math.degrees(level):.6g} deg from its "
+                        f"lowest position: impossible for an oscillating follower with {what}, "
+                        "whose distance from the cam's centre grows only while the arm's "
+                        "angle from the line of centres (phi0 + swing) stays below "
+                        f"{math.degrees(limit):g} deg",
+                    )
             else:
                 if lift is not None and lift > level * (1 + 1e-9):
                     raise r.fail(
@@ -296,7 +394,7 @@ def _allowance(r: Reader, cam: dict, p, program: Program) -> Allowance:
     return Allowance(rise, ret, rho)
 
 
-def _base(r: Reader, p, kind, contact, roller, offset, arm, given):
+def _base(r: Reader, p, kind, contact, roller, offset, arm, given, unit: LengthUnit = MM):
     notes: list[str] = []
     zero = Follower(kind, contact, 0.0, roller=roller, offset=offset, arm=arm)
     if kind == "translating":
@@ -343,11 +441,11 @@ def _base(r: Reader, p, kind, contact, roller, offset, arm, given):
             raise r.fail(
                 p + ("base_radius",),
                 f"pivot_distance, start_angle and base_radius disagree: {rel} gives "
-                f"r0 = {r_calc * 1e3:.4f} mm for the given a and phi0",
+                f"r0 = {unit(r_calc):.4f} {unit.name} for the given a and phi0",
             )
         notes.append(
-            f"{rel}: a = {a * 1e3:g} mm, phi0 = {math.degrees(phi0):g} deg give "
-            f"r0 = {r_calc * 1e3:.4f} mm (given {r0 * 1e3:g} mm)"
+            f"{rel}: a = {unit(a):g} {unit.name}, phi0 = {math.degrees(phi0):g} deg give "
+            f"r0 = {unit(r_calc):.4f} {unit.name} (given {unit(r0):g} {unit.name})"
         )
         # the drawing uses a and phi0 as given; r0 follows from them exactly
         r0 = r_calc

@@ -97,19 +97,23 @@ class Follower:
     def with_base(self, **kw) -> Follower:
         return replace(self, **kw)
 
-    def describe(self) -> str:
-        mm = 1e3
+    def describe(self, unit: str = "mm", factor: float = 1e-3) -> str:
+        """In words, lengths in ``unit`` (``factor`` metres each)."""
+
+        def ln(x: float) -> str:
+            return f"{x / factor:g} {unit}"
+
         if self.oscillating:
-            t = f"oscillating {self.contact} follower: arm l = {self.arm * mm:g} mm"
+            t = f"oscillating {self.contact} follower: arm l = {ln(self.arm)}"
             if self.contact == "roller":
-                t += f", roller radius {self.roller * mm:g} mm"
+                t += f", roller radius {ln(self.roller)}"
             if self.contact == "flat-faced" and self.offset:
-                t += f", face {self.offset * mm:g} mm from the pivot"
+                t += f", face {ln(self.offset)} from the pivot"
             return t
         t = f"translating {self.contact} follower"
         if self.contact == "roller":
-            t += f", roller radius {self.roller * mm:g} mm"
-        t += f", offset e = {self.offset * mm:g} mm"
+            t += f", roller radius {ln(self.roller)}"
+        t += f", offset e = {ln(self.offset)}"
         return t
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..writers.atomic import replacing
-from .analysis import CamResult
+from .analysis import CamResult, face_offsets
 from .design import extremes
 
 MM = 1e3
@@ -32,29 +32,39 @@ def write_motion_csv(res: CamResult, path: Path) -> Path:
     t, o = res.table, res.table_other
     w = res.model.speed
     osc = res.follower.oscillating
+    L = res.model.unit
+    u, v = L.name, L.speed  # lengths in the file's unit; speeds in m/s or in/s, ft/s
+    vf = 1.0 if L.metric else 1.0 / L.factor
     if osc:
         names = ["swing [deg]", "angular velocity [rad/s]", "angular acceleration [rad/s^2]",
                  "angular jerk [rad/s^3]"]  # fmt: skip
         s = np.degrees(t.s)
+        vf = 1.0
     else:
-        names = ["displacement [mm]", "velocity [m/s]", "acceleration [m/s^2]", "jerk [m/s^3]"]
-        s = t.s * MM
+        names = [f"displacement [{u}]", f"velocity [{v}/s]", f"acceleration [{v}/s^2]",
+                 f"jerk [{v}/s^3]"]  # fmt: skip
+        s = L(t.s)
     sn = "ccw" if t.sense > 0 else "cw"
     on = "ccw" if o.sense > 0 else "cw"
     header = ["cam angle [deg]", *names,
               f"pressure angle {sn} [deg]", f"pressure angle {on} [deg]"]  # fmt: skip
-    cols = [np.degrees(t.theta), s, t.ds * w, t.d2s * w**2, t.d3s * w**3,
+    cols = [np.degrees(t.theta), s, t.ds * w * vf, t.d2s * w**2 * vf, t.d3s * w**3 * vf,
             np.degrees(t.pressure), np.degrees(o.pressure)]  # fmt: skip
     if t.pitch is not None:
-        header += ["pitch x [mm]", "pitch y [mm]"]
-        cols += [t.pitch[:, 0] * MM, t.pitch[:, 1] * MM]
-    header += ["profile x [mm]", "profile y [mm]"]
-    cols += [t.profile[:, 0] * MM, t.profile[:, 1] * MM]
+        header += [f"pitch x [{u}]", f"pitch y [{u}]"]
+        cols += [L(t.pitch[:, 0]), L(t.pitch[:, 1])]
+    header += [f"profile x [{u}]", f"profile y [{u}]"]
+    cols += [L(t.profile[:, 0]), L(t.profile[:, 1])]
     if t.rho_pitch is not None:
-        header.append("pitch curvature radius [mm]")
-        cols.append(t.rho_pitch * MM)
-    header.append("profile curvature radius [mm]")
-    cols.append(t.rho_profile * MM)
+        header.append(f"pitch curvature radius [{u}]")
+        cols.append(L(t.rho_pitch))
+    header.append(f"profile curvature radius [{u}]")
+    cols.append(L(t.rho_profile))
+    if res.follower.contact == "flat-faced":
+        header.append(
+            f"contact along the face [{u}]" if osc else f"contact offset from the axis [{u}]"
+        )
+        cols.append(L(face_offsets(t)))
     header.append("undercut [1/0]")
     cols.append(t.undercut(res.model.allowance.rho_min).astype(float))
     return _atomic_csv(path, header, zip(*cols))
@@ -63,37 +73,56 @@ def write_motion_csv(res: CamResult, path: Path) -> Path:
 def write_profile_csv(res: CamResult, path: Path) -> Path:
     """The dense profile (and pitch curve) in the cam's frame, drawn at cam angle 0."""
     p = res.profile
-    header = ["cam angle [deg]", "profile x [mm]", "profile y [mm]"]
-    cols = [np.degrees(p.theta), p.profile[:, 0] * MM, p.profile[:, 1] * MM]
+    L = res.model.unit
+    u = L.name
+    header = ["cam angle [deg]", f"profile x [{u}]", f"profile y [{u}]"]
+    cols = [np.degrees(p.theta), L(p.profile[:, 0]), L(p.profile[:, 1])]
     if p.pitch is not None:
-        header += ["pitch x [mm]", "pitch y [mm]"]
-        cols += [p.pitch[:, 0] * MM, p.pitch[:, 1] * MM]
+        header += [f"pitch x [{u}]", f"pitch y [{u}]"]
+        cols += [L(p.pitch[:, 0]), L(p.pitch[:, 1])]
     return _atomic_csv(path, header, zip(*cols))
 
 
 def write_dxf(res: CamResult, path: Path) -> Path | None:
-    """The profile (layer PROFILE), the pitch curve (PITCH), the base circle and the
-    cam centre, in mm, as closed polylines. None when ezdxf is not installed."""
+    """The profile (layer PROFILE), the pitch curve (PITCH), the base circle (BASE: the
+    smallest circle touching the profile; for a roller, PRIME too: the roller centre's)
+    and the cam centre, in the file's length unit, as closed polylines. None when ezdxf is
+    not installed."""
     try:
         import ezdxf
     except ImportError:
         return None
+    L = res.model.unit
+    code = DXF_UNITS.get(L.name)
+    k = 1.0 / L.factor if code is not None else MM  # a unit DXF does not name: mm
     doc = ezdxf.new("R2010")
-    doc.units = ezdxf.units.MM
+    doc.units = code if code is not None else ezdxf.units.MM
     msp = doc.modelspace()
-    for name, color in (("PROFILE", 7), ("PITCH", 3), ("BASE", 8), ("CENTRE", 1)):
+    for name, color in (("PROFILE", 7), ("PITCH", 3), ("BASE", 8), ("PRIME", 5), ("CENTRE", 1)):
         doc.layers.add(name, color=color)
     p = res.profile
-    msp.add_lwpolyline((p.profile * MM).tolist(), close=True, dxfattribs={"layer": "PROFILE"})
-    if p.pitch is not None and res.follower.contact == "roller":
-        msp.add_lwpolyline((p.pitch * MM).tolist(), close=True, dxfattribs={"layer": "PITCH"})
-    msp.add_circle((0, 0), res.follower.base_radius * MM, dxfattribs={"layer": "BASE"})
-    r = 0.05 * res.follower.base_radius * MM
+    f = res.follower
+    msp.add_lwpolyline((p.profile * k).tolist(), close=True, dxfattribs={"layer": "PROFILE"})
+    if p.pitch is not None and f.contact == "roller":
+        msp.add_lwpolyline((p.pitch * k).tolist(), close=True, dxfattribs={"layer": "PITCH"})
+        msp.add_circle((0, 0), f.base_radius * k, dxfattribs={"layer": "PRIME"})
+    msp.add_circle((0, 0), _base_circle(res) * k, dxfattribs={"layer": "BASE"})
+    r = 0.05 * f.base_radius * k
     msp.add_line((-r, 0), (r, 0), dxfattribs={"layer": "CENTRE"})
     msp.add_line((0, -r), (0, r), dxfattribs={"layer": "CENTRE"})
     with replacing(path) as tmp:
         doc.saveas(tmp)
     return path
+
+
+# DXF's $INSUNITS codes of the length units a file may use
+DXF_UNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7, "yd": 10, "um": 13, "dm": 14}
+
+
+def _base_circle(res: CamResult) -> float:
+    """The cam's base circle (m): the prime circle less the roller, for a roller."""
+    f = res.follower
+    return f.base_radius - f.roller if f.contact == "roller" else f.base_radius
 
 
 def _plt():
@@ -111,14 +140,17 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
     w = res.model.speed
     deg = np.degrees(p.theta)
     osc = res.follower.oscillating
+    L = res.model.unit
+    u, v = L.name, L.speed
+    vf = 1.0 if L.metric else 1.0 / L.factor
     if osc:
         labels = ["swing psi [deg]", "angular velocity [rad/s]",
                   "angular acceleration [rad/s^2]", "angular jerk [rad/s^3]"]  # fmt: skip
         ys = [np.degrees(p.s), p.ds * w, p.d2s * w**2, p.d3s * w**3]
     else:
-        labels = ["displacement s [mm]", "velocity [m/s]", "acceleration [m/s^2]",
-                  "jerk [m/s^3]"]  # fmt: skip
-        ys = [p.s * MM, p.ds * w, p.d2s * w**2, p.d3s * w**3]
+        labels = [f"displacement s [{u}]", f"velocity [{v}/s]", f"acceleration [{v}/s^2]",
+                  f"jerk [{v}/s^3]"]  # fmt: skip
+        ys = [L(p.s), p.ds * w * vf, p.d2s * w**2 * vf, p.d3s * w**3 * vf]
     fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
     for ax, y, lab in zip(axes, ys, labels):
         ax.plot(deg, y, lw=1.2)
@@ -191,13 +223,18 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
     plt = _plt()
     p = res.profile
     f = res.follower
+    MM = 1.0 / res.model.unit.factor  # noqa: N806 - the drawing's scale: the file's unit
     fig, ax = plt.subplots(figsize=(7, 7))
     ax.plot(*(np.vstack([p.profile, p.profile[:1]]) * MM).T, "k-", lw=1.6, label="cam profile")
     if p.pitch is not None and f.contact == "roller":
         ax.plot(*(np.vstack([p.pitch, p.pitch[:1]]) * MM).T, "b--", lw=0.8, label="pitch curve")
     t = np.linspace(0, 2 * math.pi, 361)
-    rb = f.base_radius * MM
+    rb = _base_circle(res) * MM
     ax.plot(rb * np.cos(t), rb * np.sin(t), color="0.6", lw=0.6, label="base circle")
+    if f.contact == "roller":
+        rp = f.base_radius * MM
+        ax.plot(rp * np.cos(t), rp * np.sin(t), color="0.6", ls=":", lw=0.6,
+                label="prime circle")  # fmt: skip
     ax.plot([0], [0], "k+", ms=10)
     n = p.theta.size
     picks = sorted({int(round(g.start / (2 * math.pi) * n)) % n
@@ -206,6 +243,7 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
                       for g in res.model.program.segments if g.kind == "rise"})  # fmt: skip
     picks = picks[: max(positions, 1)]
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    face = res.face_extent() if f.contact == "flat-faced" else None
     for c, i in zip(colors, picks):
         ang = -p.sense * p.theta[i]
         R = np.array([[math.cos(ang), -math.sin(ang)], [math.sin(ang), math.cos(ang)]])
@@ -221,15 +259,19 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
         if f.contact == "roller":
             ax.add_patch(plt.Circle(tuple(pt), f.roller * MM, fill=False, color=c, lw=1.0))
         if f.contact == "flat-faced":
-            tdir = R @ np.array([-p.normal[i, 1], p.normal[i, 0]])
-            half = 0.5 * f.base_radius * MM
-            cp = R @ p.contact[i] * MM
-            ends = np.array([cp - half * tdir, cp + half * tdir])
+            # the face as wide as it needs to be (the contact's range along it), drawn
+            # from its reference point: the axis, or the foot of the pivot's perpendicular
+            m = p.normal[i]
+            if f.oscillating:  # as face_offsets measures: along J m from the foot
+                ref, along = np.array([f.pivot, 0.0]) - f.offset * m, np.array([-m[1], m[0]])
+            else:  # x - e from the axis x = e
+                ref, along = np.array([f.offset, p.contact[i, 1]]), np.array([1.0, 0.0])
+            ends = np.array([R @ (ref + k * along) * MM for k in (face[0], face[1])])
             ax.plot(ends[:, 0], ends[:, 1], "-", color=c, lw=2)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
+    ax.set_xlabel(f"x [{res.model.unit.name}]")
+    ax.set_ylabel(f"y [{res.model.unit.name}]")
     sense = "ccw" if p.sense > 0 else "cw"
     ax.set_title(
         f"{res.model.name}: cam at 0 deg (turns {sense}),\nfollower by inversion", fontsize=10

@@ -23,20 +23,31 @@ from ..clikit import EPILOG, FILE_ARG, QUIET, fail
     help="Rule choosing among the solutions: the largest minimum transmission angle "
     "(default, or the file's 'pick'), the shortest input link, the smallest sum of lengths.",
 )
+@click.option(
+    "--solution",
+    type=int,
+    metavar="N",
+    help="Write the N-th solution listed (from 1) instead of the one the rule picks.",
+)
 @QUIET
-def synth(file: Path, output, pick, quiet) -> None:
+def synth(file: Path, output, pick, solution, quiet) -> None:
     """Solve the synthesis problem in FILE: list every solution, pick one, and with -o
     write it as a mechanism file, checked by solving it (its limit positions).
 
     \b
-    Methods (one section of FILE): crank-rocker (extreme distances or time ratio),
-    slider-crank, guide-bar, three-positions (motion generation), window (the input
-    window that makes a point's path straightest). See mechanisms/synth/.
+    Methods (one section of FILE): crank-rocker (extreme distances, time ratio with both
+    limits, or time ratio with one limit and the frame: two solutions), slider-crank,
+    guide-bar, three-positions (motion generation), window (the input window that makes a
+    point's path straightest). See mechanisms/synth/.
     """
     try:
         from ..synth.problem import confirm, solve_problem
 
-        out = solve_problem(file, pick)
+        if solution is not None and pick is not None:
+            from ..errors import InputError
+
+            raise InputError("--solution and --pick: give one of them")
+        out = solve_problem(file, pick, solution)
         if not quiet:
             click.echo(out.text)
         if out.yaml is not None:

@@ -532,6 +532,7 @@ FOLLOWER = Section(
         "roller_radius": K(LENGTH, "A roller follower's roller radius."),
         "offset": K(LENGTH, "A translating follower's offset e."),
         "face_offset": K(LENGTH, "An oscillating flat face's distance from its pivot."),
+        "face_margin": K(LENGTH, "A flat face's clearance at each end of its width."),
     },
 )
 

@@ -1414,7 +1414,7 @@ def read_torque_problem(src: Source) -> dict:
         try:
             num, _, den = str(d).partition("/")
             delta = float(num) / float(den) if den else float(num)
-        except ValueError:
+        except (ValueError, ZeroDivisionError):
             raise r.fail(
                 ("delta",), f"expected a number such as 0.025 or 1/40, got {d!r}"
             ) from None

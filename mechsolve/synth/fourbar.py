@@ -39,7 +39,7 @@ from .common import (
     time_ratio_of,
 )
 
-__all__ = ["extreme_distance", "from_time_ratio", "crank_rocker_at"]
+__all__ = ["extreme_distance", "from_time_ratio", "from_one_limit", "crank_rocker_at"]
 
 
 def _check_rocker(rocker: float, psi1: float, psi2: float) -> None:
@@ -294,4 +294,62 @@ def _on_chord_line(o3, rocker, psi1, psi2, b1, b2, frame, method):
                 out.append(crank_rocker_at(p, o3, rocker, psi1, psi2, method))
     if not out:
         raise InputError(f"no crank pivot at {frame:g} m from the rocker pivot on the line B1 B2")
+    return out
+
+
+def from_one_limit(
+    crank_pivot: Point, rocker_pivot: Point, rocker: float, psi: float, k: float
+) -> list[Design]:
+    """Crank-rockers with both pivots given (so the frame's length and direction), the
+    rocker's length, **one** of its limit positions (``psi``, rad, of the line pivot ->
+    pin) and the time ratio ``k``: the textbook problem with two solutions.
+
+    The crank pivot O1 sees the two limit positions B1, B2 under
+    theta = 180 deg (K - 1) / (K + 1), so B2 lies on one of the two rays from O1 at
+    +-theta from O1 B1, where a ray meets the rocker's circle; each such point is a
+    candidate (up to four), solved by the extreme distances (a = (|O1B2| - |O1B1|) / 2,
+    b = (|O1B2| + |O1B1|) / 2) and listed, the invalid ones with the reason (limits on
+    opposite sides of the frame line, not a crank-rocker)."""
+    if not (math.isfinite(rocker) and rocker > 0):
+        raise InputError(f"rocker length {rocker!r}: it must be positive")
+    theta = time_ratio_angle(k)
+    o1, o3 = crank_pivot, rocker_pivot
+    if dist(o1, o3) < 1e-12 * rocker:
+        raise InputError("the crank pivot coincides with the rocker pivot")
+    b1 = polar(o3, rocker, psi)
+    if dist(o1, b1) < 1e-12 * rocker:
+        raise InputError("the given limit position of the rocker's pin is on the crank pivot")
+    u1 = math.atan2(b1[1] - o1[1], b1[0] - o1[0])
+    method = f"time ratio K = {k:g} (theta = {math.degrees(theta):.6g} deg), one limit"
+    wx, wy = o1[0] - o3[0], o1[1] - o3[1]
+    out: list[Design] = []
+    seen: list[float] = []
+    for sgn in (1, -1):
+        dx, dy = math.cos(u1 + sgn * theta), math.sin(u1 + sgn * theta)
+        bq = wx * dx + wy * dy
+        disc = bq * bq - (wx * wx + wy * wy - rocker * rocker)
+        if disc < 0:
+            continue
+        for t in (-bq - math.sqrt(disc), -bq + math.sqrt(disc)):
+            if t <= 1e-12 * rocker:
+                continue  # behind the crank pivot: not seen under theta
+            b2 = (o1[0] + t * dx, o1[1] + t * dy)
+            psi2 = math.atan2(b2[1] - o3[1], b2[0] - o3[0])
+            psi2 = psi + (psi2 - psi + math.pi) % (2 * math.pi) - math.pi
+            if abs(psi2 - psi) < 1e-9 or any(abs(psi2 - q) < 1e-9 for q in seen):
+                continue
+            seen.append(psi2)
+            if abs(abs(psi2 - psi) - math.pi) < 1e-12:
+                continue  # a swing of 180 deg: the pin would pass through the pivot line
+            d = crank_rocker_at(o1, o3, rocker, psi, psi2, method)
+            d.family = f"other limit at {math.degrees(psi2):.6f} deg, {d.family}"
+            d.extra["other_limit"] = psi2
+            out.append(d)
+    if not out:
+        raise InputError(
+            f"no position of the rocker's pin is seen from the crank pivot under theta = "
+            f"{math.degrees(theta):.4g} deg from the given limit: the rocker is too short "
+            "for this frame, or K too large"
+        )
+    out.sort(key=lambda d: (not d.valid, d.extra["other_limit"]))
     return out

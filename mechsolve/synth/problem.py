@@ -93,6 +93,11 @@ class _Reader:
             if optional:
                 return None
             raise self.err(key, "missing: give a number")
+        if isinstance(v, str):  # YAML 1.1 reads 1e6 (no dot) as a string
+            try:
+                v = float(v.strip())
+            except ValueError:
+                raise self.err(key, f"expected a number, got {v!r}") from None
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise self.err(key, f"expected a number, got {v!r}")
         return float(v)
@@ -117,7 +122,7 @@ class _Reader:
         except InputError as exc:
             if exc.file:
                 raise
-            raise self.err(key, exc.message) from None
+            raise self.err(getattr(exc, "problem_key", key), exc.message) from None
 
 
 def read(path: str | Path) -> tuple[Source, str]:
@@ -135,8 +140,11 @@ def read(path: str | Path) -> tuple[Source, str]:
     return src, found[0]
 
 
-def solve_problem(path: str | Path, rule: str | None = None) -> Outcome:
-    """Read a problem file, solve it, pick a design and write its mechanism text."""
+def solve_problem(
+    path: str | Path, rule: str | None = None, solution: int | None = None
+) -> Outcome:
+    """Read a problem file, solve it, pick a design (by ``rule``, or the ``solution``-th
+    listed, from 1) and write its mechanism text."""
     from .writer import mechanism_yaml
 
     src, method = read(path)
@@ -164,10 +172,21 @@ def solve_problem(path: str | Path, rule: str | None = None) -> Outcome:
         designs = _guide_bar(r)
     else:
         designs = _three_positions(r)
-    try:
-        chosen = pick(designs, rule)
-    except InputError as exc:
-        raise r.err((), exc.message) from None
+    if solution is not None:
+        if not 1 <= solution <= len(designs):
+            raise InputError(
+                f"--solution {solution}: the problem has {len(designs)} solution(s), "
+                f"numbered 1 to {len(designs)}"
+            )
+        chosen = designs[solution - 1]
+        if not chosen.valid:
+            raise InputError(f"--solution {solution} is not valid: {'; '.join(chosen.notes)}")
+        rule = "solution"
+    else:
+        try:
+            chosen = pick(designs, rule)
+        except InputError as exc:
+            raise r.err((), exc.message) from None
     text = mechanism_yaml(chosen, name, round_to, **kw)
     out = Outcome(name, method, designs, chosen, text)
     out.text = describe(out, rule)
@@ -177,10 +196,16 @@ def solve_problem(path: str | Path, rule: str | None = None) -> Outcome:
 def _crank_rocker(r: _Reader):
     from .fourbar import extreme_distance, from_time_ratio
 
-    r.allow(("rocker_pivot", "rocker", "limits", "line", "crank_pivot", "time_ratio", "frame"))
+    r.allow(("rocker_pivot", "rocker", "limits", "limit", "line", "crank_pivot", "time_ratio",
+             "frame"))  # fmt: skip
     o3 = r.point("rocker_pivot")
     c = r.q("rocker", "length")
-    psi1, psi2 = r.pair("limits", "angle")
+    if r.has("limit") and r.has("limits"):
+        raise r.err("limit", "give both limits ('limits') or one and the time ratio ('limit')")
+    if r.has("limit"):
+        psi1 = psi2 = r.q("limit", "angle")
+    else:
+        psi1, psi2 = r.pair("limits", "angle")
     offset, kw = 0.0, {}
     line = r.data.get("line")
     if line is not None:
@@ -205,6 +230,28 @@ def _crank_rocker(r: _Reader):
                 offset,
             )
     a, b = psi1 - offset, psi2 - offset
+    if r.has("limit"):  # one limit, K and both pivots (or the frame along x)
+        from .fourbar import from_one_limit
+
+        if not r.has("time_ratio"):
+            raise r.err((), "with one rocker limit ('limit') give the time ratio 'time_ratio'")
+        if r.has("crank_pivot") == r.has("frame"):
+            raise r.err(
+                (),
+                "with one rocker limit give the crank pivot: 'crank_pivot', or 'frame' "
+                "(the crank pivot that far from the rocker pivot along -x)",
+            )
+        if r.has("crank_pivot"):
+            o1 = r.point("crank_pivot")
+        else:
+            d = r.q("frame", "length")
+            if not d > 0:
+                raise r.err("frame", "the frame length must be positive")
+            o1 = (o3[0] - d, o3[1])
+        designs = r.wrap("time_ratio", from_one_limit, o1, o3, c, a, r.number("time_ratio"))
+        for dsg in designs:
+            dsg.extra["line_offset"] = offset
+        return designs, kw
     if r.has("crank_pivot") == r.has("time_ratio"):
         raise r.err((), "give crank_pivot (extreme distances) or time_ratio, one of them")
     if r.has("crank_pivot"):
@@ -327,6 +374,7 @@ def describe(out: Outcome, rule: str) -> str:
         "transmission": "the largest minimum transmission angle",
         "shortest-crank": "the shortest input link",
         "smallest": "the smallest sum of link lengths",
+        "solution": "its number, as asked (--solution)",
     }
     lines.append(f"  picked (*) by {rules[rule]}")
     return "\n".join(lines)

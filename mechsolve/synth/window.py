@@ -75,6 +75,13 @@ class WindowChoice:
     coarse_table: list[Window]
 
 
+def _at(key: str, message: str) -> InputError:
+    """An input error about the window problem's key ``key`` (``synth`` names it)."""
+    exc = InputError(message)
+    exc.problem_key = key  # type: ignore[attr-defined]
+    return exc
+
+
 class _Path:
     """The point's path at driver values, by mechsolve's solver core."""
 
@@ -84,15 +91,17 @@ class _Path:
         self.mech = mech
         self.an = Analysis(mech)
         if self.an.linear or mech.driver.motion is not None:
-            raise InputError(
+            raise _at(
+                "mechanism",
                 "the window is chosen over a revolute driver's angle: this file's driver is "
-                "linear or follows a motion law"
+                "linear or follows a motion law",
             )
         moving = [p for p, links in mech.point_owners().items() if links]
         if point not in moving:
-            raise InputError(
+            raise _at(
+                "point",
                 f"no point named {point!r} on a link of the mechanism (points: "
-                f"{', '.join(sorted(moving))})"
+                f"{', '.join(sorted(moving))})",
             )
         self.point = point
 
@@ -125,9 +134,10 @@ def closing_range(path: _Path, within: tuple[float, float] | None):
     u0 = path.an.start_value()
     lo_b, hi_b = within if within else (u0 - math.pi, u0 + math.pi)
     if not lo_b <= u0 <= hi_b:
-        raise InputError(
+        raise _at(
+            "within",
             f"the bounds {math.degrees(lo_b):g}..{math.degrees(hi_b):g} deg do not hold the "
-            f"file's driver start {math.degrees(u0):g} deg (where the branches are chosen)"
+            f"file's driver start {math.degrees(u0):g} deg (where the branches are chosen)",
         )
     down = np.r_[np.arange(u0, lo_b, -DEG), lo_b]
     up = np.r_[np.arange(u0, hi_b, DEG), hi_b]
@@ -135,8 +145,9 @@ def closing_range(path: _Path, within: tuple[float, float] | None):
     for grid in (down, up):
         ok = path.at(grid)[0]
         if not ok[0]:
-            raise InputError(
-                f"the mechanism does not close at its driver start {math.degrees(u0):g} deg"
+            raise _at(
+                "mechanism",
+                f"the mechanism does not close at its driver start {math.degrees(u0):g} deg",
             )
         k = len(ok) if ok.all() else int(np.argmin(ok))
         if k == len(ok):
@@ -171,15 +182,16 @@ def choose_window(
     of ``point``; ``within`` bounds the search (rad), ``compare`` lists windows to measure
     beside the choice (the seed's, say)."""
     if measure not in MEASURES:
-        raise InputError(f"unknown measure {measure!r}: choose one of {', '.join(MEASURES)}")
+        raise _at("measure", f"unknown measure {measure!r}: choose one of {', '.join(MEASURES)}")
     if not (math.isfinite(width) and width > 0):
-        raise InputError(f"window width {width!r}: it must be positive")
+        raise _at("width", f"window width {math.degrees(width):g} deg: it must be positive")
     path = _Path(mech, point)
     (lo, hi), exact = closing_range(path, within)
     if width > hi - lo + 1e-12:
-        raise InputError(
+        raise _at(
+            "width",
             f"a window of {math.degrees(width):g} deg does not fit where the mechanism closes "
-            f"({math.degrees(lo):.6g}..{math.degrees(hi):.6g} deg)"
+            f"({math.degrees(lo):.6g}..{math.degrees(hi):.6g} deg)",
         )
     # the seed's scan: starts at whole degrees, the path sampled every degree
     first = math.ceil(math.degrees(lo) - 1e-9)
@@ -187,7 +199,7 @@ def choose_window(
     table = [_evaluate(path, measure, s, s + width, DEG) for s in starts]
     table = [w for w in table if math.isfinite(w.value)]
     if not table:
-        raise InputError("no window starting at a whole degree fits where the mechanism closes")
+        raise _at("width", "no window starting at a whole degree fits where the mechanism closes")
     coarse = min(table, key=lambda w: w.value)
     # refinement: starts every `fine` within a degree either side, sampled every `fine`
     s_lo, s_hi = max(lo, coarse.start - DEG), min(hi - width, coarse.start + DEG)

@@ -108,8 +108,8 @@ def write_energy_plot(sizing, name: str, outdir) -> Path:
 
     x = np.degrees(np.abs(sizing.phi - sizing.phi[0]))
     fig, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    axes[0].plot(x, sizing.torque, label="driving torque at the mean speed")
-    axes[0].axhline(sizing.motor_torque, ls="--", color="C3", label="motor (constant)")
+    axes[0].plot(x, sizing.torque, label=sizing.torque_label)
+    axes[0].axhline(sizing.motor_torque, ls="--", color="C3", label=sizing.constant_label)
     axes[0].set_ylabel("torque [N*m]")
     axes[0].legend(fontsize=8)
     axes[1].plot(x, sizing.energy, color="C2")
