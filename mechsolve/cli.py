@@ -230,8 +230,10 @@ def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
         )
     verdicts = check_requirements(mech, res)
     if junit is not None:
+        from .writers.atomic import write_text
+
         try:
-            junit.write_text(junit_xml(verdicts, mech.name, str(mech.source.file or "")))
+            write_text(junit, junit_xml(verdicts, mech.name, str(mech.source.file or "")))
         except OSError as exc:
             raise InputError(f"--junit {junit}: cannot write it: {exc.strerror or exc}") from None
     return verdicts
