@@ -275,6 +275,22 @@ INJECTED = [
         "polygons.txt",
     ),
     ("check --draw", ["check", "{m}/fourbar.yaml", "--draw", "{d}/start.png"], "start.png"),
+    (
+        "cam csv",
+        ["cam", "{m}/shaper-cam.yaml", "-q", "--no-plots", "-o", "{d}/c"],
+        "cam_motion.csv",
+    ),
+    (
+        "cam dxf",
+        ["cam", "{m}/shaper-cam.yaml", "-q", "--no-plots", "-o", "{d}/c"],
+        "cam_profile.dxf",
+    ),
+    ("animate", ["animate", "{m}/fourbar.yaml", "--frames", "3", "-q", "-o", "{d}/a.gif"], "a.gif"),
+    (
+        "report",
+        ["report", "{m}/slider-crank.yaml", "--frames", "3", "-q", "-o", "{d}/r.html"],
+        "r.html",
+    ),
 ]
 
 
@@ -355,6 +371,45 @@ def test_permission_refused_is_exit_2(tmp_path):
     finally:
         ro.chmod(0o700)
     assert r.exit_code == 2 and "Permission denied" in r.output and "s.json" in r.output
+
+
+@pytest.mark.parametrize(
+    "argv,target",
+    [
+        (["schema", "-o", "{d}/s.json"], "s.json"),
+        (["run", "{m}/fourbar.yaml", "--step", "30 deg", "-q", "-o", "{d}/o"], "results.csv"),
+        (["check", "{m}/fourbar.yaml", "--draw", "{d}/start.png"], "start.png"),
+    ],
+    ids=["schema", "run", "check --draw"],
+)
+def test_injected_permission_refused_is_exit_2(monkeypatch, tmp_path, argv, target):
+    """The system refuses to create the file (EACCES, as a folder made read-only under a
+    running command would): exit 2, one line naming the file, nothing left."""
+    import tempfile
+
+    real = tempfile.mkstemp
+
+    def refuse(*args, **kwargs):
+        if target in kwargs.get("prefix", ""):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), kwargs.get("dir"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    r = CliRunner().invoke(main, [a.format(d=tmp_path, m=MECH) for a in argv])
+    assert r.exit_code == 2, r.output
+    err = [x for x in r.output.splitlines() if "error" in x]
+    assert len(err) == 1 and "Permission denied" in err[0] and target in err[0], r.output
+    assert leftovers(tmp_path) == [] and list(tmp_path.rglob(target)) == []
+
+
+def test_read_only_file_system_is_exit_2(full_disk):
+    """A real refusal: the tmpfs remounted read-only (EROFS) under `schema -o`."""
+    subprocess.run(["mount", "-o", "remount,ro", str(full_disk)], check=True)
+    p = mechsolve("schema", "-o", str(full_disk / "s.json"))
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.strip().splitlines() == [
+        f"error: cannot write {full_disk / 's.json'}: Read-only file system"
+    ]
 
 
 # --- simulate beside run; unique temporaries ---------------------------------------------
