@@ -329,6 +329,20 @@ def test_replacing_keeps_the_old_file_on_a_write_error(tmp_path):
     assert str(exc) == f"cannot write {target}: No space left on device"
 
 
+def test_write_failed_crosses_a_process_pool():
+    """A design's CSV written by a worker (sweep --keep-results) on a full disk reaches
+    the main process as the same error: same message, errno and exit code."""
+    import pickle
+
+    from mechsolve.writers.atomic import WriteFailed
+
+    exc = WriteFailed("out/designs/design-00001.csv", OSError(errno.ENOSPC, "No space left"))
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is WriteFailed and str(back) == str(exc)
+    assert back.errno == errno.ENOSPC and back.exit_code == 2
+    assert back.filename == "out/designs/design-00001.csv"
+
+
 def test_csv_stream_on_a_full_disk(tmp_path, monkeypatch):
     """The streamed CSV: a write refused by the disk removes its partial file."""
     from mechsolve import api
