@@ -21,6 +21,7 @@ from .clikit import (
     NO_PLOTS,
     QUIET,
     VARIANT,
+    Group,
     outdir_option,
     output_folder,
 )
@@ -39,7 +40,7 @@ from .commands.synth import synth
 from .errors import EXIT_REQUIREMENTS, InputError
 
 
-@click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=Group, epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="mechsolve")
 def main() -> None:
     """Solve planar mechanisms described in YAML files.
@@ -127,7 +128,9 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, wat
         try:
             from .watch import watch_file
 
-            watch_file(file, lambda: _run_job(*args), echo=click.echo)
+            watch_file(file, lambda: _run_job(*args), echo=click.echo, outdir=outdir)
+        except KeyboardInterrupt:  # the way a watch ends: it said "stopped watching"
+            sys.exit(EXIT_INTERRUPTED)
         except Exception as exc:  # noqa: BLE001 - no watchfiles, a missing folder
             _fail(exc)
         sys.exit(EXIT_OK)
@@ -231,8 +234,10 @@ def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
         )
     verdicts = check_requirements(mech, res)
     if junit is not None:
+        from .writers.atomic import write_text
+
         try:
-            junit.write_text(junit_xml(verdicts, mech.name, str(mech.source.file or "")))
+            write_text(junit, junit_xml(verdicts, mech.name, str(mech.source.file or "")))
         except OSError as exc:
             raise InputError(f"--junit {junit}: cannot write it: {exc.strerror or exc}") from None
     return verdicts

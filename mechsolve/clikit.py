@@ -10,14 +10,18 @@ import tempfile
 import traceback
 from collections.abc import Mapping
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
 import click
 
 from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, InputError, MechsolveError
+from .writers.atomic import ENVIRONMENT_ERRNOS
 
 EXIT_INTERNAL = 4
 EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
+# the reader of the output went away (`mechsolve run ... | head`): the code the shell
+# reports for a tool that SIGPIPE ends (128 + 13), as `cat` or `grep` in the same place
+EXIT_BROKEN_PIPE = 141
 STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk by chunk
 PROGRESS_DELAY = 1.0  # seconds: a streamed run that ends sooner never shows its bar
 
@@ -33,15 +37,57 @@ Exit codes:
   5  a requirement of the file failed (run: its table says which;
      everything was written)
   130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
+  141  the output's reader went away (`... | head`): stopped quietly
+A full disk or a file that cannot be written for want of permission
+is an input error (2); every file is written whole or not at all.
 """
 
 
-def fail(exc: BaseException) -> None:
+def broken_pipe() -> NoReturn:
+    """Stop quietly because the reader of standard output went away (``mechsolve run
+    FILE | head``), as Unix tools do: no message, no traceback. Python's recipe (the
+    ``signal`` module's "Note on SIGPIPE"): point standard output at /dev/null, so that
+    the flush at exit cannot fail again, and exit; with 141, the code the shell gives a
+    tool that SIGPIPE ends (``cat``, ``grep``), so ``set -o pipefail`` sees the same
+    thing for mechsolve as for them. Files already written stay; none is half-written."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # no real stdout (an embedding, a test)
+        pass
+    sys.exit(EXIT_BROKEN_PIPE)
+
+
+def interrupted(message: str = "interrupted") -> NoReturn:
+    """Ctrl-C or SIGTERM: one line on stderr, exit 130 (files not yet finished were
+    removed on the way out; finished ones stay)."""
+    try:
+        click.echo(message, err=True)
+    except (OSError, ValueError):
+        pass
+    sys.exit(EXIT_INTERRUPTED)
+
+
+def fail(exc: BaseException) -> NoReturn:
+    """Report ``exc`` in one line and exit with its code: a mechsolve error its own
+    (2 input, 3 solver...); a full disk or a permission refused 2; the reader of the
+    output gone 141 (quietly); anything else is a bug, 4."""
+    if isinstance(exc, BrokenPipeError):
+        broken_pipe()
+    if isinstance(exc, KeyboardInterrupt):
+        interrupted()
     if isinstance(exc, MechsolveError):
         click.echo(f"error: {exc}", err=True)
         sys.exit(exc.exit_code)
     if isinstance(exc, (click.exceptions.Exit, click.ClickException, SystemExit)):
         raise exc
+    if isinstance(exc, OSError) and exc.errno in ENVIRONMENT_ERRNOS:
+        # the machine refused (a full disk, a quota, permissions): the user can act on it
+        names = [str(n) for n in (exc.filename, exc.filename2) if n is not None]
+        where = "".join(f"{n}: " for n in names)
+        click.echo(f"error: {where}{exc.strerror or exc}", err=True)
+        sys.exit(EXIT_INPUT)
     if os.environ.get("MECHSOLVE_DEBUG"):
         traceback.print_exc()
     else:
@@ -158,6 +204,24 @@ def interrupt_on_sigterm() -> None:
         pass
 
 
+class Group(click.Group):
+    """The ``mechsolve`` command group: the rules every command shares, in one place.
+    SIGTERM unwinds like Ctrl-C; Ctrl-C is exit 130 with "interrupted" (not click's
+    "Aborted!" and 1); a closed output pipe stops quietly (:func:`broken_pipe`); a full
+    disk or a refused permission that escapes a command is exit 2 in one line."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        interrupt_on_sigterm()
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            interrupted()
+        except BrokenPipeError:
+            broken_pipe()
+        except OSError as exc:
+            fail(exc)
+
+
 # options that several commands share
 FILE_ARG = click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 VARIANT = click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
@@ -177,6 +241,7 @@ def outdir_option(what: str = "results"):
 
 __all__ = [
     "EPILOG",
+    "EXIT_BROKEN_PIPE",
     "EXIT_INPUT",
     "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
@@ -186,8 +251,11 @@ __all__ = [
     "NO_PLOTS",
     "QUIET",
     "VARIANT",
+    "Group",
+    "broken_pipe",
     "fail",
     "interrupt_on_sigterm",
+    "interrupted",
     "outdir_option",
     "output_folder",
     "progress_bar",

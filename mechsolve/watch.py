@@ -4,20 +4,24 @@ Editing a design is a loop: change a length, save, look. The watcher runs the jo
 then after every save of the file (editors that save by writing a new file and renaming
 it are seen too), prints the summary and the figures that moved since the last good run,
 and on a mistake in the file prints the message (file, key path, line) and keeps waiting:
-a user's error never ends the watch; Ctrl-C does. File events come from ``watchfiles``
-(an optional dependency: ``pip install "mechsolve[watch]"``), not from a polling loop.
+a user's error never ends the watch; Ctrl-C does (exit 130). While the file is broken,
+the output folder holds ``STALE.txt`` (the error, and when the last good run was), so
+the plots there are never taken for the file as it is; the next good run removes it.
+File events come from ``watchfiles`` (an optional dependency: ``pip install
+"mechsolve[watch]"``), not from a polling loop.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from .errors import InputError, MechsolveError
 
-__all__ = ["figures_of", "changes", "watch_file"]
+__all__ = ["STALE", "changes", "clear_stale", "figures_of", "mark_stale", "watch_file"]
 
 
 def figures_of(res: Any) -> dict[str, tuple[float, str]]:
@@ -76,13 +80,55 @@ def changes(before: dict, after: dict, rel: float = 1e-9) -> list[str]:
     return lines
 
 
+STALE = "STALE.txt"  # in the output folder while the file is broken
+
+
+def mark_stale(outdir: Path, path: Path, error: str, good: str | None) -> Path | None:
+    """Write ``outdir/STALE.txt``: the files beside it are not from ``path`` as it is
+    now (its last save failed with ``error``); ``good`` is when the last good run was.
+    Returns the marker, or None when there is no folder to mark (nothing was written)."""
+    from .writers.atomic import write_text
+
+    outdir = Path(outdir)
+    if not outdir.is_dir():
+        return None
+    since = f"the last good run ({good})" if good else "an earlier run"
+    text = (
+        f"The files in this folder are from {since} of {path}, not from the file as it\n"
+        "is now: its last save could not be run. They are replaced, and this file is\n"
+        "removed, by the next run that succeeds.\n\n"
+        f"{error}\n"
+    )
+    try:
+        return write_text(outdir / STALE, text)
+    except OSError:  # a full disk: the terminal line still says it
+        return None
+
+
+def clear_stale(outdir: Path | None) -> None:
+    """Remove the marker of :func:`mark_stale` after a good run."""
+    if outdir is None:
+        return
+    try:
+        (Path(outdir) / STALE).unlink()
+    except FileNotFoundError:
+        pass
+
+
 def watch_file(
     path: Path,
     job: Callable[[], tuple[int, Any]],
     echo: Callable[[str], None] = print,
     stop: Callable[[], bool] | None = None,
+    outdir: Path | None = None,
 ) -> None:
-    """Run ``job`` now and after every save of ``path`` until Ctrl-C (or ``stop()``)."""
+    """Run ``job`` now and after every save of ``path`` until Ctrl-C (or ``stop()``).
+
+    A save that cannot be run prints its error and keeps watching; with ``outdir`` (the
+    folder the job writes) the files there are marked stale (:data:`STALE`, with the
+    error) and the terminal says they are from the last good run, until a run succeeds.
+    Ctrl-C prints "stopped watching" and raises :class:`KeyboardInterrupt` (exit 130).
+    """
     try:
         from watchfiles import watch
     except ImportError:
@@ -95,25 +141,36 @@ def watch_file(
         raise InputError(f"{path}: its folder does not exist, there is nothing to watch")
     target = path.resolve()
     last: dict[str, tuple[float, str]] | None = None
+    good: str | None = None  # when the last run that succeeded ended
+
+    def broken(message: str) -> None:
+        echo(message)
+        if outdir is not None:
+            marker = mark_stale(outdir, path, message, good)
+            if marker is not None:
+                since = f"the last good run ({good})" if good else "an earlier run"
+                echo(f"the files in {outdir}/ are from {since}, not from this save: see {marker}")
 
     def once() -> None:
-        nonlocal last
+        nonlocal last, good
         try:
             code, res = job()
         except KeyboardInterrupt:
             raise
         except MechsolveError as exc:
-            echo(f"error: {exc}")
+            broken(f"error: {exc}")
             echo(f"watching {path}: fix it and save")
             return
         except OSError as exc:
-            echo(f"error: {exc.strerror or exc}: {exc.filename or path}")
+            broken(f"error: {exc.strerror or exc}: {exc.filename or path}")
             echo(f"watching {path}: fix it and save")
             return
         except Exception as exc:  # noqa: BLE001 - a bug must not end the user's session
-            echo(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)")
+            broken(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)")
             echo(f"watching {path}")
             return
+        clear_stale(outdir)
+        good = time.strftime("%H:%M:%S")
         figs = figures_of(res)
         if last is not None and figs:
             moved = changes(last, figs)
@@ -135,3 +192,4 @@ def watch_file(
                 break
     except KeyboardInterrupt:
         echo("stopped watching")
+        raise

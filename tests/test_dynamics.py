@@ -252,7 +252,12 @@ def test_simulate_command(tmp_path):
     )
     assert r.exit_code == 0, r.output
     names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == ["inertia.png", "motion.png", "reactions.png", "simulation.csv"]
+    assert names == [
+        "simulation-inertia.png",
+        "simulation-motion.png",
+        "simulation-reactions.png",
+        "simulation.csv",
+    ]
     head = (tmp_path / "simulation.csv").read_text().splitlines()[0].split(",")
     for col in ("t [s]", "omega [rad/s]", "epsilon [rad/s^2]", "J [kg*m^2]", "motor.torque [N*m]"):
         assert col in head

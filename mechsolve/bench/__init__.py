@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..writers.plots import save_figure
 from . import references as R
 
 
@@ -1070,7 +1071,7 @@ def plot_dynamics(case: Case, path: Path) -> Path:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, 110)
     plt.close(fig)
     return path
 
@@ -1131,6 +1132,6 @@ def plot(cases: list[Case], path: str | Path) -> Path:
     axes[0].set_ylim(floor / 3, 1e-4)
     fig.suptitle("mechsolve bench: speed against error")
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, 130)
     plt.close(fig)
     return Path(path)

@@ -65,6 +65,7 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
         from ..clikit import output_folder
         from ..errors import InputError
         from ..polygons import draw_polygons
+        from ..writers.atomic import write_text
 
         sheet = None
         if output is not None and output.suffix.lower() in SHEET_SUFFIXES:
@@ -91,7 +92,7 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
         written = list(res.images)
         if sheet is None:
             txt = outdir / "polygons.txt"
-            txt.write_text(text + "\n", encoding="utf-8")
+            write_text(txt, text + "\n")
             written.append(txt)
         if not quiet:
             click.echo(text)

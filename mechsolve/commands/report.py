@@ -82,7 +82,10 @@ def report(file: Path, output, variant, pdf, frames, polygons_at, watch, quiet) 
         if watch:
             from ..watch import watch_file
 
-            watch_file(file, once, echo=click.echo)
+            try:
+                watch_file(file, once, echo=click.echo)
+            except KeyboardInterrupt:  # how a watch ends: it said "stopped watching"
+                sys.exit(EXIT_INTERRUPTED)
             sys.exit(EXIT_OK)
         sys.exit(once()[0])
     except KeyboardInterrupt:

@@ -52,8 +52,10 @@ def schema(output: Path | None, show_path: bool) -> None:
         if output is None:
             click.echo(text, nl=False)
             return
+        from ..writers.atomic import write_text
+
         try:
-            output.write_text(text, encoding="utf-8")
+            write_text(output, text)
         except OSError as exc:
             raise InputError(f"cannot write {output}: {exc.strerror or exc}") from None
         click.echo(f"wrote {output}")

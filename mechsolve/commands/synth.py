@@ -54,8 +54,10 @@ def synth(file: Path, output, pick, solution, quiet) -> None:
             if not quiet:
                 click.echo(confirm(out))
             if output is not None:
+                from ..writers.atomic import write_text
+
                 try:
-                    output.write_text(out.yaml)
+                    write_text(output, out.yaml)
                 except OSError as exc:
                     from ..errors import InputError
 

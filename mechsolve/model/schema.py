@@ -226,6 +226,6 @@ def text() -> str:
 
 def write(path: str | Path = SHIPPED) -> Path:
     """Write the schema to ``path`` (default: the package's copy)."""
-    path = Path(path)
-    path.write_text(text(), encoding="utf-8")
-    return path
+    from ..writers.atomic import write_text
+
+    return write_text(Path(path), text())

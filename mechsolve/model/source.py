@@ -13,6 +13,9 @@ duplicate keys and non-standard tags are all refused with a clear message.
 from __future__ import annotations
 
 import copy
+import os
+import select
+import stat
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -29,6 +32,7 @@ MAX_BYTES = 1_000_000
 MAX_NODES = 100_000  # values once aliases are expanded (a 1000-loop chain has 32 000)
 MAX_EVENTS = 150_000  # parser events in the text itself (that chain has 60 000)
 MAX_DEPTH = 64
+PIPE_WAIT = 5.0  # seconds a pipe or a device may stay silent before it is refused
 
 KeyPath = tuple[Any, ...]
 
@@ -201,9 +205,20 @@ def _scalar(node: yaml.ScalarNode) -> Any:
         return node.value
     if tag == _STD + "null":
         return None
-    if tag.startswith(_STD):
-        return node.value  # timestamps, binary: keep the text
-    raise ValueError(f"the tag {tag!r} is not allowed in a mechanism file")
+    if tag in (_STD + "timestamp", _STD + "binary"):
+        return node.value  # YAML's other standard scalars: keep the text
+    # anything else, in YAML's own namespace too (!!python/name:os.system, !!python/object,
+    # !!set...), is not a standard type of a mechanism file: refused, never read as text
+    raise ValueError(_refused(tag))
+
+
+def _refused(tag: str) -> str:
+    """Why ``tag`` is refused, with the tag as the file spells it (``!!python/...``)."""
+    shown = "!!" + tag[len(_STD) :] if tag.startswith(_STD) else tag
+    return (
+        f"the tag {shown!r} is not allowed in a mechanism file (it takes plain values, "
+        "and of YAML's tags only !!str, !!int, !!float, !!bool, !!null, !!seq and !!map)"
+    )
 
 
 class _Converter:
@@ -237,7 +252,7 @@ class _Converter:
             except ValueError as exc:
                 raise self.fail(node, path, str(exc)) from None
         if node.tag not in (_STD + "seq", _STD + "map"):
-            raise self.fail(node, path, f"the tag {node.tag!r} is not allowed in a mechanism file")
+            raise self.fail(node, path, _refused(node.tag))
         if isinstance(node, yaml.SequenceNode):
             out = []
             for i, item in enumerate(node.value):
@@ -402,28 +417,73 @@ def load_text(text: str, file: str | None = None) -> Source:
     return Source(data, conv.lines, file)
 
 
+def _read_regular(p: Path) -> bytes:
+    with open(p, "rb") as f:
+        return f.read(MAX_BYTES + 1)
+
+
+def _read_stream(p: Path, name: str) -> bytes:
+    """Read a pipe (FIFO), a device or the like without ever blocking for good: opening
+    a FIFO that nothing writes to blocks until something does, and reading from a
+    writer that never writes blocks as long; so it is opened without blocking and each
+    wait for data is bounded by :data:`PIPE_WAIT` (a process substitution such as
+    ``<(sed ... file.yaml)`` still works). At most ``MAX_BYTES + 1`` bytes are read."""
+    fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        if not hasattr(select, "poll"):  # no poll() on this system: refuse outright
+            raise InputError(
+                "this is not a regular file (a pipe or a device); give the mechanism file",
+                file=name,
+            )
+        poller = select.poll()
+        poller.register(fd, select.POLLIN | select.POLLHUP | select.POLLERR)
+        chunks: list[bytes] = []
+        total = 0
+        while total <= MAX_BYTES:
+            if not poller.poll(int(PIPE_WAIT * 1000)):
+                what = "a pipe (FIFO)" if stat.S_ISFIFO(os.fstat(fd).st_mode) else "a device"
+                said = "stopped sending" if total else "sent nothing"
+                raise InputError(
+                    f"this is {what}, not a regular file, and it {said} for {PIPE_WAIT:g} s "
+                    "(is anything writing to it?); give the mechanism file itself",
+                    file=name,
+                )
+            try:
+                got = os.read(fd, min(1 << 16, MAX_BYTES + 1 - total))
+            except BlockingIOError:
+                continue
+            if not got:  # the writer closed it
+                break
+            chunks.append(got)
+            total += len(got)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
 def load_file(path: str | Path) -> Source:
-    """Read and parse a mechanism file."""
+    """Read and parse a mechanism file (a regular file; a pipe or a device is read
+    without blocking for longer than :data:`PIPE_WAIT` at a time)."""
     p = Path(path)
     name = str(path)
     try:
-        size = p.stat().st_size
+        info = p.stat()
     except FileNotFoundError:
         raise InputError("no such file", file=name) from None
     except OSError as exc:
         raise InputError(f"cannot read the file: {exc.strerror}", file=name) from None
-    if p.is_dir():
+    if stat.S_ISDIR(info.st_mode):
         raise InputError("this is a folder, not a mechanism file", file=name)
-    if size > MAX_BYTES:
+    regular = stat.S_ISREG(info.st_mode)
+    if regular and info.st_size > MAX_BYTES:
         raise InputError(
-            f"the file is {size} bytes; a mechanism file is limited to {MAX_BYTES} bytes "
-            "(is this the right file?)",
+            f"the file is {info.st_size} bytes; a mechanism file is limited to {MAX_BYTES} "
+            "bytes (is this the right file?)",
             file=name,
         )
     # a device or a pipe has no size (/dev/zero never ends): read one byte past the limit
     try:
-        with open(p, "rb") as f:
-            raw = f.read(MAX_BYTES + 1)
+        raw = _read_regular(p) if regular else _read_stream(p, name)
     except OSError as exc:
         raise InputError(f"cannot read the file: {exc.strerror}", file=name) from None
     if len(raw) > MAX_BYTES:

@@ -83,10 +83,9 @@ def write_best(study: Study, best: Best, path: Path) -> Path:
         + "\nwritten by mechsolve sweep; run it with: mechsolve run "
         + path.name
     )
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_text(design_yaml(study, best.design, header))
-    tmp.replace(path)
-    return path
+    from ..writers.atomic import write_text
+
+    return write_text(path, design_yaml(study, best.design, header))
 
 
 __all__ = ["Best", "best_column", "design_yaml", "pick_best", "write_best"]

@@ -7,6 +7,7 @@ import math
 import re
 from pathlib import Path
 
+from ..writers.plots import save_figure
 from .designs import Study
 from .figures import Row
 
@@ -113,7 +114,7 @@ def _against(plt, study: Study, rows: list[Row], figs: list[str], i: int, outdir
     fig.suptitle(f"{study.file}: figures against {p.name} ({kind})")
     fig.tight_layout(rect=(0, 0.06 if not many and len(groups) > 1 else 0, 1, 0.96))
     path = outdir / f"study-{_slug(p.name)}.png"
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, 100)
     plt.close(fig)
     return path
 
@@ -146,7 +147,7 @@ def _pass_fail(plt, study: Study, rows: list[Row], outdir: Path) -> Path:
     ax.set_title(f"{study.file}:\npass/fail over {p.name} and {q.name}", fontsize=9)
     fig.tight_layout()
     path = outdir / "study-pass-fail.png"
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, 100)
     plt.close(fig)
     return path
 
@@ -176,7 +177,7 @@ def _scatter_matrix(plt, study: Study, rows: list[Row], figs: list[str], outdir:
     )
     fig.tight_layout(rect=(0, 0, 1, 0.97))
     path = outdir / "study-scatter.png"
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, 100)
     plt.close(fig)
     return path
 

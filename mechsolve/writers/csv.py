@@ -12,11 +12,12 @@ from __future__ import annotations
 import csv
 import io
 import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+
+from .atomic import WriteFailed, commit, new_temporary
 
 if TYPE_CHECKING:  # what the writer reads of a table (mechsolve.results.Results has it)
     from collections.abc import Sequence
@@ -37,20 +38,30 @@ BATCH = 4096
 
 
 class CsvStream:
-    """A CSV file written chunk by chunk, moved into place only when complete."""
+    """A CSV file written chunk by chunk, moved into place only when complete (flushed to
+    the disk first). A write that fails (a full disk) removes the partial file and raises
+    :class:`~mechsolve.writers.atomic.WriteFailed`."""
 
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, self.tmp = tempfile.mkstemp(
-            prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent
-        )
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise WriteFailed(self.path, exc) from None
+        fd, self.tmp = new_temporary(self.path)
         self.fh = os.fdopen(fd, "w", newline="", encoding="utf-8")
         self.header: list[str] | None = None
         self.rows = 0
 
     def write(self, results: Results, skip: int = 0) -> None:
         """Append the rows of ``results`` (leaving out the first ``skip``)."""
+        try:
+            self._write(results, skip)
+        except OSError as exc:
+            self.abort()
+            raise WriteFailed(self.path, exc) from None
+
+    def _write(self, results: Results, skip: int) -> None:
         cols = results.columns()
         headers = ["step"] + [c.header for c in cols] + ["status", "solver.method"]
         if self.header is None:
@@ -82,19 +93,21 @@ class CsvStream:
         self.rows += n - skip
 
     def close(self) -> Path:
-        """Finish the file and move it into place."""
-        self.fh.close()
-        # mkstemp makes the file private (0600); give it the mode any new file gets
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(self.tmp, 0o666 & ~mask)
-        os.replace(self.tmp, self.path)
+        """Finish the file, flush it to the disk and move it into place."""
+        try:
+            self.fh.close()
+        except OSError as exc:  # the last buffer did not fit on the disk
+            self.abort()
+            raise WriteFailed(self.path, exc) from None
+        commit(self.tmp, self.path)
         return self.path
 
     def abort(self) -> None:
         """Forget the partial file (the target is left as it was)."""
         try:
             self.fh.close()
+        except OSError:  # a full disk refuses the last buffer too: the file goes anyway
+            pass
         finally:
             try:
                 os.unlink(self.tmp)

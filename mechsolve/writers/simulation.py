@@ -17,9 +17,9 @@ if TYPE_CHECKING:
 
 
 def _save(fig, path: Path) -> Path:
-    tmp = path.with_name(f".{path.name}.part.png")
-    fig.savefig(tmp, dpi=100)
-    tmp.replace(path)
+    from .plots import save_figure
+
+    save_figure(fig, path, 100)  # atomic, under a unique temporary name
     return path
 
 
@@ -67,7 +67,7 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
         ax.grid(alpha=0.3)
     axes[0].set_title(f"{name}: simulated motion")
     fig.tight_layout()
-    out.append(_save(fig, outdir / "motion.png"))
+    out.append(_save(fig, outdir / "simulation-motion.png"))
     plt.close(fig)
 
     if not lin:
@@ -82,7 +82,7 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
         ax.grid(alpha=0.3)
         ax.legend()
         fig.tight_layout()
-        out.append(_save(fig, outdir / "inertia.png"))
+        out.append(_save(fig, outdir / "simulation-inertia.png"))
         plt.close(fig)
 
     if res.forces is not None:
@@ -97,7 +97,7 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=4)
         fig.tight_layout()
-        out.append(_save(fig, outdir / "reactions.png"))
+        out.append(_save(fig, outdir / "simulation-reactions.png"))
         plt.close(fig)
     return out
 
