@@ -1,0 +1,306 @@
+"""Issue 23 §5: hand-made faults that the suite let through, each caught here against a
+formula written independently of mechsolve (textbook closed forms, finite differences of
+closed-form positions, the SI definitions of the units).
+
+(a) the cam program's jerk divided by beta^2 instead of beta^3;
+(b) guide-bar synthesis taking the bar from a given stroke with sin(theta), not sin(theta/2);
+(c) a factor of the units table changed in its fourth digit;
+(d) a dead-zone event recorded one sample late (the swing and time ratio of a rocker whose
+    extreme lies just after the dead zone silently dropped);
+(e) the x/y columns of known bodies swapped in a Newton group's rate equations (a slider
+    hanging off a four-bar's coupler under ``split-newton``).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mechsolve as ms
+from mechsolve.cam.laws import LAWS
+from mechsolve.cam.program import build_program
+
+PI = math.pi
+ROOT = Path(__file__).parent.parent
+DATA = Path(__file__).parent / "data"
+
+
+# -- (a) cam motion laws: displacement, velocity, acceleration and jerk ------------------------
+
+
+def _textbook(key: str, x: np.ndarray):
+    """f, f', f'', f''' of a unit rise over a unit cam angle (x = 0..1), written here from
+    the textbook formulas (Norton, Design of Machinery, ch. 8; Shigley, ch. 6). The
+    modified laws' second halves follow from their symmetry f(x) = 1 - f(1 - x), which
+    makes f' and f''' even and f'' odd about x = 1/2."""
+    z = 0.0 * x
+    if key == "uniform-velocity":
+        return x, 1.0 + z, z, z
+    if key == "parabolic":
+        first = x < 0.5
+        return (
+            np.where(first, 2 * x**2, 1 - 2 * (1 - x) ** 2),
+            np.where(first, 4 * x, 4 * (1 - x)),
+            np.where(first, 4.0, -4.0),
+            z,
+        )
+    if key == "simple-harmonic":
+        return (
+            (1 - np.cos(PI * x)) / 2,
+            PI / 2 * np.sin(PI * x),
+            PI**2 / 2 * np.cos(PI * x),
+            -(PI**3) / 2 * np.sin(PI * x),
+        )
+    if key == "cycloidal":
+        return (
+            x - np.sin(2 * PI * x) / (2 * PI),
+            1 - np.cos(2 * PI * x),
+            2 * PI * np.sin(2 * PI * x),
+            4 * PI**2 * np.cos(2 * PI * x),
+        )
+    if key == "polynomial-345":
+        return (
+            10 * x**3 - 15 * x**4 + 6 * x**5,
+            30 * x**2 - 60 * x**3 + 30 * x**4,
+            60 * x - 180 * x**2 + 120 * x**3,
+            60 - 360 * x + 360 * x**2,
+        )
+    if key == "polynomial-4567":
+        return (
+            35 * x**4 - 84 * x**5 + 70 * x**6 - 20 * x**7,
+            140 * x**3 - 420 * x**4 + 420 * x**5 - 140 * x**6,
+            420 * x**2 - 1680 * x**3 + 2100 * x**4 - 840 * x**5,
+            840 * x - 5040 * x**2 + 8400 * x**3 - 4200 * x**4,
+        )
+    if key in ("modified-trapezoid", "modified-sine"):
+        half = x <= 0.5
+        out = [np.empty_like(x) for _ in range(4)]
+        a = _modified_first_half(key, x[half])
+        b = _modified_first_half(key, 1 - x[~half])
+        for k, sign in enumerate((None, 1, -1, 1)):
+            out[k][half] = a[k]
+            out[k][~half] = 1 - b[k] if sign is None else sign * b[k]
+        return tuple(out)
+    raise KeyError(key)
+
+
+def _modified_first_half(key: str, x: np.ndarray):
+    """Norton eqs. 8.15 (modified trapezoid, C = 4.888124) and 8.18 (modified sine,
+    C = 5.527957) for x <= 1/2, to their printed digits."""
+    if key == "modified-trapezoid":
+        c = 4.88812407
+        q = 4 * PI
+        f = np.select(
+            [x <= 1 / 8, x <= 3 / 8],
+            [
+                0.38898448 * x - 0.0309544 * np.sin(q * x),
+                2.44406184 * x**2 - 0.22203097 * x + 0.00723407,
+            ],
+            1.6110154 * x - 0.0309544 * np.sin(q * x - PI) - 0.3055077,
+        )
+        f1 = np.select(
+            [x <= 1 / 8, x <= 3 / 8],
+            [0.38898448 * (1 - np.cos(q * x)), 4.88812367 * x - 0.22203097],
+            1.6110154 - 0.38898448 * np.cos(q * x - PI),
+        )
+        f2 = np.select(
+            [x <= 1 / 8, x <= 3 / 8], [c * np.sin(q * x), c + 0 * x], c * np.sin(q * x - PI)
+        )
+        f3 = np.select(
+            [x <= 1 / 8, x <= 3 / 8], [c * q * np.cos(q * x), 0 * x], c * q * np.cos(q * x - PI)
+        )
+        return f, f1, f2, f3
+    c = 5.5279571
+    q = 4 * PI
+    f = np.where(
+        x <= 1 / 8,
+        0.43990085 * x - 0.0350062 * np.sin(q * x),
+        0.28004957 + 0.43990085 * x - 0.31505577 * np.cos(q / 3 * x - PI / 6),
+    )
+    f1 = np.where(
+        x <= 1 / 8,
+        0.43990085 * (1 - np.cos(q * x)),
+        0.43990085 * (1 + 3 * np.sin(q / 3 * x - PI / 6)),
+    )
+    f2 = np.where(x <= 1 / 8, c * np.sin(q * x), c * np.cos(q / 3 * x - PI / 6))
+    f3 = np.where(x <= 1 / 8, c * q * np.cos(q * x), -c * q / 3 * np.sin(q / 3 * x - PI / 6))
+    return f, f1, f2, f3
+
+
+# the joins inside the laws, where f'' or f''' jumps: compared beside them, not on them
+JOINS = np.array([0.0, 1 / 8, 3 / 8, 0.5, 5 / 8, 7 / 8, 1.0])
+X = np.linspace(0.0, 1.0, 401)
+X = X[np.min(np.abs(X[:, None] - JOINS[None, :]), axis=1) > 1e-3]
+BETAS = [20.0, 45.0, 75.0, 150.0, 250.0]  # deg: beta^2 and beta^3 differ at all of them
+
+
+def _program(key: str, beta: float, lift: float, s_before: float):
+    """A rise of ``s_before`` (3-4-5) over 40 deg, a dwell, then the law's rise of ``lift``
+    over ``beta``, a dwell, its return of the whole stroke over ``beta`` (or over 360 -
+    80 - beta deg when 2 beta does not fit) and the rest of the turn a dwell: the tested
+    segments start away from 0 and from displacement 0. Returns the program, the rise's
+    and the return's start and the return's angle (rad)."""
+    law, p345 = LAWS[key], LAWS["polynomial-345"]
+    b, d = math.radians(beta), math.radians(10)
+    br = b if beta <= 140 else math.radians(360 - 80 - beta)
+    rest = 2 * PI - math.radians(40) - 2 * d - b - br
+    assert rest > 0
+    items = [("rise", math.radians(40), s_before, p345), ("dwell", d, None, None),
+             ("rise", b, lift, law), ("dwell", d, None, None), ("return", br, None, law),
+             ("dwell", rest, None, None)]  # fmt: skip
+    t_rise = math.radians(40) + d
+    return build_program(items, False), t_rise, t_rise + b + d, br
+
+
+@pytest.mark.parametrize("key", sorted(LAWS))
+@pytest.mark.parametrize("beta", BETAS)
+def test_cam_program_derivatives_against_textbook(key, beta):
+    """s, ds/dθ, d²s/dθ², d³s/dθ³ of a rise and a return against h f(x), h f'/β, h f''/β²,
+    h f'''/β³ written here (with x = (θ - θ0)/β)."""
+    h, s0 = 0.025, 0.004
+    prog, t_rise, t_ret, br = _program(key, beta, h, s0)
+    b = math.radians(beta)
+    f, f1, f2, f3 = _textbook(key, X)
+    tol = 3e-7 if key.startswith("modified") else 1e-11  # Norton prints 8 digits
+    s, v, a, j = prog.eval(t_rise + X * b)
+    assert np.allclose(s, s0 + h * f, rtol=0, atol=tol * h)
+    assert np.allclose(v, h * f1 / b, rtol=0, atol=tol * h / b * 10)
+    assert np.allclose(a, h * f2 / b**2, rtol=0, atol=tol * h / b**2 * 100)
+    assert np.allclose(j, h * f3 / b**3, rtol=0, atol=tol * h / b**3 * 1000)
+    # the return of the whole stroke s0 + h: s = (s0 + h)(1 - f), every derivative negated
+    b = br
+    s, v, a, j = prog.eval(t_ret + X * b)
+    H = s0 + h
+    assert np.allclose(s, H * (1 - f), rtol=0, atol=tol * H)
+    assert np.allclose(v, -H * f1 / b, rtol=0, atol=tol * H / b * 10)
+    assert np.allclose(a, -H * f2 / b**2, rtol=0, atol=tol * H / b**2 * 100)
+    assert np.allclose(j, -H * f3 / b**3, rtol=0, atol=tol * H / b**3 * 1000)
+
+
+@pytest.mark.parametrize("key", sorted(LAWS))
+@pytest.mark.parametrize("beta", [30.0, 100.0, 230.0])
+def test_cam_program_rates_are_differences_of_its_displacement(key, beta):
+    """The program's own velocity, acceleration and jerk against central differences of
+    its displacement alone (no law formula involved): 1st, 2nd and 3rd differences with
+    step e, accurate to O(e^2) away from the joins."""
+    h = 0.03
+    prog, t_rise, t_ret, br = _program(key, beta, h, 0.002)
+    x = X[np.min(np.abs(X[:, None] - JOINS[None, :]), axis=1) > 5e-3]
+    for t0, b in ((t_rise, math.radians(beta)), (t_ret, br)):
+        e = 2e-3 * b
+        th = t0 + x * b
+
+        def s(t):
+            return prog.eval(t)[0]
+
+        _, v, a, j = prog.eval(th)
+        v_fd = (s(th + e) - s(th - e)) / (2 * e)
+        a_fd = (s(th + e) - 2 * s(th) + s(th - e)) / e**2
+        j_fd = (s(th + 2 * e) - 2 * s(th + e) + 2 * s(th - e) - s(th - 2 * e)) / (2 * e**3)
+        # scale of each derivative for the tolerance: the law's peak values
+        sv, sa, sj = h / b * 2.5, h / b**2 * 8, h / b**3 * 120
+        assert np.allclose(v, v_fd, rtol=0, atol=2e-4 * sv), key
+        assert np.allclose(a, a_fd, rtol=0, atol=2e-4 * sa), key
+        assert np.allclose(j, j_fd, rtol=0, atol=2e-3 * sj), key
+
+
+def test_cam_motion_csv_jerk_in_time(tmp_path):
+    """The motion table the user reads: velocity, acceleration and jerk in m/s, m/s^2,
+    m/s^3 at 120 rpm equal omega, omega^2, omega^3 times the closed forms (a cycloidal rise
+    of 25 mm over 120 deg, a 3-4-5 return over 90 deg)."""
+    from mechsolve.commands.cam import cam
+
+    r = CliRunner().invoke(
+        cam, [str(DATA / "cam_translating.yaml"), "-o", str(tmp_path), "--no-plots"]
+    )
+    assert r.exit_code == 0, r.output
+    with open(tmp_path / "cam_motion.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    w = 120 * 2 * PI / 60
+    h = 0.025
+    b1, b2 = math.radians(120), math.radians(90)
+    seen = {"rise": 0, "return": 0}
+    for row in rows:
+        th = math.radians(float(row["cam angle [deg]"]))
+        if 1e-9 < th < b1 - 1e-9:
+            x, b, sign, seg = th / b1, b1, 1.0, "rise"
+            f = _textbook("cycloidal", np.array([x]))
+        elif math.radians(180) + 1e-9 < th < math.radians(270) - 1e-9:
+            x, b, sign, seg = (th - math.radians(180)) / b2, b2, -1.0, "return"
+            f = _textbook("polynomial-345", np.array([x]))
+        else:
+            continue
+        seen[seg] += 1
+        s_want = h * f[0][0] if sign > 0 else h * (1 - f[0][0])
+        assert float(row["displacement [mm]"]) == pytest.approx(s_want * 1e3, abs=1e-8)
+        assert float(row["velocity [m/s]"]) == pytest.approx(sign * h * f[1][0] / b * w, abs=1e-9)
+        assert float(row["acceleration [m/s^2]"]) == pytest.approx(
+            sign * h * f[2][0] / b**2 * w**2, abs=1e-8
+        )
+        assert float(row["jerk [m/s^3]"]) == pytest.approx(
+            sign * h * f[3][0] / b**3 * w**3, abs=1e-6
+        )
+    assert seen["rise"] >= 5 and seen["return"] >= 5
+
+
+# -- (b) guide-bar synthesis from a stroke ----------------------------------------------------
+
+
+def _theta_of_k(k: float) -> float:
+    """The crank's angle between its two limit positions from the time ratio (rad):
+    theta = 180 deg (K - 1)/(K + 1)."""
+    return PI * (k - 1) / (k + 1)
+
+
+@pytest.mark.parametrize("k", [1.2, 1.46, 1.8, 2.5])
+@pytest.mark.parametrize("stroke", [0.1, 0.3126])
+def test_guide_bar_from_a_stroke(k, stroke):
+    """A guide bar with time ratio K on a frame d, given the stroke H of the bar's end:
+    the bar swings psi = theta (the crank is perpendicular to the bar at both limits), the
+    crank is r = d sin(theta/2) and the bar L = H / (2 sin(theta/2))."""
+    from mechsolve.synth.guidebar import guide_bar
+
+    th = _theta_of_k(k)
+    L = stroke / (2 * math.sin(th / 2))
+    d = 0.9 * L / (1 + math.sin(th / 2))  # the slot reaches the block: L > d + r
+    (des,) = guide_bar(frame=d, k=k, stroke=stroke)
+    assert des.lengths["crank"] == pytest.approx(d * math.sin(th / 2), rel=1e-12)
+    assert des.lengths["bar"] == pytest.approx(L, rel=1e-12)
+    assert des.extra["stroke"] == pytest.approx(stroke, rel=1e-12)
+    assert des.extra["swing"] == pytest.approx(th, rel=1e-12)
+    assert des.time_ratio == pytest.approx(k, rel=1e-12)
+
+
+def test_guide_bar_stroke_through_synth_and_the_solver(tmp_path):
+    """`mechsolve synth` on a guide bar given K = 1.5 and a 300 mm stroke: the written
+    mechanism, solved, swings its bar by theta = 36 deg, and the bar's end B sweeps a
+    chord 2 |O4B| sin(swing/2) equal to the stroke; the crank is d sin(18 deg)."""
+    from mechsolve.commands.synth import synth
+
+    prob = tmp_path / "gb.yaml"
+    prob.write_text(
+        "name: guide bar from a stroke\nunits: {length: mm, angle: deg}\n"
+        "guide-bar: {frame: 300, time_ratio: 1.5, stroke: 300}\n"
+    )
+    out = tmp_path / "design.yaml"
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    res = ms.run(out)
+    assert res.ok.all()
+    (lp,) = [lp for lp in res.limit_positions() if lp.name == "guide_bar"]
+    th = _theta_of_k(1.5)
+    assert lp.swing == pytest.approx(th, abs=1e-9)
+    assert lp.time_ratio == pytest.approx(1.5, abs=1e-7)
+    b = res.point("B")
+    o4 = res.point("O4")
+    L = math.hypot(b.x[0] - o4.x[0], b.y[0] - o4.y[0])
+    assert 2 * L * math.sin(lp.swing / 2) == pytest.approx(0.300, abs=1e-9)
+    a, o2 = res.point("A"), res.point("O2")
+    assert math.hypot(a.x[0] - o2.x[0], a.y[0] - o2.y[0]) == pytest.approx(
+        0.3 * math.sin(th / 2), abs=1e-12
+    )
