@@ -304,3 +304,63 @@ def test_guide_bar_stroke_through_synth_and_the_solver(tmp_path):
     assert math.hypot(a.x[0] - o2.x[0], a.y[0] - o2.y[0]) == pytest.approx(
         0.3 * math.sin(th / 2), abs=1e-12
     )
+
+
+# -- (c) the units table against the definitions of its units ---------------------------------
+
+_IN, _FT, _LBF = 0.0254, 0.3048, 4.4482216152605  # m, m, N: exact (1959; NIST SP 811)
+_L, _M, _T, _A = (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)
+_F, _E, _P, _PR = (1, 1, -2, 0), (2, 1, -2, 0), (2, 1, -3, 0), (-1, 1, -2, 0)
+# symbol -> (SI value of one unit, dimension over (length, mass, time, angle)), written
+# from the definitions; a superset of the table (units it may gain are defined here too)
+DEFINITIONS = {
+    "m": (1.0, _L), "mm": (0.001, _L), "cm": (0.01, _L), "dm": (0.1, _L), "km": (1000.0, _L),
+    "um": (1e-6, _L), "in": (_IN, _L), "inch": (_IN, _L), "ft": (_FT, _L),
+    "yd": (3 * _FT, _L), "mi": (5280 * _FT, _L),
+    "kg": (1.0, _M), "g": (0.001, _M), "t": (1000.0, _M), "lbm": (0.45359237, _M),
+    "slug": (_LBF / _FT, _M), "blob": (_LBF / _IN, _M),
+    "s": (1.0, _T), "ms": (0.001, _T), "sec": (1.0, _T), "min": (60.0, _T),
+    "h": (3600.0, _T),
+    "rad": (1.0, _A), "deg": (PI / 180, _A), "°": (PI / 180, _A), "rev": (2 * PI, _A),
+    "r": (2 * PI, _A), "turn": (2 * PI, _A), "rpm": (2 * PI / 60, (0, 0, -1, 1)),
+    "N": (1.0, _F), "kN": (1e3, _F), "MN": (1e6, _F), "kgf": (9.80665, _F),
+    "lbf": (_LBF, _F), "kip": (1000 * _LBF, _F),
+    "Nm": (1.0, _E), "kNm": (1e3, _E), "J": (1.0, _E), "kJ": (1e3, _E),
+    "W": (1.0, _P), "kW": (1e3, _P), "hp": (745.69987158227022, _P),
+    "Pa": (1.0, _PR), "kPa": (1e3, _PR), "MPa": (1e6, _PR), "bar": (1e5, _PR),
+    "psi": (_LBF / _IN**2, _PR), "ksi": (1000 * _LBF / _IN**2, _PR),
+}  # fmt: skip
+
+
+def test_every_unit_of_the_table_is_its_definition():
+    """Every symbol of the units table converts by its definition (to rounding), with its
+    dimension; a symbol the table gains must be defined here as well."""
+    from mechsolve.units import _UNITS, parse_unit
+
+    missing = sorted(set(_UNITS) - set(DEFINITIONS))
+    assert not missing, f"define these units in DEFINITIONS: {missing}"
+    for sym, (factor, dim) in _UNITS.items():
+        want, want_dim = DEFINITIONS[sym]
+        assert factor == pytest.approx(want, rel=1e-14), sym
+        assert tuple(dim) == want_dim, sym
+        unit = parse_unit(sym)  # the path a file's "<number> <unit>" takes
+        assert unit.factor == pytest.approx(want, rel=1e-14), sym
+        assert tuple(unit.dim) == want_dim, sym
+
+
+def test_units_against_printed_conversion_values():
+    """A few conversions as the tables print them (NIST SP 811, appendix B), and compound
+    units through the parser."""
+    from mechsolve.units import parse_quantity, parse_unit
+
+    assert parse_unit("psi").factor == pytest.approx(6894.757293168, rel=1e-12)
+    assert parse_unit("slug").factor == pytest.approx(14.59390293720636, rel=1e-13)
+    assert parse_unit("lbf in").factor == pytest.approx(0.1129848290276167, rel=1e-13)
+    assert parse_unit("lbf ft").factor == pytest.approx(1.3558179483314004, rel=1e-13)
+    assert parse_unit("r/min").factor == pytest.approx(0.10471975511965977, rel=1e-14)
+    assert parse_quantity("2 lb", "force") == pytest.approx(2 * _LBF, rel=1e-14)
+    assert parse_quantity("2 lb", "mass") == pytest.approx(0.90718474, rel=1e-14)
+    assert parse_quantity("0.3 lb in s^2", "moment of inertia") == pytest.approx(
+        0.3 * _LBF * _IN, rel=1e-14
+    )
+    assert parse_quantity("25 deg", "angle") == pytest.approx(25 * PI / 180, rel=1e-15)
