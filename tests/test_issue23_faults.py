@@ -364,3 +364,72 @@ def test_units_against_printed_conversion_values():
         0.3 * _LBF * _IN, rel=1e-14
     )
     assert parse_quantity("25 deg", "angle") == pytest.approx(25 * PI / 180, rel=1e-15)
+
+
+# -- (d) a rocker whose extreme lies just after a dead zone the sweep steps over -------------
+
+FB = (30.0, 100.0, 80.0, 90.0)  # crank, coupler, rocker, frame (mm): a crank-rocker
+
+
+def _fourbar_extremes():
+    """The rocker's limit positions in closed form: crank and coupler in line (extended,
+    O2B = b + a; folded, O2B = b - a), B above the frame. Returns the crank angles and the
+    rocker angles there (rad)."""
+    a, b, c, d = FB
+    out = []
+    for r, turn in ((b + a, 0.0), (b - a, PI)):
+        ang = math.acos((r * r + d * d - c * c) / (2 * r * d))  # angle B O2 O4
+        bx, by = r * math.cos(ang), r * math.sin(ang)
+        out.append((ang + turn, math.atan2(by, bx - d)))
+    return out
+
+
+def _dead_zone_linkage(centre: float, half: float, step: float) -> str:
+    """The four-bar FB, and a dyad arm E-F, lever F-O6 hung on the crank at E (30 mm behind
+    O2): |E O6| = sqrt(a^2 + D^2 + 2 a D cos(phi - centre)) with O6 at D = 100 mm in the
+    direction ``centre``, so the dyad (arm + lever = |E O6| at phi = centre +- half) cannot
+    close for |phi - centre| < half deg."""
+    a, b, c, d = FB
+    D, p = 100.0, 70.0
+    q = math.sqrt(a * a + D * D + 2 * a * D * math.cos(math.radians(half))) - p
+    ox, oy = D * math.cos(math.radians(centre)), D * math.sin(math.radians(centre))
+    return f"""
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [{d}, 0], O6: [{ox!r}, {oy!r}]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0], E: [-{a}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}}}
+  arm: {{points: {{E: [0, 0], F: [{p}, 0]}}}}
+  lever: {{points: {{O6: [0, 0], F: [{q!r}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker],
+         E: [crank, arm], F: [arm, lever], O6: [ground, lever]}}
+assembly: [B left of A -> O4]
+driver: {{joint: O2, speed: 1 rad/s, start: 0 deg}}
+sweep: {{range: 360 deg, step: {step} deg}}
+"""
+
+
+# (dead zone's centre, half width, step), deg: the dead zone between two samples and the
+# rocker's extreme (crank at 37.35 deg, extended; 238.41 deg, folded) between the next two
+DEAD_ZONES = [(25.0, 4.0, 10.0), (33.0, 2.5, 6.0), (225.0, 4.0, 10.0), (234.0, 1.5, 4.0)]
+
+
+@pytest.mark.parametrize("centre,half,step", DEAD_ZONES)
+def test_rocker_extreme_just_after_a_stepped_over_dead_zone(centre, half, step):
+    (ce, re), (cf, rf) = _fourbar_extremes()
+    # the layout the test needs: the extreme in the interval after the dead zone's
+    k = int(centre // step)
+    assert k * step < centre - half and centre + half < (k + 1) * step
+    ext = math.degrees(ce if centre < 180 else cf)
+    assert (k + 1) * step < ext < (k + 2) * step
+    res = ms.solve(ms.loads(_dead_zone_linkage(centre, half, step)))
+    dz = [e for e in res.solution.events if e.kind == "dead zone"]
+    assert len(dz) == 1 and dz[0].after == k  # between samples k and k + 1
+    assert math.degrees(dz[0].u) == pytest.approx(centre, abs=1e-6)
+    (lp,) = [lp for lp in res.limit_positions() if lp.name == "rocker"]
+    assert lp.low == pytest.approx(re, abs=1e-9)
+    assert lp.high == pytest.approx(rf, abs=1e-9)
+    assert lp.swing == pytest.approx(rf - re, abs=1e-9)
+    theta = cf - ce - PI  # the crank angle between the limits beyond half a turn
+    assert lp.time_ratio == pytest.approx((PI + theta) / (PI - theta), abs=1e-8)
