@@ -433,3 +433,77 @@ def test_rocker_extreme_just_after_a_stepped_over_dead_zone(centre, half, step):
     assert lp.swing == pytest.approx(rf - re, abs=1e-9)
     theta = cf - ce - PI  # the crank angle between the limits beyond half a turn
     assert lp.time_ratio == pytest.approx((PI + theta) / (PI - theta), abs=1e-8)
+
+
+# -- (e) a slider driven from a four-bar's coupler point, every solver method ----------------
+
+W = 3.0  # crank speed (rad/s)
+
+
+def _coupler_slider(method: str) -> str:
+    """The docs' four-bar (crank 26.5, coupler 105.6, rocker 59, frame 87.5 mm, P 60 mm
+    from A at 30 deg from A -> B) and a rod P-C of 150 mm to a block C on the ground line
+    y = 10 mm: under ``split-newton`` the rod and block are a Newton group whose known
+    body (the coupler) moves."""
+    return f"""
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [87.5, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [26.5, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [105.6, 0], P: {{length: 60, angle: 30}}}}}}
+  rocker: {{points: {{O4: [0, 0], B: [59, 0]}}}}
+  rod: {{points: {{P: [0, 0], C: [150, 0]}}}}
+  block: {{points: {{C: [0, 0]}}}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+  P: [coupler, rod]
+  C: [rod, block]
+  guide: {{slider: [ground, block], point: C, line: {{through: [0, 10], angle: 0}}}}
+assembly: [B left of A -> O4, C.x > P.x]
+driver: {{joint: O2, speed: {W} rad/s, start: 10 deg}}
+sweep: {{range: 360 deg, step: 7.5 deg}}
+solver: {{method: {method}}}
+"""
+
+
+def _block_x(phi: np.ndarray) -> np.ndarray:
+    """C.x (m) at crank angles phi in closed form: B from the two circles about A and O4
+    (on the left of A -> O4), P on the coupler, C on the line y = 10 mm right of P."""
+    a, b, c, d = 0.0265, 0.1056, 0.059, 0.0875
+    ax, ay = a * np.cos(phi), a * np.sin(phi)
+    ex, ey = d - ax, -ay  # A -> O4
+    r = np.hypot(ex, ey)
+    along = (b * b - c * c + r * r) / (2 * r)
+    off = np.sqrt(b * b - along * along)
+    bx = ax + (along * ex - off * ey) / r  # the left of A -> O4: +90 deg from it
+    by = ay + (along * ey + off * ex) / r
+    ux, uy = (bx - ax) / b, (by - ay) / b
+    k, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    px, py = ax + 0.06 * (k * ux - s * uy), ay + 0.06 * (s * ux + k * uy)
+    return px + np.sqrt(0.15**2 - (0.01 - py) ** 2)
+
+
+@pytest.mark.parametrize("method", ["split-newton", "newton", "auto"])
+def test_slider_on_a_coupler_point_rates(method):
+    """The block's position, velocity and acceleration against the closed-form position
+    and its central differences in the crank angle (times omega, omega^2: constant
+    speed), at every sample and every solver method."""
+    res = ms.solve(ms.loads(_coupler_slider(method)))
+    assert res.ok.all()
+    phi = np.asarray(res.u, dtype=float)
+    h = 1e-4
+    x0, xp, xm = _block_x(phi), _block_x(phi + h), _block_x(phi - h)
+    v = (xp - xm) / (2 * h) * W
+    acc = (xp - 2 * x0 + xm) / h**2 * W**2
+    c = res.point("C")
+    assert np.allclose(c.x, x0, rtol=0, atol=1e-12)
+    assert np.allclose(c.y, 0.01, rtol=0, atol=1e-12)
+    assert np.allclose(c.vx, v, rtol=0, atol=1e-8)
+    assert np.allclose(c.vy, 0.0, rtol=0, atol=1e-12)
+    assert np.allclose(c.ax, acc, rtol=0, atol=1e-6)
+    assert np.allclose(c.ay, 0.0, rtol=0, atol=1e-10)
+    # the rates change sign over the turn: a swapped sign or factor cannot pass
+    assert np.ptp(v) > 0.1 and np.ptp(acc) > 0.5
