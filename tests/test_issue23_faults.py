@@ -248,6 +248,43 @@ def test_cam_motion_csv_jerk_in_time(tmp_path):
     assert seen["rise"] >= 5 and seen["return"] >= 5
 
 
+def test_cam_motion_csv_angular_jerk_of_an_oscillating_follower(tmp_path):
+    """The seed's oscillating follower (15 deg over 75 deg of cam angle, back over 75 deg,
+    60 rpm) with a cycloidal law: swing, angular velocity, acceleration and jerk in the
+    table against omega^n times the closed forms."""
+    from mechsolve.commands.cam import cam
+
+    text = (ROOT / "mechanisms" / "shaper-cam.yaml").read_text()
+    assert "law: equal acceleration" in text
+    f = tmp_path / "cyc.yaml"
+    f.write_text(text.replace("law: equal acceleration", "law: cycloidal"))
+    r = CliRunner().invoke(
+        cam, [str(f), "-o", str(tmp_path / "out"), "--no-plots", "--variant", "as-seed"]
+    )
+    assert r.exit_code == 0, r.output
+    with open(tmp_path / "out" / "cam_motion.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    w, h, b = 2 * PI, math.radians(15), math.radians(75)
+    n = 0
+    for row in rows:
+        th = math.radians(float(row["cam angle [deg]"]))
+        if 1e-9 < th < b - 1e-9:
+            x, sign = th / b, 1.0
+        elif math.radians(85) + 1e-9 < th < math.radians(160) - 1e-9:
+            x, sign = (th - math.radians(85)) / b, -1.0
+        else:
+            continue
+        n += 1
+        f0, f1, f2, f3 = (float(v[0]) for v in _textbook("cycloidal", np.array([x])))
+        swing = h * f0 if sign > 0 else h * (1 - f0)
+        assert float(row["swing [deg]"]) == pytest.approx(math.degrees(swing), abs=1e-9)
+        got = [float(row[k]) for k in ("angular velocity [rad/s]",
+               "angular acceleration [rad/s^2]", "angular jerk [rad/s^3]")]  # fmt: skip
+        want = [sign * h * f1 / b * w, sign * h * f2 / b**2 * w**2, sign * h * f3 / b**3 * w**3]
+        assert got == pytest.approx(want, abs=1e-8)
+    assert n >= 20
+
+
 # -- (b) guide-bar synthesis from a stroke ----------------------------------------------------
 
 
