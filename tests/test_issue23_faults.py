@@ -1,0 +1,546 @@
+"""Issue 23 §5: hand-made faults that the suite let through, each caught here against a
+formula written independently of mechsolve (textbook closed forms, finite differences of
+closed-form positions, the SI definitions of the units).
+
+(a) the cam program's jerk divided by beta^2 instead of beta^3;
+(b) guide-bar synthesis taking the bar from a given stroke with sin(theta), not sin(theta/2);
+(c) a factor of the units table changed in its fourth digit;
+(d) a dead-zone event recorded one sample late (the swing and time ratio of a rocker whose
+    extreme lies just after the dead zone silently dropped);
+(e) the x/y columns of known bodies swapped in a Newton group's rate equations (a slider
+    hanging off a four-bar's coupler under ``split-newton``).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mechsolve as ms
+from mechsolve.cam.laws import LAWS
+from mechsolve.cam.program import build_program
+
+PI = math.pi
+ROOT = Path(__file__).parent.parent
+DATA = Path(__file__).parent / "data"
+
+
+# -- (a) cam motion laws: displacement, velocity, acceleration and jerk ------------------------
+
+
+def _textbook(key: str, x: np.ndarray):
+    """f, f', f'', f''' of a unit rise over a unit cam angle (x = 0..1), written here from
+    the textbook formulas (Norton, Design of Machinery, ch. 8; Shigley, ch. 6). The
+    modified laws' second halves follow from their symmetry f(x) = 1 - f(1 - x), which
+    makes f' and f''' even and f'' odd about x = 1/2."""
+    z = 0.0 * x
+    if key == "uniform-velocity":
+        return x, 1.0 + z, z, z
+    if key == "parabolic":
+        first = x < 0.5
+        return (
+            np.where(first, 2 * x**2, 1 - 2 * (1 - x) ** 2),
+            np.where(first, 4 * x, 4 * (1 - x)),
+            np.where(first, 4.0, -4.0),
+            z,
+        )
+    if key == "simple-harmonic":
+        return (
+            (1 - np.cos(PI * x)) / 2,
+            PI / 2 * np.sin(PI * x),
+            PI**2 / 2 * np.cos(PI * x),
+            -(PI**3) / 2 * np.sin(PI * x),
+        )
+    if key == "cycloidal":
+        return (
+            x - np.sin(2 * PI * x) / (2 * PI),
+            1 - np.cos(2 * PI * x),
+            2 * PI * np.sin(2 * PI * x),
+            4 * PI**2 * np.cos(2 * PI * x),
+        )
+    if key == "polynomial-345":
+        return (
+            10 * x**3 - 15 * x**4 + 6 * x**5,
+            30 * x**2 - 60 * x**3 + 30 * x**4,
+            60 * x - 180 * x**2 + 120 * x**3,
+            60 - 360 * x + 360 * x**2,
+        )
+    if key == "polynomial-4567":
+        return (
+            35 * x**4 - 84 * x**5 + 70 * x**6 - 20 * x**7,
+            140 * x**3 - 420 * x**4 + 420 * x**5 - 140 * x**6,
+            420 * x**2 - 1680 * x**3 + 2100 * x**4 - 840 * x**5,
+            840 * x - 5040 * x**2 + 8400 * x**3 - 4200 * x**4,
+        )
+    if key in ("modified-trapezoid", "modified-sine"):
+        half = x <= 0.5
+        out = [np.empty_like(x) for _ in range(4)]
+        a = _modified_first_half(key, x[half])
+        b = _modified_first_half(key, 1 - x[~half])
+        for k, sign in enumerate((None, 1, -1, 1)):
+            out[k][half] = a[k]
+            out[k][~half] = 1 - b[k] if sign is None else sign * b[k]
+        return tuple(out)
+    raise KeyError(key)
+
+
+def _modified_first_half(key: str, x: np.ndarray):
+    """Norton eqs. 8.15 (modified trapezoid, C = 4.888124) and 8.18 (modified sine,
+    C = 5.527957) for x <= 1/2, to their printed digits."""
+    if key == "modified-trapezoid":
+        c = 4.88812407
+        q = 4 * PI
+        f = np.select(
+            [x <= 1 / 8, x <= 3 / 8],
+            [
+                0.38898448 * x - 0.0309544 * np.sin(q * x),
+                2.44406184 * x**2 - 0.22203097 * x + 0.00723407,
+            ],
+            1.6110154 * x - 0.0309544 * np.sin(q * x - PI) - 0.3055077,
+        )
+        f1 = np.select(
+            [x <= 1 / 8, x <= 3 / 8],
+            [0.38898448 * (1 - np.cos(q * x)), 4.88812367 * x - 0.22203097],
+            1.6110154 - 0.38898448 * np.cos(q * x - PI),
+        )
+        f2 = np.select(
+            [x <= 1 / 8, x <= 3 / 8], [c * np.sin(q * x), c + 0 * x], c * np.sin(q * x - PI)
+        )
+        f3 = np.select(
+            [x <= 1 / 8, x <= 3 / 8], [c * q * np.cos(q * x), 0 * x], c * q * np.cos(q * x - PI)
+        )
+        return f, f1, f2, f3
+    c = 5.5279571
+    q = 4 * PI
+    f = np.where(
+        x <= 1 / 8,
+        0.43990085 * x - 0.0350062 * np.sin(q * x),
+        0.28004957 + 0.43990085 * x - 0.31505577 * np.cos(q / 3 * x - PI / 6),
+    )
+    f1 = np.where(
+        x <= 1 / 8,
+        0.43990085 * (1 - np.cos(q * x)),
+        0.43990085 * (1 + 3 * np.sin(q / 3 * x - PI / 6)),
+    )
+    f2 = np.where(x <= 1 / 8, c * np.sin(q * x), c * np.cos(q / 3 * x - PI / 6))
+    f3 = np.where(x <= 1 / 8, c * q * np.cos(q * x), -c * q / 3 * np.sin(q / 3 * x - PI / 6))
+    return f, f1, f2, f3
+
+
+# the joins inside the laws, where f'' or f''' jumps: compared beside them, not on them
+JOINS = np.array([0.0, 1 / 8, 3 / 8, 0.5, 5 / 8, 7 / 8, 1.0])
+X = np.linspace(0.0, 1.0, 401)
+X = X[np.min(np.abs(X[:, None] - JOINS[None, :]), axis=1) > 1e-3]
+BETAS = [20.0, 45.0, 75.0, 150.0, 250.0]  # deg: beta^2 and beta^3 differ at all of them
+
+
+def _program(key: str, beta: float, lift: float, s_before: float):
+    """A rise of ``s_before`` (3-4-5) over 40 deg, a dwell, then the law's rise of ``lift``
+    over ``beta``, a dwell, its return of the whole stroke over ``beta`` (or over 360 -
+    80 - beta deg when 2 beta does not fit) and the rest of the turn a dwell: the tested
+    segments start away from 0 and from displacement 0. Returns the program, the rise's
+    and the return's start and the return's angle (rad)."""
+    law, p345 = LAWS[key], LAWS["polynomial-345"]
+    b, d = math.radians(beta), math.radians(10)
+    br = b if beta <= 140 else math.radians(360 - 80 - beta)
+    rest = 2 * PI - math.radians(40) - 2 * d - b - br
+    assert rest > 0
+    items = [("rise", math.radians(40), s_before, p345), ("dwell", d, None, None),
+             ("rise", b, lift, law), ("dwell", d, None, None), ("return", br, None, law),
+             ("dwell", rest, None, None)]  # fmt: skip
+    t_rise = math.radians(40) + d
+    return build_program(items, False), t_rise, t_rise + b + d, br
+
+
+@pytest.mark.parametrize("key", sorted(LAWS))
+@pytest.mark.parametrize("beta", BETAS)
+def test_cam_program_derivatives_against_textbook(key, beta):
+    """s, ds/dθ, d²s/dθ², d³s/dθ³ of a rise and a return against h f(x), h f'/β, h f''/β²,
+    h f'''/β³ written here (with x = (θ - θ0)/β)."""
+    h, s0 = 0.025, 0.004
+    prog, t_rise, t_ret, br = _program(key, beta, h, s0)
+    b = math.radians(beta)
+    f, f1, f2, f3 = _textbook(key, X)
+    tol = 3e-7 if key.startswith("modified") else 1e-11  # Norton prints 8 digits
+    s, v, a, j = prog.eval(t_rise + X * b)
+    assert np.allclose(s, s0 + h * f, rtol=0, atol=tol * h)
+    assert np.allclose(v, h * f1 / b, rtol=0, atol=tol * h / b * 10)
+    assert np.allclose(a, h * f2 / b**2, rtol=0, atol=tol * h / b**2 * 100)
+    assert np.allclose(j, h * f3 / b**3, rtol=0, atol=tol * h / b**3 * 1000)
+    # the return of the whole stroke s0 + h: s = (s0 + h)(1 - f), every derivative negated
+    b = br
+    s, v, a, j = prog.eval(t_ret + X * b)
+    H = s0 + h
+    assert np.allclose(s, H * (1 - f), rtol=0, atol=tol * H)
+    assert np.allclose(v, -H * f1 / b, rtol=0, atol=tol * H / b * 10)
+    assert np.allclose(a, -H * f2 / b**2, rtol=0, atol=tol * H / b**2 * 100)
+    assert np.allclose(j, -H * f3 / b**3, rtol=0, atol=tol * H / b**3 * 1000)
+
+
+@pytest.mark.parametrize("key", sorted(LAWS))
+@pytest.mark.parametrize("beta", [30.0, 100.0, 230.0])
+def test_cam_program_rates_are_differences_of_its_displacement(key, beta):
+    """The program's own velocity, acceleration and jerk against central differences of
+    its displacement alone (no law formula involved): 1st, 2nd and 3rd differences with
+    step e, accurate to O(e^2) away from the joins."""
+    h = 0.03
+    prog, t_rise, t_ret, br = _program(key, beta, h, 0.002)
+    x = X[np.min(np.abs(X[:, None] - JOINS[None, :]), axis=1) > 5e-3]
+    for t0, b in ((t_rise, math.radians(beta)), (t_ret, br)):
+        e = 2e-3 * b
+        th = t0 + x * b
+
+        def s(t):
+            return prog.eval(t)[0]
+
+        _, v, a, j = prog.eval(th)
+        v_fd = (s(th + e) - s(th - e)) / (2 * e)
+        a_fd = (s(th + e) - 2 * s(th) + s(th - e)) / e**2
+        j_fd = (s(th + 2 * e) - 2 * s(th + e) + 2 * s(th - e) - s(th - 2 * e)) / (2 * e**3)
+        # scale of each derivative for the tolerance: the law's peak values
+        sv, sa, sj = h / b * 2.5, h / b**2 * 8, h / b**3 * 120
+        assert np.allclose(v, v_fd, rtol=0, atol=2e-4 * sv), key
+        assert np.allclose(a, a_fd, rtol=0, atol=2e-4 * sa), key
+        assert np.allclose(j, j_fd, rtol=0, atol=2e-3 * sj), key
+
+
+def test_cam_motion_csv_jerk_in_time(tmp_path):
+    """The motion table the user reads: velocity, acceleration and jerk in m/s, m/s^2,
+    m/s^3 at 120 rpm equal omega, omega^2, omega^3 times the closed forms (a cycloidal rise
+    of 25 mm over 120 deg, a 3-4-5 return over 90 deg)."""
+    from mechsolve.commands.cam import cam
+
+    r = CliRunner().invoke(
+        cam, [str(DATA / "cam_translating.yaml"), "-o", str(tmp_path), "--no-plots"]
+    )
+    assert r.exit_code == 0, r.output
+    with open(tmp_path / "cam_motion.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    w = 120 * 2 * PI / 60
+    h = 0.025
+    b1, b2 = math.radians(120), math.radians(90)
+    seen = {"rise": 0, "return": 0}
+    for row in rows:
+        th = math.radians(float(row["cam angle [deg]"]))
+        if 1e-9 < th < b1 - 1e-9:
+            x, b, sign, seg = th / b1, b1, 1.0, "rise"
+            f = _textbook("cycloidal", np.array([x]))
+        elif math.radians(180) + 1e-9 < th < math.radians(270) - 1e-9:
+            x, b, sign, seg = (th - math.radians(180)) / b2, b2, -1.0, "return"
+            f = _textbook("polynomial-345", np.array([x]))
+        else:
+            continue
+        seen[seg] += 1
+        s_want = h * f[0][0] if sign > 0 else h * (1 - f[0][0])
+        assert float(row["displacement [mm]"]) == pytest.approx(s_want * 1e3, abs=1e-8)
+        assert float(row["velocity [m/s]"]) == pytest.approx(sign * h * f[1][0] / b * w, abs=1e-9)
+        assert float(row["acceleration [m/s^2]"]) == pytest.approx(
+            sign * h * f[2][0] / b**2 * w**2, abs=1e-8
+        )
+        assert float(row["jerk [m/s^3]"]) == pytest.approx(
+            sign * h * f[3][0] / b**3 * w**3, abs=1e-6
+        )
+    assert seen["rise"] >= 5 and seen["return"] >= 5
+
+
+def test_cam_motion_csv_angular_jerk_of_an_oscillating_follower(tmp_path):
+    """The seed's oscillating follower (15 deg over 75 deg of cam angle, back over 75 deg,
+    60 rpm) with a cycloidal law: swing, angular velocity, acceleration and jerk in the
+    table against omega^n times the closed forms."""
+    from mechsolve.commands.cam import cam
+
+    text = (ROOT / "mechanisms" / "shaper-cam.yaml").read_text()
+    assert "law: equal acceleration" in text
+    f = tmp_path / "cyc.yaml"
+    f.write_text(text.replace("law: equal acceleration", "law: cycloidal"))
+    r = CliRunner().invoke(
+        cam, [str(f), "-o", str(tmp_path / "out"), "--no-plots", "--variant", "as-seed"]
+    )
+    assert r.exit_code == 0, r.output
+    with open(tmp_path / "out" / "cam_motion.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    w, h, b = 2 * PI, math.radians(15), math.radians(75)
+    n = 0
+    for row in rows:
+        th = math.radians(float(row["cam angle [deg]"]))
+        if 1e-9 < th < b - 1e-9:
+            x, sign = th / b, 1.0
+        elif math.radians(85) + 1e-9 < th < math.radians(160) - 1e-9:
+            x, sign = (th - math.radians(85)) / b, -1.0
+        else:
+            continue
+        n += 1
+        f0, f1, f2, f3 = (float(v[0]) for v in _textbook("cycloidal", np.array([x])))
+        swing = h * f0 if sign > 0 else h * (1 - f0)
+        assert float(row["swing [deg]"]) == pytest.approx(math.degrees(swing), abs=1e-9)
+        got = [float(row[k]) for k in ("angular velocity [rad/s]",
+               "angular acceleration [rad/s^2]", "angular jerk [rad/s^3]")]  # fmt: skip
+        want = [sign * h * f1 / b * w, sign * h * f2 / b**2 * w**2, sign * h * f3 / b**3 * w**3]
+        assert got == pytest.approx(want, abs=1e-8)
+    assert n >= 20
+
+
+# -- (b) guide-bar synthesis from a stroke ----------------------------------------------------
+
+
+def _theta_of_k(k: float) -> float:
+    """The crank's angle between its two limit positions from the time ratio (rad):
+    theta = 180 deg (K - 1)/(K + 1)."""
+    return PI * (k - 1) / (k + 1)
+
+
+@pytest.mark.parametrize("k", [1.2, 1.46, 1.8, 2.5])
+@pytest.mark.parametrize("stroke", [0.1, 0.3126])
+def test_guide_bar_from_a_stroke(k, stroke):
+    """A guide bar with time ratio K on a frame d, given the stroke H of the bar's end:
+    the bar swings psi = theta (the crank is perpendicular to the bar at both limits), the
+    crank is r = d sin(theta/2) and the bar L = H / (2 sin(theta/2))."""
+    from mechsolve.synth.guidebar import guide_bar
+
+    th = _theta_of_k(k)
+    L = stroke / (2 * math.sin(th / 2))
+    d = 0.9 * L / (1 + math.sin(th / 2))  # the slot reaches the block: L > d + r
+    (des,) = guide_bar(frame=d, k=k, stroke=stroke)
+    assert des.lengths["crank"] == pytest.approx(d * math.sin(th / 2), rel=1e-12)
+    assert des.lengths["bar"] == pytest.approx(L, rel=1e-12)
+    assert des.extra["stroke"] == pytest.approx(stroke, rel=1e-12)
+    assert des.extra["swing"] == pytest.approx(th, rel=1e-12)
+    assert des.time_ratio == pytest.approx(k, rel=1e-12)
+
+
+def test_guide_bar_stroke_through_synth_and_the_solver(tmp_path):
+    """`mechsolve synth` on a guide bar given K = 1.5 and a 300 mm stroke: the written
+    mechanism, solved, swings its bar by theta = 36 deg, and the bar's end B sweeps a
+    chord 2 |O4B| sin(swing/2) equal to the stroke; the crank is d sin(18 deg)."""
+    from mechsolve.commands.synth import synth
+
+    prob = tmp_path / "gb.yaml"
+    prob.write_text(
+        "name: guide bar from a stroke\nunits: {length: mm, angle: deg}\n"
+        "guide-bar: {frame: 300, time_ratio: 1.5, stroke: 300}\n"
+    )
+    out = tmp_path / "design.yaml"
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    res = ms.run(out)
+    assert res.ok.all()
+    (lp,) = [lp for lp in res.limit_positions() if lp.name == "guide_bar"]
+    th = _theta_of_k(1.5)
+    assert lp.swing == pytest.approx(th, abs=1e-9)
+    assert lp.time_ratio == pytest.approx(1.5, abs=1e-7)
+    b = res.point("B")
+    o4 = res.point("O4")
+    L = math.hypot(b.x[0] - o4.x[0], b.y[0] - o4.y[0])
+    assert 2 * L * math.sin(lp.swing / 2) == pytest.approx(0.300, abs=1e-9)
+    a, o2 = res.point("A"), res.point("O2")
+    assert math.hypot(a.x[0] - o2.x[0], a.y[0] - o2.y[0]) == pytest.approx(
+        0.3 * math.sin(th / 2), abs=1e-12
+    )
+
+
+# -- (c) the units table against the definitions of its units ---------------------------------
+
+_IN, _FT, _LBF = 0.0254, 0.3048, 4.4482216152605  # m, m, N: exact (1959; NIST SP 811)
+_L, _M, _T, _A = (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)
+_F, _E, _P, _PR = (1, 1, -2, 0), (2, 1, -2, 0), (2, 1, -3, 0), (-1, 1, -2, 0)
+# symbol -> (SI value of one unit, dimension over (length, mass, time, angle)), written
+# from the definitions; a superset of the table (units it may gain are defined here too)
+DEFINITIONS = {
+    "m": (1.0, _L), "mm": (0.001, _L), "cm": (0.01, _L), "dm": (0.1, _L), "km": (1000.0, _L),
+    "um": (1e-6, _L), "in": (_IN, _L), "inch": (_IN, _L), "ft": (_FT, _L),
+    "yd": (3 * _FT, _L), "mi": (5280 * _FT, _L),
+    "kg": (1.0, _M), "g": (0.001, _M), "t": (1000.0, _M), "lbm": (0.45359237, _M),
+    "slug": (_LBF / _FT, _M), "blob": (_LBF / _IN, _M),
+    "s": (1.0, _T), "ms": (0.001, _T), "sec": (1.0, _T), "min": (60.0, _T),
+    "h": (3600.0, _T),
+    "rad": (1.0, _A), "deg": (PI / 180, _A), "°": (PI / 180, _A), "rev": (2 * PI, _A),
+    "r": (2 * PI, _A), "turn": (2 * PI, _A), "rpm": (2 * PI / 60, (0, 0, -1, 1)),
+    "N": (1.0, _F), "kN": (1e3, _F), "MN": (1e6, _F), "kgf": (9.80665, _F),
+    "lbf": (_LBF, _F), "kip": (1000 * _LBF, _F),
+    "Nm": (1.0, _E), "kNm": (1e3, _E), "J": (1.0, _E), "kJ": (1e3, _E),
+    "W": (1.0, _P), "kW": (1e3, _P), "hp": (745.69987158227022, _P),
+    "Pa": (1.0, _PR), "kPa": (1e3, _PR), "MPa": (1e6, _PR), "bar": (1e5, _PR),
+    "psi": (_LBF / _IN**2, _PR), "ksi": (1000 * _LBF / _IN**2, _PR),
+}  # fmt: skip
+
+
+def test_every_unit_of_the_table_is_its_definition():
+    """Every symbol of the units table converts by its definition (to rounding), with its
+    dimension; a symbol the table gains must be defined here as well."""
+    from mechsolve.units import _UNITS, parse_unit
+
+    missing = sorted(set(_UNITS) - set(DEFINITIONS))
+    assert not missing, f"define these units in DEFINITIONS: {missing}"
+    for sym, (factor, dim) in _UNITS.items():
+        want, want_dim = DEFINITIONS[sym]
+        assert factor == pytest.approx(want, rel=1e-14), sym
+        assert tuple(dim) == want_dim, sym
+        unit = parse_unit(sym)  # the path a file's "<number> <unit>" takes
+        assert unit.factor == pytest.approx(want, rel=1e-14), sym
+        assert tuple(unit.dim) == want_dim, sym
+
+
+def test_units_against_printed_conversion_values():
+    """A few conversions as the tables print them (NIST SP 811, appendix B), and compound
+    units through the parser."""
+    from mechsolve.units import parse_quantity, parse_unit
+
+    assert parse_unit("psi").factor == pytest.approx(6894.757293168, rel=1e-12)
+    assert parse_unit("slug").factor == pytest.approx(14.59390293720636, rel=1e-13)
+    assert parse_unit("lbf in").factor == pytest.approx(0.1129848290276167, rel=1e-13)
+    assert parse_unit("lbf ft").factor == pytest.approx(1.3558179483314004, rel=1e-13)
+    assert parse_unit("r/min").factor == pytest.approx(0.10471975511965977, rel=1e-14)
+    assert parse_quantity("2 lb", "force") == pytest.approx(2 * _LBF, rel=1e-14)
+    assert parse_quantity("2 lb", "mass") == pytest.approx(0.90718474, rel=1e-14)
+    assert parse_quantity("0.3 lb in s^2", "moment of inertia") == pytest.approx(
+        0.3 * _LBF * _IN, rel=1e-14
+    )
+    assert parse_quantity("25 deg", "angle") == pytest.approx(25 * PI / 180, rel=1e-15)
+
+
+# -- (d) a rocker whose extreme lies just after a dead zone the sweep steps over -------------
+
+FB = (30.0, 100.0, 80.0, 90.0)  # crank, coupler, rocker, frame (mm): a crank-rocker
+
+
+def _fourbar_extremes():
+    """The rocker's limit positions in closed form: crank and coupler in line (extended,
+    O2B = b + a; folded, O2B = b - a), B above the frame. Returns the crank angles and the
+    rocker angles there (rad)."""
+    a, b, c, d = FB
+    out = []
+    for r, turn in ((b + a, 0.0), (b - a, PI)):
+        ang = math.acos((r * r + d * d - c * c) / (2 * r * d))  # angle B O2 O4
+        bx, by = r * math.cos(ang), r * math.sin(ang)
+        out.append((ang + turn, math.atan2(by, bx - d)))
+    return out
+
+
+def _dead_zone_linkage(centre: float, half: float, step: float) -> str:
+    """The four-bar FB, and a dyad arm E-F, lever F-O6 hung on the crank at E (30 mm behind
+    O2): |E O6| = sqrt(a^2 + D^2 + 2 a D cos(phi - centre)) with O6 at D = 100 mm in the
+    direction ``centre``, so the dyad (arm + lever = |E O6| at phi = centre +- half) cannot
+    close for |phi - centre| < half deg."""
+    a, b, c, d = FB
+    D, p = 100.0, 70.0
+    q = math.sqrt(a * a + D * D + 2 * a * D * math.cos(math.radians(half))) - p
+    ox, oy = D * math.cos(math.radians(centre)), D * math.sin(math.radians(centre))
+    return f"""
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [{d}, 0], O6: [{ox!r}, {oy!r}]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a}, 0], E: [-{a}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{c}, 0]}}}}
+  arm: {{points: {{E: [0, 0], F: [{p}, 0]}}}}
+  lever: {{points: {{O6: [0, 0], F: [{q!r}, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker],
+         E: [crank, arm], F: [arm, lever], O6: [ground, lever]}}
+assembly: [B left of A -> O4]
+driver: {{joint: O2, speed: 1 rad/s, start: 0 deg}}
+sweep: {{range: 360 deg, step: {step} deg}}
+"""
+
+
+# (dead zone's centre, half width, step), deg: the dead zone between two samples and the
+# rocker's extreme (crank at 37.35 deg, extended; 238.41 deg, folded) between the next two
+DEAD_ZONES = [(25.0, 4.0, 10.0), (33.0, 2.5, 6.0), (225.0, 4.0, 10.0), (234.0, 1.5, 4.0)]
+
+
+@pytest.mark.parametrize("centre,half,step", DEAD_ZONES)
+def test_rocker_extreme_just_after_a_stepped_over_dead_zone(centre, half, step):
+    (ce, re), (cf, rf) = _fourbar_extremes()
+    # the layout the test needs: the extreme in the interval after the dead zone's
+    k = int(centre // step)
+    assert k * step < centre - half and centre + half < (k + 1) * step
+    ext = math.degrees(ce if centre < 180 else cf)
+    assert (k + 1) * step < ext < (k + 2) * step
+    res = ms.solve(ms.loads(_dead_zone_linkage(centre, half, step)))
+    dz = [e for e in res.solution.events if e.kind == "dead zone"]
+    assert len(dz) == 1 and dz[0].after == k  # between samples k and k + 1
+    assert math.degrees(dz[0].u) == pytest.approx(centre, abs=1e-6)
+    (lp,) = [lp for lp in res.limit_positions() if lp.name == "rocker"]
+    assert lp.low == pytest.approx(re, abs=1e-9)
+    assert lp.high == pytest.approx(rf, abs=1e-9)
+    assert lp.swing == pytest.approx(rf - re, abs=1e-9)
+    theta = cf - ce - PI  # the crank angle between the limits beyond half a turn
+    assert lp.time_ratio == pytest.approx((PI + theta) / (PI - theta), abs=1e-8)
+
+
+# -- (e) a slider driven from a four-bar's coupler point, every solver method ----------------
+
+W = 3.0  # crank speed (rad/s)
+
+
+def _coupler_slider(method: str) -> str:
+    """The docs' four-bar (crank 26.5, coupler 105.6, rocker 59, frame 87.5 mm, P 60 mm
+    from A at 30 deg from A -> B) and a rod P-C of 150 mm to a block C on the ground line
+    y = 10 mm: under ``split-newton`` the rod and block are a Newton group whose known
+    body (the coupler) moves."""
+    return f"""
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [87.5, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [26.5, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [105.6, 0], P: {{length: 60, angle: 30}}}}}}
+  rocker: {{points: {{O4: [0, 0], B: [59, 0]}}}}
+  rod: {{points: {{P: [0, 0], C: [150, 0]}}}}
+  block: {{points: {{C: [0, 0]}}}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+  P: [coupler, rod]
+  C: [rod, block]
+  guide: {{slider: [ground, block], point: C, line: {{through: [0, 10], angle: 0}}}}
+assembly: [B left of A -> O4, C.x > P.x]
+driver: {{joint: O2, speed: {W} rad/s, start: 10 deg}}
+sweep: {{range: 360 deg, step: 7.5 deg}}
+solver: {{method: {method}}}
+"""
+
+
+def _block_x(phi: np.ndarray) -> np.ndarray:
+    """C.x (m) at crank angles phi in closed form: B from the two circles about A and O4
+    (on the left of A -> O4), P on the coupler, C on the line y = 10 mm right of P."""
+    a, b, c, d = 0.0265, 0.1056, 0.059, 0.0875
+    ax, ay = a * np.cos(phi), a * np.sin(phi)
+    ex, ey = d - ax, -ay  # A -> O4
+    r = np.hypot(ex, ey)
+    along = (b * b - c * c + r * r) / (2 * r)
+    off = np.sqrt(b * b - along * along)
+    bx = ax + (along * ex - off * ey) / r  # the left of A -> O4: +90 deg from it
+    by = ay + (along * ey + off * ex) / r
+    ux, uy = (bx - ax) / b, (by - ay) / b
+    k, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    px, py = ax + 0.06 * (k * ux - s * uy), ay + 0.06 * (s * ux + k * uy)
+    return px + np.sqrt(0.15**2 - (0.01 - py) ** 2)
+
+
+@pytest.mark.parametrize("method", ["split-newton", "newton", "auto"])
+def test_slider_on_a_coupler_point_rates(method):
+    """The block's position, velocity and acceleration against the closed-form position
+    and its central differences in the crank angle (times omega, omega^2: constant
+    speed), at every sample and every solver method."""
+    res = ms.solve(ms.loads(_coupler_slider(method)))
+    assert res.ok.all()
+    phi = np.asarray(res.u, dtype=float)
+    h = 1e-4
+    x0, xp, xm = _block_x(phi), _block_x(phi + h), _block_x(phi - h)
+    v = (xp - xm) / (2 * h) * W
+    acc = (xp - 2 * x0 + xm) / h**2 * W**2
+    c = res.point("C")
+    assert np.allclose(c.x, x0, rtol=0, atol=1e-12)
+    assert np.allclose(c.y, 0.01, rtol=0, atol=1e-12)
+    assert np.allclose(c.vx, v, rtol=0, atol=1e-8)
+    assert np.allclose(c.vy, 0.0, rtol=0, atol=1e-12)
+    assert np.allclose(c.ax, acc, rtol=0, atol=1e-6)
+    assert np.allclose(c.ay, 0.0, rtol=0, atol=1e-10)
+    # the rates change sign over the turn: a swapped sign or factor cannot pass
+    assert np.ptp(v) > 0.1 and np.ptp(acc) > 0.5
