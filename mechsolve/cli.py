@@ -277,12 +277,16 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
             from .writers.simulation import write_simulation_plots
 
             written += write_simulation_plots(res, res.model, outdir)
+        tr = res.trajectory
         if not quiet:
             click.echo(res.summary())
+            upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
             click.echo(
-                f"  wrote {len(written)} file(s) to {outdir}/: "
+                f"  wrote {len(written)} file(s){upto} to {outdir}/: "
                 + ", ".join(p.name for p in written)
             )
+        if tr.error is not None:  # the file's motor law stopped it: an input error
+            raise tr.error
         sys.exit(EXIT_WARNINGS if res.incomplete() else EXIT_OK)
     except KeyboardInterrupt:
         click.echo("interrupted: the files not yet finished were not written", err=True)
