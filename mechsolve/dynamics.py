@@ -1147,7 +1147,13 @@ def simulate(
     the equation of motion at every integrator stage instead of from its tabulation over
     a turn (see :meth:`ReducedModel.tabulate`; always so where it cannot tabulate: a
     crank that does not turn fully or whose linkage does not come back after a turn, a
-    condition that reads the size of a speed, a J too sharp for a table)."""
+    condition that reads the size of a speed, a J too sharp for a table).
+
+    Where the motion cannot go on (the mechanism does not close, the step is too large,
+    the motor's law is not finite), the results hold the motion up to there and
+    ``trajectory.stopped`` says why (``trajectory.early``); a motor law that is not finite
+    is an input error (``trajectory.error``), raised at once if it stops the motion at its
+    start."""
     if mech.motor is None:
         raise mech.error(
             ("motor",), "a simulation needs a 'motor' section (the driver's torque law)"
@@ -1164,6 +1170,8 @@ def simulate(
     if not exact:
         model.tabulate()
     traj = integrate(model, mech.simulation, mech.motor, progress)
+    if traj.error is not None and len(traj.t) < 2:
+        raise traj.error  # the file's motor law at the start: nothing to keep
     good = np.isfinite(traj.J)
     an = model.an
     phi = traj.phi[good]

@@ -8,12 +8,15 @@ from __future__ import annotations
 import csv
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
+import mechsolve as ms
 from mechsolve.cli import main
+from mechsolve.dynamics import simulate
 
 # a uniform bar 0.8 m, 3 kg, pivoted at one end: J = m l^2 / 3 = 0.64 kg m^2, gravity's
 # moment m g (l / 2) cos(phi) = 11.772 cos(phi) N m
@@ -102,3 +105,46 @@ def test_leaving_the_closing_range_writes_the_computed_part(tmp_path, method):
     assert f"stopped early at t = {t[-1]:.6g} s" in text, text
     assert f"wrote {len(names)} file(s) with the motion up to t = {t[-1]:.6g} s" in text, text
     assert "stopped stopped" not in text
+
+
+# -- 4, bullet 6: a motor law that is not finite is named as such ------------------------------
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45"])
+def test_a_motor_law_that_is_infinite_at_the_start_is_an_input_error(tmp_path, method):
+    """M = 5 / omega from rest: inf at omega = 0, t = 0. Input error (exit 2) at the law's
+    key and line, nothing written, no numpy warning, no 'stopped stopped'."""
+    text = bar('{torque: "5 / omega"}', method=method)
+    r, out = run_cli(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    line = 1 + text.splitlines().index('motor: {torque: "5 / omega"}')
+    assert f"m.yaml:{line}: motor.torque: the motor's law M = 5 / omega gives inf at " in r.output
+    assert "omega = 0 rad/s, t = 0 s" in r.output, r.output
+    assert "too large" not in r.output and "Warning" not in r.output
+    assert "stopped stopped" not in r.output and "Traceback" not in r.output
+    assert not out.exists() or not any(out.iterdir())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning through the API either
+        with pytest.raises(ms.InputError, match="gives inf at omega = 0 rad/s"):
+            simulate(ms.loads(text))
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45"])
+def test_a_motor_law_that_becomes_nan_keeps_the_motion_up_to_there(tmp_path, method):
+    """M = sqrt(omega - 1) N m, launched at 3 rad/s upwards against gravity: the speed
+    falls through 1 rad/s, where the law has no value. The motion before is written; the
+    message names the law, a speed below 1 rad/s (where sqrt is nan) and the time, and the
+    exit is 2 (the file's law is at fault)."""
+    text = bar('{torque: "sqrt(omega - 1)"}', method=method).replace("from: rest", "from: 3 rad/s")
+    r, out = run_cli(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    m = re.search(r"gives nan at omega = ([\d.]+) rad/s, t = ([\d.]+) s", r.output)
+    assert m, r.output
+    assert 0.9 < float(m.group(1)) < 1.0
+    assert "motor.torque" in r.output and "Warning" not in r.output
+    assert "too large" not in r.output and "stopped stopped" not in r.output
+    csv_file = next(p for p in out.iterdir() if p.suffix == ".csv")
+    t, omega = read_csv(csv_file, "t [s]", "omega [rad/s]")
+    # every row written has a defined law, and the last is just before the speed of 1 rad/s
+    assert np.all(omega >= 1.0) and omega[-1] < 1.05
+    assert abs(float(m.group(2)) - t[-1]) < 0.01
