@@ -247,8 +247,16 @@ def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
     is_flag=True,
     help="Solve the equation of motion at every integrator stage (no tabulation).",
 )
+@click.option(
+    "--max-steps",
+    type=click.IntRange(min=1),
+    default=None,
+    metavar="N",
+    help="Allow up to N integrator steps (output rows) [default: 200000]; a longer run is "
+    "refused before it starts, with its estimated size.",
+)
 @QUIET
-def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
+def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> None:
     """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
     write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
     quantity and joint force) and plots."""
@@ -257,10 +265,12 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
         import numpy as np
 
         from . import api
+        from .dynamics import check_size
         from .dynamics import simulate as run_simulation
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
         mech = api.load(file, variant)
+        check_size(mech, max_steps)  # before anything is computed or created
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else ""))
         output_folder(outdir)
@@ -268,7 +278,12 @@ def simulate(file: Path, outdir, variant, no_plots, exact, quiet) -> None:
         steps = int(sim.duration / sim.step) if sim is not None and sim.step else 0
         bar = _progress_bar(steps, quiet) if sim is not None and sim.method == "rk4" else None
         try:
-            res = run_simulation(mech, exact=exact, progress=None if bar is None else bar.update)
+            res = run_simulation(
+                mech,
+                exact=exact,
+                progress=None if bar is None else bar.update,
+                max_steps=max_steps,
+            )
         finally:
             if bar is not None:
                 bar.close()

@@ -148,3 +148,61 @@ def test_a_motor_law_that_becomes_nan_keeps_the_motion_up_to_there(tmp_path, met
     # every row written has a defined law, and the last is just before the speed of 1 rad/s
     assert np.all(omega >= 1.0) and omega[-1] < 1.05
     assert abs(float(m.group(2)) - t[-1]) < 0.01
+
+
+# -- 3.2: a run too long to hold is refused before it starts, with its numbers -----------------
+
+
+@pytest.mark.parametrize(
+    "duration, step, steps", [("1e9 s", "1e-6 s", "1e+15"), ("2 s", "1e-300 s", "2e+300")]
+)
+def test_a_simulation_too_long_to_hold_is_refused_at_once(tmp_path, duration, step, steps):
+    import time
+
+    text = bar("{stall: 5 N m, slope: 2 N m s}").replace(
+        "duration: 6 s, step: 0.002 s", f"duration: {duration}, step: {step}"
+    )
+    start = time.perf_counter()
+    r, out = run_cli(tmp_path, text)
+    assert time.perf_counter() - start < 20
+    assert r.exit_code == 2, r.output
+    line = 1 + next(i for i, s in enumerate(text.splitlines()) if s.startswith("simulate:"))
+    assert f"m.yaml:{line}: simulate.step: " in r.output
+    assert f"is {steps} steps" in r.output and "the limit is 200000 steps" in r.output
+    assert "--max-steps" in r.output and "Traceback" not in r.output
+    assert re.search(r"about [\d.e+]+ [EPTGM]B of results", r.output), r.output
+    assert not out.exists()
+
+
+def test_max_steps_sets_the_limit_and_the_estimate_counts_the_columns_written(tmp_path):
+    """250 steps of 2 ms: refused over --max-steps 100, run under --max-steps 250; the
+    refusal's estimate of the values a row holds is the CSV's own column count (the
+    memory: rows times those values times 100 bytes, the measured cost of a value)."""
+    text = bar("{stall: 5 N m, slope: 2 N m s}", duration="0.5 s")
+    r, out = run_cli(tmp_path, text, "--max-steps", "100")
+    assert r.exit_code == 2, r.output
+    flat = " ".join(r.output.split())
+    m = re.search(
+        r"is 250 steps, about ([\d.]+) kB of results \(251 rows of about (\d+) values\)", flat
+    )
+    assert m and "the limit is 100 steps" in flat, flat
+    r, out = run_cli(tmp_path, text, "--max-steps", "250", "--no-plots")
+    assert r.exit_code == 0, r.output
+    (t,) = read_csv(out / "simulation.csv", "t [s]")
+    assert len(t) == 251
+    with open(out / "simulation.csv") as fh:
+        columns = len(next(csv.reader(fh)))
+    assert int(m.group(2)) == pytest.approx(columns, rel=0.1)
+    assert float(m.group(1)) * 1e3 == pytest.approx(251 * int(m.group(2)) * 100, rel=0.01)
+
+
+def test_an_adaptive_integrator_stops_after_max_steps_and_keeps_its_motion(tmp_path):
+    """RK45 over 1e9 s (an output every 2e6 s) of a disc run up to a constant speed: the
+    integrator's own steps are capped; the motion so far is written, exit 1."""
+    text = bar(
+        "{stall: -5 N m, slope: 0.5 N m s}", gravity="gravity: off", duration="1e9 s", method="RK45"
+    ).replace("step: 0.002 s, ", "")
+    r, out = run_cli(tmp_path, text, "--max-steps", "500", "--no-plots")
+    assert r.exit_code == 1, r.output
+    assert "the integrator took 500 steps, the limit (--max-steps raises it" in r.output
+    assert (out / "simulation.csv").exists()
