@@ -39,7 +39,7 @@ from .results import Column, Results
 from .state import State
 from .sweep import Analysis
 
-__all__ = ["ReducedModel", "simulate", "SimulationResults"]
+__all__ = ["ReducedModel", "check_size", "simulate", "SimulationResults"]
 
 NEAR_SINGULAR = 1e-6  # sin of a loop's transmission angle below this: solved beside it
 # the exact path (every stage solved): within this indicator of a singular position, the
@@ -49,6 +49,10 @@ SWITCH_GRID = math.radians(0.05)  # where a switching load's switches are looked
 TABLE_MIN, TABLE_MAX = 360, 61440  # intervals of the integrator's table over a turn
 TABLE_FLOOR = 1e-13  # the tables' tolerance for a column, at least this of the largest's
 SPLINE_FLOOR = 1e-8  # splines through unconverged samples: good to this of the largest
+MAX_STEPS = 200_000  # integrator steps (and output rows) allowed unless asked for more
+# memory per value of the results along a motion (its states, forces, CSV and plots): the
+# peak resident memory of seed 004 over 11 001 rows of 84 columns is 87-130 bytes a value
+BYTES_PER_VALUE = 100
 
 
 class ReducedModel:
@@ -644,8 +648,62 @@ def drive_torque(motor, d: int, omega, t=0.0) -> np.ndarray:
 
 
 class _LeftRange(Exception):
+    """The mechanism cannot close at the driver angle ``phi``."""
+
     def __init__(self, phi: float) -> None:
         self.phi = phi
+
+
+class _MotorNotFinite(Exception):
+    """The motor's law gives ``value`` (inf or nan) at the speed ``omega`` (along the
+    driver's direction) and the time ``t``."""
+
+    def __init__(self, omega: float, t: float, value: float) -> None:
+        self.omega, self.t, self.value = omega, t, value
+
+
+# why an integration cannot go on: the mechanism does not close, the motor's law is not
+# finite, or numbers beyond float range (int(inf) and the like: the step is too large)
+_STOPS = (_LeftRange, _MotorNotFinite, OverflowError, ValueError, ZeroDivisionError)
+
+
+@dataclass
+class _End:
+    """How an integration ended: ``reason`` ('' if it ran its whole duration), ``early``
+    if before what was asked (not after its revolutions or at a steady state), ``error``
+    the input error behind it (a motor law that is not finite), if any."""
+
+    reason: str = ""
+    early: bool = False
+    error: InputError | None = None
+
+
+def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) -> _End:
+    """The end of an integration that cannot go on because of ``exc`` (one of
+    :data:`_STOPS`); ``step``: the fixed step of RK4."""
+    if isinstance(exc, _LeftRange):
+        return _End(_left_text(model, exc.phi), early=True)
+    if isinstance(exc, _MotorNotFinite):
+        mech = model.mech
+        lin = model.an.linear
+        speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
+        law = mech.motor.describe() if mech.motor is not None else "the motor's law"
+        text = (
+            f"the motor's law {law} gives {exc.value:g} at {speed} = {exc.omega:.6g} {unit}, "
+            f"t = {exc.t:.6g} s: it must give a finite {'force' if lin else 'torque'} at "
+            "every speed and time the motion reaches"
+        )
+        raw = mech.source.data.get("motor") if mech.source is not None else None
+        keys = [k for k in ("torque", "force") if isinstance(raw, dict) and k in raw]
+        key = keys[0] if keys else ("force" if lin else "torque")
+        return _End(text, early=True, error=mech.error(("motor", key), text))
+    if step is not None:
+        return _End(
+            f"the step {step:.6g} s is too large for this motion (the driver would turn more "
+            "than half a turn in one step, or its speed grows without bound)",
+            early=True,
+        )
+    return _End("the driver's speed grows beyond the range of numbers", early=True)
 
 
 @dataclass
@@ -655,8 +713,10 @@ class Trajectory:
     omega: np.ndarray
     eps: np.ndarray
     J: np.ndarray
-    stopped: str = ""  # why the integration ended early ("" if it did not)
+    stopped: str = ""  # why the integration ended before its duration ("" if it did not)
     nfev: int = 0
+    early: bool = False  # it stopped before what was asked (stopped says why)
+    error: InputError | None = None  # the input error that stopped it, if any
 
 
 def _with_flywheel(mech: Mechanism) -> Mechanism:
@@ -778,7 +838,11 @@ def _acceleration(model: ReducedModel, motor, d: int):
     def torque(w: float, t: float) -> float:
         if motor.kind == "linear":  # the common law, without numpy's overhead
             return d * (motor.stall - motor.slope * d * w)
-        return float(drive_torque(motor, d, np.array([w]), t)[0])
+        with np.errstate(all="ignore"):
+            M = float(drive_torque(motor, d, np.array([w]), t)[0])
+        if not math.isfinite(M):
+            raise _MotorNotFinite(d * w, t, M)
+        return M
 
     def general(t: float, p: float, w: float) -> float:
         J, e0 = model.terms(p, w, t)
@@ -790,7 +854,7 @@ def _acceleration(model: ReducedModel, motor, d: int):
 
 def _rk4(model, sim, accel, y0, turns: _Turns, progress):
     """Fixed-step RK4 (Mathcad's ``rkfixed``) in plain floats: the times, the states
-    (phi, omega) and why it stopped early ('' if it did not)."""
+    (phi, omega) and how it ended (:class:`_End`)."""
     h = sim.step
     n = max(1, math.ceil(sim.duration / h - 1e-9))
     h2, h6 = h / 2, h / 6
@@ -798,8 +862,7 @@ def _rk4(model, sim, accel, y0, turns: _Turns, progress):
     p, w = y0
     ts, ys = [0.0], [(p, w)]
     wanted = turns.wanted
-    stopped = ""
-    too_large = ""
+    end = _End()
     try:
         for i in range(n):
             t = i * h
@@ -813,48 +876,45 @@ def _rk4(model, sim, accel, y0, turns: _Turns, progress):
             p_new = p + h6 * (w + 2 * w2 + 2 * w3 + w4)
             w_new = w + h6 * (a1 + 2 * a2 + 2 * a3 + a4)
             if not (math.isfinite(p_new) and math.isfinite(w_new) and abs(p_new - p) < math.pi):
-                too_large = f"{t:.6g}"
-                break
+                raise OverflowError
             p, w = p_new, w_new
             ts.append(t + h)
             ys.append((p, w))
             if progress is not None and (i + 1) % 50 == 0:
                 progress(50)
-            while wanted and abs(p - phi0) >= turns.next_angle() and not stopped:
-                stopped = turns.passed(t + h * _crossing(ys[-2], ys[-1], h, phi0, turns))
-            if stopped:
+            while wanted and abs(p - phi0) >= turns.next_angle() and not end.reason:
+                end.reason = turns.passed(t + h * _crossing(ys[-2], ys[-1], h, phi0, turns))
+            if end.reason:
                 break
-    except (OverflowError, ValueError):  # a speed beyond float range: int(inf) and the like
-        too_large = f"{ts[-1]:.6g}"
-    except _LeftRange as exc:
-        stopped = _left_text(model, exc.phi, ts[-1])
-    if too_large:
-        stopped = (
-            f"stopped at t = {too_large} s: the step {h:.6g} s is too large for this motion "
-            "(the driver would turn more than half a turn in one step, or its speed grows "
-            "without bound)"
-        )
+    except _STOPS as exc:
+        end = _stop_for(model, exc, h)
     if not accel.counted:
         model.nfev += 4 * (len(ts) - 1)
-    return ts, ys, stopped
+    return ts, ys, end
 
 
-def integrate(model: ReducedModel, sim, motor, progress=None) -> Trajectory:
+def integrate(
+    model: ReducedModel, sim, motor, progress=None, max_steps: int | None = None
+) -> Trajectory:
     """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start;
-    ``progress(k)`` is called as k more steps are done (RK4)."""
+    ``progress(k)`` is called as k more steps are done (RK4). An adaptive integrator
+    stops after ``max_steps`` steps of its own (default :data:`MAX_STEPS`). Where the
+    motion cannot go on (the mechanism cannot close, the motor's law is not finite, the
+    step is too large), the motion up to there is returned, with the reason."""
     d = model.mech.driver.direction
     phi0 = model.u0
     w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
     accel = _acceleration(model, motor, d)
     turns = _Turns(phi0, sim.revolutions, sim.steady)
     if sim.method == "rk4":
-        ts, ys, stopped = _rk4(model, sim, accel, (phi0, w0), turns, progress)
+        ts, ys, end = _rk4(model, sim, accel, (phi0, w0), turns, progress)
     else:
-        ts, ys, stopped = _adaptive(model, sim, accel, (phi0, w0), turns)
+        limit = MAX_STEPS if max_steps is None else max_steps
+        ts, ys, end = _adaptive(model, sim, accel, (phi0, w0), turns, limit)
     ts = np.array(ts)
     Y = np.array(ys, float).reshape(-1, 2)
     eps, J = _along(model, motor, d, ts, Y)
-    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, stopped, model.nfev)
+    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, end.reason, model.nfev, end.early, end.error)
 
 
 def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
@@ -879,9 +939,11 @@ def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
     return eps, J
 
 
-def _adaptive(model, sim, accel, y0, turns: _Turns):
+def _adaptive(model, sim, accel, y0, turns: _Turns, max_steps: int):
     """scipy's ``solve_ivp`` on a grid of output times, one revolution at a time when
-    revolutions are counted (a terminal event at each)."""
+    revolutions are counted (a terminal event at each). Where the motion cannot go on,
+    the integrator's step fails (:func:`_guarded`) and the rows computed so far, with its
+    last accepted state, are kept."""
     from scipy.integrate import solve_ivp
 
     phi0 = y0[0]
@@ -893,7 +955,8 @@ def _adaptive(model, sim, accel, y0, turns: _Turns):
     grid = np.minimum(np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration)
     ts, ys = [0.0], [tuple(y0)]
     t0, y = 0.0, np.array(y0, float)
-    stopped = ""
+    end = _End()
+    guard = _guarded(sim.method, model, max_steps)
     while True:
         events = None
         if turns.wanted:
@@ -905,18 +968,20 @@ def _adaptive(model, sim, accel, y0, turns: _Turns):
             turn.terminal = True
             events = [turn]
         try:
-            out = solve_ivp(
-                rhs,
-                (t0, sim.duration),
-                y,
-                method=sim.method,
-                t_eval=grid[grid > t0] if t0 > 0 else grid,
-                rtol=sim.rtol,
-                atol=sim.atol,
-                events=events,
-            )
-        except _LeftRange as exc:
-            raise InputError(_left_text(model, exc.phi, math.nan)) from None
+            with np.errstate(all="ignore"):
+                out = solve_ivp(
+                    rhs,
+                    (t0, sim.duration),
+                    y,
+                    method=guard,
+                    t_eval=grid[grid > t0] if t0 > 0 else grid,
+                    rtol=sim.rtol,
+                    atol=sim.atol,
+                    events=events,
+                )
+        except _STOPS as exc:  # at the first evaluations, before any step
+            end = _stop_for(model, exc)
+            break
         if not accel.counted:
             model.nfev += out.nfev
         start = 1 if t0 == 0 else 0
@@ -924,24 +989,60 @@ def _adaptive(model, sim, accel, y0, turns: _Turns):
         ys += [tuple(v) for v in out.y.T[start:]]
         if out.status == 1:
             te, ye = float(out.t_events[0][0]), out.y_events[0][0]
-            stopped = turns.passed(te)
-            if not stopped and te < sim.duration:
+            end.reason = turns.passed(te)
+            if not end.reason and te < sim.duration:
                 t0, y = te, ye
                 continue
-            if stopped and te > ts[-1]:
+            if end.reason and te > ts[-1]:
                 ts.append(te)
                 ys.append(tuple(ye))
         elif out.status < 0:
-            stopped = f"the integrator stopped: {out.message}"
+            end = guard.end or _End(f"the integrator {sim.method} failed: {out.message}", True)
+            if guard.last is not None and guard.last[0] > ts[-1]:  # its last accepted state
+                ts.append(guard.last[0])
+                ys.append(tuple(guard.last[1]))
         break
-    return ts, ys, stopped
+    return ts, ys, end
 
 
-def _left_text(model: ReducedModel, phi: float, t: float) -> str:
-    when = f"at t = {t:.6g} s, " if np.isfinite(t) else ""
+def _guarded(method: str, model: ReducedModel, max_steps: int):
+    """scipy's integrator class ``method`` whose step fails, instead of raising, where
+    the motion cannot go on (:data:`_STOPS`) or after ``max_steps`` steps, so that
+    ``solve_ivp`` returns the output computed so far. The class records why (``end``) and
+    the last accepted state (``last``)."""
+    import scipy.integrate
+
+    base = getattr(scipy.integrate, method)
+
+    class Guarded(base):
+        end: _End | None = None
+        last: tuple | None = None
+        steps = 0
+
+        def _step_impl(self):
+            cls = type(self)
+            cls.last = (float(self.t), np.array(self.y, float))
+            if cls.steps >= max_steps:
+                cls.end = _End(
+                    f"the integrator took {max_steps} steps, the limit (--max-steps raises "
+                    "it; max_steps in Python)",
+                    early=True,
+                )
+                return False, cls.end.reason
+            cls.steps += 1
+            try:
+                return super()._step_impl()
+            except _STOPS as exc:
+                cls.end = _stop_for(model, exc)
+                return False, cls.end.reason
+
+    return Guarded
+
+
+def _left_text(model: ReducedModel, phi: float) -> str:
     return (
-        f"the motion left the range where the mechanism closes {when}"
-        f"{model.an.format_u(model._wrap(phi))}: the computed part is kept"
+        "the motion left the range where the mechanism closes (the next step reached "
+        f"near {model.an.format_u(model._wrap(phi))})"
     )
 
 
@@ -1012,13 +1113,18 @@ class SimulationResults(Results):
                 f"  last full revolution: mean speed {mean:.6g} rad/s, coefficient of "
                 f"fluctuation delta = {delta:.4g}"
             )
-        if tr.stopped:
-            lines.append(f"  stopped {tr.stopped}")
+        if tr.early:
+            lines.append(
+                f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}; the motion up to "
+                "there is kept"
+            )
+        elif tr.stopped:
+            lines.append(f"  ended {tr.stopped}")
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        stop = self.trajectory.stopped
-        return super().incomplete() or bool(stop and not stop.startswith("after"))
+        """Also when the motion stopped before what was asked (see :class:`Trajectory`)."""
+        return super().incomplete() or self.trajectory.early
 
 
 def steady_fluctuation(tr: Trajectory):
@@ -1036,21 +1142,107 @@ def steady_fluctuation(tr: Trajectory):
     return mean, float((np.max(w) - np.min(w)) / mean)
 
 
+def check_size(mech: Mechanism, max_steps: int | None = None) -> None:
+    """Refuse, before any work, a simulation of more than ``max_steps`` steps (output rows
+    for an adaptive integrator; default :data:`MAX_STEPS`) or whose results would not fit
+    in the memory available: an input error at the ``simulate`` section's step (or
+    duration) with the numbers.
+
+    The memory is estimated as rows times the columns of the results (from the numbers
+    of points, links and joints) times :data:`BYTES_PER_VALUE`."""
+    sim = mech.simulation
+    if sim is None:
+        return
+    limit = MAX_STEPS if max_steps is None else max_steps
+    step = sim.step or sim.duration / 500
+    ratio = sim.duration / step  # inf for a step of 1e-300 s over 1e10 s
+    steps = math.ceil(ratio - 1e-9) if math.isfinite(ratio) else math.inf
+    rows = steps + 1
+    memory = rows * _columns_estimate(mech) * BYTES_PER_VALUE
+    available = _available_memory()
+    over_memory = available is not None and memory > available
+    if steps <= limit and not over_memory:
+        return
+    what = "steps" if sim.method == "rk4" else f"output times ({sim.method}'s output step)"
+    whole = (
+        " (the limit counts the whole duration; 'revolutions' or 'steady' may end it sooner)"
+        if sim.revolutions or sim.steady
+        else ""
+    )
+    limits = f"the limit is {limit} steps" if steps > limit else ""
+    if over_memory:
+        limits += (" and " if limits else "") + (
+            f"this machine has {_bytes_text(available)} of memory available"
+        )
+    raise mech.error(
+        ("simulate", "step") if sim.step else ("simulate", "duration"),
+        f"a duration of {sim.duration:g} s in steps of {step:g} s is {steps:.6g} {what}, "
+        f"about {_bytes_text(memory)} of results ({rows:.6g} rows of about "
+        f"{_columns_estimate(mech)} values){whole}; {limits}: give a longer step or a "
+        "shorter duration" + (", or raise the limit with --max-steps N" if steps > limit else ""),
+    )
+
+
+def _columns_estimate(mech: Mechanism) -> int:
+    """About how many columns the results of a motion have: the driver's and the
+    motor's, six a moving point (position, velocity, acceleration), three a link, three a
+    pin's reaction and seven a slider's (reaction and travel), the energies and powers."""
+    ground = set(mech.ground)
+    points = {p for lk in mech.links for p in lk.points} - ground
+    sliders = sum(1 for j in mech.joints if type(j).__name__ == "SliderJoint")
+    return 20 + 6 * len(points) + 3 * len(mech.links) + 3 * len(mech.joints) + 4 * sliders
+
+
+def _available_memory() -> int | None:
+    """The memory available to a new process (bytes; Linux's MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _bytes_text(n: float) -> str:
+    """``12.3 GB``: a number of bytes in decimal units."""
+    for unit, size in (("EB", 1e18), ("PB", 1e15), ("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{n / 1e3:.3g} kB"
+
+
 def simulate(
-    mech: Mechanism, *, method: str | None = None, exact: bool = False, progress=None
+    mech: Mechanism,
+    *,
+    method: str | None = None,
+    exact: bool = False,
+    progress=None,
+    max_steps: int | None = None,
 ) -> SimulationResults:
     """Simulate the motor-driven machine of ``mech`` (its ``motor:`` and ``simulate:``
     sections) and solve the states and joint forces along the motion. ``exact``: solve
     the equation of motion at every integrator stage instead of from its tabulation over
     a turn (see :meth:`ReducedModel.tabulate`; always so where it cannot tabulate: a
     crank that does not turn fully or whose linkage does not come back after a turn, a
-    condition that reads the size of a speed, a J too sharp for a table)."""
+    condition that reads the size of a speed, a J too sharp for a table).
+
+    Where the motion cannot go on (the mechanism does not close, the step is too large,
+    the motor's law is not finite), the results hold the motion up to there and
+    ``trajectory.stopped`` says why (``trajectory.early``); a motor law that is not finite
+    is an input error (``trajectory.error``), raised at once if it stops the motion at its
+    start.
+
+    ``max_steps``: refuse more steps than this (see :func:`check_size`; an adaptive
+    integrator also stops after that many steps of its own)."""
     if mech.motor is None:
         raise mech.error(
             ("motor",), "a simulation needs a 'motor' section (the driver's torque law)"
         )
     if mech.simulation is None:
         raise mech.error(("simulate",), "a simulation needs a 'simulate' section (duration, step)")
+    check_size(mech, max_steps)
     machine = _with_flywheel(mech)
     if machine.driver.motion is not None:
         machine = copy.copy(machine)
@@ -1060,7 +1252,9 @@ def simulate(
         raise mech.error(("driver", "start"), "the mechanism cannot close at the driver's start")
     if not exact:
         model.tabulate()
-    traj = integrate(model, mech.simulation, mech.motor, progress)
+    traj = integrate(model, mech.simulation, mech.motor, progress, max_steps)
+    if traj.error is not None and len(traj.t) < 2:
+        raise traj.error  # the file's motor law at the start: nothing to keep
     good = np.isfinite(traj.J)
     an = model.an
     phi = traj.phi[good]
@@ -1069,10 +1263,8 @@ def simulate(
     else:
         sol = core.states(an, phi, traj.omega[good], traj.eps[good], t=traj.t[good])
     if not good.all():
-        traj = Trajectory(
-            *(getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")),
-            traj.stopped,
-            traj.nfev,
+        traj = dataclasses.replace(
+            traj, **{f: getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")}
         )
     forces = core.forces(an, sol, model.extremes)
     res = SimulationResults(an, sol, forces, traj, mech.motor)

@@ -1,0 +1,208 @@
+"""Issue 23, `mechsolve simulate`: what a run says and keeps when the machine stalls, runs
+backwards, leaves the range where it closes, meets a motor law that is not finite, or is
+asked for more steps than it can hold. Checked against static torque balance, the
+closed-form run-up of a disc, and the geometry of where a four-bar closes."""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import warnings
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mechsolve as ms
+from mechsolve.cli import main
+from mechsolve.dynamics import simulate
+
+# a uniform bar 0.8 m, 3 kg, pivoted at one end: J = m l^2 / 3 = 0.64 kg m^2, gravity's
+# moment m g (l / 2) cos(phi) = 11.772 cos(phi) N m
+BAR = """
+name: bar on a motor
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], A: [0.8, 0]}, mass: 3 kg, uniform_bar: [O, A]}
+joints: {O: [ground, bar]}
+driver: {joint: O, start: 0 deg}
+GRAVITY
+MOTOR
+simulate: {duration: DURATION, step: 0.002 s, method: METHOD, from: rest}
+"""
+M_GRAVITY = 3 * 9.81 * 0.4
+
+
+def bar(motor: str, gravity: str = "gravity: 9.81 m/s^2", duration="6 s", method="rk4"):
+    return (
+        BAR.replace("GRAVITY", gravity)
+        .replace("MOTOR", f"motor: {motor}")
+        .replace("DURATION", duration)
+        .replace("METHOD", method)
+    )
+
+
+# a non-Grashof four-bar (crank a = 0.6, coupler b = 0.6, rocker c = 0.5, frame d = 1):
+# the loop closes while |A O4| <= b + c, i.e. cos(phi) >= 0.125, phi <= 82.8192 deg; the
+# motor drives the crank into that limit
+NON_GRASHOF = """
+name: non-Grashof four-bar on a motor
+ground: {O2: [0, 0], O4: [1.0, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.6, 0]}, mass: 1 kg, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [0.6, 0]}, mass: 1 kg, uniform_bar: [A, B]}
+  rocker: {points: {O4: [0, 0], B: [0.5, 0]}, mass: 1 kg, uniform_bar: [O4, B]}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, start: 0 deg}
+gravity: off
+motor: {stall: 5 N m, slope: 0 N m s}
+simulate: {duration: 2 s, step: 0.01 s, method: METHOD, from: rest}
+"""
+CLOSES_UP_TO = math.degrees(math.acos(0.125))  # 82.8192 deg
+
+
+def run_cli(tmp_path, text: str, *args: str, name="m.yaml"):
+    f = tmp_path / name
+    f.write_text(text)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out), *args])
+    return r, out
+
+
+def read_csv(path, *columns: str) -> list[np.ndarray]:
+    """The named columns of a CSV as float arrays (blank: nan)."""
+    with open(path, newline="") as fh:
+        rows = [r for r in csv.reader(fh) if r and not r[0].startswith("#")]
+    head = rows[0]
+    return [np.array([float(r[head.index(c)] or "nan") for r in rows[1:]]) for c in columns]
+
+
+# -- 2.1: a motion that leaves the closing range keeps what was computed, every method -------
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45", "LSODA", "DOP853", "Radau"])
+def test_leaving_the_closing_range_writes_the_computed_part(tmp_path, method):
+    """Exit 1 (completed with warnings, as `run` when positions cannot be solved: the
+    mechanism reaching where it cannot close is a finding of the run, not bad input), the
+    CSV and the plots hold the motion up to there, and the message says so and where."""
+    r, out = run_cli(tmp_path, NON_GRASHOF.replace("METHOD", method))
+    assert r.exit_code == 1, r.output
+    assert "Traceback" not in r.output
+    names = sorted(p.name for p in out.iterdir())
+    assert any(n.endswith(".csv") for n in names) and any(n.endswith(".png") for n in names)
+    csv_file = next(p for p in out.iterdir() if p.suffix == ".csv")
+    t, angle = read_csv(csv_file, "t [s]", "input.angle [deg]")
+    assert len(t) > 10 and np.all(np.diff(t) > 0) and t[-1] < 2.0
+    # every row written closes: before the geometric limit, and the motion got near it
+    assert np.all(angle <= CLOSES_UP_TO + 1e-9)
+    assert angle[-1] > CLOSES_UP_TO - 3.0
+    text = " ".join(r.output.split())
+    assert "left the range where the mechanism closes" in text
+    m = re.search(r"near driver angle ([\d.]+)°", text)
+    assert m and abs(float(m.group(1)) - CLOSES_UP_TO) < 1.0, text
+    assert f"stopped early at t = {t[-1]:.6g} s" in text, text
+    assert f"wrote {len(names)} file(s) with the motion up to t = {t[-1]:.6g} s" in text, text
+    assert "stopped stopped" not in text
+
+
+# -- 4, bullet 6: a motor law that is not finite is named as such ------------------------------
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45"])
+def test_a_motor_law_that_is_infinite_at_the_start_is_an_input_error(tmp_path, method):
+    """M = 5 / omega from rest: inf at omega = 0, t = 0. Input error (exit 2) at the law's
+    key and line, nothing written, no numpy warning, no 'stopped stopped'."""
+    text = bar('{torque: "5 / omega"}', method=method)
+    r, out = run_cli(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    line = 1 + text.splitlines().index('motor: {torque: "5 / omega"}')
+    assert f"m.yaml:{line}: motor.torque: the motor's law M = 5 / omega gives inf at " in r.output
+    assert "omega = 0 rad/s, t = 0 s" in r.output, r.output
+    assert "too large" not in r.output and "Warning" not in r.output
+    assert "stopped stopped" not in r.output and "Traceback" not in r.output
+    assert not out.exists() or not any(out.iterdir())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning through the API either
+        with pytest.raises(ms.InputError, match="gives inf at omega = 0 rad/s"):
+            simulate(ms.loads(text))
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45"])
+def test_a_motor_law_that_becomes_nan_keeps_the_motion_up_to_there(tmp_path, method):
+    """M = sqrt(omega - 1) N m, launched at 3 rad/s upwards against gravity: the speed
+    falls through 1 rad/s, where the law has no value. The motion before is written; the
+    message names the law, a speed below 1 rad/s (where sqrt is nan) and the time, and the
+    exit is 2 (the file's law is at fault)."""
+    text = bar('{torque: "sqrt(omega - 1)"}', method=method).replace("from: rest", "from: 3 rad/s")
+    r, out = run_cli(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    m = re.search(r"gives nan at omega = ([\d.]+) rad/s, t = ([\d.]+) s", r.output)
+    assert m, r.output
+    assert 0.9 < float(m.group(1)) < 1.0
+    assert "motor.torque" in r.output and "Warning" not in r.output
+    assert "too large" not in r.output and "stopped stopped" not in r.output
+    csv_file = next(p for p in out.iterdir() if p.suffix == ".csv")
+    t, omega = read_csv(csv_file, "t [s]", "omega [rad/s]")
+    # every row written has a defined law, and the last is just before the speed of 1 rad/s
+    assert np.all(omega >= 1.0) and omega[-1] < 1.05
+    assert abs(float(m.group(2)) - t[-1]) < 0.01
+
+
+# -- 3.2: a run too long to hold is refused before it starts, with its numbers -----------------
+
+
+@pytest.mark.parametrize(
+    "duration, step, steps", [("1e9 s", "1e-6 s", "1e+15"), ("2 s", "1e-300 s", "2e+300")]
+)
+def test_a_simulation_too_long_to_hold_is_refused_at_once(tmp_path, duration, step, steps):
+    import time
+
+    text = bar("{stall: 5 N m, slope: 2 N m s}").replace(
+        "duration: 6 s, step: 0.002 s", f"duration: {duration}, step: {step}"
+    )
+    start = time.perf_counter()
+    r, out = run_cli(tmp_path, text)
+    assert time.perf_counter() - start < 20
+    assert r.exit_code == 2, r.output
+    line = 1 + next(i for i, s in enumerate(text.splitlines()) if s.startswith("simulate:"))
+    assert f"m.yaml:{line}: simulate.step: " in r.output
+    assert f"is {steps} steps" in r.output and "the limit is 200000 steps" in r.output
+    assert "--max-steps" in r.output and "Traceback" not in r.output
+    assert re.search(r"about [\d.e+]+ [EPTGM]B of results", r.output), r.output
+    assert not out.exists()
+
+
+def test_max_steps_sets_the_limit_and_the_estimate_counts_the_columns_written(tmp_path):
+    """250 steps of 2 ms: refused over --max-steps 100, run under --max-steps 250; the
+    refusal's estimate of the values a row holds is the CSV's own column count (the
+    memory: rows times those values times 100 bytes, the measured cost of a value)."""
+    text = bar("{stall: 5 N m, slope: 2 N m s}", duration="0.5 s")
+    r, out = run_cli(tmp_path, text, "--max-steps", "100")
+    assert r.exit_code == 2, r.output
+    flat = " ".join(r.output.split())
+    m = re.search(
+        r"is 250 steps, about ([\d.]+) kB of results \(251 rows of about (\d+) values\)", flat
+    )
+    assert m and "the limit is 100 steps" in flat, flat
+    r, out = run_cli(tmp_path, text, "--max-steps", "250", "--no-plots")
+    assert r.exit_code == 0, r.output
+    (t,) = read_csv(out / "simulation.csv", "t [s]")
+    assert len(t) == 251
+    with open(out / "simulation.csv") as fh:
+        columns = len(next(csv.reader(fh)))
+    assert int(m.group(2)) == pytest.approx(columns, rel=0.1)
+    assert float(m.group(1)) * 1e3 == pytest.approx(251 * int(m.group(2)) * 100, rel=0.01)
+
+
+def test_an_adaptive_integrator_stops_after_max_steps_and_keeps_its_motion(tmp_path):
+    """RK45 over 1e9 s (an output every 2e6 s) of a disc run up to a constant speed: the
+    integrator's own steps are capped; the motion so far is written, exit 1."""
+    text = bar(
+        "{stall: -5 N m, slope: 0.5 N m s}", gravity="gravity: off", duration="1e9 s", method="RK45"
+    ).replace("step: 0.002 s, ", "")
+    r, out = run_cli(tmp_path, text, "--max-steps", "500", "--no-plots")
+    assert r.exit_code == 1, r.output
+    assert "the integrator took 500 steps, the limit (--max-steps raises it" in r.output
+    assert (out / "simulation.csv").exists()
