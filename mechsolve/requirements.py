@@ -79,6 +79,7 @@ __all__ = [
     "check_requirements",
     "evaluate_figure",
     "junit_xml",
+    "located_extreme",
     "parse_requirement",
     "verdict_table",
 ]
@@ -512,20 +513,26 @@ class _Reducer:
         if func == "range":
             hi, u_hi = self.extreme(arg, +1)
             lo, u_lo = self.extreme(arg, -1)
-            self._where("max", u_hi, "largest")
-            self._where("min", u_lo, "smallest")
+            if self.fine is None and u_hi is not None:
+                self.notes.append(f"range of the {self._samples()} samples, not located")
+            else:
+                self._where("max", u_hi, "largest")
+                self._where("min", u_lo, "smallest")
             return hi - lo
         sense = +1 if func == "max" else -1
         v, u = self.extreme(arg, sense)
         self._where(func, u, "largest" if sense > 0 else "smallest")
         return v
 
+    def _samples(self) -> int:
+        return int(np.count_nonzero(self.res.ok))
+
     def _where(self, func: str, u: float | None, word: str) -> None:
+        """Note where an extreme is (``u``: None for a figure that is one number)."""
         if u is None:
             return
         if self.fine is None:
-            n = int(np.count_nonzero(np.isfinite(np.asarray(self.res.u, float))))
-            self.notes.append(f"{func}: the {word} of the {n} samples, not located between them")
+            self.notes.append(f"{func} the {word} of the {self._samples()} samples, not located")
         elif math.isfinite(u):
             self.notes.append(f"{func} at {self.res.analysis.format_u(u)}")
 
@@ -647,6 +654,24 @@ def evaluate_figure(text: str, mech: Mechanism, results: Results) -> float:
         raise InputError(f"{text!r}: {red.ctx.unknown(exc.args[0])}") from None
     except ExprError as exc:
         raise InputError(f"{text!r}: {exc}") from None
+
+
+def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[float, float]:
+    """The largest (or smallest) value over a run of a quantity such as
+    ``"abs(input.torque)"`` and the driver value where it is, located between samples as
+    for requirements (``max()``, ``min()``), for any report that prints a peak;
+    ``(nan, nan)`` where nothing is determined. An :class:`InputError` for text that
+    does not read the run."""
+    red = _Reducer(results)
+    try:
+        e = Expression(_rewrite(text))
+        _check_dims(e, red.ctx)
+        value, where = red.extreme(e.tree, +1 if largest else -1)
+    except _Unknown as exc:
+        raise InputError(f"{text!r}: {red.ctx.unknown(exc.args[0])}") from None
+    except ExprError as exc:
+        raise InputError(f"{text!r}: {exc}") from None
+    return value, (math.nan if where is None else where)
 
 
 def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:

@@ -160,6 +160,11 @@ def test_the_crane_torque_requirement_reads_the_true_peak():
     assert m, v.message
     assert float(m.group(1)) == pytest.approx(e[k] / 1e3, abs=2e-3)
     assert float(m.group(2)) == pytest.approx(math.degrees(fine.u[k]), abs=0.01)
+    # the same computation for a report that prints the peak
+    from mechsolve.requirements import located_extreme
+
+    peak, at = located_extreme("abs(input.torque)", res)
+    assert peak == v.value and math.degrees(at) == pytest.approx(float(m.group(2)), abs=1e-3)
     # and a limit above the true peak passes
     ok = ms.loads(with_requirements(CRANE, {"torque": "max(abs(input.torque)) <= 295.2 kN m"}))
     [v] = check_requirements(ok, ms.solve(ok))
@@ -195,6 +200,18 @@ def test_a_sampled_reduction_says_so():
     mech = ms.loads(with_requirements(FOURBAR, {"m": "mean(P.y) <= 1 m"}))
     [v] = check_requirements(mech, ms.solve(mech))
     assert "mean over the 181 samples" in v.message
+    # a motion law of time has no finer sweep: its extremes are the samples' and say so
+    timed = FOURBAR.replace(
+        "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}\nsweep: {range: 360 deg, step: 2 deg}",
+        'driver: {joint: O2, motion: {law: "0.3 + 2 * t"}}\n'
+        "sweep: {duration: 1 s, time_step: 0.05 s}",
+    )
+    mech = ms.loads(with_requirements(timed, {"v": "max(P.vy) <= 1 m/s", "r": "range(P.y) <= 1 m"}))
+    res = ms.solve(mech)
+    v, r = check_requirements(mech, res)
+    assert v.value == np.nanmax(res.point("P").vy)
+    assert "(the largest of the 21 samples, not located)" in v.message
+    assert "(range of the 21 samples, not located)" in r.message
 
 
 # -- 1.8: the kind of thing a figure function takes -------------------------------------
