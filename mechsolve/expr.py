@@ -25,6 +25,11 @@ quantity of a point, link or slider (see :class:`Context`). Functions: ``abs``, 
 ``deg`` (radians to degrees) and, where the context supports it, ``stroke(q)``: the
 fraction (0..1) of ``q`` between its minimum and maximum over the sweep.
 
+Whatever is compared, added or given to ``max(a, b)`` must be of one kind:
+:func:`dimension_of` finds the dimension of every value (numbers keep their unit's, a
+bare number is SI of what it meets) and raises :class:`DimensionError` for
+``"K.vx > 0.1 m"``.
+
 A driver's motion law is an expression of time: ``Expression("0.3 + 2 * t", variables=
 ("t",))`` accepts the bare name ``t``; :meth:`Expression.derivative` differentiates it
 symbolically and :meth:`Expression.evaluate_at` evaluates it for arrays of ``t``.

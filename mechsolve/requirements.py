@@ -173,6 +173,7 @@ def parse_requirement(name: str, text: Any, linear: bool | None = None) -> Requi
     if text.strip().lower() in (FULL_TURN, "assembles: full turn", "assembles full turn"):
         return Requirement(name, text, None)
     expr = Expression(_rewrite(text))
+    expr.text = text  # messages quote what the file says (time_ratio(ram), not ram.time_ratio)
     tree = expr.tree
     if not isinstance(tree, Compare) or len(tree.ops) != 1:
         raise ExprError(
@@ -648,6 +649,7 @@ def evaluate_figure(text: str, mech: Mechanism, results: Results) -> float:
     red = _Reducer(results)
     try:
         e = Expression(_rewrite(text))
+        e.text = text
         _check_dims(e, red.ctx)
         return _scalar(red.value(e.tree), repr(text))
     except _Unknown as exc:
@@ -665,6 +667,7 @@ def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[
     red = _Reducer(results)
     try:
         e = Expression(_rewrite(text))
+        e.text = text
         _check_dims(e, red.ctx)
         value, where = red.extreme(e.tree, +1 if largest else -1)
     except _Unknown as exc:
