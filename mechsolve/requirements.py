@@ -25,7 +25,8 @@ What a requirement may read (SI values, whatever unit the CSV shows):
 Reductions: ``max(q)``, ``min(q)``, ``range(q)`` (max − min): the extremes over the sweep
 the plots are drawn from, each located between its neighbouring samples (see
 :class:`_Reducer`), the verdict saying where; ``mean(q)``, ``rms(q)`` over the file's
-samples, ``at(q, u)`` (q at the driver value u, cubic between samples); ``abs`` and the
+samples, ``at(q, u)`` (q at the driver value u, solved there; cubic between the samples
+of a motion law of time); ``abs`` and the
 other functions act position by position. Positions that did not solve are left out of a
 reduction; a figure that is not determined (no solved position) fails its requirement and
 says so.
@@ -458,7 +459,7 @@ class _Reducer:
     best point down to 1e-8 of the driver coordinate (a value the quantity takes, so
     never beyond the true extreme). Where that sweep cannot be had (a motion law of
     time, a sweep that does not close at its ends) they are the samples' and say so;
-    ``mean``, ``rms`` and ``at`` read the file's samples (``at``: cubic between them)."""
+    ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u."""
 
     def __init__(self, results: Results) -> None:
         self.res = results
@@ -500,8 +501,24 @@ class _Reducer:
             node = _rebuild(n, [done[id(k)] for k in kids]) if kids else n
             if isinstance(node, Call) and node.func in REDUCE and len(node.args) == 1:
                 node = Num(self.reduce(node.func, node.args[0]))
+            elif isinstance(node, Call) and node.func == "at" and self.fine is not None:
+                node = Num(self.at(node.args[0], _scalar(_evaluate(node.args[1], self.ctx), "u")))
             done[id(n)] = node
         return _evaluate(done[id(tree)], self.ctx)
+
+    def at(self, arg, x: float) -> float:
+        """``arg`` at the driver value ``x``, solved there (next to the nearest solved
+        sample of the sweep); not determined outside the sweep or where it does not
+        close. (Without a fine sweep ``at`` is cubic between the samples, see
+        :meth:`RunContext.at`.)"""
+        fine = self.fine
+        u = np.asarray(fine.u, float)
+        good = np.flatnonzero(fine.ok)
+        tol = 1e-12 * (fine.analysis.scale if fine.analysis.linear else 1.0)
+        if not good.size or not (u[good].min() - tol <= x <= u[good].max() + tol):
+            return math.nan
+        k = int(good[np.argmin(np.abs(u[good] - x))])
+        return float(self._values(arg, np.array([x]), k)[0])
 
     def reduce(self, func: str, arg) -> float:
         if func in ("mean", "rms"):
