@@ -22,25 +22,52 @@ What a requirement may read (SI values, whatever unit the CSV shows):
   ``<slider>.time_ratio``: the limit positions' figures; ``cycle.work``: the driver's work
   over the sweep (J).
 
-Reductions: ``min(q)``, ``max(q)``, ``mean(q)`` (over the samples), ``rms(q)``,
-``range(q)`` (max − min), ``at(q, u)`` (q at the driver value u, cubic between samples);
-``abs`` and the other functions act position by position. Positions that did not solve
-are left out of a reduction; a figure that is not determined (no solved position) fails
-its requirement and says so.
+Reductions: ``max(q)``, ``min(q)``, ``range(q)`` (max − min): the extremes over the sweep
+the plots are drawn from, each located between its neighbouring samples (see
+:class:`_Reducer`), the verdict saying where; ``mean(q)``, ``rms(q)`` over the file's
+samples, ``at(q, u)`` (q at the driver value u, solved there; cubic between the samples
+of a motion law of time); ``abs`` and the
+other functions act position by position. Positions that did not solve are left out of a
+reduction; a figure that is not determined (no solved position) fails its requirement and
+says so.
+
+What is compared must be of one kind (:func:`mechsolve.expr.dimension_of`), and the
+figures of limit positions must name what they belong to (:func:`check_names`): both are
+checked as the file is read, so that a slip is an input error at its line before anything
+is solved, never a verdict.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
+import functools
 import math
 import re
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError
-from .expr import Compare, ExprError, Expression, Ref, walk
+from .expr import (
+    QUANTITY_DIMS,
+    Binary,
+    BoolOp,
+    Call,
+    Chain,
+    Compare,
+    ExprError,
+    Expression,
+    Not,
+    Num,
+    Ref,
+    Unary,
+    children,
+    dimension_of,
+    walk,
+)
 from .units import UnitError, parse_unit
 
 # (the model and the results are not imported: the model's parser imports this module)
@@ -53,6 +80,7 @@ __all__ = [
     "check_requirements",
     "evaluate_figure",
     "junit_xml",
+    "located_extreme",
     "parse_requirement",
     "verdict_table",
 ]
@@ -89,9 +117,55 @@ def _rewrite(text: str) -> str:
     return re.sub(r"\b(time_ratio|swing|stroke)\(\s*([^\W\d]\w*)\s*\)", r"\2.\1", text)
 
 
-def parse_requirement(name: str, text: Any) -> Requirement:
+_FORCE = (1, 1, -2, 0)
+_TORQUE = (2, 1, -2, 0)
+_ANGLE = (0, 0, 0, 1)
+_LENGTH = (1, 0, 0, 0)
+_PURE = (0, 0, 0, 0)
+# the figures a requirement reads, beyond the quantities of points, links and sliders
+_ATTR_DIMS = {
+    **QUANTITY_DIMS,
+    "Fx": _FORCE,
+    "Fy": _FORCE,
+    "F": _FORCE,
+    "N": _FORCE,
+    "M": _TORQUE,
+    "swing": _ANGLE,
+    "stroke": _LENGTH,
+    "time_ratio": _PURE,
+}
+_NAMED_DIMS = {
+    ("input", "torque"): _TORQUE,
+    ("input", "force"): _FORCE,
+    ("input", "angle"): _ANGLE,
+    ("input", "s"): _LENGTH,
+    ("cycle", "work"): _TORQUE,
+    ("solver", "residual"): _LENGTH,
+    ("solver", "iterations"): _PURE,
+    ("jacobian", "rcond"): _PURE,
+    **{("energy", a): _TORQUE for a in ("kinetic", "potential")},
+    **{
+        ("power", a): (2, 1, -3, 0)
+        for a in ("input", "kinetic_rate", "potential_rate", "loads", "residual")
+    },
+}
+
+
+def figure_dim(ref: Ref, linear: bool | None = None) -> tuple[int, int, int, int] | None:
+    """The dimension of a figure a requirement reads, from its name alone (``None`` when
+    the name does not tell: it is checked again on the run's columns)."""
+    if ref.name == "transmission_angle":
+        return _ANGLE
+    if (ref.name, ref.attr) == ("input", "travel"):
+        return None if linear is None else (_LENGTH if linear else _ANGLE)
+    return _NAMED_DIMS.get((ref.name, ref.attr), _ATTR_DIMS.get(ref.attr))
+
+
+def parse_requirement(name: str, text: Any, linear: bool | None = None) -> Requirement:
     """Read one requirement; raises :class:`ExprError` with the reason when it is not a
-    comparison of a figure with a limit."""
+    comparison of a figure with a limit, and :class:`~mechsolve.expr.DimensionError`
+    when it compares (or adds) figures of different kinds (``linear``: whether the
+    driver is a slider, so that ``at(q, u)`` takes a length rather than an angle)."""
     if not isinstance(text, str):
         raise ExprError(
             "a requirement is a comparison such as 'max(abs(input.torque)) <= 300 kN m', "
@@ -100,6 +174,7 @@ def parse_requirement(name: str, text: Any) -> Requirement:
     if text.strip().lower() in (FULL_TURN, "assembles: full turn", "assembles full turn"):
         return Requirement(name, text, None)
     expr = Expression(_rewrite(text))
+    expr.text = text  # messages quote what the file says (time_ratio(ram), not ram.time_ratio)
     tree = expr.tree
     if not isinstance(tree, Compare) or len(tree.ops) != 1:
         raise ExprError(
@@ -112,8 +187,100 @@ def parse_requirement(name: str, text: Any) -> Requirement:
             "one side of the comparison must read the run (e.g. max(K.y)) and the other "
             "be a limit (e.g. 2 m)"
         )
+    for n in walk(tree):
+        if isinstance(n, Call) and n.func == "stroke":
+            raise ExprError(
+                "in a requirement stroke(X) is the stroke of the slider joint X (e.g. "
+                "stroke(ram_guide)); the fraction of a stroke, stroke(C.x), belongs in a "
+                "load's 'when'"
+            )
+        if isinstance(n, Call) and n.func == "at":
+            if any(isinstance(m, Ref) for m in walk(n.args[1])):
+                raise ExprError(
+                    "at(q, u) reads q at the driver value u, a number such as 31 deg "
+                    f"(got {Expression._derived(n.args[1], '', ()).to_text()!r})"
+                )
+    driver = None if linear is None else (_LENGTH if linear else _ANGLE)
+    expr.dimension(lambda ref: figure_dim(ref, linear), driver)
     limit_text = re.split(r"<=|>=|==|!=|<|>", text)[1 if reads[0] else 0]
     return Requirement(name, text, expr, _unit_of(limit_text))
+
+
+def _quote(names: list[str]) -> str:
+    return ", ".join(names) if names else "none in this mechanism"
+
+
+def check_names(mech: Mechanism, req: Requirement) -> None:
+    """Check that each figure of a limit position names the kind of thing it belongs to:
+    ``swing(X)`` a rocker (a link pinned to the ground, not the driven one),
+    ``stroke(X)`` a slider joint (not the driven one), ``time_ratio(X)`` a rocker or a
+    slider on a ground guide (a ram). Raises :class:`ExprError` with the names that
+    would do; a name that is neither a link nor a joint is left to the run (which
+    suggests the close ones)."""
+    from .model import GROUND, PinJoint, SliderJoint
+
+    if req.expr is None:
+        return
+    driven = mech.driver.joint if mech.driver is not None else None
+    links = {lk.name for lk in mech.links}
+    joints = {j.name: j for j in mech.joints}
+    rockers = [
+        x
+        for j in mech.joints
+        if isinstance(j, PinJoint) and GROUND in j.links and j.name != driven
+        for x in j.links
+        if x != GROUND
+    ]
+    sliders = [j for j in mech.joints if isinstance(j, SliderJoint) and j.name != driven]
+    slider_names = [j.name for j in sliders]
+    rams = [j.name for j in sliders if GROUND in (j.guide, j.block)]
+    driven_links = set(joints[driven].links) - {GROUND} if driven in joints else set()
+    for ref in walk(req.expr.tree):
+        if not isinstance(ref, Ref) or ref.attr not in ("swing", "stroke", "time_ratio"):
+            continue
+        x, attr = ref.name, ref.attr
+        if x not in links and x not in joints:
+            continue
+        carried = [j.name for j in sliders if x in (j.guide, j.block)]
+        if x in joints:
+            what = (
+                "the driven joint"
+                if x == driven
+                else "a slider joint"
+                if x in slider_names
+                else "a pin joint"
+            )
+        else:
+            what = "the driven link" if x in driven_links else "a link"
+        if attr == "swing" and x not in rockers:
+            hint = f"stroke({x}) is its figure" if x in slider_names else None
+            if hint is None and carried:
+                hint = f"it moves along the slider {carried[0]}: stroke({carried[0]})"
+            raise ExprError(
+                f"swing({x}): {x!r} is {what}, not a rocker"
+                + (f" ({hint})" if hint else "")
+                + f". swing() is the figure of a rocker, a link pinned to the ground: "
+                f"{_quote(rockers)}"
+            )
+        if attr == "stroke" and x not in slider_names:
+            hint = f" (the slider joint that moves it: stroke({carried[0]}))" if carried else ""
+            raise ExprError(
+                f"stroke({x}): {x!r} is {what}, not a slider joint{hint}. stroke() is the "
+                f"figure of a slider joint: {_quote(slider_names)}"
+            )
+        if attr == "time_ratio" and x not in rockers and x not in rams:
+            ram = next((c for c in carried if c in rams), None)
+            if ram is not None:
+                hint = f" (the slider joint that guides it: time_ratio({ram}))"
+            elif x in slider_names:
+                hint = " (it slides along a moving link: no return stroke to time)"
+            else:
+                hint = ""
+            raise ExprError(
+                f"time_ratio({x}): {x!r} is {what}, not a rocker or a slider joint on a "
+                f"ground guide{hint}. A time ratio is the figure of one of these: "
+                f"{_quote(rockers + rams)}"
+            )
 
 
 def _unit_of(limit_text: str) -> str:
@@ -132,26 +299,34 @@ class _Exact(np.ndarray):
     (the attribute is lost by arithmetic: only ``min(transmission_angle.X)`` uses it)."""
 
     exact_min: float | None = None
+    exact_u: float | None = None
 
 
 class _Unknown(KeyError):
     pass
 
 
-class RunContext:
-    """What a requirement reads from a run (see the module's docstring)."""
+@functools.lru_cache(maxsize=64)
+def _factor(unit: str) -> float:
+    """The factor to SI of a column's unit (1 for one that is not a unit, such as "-")."""
+    try:
+        return parse_unit(unit).factor if unit else 1.0
+    except UnitError:
+        return 1.0
 
-    def __init__(self, results: Results) -> None:
+
+class RunContext:
+    """What a requirement reads from a run (see the module's docstring); ``figures``:
+    also the limit positions, exact transmission minima and the work (not needed for
+    the few positions an extreme is located with)."""
+
+    def __init__(self, results: Results, figures: bool = True) -> None:
         self.res = results
         self.values: dict[str, Any] = {}
         self.units: dict[str, str] = {}
         joints: dict[str, list[str]] = {}
         for c in results.columns():
-            try:
-                factor = parse_unit(c.unit).factor if c.unit else 1.0
-            except UnitError:
-                factor = 1.0
-            self.values[c.name] = np.asarray(c.values, float) * factor
+            self.values[c.name] = np.asarray(c.values, float) * _factor(c.unit)
             self.units[c.name] = c.unit
             head, _, attr = c.name.rpartition(".")
             if "(" in head:
@@ -160,22 +335,25 @@ class RunContext:
             if len(cols) == 1 and alias not in self.values:
                 self.values[alias] = self.values[cols[0]]
                 self.units[alias] = self.units[cols[0]]
-        self._figures()
+        self._figures(figures)
 
-    def _figures(self) -> None:
+    def _figures(self, figures: bool) -> None:
         res = self.res
         sol = res.solution
         plan = res.analysis.plan
-        exact = {t.group: t.angle for t in res.transmission_angles()}
+        exact = {t.group: t for t in res.transmission_angles()} if figures else {}
         for gi, g in enumerate(plan):
             if g.n_modes != 2 or not sol.indicator.size:
                 continue
             key = g.label.split()[1] if g.label.startswith("loop ") else g.label
             mu = np.arcsin(np.clip(np.where(sol.ok, sol.indicator[gi], np.nan), 0.0, 1.0))
             arr = mu.view(_Exact)
-            arr.exact_min = exact.get(g.label)
+            if g.label in exact:
+                arr.exact_min, arr.exact_u = exact[g.label].angle, exact[g.label].u
             self.values[f"transmission_angle.{key}"] = arr
             self.units[f"transmission_angle.{key}"] = "deg"
+        if not figures:
+            return
         for lp in res.limit_positions():
             kind = "stroke" if lp.kind == "slider" else "swing"
             self.values[f"{lp.name}.{kind}"] = lp.high - lp.low
@@ -205,6 +383,16 @@ class RunContext:
     def point_xy(self, name: str):
         return self.quantity(name, "x"), self.quantity(name, "y")
 
+    def ref_dim(self, ref: Ref) -> tuple[int, int, int, int] | None:
+        """The dimension of a figure from the unit of its column (``None`` if unknown)."""
+        unit = self.units.get(f"{ref.name}.{ref.attr}")
+        if unit is None:
+            return figure_dim(ref, self.res.linear)
+        try:
+            return parse_unit("" if unit == "-" else unit).dim
+        except UnitError:
+            return None
+
     def unknown(self, key: str) -> str:
         near = difflib.get_close_matches(key, list(self.values), n=3, cutoff=0.6)
         hint = f" (did you mean {', '.join(near)}?)" if near else ""
@@ -214,57 +402,237 @@ class RunContext:
             "<rocker>.swing, <rocker>.time_ratio, <slider>.stroke and cycle.work"
         )
 
-    def functions(self) -> dict[str, Any]:
+    def at(self, q: Any, where: Any) -> float:
+        """``q`` at the driver value ``where``: cubic between the samples."""
+        from scipy.interpolate import CubicSpline
+
         u = np.asarray(self.res.u, float)
-
-        def finite(q):
-            q = np.atleast_1d(np.asarray(q, float))
-            return q[np.isfinite(q)]
-
-        def reduce(f):
-            def g(q):
-                v = finite(q)
-                return float(f(v)) if v.size else math.nan
-
-            return g
-
-        def minimum(q):
-            ex = getattr(q, "exact_min", None)
-            v = finite(q)
-            best = float(v.min()) if v.size else math.nan
-            return min(best, ex) if ex is not None and v.size else best
-
-        def at(q, where):
-            from scipy.interpolate import CubicSpline
-
-            q = np.broadcast_to(np.asarray(q, float), u.shape)
-            w = float(np.asarray(where, float).ravel()[0])
-            good = np.isfinite(q) & np.isfinite(u)
-            if good.sum() < 2 or not (u[good].min() <= w <= u[good].max()):
-                return math.nan
-            x, y = u[good], q[good]
-            order = np.argsort(x)
-            x, y = x[order], y[order]
-            keep = np.r_[True, np.diff(x) > 0]
-            x, y = x[keep], y[keep]
-            if len(x) < 4:
-                return float(np.interp(w, x, y))
-            return float(CubicSpline(x, y)(w))
-
-        return {
-            "min": minimum,
-            "max": reduce(np.max),
-            "mean": reduce(np.mean),
-            "rms": reduce(lambda v: np.sqrt(np.mean(v * v))),
-            "range": reduce(lambda v: v.max() - v.min()),
-            "at": at,
-        }
+        q = np.broadcast_to(np.asarray(q, float), u.shape)
+        w = float(np.asarray(where, float).ravel()[0])
+        good = np.isfinite(q) & np.isfinite(u)
+        if good.sum() < 2 or not (u[good].min() <= w <= u[good].max()):
+            return math.nan
+        x, y = u[good], q[good]
+        order = np.argsort(x)
+        x, y = x[order], y[order]
+        keep = np.r_[True, np.diff(x) > 0]
+        x, y = x[keep], y[keep]
+        if len(x) < 4:
+            return float(np.interp(w, x, y))
+        return float(CubicSpline(x, y)(w))
 
 
-def _value(tree, ctx: RunContext) -> Any:
+def _finite(q: Any) -> np.ndarray:
+    q = np.atleast_1d(np.asarray(q, float))
+    return q[np.isfinite(q)]
+
+
+def _evaluate(tree, ctx: RunContext) -> Any:
+    """A tree without reductions, position by position."""
     e = Expression._derived(tree, "", ())
     with np.errstate(all="ignore"):
-        return e.evaluate(ctx, ctx.functions())
+        return e.evaluate(ctx, {"at": ctx.at})
+
+
+def _rebuild(n: Any, kids: list[Any]) -> Any:
+    """Node ``n`` with its operands replaced."""
+    if isinstance(n, (Unary, Not)):
+        return dataclasses.replace(n, arg=kids[0])
+    if isinstance(n, Binary):
+        return dataclasses.replace(n, left=kids[0], right=kids[1])
+    if isinstance(n, (Chain, Compare)):
+        return dataclasses.replace(n, operands=tuple(kids))
+    if isinstance(n, (Call, BoolOp)):
+        return dataclasses.replace(n, args=tuple(kids))
+    return n
+
+
+_FINE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+class _Reducer:
+    """Reduces a run to its figures. ``max``, ``min`` and ``range`` are taken over the
+    sweep the plots are drawn from (:func:`mechsolve.api.for_plots`: 1 degree or finer,
+    with the exact driver values of the limit positions and of the switching of loads)
+    and each extreme is then located between its neighbouring samples: the quantity is
+    evaluated on a grid between them, solved there, and the grid narrowed around its
+    best point down to 1e-8 of the driver coordinate (a value the quantity takes, so
+    never beyond the true extreme). Where that sweep cannot be had (a motion law of
+    time, a sweep that does not close at its ends) they are the samples' and say so;
+    ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u."""
+
+    def __init__(self, results: Results) -> None:
+        self.res = results
+        self.ctx = RunContext(results)
+        self.fine = self._fine_sweep(results)
+        # per position only: the figures (limit positions, exact minima) are the run's
+        self.fctx = RunContext(self.fine, figures=False) if self.fine is not None else None
+        self.notes: list[str] = []
+
+    @staticmethod
+    def _fine_sweep(res: Results) -> Results | None:
+        try:
+            return _FINE[res]
+        except (KeyError, TypeError):
+            pass
+        from .api import for_plots
+
+        fine = None
+        if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
+            fine = for_plots(res.mechanism, res)
+        try:
+            _FINE[res] = fine
+        except TypeError:
+            pass
+        return fine
+
+    # -- evaluation -------------------------------------------------------------------
+    def value(self, tree) -> Any:
+        """The value of a tree: each reduction replaced by its figure, bottom-up."""
+        done: dict[int, Any] = {}
+        stack: list[tuple[Any, bool]] = [(tree, False)]
+        while stack:
+            n, ready = stack.pop()
+            kids = children(n)
+            if kids and not ready:
+                stack.append((n, True))
+                stack.extend((k, False) for k in reversed(kids))
+                continue
+            node = _rebuild(n, [done[id(k)] for k in kids]) if kids else n
+            if isinstance(node, Call) and node.func in REDUCE and len(node.args) == 1:
+                node = Num(self.reduce(node.func, node.args[0]))
+            elif isinstance(node, Call) and node.func == "at" and self.fine is not None:
+                node = Num(self.at(node.args[0], _scalar(_evaluate(node.args[1], self.ctx), "u")))
+            done[id(n)] = node
+        return _evaluate(done[id(tree)], self.ctx)
+
+    def at(self, arg, x: float) -> float:
+        """``arg`` at the driver value ``x``, solved there (next to the nearest solved
+        sample of the sweep); not determined outside the sweep or where it does not
+        close. (Without a fine sweep ``at`` is cubic between the samples, see
+        :meth:`RunContext.at`.)"""
+        fine = self.fine
+        u = np.asarray(fine.u, float)
+        good = np.flatnonzero(fine.ok)
+        tol = 1e-12 * (fine.analysis.scale if fine.analysis.linear else 1.0)
+        if not good.size or not (u[good].min() - tol <= x <= u[good].max() + tol):
+            return math.nan
+        k = int(good[np.argmin(np.abs(u[good] - x))])
+        return float(self._values(arg, np.array([x]), k)[0])
+
+    def reduce(self, func: str, arg) -> float:
+        if func in ("mean", "rms"):
+            v = _finite(_evaluate(arg, self.ctx))
+            if v.size > 1:
+                self.notes.append(f"{func} over the {v.size} samples")
+            if not v.size:
+                return math.nan
+            return float(v.mean() if func == "mean" else np.sqrt(np.mean(v * v)))
+        if func == "range":
+            hi, u_hi = self.extreme(arg, +1)
+            lo, u_lo = self.extreme(arg, -1)
+            if self.fine is None and u_hi is not None:
+                self.notes.append(f"range of the {self._samples()} samples, not located")
+            else:
+                self._where("max", u_hi, "largest")
+                self._where("min", u_lo, "smallest")
+            return hi - lo
+        sense = +1 if func == "max" else -1
+        v, u = self.extreme(arg, sense)
+        self._where(func, u, "largest" if sense > 0 else "smallest")
+        return v
+
+    def _samples(self) -> int:
+        return int(np.count_nonzero(self.res.ok))
+
+    def _where(self, func: str, u: float | None, word: str) -> None:
+        """Note where an extreme is (``u``: None for a figure that is one number)."""
+        if u is None:
+            return
+        if self.fine is None:
+            self.notes.append(f"{func} the {word} of the {self._samples()} samples, not located")
+        elif math.isfinite(u):
+            self.notes.append(f"{func} at {self.res.analysis.format_u(u)}")
+
+    def extreme(self, arg, sense: int) -> tuple[float, float | None]:
+        """(the largest (sense +1) or smallest value of ``arg`` over the run, the driver
+        value where it is; ``None`` for a figure that is one number already)."""
+        ctx = self.fctx if self.fctx is not None else self.ctx
+        q = _evaluate(arg, ctx)
+        arr = np.asarray(q, float)
+        if arr.size == 1:
+            return float(arr.ravel()[0]), None
+        s = sense * np.where(np.isfinite(arr), arr, np.nan)
+        if not np.any(np.isfinite(s)):
+            return math.nan, math.nan
+        k = int(np.nanargmax(s))
+        best, where = float(s[k]), float(ctx.res.u[k])
+        if self.fine is not None:
+            best, where = self._locate(arg, sense, k, best, where)
+        if sense < 0:  # transmission angles: the exact minimum the run located
+            exact = _evaluate(arg, self.ctx)
+            ex = getattr(exact, "exact_min", None)
+            if ex is not None and -ex > best:
+                best, where = -ex, float(getattr(exact, "exact_u", where))
+        return sense * best, where
+
+    def _locate(self, arg, sense: int, k: int, best: float, where: float):
+        fine = self.fine
+        u, ok, n = np.asarray(fine.u, float), fine.ok, len(fine.u)
+        gaps = {e.after for e in fine.solution.events if e.kind == "dead zone"}
+        lo = u[k - 1] if k > 0 and ok[k - 1] and k - 1 not in gaps else u[k]
+        hi = u[k + 1] if k < n - 1 and ok[k + 1] and k not in gaps else u[k]
+        sides = [(lo, hi, k)]
+        if fine.is_full_cycle():  # the last sample is the first: its neighbours too
+            if k == 0 and ok[n - 2] and n - 2 not in gaps:
+                sides.append((u[n - 2], u[n - 1], n - 1))
+            if k == n - 1 and ok[1] and 0 not in gaps:
+                sides.append((u[0], u[1], 0))
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        for lo, hi, near in sides:
+            for _ in range(40):
+                if not abs(hi - lo) > _TOL * scale:
+                    break
+                x = np.linspace(lo, hi, _GRID)
+                vals = sense * self._values(arg, x, near)
+                if not np.any(np.isfinite(vals)):
+                    break
+                j = int(np.nanargmax(vals))
+                if vals[j] > best:
+                    best, where = float(vals[j]), float(x[j])
+                lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+        return best, where
+
+    def _values(self, arg, x: np.ndarray, near: int) -> np.ndarray:
+        """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
+        from . import core
+        from .results import Results
+
+        fine = self.fine
+        an, sol = fine.analysis, fine.solution
+        one = an.solve(x, start=sol.start, near=(sol, near), per_unit_driver=True)
+        ud, udd = sol.driver_rates()
+        m = len(x)
+        rates = np.full(m, ud[near]), np.full(m, udd[near])
+        core.scale_rates(one.state, *rates, sol.has_acceleration)
+        one.ud, one.udd = rates
+        one.has_velocity, one.has_acceleration = sol.has_velocity, sol.has_acceleration
+        one.t = np.zeros(m)
+        f = None
+        if fine.forces is not None:
+            f = core.forces(an, one, fine.forces.stroke_extremes)
+        with np.errstate(all="ignore"):
+            q = _evaluate(arg, RunContext(Results(an, one, f), figures=False))
+        out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
+        out[~np.asarray(one.ok, bool)] = np.nan
+        return out
+
+
+_GRID = 65  # points of each narrowing of an extreme's interval (32 times narrower each)
+# width (rad, or of the mechanism's size) at which an extreme is located: its value is
+# then off by 0.5 |q''| 1e-16 at a smooth extreme, |q'| 1e-8 at a kink
+_TOL = 1e-8
+REDUCE = ("max", "min", "range", "mean", "rms")
 
 
 def _scalar(val: Any, what: str) -> float:
@@ -285,31 +653,58 @@ def _show(x: float, unit: str) -> str:
     return f"{x:.6g}"
 
 
+def _check_dims(expr: Expression, ctx: RunContext) -> Any:
+    driver = _LENGTH if ctx.res.linear else _ANGLE
+    return expr.dimension(ctx.ref_dim, driver)
+
+
 def evaluate_figure(text: str, mech: Mechanism, results: Results) -> float:
     """The value (SI) of a figure of a run, e.g. ``"range(K.y)"`` or
-    ``"max(abs(input.torque))"``; an :class:`InputError` for text that does not parse or
-    reads something the run does not have."""
-    ctx = RunContext(results)
+    ``"max(abs(input.torque))"`` (extremes located as for requirements); an
+    :class:`InputError` for text that does not parse, mixes kinds of quantities or reads
+    something the run does not have."""
+    red = _Reducer(results)
     try:
         e = Expression(_rewrite(text))
-        return _scalar(_value(e.tree, ctx), repr(text))
+        e.text = text
+        _check_dims(e, red.ctx)
+        return _scalar(red.value(e.tree), repr(text))
     except _Unknown as exc:
-        raise InputError(f"{text!r}: {ctx.unknown(exc.args[0])}") from None
+        raise InputError(f"{text!r}: {red.ctx.unknown(exc.args[0])}") from None
     except ExprError as exc:
         raise InputError(f"{text!r}: {exc}") from None
 
 
+def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[float, float]:
+    """The largest (or smallest) value over a run of a quantity such as
+    ``"abs(input.torque)"`` and the driver value where it is, located between samples as
+    for requirements (``max()``, ``min()``), for any report that prints a peak;
+    ``(nan, nan)`` where nothing is determined. An :class:`InputError` for text that
+    does not read the run."""
+    red = _Reducer(results)
+    try:
+        e = Expression(_rewrite(text))
+        e.text = text
+        _check_dims(e, red.ctx)
+        value, where = red.extreme(e.tree, +1 if largest else -1)
+    except _Unknown as exc:
+        raise InputError(f"{text!r}: {red.ctx.unknown(exc.args[0])}") from None
+    except ExprError as exc:
+        raise InputError(f"{text!r}: {exc}") from None
+    return value, (math.nan if where is None else where)
+
+
 def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     """Check every requirement of ``mech`` on ``results`` (``[]`` when there are none).
-    A requirement that reads something the run does not have is an input error located
-    at its line."""
+    A requirement that reads something the run does not have, or mixes kinds of
+    quantities, is an input error located at its line."""
     reqs: list[Requirement] = getattr(mech, "requirements", []) or []
     if not reqs:
         return []
-    ctx = RunContext(results)
+    red = _Reducer(results) if any(r.expr is not None for r in reqs) else None
     out = []
     for r in reqs:
-        if r.expr is None:
+        if r.expr is None or red is None:
             n = len(results.u)
             solved = int(np.count_nonzero(results.ok))
             full = bool(results.is_full_cycle()) and solved == n
@@ -323,28 +718,36 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
             out.append(Verdict(r.name, r.text, float(solved), float(n), "", full, msg))
             continue
         tree = r.expr.tree
+        red.notes = []
         try:
-            sides = [_value(t, ctx) for t in tree.operands]
+            _check_dims(r.expr, red.ctx)
             reads = [any(isinstance(n, Ref) for n in walk(t)) for t in tree.operands]
             k = reads.index(True)
-            value = _scalar(sides[k], "the figure")
-            limit = _scalar(sides[1 - k], "the limit")
+            fig_dim = dimension_of_side(tree.operands[k], red.ctx)
+            value = _scalar(red.value(tree.operands[k]), "the figure")
+            limit = _scalar(red.value(tree.operands[1 - k]), "the limit")
         except _Unknown as exc:
-            raise mech.error(("requirements", r.name), ctx.unknown(exc.args[0])) from None
+            raise mech.error(("requirements", r.name), red.ctx.unknown(exc.args[0])) from None
         except ExprError as exc:
             raise mech.error(("requirements", r.name), str(exc)) from None
-        unit = r.unit or _unit_for(tree.operands[k], ctx)
+        unit = r.unit or _unit_for(tree.operands[k], red.ctx, fig_dim)
         left, right = (value, limit) if k == 0 else (limit, value)
         ok = bool(
             math.isfinite(value)
-            and Expression._derived(Compare(tree.ops, (_num(left), _num(right))), "", ()).evaluate(
-                ctx
+            and Expression._derived(Compare(tree.ops, (Num(left), Num(right))), "", ()).evaluate(
+                red.ctx
             )
         )
         figure = re.split(r"<=|>=|==|!=|<|>", r.text)[k].strip()
-        shown = f"{figure} = {_show(value, unit)} {tree.ops[0]} {_show(limit, unit)}"
+        notes = ""
+        if red.notes and math.isfinite(value):
+            said = list(red.notes)
+            if len(said) == 1 and said[0].split(" ", 1)[0] in ("max", "min"):
+                said = [said[0].split(" ", 1)[1]]  # one extreme: "at driver angle ..."
+            notes = f" ({'; '.join(said)})"
+        shown = f"{figure} = {_show(value, unit)}{notes} {tree.ops[0]} {_show(limit, unit)}"
         if k == 1:
-            shown = f"{_show(limit, unit)} {tree.ops[0]} {figure} = {_show(value, unit)}"
+            shown = f"{_show(limit, unit)} {tree.ops[0]} {figure} = {_show(value, unit)}{notes}"
         out.append(
             Verdict(
                 r.name, r.text, value, limit, unit, ok, f"{shown}: " + ("pass" if ok else "FAIL")
@@ -353,22 +756,21 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     return out
 
 
-def _num(x: float):
-    from .expr import Num
+def dimension_of_side(tree, ctx: RunContext) -> Any:
+    """The dimension of one side of a requirement, from the run's columns."""
+    return dimension_of(tree, ctx.ref_dim, _LENGTH if ctx.res.linear else _ANGLE)
 
-    return Num(x)
 
-
-def _unit_for(tree, ctx: RunContext) -> str:
+def _unit_for(tree, ctx: RunContext, dim: Any) -> str:
     """The unit to show a figure in when its limit has none: the unit of the one column
-    it reads (degrees for angles), else SI."""
+    it reads (degrees for angles) if the figure is of that column's kind, else SI."""
     refs = {f"{n.name}.{n.attr}" for n in walk(tree) if isinstance(n, Ref)}
     units = {ctx.units.get(k, "") for k in refs}
     if len(units) == 1:
         (u,) = units
         try:
-            parse_unit(u)
-            return u
+            if u and parse_unit(u).dim == dim:
+                return u
         except UnitError:
             return ""
     return ""

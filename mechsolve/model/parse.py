@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from ..expr import ExprError, Expression
+from ..expr import ExprError, Expression, compatible, describe_dim
 from ..units import LIMITS, UnitError, parse_quantity, parse_unit
 from . import (
     GROUND,
@@ -804,14 +804,25 @@ def read_motion(
         law = TableMotion(times=np.array(ts), values=np.array(us), end=end)
         d.start = law.start
     else:
-        law = read_law(r, m["law"], path + ("law",), has_start)
+        law = read_law(r, m["law"], path + ("law",), has_start, linear)
         d.start = law.start
     d.motion = law
     d.speed = law.nominal_speed()
     d.sense = 1 if d.speed > 0 else -1
 
 
-def read_law(r: Reader, value: Any, path: KeyPath, has_start: bool):
+def _law_kind(e: Expression, kind: str, what: str) -> None:
+    """An :class:`ExprError` unless law ``e`` gives ``what``, of the kind ``kind`` (a
+    law whose coefficients are bare numbers is SI and passes; one written with units
+    must come out in the right kind: "5 N - 0.1 * omega" is no torque)."""
+    from ..units import dimension
+
+    got, want = e.dimension(), dimension(kind)
+    if not compatible(got, want):
+        raise ExprError(f"{e.text!r} is {describe_dim(got)}, but {what} is {describe_dim(want)}")
+
+
+def read_law(r: Reader, value: Any, path: KeyPath, has_start: bool, linear: bool = False):
     """``u(t)`` as an expression of ``t`` (SI: rad or m), differentiated symbolically."""
     import numpy as np
 
@@ -825,6 +836,7 @@ def read_law(r: Reader, value: Any, path: KeyPath, has_start: bool):
         raise r.fail(("driver", "start"), "the law gives the start (its value at t = 0)")
     try:
         e = Expression(value, variables=("t",))
+        _law_kind(e, "length" if linear else "angle", "the driver's position")
         e1 = e.derivative("t")
         e2 = e1.derivative("t")
         law = ExpressionMotion(expr=e, first=e1, second=e2)
@@ -1144,13 +1156,14 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
     if "simulate" in data:
         mech.simulation = read_simulation(r, data["simulate"], linear)
     if "requirements" in data:
-        mech.requirements = read_requirements(r, data["requirements"])
+        mech.requirements = read_requirements(r, data["requirements"], linear)
     return mech.validate()
 
 
-def read_requirements(r: Reader, value: Any) -> list:
+def read_requirements(r: Reader, value: Any, linear: bool | None = None) -> list:
     """``requirements: {name: "max(abs(input.torque)) <= 300 kN m", ...}`` (see
-    :mod:`mechsolve.requirements`)."""
+    :mod:`mechsolve.requirements`); ``linear``: the driver is a slider."""
+    from ..expr import DimensionError
     from ..requirements import parse_requirement
 
     path: KeyPath = ("requirements",)
@@ -1163,7 +1176,9 @@ def read_requirements(r: Reader, value: Any) -> list:
     out = []
     for name, text in value.items():
         try:
-            out.append(parse_requirement(str(name), text))
+            out.append(parse_requirement(str(name), text, linear))
+        except DimensionError as exc:
+            raise r.fail(path + (name,), str(exc)) from None
         except ExprError as exc:
             raise r.fail(path + (name,), f"cannot read the requirement: {exc}") from None
     return out
@@ -1221,6 +1236,7 @@ def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
         )
     try:
         e = Expression(text, variables=("omega", "v", "t"))
+        _law_kind(e, effort, f"a motor's {effort}")
     except (ExprError, TypeError) as exc:
         raise r.fail(path + (key,), str(exc)) from None
     return Motor("law", expr=e, text=text)
@@ -1400,6 +1416,7 @@ def read_torque_problem(src: Source) -> dict:
             raise r.fail(path + ("law",), "'law' is an expression of angle (rad)")
         try:
             e = Expression(t["law"], variables=("angle",))
+            _law_kind(e, "torque", "the torque curve")
             x = np.linspace(0.0, cycle, 36001)
             T = np.broadcast_to(np.asarray(e.evaluate_at({"angle": x}), float), x.shape)
         except ExprError as exc:

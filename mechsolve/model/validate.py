@@ -10,7 +10,7 @@ import difflib
 import math
 from typing import TYPE_CHECKING
 
-from ..expr import Ref, Side
+from ..expr import DimensionError, Ref, Side
 from ..units import UnitError, check_range
 from . import (
     GROUND,
@@ -273,6 +273,8 @@ def validate(mech: Mechanism) -> None:
         if load.when is not None:
             check_refs(mech, load.when, load.where + ("when",))
 
+    _check_requirements(mech)
+
     # assembly and outputs refer to existing things
     for k, cond in enumerate(mech.assembly.conditions):
         check_refs(mech, cond, mech.assembly.where_of(k))
@@ -334,6 +336,30 @@ def check_refs(mech: Mechanism, expr, where) -> None:
                 + ", ".join(attrs)
                 + ")",
             )
+    try:  # what is compared or added is of one kind (a speed with a speed)
+        expr.dimension()
+    except DimensionError as exc:
+        raise mech.error(where, str(exc)) from None
+
+
+def _check_requirements(mech: Mechanism) -> None:
+    """Each requirement names the kind of thing its figures belong to (``time_ratio`` of
+    a rocker or a ram, not of the link a slider carries) and compares quantities of one
+    kind (a model built in code is checked here; a file's also as it is read)."""
+    from ..expr import ExprError
+    from ..requirements import _ANGLE, _LENGTH, check_names, figure_dim
+
+    linear = mech.driver is not None and any(
+        isinstance(j, SliderJoint) and j.name == mech.driver.joint for j in mech.joints
+    )
+    for req in getattr(mech, "requirements", None) or []:
+        if req.expr is None:
+            continue
+        try:
+            check_names(mech, req)
+            req.expr.dimension(lambda ref: figure_dim(ref, linear), _LENGTH if linear else _ANGLE)
+        except ExprError as exc:
+            raise mech.error(("requirements", req.name), str(exc)) from None
 
 
 def _check_load(mech: Mechanism, load, links: dict) -> None:
