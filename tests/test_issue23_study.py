@@ -172,3 +172,63 @@ def test_shaper_damper_work_is_one_figure_in_terminal_plot_and_report(tmp_path):
     # and at another step, the same work
     other = ms.solve(mech, step=math.radians(3.0))
     assert other.work() == pytest.approx(res.work(), rel=1e-9)
+
+
+# --- §1.7: a design that does not assemble gets no figures --------------------------
+STUDY_FOURBAR = Path(__file__).parent / "data" / "study_fourbar.yaml"
+
+
+def test_design_that_assembles_in_part_has_blank_figures_and_no_pass(tmp_path):
+    """A crank of 60 mm with the frame 87.5, coupler 105.6 and rocker 59 mm: |A O4| falls
+    below b - c = 46.6 mm near 0 deg (|A O4| = d - a = 27.5 there), so the loop does not
+    close over part of the turn. Its partial data once gave a "swing" of 191.5 deg and a
+    passing swing requirement: every figure is blank, the status says why, the verdicts
+    say "not assembled"; the design that assembles keeps its figures."""
+    from mechsolve.study.table import read_csv
+
+    out = tmp_path / "out"
+    r = CliRunner().invoke(
+        main,
+        [
+            "sweep",
+            str(STUDY_FOURBAR),
+            "-p",
+            "links.crank.points.A[0]=60, 26.5 mm",
+            "-p",
+            "ground.O4[0]=87.5",
+            "-j",
+            "1",
+            "-o",
+            str(out),
+            "--no-plots",
+            "-q",
+        ],
+    )
+    assert r.exit_code == 1, r.output  # a design is not solved everywhere
+    rows = read_csv(out / "study.csv")
+    bad, good = rows
+    assert bad["status"].startswith("not assemblable at 8 of 37 positions"), bad["status"]
+    assert "figures not computed" in bad["status"]
+    assert bad["assembles [-]"] == "false" and bad["solved [-]"] == "29"
+    figures = [
+        "rocker.swing [deg]",
+        "min(transmission_angle.B) [deg]",
+        "max(abs(input.torque)) [N*m]",
+        "max(O2.F) [N]",
+        "cycle.work [J]",
+        "req.transmission [deg]",
+        "req.swing [deg]",
+    ]
+    for col in figures:
+        assert bad[col] == "", (col, bad[col])
+        assert good[col] != "", col
+    for col in ("req.transmission.pass [-]", "req.swing.pass [-]", "requirements.pass [-]"):
+        assert bad[col] == "not assembled", (col, bad[col])
+    # the closed form of the good design: crank-rocker swing from the two limit triangles
+    b, c, d, a = 105.6, 59.0, 87.5, 26.5
+    swing = math.degrees(
+        math.acos((c * c + d * d - (b + a) ** 2) / (2 * c * d))
+        - math.acos((c * c + d * d - (b - a) ** 2) / (2 * c * d))
+    )
+    assert float(good["rocker.swing [deg]"]) == pytest.approx(swing, rel=1e-9)
+    assert good["requirements.pass [-]"] == "true"
