@@ -139,7 +139,9 @@ def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Resul
     u, t = an.sweep_values(an.start_value(), step=step, travel=travel)
     vel, acc = res.solution.has_velocity, res.solution.has_acceleration
     sol = core.states(an, u, t=t, velocity=vel, acceleration=acc)
-    f = core.forces(an, sol) if res.forces is not None else None
+    # stroke(q) over the extremes of the results' own sweep: one definition of a
+    # conditional load's range, so the plots' work and mean effort are the table's
+    f = core.forces(an, sol, res.forces.stroke_extremes) if res.forces is not None else None
     first = Results(an, sol, f)
     extra: list[float] = []
     for lp in first.limit_positions():

@@ -313,6 +313,34 @@ def _analysis_of(an0, mech_b: Mechanism):
 
 
 # -- the start assembly of every design at once ----------------------------------------
+def _design_states(an0, X: np.ndarray, modes: np.ndarray, speed: float):
+    """A function of driver values ``u`` (designs, L) solving each design (numbers ``X``,
+    branches ``modes``) at its own values, at the driver's speed: the analysis of those
+    columns, their state and where they close (for stroke(q)'s extremes between the
+    samples, :func:`mechsolve.solvers.forces.exact_extremes`)."""
+
+    def solve(u: np.ndarray):
+        nd, L = u.shape
+        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, np.repeat(np.arange(nd), L))))
+        n = nd * L
+        st = State(a.system.nb, n)
+        unit = Drive(u.ravel(), np.ones(n), np.zeros(n))
+        ok = np.ones(n, bool)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for gi, g in enumerate(a.plan):
+                good, _ = g.position(st, unit, np.repeat(modes[gi], L) if g.n_modes == 2 else 1.0)
+                g.velocity(st, unit)
+                g.acceleration(st, unit)
+                ok &= good
+        if speed != 1.0:
+            st.block[5:8] *= speed
+            st.block[8:11] *= speed * speed
+            st.token = State.new_token()
+        return a, st, ok
+
+    return solve
+
+
 def _assemble(ab, u0: float, nd: int):
     """Every design's branches at the start, as :meth:`Analysis.assemble` chooses them
     (conditions, then the sketch, then branch +), on ``2 nd`` columns: branch + of each
@@ -511,6 +539,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
         reasons = [[r[j] for j in keep] for r in reasons]
         start_state = start_state.take(keep)
     ab.blocks = int(keep.size)  # stroke(q): each design's own extremes
+    ab.design_states = _design_states(an0, X[keep], modes, speed)  # ... located exactly
     n = keep.size * P
     sol = Solution(
         ab,

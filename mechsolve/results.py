@@ -459,10 +459,15 @@ class Results:
     def work(self) -> float:
         """Work done by the driver over the sweep (J); for a full turn, the work per cycle.
         See :func:`mechsolve.solvers.forces.driver_work`."""
-        from .solvers.forces import driver_work
+        return self._work_why()[0]
+
+    def _work_why(self) -> tuple[float, str]:
+        """The driver's work and why it is not defined (see
+        :func:`mechsolve.solvers.forces.driver_work_why`), computed once."""
+        from .solvers.forces import driver_work_why
 
         if not hasattr(self, "_work"):
-            self._work = driver_work(self.analysis, self.solution, self.forces)
+            self._work = driver_work_why(self.analysis, self.solution, self.forces)
         return self._work
 
     def incomplete(self) -> bool:
@@ -493,11 +498,9 @@ class Results:
     def work_text(self) -> str:
         """``work of the driver per cycle: 31.74 kJ``, or why it is not defined."""
         per = "per cycle" if self.is_full_cycle() else "over the sweep"
-        work = self.work()
+        work, why = self._work_why()
         if not math.isfinite(work):
-            missing = int(np.sum(~self.solution.ok))
-            why = f"{missing} position(s) not solved" if missing else "not enough positions"
-            return f"work of the driver {per}: not defined ({why})"
+            return f"work of the driver {per}: not defined ({why or 'not enough positions'})"
         wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
         return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
 

@@ -42,7 +42,6 @@ from ..conditioning import (
 )
 from ..groups.generic import NewtonGroup
 from ..model import GROUND, Damper, PointForce, Spring, Torque
-from ..numerics import simpson
 
 if TYPE_CHECKING:
     from ..sweep import Analysis, Solution
@@ -117,10 +116,10 @@ class ForceResult:
 class _Q:
     """Accumulates generalised forces (nq, N) and their power."""
 
-    def __init__(self, an: Analysis, sol: Solution) -> None:
-        self.st = sol.state
+    def __init__(self, an: Analysis, st) -> None:
+        self.st = st
         self.nb = an.system.nb
-        self.Q = np.zeros((3 * self.nb, sol.state.n))
+        self.Q = np.zeros((3 * self.nb, st.n))
 
     def force(self, b: int, s, fx, fy, r=None) -> None:
         """A force (fx, fy) at the local point ``s`` of body ``b`` (``r``: the point's
@@ -171,6 +170,14 @@ def stroke_function(
             return frac.ravel()
         if calls is not None:
             lo, hi = next(calls)
+            if blocks is not None and np.ndim(lo):  # each design's own extremes
+                rows = np.broadcast_to(q, (q.size,)).reshape(blocks, -1)
+                span = np.asarray(hi) - np.asarray(lo)
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    frac = (rows - np.asarray(lo)[:, None]) / np.where(span > 0, span, np.inf)[
+                        :, None
+                    ]
+                return frac.ravel()
         else:
             good = np.flatnonzero(np.isfinite(q))
             if good.size < 2:
@@ -199,7 +206,17 @@ def _extreme(q, good, arg, sign):
 def condition_masks(
     an: Analysis, sol: Solution, view, extremes: list, replay: bool = False
 ) -> dict[str, np.ndarray]:
-    """Where each conditional load acts (False where a position was not solved)."""
+    """Where each conditional load acts (False where a position was not solved).
+
+    Without ``replay``, the extremes that ``stroke(q)`` uses are found over ``sol`` and
+    recorded in ``extremes``: each located between the samples on the motion itself
+    (:func:`exact_extremes`), not read off the samples, so that a conditional load acts
+    over the same part of the motion whatever the step."""
+    if not replay and any(ld.when is not None and ld.when.uses("stroke") for ld in an.mech.loads):
+        found: list = []
+        args = stroke_arguments(an, view, found)
+        extremes += exact_extremes(an, sol, args, found)
+        replay = True
     out = {}
     funcs = {"stroke": stroke_function(extremes, replay, getattr(an, "blocks", None))}
     n = len(sol.u)
@@ -210,6 +227,181 @@ def condition_masks(
             val = load.when.evaluate(view, funcs)
         out[load.name] = np.broadcast_to(np.asarray(val, bool), (n,)) & sol.ok
     return out
+
+
+def stroke_arguments(an: Analysis, view, extremes: list | None = None) -> list[np.ndarray]:
+    """The values of the argument ``q`` of every ``stroke(q)`` in the load conditions, in
+    the order the conditions evaluate them (the order of ``extremes``). With
+    ``extremes``, each call also records the extremes over the samples there."""
+    args: list[np.ndarray] = []
+    inner = (
+        stroke_function(extremes, False, getattr(an, "blocks", None))
+        if extremes is not None
+        else None
+    )
+    n = view.st.n
+
+    def capture(q):
+        q = np.broadcast_to(np.asarray(q, float), (n,))
+        args.append(q)
+        return inner(q) if inner is not None else np.zeros(n)
+
+    for load in an.mech.loads:
+        if load.when is not None:
+            with np.errstate(invalid="ignore"):
+                load.when.evaluate(view, {"stroke": capture})
+    return args
+
+
+EXTREME_POINTS = 65  # points per bracket and round in exact_extremes (shrinks it 32-fold)
+
+
+def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> list[tuple]:
+    """The extremes of each ``stroke(q)`` argument over the motion of ``sol``.
+
+    ``args``: the arguments' values at the samples; ``sampled``: their extremes over the
+    samples (parabola-refined). Each extreme is located next to its extreme sample: the
+    bracket of the two neighbouring samples (across the ends of a full turn, which are
+    one pose) is sampled at :data:`EXTREME_POINTS` positions solved on the sweep's
+    branches, then again around the best of them, until it is 1e-11 of the travel wide.
+    The result is never less extreme than the samples. Designs solved as one batch
+    (``an.blocks``) are located together, each on its own motion, when the batch gives
+    their states (``an.design_states``); a driver with a motion law of time keeps the
+    samples' extremes.
+    """
+    from ..limits import full_cycle
+
+    blocks = getattr(an, "blocks", None)
+    B = blocks or 1
+    u_all = np.asarray(sol.u, float)
+    P = len(u_all) // B
+    if not args or P < 3 or an.mech.driver.motion is not None:
+        return list(sampled)
+    evaluate = _design_evaluator(an, sol) if blocks else _sweep_evaluator(an, sol)
+    if evaluate is None:
+        return list(sampled)
+    u = u_all[:P]
+    d = 1.0 if u[-1] >= u[0] else -1.0
+    x = d * (u - u[0])  # travel from the first sample, increasing
+    T = float(x[-1])
+    if not T > 0:
+        return list(sampled)
+    periodic = full_cycle(an.linear, u)
+    # brackets: one per (argument, block, min/max)
+    nq = len(args)
+    Q = np.stack([np.asarray(q, float).reshape(B, P) for q in args])  # (nq, B, P)
+    sign = np.array([-1.0, 1.0])  # min, max
+    score = sign[:, None, None, None] * Q[None]  # (2, nq, B, P): larger is better
+    score = np.where(np.isfinite(score), score, -np.inf)
+    k = np.argmax(score, axis=-1)  # (2, nq, B)
+    best = np.take_along_axis(score, k[..., None], -1)[..., 0]
+    lo_k, hi_k = np.maximum(k - 1, 0), np.minimum(k + 1, P - 1)
+    a, b = x[lo_k], x[hi_k]
+    if periodic:  # the ends of a full turn are one pose: the bracket goes across
+        a = np.where(k == 0, x[P - 2] - T, a)
+        b = np.where(k == P - 1, x[1] + T, b)
+    active = np.isfinite(best)
+    frac = np.linspace(0.0, 1.0, EXTREME_POINTS)
+    for _ in range(12):
+        if not active.any() or np.all((b - a)[active] <= 1e-11 * T):
+            break
+        nodes = a[..., None] + (b - a)[..., None] * frac  # (2, nq, B, M)
+        if periodic:
+            nodes = np.where(nodes < 0, nodes + T, np.where(nodes > T, nodes - T, nodes))
+        nodes = np.clip(nodes, 0.0, T)
+        # every block's nodes of every bracket, solved together: (B, 2 * nq * M)
+        per_block = np.moveaxis(nodes, 2, 0).reshape(B, -1)
+        vals = evaluate(u[0] + d * per_block)  # list over arguments of (B, L)
+        if vals is None:
+            break
+        V = np.stack(vals)  # (nq, B, L)
+        V = V.reshape(nq, B, 2, nq, EXTREME_POINTS)  # value of q_i at bracket (s, j)
+        idx = np.arange(nq)
+        mine = V[idx, :, :, idx, :]  # (nq, B, 2, M): q_j at its own brackets
+        got = sign[None, None, :, None] * mine
+        got = np.moveaxis(got, 2, 0)  # (2, nq, B, M)
+        got = np.where(np.isfinite(got), got, -np.inf)
+        i = np.argmax(got, axis=-1)
+        top = np.take_along_axis(got, i[..., None], -1)[..., 0]
+        found = active & np.isfinite(top)
+        best = np.where(found & (top > best), top, best)
+        width = (b - a) / (EXTREME_POINTS - 1)
+        centre = a + width * i
+        a = np.where(found, centre - width, a)
+        b = np.where(found, centre + width, b)
+        active = found
+    values = sign[:, None, None] * best  # (2, nq, B)
+    out = []
+    for j in range(nq):
+        lo, hi = values[0, j], values[1, j]
+        slo, shi = sampled[j]
+        lo = np.where(np.isfinite(lo), lo, np.asarray(slo, float).reshape(-1))
+        hi = np.where(np.isfinite(hi), hi, np.asarray(shi, float).reshape(-1))
+        out.append((lo, hi) if blocks else (float(lo[0]), float(hi[0])))
+    return out
+
+
+def states_between(an: Analysis, sol: Solution, u: np.ndarray, ud, udd):
+    """The mechanism's states at driver values ``u`` between the samples of ``sol``, on
+    its branches, with the driver's rates ``ud``, ``udd``: (state, where it closes).
+
+    Closed forms take the sweep's start and branch switches; Newton groups continue from
+    the nearest sample, one run of values per sample."""
+    from ..core import scale_rates
+    from ..state import State
+
+    u = np.asarray(u, float)
+    n = u.size
+    if not any(isinstance(g, NewtonGroup) for g in an.plan):
+        ns = an.solve(u, start=sol.start, near=(sol, 0), per_unit_driver=True)
+        st, ok = ns.state, ns.ok
+    else:
+        st = State(an.system.nb, n)
+        ok = np.zeros(n, bool)
+        su = np.asarray(sol.u, float)
+        order = np.argsort(su)
+        pos = np.clip(np.searchsorted(su[order], u), 1, len(su) - 1)
+        left, right = order[pos - 1], order[pos]
+        nearest = np.where(np.abs(u - su[left]) <= np.abs(u - su[right]), left, right)
+        for k in np.unique(nearest):
+            idx = np.flatnonzero(nearest == k)
+            idx = idx[np.argsort(np.abs(u[idx] - su[k]), kind="stable")]  # outwards
+            part = an.solve(u[idx], start=sol.start, near=(sol, int(k)), per_unit_driver=True)
+            st.block[..., idx] = part.state.block
+            ok[idx] = part.ok
+        st.token = State.new_token()
+    scale_rates(st, np.broadcast_to(ud, (n,)), np.broadcast_to(udd, (n,)))
+    return st, ok
+
+
+def _sweep_evaluator(an: Analysis, sol: Solution):
+    """``stroke(q)``'s arguments at driver values ``u`` (1, L): the mechanism solved
+    there on the sweep's branches, at the file's speed."""
+    from ..sweep import StateView
+
+    def evaluate(u: np.ndarray):
+        st, ok = states_between(an, sol, u.ravel(), an.speed, 0.0)
+        args = stroke_arguments(an, StateView(an, st))
+        return [np.where(ok, q, np.nan).reshape(u.shape) for q in args]
+
+    return evaluate
+
+
+def _design_evaluator(an: Analysis, sol: Solution):
+    """As :func:`_sweep_evaluator` for designs solved as one batch: ``an.design_states``
+    (given by :mod:`mechsolve.batch`) solves each design at its own driver values."""
+    from ..sweep import StateView
+
+    solve = getattr(an, "design_states", None)
+    if solve is None:
+        return None
+
+    def evaluate(u: np.ndarray):
+        a, st, ok = solve(u)
+        args = stroke_arguments(a, StateView(a, st))
+        return [np.where(ok, q, np.nan).reshape(u.shape) for q in args]
+
+    return evaluate
 
 
 def solve_forces(
@@ -225,13 +417,9 @@ def solve_forces(
     mech, sys_ = an.mech, an.system
     st = sol.state
     n = st.n
-    nb = sys_.nb
     view = StateView(an, st)
-    acc = _Q(an, sol)
+    acc = _Q(an, st)
     gx, gy = mech.gravity_vector()
-
-    power_loads = np.zeros(n)
-    springs = [0.0, 0.0]  # potential of unconditional springs and its rate
 
     # inertia and gravity, at each body's centre of mass
     massive = []
@@ -276,6 +464,44 @@ def solve_forces(
     replay = stroke_extremes is not None
     extremes: list[tuple[float, float]] = list(stroke_extremes) if replay else []
     active = condition_masks(an, sol, view, extremes, replay)
+    power_loads, load_power, springs = apply_loads(an, st, active, acc)
+
+    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
+    drv = sys_.driver
+    row = next(r.start for r in sys_.rows if r.constraint is drv)
+    effort = -lam[:, row]
+    reactions = _reactions(an, st, lam)
+    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
+    return ForceResult(
+        lam,
+        effort,
+        reactions,
+        active,
+        power_loads,
+        singular,
+        ok,
+        load_power=load_power,
+        stroke_extremes=extremes,
+        nonunique=_nonunique_components(an, nonunique),
+        speed=sol.driver_rates()[0],
+        energy_terms=energy_terms,
+        near_singular=near,
+    )
+
+
+def apply_loads(
+    an: Analysis, st, active: dict[str, np.ndarray], acc: _Q
+) -> tuple[np.ndarray, dict[str, np.ndarray], list]:
+    """Add the model's loads to the generalised forces ``acc`` in the states ``st``.
+
+    ``active``: where each conditional load acts. Returns the power of the loads whose
+    work is not in a potential (W, per position), the power of each load, and the
+    potential of the unconditional springs with its rate, ``[V, dV/dt]``.
+    """
+    mech, sys_ = an.mech, an.system
+    nb = sys_.nb
+    power_loads = np.zeros(st.n)
+    springs = [0.0, 0.0]  # potential of unconditional springs and its rate
     load_power: dict[str, np.ndarray] = {}
     with np.errstate(invalid="ignore"):  # unsolved positions stay NaN
         for load in mech.loads:
@@ -342,28 +568,7 @@ def solve_forces(
                 acc.force(bb, sb, -t * ex, -t * ey)
                 acc.force(ba, sa, t * ex, t * ey)
             load_power[load.name] = power_loads - before
-
-    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
-    drv = sys_.driver
-    row = next(r.start for r in sys_.rows if r.constraint is drv)
-    effort = -lam[:, row]
-    reactions = _reactions(an, st, lam)
-    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
-    return ForceResult(
-        lam,
-        effort,
-        reactions,
-        active,
-        power_loads,
-        singular,
-        ok,
-        load_power=load_power,
-        stroke_extremes=extremes,
-        nonunique=_nonunique_components(an, nonunique),
-        speed=sol.driver_rates()[0],
-        energy_terms=energy_terms,
-        near_singular=near,
-    )
+    return power_loads, load_power, springs
 
 
 def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]:
@@ -515,24 +720,38 @@ def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndar
 
 
 def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
-    """Work done by the driver over the sweep (J), by the energy method.
+    """Work done by the driver over the sweep (J); NaN where it is not defined (see
+    :func:`driver_work_why`)."""
+    return driver_work_why(an, sol, fr)[0]
+
+
+def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float, str]:
+    """Work done by the driver over the sweep (J), by the energy method, and why it is
+    not defined when it is NaN (else "").
 
     ``W = (T + V)(end) - (T + V)(start) - W_loads``. The kinetic and potential energies are
     state functions, exact at the ends. A constant force (global components) or torque does
     work ``F . (r_1 - r_0)`` (``T (theta_1 - theta_0)``) over each interval where it acts;
     where a condition switches between two samples, the switch is located by bisection on
-    the driver coordinate, so the result does not depend on the step. The work of other
-    loads (springs under a condition, dampers, link-fixed forces) is integrated with
-    Simpson's rule. The energies need only the motion, so positions where the forces are
-    indeterminate (singular) do not matter; if the mechanism could not be solved at some
-    position, the work is not defined (NaN).
+    the driver coordinate, so the result does not depend on the step. The work of the other
+    loads (dampers, drag, springs under a condition, link-fixed forces) is the integral of
+    their power over the motion, ``integral of P dt`` (a damper's ``-c v^2``), by adaptive
+    quadrature on states solved between the samples (:func:`_power_integral`), to a
+    relative 1e-11: not a rule on the samples, so it does not depend on the step either.
+    The energies need only the motion, so positions where the forces are indeterminate
+    (singular) do not matter; if the mechanism could not be solved at some position, the
+    work is not defined (NaN).
     """
-    if len(sol.u) < 2 or not np.all(sol.ok):
-        return float("nan")  # the motion has gaps: no work over the sweep to speak of
+    if len(sol.u) < 2:
+        return float("nan"), "not enough positions"
+    if not np.all(sol.ok):
+        missing = int(np.sum(~sol.ok))
+        return float("nan"), f"{missing} position(s) not solved"
     mech, sys_ = an.mech, an.system
     st = sol.state
     energy = fr.kinetic + fr.potential
     work = energy[-1] - energy[0]
+    integrated = []  # loads whose work is the integral of their power
     for load in mech.loads:
         # "pos" is the load's potential-like function: its work is a difference of it;
         # "phi" its values at every sample
@@ -555,8 +774,8 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
                 return t * float(state.th[b, i])
 
         else:
-            p = fr.load_power[load.name]
-            work -= float(simpson(p, x=sol.t))
+            if not (isinstance(load, Spring) and load.when is None):  # else in V
+                integrated.append(load)
             continue
         on = fr.active.get(load.name)
         if on is None:
@@ -571,7 +790,136 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
                 work -= pos(ss, 0) - float(phi[k])
             else:
                 work -= float(phi[k + 1]) - pos(ss, 0)
-    return float(work)
+    if integrated:
+        w_loads, why = _power_integral(an, sol, fr, integrated)
+        if why:
+            return float("nan"), why
+        work -= w_loads
+    return float(work), ""
+
+
+# Gauss-Kronrod 7-15 on [-1, 1] (QUADPACK's qk15): the 15 Kronrod nodes and weights, and
+# the weights of the 7-point Gauss rule on its nodes (every second Kronrod node)
+_XK = np.array(
+    [
+        0.991455371120812639206854697526329,
+        0.949107912342758524526189684047851,
+        0.864864423359769072789712788640926,
+        0.741531185599394439863864773280788,
+        0.586087235467691130294144845693013,
+        0.405845151377397166906606412076961,
+        0.207784955007898467600689403773245,
+    ]
+)
+_WK = np.array(
+    [
+        0.022935322010529224963732008058970,
+        0.063092092629978553290700663189204,
+        0.104790010322250183839876322541518,
+        0.140653259715525918745189590510238,
+        0.169004726639267902826583426598550,
+        0.190350578064785409913256402421014,
+        0.204432940075298892414161999234649,
+    ]
+)
+_WG = np.array(
+    [
+        0.129484966168869693270611432679082,
+        0.279705391489276667901467771423780,
+        0.381830050505118944950369775488975,
+    ]
+)
+GK_NODES = np.r_[-_XK, 0.0, _XK[::-1]]
+GK_WEIGHTS = np.r_[_WK, 0.209482141084727828012999174891714, _WK[::-1]]
+G7_WEIGHTS = np.r_[_WG, 0.417959183673469387755102040816327, _WG[::-1]]  # at nodes 1::2
+WORK_RTOL = 1e-11  # the quadrature's tolerance, relative to the integral of |P|
+
+
+def _power_integral(
+    an: Analysis, sol: Solution, fr: ForceResult, loads: list, rtol: float = WORK_RTOL
+) -> tuple[float, str]:
+    """The work of ``loads`` over the motion of ``sol``, ``integral of P dt`` (J), and why
+    it could not be found ("" if it was).
+
+    Adaptive Gauss-Kronrod (7-15) quadrature in time: the panels start as the intervals
+    between samples, cut where a condition of one of the loads switches (located by
+    bisection, so that each panel's power is smooth); a panel whose Kronrod and Gauss
+    estimates differ by more than its share of ``rtol`` times the integral of ``|P|`` is
+    halved, all such panels of a round solved at once. The states at the nodes are the
+    mechanism's own at those driver values (:func:`mechsolve.core.states`, on the sweep's
+    branches), with the driver's rates there: the file's speed, or its motion law of time.
+    """
+    from ..sweep import StateView
+
+    t = np.asarray(sol.t, float)
+    u = np.asarray(sol.u, float)
+    ud, udd = sol.driver_rates()
+    law = an.mech.driver.motion
+    panels: list[tuple[float, float, int]] = []
+    for k in range(len(u) - 1):
+        a, b = float(t[k]), float(t[k + 1])
+        if not b > a:
+            continue  # no time passes (a repeated sample, a sweep at rest): no work
+        cuts = []
+        if law is None and u[k + 1] != u[k]:
+            for load in loads:
+                on = fr.active.get(load.name)
+                if on is not None and on[k] != on[k + 1]:
+                    us = _switch(an, sol, fr, load, k)[0]
+                    cuts.append(a + (b - a) * (us - u[k]) / (u[k + 1] - u[k]))
+        edges = [a, *sorted(c for c in cuts if a < c < b), b]
+        panels += [(lo, hi, k) for lo, hi in zip(edges[:-1], edges[1:])]
+    if not panels:
+        return 0.0, ""
+    total_time = float(t[-1] - t[0]) if t[-1] != t[0] else 1.0
+
+    def power(tau: np.ndarray, ks: np.ndarray) -> np.ndarray:
+        if law is not None:
+            uu, vv, ww = law.at(tau)
+        else:  # a constant speed: u is linear in t between samples
+            frac = (tau - t[ks]) / (t[ks + 1] - t[ks])
+            uu = u[ks] + (u[ks + 1] - u[ks]) * frac
+            vv, ww = ud[ks], udd[ks]
+        st, ok = states_between(an, sol, uu, vv, ww)
+        view = StateView(an, st)
+        funcs = {"stroke": stroke_function(list(fr.stroke_extremes), True)}
+        active = {}
+        for ld in an.mech.loads:
+            if ld.when is not None:
+                with np.errstate(invalid="ignore"):
+                    on = np.asarray(ld.when.evaluate(view, funcs), bool)
+                active[ld.name] = np.broadcast_to(on, uu.shape) & ok
+        _, per_load, _ = apply_loads(an, st, active, _Q(an, st))
+        p = sum(per_load[ld.name] for ld in loads)
+        return np.where(ok, p, np.nan)
+
+    lo = np.array([p[0] for p in panels])
+    hi = np.array([p[1] for p in panels])
+    ks = np.array([p[2] for p in panels])
+    total = 0.0
+    scale = None
+    for _ in range(60):
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        tau = mid[:, None] + half[:, None] * GK_NODES[None, :]
+        p = power(tau.ravel(), np.repeat(ks, len(GK_NODES))).reshape(tau.shape)
+        if not np.all(np.isfinite(p)):
+            i = int(np.argmax(~np.all(np.isfinite(p), axis=1)))
+            return float("nan"), (
+                "the mechanism could not be solved between the positions at "
+                f"{an.format_u(float(u[ks[i]]))} and {an.format_u(float(u[ks[i] + 1]))}"
+            )
+        kron = half * (p @ GK_WEIGHTS)
+        gauss = half * (p[:, 1::2] @ G7_WEIGHTS)
+        if scale is None:  # the integral of |P|: what the tolerance is relative to
+            scale = float(np.sum(half * (np.abs(p) @ GK_WEIGHTS)))
+        err = np.abs(kron - gauss)
+        done = (err <= rtol * scale * (hi - lo) / total_time) | (hi - lo <= 1e-13 * total_time)
+        total += float(np.sum(kron[done]))
+        if done.all():
+            return total, ""
+        lo, hi, ks, mid = lo[~done], hi[~done], ks[~done], mid[~done]
+        lo, hi, ks = np.r_[lo, mid], np.r_[mid, hi], np.r_[ks, ks]
+    return float("nan"), "the power of the loads could not be integrated to tolerance"
 
 
 def switch_points(an: Analysis, sol: Solution, fr: ForceResult) -> list[float]:

@@ -23,7 +23,9 @@ from .figures import Row, design_row
 SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
 
 
-def status_of(row: Row) -> str:
+def status_of(row: Row, res=None) -> str:
+    """``ok``, or why the design's figures are blank: where it does not assemble (the
+    first run of positions where a loop cannot close, with ``res``)."""
     n, solved = row.get("positions [-]"), row.get("solved [-]")
     if n is None:
         return "ok"
@@ -31,7 +33,19 @@ def status_of(row: Row) -> str:
         return "ok"
     if solved == 0:
         return "not assemblable at any position"
-    return f"not assemblable at {n - solved} of {n} positions"
+    where = ""
+    fails = getattr(res, "failures", None) if res is not None else None
+    if fails:
+        f = fails[0]
+        an = res.analysis
+        span = (
+            an.format_u(f.u_first)
+            if f.first == f.last
+            else f"{an.format_u(f.u_first)} to {an.format_u(f.u_last)}"
+        )
+        more = f" and {len(fails) - 1} more run(s)" if len(fails) > 1 else ""
+        where = f" ({f.group} does not close at {span}{more})"
+    return f"not assemblable at {n - solved} of {n} positions{where}: figures not computed"
 
 
 def _head(study: Study, k: int) -> Row:
@@ -67,7 +81,7 @@ def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
     except Exception as exc:  # noqa: BLE001 - one design's bug must not end the study
         row["status"] = f"internal error: {type(exc).__name__}: {exc}"
         return row
-    row["status"] = status_of(fig)
+    row["status"] = status_of(fig, res)
     row.update(fig)
     return row
 

@@ -2,7 +2,9 @@
 
 Columns (SI but for angles, in degrees as everywhere in mechsolve):
 
-* ``positions``, ``solved``, ``assembles`` (every position of the sweep solved);
+* ``positions``, ``solved``, ``assembles`` (every position of the sweep solved); a design
+  that does not assemble at every position has no other figures (blank cells) and its
+  verdicts say ``not assembled``: figures read off part of a motion would mislead;
 * per rocker ``NAME.swing [deg]``, per slider ``NAME.stroke [m]``, and over a full turn
   ``NAME.time_ratio [-]`` (see :mod:`mechsolve.limits`: extremes located exactly);
 * per two-branch loop ``min(transmission_angle.LOOP) [deg]``: its smallest value;
@@ -155,16 +157,41 @@ def _shown(value: float, unit: str) -> float:
         return float(value)
 
 
+NOT_ASSEMBLED = "not assembled"  # the verdict of a design that does not close everywhere
+COUNTS = ("positions [-]", "solved [-]", "assembles [-]")
+
+
 def design_row(res, mech, figures: list[str] = ()) -> Row:
-    """Every figure of one solved design."""
+    """Every figure of one solved design. A design that does not close at every position
+    of its sweep has no figures: they are blank (NaN) and its verdicts say
+    :data:`NOT_ASSEMBLED`, never a value or a pass read off the positions it does reach
+    (see :func:`blank_unassembled`)."""
     row = kinematic_figures(res)
     row.update(force_figures(res))
     row.update(extra_figures(res, mech, list(figures)))
     row.update(requirement_figures(res, mech))
+    if not row["assembles [-]"]:
+        row = blank_unassembled(row)
     return row
 
 
+def blank_unassembled(row: Row) -> Row:
+    """``row`` with every figure blank (NaN) and every verdict :data:`NOT_ASSEMBLED`: the
+    counts of positions and whether it assembles stay."""
+    out: Row = {}
+    for key, value in row.items():
+        if key in COUNTS:
+            out[key] = value
+        elif key.endswith(".pass [-]"):
+            out[key] = NOT_ASSEMBLED
+        else:
+            out[key] = math.nan
+    return out
+
+
 __all__ = [
+    "NOT_ASSEMBLED",
+    "blank_unassembled",
     "design_row",
     "expression_unit",
     "extra_figures",

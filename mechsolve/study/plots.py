@@ -54,7 +54,7 @@ def passed(row: Row) -> bool | None:
     if str(row.get("status", "")).startswith("invalid"):
         return None
     if "requirements.pass [-]" in row:
-        return bool(row["requirements.pass [-]"])
+        return row["requirements.pass [-]"] is True  # "not assembled" is no pass
     return row.get("status") == "ok"
 
 
