@@ -201,6 +201,17 @@ def force_text(f: float) -> str:
     return f"{f:.4g} N"
 
 
+def check_frame_count(count: int | None) -> None:
+    """Refuse a number of frames outside 2 .. :data:`MAX_FRAMES` (None: the default).
+
+    ``animate`` and ``report`` call it before loading or solving anything, so that a slip
+    on the command line costs nothing; :func:`fine_step` calls it too."""
+    if count is not None and count < 2:
+        raise InputError(f"--frames {count}: an animation needs at least 2 frames")
+    if count is not None and count > MAX_FRAMES:
+        raise InputError(f"--frames {count}: at most {MAX_FRAMES} frames")
+
+
 def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | None]:
     """The sweep step that gives ``count`` frames over the file's range (or 1 degree, a
     360th of a linear travel or of a sweep in time when ``count`` is None), and the count
@@ -208,10 +219,7 @@ def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | N
     without a duration)."""
     from .model import SliderJoint
 
-    if count is not None and count < 2:
-        raise InputError(f"--frames {count}: an animation needs at least 2 frames")
-    if count is not None and count > MAX_FRAMES:
-        raise InputError(f"--frames {count}: at most {MAX_FRAMES} frames")
+    check_frame_count(count)
     sw = mech.sweep
     if mech.driver.motion is not None:
         if sw.duration is None:
@@ -564,6 +572,7 @@ __all__ = [
     "Frames",
     "ffmpeg_available",
     "fine_step",
+    "check_frame_count",
     "frames_of",
     "render",
     "solve_frames",

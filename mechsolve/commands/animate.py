@@ -69,10 +69,17 @@ def animate(file: Path, output, variant, frames, fps, forces, size_text, quiet) 
         import numpy as np
 
         from .. import api
-        from ..animate import FFMPEG_HINT, ffmpeg_available, solve_frames, write_animation
+        from ..animate import (
+            FFMPEG_HINT,
+            check_frame_count,
+            ffmpeg_available,
+            solve_frames,
+            write_animation,
+        )
         from ..errors import InputError
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        check_frame_count(frames)  # before loading or solving anything
         size = _size(size_text)
         if output is None:
             output = Path(file.stem + (f"-{variant}" if variant else "") + ".gif")

@@ -62,10 +62,12 @@ def report(file: Path, output, variant, pdf, frames, polygons_at, watch, quiet) 
     try:
         import numpy as np
 
+        from ..animate import check_frame_count
         from ..errors import EXIT_REQUIREMENTS
         from ..report import write_report
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
+        check_frame_count(frames)  # before loading or solving anything (as animate does)
         if output is None:
             output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
 

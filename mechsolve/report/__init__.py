@@ -49,6 +49,8 @@ class ReportOutcome:
             lines.append(c.summary_text)
         elif c.cam_text:
             lines.append(c.cam_text)
+        if c.polygons_problem:
+            lines.append("  note: " + c.polygons_problem[:1].lower() + c.polygons_problem[1:])
         if c.verdicts:
             from ..requirements import verdict_table
 
@@ -139,6 +141,9 @@ def write_report(
     Raises :class:`~mechsolve.errors.InputError` for a wrong file or option, or for
     ``pdf`` without a headless browser (the HTML is written first, so it is there
     either way)."""
+    from ..animate import check_frame_count
+
+    check_frame_count(frames)  # a slip in the options costs nothing
     file = Path(file)
     if out is None:
         out = Path(file.stem + (f"-{variant}" if variant else "") + ".html")

@@ -456,6 +456,7 @@ class Content:
     cam_text: str = ""
     cam_plots: list[Image] = field(default_factory=list)
     polygons_text: str = ""
+    polygons_problem: str = ""  # why the polygons are not drawn
     polygons_images: list[Image] = field(default_factory=list)
     animation: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
@@ -463,6 +464,11 @@ class Content:
     incomplete: bool = False
     failed_requirements: int = 0
     verdicts: list = field(default_factory=list)
+
+
+def _plain(exc: Exception) -> str:
+    """An error's message without the command's prefix (``polygons: ...``)."""
+    return str(exc).removeprefix("polygons: ")
 
 
 def _description(source) -> str:
@@ -537,7 +543,7 @@ def mechanism_content(
         if mech.driver is not None and not res.linear:
             # the graphical check at one position (default: position 2 of 12, 30 deg
             # after the start, where a mechanism that starts at a limit already moves)
-            from ..errors import InputError
+            from ..errors import AssemblyError, InputError, SolverError
             from ..polygons import draw_polygons
 
             try:
@@ -545,7 +551,23 @@ def mechanism_content(
             except InputError as exc:  # a group the graphical method here does not draw
                 if polygons_at is not None:
                     raise
-                c.polygons_text = f"(no polygons: {exc})"
+                c.polygons_problem = f"No polygons: {_plain(exc)}"
+            except (
+                SolverError,
+                AssemblyError,
+            ) as exc:  # the position lies where the mechanism cannot close
+                c.polygons_problem = (
+                    f"No polygons: {_plain(exc)}. "
+                    + (
+                        "Position 2 (30° after the start) is only the default: "
+                        if polygons_at is None
+                        else ""
+                    )
+                    + "give a position the mechanism reaches with --polygons-at (a position "
+                    "number, 1 at the start, or a driver angle such as '100 deg')."
+                )
+                # asked for and not drawn: the report lacks it (exit 1); the default is not
+                c.incomplete = c.incomplete or polygons_at is not None
             else:
                 c.polygons_text = pol.text()
                 c.polygons_images = [embed(p) for p in pol.images if p.suffix == ".png"]
