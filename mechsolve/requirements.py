@@ -44,7 +44,6 @@ import difflib
 import functools
 import math
 import re
-import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -447,9 +446,6 @@ def _rebuild(n: Any, kids: list[Any]) -> Any:
     return n
 
 
-_FINE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 class _Reducer:
     """Reduces a run to its figures. ``max``, ``min`` and ``range`` are taken over the
     sweep the plots are drawn from (:func:`mechsolve.api.for_plots`: 1 degree or finer,
@@ -469,22 +465,27 @@ class _Reducer:
         self.fctx = RunContext(self.fine, figures=False) if self.fine is not None else None
         self.notes: list[str] = []
 
+    @classmethod
+    def of(cls, results: Results) -> _Reducer:
+        """The reducer of a run, made once per run (its fine sweep and contexts kept on
+        the run: a study reads several figures of each design)."""
+        red = getattr(results, "_requirements_reducer", None)
+        if red is None or red.res is not results:
+            red = cls(results)
+            try:
+                results._requirements_reducer = red
+            except AttributeError:
+                pass
+        red.notes = []
+        return red
+
     @staticmethod
     def _fine_sweep(res: Results) -> Results | None:
-        try:
-            return _FINE[res]
-        except (KeyError, TypeError):
-            pass
         from .api import for_plots
 
-        fine = None
         if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
-            fine = for_plots(res.mechanism, res)
-        try:
-            _FINE[res] = fine
-        except TypeError:
-            pass
-        return fine
+            return for_plots(res.mechanism, res)
+        return None
 
     # -- evaluation -------------------------------------------------------------------
     def value(self, tree) -> Any:
@@ -663,7 +664,7 @@ def evaluate_figure(text: str, mech: Mechanism, results: Results) -> float:
     ``"max(abs(input.torque))"`` (extremes located as for requirements); an
     :class:`InputError` for text that does not parse, mixes kinds of quantities or reads
     something the run does not have."""
-    red = _Reducer(results)
+    red = _Reducer.of(results)
     try:
         e = Expression(_rewrite(text))
         e.text = text
@@ -681,7 +682,7 @@ def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[
     for requirements (``max()``, ``min()``), for any report that prints a peak;
     ``(nan, nan)`` where nothing is determined. An :class:`InputError` for text that
     does not read the run."""
-    red = _Reducer(results)
+    red = _Reducer.of(results)
     try:
         e = Expression(_rewrite(text))
         e.text = text
@@ -701,7 +702,7 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     reqs: list[Requirement] = getattr(mech, "requirements", []) or []
     if not reqs:
         return []
-    red = _Reducer(results) if any(r.expr is not None for r in reqs) else None
+    red = _Reducer.of(results) if any(r.expr is not None for r in reqs) else None
     out = []
     for r in reqs:
         if r.expr is None or red is None:
