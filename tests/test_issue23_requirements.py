@@ -267,3 +267,58 @@ def test_the_shaper_time_ratio_against_its_closed_form():
         [v] = check_requirements(mech, ms.solve(mech))
         assert v.passed is passed
         assert v.value == pytest.approx(K, abs=1e-6)
+
+
+# -- the kinds, exhaustively ------------------------------------------------------------
+
+# what each quantity is, written here by hand (not read from mechsolve's tables)
+KIND_OF_QUANTITY = {
+    "P.x": "length",
+    "P.vy": "speed",
+    "P.a": "acceleration",
+    "crank.angle": "angle",
+    "crank.omega": "angular speed",
+    "crank.alpha": "angular acceleration",
+    "ram_guide.s": "length",
+    "ram_guide.v": "speed",
+}
+KIND_OF_UNIT = {
+    "mm": "length",
+    "in": "length",
+    "kg": "mass",
+    "s": "time",
+    "deg": "angle",
+    "rev": "angle",
+    "m/s": "speed",
+    "ft/s": "speed",
+    "m/s^2": "acceleration",
+    "rpm": "angular speed",
+    "rad/s": "angular speed",
+    "rad/s^2": "angular acceleration",
+    "N": "force",
+    "kN m": "torque",
+    "W": "power",
+}
+
+
+@pytest.mark.parametrize("quantity", sorted(KIND_OF_QUANTITY))
+def test_every_quantity_against_every_unit(quantity):
+    from mechsolve.expr import DimensionError, Expression
+
+    for unit, kind in KIND_OF_UNIT.items():
+        same = kind == KIND_OF_QUANTITY[quantity]
+        for text in (
+            f"{quantity} < 2 {unit}",
+            f"3 {unit} >= {quantity}",
+            f"{quantity} + 1 {unit} > 0",
+            f"max({quantity}, 2 {unit}) > 0",
+        ):
+            e = Expression(text)
+            if same:
+                e.dimension()
+            else:
+                with pytest.raises(DimensionError):
+                    e.dimension()
+        # a bare number is SI of what it meets, and a pure number in a product
+        Expression(f"{quantity} < 2").dimension()
+        Expression(f"{quantity} < 2 * {quantity} + 1").dimension()
