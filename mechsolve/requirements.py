@@ -319,7 +319,9 @@ class RunContext:
     also the limit positions, exact transmission minima and the work (not needed for
     the few positions an extreme is located with)."""
 
-    def __init__(self, results: Results, figures: bool = True) -> None:
+    def __init__(
+        self, results: Results, figures: bool = True, of: RunContext | None = None
+    ) -> None:
         self.res = results
         self.values: dict[str, Any] = {}
         self.units: dict[str, str] = {}
@@ -335,6 +337,10 @@ class RunContext:
                 self.values[alias] = self.values[cols[0]]
                 self.units[alias] = self.units[cols[0]]
         self._figures(figures)
+        if of is not None:  # the run's own figures (a swing, the work), one number each
+            for key, v in of.values.items():
+                if key not in self.values and np.ndim(v) == 0:
+                    self.values[key], self.units[key] = v, of.units[key]
 
     def _figures(self, figures: bool) -> None:
         res = self.res
@@ -462,7 +468,9 @@ class _Reducer:
         self.ctx = RunContext(results)
         self.fine = self._fine_sweep(results)
         # per position only: the figures (limit positions, exact minima) are the run's
-        self.fctx = RunContext(self.fine, figures=False) if self.fine is not None else None
+        self.fctx = None
+        if self.fine is not None:
+            self.fctx = RunContext(self.fine, figures=False, of=self.ctx)
         self.notes: list[str] = []
 
     @classmethod
@@ -623,7 +631,7 @@ class _Reducer:
         if fine.forces is not None:
             f = core.forces(an, one, fine.forces.stroke_extremes)
         with np.errstate(all="ignore"):
-            q = _evaluate(arg, RunContext(Results(an, one, f), figures=False))
+            q = _evaluate(arg, RunContext(Results(an, one, f), figures=False, of=self.ctx))
         out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
         out[~np.asarray(one.ok, bool)] = np.nan
         return out

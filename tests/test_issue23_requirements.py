@@ -213,6 +213,18 @@ def test_at_is_solved_at_its_driver_value():
     assert math.isnan(evaluate_figure("at(P.y, 400 deg)", mech, res))
 
 
+def test_a_reduction_of_a_figure_that_is_one_number():
+    mech = ms.loads(FOURBAR)
+    res = ms.solve(mech)
+    swing = evaluate_figure("rocker.swing", mech, res)
+    assert evaluate_figure("max(rocker.swing)", mech, res) == swing
+    assert evaluate_figure("range(rocker.swing)", mech, res) == 0
+    hi = evaluate_figure("max(P.y)", mech, res)
+    assert evaluate_figure("max(P.y + rocker.swing * 1 m)", mech, res) == pytest.approx(
+        hi + swing, abs=1e-12
+    )
+
+
 def test_a_sampled_reduction_says_so():
     mech = ms.loads(with_requirements(FOURBAR, {"m": "mean(P.y) <= 1 m"}))
     [v] = check_requirements(mech, ms.solve(mech))
