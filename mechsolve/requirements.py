@@ -44,7 +44,6 @@ import difflib
 import functools
 import math
 import re
-import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -320,7 +319,9 @@ class RunContext:
     also the limit positions, exact transmission minima and the work (not needed for
     the few positions an extreme is located with)."""
 
-    def __init__(self, results: Results, figures: bool = True) -> None:
+    def __init__(
+        self, results: Results, figures: bool = True, of: RunContext | None = None
+    ) -> None:
         self.res = results
         self.values: dict[str, Any] = {}
         self.units: dict[str, str] = {}
@@ -336,6 +337,10 @@ class RunContext:
                 self.values[alias] = self.values[cols[0]]
                 self.units[alias] = self.units[cols[0]]
         self._figures(figures)
+        if of is not None:  # the run's own figures (a swing, the work), one number each
+            for key, v in of.values.items():
+                if key not in self.values and np.ndim(v) == 0:
+                    self.values[key], self.units[key] = v, of.units[key]
 
     def _figures(self, figures: bool) -> None:
         res = self.res
@@ -447,9 +452,6 @@ def _rebuild(n: Any, kids: list[Any]) -> Any:
     return n
 
 
-_FINE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 class _Reducer:
     """Reduces a run to its figures. ``max``, ``min`` and ``range`` are taken over the
     sweep the plots are drawn from (:func:`mechsolve.api.for_plots`: 1 degree or finer,
@@ -466,25 +468,32 @@ class _Reducer:
         self.ctx = RunContext(results)
         self.fine = self._fine_sweep(results)
         # per position only: the figures (limit positions, exact minima) are the run's
-        self.fctx = RunContext(self.fine, figures=False) if self.fine is not None else None
+        self.fctx = None
+        if self.fine is not None:
+            self.fctx = RunContext(self.fine, figures=False, of=self.ctx)
         self.notes: list[str] = []
+
+    @classmethod
+    def of(cls, results: Results) -> _Reducer:
+        """The reducer of a run, made once per run (its fine sweep and contexts kept on
+        the run: a study reads several figures of each design)."""
+        red = getattr(results, "_requirements_reducer", None)
+        if red is None or red.res is not results:
+            red = cls(results)
+            try:
+                results._requirements_reducer = red
+            except AttributeError:
+                pass
+        red.notes = []
+        return red
 
     @staticmethod
     def _fine_sweep(res: Results) -> Results | None:
-        try:
-            return _FINE[res]
-        except (KeyError, TypeError):
-            pass
         from .api import for_plots
 
-        fine = None
         if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
-            fine = for_plots(res.mechanism, res)
-        try:
-            _FINE[res] = fine
-        except TypeError:
-            pass
-        return fine
+            return for_plots(res.mechanism, res)
+        return None
 
     # -- evaluation -------------------------------------------------------------------
     def value(self, tree) -> Any:
@@ -622,7 +631,7 @@ class _Reducer:
         if fine.forces is not None:
             f = core.forces(an, one, fine.forces.stroke_extremes)
         with np.errstate(all="ignore"):
-            q = _evaluate(arg, RunContext(Results(an, one, f), figures=False))
+            q = _evaluate(arg, RunContext(Results(an, one, f), figures=False, of=self.ctx))
         out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
         out[~np.asarray(one.ok, bool)] = np.nan
         return out
@@ -663,7 +672,7 @@ def evaluate_figure(text: str, mech: Mechanism, results: Results) -> float:
     ``"max(abs(input.torque))"`` (extremes located as for requirements); an
     :class:`InputError` for text that does not parse, mixes kinds of quantities or reads
     something the run does not have."""
-    red = _Reducer(results)
+    red = _Reducer.of(results)
     try:
         e = Expression(_rewrite(text))
         e.text = text
@@ -681,7 +690,7 @@ def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[
     for requirements (``max()``, ``min()``), for any report that prints a peak;
     ``(nan, nan)`` where nothing is determined. An :class:`InputError` for text that
     does not read the run."""
-    red = _Reducer(results)
+    red = _Reducer.of(results)
     try:
         e = Expression(_rewrite(text))
         e.text = text
@@ -701,7 +710,7 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     reqs: list[Requirement] = getattr(mech, "requirements", []) or []
     if not reqs:
         return []
-    red = _Reducer(results) if any(r.expr is not None for r in reqs) else None
+    red = _Reducer.of(results) if any(r.expr is not None for r in reqs) else None
     out = []
     for r in reqs:
         if r.expr is None or red is None:

@@ -213,6 +213,18 @@ def test_at_is_solved_at_its_driver_value():
     assert math.isnan(evaluate_figure("at(P.y, 400 deg)", mech, res))
 
 
+def test_a_reduction_of_a_figure_that_is_one_number():
+    mech = ms.loads(FOURBAR)
+    res = ms.solve(mech)
+    swing = evaluate_figure("rocker.swing", mech, res)
+    assert evaluate_figure("max(rocker.swing)", mech, res) == swing
+    assert evaluate_figure("range(rocker.swing)", mech, res) == 0
+    hi = evaluate_figure("max(P.y)", mech, res)
+    assert evaluate_figure("max(P.y + rocker.swing * 1 m)", mech, res) == pytest.approx(
+        hi + swing, abs=1e-12
+    )
+
+
 def test_a_sampled_reduction_says_so():
     mech = ms.loads(with_requirements(FOURBAR, {"m": "mean(P.y) <= 1 m"}))
     [v] = check_requirements(mech, ms.solve(mech))
@@ -267,3 +279,58 @@ def test_the_shaper_time_ratio_against_its_closed_form():
         [v] = check_requirements(mech, ms.solve(mech))
         assert v.passed is passed
         assert v.value == pytest.approx(K, abs=1e-6)
+
+
+# -- the kinds, exhaustively ------------------------------------------------------------
+
+# what each quantity is, written here by hand (not read from mechsolve's tables)
+KIND_OF_QUANTITY = {
+    "P.x": "length",
+    "P.vy": "speed",
+    "P.a": "acceleration",
+    "crank.angle": "angle",
+    "crank.omega": "angular speed",
+    "crank.alpha": "angular acceleration",
+    "ram_guide.s": "length",
+    "ram_guide.v": "speed",
+}
+KIND_OF_UNIT = {
+    "mm": "length",
+    "in": "length",
+    "kg": "mass",
+    "s": "time",
+    "deg": "angle",
+    "rev": "angle",
+    "m/s": "speed",
+    "ft/s": "speed",
+    "m/s^2": "acceleration",
+    "rpm": "angular speed",
+    "rad/s": "angular speed",
+    "rad/s^2": "angular acceleration",
+    "N": "force",
+    "kN m": "torque",
+    "W": "power",
+}
+
+
+@pytest.mark.parametrize("quantity", sorted(KIND_OF_QUANTITY))
+def test_every_quantity_against_every_unit(quantity):
+    from mechsolve.expr import DimensionError, Expression
+
+    for unit, kind in KIND_OF_UNIT.items():
+        same = kind == KIND_OF_QUANTITY[quantity]
+        for text in (
+            f"{quantity} < 2 {unit}",
+            f"3 {unit} >= {quantity}",
+            f"{quantity} + 1 {unit} > 0",
+            f"max({quantity}, 2 {unit}) > 0",
+        ):
+            e = Expression(text)
+            if same:
+                e.dimension()
+            else:
+                with pytest.raises(DimensionError):
+                    e.dimension()
+        # a bare number is SI of what it meets, and a pure number in a product
+        Expression(f"{quantity} < 2").dimension()
+        Expression(f"{quantity} < 2 * {quantity} + 1").dimension()
