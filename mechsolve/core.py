@@ -28,32 +28,10 @@ import numpy as np
 from .groups.generic import NewtonGroup
 from .numerics import limit_from_both_sides
 from .solvers.forces import ForceResult, solve_forces
-from .state import State
+from .state import State, scale_rates
 from .sweep import Analysis, Failure, Solution
 
 __all__ = ["states", "forces", "scale_rates"]
-
-
-def scale_rates(st: State, ud: np.ndarray, udd: np.ndarray, acceleration: bool = True) -> None:
-    """Turn rates per unit driver coordinate (``q'``, ``q''``) into time rates, in place."""
-    vel = st.block[5:8]  # vx, vy, w of every body
-    acc = st.block[8:11]  # ax, ay, al
-    ud = np.asarray(ud, float)
-    udd = np.asarray(udd, float)
-    if ud.size and np.all(ud == ud.flat[0]) and not np.any(udd):
-        w = float(ud.flat[0])  # a constant speed: two scalar products, as the sweep does
-        if acceleration and w != 1.0:
-            acc *= w * w
-        if w != 1.0:
-            vel *= w
-    else:
-        ud = np.broadcast_to(ud, (st.n,))
-        udd = np.broadcast_to(udd, (st.n,))
-        if acceleration:
-            acc *= ud * ud
-            acc += vel * udd
-        vel *= ud
-    st.token = State.new_token()
 
 
 def states(

@@ -185,3 +185,25 @@ class State:
         w2 = self.w[i, idx] ** 2
         al = self.al[i, idx]
         return self.ax[i, idx] - al * ry - w2 * rx, self.ay[i, idx] + al * rx - w2 * ry
+
+
+def scale_rates(st: State, ud: np.ndarray, udd: np.ndarray, acceleration: bool = True) -> None:
+    """Turn rates per unit driver coordinate (``q'``, ``q''``) into time rates, in place."""
+    vel = st.block[5:8]  # vx, vy, w of every body
+    acc = st.block[8:11]  # ax, ay, al
+    ud = np.asarray(ud, float)
+    udd = np.asarray(udd, float)
+    if ud.size and np.all(ud == ud.flat[0]) and not np.any(udd):
+        w = float(ud.flat[0])  # a constant speed: two scalar products, as the sweep does
+        if acceleration and w != 1.0:
+            acc *= w * w
+        if w != 1.0:
+            vel *= w
+    else:
+        ud = np.broadcast_to(ud, (st.n,))
+        udd = np.broadcast_to(udd, (st.n,))
+        if acceleration:
+            acc *= ud * ud
+            acc += vel * udd
+        vel *= ud
+    st.token = State.new_token()

@@ -1164,7 +1164,7 @@ def read_requirements(r: Reader, value: Any, linear: bool | None = None) -> list
     """``requirements: {name: "max(abs(input.torque)) <= 300 kN m", ...}`` (see
     :mod:`mechsolve.requirements`); ``linear``: the driver is a slider."""
     from ..expr import DimensionError
-    from ..requirements import parse_requirement
+    from .requirement import parse_requirement
 
     path: KeyPath = ("requirements",)
     if not isinstance(value, dict) or not value:

@@ -347,7 +347,7 @@ def _check_requirements(mech: Mechanism) -> None:
     a rocker or a ram, not of the link a slider carries) and compares quantities of one
     kind (a model built in code is checked here; a file's also as it is read)."""
     from ..expr import ExprError
-    from ..requirements import _ANGLE, _LENGTH, check_names, figure_dim
+    from .requirement import _ANGLE, _LENGTH, check_names, figure_dim
 
     linear = mech.driver is not None and any(
         isinstance(j, SliderJoint) and j.name == mech.driver.joint for j in mech.joints

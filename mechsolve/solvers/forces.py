@@ -181,11 +181,16 @@ def stroke_function(
         else:
             good = np.flatnonzero(np.isfinite(q))
             if good.size < 2:
+                # no stroke over fewer than two positions; recorded all the same, so
+                # that a replay meets its calls in the same order
+                extremes.append((np.nan, np.nan))
                 return np.full_like(q, np.nan)
             lo = _extreme(q, good, np.argmin, -1.0)
             hi = _extreme(q, good, np.argmax, 1.0)
             extremes.append((lo, hi))
         span = hi - lo
+        if not np.isfinite(span):
+            return np.full_like(q, np.nan)
         return (q - lo) / span if span > 0 else np.zeros_like(q)
 
     return stroke
@@ -347,8 +352,7 @@ def states_between(an: Analysis, sol: Solution, u: np.ndarray, ud, udd):
 
     Closed forms take the sweep's start and branch switches; Newton groups continue from
     the nearest sample, one run of values per sample."""
-    from ..core import scale_rates
-    from ..state import State
+    from ..state import State, scale_rates
 
     u = np.asarray(u, float)
     n = u.size
