@@ -218,7 +218,9 @@ def _effort_limits(an: Analysis, sol: Solution, f: ForceResult, extremes) -> Non
             continue
         scale_rates(near.state, np.full(4, ud[i]), np.full(4, udd[i]))
         near.ud, near.udd = np.full(4, ud[i]), np.full(4, udd[i])
-        e = solve_forces(an, near, extremes).effort
+        with np.errstate(invalid="ignore", divide="ignore"):
+            # a point next to it may itself be singular (its rates NaN): no limit then
+            e = solve_forces(an, near, extremes).effort
         if not np.all(np.isfinite(e)):
             continue
         if i in (0, n - 1):  # cubic extrapolation, checked against the quadratic one

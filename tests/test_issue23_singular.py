@@ -214,3 +214,35 @@ def test_values_next_to_a_bifurcation_are_right(offset_deg):
     np.testing.assert_allclose(res.driving_effort, hand, rtol=0, atol=1e-6)
     np.testing.assert_allclose(res.link("crank3").alpha, 0.0, atol=1e-6)
     np.testing.assert_allclose(res.link("crank3").omega, 2.0, atol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45", "DOP853"])
+def test_a_motor_drives_the_chain_through_its_collinear_positions(method):
+    """simulate on the chain used to stop ('the motion left the range where the mechanism
+    closes') with every method but split-newton. Independent reference: its reduced
+    inertia is constant, J = 3 (m l^2 / 3) + 2 m l^2 = 3 kg m^2, so the crank angle obeys
+    J theta'' = d M(d theta') - dV/dtheta, V = g sin(theta) sum(m l_c), with the motor
+    M(w) = 50 - 1.25 w acting in the driver's direction d = -1; integrated by scipy."""
+    from scipy.integrate import solve_ivp
+
+    from mechsolve.dynamics import simulate
+
+    text = CHAIN.format(
+        assembly="assembly: {sketch: {B: [1, 1], C: [2, 1]}}\n", start=90, step=1
+    ) + (
+        "motor: {stall: 50 N m, slope: 1.25 N m s}\n"
+        f"simulate: {{duration: 2 s, step: 0.002 s, from: rest, method: {method}}}\n"
+    )
+    tr = simulate(ms.loads(text)).trajectory
+    assert not tr.early and tr.t[-1] == pytest.approx(2.0)
+    # (next to a collinear position J is the rates' limit along the motion, O(h^4))
+    np.testing.assert_allclose(tr.J, 3.0, rtol=1e-8)
+
+    def rhs(t, y):
+        th, w = y
+        return [w, (-(50 - 1.25 * -w) - 9.81 * 3.5 * np.cos(th)) / 3.0]
+
+    ref = solve_ivp(rhs, (0, 2), [math.pi / 2, 0.0], t_eval=tr.t, rtol=1e-11, atol=1e-12)
+    assert abs(tr.phi[-1] - tr.phi[0]) > 4 * math.pi  # through collinear positions
+    np.testing.assert_allclose(tr.phi, ref.y[0], atol=1e-6)
+    np.testing.assert_allclose(tr.omega, ref.y[1], atol=1e-5)
