@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .branches import TOUCH, _coincident_at
+from .branches import START_SNAP, TOUCH, _coincident_at
 from .conditioning import group_block, rcond
 from .errors import AssemblyError, CannotCloseAtStart
 from .expr import Side
@@ -145,12 +145,9 @@ class StartAssembler:
             if not ok2.any():
                 raise self._cannot_close(g, st2, u0)
             g.velocity(st2, unit2)
-            H0 = g.disc(st2)[0][0]
+            meet = self._branches_meet(g, st2, ok2)
             j, reason = self._choose(
-                g,
-                *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0),
-                ready,
-                bool(np.isfinite(H0) and H0 <= TOUCH),
+                g, *self._where_to_choose(gi, g, st2, ok2, modes, q_start, u0), ready, meet
             )
             mode = 1.0 if j == 0 else -1.0
             if _coincident_at(g, st2, 0):  # the limit from the side the motion goes to
@@ -291,8 +288,7 @@ class StartAssembler:
         ok2, _ = g.position(two, self.drive(np.array([u0, u0])), np.array([1.0, -1.0]))
         if not ok2.any():
             raise self._cannot_close(g, two, u0)
-        H = g.disc(two)[0]
-        singular = bool(np.isfinite(H[0]) and H[0] <= TOUCH)
+        singular = self._branches_meet(g, two, ok2)
         if not ready and not has_sketch and ok2[0] and not singular:
             start.reasons[gi] = "default branch (+)"
             return
@@ -310,13 +306,24 @@ class StartAssembler:
         the group is singular there (its two branches meet: a toggle, a bifurcation,
         coincident joints), just past it, where the branches differ. Returns the state
         with both branches (one in each column) and where each closes."""
-        H = g.disc(st2)[0]
-        if not (np.isfinite(H[0]) and H[0] <= TOUCH):
+        if not self._branches_meet(g, st2, ok2):
             return st2, ok2
         d = self.mech.driver.direction
         delta = START_PROBE * (self.scale if self.linear else 1.0)
+        # a singular point just off the start (a start 1e-7 rad before a bifurcation)
+        # must not lie between the start and the probe: the branches swap across it.
+        # (Where the outer joints coincide at the start to within the tolerance of its
+        # pose, the sweep takes the start as that point: the probe goes past it.)
+        H, dH = (float(np.asarray(x)[0]) for x in g.disc(st2))
+        off = np.inf
+        if np.isfinite(H) and np.isfinite(dH) and dH != 0 and not _coincident_at(g, st2, 0):
+            off = -2.0 * H / dH
+        snap = START_SNAP * (self.scale if self.linear else 1.0)
         for side in (1.0, -1.0):  # the side the motion goes to, else where it comes from
-            u = u0 + side * d * delta
+            step = delta
+            if snap < side * d * off < delta:  # (nearer, the sweep takes it as the start)
+                step = 0.5 * abs(off)
+            u = u0 + side * d * step
             st = self._groups_at(u, gi, modes, q_start)
             if st is None:
                 continue
@@ -325,6 +332,25 @@ class StartAssembler:
             if ok.any():
                 return st, ok
         return st2, ok2
+
+    def _branches_meet(self, g: Group, st2: State, ok2) -> bool:
+        """Do the group's two branches (the two columns of ``st2``) meet here, so that
+        which one the motion takes is read just past this position? Its discriminant
+        vanishes there, and its links' poses are the same on both (near a loop whose
+        outer joints nearly coincide the discriminant is tiny but the branches are far
+        apart: a probe past the start could then cross the singular point and swap
+        them)."""
+        H = g.disc(st2)[0]
+        if not (np.isfinite(H[0]) and H[0] <= TOUCH):
+            return False
+        if not np.all(ok2) or _coincident_at(g, st2, 0):
+            return True
+        b = list(g.bodies)
+        pos = st2.block[:2, b, :]
+        ang = st2.block[2, b, :]
+        dpos = float(np.max(np.abs(pos[..., 0] - pos[..., 1]))) / self.scale
+        dang = float(np.max(np.abs((ang[:, 0] - ang[:, 1] + np.pi) % (2 * np.pi) - np.pi)))
+        return max(dpos, dang) <= 1e-6
 
     def _groups_at(self, u: float, upto: int, modes, q_start) -> State | None:
         """The assembly groups before ``upto`` solved at driver value ``u`` (two equal

@@ -32,6 +32,10 @@ EVENT_CHECK = 0.25  # examine minima whose interpolated discriminant is below th
 
 NEAR_SINGULAR = math.sin(math.radians(3.0))
 
+# a bifurcation this near the sweep's start (rad, or of the size) is at the start: the
+# start assembly reads the branch past it, and the sweep does not flip there
+START_SNAP = 1e-6
+
 
 def _coincident_at(g: Group, st: State, i: int) -> bool:
     """Do the outer joints of the group coincide at position ``i`` (see RRR)?"""
@@ -311,7 +315,19 @@ class BranchEvents:
             # a minimum on a sample (to rounding) is that sample: the sample keeps the
             # branch it comes in on, and the flip applies after it
             j = int(np.argmin(np.abs(u_s - us)))
-            if abs(u_s[j] - us) <= 1e-12 * (1.0 + abs(us)):
+            # (a sample where the group's outer joints coincide, to within the
+            # tolerance its pose treats as coincident, is at the minimum too: its pose
+            # is the limit from the side it is reached from)
+            at_start = (
+                j == 0
+                and ctx.is_start
+                and abs(u_s[0] - us) <= START_SNAP * (self.scale if self.linear else 1.0)
+            )
+            if (
+                abs(u_s[j] - us) <= 1e-12 * (1.0 + abs(us))
+                or _coincident_at(g, ctx.st, j)
+                or at_start
+            ):
                 us = float(u_s[j])
                 if j == 0 and ctx.is_start:
                     continue  # the start's branch is the one taken from the start

@@ -84,9 +84,7 @@ sweep: {{range: {sweep!r} deg, step: {step!r} deg}}
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     a=hs.sampled_from([0.3, 1.0, 2.5]),
-    # (a rhombus, ratio 1, whose crank meets O4 at 0 deg, is a double singularity: its
-    # accelerations within 0.01 deg of it are not yet right to 1e-5, see the issue)
-    ratio=hs.sampled_from([1.3, 1.7, 4.0]),
+    ratio=hs.sampled_from([1.0, 1.3, 1.7, 4.0]),  # ratio 1: a rhombus
     start=hs.one_of(
         hs.sampled_from([0.0, 180.0, -180.0, 360.0]),  # exactly at a bifurcation
         hs.floats(-360.0, 360.0, allow_nan=False).map(lambda x: round(x, 7)),
@@ -105,7 +103,7 @@ def test_parallelograms_stay_parallelograms_with_bounded_rates(a, ratio, start, 
     # the sketch: the parallelogram's B at the start; where the start is a bifurcation
     # (both branches meet there), a little past it, on the side the motion goes to
     s = math.radians(start)
-    if abs(math.sin(s)) < 1e-9:
+    if abs(math.sin(s)) < 1e-6:  # (a start this near is the bifurcation, see branches)
         s += math.radians(5.0) * math.copysign(1.0, speed)
     sketch = f"assembly: {{sketch: {{B: [{d + a * math.cos(s)!r}, {a * math.sin(s)!r}]}}}}\n"
     res = ms.solve(ms.loads(_parallelogram(a, d, start, step, 360.0, speed) + sketch))
