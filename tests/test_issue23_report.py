@@ -6,15 +6,22 @@ from __future__ import annotations
 
 import math
 import re
+import shutil
+import subprocess
 import time
+import unicodedata
+from html import unescape
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 from test_report import Page
 
+import mechsolve
 import mechsolve.api
 from mechsolve.commands.animate import animate
 from mechsolve.commands.report import report
+from mechsolve.report.browser import find_browser
 
 from conftest import MECH
 
@@ -136,3 +143,128 @@ def test_requested_polygon_position_that_cannot_close(tmp_path):
     assert r.exit_code == 0, r.output
     text = _section(out.read_text(encoding="utf-8"), "polygons")
     assert "<img" in text and "cannot close" not in text
+
+
+# -- the PDF --------------------------------------------------------------------------
+A4 = (595.276, 841.89)  # 210 x 297 mm in points
+LETTER = (612.0, 792.0)
+
+
+def pdf_pages(path: Path) -> list[tuple[float, float, str]]:
+    """(width, height, text) of each page, read back with pypdf (the test extra), else
+    with poppler's pdfinfo/pdftotext; skipped when neither is there."""
+    try:
+        from pypdf import PdfReader
+    except ImportError:
+        PdfReader = None
+    if PdfReader is not None:
+        pages = []
+        for p in PdfReader(str(path)).pages:
+            box = p.mediabox
+            pages.append((float(box.width), float(box.height), p.extract_text() or ""))
+        return pages
+    if not (shutil.which("pdftotext") and shutil.which("pdfinfo")):
+        pytest.skip("no PDF reader (pip install pypdf, or poppler-utils)")
+    info = subprocess.run(
+        ["pdfinfo", "-f", "1", "-l", "9999", str(path)], capture_output=True, text=True
+    ).stdout
+    sizes = [
+        (float(w), float(h)) for w, h in re.findall(r"Page\s+\d+ size:\s+([\d.]+) x ([\d.]+)", info)
+    ]
+    pages = []
+    for k, (w, h) in enumerate(sizes, start=1):
+        text = subprocess.run(
+            ["pdftotext", "-f", str(k), "-l", str(k), str(path), "-"],
+            capture_output=True,
+            text=True,
+        ).stdout
+        pages.append((w, h, text))
+    return pages
+
+
+def squash(text: str) -> str:
+    """The text without white space, its ligatures (ﬁ) as letters."""
+    return re.sub(r"\s+", "", unicodedata.normalize("NFKC", text))
+
+
+needs_browser = pytest.mark.skipif(
+    find_browser() is None, reason="no Chromium-based browser (apt-get install -y chromium)"
+)
+
+
+@pytest.fixture(scope="module")
+def shaper_pdf(tmp_path_factory):
+    d = tmp_path_factory.mktemp("pdf")
+    out = d / "shaper.html"
+    r = CliRunner().invoke(
+        report, [str(MECH / "shaper.yaml"), "-o", str(out), "--frames", "6", "--pdf", "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    return out, out.with_suffix(".pdf")
+
+
+@needs_browser
+def test_pdf_is_a4_and_nothing_is_cut(shaper_pdf):
+    """The shaper's PDF was US Letter, its reactions table stopped at the first joints (C,
+    D and O4 missing), the summary's long lines were cut and a scrollbar printed. Read
+    back: A4 pages; every joint's reaction columns with the values of the last position;
+    the summary and the polygons' text whole."""
+    html_path, pdf_path = shaper_pdf
+    pages = pdf_pages(pdf_path)
+    assert len(pages) >= 5
+    for w, h, _ in pages:
+        assert (w, h) == pytest.approx(A4, abs=1.0)
+    text = "\n".join(t for _, _, t in pages)
+    flat = squash(text)
+    page = Page(html_path.read_text(encoding="utf-8"))
+    forces = page.table("Driving effort and joint reactions")
+    mech = mechsolve.load(MECH / "shaper.yaml")
+    assert len(mech.joints) == 7
+    last = forces["rows"][-1]
+    for j in mech.joints:
+        label = f"{j.name}({j.links[0]}->{j.links[1]})"
+        assert label in flat, f"joint {j.name} is missing from the PDF"
+        cols = [k for k, h in enumerate(forces["header"]) if h.startswith(label + ".")]
+        assert cols, label
+        for k in cols:  # its values at the last position are printed
+            assert re.search(rf"(?<![\d.]){re.escape(last[k])}(?![\d])", text), (
+                f"{forces['header'][k]} = {last[k]} at the last position is not in the PDF"
+            )
+    # every table of positions reaches the last position, 73
+    assert len(forces["rows"]) == 73
+    # every table (as on the screen) is printed whole: each cell of its last row is there
+    tables = [t for t in page.tables if "(part " not in t["caption"]]
+    assert len(tables) >= 10
+    for t in tables:
+        for cell in t["rows"][-1]:
+            assert squash(cell) in flat, f"{t['caption']}: {cell!r} is not in the PDF"
+    # the summary and the polygons' text are not cut at the right margin
+    html = html_path.read_text(encoding="utf-8")
+    for section in ("summary", "polygons"):
+        pre = re.search(r"<pre>(.*?)</pre>", _section(html, section), re.S).group(1)
+        pre = squash(unescape(pre))
+        assert pre and pre in flat, f"the {section} text is cut in the PDF"
+
+
+@needs_browser
+def test_pdf_on_letter_paper(tmp_path):
+    out = tmp_path / "fourbar.html"
+    r = CliRunner().invoke(
+        report,
+        [
+            str(MECH / "fourbar.yaml"),
+            "-o",
+            str(out),
+            "--frames",
+            "6",
+            "--pdf",
+            "--paper",
+            "letter",
+            "-q",
+        ],  # fmt: skip
+    )
+    assert r.exit_code == 0, r.output
+    pages = pdf_pages(out.with_suffix(".pdf"))
+    assert pages
+    for w, h, _ in pages:
+        assert (w, h) == pytest.approx(LETTER, abs=1.0)
