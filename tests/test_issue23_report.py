@@ -13,6 +13,7 @@ import unicodedata
 from html import unescape
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from test_report import Page
@@ -23,7 +24,7 @@ from mechsolve.commands.animate import animate
 from mechsolve.commands.report import report
 from mechsolve.report.browser import find_browser
 
-from conftest import MECH
+from conftest import MECH, ref
 
 # A four-bar whose input link cannot turn fully: |A O4| exceeds coupler + rocker
 # (60 + 59 mm) past 117.2 deg of the input (hand calculation below). Started at 95 deg
@@ -268,3 +269,118 @@ def test_pdf_on_letter_paper(tmp_path):
     assert pages
     for w, h, _ in pages:
         assert (w, h) == pytest.approx(LETTER, abs=1.0)
+
+
+# -- one value per figure ---------------------------------------------------------------
+def _circle_meet(p, r1, q, r2):
+    """The meeting point of circles (p, r1) and (q, r2) to the left of p -> q (arrays)."""
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    d = np.hypot(dx, dy)
+    a = (r1**2 - r2**2 + d**2) / (2 * d)
+    h = np.sqrt(r1**2 - a**2)
+    ex, ey = dx / d, dy / d
+    return p[0] + a * ex - h * ey, p[1] + a * ey + h * ex
+
+
+def crane_tie_angle(theta):
+    """The crane's tie angle O4 -> D (deg) at crank angles ``theta`` (rad), by hand from
+    mechanisms/crane.yaml: B where the coupler (2.780 m from A) meets the jib (4.0 m from
+    O3) left of O3 -> A; C on the jib 28.525 m from O3 at 25 deg from O3 -> B; D where the
+    boom (3.625 m from C) meets the tie (25.15 m from O4) left of C -> O4."""
+    o1, o4 = (2.86, 4.0), (5.6, 8.1)
+    a = (o1[0] + 1.388 * np.cos(theta), o1[1] + 1.388 * np.sin(theta))
+    zero = np.zeros_like(theta)
+    b = _circle_meet((zero, zero), 4.0, a, 2.780)
+    psi = np.arctan2(b[1], b[0]) + math.radians(25)
+    c = (28.525 * np.cos(psi), 28.525 * np.sin(psi))
+    d = _circle_meet(c, 3.625, (o4[0] + zero, o4[1] + zero), 25.15)
+    return np.degrees(np.arctan2(d[1] - o4[1], d[0] - o4[0]))
+
+
+def crane_tie_minima() -> tuple[float, list[float]]:
+    """The tie's smallest angle (deg) and every crank angle (deg) where it is reached:
+    the local minima of a 0.001-degree sweep, each refined by golden-section search."""
+    from scipy.optimize import minimize_scalar
+
+    th = np.radians(np.arange(0.0, 360.0, 0.001))
+    tie = crane_tie_angle(th)
+    k = np.flatnonzero((tie < np.roll(tie, 1)) & (tie <= np.roll(tie, -1)))
+    found = []
+    for i in k:
+        r = minimize_scalar(
+            lambda x: float(crane_tie_angle(np.array([x]))[0]),
+            bracket=(th[i] - 1e-4, th[i], th[i] + 1e-4),
+            tol=1e-12,
+        )
+        found.append((float(r.fun), math.degrees(r.x) % 360))
+    low = min(v for v, _ in found)
+    return low, sorted(x for v, x in found if v - low < 1e-9)
+
+
+def test_the_crane_tie_reaches_its_lower_limit_twice():
+    """Why the report said 355.18 deg in one place and 27.49 deg in another: the tie's
+    angle has the same minimum at both (the jib passes the same angle on its way down and
+    back up, and the tie's extreme lies inside the jib's swing). The independent
+    computation finds both; so do the 10-degree and the 1-degree sweeps, in sweep order."""
+    low, where = crane_tie_minima()
+    assert len(where) == 2
+    assert where == pytest.approx([27.487, 355.182], abs=1e-3)
+    mech = mechsolve.load(MECH / "crane.yaml")
+    res = mechsolve.api.solve(mech)
+    fine = mechsolve.api.for_plots(mech, res)
+    for r in (res, fine):
+        (tie,) = [lp for lp in r.limit_positions() if lp.name == "tie"]
+        assert math.degrees(tie.low) == pytest.approx(low, abs=1e-8)
+        got = [math.degrees(u) % 360 for u in tie.u_lows]
+        # a search of the angle itself places a flat minimum to about the square root of
+        # the rounding (5e-8 rad); the solver finds the root of the tie's rate, sharper
+        assert got == pytest.approx(where, abs=2e-5)
+        assert tie.u_low == tie.u_lows[0]
+
+
+@pytest.fixture(scope="module")
+def crane_page(tmp_path_factory):
+    out = tmp_path_factory.mktemp("crane") / "crane.html"
+    r = CliRunner().invoke(report, [str(MECH / "crane.yaml"), "-o", str(out), "--frames", "6"])
+    assert r.exit_code == 0, r.output
+    html = out.read_text(encoding="utf-8")
+    summary = unescape(re.search(r"<pre>(.*?)</pre>", _section(html, "summary"), re.S).group(1))
+    return Page(html), summary, r.output
+
+
+def _angles(text: str) -> list[float]:
+    return [float(x) for x in re.findall(r"driver angle (-?[\d.]+)°", text)]
+
+
+def test_report_gives_one_value_per_figure(crane_page):
+    """The summary said the tie's lower limit is at 355.18 deg and the figures table 27.49
+    deg (two sweeps, each picking one of two equal minima); the summary's torque extremes
+    were the 10-degree table's (-292.914 kN m) beside the figures' -295.108. Now every
+    figure the two share is the same number, and the tie's limit is at both angles."""
+    page, summary, terminal = crane_page
+    low, where = crane_tie_minima()
+    rows = {r[0]: r for r in page.table("Figures of the motion")["rows"]}
+    row = rows["limit positions of rocker tie"]
+    assert row[1].startswith(f"{low:.6g}°")
+    for x in where:  # both positions of the lower limit
+        assert any(abs(x - y) < 1e-3 for y in _angles(row[2])), (x, row[2])
+    lower, higher = row[2].split(";")
+    assert _angles(lower) == pytest.approx(where, abs=1e-3)
+    (tie,) = re.findall(r"rocker tie ([^;\n]*)", summary)
+    at_low, at_high = tie.split(" to ")
+    assert at_low.startswith(f"{low:.6g}°")
+    assert _angles(at_low) == pytest.approx(where, abs=1e-3)
+    assert _angles(at_high) == _angles(higher)
+    assert summary in terminal  # the terminal prints the same summary
+    # the driving torque's extremes: the same numbers in the summary and the figures
+    m = re.search(
+        r"driving torque: max (-?[\d.]+) kN\*m at (.*?), min (-?[\d.]+) kN\*m at (.*?),",
+        summary,
+    )
+    assert m, summary
+    assert rows["largest driving torque"][1] == f"{m.group(1)} kN m"
+    assert rows["smallest driving torque"][1] == f"{m.group(3)} kN m"
+    assert rows["largest driving torque"][2] == m.group(2)
+    # the true extreme (seed's fine recomputation), not the 10-degree table's -292.914
+    fine = np.array(ref("000_crane_kinetostatics.json")["fine_1deg"])
+    assert float(m.group(3)) == pytest.approx(fine[:, 1].min() / 1e3, abs=0.2)

@@ -406,13 +406,15 @@ def figures_table(res) -> Table:
     an = res.analysis
     rows: list[list[str]] = []
     for lp in res.limit_positions():
-        a, b = an.format_u(lp.u_low), an.format_u(lp.u_high)
+        a = " and at ".join(an.format_u(u) for u in lp.u_lows)  # an extreme reached twice
+        b = " and at ".join(an.format_u(u) for u in lp.u_highs)
+        where = f"the lower at {a}; the higher at {b}"
         if lp.kind == "rocker":
             rows.append(
                 [
                     f"limit positions of rocker {lp.name}",
                     f"{num(math.degrees(lp.low), 6)}° to {num(math.degrees(lp.high), 6)}°",
-                    f"at {a} and {b}",
+                    where,
                 ]
             )
             rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing), 6)}°", ""])
@@ -421,7 +423,7 @@ def figures_table(res) -> Table:
                 [
                     f"limit positions of slider {lp.name}",
                     f"{num(lp.low, 6)} m to {num(lp.high, 6)} m",
-                    f"at {a} and {b}",
+                    where,
                 ]
             )
             rows.append([f"stroke of {lp.name}", f"{num(lp.swing, 6)} m", ""])
@@ -633,8 +635,10 @@ def mechanism_content(
     }
     res = api.solve(mech, method=method)
     fine = api.for_plots(mech, res, method)
-    summary = res.summary()  # also runs the checks that add warnings
-    c.summary_text = summary
+    # one computation of each figure for the whole report: the summary takes its limit
+    # positions, transmission angles and torque figures from the sweep the figures
+    # table and the plots are drawn from
+    c.summary_text = res.summary(figures=fine)  # also runs the checks that add warnings
     c.incomplete = res.incomplete()
     c.figures = figures_table(fine)
     c.tables = position_tables(res)
