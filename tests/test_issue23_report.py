@@ -247,6 +247,53 @@ def test_pdf_is_a4_and_nothing_is_cut(shaper_pdf):
         assert pre and pre in flat, f"the {section} text is cut in the PDF"
 
 
+def image_boxes(path: Path) -> list[tuple[int, float, float, float, float]]:
+    """(page, x0, y0, x1, y1) in points of every image drawn in the PDF, from the page's
+    content stream (the transformation in force at each image's ``Do``). An image split
+    over two pages is drawn on both, partly outside each."""
+    pypdf = pytest.importorskip("pypdf")
+    out = []
+    for n, page in enumerate(pypdf.PdfReader(str(path)).pages, start=1):
+        res = page.get("/Resources")
+        xobj = res.get_object().get("/XObject", {}) if res is not None else {}
+        xobj = xobj.get_object() if hasattr(xobj, "get_object") else xobj
+        ctm, stack = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0], []
+        for operands, op in page.get_contents().operations:
+            if op == b"q":
+                stack.append(list(ctm))
+            elif op == b"Q":
+                ctm = stack.pop()
+            elif op == b"cm":
+                a, b, c, d, e, f = (float(v) for v in operands)
+                A, B, C, D, E, F = ctm
+                ctm = [a * A + b * C, a * B + b * D, c * A + d * C, c * B + d * D,
+                       e * A + f * C + E, e * B + f * D + F]  # fmt: skip
+            elif op == b"Do" and xobj[operands[0]].get_object().get("/Subtype") == "/Image":
+                A, B, C, D, E, F = ctm
+                xs, ys = (E, E + A, E + C, E + A + C), (F, F + B, F + D, F + B + D)
+                out.append((n, min(xs), min(ys), max(xs), max(ys)))
+    return out
+
+
+@needs_browser
+def test_pdf_images_are_never_split(tmp_path):
+    """The six-bar's acceleration polygon is taller than a page: it was printed split over
+    two pages (its lower part on the next). Every image lies within one page."""
+    out = tmp_path / "sixbar.html"
+    r = CliRunner().invoke(
+        report, [str(MECH / "sixbar.yaml"), "-o", str(out), "--frames", "6", "--pdf", "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    pdf = out.with_suffix(".pdf")
+    boxes = image_boxes(pdf)
+    assert len(boxes) >= out.read_text(encoding="utf-8").count("<img ")
+    w, h = A4
+    for page, x0, y0, x1, y1 in boxes:
+        assert -0.5 <= x0 and x1 <= w + 0.5 and -0.5 <= y0 and y1 <= h + 0.5, (
+            f"an image on page {page} runs off it: ({x0:.0f}, {y0:.0f}) to ({x1:.0f}, {y1:.0f})"
+        )
+
+
 @needs_browser
 def test_pdf_on_letter_paper(tmp_path):
     out = tmp_path / "fourbar.html"
