@@ -431,3 +431,34 @@ def test_report_gives_one_value_per_figure(crane_page):
     # the true extreme (seed's fine recomputation), not the 10-degree table's -292.914
     fine = np.array(ref("000_crane_kinetostatics.json")["fine_1deg"])
     assert float(m.group(3)) == pytest.approx(fine[:, 1].min() / 1e3, abs=0.2)
+
+
+def test_a_wide_table_is_printed_in_parts_of_whole_groups():
+    """Each part fits the printed page's width, repeats the leading columns, and together
+    the parts hold every other column once, in order, a joint's components together."""
+    from mechsolve.report.build import PRINT_CHAR, PRINT_PAD, PRINT_WIDTH, Table
+
+    header = ["#", "t [s]", "input.angle [deg]", "input.torque [N m]"]
+    header += [f"J{i}(link{i}->link{i + 1}).{c} [N]" for i in range(9) for c in ("Fx", "Fy", "F")]
+    rows = [[str(n), "0.0125", "-163.17"] + ["-123456.7"] * (len(header) - 3) for n in (1, 2)]
+    t = Table("Driving effort and joint reactions", header, rows, [True] * len(header), lead=3)
+    parts = t.print_parts()
+    assert len(parts) >= 2
+    seen = []
+    for i, p in enumerate(parts, start=1):
+        assert p.caption == f"Driving effort and joint reactions (part {i} of {len(parts)})"
+        assert [g.text for g in p.groups[:3]] == header[:3]
+        assert all(g.rowspan == 2 for g in p.groups[:3])
+        for g in p.groups[3:]:
+            # a joint's three components under its name, never split between parts
+            assert g.colspan == 3 if g.text.startswith("J") else g.colspan == 1
+        cell = len("-123456.7") * PRINT_CHAR + PRINT_PAD  # the widest text of a column
+        width = sum(t.column_width(k) for k in range(3)) + sum(
+            g.colspan * cell for g in p.groups[3:]
+        )
+        assert width <= PRINT_WIDTH + 1e-9
+        assert all(len(r) == 3 + len(p.sub) for r in p.rows)
+        seen += [g.text for g in p.groups[3:]]
+    assert seen == ["input"] + [f"J{i}(link{i}->link{i + 1})" for i in range(9)]
+    # a table that fits is printed as it is
+    assert Table("Fixed points", ["point", "x [mm]"], [["O2", "0"]]).print_parts() == []

@@ -167,7 +167,7 @@ class Table:
                     f"{self.caption} (part {i} of {len(parts)})",
                     top,
                     sub,
-                    [[r[k] for k in cols] for r in self.rows],
+                    [[r[k] if k < len(r) else "" for k in cols] for r in self.rows],
                     [
                         bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
                         for k in cols
