@@ -63,6 +63,15 @@ class LimitPositions:
     time_ratio: float | None = None
     forward: float | None = None  # driver travel from low to high (rad)
     back: float | None = None
+    # every driver value where the extreme is reached, in the order of the sweep (the
+    # first is u_low / u_high): a rocker driven through a linkage can reach its extreme
+    # twice per turn (the crane's tie, at 27.487 and 355.182 deg of the crank)
+    u_lows: tuple[float, ...] = ()
+    u_highs: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        self.u_lows = self.u_lows or (self.u_low,)
+        self.u_highs = self.u_highs or (self.u_high,)
 
     @property
     def swing(self) -> float:
@@ -123,6 +132,22 @@ def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool):
     if angle:  # next to the unwrapped samples
         v += 2 * math.pi * round((vk - v) / (2 * math.pi))
     return x, v
+
+
+def _in_sweep_order(res: _Sweep, us: list[float]) -> tuple[float, ...]:
+    """Driver values in the order the sweep meets them, each position once (over a full
+    turn, u and u + 2 pi are one position)."""
+    u0 = float(res.u[0])
+    d = res.mechanism.driver.direction
+    full = res.is_full_cycle()
+    out: list[float] = []
+    for x in sorted(us, key=lambda x: d * (x - u0)):
+        same = [
+            y for y in out if abs(x - y) < 1e-9 or (full and abs(abs(x - y) - 2 * math.pi) < 1e-9)
+        ]
+        if not same:
+            out.append(x)
+    return tuple(out)
 
 
 def limit_positions(sol: Solution) -> list[LimitPositions]:
@@ -206,7 +231,14 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
         lo = min((e for e in extremes if not e[2]), key=lambda e: e[1], default=None)
         if hi is None or lo is None:
             continue
-        lp = LimitPositions(name, kind, lo[1], lo[0], hi[1], hi[0])
+        # an extreme reached at several positions (equal but for rounding): all of them,
+        # not the one that rounding happens to favour
+        tol = 1e-9 * max(hi[1] - lo[1], 1e-12)
+        u_highs = _in_sweep_order(res, [e[0] for e in extremes if e[2] and e[1] >= hi[1] - tol])
+        u_lows = _in_sweep_order(res, [e[0] for e in extremes if not e[2] and e[1] <= lo[1] + tol])
+        lp = LimitPositions(
+            name, kind, lo[1], u_lows[0], hi[1], u_highs[0], u_lows=u_lows, u_highs=u_highs
+        )
         if grounded and full and len(extremes) == 2 and not edges:
             fwd = (hi[0] - lo[0]) * mech.driver.direction % (2 * math.pi)
             back = 2 * math.pi - fwd

@@ -308,7 +308,11 @@ class Results:
         """Bifurcations, dead zones stepped over, near-singular minima met by the sweep."""
         return self.solution.events
 
-    def design_summary(self) -> list[str]:
+    def design_summary(self, figures: Results | None = None) -> list[str]:
+        """The summary's lines about singular positions, conditioning and the design
+        figures; ``figures``: a finer sweep of the same motion to take the limit positions
+        and transmission angles from (see :meth:`summary`)."""
+        src = self if figures is None else figures
         lines = []
         if len(self.u) < 2:
             return lines
@@ -350,12 +354,14 @@ class Results:
                 f"  conditioning: smallest reciprocal condition of the constraint Jacobian "
                 f"{rc[i]:.3g} at {self.describe_u(i)}"
             )
-        lim = self.limit_positions()
+        lim = src.limit_positions()
         if lim:
             parts = []
             ratios = []
             for lp in lim:
-                a, b = self.analysis.format_u(lp.u_low), self.analysis.format_u(lp.u_high)
+                fmt = self.analysis.format_u
+                a = " and at ".join(fmt(u) for u in lp.u_lows)  # an extreme reached twice
+                b = " and at ".join(fmt(u) for u in lp.u_highs)
                 if lp.kind == "rocker":
                     parts.append(
                         f"rocker {lp.name} {math.degrees(lp.low):.6g}° at {a} to "
@@ -375,7 +381,7 @@ class Results:
             lines.append("  limit positions: " + "; ".join(parts))
             if ratios:
                 lines.append("  time ratio: " + "; ".join(ratios))
-        tr = self.transmission_angles()
+        tr = src.transmission_angles()
         if tr:
             lines.append(
                 "  minimum transmission angle: "
@@ -575,8 +581,13 @@ class Results:
             )
         return lines
 
-    def summary(self) -> str:
-        """A short text summary: positions solved, ranges of the outputs, anything unusual."""
+    def summary(self, figures: Results | None = None) -> str:
+        """A short text summary: positions solved, ranges of the outputs, anything unusual.
+
+        ``figures``: a finer sweep of the same motion (:func:`mechsolve.api.for_plots`) to
+        take the figures from (limit positions, transmission angles, the driving effort's
+        extremes, mean and work, peak reactions, power balance), so that they are the
+        numbers the plots and the report's figures show, from one computation."""
         n = len(self.u)
         lines = []
         mech = self.mechanism
@@ -643,41 +654,46 @@ class Results:
             )
             if red.removable:
                 lines.append("  " + red.suggestion())
-        lines += self.design_summary()
+        lines += self.design_summary(figures)
         if self.forces is not None:
-            lines += self.force_summary()
+            lines += self.force_summary(figures)
         for w in self.warnings:
             lines.append("  warning: " + w)
         return "\n".join(lines)
 
-    def force_summary(self) -> list[str]:
+    def force_summary(self, figures: Results | None = None) -> list[str]:
+        """The summary's lines about the forces; ``figures``: a finer sweep of the same
+        motion to take the figures from (see :meth:`summary`), the driving effort as
+        :attr:`driving_effort` gives it (at a singular position its limit)."""
         f = self.forces
         lines = []
         if not np.any(f.ok):
             return ["  forces: no position could be solved"]
+        src = self if figures is None or figures.forces is None else figures
+        g = src.forces
         kind, unit = self.effort_name
-        e = np.where(f.ok, f.effort, np.nan)
+        e = np.where(g.ok, g.effort, np.nan) if figures is None else src.driving_effort
         scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
         rms = float(np.sqrt(np.nanmean(e**2)))
-        mean, what = self.mean_effort()
+        mean, what = src.mean_effort()
         lines.append(
-            f"  driving {kind}: max {e[imax] / scale:.6g} {sym}{unit} at {self.describe_u(imax)}, "
-            f"min {e[imin] / scale:.6g} {sym}{unit} at {self.describe_u(imin)}, "
+            f"  driving {kind}: max {e[imax] / scale:.6g} {sym}{unit} at {src.describe_u(imax)}, "
+            f"min {e[imin] / scale:.6g} {sym}{unit} at {src.describe_u(imin)}, "
             f"RMS {rms / scale:.6g} {sym}{unit}, {what} {mean / scale:.6g} {sym}{unit}"
         )
-        lines.append("  " + self.work_text())
+        lines.append("  " + src.work_text())
         peaks = []
         for j in self.mechanism.joints:
-            r = f.reactions[j.name]
+            r = g.reactions[j.name]
             mag = np.abs(r["F"] if "F" in r else r["N"])
-            mag = np.where(f.ok, mag, np.nan)
+            mag = np.where(g.ok, mag, np.nan)
             if np.any(np.isfinite(mag)):
                 i = int(np.nanargmax(mag))
-                peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {self.describe_u(i)}")
+                peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {src.describe_u(i)}")
         lines.append("  peak reactions: " + "; ".join(peaks))
-        res = np.nanmax(np.abs(np.where(f.ok, f.residual, np.nan)))
-        ps = self.power_scale()
+        res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
+        ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
         lines.append(
             f"  power balance: max residual {res:.3g} W ({rel:.2g} of the largest power term)"

@@ -36,6 +36,13 @@ from ..clikit import (
     "(MECHSOLVE_BROWSER names another).",
 )
 @click.option(
+    "--paper",
+    type=click.Choice(["a4", "letter"], case_sensitive=False),
+    default="a4",
+    show_default=True,
+    help="The page size of the PDF (and of the HTML printed from a browser).",
+)
+@click.option(
     "--frames",
     type=click.IntRange(min=2),
     help="Frames of the embedded animation (default: one per degree of the driver).",
@@ -52,7 +59,7 @@ from ..clikit import (
     help="Write the report again whenever FILE is saved; Ctrl-C stops (needs watchfiles).",
 )
 @QUIET
-def report(file: Path, output, variant, pdf, frames, polygons_at, watch, quiet) -> None:
+def report(file: Path, output, variant, pdf, paper, frames, polygons_at, watch, quiet) -> None:
     """Write one HTML file about FILE that opens in any browser without a network: the
     model's tables with units, degrees of freedom and Assur groups with their branches,
     the mechanism drawn to scale, the figures of the motion, the position tables at the
@@ -73,7 +80,9 @@ def report(file: Path, output, variant, pdf, frames, polygons_at, watch, quiet) 
 
         def once():
             at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
-            done = write_report(file, variant, output, pdf=pdf, frames=frames, polygons_at=at)
+            done = write_report(
+                file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper
+            )
             if not quiet:
                 click.echo(done.text())
                 click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))

@@ -72,17 +72,31 @@ def _environment():
     )
 
 
-def render(content: Content) -> str:
-    """The report's HTML."""
+PAPERS = {"a4": "A4", "letter": "letter"}  # --paper: the CSS page size of each
+
+
+def paper_size(paper: str) -> str:
+    """The CSS page size of ``paper`` (``a4`` or ``letter``, any case)."""
+    try:
+        return PAPERS[str(paper).lower()]
+    except KeyError:
+        raise InputError(f"--paper {paper!r}: the paper is a4 or letter") from None
+
+
+def render(content: Content, paper: str = "a4") -> str:
+    """The report's HTML, printed (by ``--pdf`` or from a browser) on ``paper`` (``a4`` or
+    ``letter``) with 12 mm margins."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
         ver = version("mechsolve")
     except PackageNotFoundError:  # run from a source tree
         ver = "dev"
+    size = paper_size(paper)
     env = _environment()
     return env.get_template("report.html.j2").render(
         c=content,
+        paper=size,
         version=ver,
         generated=datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
     )
@@ -134,9 +148,12 @@ def write_report(
     frames: int | None = None,
     method: str | None = None,
     polygons_at: str | int | None = None,
+    paper: str = "a4",
 ) -> ReportOutcome:
     """Write the HTML report of ``file`` to ``out`` (default: ``<file stem>.html`` in the
-    current folder) and, with ``pdf``, print it to PDF beside it (or to the path given).
+    current folder) and, with ``pdf``, print it to PDF beside it (or to the path given), on
+    ``paper`` (``a4`` or ``letter``; also the page size when the HTML is printed from a
+    browser).
 
     Raises :class:`~mechsolve.errors.InputError` for a wrong file or option, or for
     ``pdf`` without a headless browser (the HTML is written first, so it is there
@@ -144,6 +161,7 @@ def write_report(
     from ..animate import check_frame_count
 
     check_frame_count(frames)  # a slip in the options costs nothing
+    paper_size(paper)
     file = Path(file)
     if out is None:
         out = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
@@ -156,7 +174,7 @@ def write_report(
     if pdf:
         pdf_path = Path(pdf) if not isinstance(pdf, bool) else out.with_suffix(".pdf")
     content = build(file, variant, frames=frames, method=method, polygons_at=polygons_at)
-    html = render(content)
+    html = render(content, paper)
     try:
         _write_atomic(out, html)
     except OSError as exc:
@@ -172,4 +190,13 @@ def write_report(
     return outcome
 
 
-__all__ = ["JINJA_HINT", "ReportOutcome", "build", "is_cam_file", "render", "write_report"]
+__all__ = [
+    "JINJA_HINT",
+    "PAPERS",
+    "ReportOutcome",
+    "build",
+    "is_cam_file",
+    "paper_size",
+    "render",
+    "write_report",
+]

@@ -40,15 +40,141 @@ class Image:
     name: str = ""
 
 
+# What a printed page holds, for splitting a wide table into parts that fit: the width of
+# an A4 page (the narrower of A4 and Letter) less its margins, in CSS pixels, and the print
+# stylesheet's character width and cell padding (report.css, @media print).
+PRINT_WIDTH = (210 - 2 * 12) / 25.4 * 96 - 16  # px, a little to spare
+PRINT_CHAR = 5.8  # px per character of a table at 8.5 px (a wide sans-serif: DejaVu Sans)
+PRINT_PAD = 8.0  # px of padding and borders per cell
+
+
+@dataclass
+class HeaderCell:
+    """A cell of a printed part's two header rows."""
+
+    text: str
+    colspan: int = 1
+    rowspan: int = 1
+
+
+@dataclass
+class PrintPart:
+    """Some of a wide table's columns, with its leading columns repeated, as printed."""
+
+    caption: str
+    groups: list[HeaderCell]  # the first header row (a name over its columns)
+    sub: list[str]  # the second header row (each column's quantity and unit)
+    rows: list[list[str]]
+    numeric: list[bool]
+
+
+def _split_header(text: str) -> tuple[str, str]:
+    """``O2(ground->crank).Fx [N]`` -> (``O2(ground->crank)``, ``Fx [N]``); a header without
+    a name before its quantity -> ("", text)."""
+    name, sp, unit = text.partition(" [")
+    head, dot, q = name.rpartition(".")
+    if not dot or not head:
+        return "", text
+    return head, q + sp + unit
+
+
+def _width(texts: list[str], wrap: bool) -> float:
+    """Estimated printed width (px) of a column holding ``texts``: its longest word when it
+    may wrap, else its longest text."""
+    if wrap:
+        n = max((len(w) for t in texts for w in t.split()), default=1)
+    else:
+        n = max((len(t) for t in texts), default=1)
+    return n * PRINT_CHAR + PRINT_PAD
+
+
 @dataclass
 class Table:
-    """A table of text cells: a caption, header cells (each with its unit) and rows."""
+    """A table of text cells: a caption, header cells (each with its unit) and rows.
+
+    ``lead``: how many leading columns identify a row (position number, time, driver
+    value); a table too wide for a printed page is printed in parts (:meth:`print_parts`),
+    each with these columns again."""
 
     caption: str
     header: list[str]
     rows: list[list[str]]
     numeric: list[bool] = field(default_factory=list)
     note: str = ""
+    lead: int = 0
+
+    def column_width(self, k: int) -> float:
+        """The printed width (px) of column ``k``: its cells (a number does not wrap, a
+        text does at its spaces) and its header, which wraps at spaces."""
+        cells = [r[k] for r in self.rows if k < len(r)]
+        num = bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
+        return max(_width(cells, wrap=not num), _width([self.header[k]], wrap=True))
+
+    def print_parts(self) -> list[PrintPart]:
+        """The table as printed when it is wider than a page: parts of whole groups of
+        columns (a joint's Fx, Fy and F; a point's x and y) under a two-row header, each
+        part led by the ``lead`` columns. Empty when the table fits as it is."""
+        ncol = len(self.header)
+        if ncol == 0 or sum(self.column_width(k) for k in range(ncol)) <= PRINT_WIDTH:
+            return []
+        lead = list(range(min(self.lead, ncol)))
+        # the groups of the other columns: consecutive columns with one name
+        groups: list[tuple[str, list[int]]] = []
+        for k in range(len(lead), ncol):
+            head, _ = _split_header(self.header[k])
+            if groups and head and groups[-1][0] == head:
+                groups[-1][1].append(k)
+            else:
+                groups.append((head, [k]))
+        sub_of = {k: _split_header(self.header[k]) for k in range(ncol)}
+
+        def sub_width(k: int) -> float:
+            head, sub = sub_of[k]
+            cells = [r[k] for r in self.rows if k < len(r)]
+            num = bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
+            return max(_width(cells, wrap=not num), _width([sub if head else self.header[k]], True))
+
+        def group_width(head: str, cols: list[int]) -> float:
+            inner = sum(sub_width(k) for k in cols)
+            return max(inner, _width([head], wrap=False)) if head else inner
+
+        base = sum(sub_width(k) for k in lead)
+        parts: list[list[tuple[str, list[int]]]] = [[]]
+        used = base
+        for head, cols in groups:
+            w = group_width(head, cols)
+            if parts[-1] and used + w > PRINT_WIDTH:
+                parts.append([])
+                used = base
+            parts[-1].append((head, cols))
+            used += w
+        out = []
+        for i, part in enumerate(parts, start=1):
+            cols = lead + [k for _, ks in part for k in ks]
+            top = [HeaderCell(self.header[k], rowspan=2) for k in lead]
+            sub = []
+            for head, ks in part:
+                if head:
+                    top.append(HeaderCell(head, colspan=len(ks)))
+                    sub += [sub_of[k][1] for k in ks]
+                else:
+                    top += [HeaderCell(self.header[k], rowspan=2) for k in ks]
+            if not sub:  # one header row
+                for cell in top:
+                    cell.rowspan = 1
+            out.append(
+                PrintPart(
+                    f"{self.caption} (part {i} of {len(parts)})",
+                    top,
+                    sub,
+                    [[r[k] if k < len(r) else "" for k in cols] for r in self.rows],
+                    [
+                        bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
+                        for k in cols
+                    ],  # fmt: skip
+                )
+            )
+        return out
 
 
 def embed(path: Path, title: str | None = None) -> Image:
@@ -280,13 +406,15 @@ def figures_table(res) -> Table:
     an = res.analysis
     rows: list[list[str]] = []
     for lp in res.limit_positions():
-        a, b = an.format_u(lp.u_low), an.format_u(lp.u_high)
+        a = " and at ".join(an.format_u(u) for u in lp.u_lows)  # an extreme reached twice
+        b = " and at ".join(an.format_u(u) for u in lp.u_highs)
+        where = f"the lower at {a}; the higher at {b}"
         if lp.kind == "rocker":
             rows.append(
                 [
                     f"limit positions of rocker {lp.name}",
                     f"{num(math.degrees(lp.low), 6)}° to {num(math.degrees(lp.high), 6)}°",
-                    f"at {a} and {b}",
+                    where,
                 ]
             )
             rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing), 6)}°", ""])
@@ -295,7 +423,7 @@ def figures_table(res) -> Table:
                 [
                     f"limit positions of slider {lp.name}",
                     f"{num(lp.low, 6)} m to {num(lp.high, 6)} m",
-                    f"at {a} and {b}",
+                    where,
                 ]
             )
             rows.append([f"stroke of {lp.name}", f"{num(lp.swing, 6)} m", ""])
@@ -415,6 +543,7 @@ def position_tables(res) -> list[Table]:
                 rows,
                 [True] * (len(allc) + 1),
                 "Not solved or not determined: " + "; ".join(notes) if notes else "",
+                lead=1 + len(lead),
             )
         )
     return tables
@@ -506,8 +635,10 @@ def mechanism_content(
     }
     res = api.solve(mech, method=method)
     fine = api.for_plots(mech, res, method)
-    summary = res.summary()  # also runs the checks that add warnings
-    c.summary_text = summary
+    # one computation of each figure for the whole report: the summary takes its limit
+    # positions, transmission angles and torque figures from the sweep the figures
+    # table and the plots are drawn from
+    c.summary_text = res.summary(figures=fine)  # also runs the checks that add warnings
     c.incomplete = res.incomplete()
     c.figures = figures_table(fine)
     c.tables = position_tables(res)
