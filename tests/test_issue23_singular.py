@@ -244,3 +244,68 @@ def test_a_motor_drives_the_chain_through_its_collinear_positions(method):
     assert abs(tr.phi[-1] - tr.phi[0]) > 4 * math.pi  # through collinear positions
     np.testing.assert_allclose(tr.phi, ref.y[0], atol=1e-6)
     np.testing.assert_allclose(tr.omega, ref.y[1], atol=1e-5)
+
+
+def _kite_B(a: float, b: float, th, sign: float):
+    """A kite (crank = frame = a, coupler = rocker = b > a): both solutions for B lie on
+    the perpendicular bisector of A-O4, which passes through O2 at the angle th/2, at
+    a cos(th/2) +- sqrt(b^2 - a^2 sin^2(th/2)) from O2: two smooth motions, each
+    closing after two turns of the crank."""
+    th = np.asarray(th, float)
+    h = np.sqrt(b * b - (a * np.sin(th / 2)) ** 2)
+    r = a * np.cos(th / 2) + sign * h
+    return r * np.cos(th / 2), r * np.sin(th / 2)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    b_over_a=hs.sampled_from([1.2, 2.0, 3.5]),
+    start=hs.one_of(
+        hs.sampled_from([0.0, 360.0, -360.0, 180.0]),  # 0, 360: A meets O4
+        hs.floats(-400.0, 400.0, allow_nan=False).map(lambda x: round(x, 6)),
+    ),
+    step=hs.one_of(hs.sampled_from([1.0, 7.5, 360.0 / 7]), hs.floats(0.5, 30.0)),
+    speed=hs.sampled_from([1.0, -1.5]),
+    sign=hs.sampled_from([1.0, -1.0]),
+)
+def test_kites_follow_their_sketched_smooth_motion(b_over_a, start, step, speed, sign):
+    """Property: a kite sketched on one of its two smooth motions follows it over two
+    turns (through the positions where A meets O4, where any B closes the loop), with
+    B's velocity that of the closed form and no rate above the geometry's bound."""
+    a, b = 1.0, b_over_a
+    s = math.radians(start)
+    if abs(math.sin(s / 2)) < 1e-6 or abs(math.cos(s / 2)) < 1e-6 or abs(math.sin(s)) < 1e-6:
+        s += math.radians(5.0) * math.copysign(1.0, speed)  # sketched a little past
+    bx, by = _kite_B(a, b, s, sign)
+    text = f"""
+ground: {{O2: [0, 0], O4: [{a!r}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{a!r}, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [{b!r}, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [{b!r}, 0]}}}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly: {{sketch: {{B: [{float(bx)!r}, {float(by)!r}]}}}}
+driver: {{joint: O2, speed: {speed!r} rad/s, start: {start!r} deg}}
+sweep: {{range: 720 deg, step: {step!r} deg}}
+"""
+    res = ms.solve(ms.loads(text))
+    assert res.ok.all()
+    th = res.u  # the driver's angle as the file counts it (th / 2 tells the turns apart)
+    np.testing.assert_allclose(wrap(res.link("crank").angle - th), 0.0, atol=1e-12)
+    B = res.point("B")
+    x, y = _kite_B(a, b, th, sign)
+    np.testing.assert_allclose(B.x, x, atol=1e-7)
+    np.testing.assert_allclose(B.y, y, atol=1e-7)
+    e = 1e-6
+    xp, yp = _kite_B(a, b, th + e, sign)
+    xm, ym = _kite_B(a, b, th - e, sign)
+    w = speed
+    np.testing.assert_allclose(B.vx, (xp - xm) / (2 * e) * w, atol=1e-5)
+    np.testing.assert_allclose(B.vy, (yp - ym) / (2 * e) * w, atol=1e-5)
+    # |dB/dth| <= |d r/dth| + r/2 <= a/2 + a^2/(4 sqrt(b^2 - a^2)) + (a + b)/2
+    bound = abs(w) * (a / 2 + a * a / (4 * math.sqrt(b * b - a * a)) + (a + b) / 2)
+    assert np.max(np.hypot(B.vx, B.vy)) <= bound * (1 + 1e-9)
