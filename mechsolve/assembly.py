@@ -310,14 +310,12 @@ class StartAssembler:
             return st2, ok2
         d = self.mech.driver.direction
         delta = START_PROBE * (self.scale if self.linear else 1.0)
-        # a singular point just off the start (a start 1e-7 rad before a bifurcation)
-        # must not lie between the start and the probe: the branches swap across it.
-        # (Where the outer joints coincide at the start to within the tolerance of its
-        # pose, the sweep takes the start as that point: the probe goes past it.)
-        H, dH = (float(np.asarray(x)[0]) for x in g.disc(st2))
-        off = np.inf
-        if np.isfinite(H) and np.isfinite(dH) and dH != 0 and not _coincident_at(g, st2, 0):
-            off = -2.0 * H / dH
+        # a singular point just off the start (a start 1e-5 rad before a bifurcation)
+        # must not lie between the start and the probe: the branches swap across it;
+        # one nearer than START_SNAP is the start's (the sweep does not flip there), and
+        # so is one where the outer joints coincide at the start to within the tolerance
+        # of its pose: the probe goes past it
+        off = self._singular_offset(g, st2)
         snap = START_SNAP * (self.scale if self.linear else 1.0)
         for side in (1.0, -1.0):  # the side the motion goes to, else where it comes from
             step = delta
@@ -345,12 +343,44 @@ class StartAssembler:
             return False
         if not np.all(ok2) or _coincident_at(g, st2, 0):
             return True
+        if abs(self._singular_offset(g, st2)) <= START_SNAP * (self.scale if self.linear else 1):
+            return True  # the singular point is the start's (see branches.START_SNAP)
         b = list(g.bodies)
         pos = st2.block[:2, b, :]
         ang = st2.block[2, b, :]
         dpos = float(np.max(np.abs(pos[..., 0] - pos[..., 1]))) / self.scale
         dang = float(np.max(np.abs((ang[:, 0] - ang[:, 1] + np.pi) % (2 * np.pi) - np.pi)))
         return max(dpos, dang) <= 1e-6
+
+    def _singular_just_ahead(self, g: Group, st: State) -> bool:
+        """Is the group's singular point just ahead of the sweep's start (within
+        START_SNAP, in the direction of motion)? It is then the start's: the branch is
+        read past it and the start's own pose is the other label's (as where the outer
+        joints coincide at the start)."""
+        if g.n_modes != 2:
+            return False
+        disc = g.disc(st)
+        if disc is None:
+            return False
+        H = float(np.asarray(disc[0])[0])
+        if not (np.isfinite(H) and H <= TOUCH):
+            return False
+        ahead = self.mech.driver.direction * self._singular_offset(g, st)
+        return 0.0 < ahead <= START_SNAP * (self.scale if self.linear else 1.0)
+
+    @staticmethod
+    def _singular_offset(g: Group, st2: State) -> float:
+        """How far (driver coordinate) the group's singular point lies from the first
+        column's position, from its discriminant and rate: a minimum that touches zero,
+        H = c (u - u*)^2, gives u* - u = -2 H / H'; inf where not known, and where the
+        outer joints coincide there already."""
+        disc = g.disc(st2)
+        if disc is None:
+            return math.inf
+        H, dH = (float(np.asarray(x)[0]) for x in disc)
+        if _coincident_at(g, st2, 0) or not (np.isfinite(H) and np.isfinite(dH)) or dH == 0:
+            return math.inf
+        return -2.0 * H / dH
 
     def _groups_at(self, u: float, upto: int, modes, q_start) -> State | None:
         """The assembly groups before ``upto`` solved at driver value ``u`` (two equal
@@ -457,6 +487,11 @@ class StartAssembler:
         take_m, why, conflict, texts = self._choose_branches(g, st2, ok2, ready)
         if conflict[0]:
             raise AssemblyError(f"{self._file()}no branch of the {g.label} satisfies {texts}")
+        if singular and why[0] != "default branch (+)":
+            return int(take_m[0]), (
+                f"{why[0]}, read just past the start (the start is singular: the "
+                "branches meet there)"
+            )
         if singular and why[0] == "default branch (+)" and ok2.all():
             # the drawn pose: every link along its own x axis (its angle 0)
             ang = np.stack([st2.block[2, b, :] for b in g.bodies])

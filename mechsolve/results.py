@@ -599,6 +599,10 @@ class Results:
             f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}" + (f" over {self.t[-1]:.6g} s" if n else "")
         )
         lines += self.motion_summary()
+        start = self.solution.start
+        for g, why in zip(self.analysis.groups, getattr(start, "reasons", []) or []):
+            if "the start is singular" in why:
+                lines.append(f"  start: {g.label}: the branch {why}")
         for f in self.failures:
             lines.append(
                 f"  unassemblable at {self.describe_u(f.first)}"
@@ -672,7 +676,7 @@ class Results:
         src = self if figures is None or figures.forces is None else figures
         g = src.forces
         kind, unit = self.effort_name
-        e = np.where(g.ok, g.effort, np.nan) if figures is None else src.driving_effort
+        e = src.driving_effort  # at a singular position its limit along the motion
         scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
         rms = float(np.sqrt(np.nanmean(e**2)))

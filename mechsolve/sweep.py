@@ -364,7 +364,11 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                         conds.solved(g.bodies)
                         if g.n_modes == 2:
                             self._decide_at_start(gi, g, st, start, conds)
-                    if ctx.is_start and n and _coincident_at(g, st, 0):
+                    if (
+                        ctx.is_start
+                        and n
+                        and (_coincident_at(g, st, 0) or self._singular_just_ahead(g, st))
+                    ):
                         # the start's branch is the one taken from the start; the pose at
                         # the start itself is the limit from that side (see RRR)
                         flips[gi][:0] = [-math.inf * self.mech.driver.direction, float(u[0])]

@@ -179,6 +179,11 @@ def test_chain_started_collinear_runs_from_the_command_line(tmp_path):
     assert r.exit_code == 1, r.output
     assert "forces indeterminate at 3 singular position(s)" in r.output
     assert "361 of 361 positions solved" in r.output
+    # the summary says what it chose at the singular start
+    assert "start: loop B (crank2 O2-B, bar1 B-A): the branch nearest to the drawn pose" in r.output
+    assert "the start is singular" in r.output
+    # the torque's extremes are at the collinear positions, where it is its limit
+    assert "driving torque: max 34.335 N*m at driver angle" in r.output
 
 
 @pytest.mark.parametrize("start", [30, 0])
