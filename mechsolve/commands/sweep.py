@@ -35,6 +35,18 @@ SWEEP_EPILOG = (
 )
 
 
+def _exit_interrupted() -> None:
+    """Exit 130; a Ctrl-C pressed again while the process ends (Dask's and the pool's
+    exit handlers) is ignored: it would only turn the exit into a traceback."""
+    import signal
+
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        pass
+    sys.exit(EXIT_INTERRUPTED)
+
+
 def _bar(total: int, quiet: bool):
     return clikit.progress_bar(total, quiet, desc="designs", unit=" designs")
 
@@ -205,7 +217,7 @@ def sweep(
                 f"{written[0]}",
                 err=True,
             )
-            sys.exit(EXIT_INTERRUPTED)
+            _exit_interrupted()
         pick = pick_best(study, rows) if study.best is not None else None
         if pick is not None:
             written.append(write_best(study, pick, outdir / "best.yaml"))
@@ -248,7 +260,7 @@ def sweep(
         if bar is not None:
             bar.close()
         click.echo("interrupted before any design was finished", err=True)
-        sys.exit(EXIT_INTERRUPTED)
+        _exit_interrupted()
     except OSError as exc:
         if bar is not None:
             bar.close()

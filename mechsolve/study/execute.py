@@ -8,8 +8,10 @@ finish; Ctrl-C stops the study and keeps the rows already finished.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -177,6 +179,9 @@ def _init_worker(study: Study) -> None:
     global _WORKER_STUDY
     _WORKER_STUDY = study
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+    # and SIGTERM (the main process's pool.terminate) ends a worker at once, without the
+    # KeyboardInterrupt and traceback of the handler a forked worker inherits
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _pool_chunk(indices: list[int], results_dir: str | None) -> list[Row]:
@@ -254,22 +259,49 @@ def execute(
         except KeyboardInterrupt:
             return Outcome(rows, n, True, "this process")
         return Outcome(rows, n, False, "this process")
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    import multiprocessing
 
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(study,))
+    # a multiprocessing pool, not concurrent.futures: on Ctrl-C its workers are ended at
+    # once (terminate), where an executor's shutdown lets every chunk already handed out
+    # run to its end (a minute or more of a large study) before the process can exit
+    pool = multiprocessing.get_context().Pool(workers, _init_worker, (study,))
     interrupted = False
     try:
-        futures = [pool.submit(_pool_chunk, idx, rd) for idx in chunks(n, workers, chunk)]
-        for fut in as_completed(futures):
-            got = fut.result()
+        todo = [(idx, rd) for idx in chunks(n, workers, chunk)]
+        for got in pool.imap_unordered(_pool_chunk_args, todo):
             rows += got
             if progress is not None:
                 progress(len(got))
+        pool.close()
     except KeyboardInterrupt:
         interrupted = True
-    finally:
-        pool.shutdown(wait=not interrupted, cancel_futures=True)
+    except BaseException:
+        pool.terminate()
+        pool.join()
+        raise
+    try:
+        if interrupted:
+            with _ctrl_c_held():  # pressed again: the workers are being ended already
+                _end_pool(pool)
+        else:
+            pool.join()
+    except KeyboardInterrupt:  # Ctrl-C while the workers end: the rows are kept
+        interrupted = True
+        with _ctrl_c_held():
+            _end_pool(pool)
     return Outcome(rows, n, interrupted, f"a pool of {workers} processes")
+
+
+def _pool_chunk_args(args: tuple[list[int], str | None]) -> list[Row]:
+    return _pool_chunk(*args)
+
+
+def _end_pool(pool) -> None:
+    """End the workers of an interrupted pool now: they are computing chunks whose rows
+    are not wanted any more. ``terminate`` sends each SIGTERM (which ends a worker at
+    once: see :func:`_init_worker`) and waits for them."""
+    pool.terminate()
+    pool.join()
 
 
 def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
@@ -295,41 +327,65 @@ def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
         raise InputError(f"--scheduler {scheduler}: {exc}") from None
 
 
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Ignore Ctrl-C for a moment: while a Dask local cluster starts its worker processes
+    (they inherit SIGINT ignored, so a Ctrl-C at the terminal, sent to the whole process
+    group, does not raise KeyboardInterrupt in each of them and print its traceback, and
+    a cluster half started is not left for Dask's exit handler to fail on; a Ctrl-C
+    during the start, a few seconds, is not seen: press it again once the designs are
+    running), and while workers are ended or a cluster closed after a Ctrl-C."""
+    import signal
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome:
     n = len(study)
-    cluster = None
-    if scheduler is not None:
-        client = connect(scheduler)
-        where = f"the Dask scheduler at {scheduler}"
-    else:
+    cluster = client = None
+    rows: list[Row] = []
+    interrupted = False
+    futures: list = []
+    if scheduler is None:
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
             raise InputError(
                 '--dask needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
             ) from None
-        workers = jobs or cpu_count()
-        cluster = LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=processes,
-            dashboard_address=None,
-            silence_logs=50,
-        )
-        client = Client(cluster)
-        where = f"a Dask local cluster of {workers} workers"
-    from dask.distributed import as_completed
-
-    rows: list[Row] = []
-    interrupted = False
-    futures = []
     try:
-        workers = max(1, len(client.scheduler_info().get("workers", {})))
-        shared = client.scatter(study, broadcast=True)
-        futures = [
-            client.submit(solve_chunk, shared, idx, rd, pure=False)
-            for idx in chunks(n, workers, chunk)
-        ]
+        # Ctrl-C is held while the cluster starts and the designs are handed out (see
+        # _ctrl_c_held): it stops the study while the designs are being solved
+        with _ctrl_c_held():
+            if scheduler is not None:
+                client = connect(scheduler)
+                where = f"the Dask scheduler at {scheduler}"
+            else:
+                workers = jobs or cpu_count()
+                where = f"a Dask local cluster of {workers} workers"
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    dashboard_address=None,
+                    silence_logs=50,
+                )
+                client = Client(cluster)
+            from dask.distributed import as_completed
+
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+            shared = client.scatter(study, broadcast=True)
+            futures = [
+                client.submit(solve_chunk, shared, idx, rd, pure=False)
+                for idx in chunks(n, workers, chunk)
+            ]
         for fut in as_completed(futures):
             got = fut.result()
             rows += got
@@ -337,12 +393,17 @@ def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome
                 progress(len(got))
     except KeyboardInterrupt:
         interrupted = True
-        client.cancel(futures)
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return Outcome(rows, n, interrupted, where)
+        # a Ctrl-C pressed again while the cluster closes would leave it half closed for
+        # Dask's exit handler to fail on (with tracebacks): the close is not interrupted
+        with _ctrl_c_held():
+            if interrupted and client is not None and futures:
+                client.cancel(futures)
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+    return Outcome(rows, n, interrupted, where if client is not None else "Dask")
 
 
 __all__ = [
