@@ -338,3 +338,95 @@ def test_ctrl_c_on_a_dask_cluster_prints_no_worker_tracebacks(tmp_path):
     m = re.search(r"interrupted: (\d+) of 512 designs were finished", err)
     assert m, err
     assert len(read_csv(out / "study.csv")) == int(m[1])
+
+
+# --- §3.4: a very large study is estimated first, and refused above a limit -----------
+def _run_sweep(tmp_path: Path, args: list[str], timeout: float = 120):
+    import os
+    import subprocess
+    import sys
+
+    f = _slow_study(tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(ROOT), CI="1")
+    cmd = [sys.executable, "-m", "mechsolve", "sweep", str(f), "--no-plots", *args]
+    return subprocess.run(
+        cmd, capture_output=True, text=True, env=env, cwd=tmp_path, timeout=timeout
+    )
+
+
+def test_a_million_designs_are_counted_estimated_and_refused(tmp_path):
+    """10^6 designs: the count and an estimate (from the first designs, timed) come
+    first, then the refusal with its numbers and the option that allows it: exit 2 in
+    seconds, no output folder (it used to start solving for hours)."""
+    out = tmp_path / "out"
+    r = _run_sweep(
+        tmp_path,
+        [
+            "-p",
+            "links.coupler.mass=0.1..0.3 kg:1000",
+            "-p",
+            "links.crank.points.A[0]=20..30 mm:1000",
+            "-o",
+            str(out),
+        ],
+        timeout=90,
+    )
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "1000000 designs (a grid of 1000 x 1000)" in r.stdout
+    m = re.search(r"estimate: about ([\d.]+) (s|min|h|days) on a pool of \d+ processes", r.stdout)
+    assert m, r.stdout
+    assert re.search(r"\(([\d.]+) ms a design, timed on the first 32\)", r.stdout)
+    assert "more than --max-designs 100000" in r.stderr
+    assert "give --max-designs 1000000" in r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+def test_a_study_over_the_time_limit_is_refused_with_its_estimate(tmp_path):
+    """--max-time: 4096 designs at 0.1 deg against a limit of 1 s: refused, exit 2, with
+    the estimate, the time per design and the --max-time that would run it."""
+    r = _run_sweep(
+        tmp_path,
+        [
+            "-p",
+            "links.coupler.mass=0.1..0.3 kg:64",
+            "-p",
+            "links.crank.points.A[0]=20..30 mm:64",
+            "--step",
+            "0.1 deg",
+            "--max-time",
+            "1 s",
+            "-j",
+            "1",
+            "-o",
+            str(tmp_path / "out"),
+        ],
+    )
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "4096 designs would take more than --max-time 1 s: about" in r.stderr
+    assert "on this process" in r.stderr and "ms a design, timed on the first 32" in r.stderr
+    assert re.search(r"give --max-time '\d+ min'", r.stderr), r.stderr
+
+
+def test_the_timed_first_chunk_is_the_tables_first_rows(tmp_path):
+    """The designs timed for the estimate are not solved again: the table equals the one
+    solved without the estimate (the rows of every design, the first chunk's included)."""
+    from mechsolve.model.source import load_file
+    from mechsolve.study.designs import make_study
+    from mechsolve.study.execute import execute, time_first_chunk
+
+    f = _slow_study(tmp_path)
+    study = make_study(
+        load_file(f),
+        ["links.coupler.mass=0.1..0.3 kg:8", "links.crank.points.A[0]=20..30 mm:8"],
+    )
+    est = time_first_chunk(study, 1)
+    assert est.timed == 4 and est.per_design > 0 and est.memory > 0
+    got = execute(study, jobs=1, first=est.rows).rows
+    want = execute(study, jobs=1).rows
+    assert [r["design [-]"] for r in got] == list(range(64))
+
+    def same(a, b):
+        return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
+
+    assert all(r.keys() == w.keys() and all(same(r[k], w[k]) for k in r) for r, w in zip(got, want))

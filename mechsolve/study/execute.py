@@ -169,6 +169,75 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     return [heads[k] for k in indices]
 
 
+class Estimate:
+    """What a study will cost, from its first chunk of designs solved and timed here."""
+
+    def __init__(self, rows: list[Row], seconds: float, n: int, workers: int) -> None:
+        self.rows = rows
+        self.timed = len(rows)
+        self.per_design = seconds / max(len(rows), 1)  # s, as solved in chunks
+        self.n = n
+        self.workers = max(1, workers)
+        # the table's rows stay in memory until it is written: their size, measured
+        self.row_bytes = sum(_row_size(r) for r in rows) / max(len(rows), 1)
+
+    @property
+    def seconds(self) -> float:
+        """The estimated time for the designs not timed yet (s)."""
+        return (self.n - self.timed) * self.per_design / self.workers
+
+    @property
+    def memory(self) -> float:
+        """The estimated memory of the table's rows (bytes)."""
+        return self.n * self.row_bytes
+
+    def text(self, where: str) -> str:
+        return (
+            f"about {duration_text(self.seconds)} on {where} "
+            f"({self.per_design * 1e3:.3g} ms a design, timed on the first {self.timed}) "
+            f"and about {bytes_text(self.memory)} of memory for the table's rows"
+        )
+
+
+def _row_size(row: Row) -> int:
+    import sys
+
+    return sys.getsizeof(row) + sum(sys.getsizeof(k) + sys.getsizeof(v) for k, v in row.items())
+
+
+def duration_text(seconds: float) -> str:
+    """``42 s``, ``3.5 min``, ``2.1 h``, ``3.2 days``."""
+    if seconds < 90:
+        return f"{seconds:.2g} s" if seconds < 10 else f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.2g} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.3g} days"
+
+
+def bytes_text(b: float) -> str:
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= size:
+            return f"{b / size:.2g} {unit}"
+    return f"{b:.0f} B"
+
+
+def time_first_chunk(
+    study: Study, workers: int, chunk: int | None = None, results_dir: str | Path | None = None
+) -> Estimate:
+    """Solve the study's first chunk of designs here, timed, for :class:`Estimate`; its
+    rows are kept (``execute(first=...)`` does not solve them again)."""
+    n = len(study)
+    todo = chunks(n, 1, chunk)
+    if not todo:
+        return Estimate([], 0.0, 0, workers)
+    rd = None if results_dir is None else str(results_dir)
+    t0 = time.perf_counter()
+    rows = solve_chunk(study, todo[0], rd)
+    return Estimate(rows, time.perf_counter() - t0, n, workers)
+
+
 # the study of a pool worker: sent once, when the worker starts
 _WORKER_STUDY: Study | None = None
 
@@ -227,6 +296,7 @@ def execute(
     chunk: int | None = None,
     progress: Callable[[int], Any] | None = None,
     results_dir: str | Path | None = None,
+    first: list[Row] | None = None,
 ) -> Outcome:
     """Solve every design of ``study``.
 
@@ -243,16 +313,26 @@ def execute(
         Called with the number of designs each finished chunk holds.
     results_dir
         Write each design's results CSV there (``design-00007.csv``).
+    first
+        The rows of the first chunk, already solved (:func:`time_first_chunk`): the
+        other chunks are solved.
     """
     n = len(study)
     rd = None if results_dir is None else str(results_dir)
+    todo_chunks = chunks(n, 1, chunk)
+    done: list[Row] = []
+    if first is not None and todo_chunks:
+        assert [r["design [-]"] for r in first] == todo_chunks[0], "not the first chunk"
+        done, todo_chunks = list(first), todo_chunks[1:]
     if scheduler is not None or dask:
-        return _run_dask(study, jobs, scheduler, dask_processes, chunk, progress, rd)
+        return _run_dask(study, jobs, scheduler, dask_processes, todo_chunks, done, progress, rd)
     workers = min(jobs or cpu_count(), max(n, 1))
-    rows: list[Row] = []
+    rows: list[Row] = list(done)
+    if not todo_chunks:
+        return Outcome(rows, n, False, "this process")
     if workers <= 1:
         try:
-            for idx in chunks(n, 1, chunk):
+            for idx in todo_chunks:
                 rows += solve_chunk(study, idx, rd)
                 if progress is not None:
                     progress(len(idx))
@@ -267,7 +347,7 @@ def execute(
     pool = multiprocessing.get_context().Pool(workers, _init_worker, (study,))
     interrupted = False
     try:
-        todo = [(idx, rd) for idx in chunks(n, workers, chunk)]
+        todo = [(idx, rd) for idx in todo_chunks]
         for got in pool.imap_unordered(_pool_chunk_args, todo):
             rows += got
             if progress is not None:
@@ -347,10 +427,10 @@ def _ctrl_c_held():
         signal.signal(signal.SIGINT, old)
 
 
-def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome:
+def _run_dask(study, jobs, scheduler, processes, todo_chunks, done, progress, rd) -> Outcome:
     n = len(study)
     cluster = client = None
-    rows: list[Row] = []
+    rows: list[Row] = list(done)
     interrupted = False
     futures: list = []
     if scheduler is None:
@@ -380,11 +460,9 @@ def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome
                 client = Client(cluster)
             from dask.distributed import as_completed
 
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
             shared = client.scatter(study, broadcast=True)
             futures = [
-                client.submit(solve_chunk, shared, idx, rd, pure=False)
-                for idx in chunks(n, workers, chunk)
+                client.submit(solve_chunk, shared, idx, rd, pure=False) for idx in todo_chunks
             ]
         for fut in as_completed(futures):
             got = fut.result()
@@ -407,6 +485,7 @@ def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome
 
 
 __all__ = [
+    "Estimate",
     "Outcome",
     "chunks",
     "connect",
@@ -416,4 +495,5 @@ __all__ = [
     "solve_chunk",
     "solve_design",
     "status_of",
+    "time_first_chunk",
 ]
