@@ -219,7 +219,7 @@ def duration_text(seconds: float) -> str:
 def bytes_text(b: float) -> str:
     for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if b >= size:
-            return f"{b / size:.2g} {unit}"
+            return f"{b / size:.3g} {unit}"
     return f"{b:.0f} B"
 
 
