@@ -232,3 +232,201 @@ def test_design_that_assembles_in_part_has_blank_figures_and_no_pass(tmp_path):
     )
     assert float(good["rocker.swing [deg]"]) == pytest.approx(swing, rel=1e-9)
     assert good["requirements.pass [-]"] == "true"
+
+
+# --- §3.1: Ctrl-C on a study with workers ---------------------------------------------
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _slow_study(tmp_path: Path) -> Path:
+    """The study four-bar without its study section: 512 designs in chunks of 32, the
+    first 256 invalid (a negative coupler mass: their rows are finished at once), the
+    others solved at 18000 positions each (a chunk of them takes seconds)."""
+    text = STUDY_FOURBAR.read_text()
+    f = tmp_path / "fourbar.yaml"
+    f.write_text(text[: text.index("\nstudy:")] + "\n")
+    return f
+
+
+def _interrupt_after_first_rows(
+    tmp_path: Path, extra: list[str], wait: float = 4.0, step: str = "0.02 deg", again: int = 0
+):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    f = _slow_study(tmp_path)
+    out = tmp_path / "out"
+    cmd = [
+        sys.executable,
+        "-m",
+        "mechsolve",
+        "sweep",
+        str(f),
+        "-p",
+        "links.coupler.mass=-1, 0.2 kg",
+        "-p",
+        "links.crank.points.A[0]=20..30 mm:256",
+        "--step",
+        step,
+        "-o",
+        str(out),
+        "--no-plots",
+        *extra,
+    ]
+    env = dict(os.environ, PYTHONPATH=str(ROOT), CI="1")
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        start_new_session=True,  # its own process group: Ctrl-C reaches every worker
+    )
+    first = proc.stdout.readline()  # "study four-bar: 512 designs ...": it is starting
+    assert "512 designs" in first, first + proc.stderr.read()
+    time.sleep(wait)  # the invalid designs' chunks are finished by then
+    assert proc.poll() is None, "the study ended before it was interrupted"
+    os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C at a terminal does
+    t0 = time.monotonic()
+    for _ in range(again):  # pressed again, every second, while it has not ended
+        try:
+            proc.wait(timeout=1)
+            break
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGINT)
+    try:
+        rest, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    waited = time.monotonic() - t0
+    return proc.returncode, waited, first + rest, err, out
+
+
+def test_ctrl_c_on_a_pool_ends_at_once_and_keeps_the_finished_rows(tmp_path):
+    """Ctrl-C on `sweep -j 2`: exit 130 within seconds (it used to wait 20-60 s for the
+    workers' chunks), the finished rows written, no traceback."""
+    from mechsolve.study.table import read_csv
+
+    rc, waited, out_text, err, out = _interrupt_after_first_rows(tmp_path, ["-j", "2"])
+    assert rc == 130, (rc, out_text, err)
+    assert waited < 10.0, f"took {waited:.1f} s to exit after Ctrl-C"
+    assert "Traceback" not in err, err
+    m = re.search(r"interrupted: (\d+) of 512 designs were finished", err)
+    assert m, err
+    rows = read_csv(out / "study.csv")
+    assert len(rows) == int(m[1]) >= 32
+    assert all(r["status"].startswith("invalid") or r["status"] == "ok" for r in rows)
+
+
+def test_ctrl_c_on_a_dask_cluster_prints_no_worker_tracebacks(tmp_path):
+    """Ctrl-C on `sweep --dask -j 2`: the workers (in the same process group) print no
+    KeyboardInterrupt tracebacks, the rows finished are written, exit 130. (Ctrl-C is
+    held while the cluster starts: it is pressed again until the study ends.)"""
+    pytest.importorskip("dask.distributed")
+    from mechsolve.study.table import read_csv
+
+    rc, waited, out_text, err, out = _interrupt_after_first_rows(
+        tmp_path, ["--dask", "-j", "2"], wait=1.5, step="0.01 deg", again=30
+    )
+    assert rc == 130, (rc, out_text, err)
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    m = re.search(r"interrupted: (\d+) of 512 designs were finished", err)
+    assert m, err
+    assert len(read_csv(out / "study.csv")) == int(m[1])
+
+
+# --- §3.4: a very large study is estimated first, and refused above a limit -----------
+def _run_sweep(tmp_path: Path, args: list[str], timeout: float = 120):
+    import os
+    import subprocess
+    import sys
+
+    f = _slow_study(tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(ROOT), CI="1")
+    cmd = [sys.executable, "-m", "mechsolve", "sweep", str(f), "--no-plots", *args]
+    return subprocess.run(
+        cmd, capture_output=True, text=True, env=env, cwd=tmp_path, timeout=timeout
+    )
+
+
+def test_a_million_designs_are_counted_estimated_and_refused(tmp_path):
+    """10^6 designs: the count and an estimate (from the first designs, timed) come
+    first, then the refusal with its numbers and the option that allows it: exit 2 in
+    seconds, no output folder (it used to start solving for hours)."""
+    out = tmp_path / "out"
+    r = _run_sweep(
+        tmp_path,
+        [
+            "-p",
+            "links.coupler.mass=0.1..0.3 kg:1000",
+            "-p",
+            "links.crank.points.A[0]=20..30 mm:1000",
+            "-o",
+            str(out),
+        ],
+        timeout=90,
+    )
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "1000000 designs (a grid of 1000 x 1000)" in r.stdout
+    m = re.search(r"estimate: about ([\d.]+) (s|min|h|days) on a pool of \d+ processes", r.stdout)
+    assert m, r.stdout
+    assert re.search(r"\(([\d.]+) ms a design, timed on the first 32\)", r.stdout)
+    assert "more than --max-designs 100000" in r.stderr
+    assert "give --max-designs 1000000" in r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+def test_a_study_over_the_time_limit_is_refused_with_its_estimate(tmp_path):
+    """--max-time: 4096 designs at 0.1 deg against a limit of 1 s: refused, exit 2, with
+    the estimate, the time per design and the --max-time that would run it."""
+    r = _run_sweep(
+        tmp_path,
+        [
+            "-p",
+            "links.coupler.mass=0.1..0.3 kg:64",
+            "-p",
+            "links.crank.points.A[0]=20..30 mm:64",
+            "--step",
+            "0.1 deg",
+            "--max-time",
+            "1 s",
+            "-j",
+            "1",
+            "-o",
+            str(tmp_path / "out"),
+        ],
+    )
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "4096 designs would take more than --max-time 1 s: about" in r.stderr
+    assert "on this process" in r.stderr and "ms a design, timed on the first 32" in r.stderr
+    assert re.search(r"give --max-time '\d+ min'", r.stderr), r.stderr
+
+
+def test_the_timed_first_chunk_is_the_tables_first_rows(tmp_path):
+    """The designs timed for the estimate are not solved again: the table equals the one
+    solved without the estimate (the rows of every design, the first chunk's included)."""
+    from mechsolve.model.source import load_file
+    from mechsolve.study.designs import make_study
+    from mechsolve.study.execute import execute, time_first_chunk
+
+    f = _slow_study(tmp_path)
+    study = make_study(
+        load_file(f),
+        ["links.coupler.mass=0.1..0.3 kg:8", "links.crank.points.A[0]=20..30 mm:8"],
+    )
+    est = time_first_chunk(study, 1)
+    assert est.timed == 4 and est.per_design > 0 and est.memory > 0
+    got = execute(study, jobs=1, first=est.rows).rows
+    want = execute(study, jobs=1).rows
+    assert [r["design [-]"] for r in got] == list(range(64))
+
+    def same(a, b):
+        return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
+
+    assert all(r.keys() == w.keys() and all(same(r[k], w[k]) for k in r) for r, w in zip(got, want))

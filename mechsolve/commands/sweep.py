@@ -26,6 +26,8 @@ from ..clikit import (
 )
 
 EXIT_REQUIREMENTS = getattr(clikit, "EXIT_REQUIREMENTS", 5)
+MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
+MAX_TIME = "1 h"  # default --max-time
 
 SWEEP_EPILOG = (
     EPILOG.rstrip("\n")
@@ -33,6 +35,33 @@ SWEEP_EPILOG = (
     "   say why; 5 when the file has requirements and no design meets them all;\n"
     "   130 keeps the rows finished before Ctrl-C in the table)\n"
 )
+
+
+def _round_up(seconds: float) -> str:
+    """A --max-time above ``seconds``: whole minutes or hours, e.g. ``'3 h'``."""
+    import math
+
+    if seconds < 3600:
+        return f"'{max(1, math.ceil(seconds * 1.2 / 60))} min'"
+    return f"'{math.ceil(seconds * 1.2 / 3600)} h'"
+
+
+def _exit_interrupted() -> None:
+    """Exit 130; a Ctrl-C pressed again while the interpreter ends (Dask's and the
+    pool's exit handlers) is ignored: it would only turn the exit into a traceback. (An
+    exit handler, so that a caller that catches the exit, as click's test runner does,
+    keeps its Ctrl-C.)"""
+    import atexit
+    import signal
+
+    def ignore() -> None:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        except ValueError:  # not the main thread
+            pass
+
+    atexit.register(ignore)  # runs before the handlers registered earlier (Dask's)
+    sys.exit(EXIT_INTERRUPTED)
 
 
 def _bar(total: int, quiet: bool):
@@ -99,6 +128,22 @@ def _bar(total: int, quiet: bool):
     is_flag=True,
     help="Also write each design's full results CSV to OUTDIR/designs/.",
 )
+@click.option(
+    "--max-designs",
+    type=int,
+    default=MAX_DESIGNS,
+    show_default=True,
+    help="Refuse a study of more designs (their rows are kept in memory until the table "
+    "is written); raise it to run a larger one.",
+)
+@click.option(
+    "--max-time",
+    default=MAX_TIME,
+    show_default=True,
+    metavar="DURATION",
+    help="Refuse a study estimated (from its first designs, timed) to take longer, e.g. "
+    "'30 min', '8 h'.",
+)
 @outdir_option("study's table and plots")
 @NO_PLOTS
 @QUIET
@@ -117,6 +162,8 @@ def sweep(
     scheduler,
     fmt,
     keep_results,
+    max_designs,
+    max_time,
     outdir,
     no_plots,
     quiet,
@@ -148,14 +195,23 @@ def sweep(
         from ..model.source import load_file
         from ..study.best import pick_best, write_best
         from ..study.designs import make_study
-        from ..study.execute import execute, precheck
+        from ..study.execute import cpu_count, execute, precheck, time_first_chunk
         from ..study.table import write_table
+        from ..units import UnitError, parse_quantity
 
         np.seterr(divide="ignore", invalid="ignore", over="ignore")
         if jobs is not None and jobs < 1:
             raise InputError(f"--jobs {jobs}: give 1 or more workers")
         if use_dask and scheduler:
             raise InputError("give --dask (a local cluster) or --scheduler ADDRESS, not both")
+        if max_designs < 1:
+            raise InputError(f"--max-designs {max_designs}: give 1 or more")
+        try:
+            limit_s = parse_quantity(max_time, "time", "s")
+        except UnitError as exc:
+            raise InputError(f"--max-time {max_time!r}: {exc}") from None
+        if not limit_s > 0:
+            raise InputError(f"--max-time {max_time!r}: give a positive duration")
         src = load_file(file)
         study = make_study(
             src,
@@ -173,9 +229,9 @@ def sweep(
         precheck(study, nominal)
         if outdir is None:
             outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
-        output_folder(outdir)
         results_dir = None
-        if keep_results:
+        if keep_results:  # the first designs, timed, write theirs too
+            output_folder(outdir)
             results_dir = output_folder(outdir / "designs")
         n = len(study)
         if not quiet:
@@ -185,7 +241,32 @@ def sweep(
                 f"{nominal.name}: {n} designs ({what}) of "
                 + ", ".join(p.name for p in study.params)
             )
+        # the first chunk of designs, solved here and timed: what the rest will cost
+        if scheduler is not None:
+            workers, where = 1, "one worker of the scheduler"
+        else:
+            workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
+            kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
+            where = "this process" if workers == 1 else kind.format(workers)
+        est = time_first_chunk(study, workers, results_dir=results_dir)
+        if est.timed < n:
+            if not quiet:
+                click.echo(f"  estimate: {est.text(where)}")
+            if n > max_designs:
+                raise InputError(
+                    f"{n} designs are more than --max-designs {max_designs}: "
+                    f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
+                )
+            if est.seconds > limit_s:
+                raise InputError(
+                    f"{n} designs would take more than --max-time {max_time}: "
+                    f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
+                    "them, or fewer values or a larger --step"
+                )
+        output_folder(outdir)
         bar = _bar(n, quiet)
+        if bar is not None:
+            bar.update(est.timed)
         outcome = execute(
             study,
             jobs=jobs,
@@ -193,6 +274,7 @@ def sweep(
             scheduler=scheduler,
             progress=None if bar is None else bar.update,
             results_dir=results_dir,
+            first=est.rows,
         )
         if bar is not None:
             bar.close()
@@ -205,7 +287,7 @@ def sweep(
                 f"{written[0]}",
                 err=True,
             )
-            sys.exit(EXIT_INTERRUPTED)
+            _exit_interrupted()
         pick = pick_best(study, rows) if study.best is not None else None
         if pick is not None:
             written.append(write_best(study, pick, outdir / "best.yaml"))
@@ -248,7 +330,7 @@ def sweep(
         if bar is not None:
             bar.close()
         click.echo("interrupted before any design was finished", err=True)
-        sys.exit(EXIT_INTERRUPTED)
+        _exit_interrupted()
     except OSError as exc:
         if bar is not None:
             bar.close()

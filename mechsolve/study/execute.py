@@ -8,8 +8,10 @@ finish; Ctrl-C stops the study and keeps the rows already finished.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -167,6 +169,75 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     return [heads[k] for k in indices]
 
 
+class Estimate:
+    """What a study will cost, from its first chunk of designs solved and timed here."""
+
+    def __init__(self, rows: list[Row], seconds: float, n: int, workers: int) -> None:
+        self.rows = rows
+        self.timed = len(rows)
+        self.per_design = seconds / max(len(rows), 1)  # s, as solved in chunks
+        self.n = n
+        self.workers = max(1, workers)
+        # the table's rows stay in memory until it is written: their size, measured
+        self.row_bytes = sum(_row_size(r) for r in rows) / max(len(rows), 1)
+
+    @property
+    def seconds(self) -> float:
+        """The estimated time for the designs not timed yet (s)."""
+        return (self.n - self.timed) * self.per_design / self.workers
+
+    @property
+    def memory(self) -> float:
+        """The estimated memory of the table's rows (bytes)."""
+        return self.n * self.row_bytes
+
+    def text(self, where: str) -> str:
+        return (
+            f"about {duration_text(self.seconds)} on {where} "
+            f"({self.per_design * 1e3:.3g} ms a design, timed on the first {self.timed}) "
+            f"and about {bytes_text(self.memory)} of memory for the table's rows"
+        )
+
+
+def _row_size(row: Row) -> int:
+    import sys
+
+    return sys.getsizeof(row) + sum(sys.getsizeof(k) + sys.getsizeof(v) for k, v in row.items())
+
+
+def duration_text(seconds: float) -> str:
+    """``42 s``, ``3.5 min``, ``2.1 h``, ``3.2 days``."""
+    if seconds < 90:
+        return f"{seconds:.2g} s" if seconds < 10 else f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.2g} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.3g} days"
+
+
+def bytes_text(b: float) -> str:
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b:.0f} B"
+
+
+def time_first_chunk(
+    study: Study, workers: int, chunk: int | None = None, results_dir: str | Path | None = None
+) -> Estimate:
+    """Solve the study's first chunk of designs here, timed, for :class:`Estimate`; its
+    rows are kept (``execute(first=...)`` does not solve them again)."""
+    n = len(study)
+    todo = chunks(n, 1, chunk)
+    if not todo:
+        return Estimate([], 0.0, 0, workers)
+    rd = None if results_dir is None else str(results_dir)
+    t0 = time.perf_counter()
+    rows = solve_chunk(study, todo[0], rd)
+    return Estimate(rows, time.perf_counter() - t0, n, workers)
+
+
 # the study of a pool worker: sent once, when the worker starts
 _WORKER_STUDY: Study | None = None
 
@@ -177,6 +248,9 @@ def _init_worker(study: Study) -> None:
     global _WORKER_STUDY
     _WORKER_STUDY = study
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+    # and SIGTERM (the main process's pool.terminate) ends a worker at once, without the
+    # KeyboardInterrupt and traceback of the handler a forked worker inherits
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _pool_chunk(indices: list[int], results_dir: str | None) -> list[Row]:
@@ -222,6 +296,7 @@ def execute(
     chunk: int | None = None,
     progress: Callable[[int], Any] | None = None,
     results_dir: str | Path | None = None,
+    first: list[Row] | None = None,
 ) -> Outcome:
     """Solve every design of ``study``.
 
@@ -238,38 +313,75 @@ def execute(
         Called with the number of designs each finished chunk holds.
     results_dir
         Write each design's results CSV there (``design-00007.csv``).
+    first
+        The rows of the first chunk, already solved (:func:`time_first_chunk`): the
+        other chunks are solved.
     """
     n = len(study)
     rd = None if results_dir is None else str(results_dir)
+    todo_chunks = chunks(n, 1, chunk)
+    done: list[Row] = []
+    if first is not None and todo_chunks:
+        assert [r["design [-]"] for r in first] == todo_chunks[0], "not the first chunk"
+        done, todo_chunks = list(first), todo_chunks[1:]
     if scheduler is not None or dask:
-        return _run_dask(study, jobs, scheduler, dask_processes, chunk, progress, rd)
+        return _run_dask(study, jobs, scheduler, dask_processes, todo_chunks, done, progress, rd)
     workers = min(jobs or cpu_count(), max(n, 1))
-    rows: list[Row] = []
+    rows: list[Row] = list(done)
+    if not todo_chunks:
+        return Outcome(rows, n, False, "this process")
     if workers <= 1:
         try:
-            for idx in chunks(n, 1, chunk):
+            for idx in todo_chunks:
                 rows += solve_chunk(study, idx, rd)
                 if progress is not None:
                     progress(len(idx))
         except KeyboardInterrupt:
             return Outcome(rows, n, True, "this process")
         return Outcome(rows, n, False, "this process")
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    import multiprocessing
 
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(study,))
+    # a multiprocessing pool, not concurrent.futures: on Ctrl-C its workers are ended at
+    # once (terminate), where an executor's shutdown lets every chunk already handed out
+    # run to its end (a minute or more of a large study) before the process can exit
+    pool = multiprocessing.get_context().Pool(workers, _init_worker, (study,))
     interrupted = False
     try:
-        futures = [pool.submit(_pool_chunk, idx, rd) for idx in chunks(n, workers, chunk)]
-        for fut in as_completed(futures):
-            got = fut.result()
+        todo = [(idx, rd) for idx in todo_chunks]
+        for got in pool.imap_unordered(_pool_chunk_args, todo):
             rows += got
             if progress is not None:
                 progress(len(got))
+        pool.close()
     except KeyboardInterrupt:
         interrupted = True
-    finally:
-        pool.shutdown(wait=not interrupted, cancel_futures=True)
+    except BaseException:
+        pool.terminate()
+        pool.join()
+        raise
+    try:
+        if interrupted:
+            with _ctrl_c_held():  # pressed again: the workers are being ended already
+                _end_pool(pool)
+        else:
+            pool.join()
+    except KeyboardInterrupt:  # Ctrl-C while the workers end: the rows are kept
+        interrupted = True
+        with _ctrl_c_held():
+            _end_pool(pool)
     return Outcome(rows, n, interrupted, f"a pool of {workers} processes")
+
+
+def _pool_chunk_args(args: tuple[list[int], str | None]) -> list[Row]:
+    return _pool_chunk(*args)
+
+
+def _end_pool(pool) -> None:
+    """End the workers of an interrupted pool now: they are computing chunks whose rows
+    are not wanted any more. ``terminate`` sends each SIGTERM (which ends a worker at
+    once: see :func:`_init_worker`) and waits for them."""
+    pool.terminate()
+    pool.join()
 
 
 def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
@@ -295,41 +407,63 @@ def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
         raise InputError(f"--scheduler {scheduler}: {exc}") from None
 
 
-def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome:
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Ignore Ctrl-C for a moment: while a Dask local cluster starts its worker processes
+    (they inherit SIGINT ignored, so a Ctrl-C at the terminal, sent to the whole process
+    group, does not raise KeyboardInterrupt in each of them and print its traceback, and
+    a cluster half started is not left for Dask's exit handler to fail on; a Ctrl-C
+    during the start, a few seconds, is not seen: press it again once the designs are
+    running), and while workers are ended or a cluster closed after a Ctrl-C."""
+    import signal
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _run_dask(study, jobs, scheduler, processes, todo_chunks, done, progress, rd) -> Outcome:
     n = len(study)
-    cluster = None
-    if scheduler is not None:
-        client = connect(scheduler)
-        where = f"the Dask scheduler at {scheduler}"
-    else:
+    cluster = client = None
+    rows: list[Row] = list(done)
+    interrupted = False
+    futures: list = []
+    if scheduler is None:
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
             raise InputError(
                 '--dask needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
             ) from None
-        workers = jobs or cpu_count()
-        cluster = LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=processes,
-            dashboard_address=None,
-            silence_logs=50,
-        )
-        client = Client(cluster)
-        where = f"a Dask local cluster of {workers} workers"
-    from dask.distributed import as_completed
-
-    rows: list[Row] = []
-    interrupted = False
-    futures = []
     try:
-        workers = max(1, len(client.scheduler_info().get("workers", {})))
-        shared = client.scatter(study, broadcast=True)
-        futures = [
-            client.submit(solve_chunk, shared, idx, rd, pure=False)
-            for idx in chunks(n, workers, chunk)
-        ]
+        # Ctrl-C is held while the cluster starts and the designs are handed out (see
+        # _ctrl_c_held): it stops the study while the designs are being solved
+        with _ctrl_c_held():
+            if scheduler is not None:
+                client = connect(scheduler)
+                where = f"the Dask scheduler at {scheduler}"
+            else:
+                workers = jobs or cpu_count()
+                where = f"a Dask local cluster of {workers} workers"
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    dashboard_address=None,
+                    silence_logs=50,
+                )
+                client = Client(cluster)
+            from dask.distributed import as_completed
+
+            shared = client.scatter(study, broadcast=True)
+            futures = [
+                client.submit(solve_chunk, shared, idx, rd, pure=False) for idx in todo_chunks
+            ]
         for fut in as_completed(futures):
             got = fut.result()
             rows += got
@@ -337,15 +471,21 @@ def _run_dask(study, jobs, scheduler, processes, chunk, progress, rd) -> Outcome
                 progress(len(got))
     except KeyboardInterrupt:
         interrupted = True
-        client.cancel(futures)
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return Outcome(rows, n, interrupted, where)
+        # a Ctrl-C pressed again while the cluster closes would leave it half closed for
+        # Dask's exit handler to fail on (with tracebacks): the close is not interrupted
+        with _ctrl_c_held():
+            if interrupted and client is not None and futures:
+                client.cancel(futures)
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+    return Outcome(rows, n, interrupted, where if client is not None else "Dask")
 
 
 __all__ = [
+    "Estimate",
     "Outcome",
     "chunks",
     "connect",
@@ -355,4 +495,5 @@ __all__ = [
     "solve_chunk",
     "solve_design",
     "status_of",
+    "time_first_chunk",
 ]
