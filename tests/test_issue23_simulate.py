@@ -18,6 +18,8 @@ import mechsolve as ms
 from mechsolve.cli import main
 from mechsolve.dynamics import simulate
 
+from conftest import MECH
+
 # a uniform bar 0.8 m, 3 kg, pivoted at one end: J = m l^2 / 3 = 0.64 kg m^2, gravity's
 # moment m g (l / 2) cos(phi) = 11.772 cos(phi) N m
 BAR = """
@@ -206,3 +208,123 @@ def test_an_adaptive_integrator_stops_after_max_steps_and_keeps_its_motion(tmp_p
     assert r.exit_code == 1, r.output
     assert "the integrator took 500 steps, the limit (--max-steps raises it" in r.output
     assert (out / "simulation.csv").exists()
+
+
+# -- 1.5: what the summary of a simulation says, each figure with its unit and meaning ---------
+
+
+def number(pattern: str, text: str) -> float:
+    m = re.search(pattern, text)
+    assert m, (pattern, text)
+    return float(m.group(1))
+
+
+def test_a_motor_too_weak_to_lift_the_bar_is_reported_stalled_where_torques_balance(
+    tmp_path, monkeypatch
+):
+    """M = 5 - 3 omega N m on the bar, whose weight needs 11.772 cos(phi) N m: it cannot
+    lift it; the bar swings down and comes to rest where 5 = 11.772 cos(phi), phi =
+    -acos(5 / 11.772) = -64.866 deg (static torque balance; the stable one, below). The
+    mean of the motor torque is over time, said so, in the summary and the plot alike:
+    with M linear in omega its time mean is 5 - 3 (phi_end - phi_0) / T."""
+    res = simulate(ms.loads(bar("{stall: 5 N m, slope: 3 N m s}")))
+    text = " ".join(res.summary().split())
+    rest = math.degrees(math.acos(5 / M_GRAVITY))
+    assert number(r"stalled at driver angle ([\d.]+)°", text) == pytest.approx(360 - rest, abs=1e-3)
+    assert number(r"\(([\d.]+)° backwards from the start\) after", text) == pytest.approx(
+        rest, abs=1e-3
+    )
+    t_rest = number(r"after t = ([\d.]+) s \(at rest from then on, to 0.01°\)", text)
+    tr = res.trajectory
+    assert 1.0 < t_rest < 6.0
+    later = tr.t >= t_rest
+    assert np.all(np.abs(np.degrees(tr.phi[later]) + rest) < 0.01 + 1e-3)
+    assert not np.all(np.abs(np.degrees(tr.phi[tr.t >= t_rest - 0.1]) + rest) < 0.01 - 1e-3)
+    assert "the motor's torque at standstill, 5 N*m, balances the static load" in text
+    mean = 5 + 3 * math.radians(rest) / 6.0
+    assert number(r"time mean (-?[\d.]+) N\*m", text) == pytest.approx(mean, abs=2e-4)
+    assert not re.search(r"(?<!time) mean -?\d", text), text  # no unlabelled mean left
+    # the plot's mean is the same figure, the same words
+    from matplotlib.axes import Axes
+
+    labels = []
+    original = Axes.axhline
+
+    def spy(self, *args, **kwargs):
+        labels.append(kwargs.get("label"))
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(Axes, "axhline", spy)
+    from mechsolve.writers.simulation import write_simulation_plots
+
+    write_simulation_plots(res, res.model, tmp_path)
+    shown = number(r"time mean (-?[\d.]+) N\*m", text)
+    assert f"time mean {shown:.6g} N*m" in labels, labels
+
+
+def test_a_machine_swinging_without_turning_is_said_so():
+    """No damping, M = 5 N m < 11.772 N m: the bar swings about its balance forever."""
+    text = simulate(ms.loads(bar("{stall: 5 N m, slope: 0 N m s}"))).summary()
+    assert "does not turn: no full revolution in 6 s" in text and "stalled" not in text
+    # the swing: from the start (0 deg) down to 2 x 64.866 deg (energy: the work of the
+    # constant torque equals the change of potential energy between the turning points)
+    low = number(r"\(([\d.]+)° backwards from the start\) and", " ".join(text.split()))
+    assert 5 * math.radians(-low) == pytest.approx(
+        M_GRAVITY * math.sin(math.radians(-low)), abs=2e-4
+    )
+
+
+def test_a_negative_stall_torque_runs_the_crank_backwards_and_the_summary_says_how_fast():
+    """M = -5 - 0.5 omega N m on a balanced bar (J = 0.64 kg m^2, no gravity): it runs
+    backwards, omega(t) = -10 (1 - exp(-t / 1.28)) rad/s, phi(t) = -10 (t - 1.28 (1 -
+    exp(-t / 1.28))) rad; the summary gives the largest |omega| and its sense, and the
+    peak reaction (m r omega^2, r = 0.4 m) at its time with the turns made."""
+    res = simulate(
+        ms.loads(bar("{stall: -5 N m, slope: 0.5 N m s}", gravity="gravity: off", duration="10 s"))
+    )
+    text = " ".join(res.summary().split())
+    tau = 0.64 / 0.5
+    w_end = 10 * (1 - math.exp(-10 / tau))
+    fastest = number(r"fastest \|omega\| = ([\d.]+) rad/s at t = 10 s", text)
+    assert fastest == pytest.approx(w_end, rel=1e-6)
+    assert "clockwise: backwards, against the driver's direction" in text
+    assert "max omega = 0" not in text
+    phi_end = -10 * (10 - tau * (1 - math.exp(-10 / tau)))
+    turns, part = divmod(math.degrees(-phi_end), 360.0)
+    peak = number(r"peak reactions: O ([\d.]+) N at t = 10 s", text)
+    eps_end = (-5 + 0.5 * w_end) / 0.64
+    assert peak == pytest.approx(3 * 0.4 * math.hypot(w_end**2, eps_end), rel=1e-3)
+    got = number(
+        rf"O [\d.]+ N at t = 10 s \(driver angle [\d.]+°, {int(turns)} turns "
+        r"\+ ([\d.]+)° backwards",
+        text,
+    )
+    assert got == pytest.approx(part, abs=1e-3)
+
+
+def test_the_shaper_summary_gives_speeds_as_sizes_with_their_sense_and_units():
+    """The shaper's crank turns clockwise: the fastest speed is a size with its sense
+    (was 'max omega = -6.72', the signed minimum); its reduced inertia is the flywheel's
+    2 kg m^2 (the crank is massless) at the guide bar's limits, where the ram and the bar
+    stop, with its unit; the revolution's mean speed says which mean it is."""
+    res = simulate(ms.load(MECH / "shaper.yaml"))
+    text = " ".join(res.summary().split())
+    tr = res.trajectory
+    fastest = number(r"fastest \|omega\| = ([\d.]+) rad/s", text)
+    assert fastest == pytest.approx(float(np.max(-tr.omega)), rel=1e-6) and fastest > 0
+    assert "clockwise (the driver's direction)" in text
+    assert number(r"reduced inertia J from ([\d.]+) to [\d.]+ kg\*m\^2", text) == pytest.approx(
+        2.0, abs=1e-6
+    )
+    assert "last full revolution: time mean of |omega|" in text
+    assert "max omega = -" not in text
+    # peaks are placed in time, with the turns made: the crank starts at 196.83 deg
+    m = re.search(
+        r"O4 [\d.]+ N at t = ([\d.]+) s \(driver angle ([\d.]+)°, "
+        r"1 turn \+ ([\d.]+)° from the start\)",
+        text,
+    )
+    assert m, text
+    k = int(np.argmin(np.abs(tr.t - float(m.group(1)))))
+    travel = math.degrees(tr.phi[0] - tr.phi[k])  # clockwise
+    assert float(m.group(3)) == pytest.approx(travel - 360, abs=1e-3)
