@@ -328,3 +328,30 @@ def test_the_shaper_summary_gives_speeds_as_sizes_with_their_sense_and_units():
     k = int(np.argmin(np.abs(tr.t - float(m.group(1)))))
     travel = math.degrees(tr.phi[0] - tr.phi[k])  # clockwise
     assert float(m.group(3)) == pytest.approx(travel - 360, abs=1e-3)
+
+
+def test_seed_004_with_a_weak_motor_stalls_where_its_weight_needs_the_motor_torque():
+    """The six-link machine of seed 004 with M = 3 - 1.25 omega N m: its links' weight
+    turns the crank back and it rests where the motor's 3 N m holds it. Check by virtual
+    work from the positions alone: the torque that holds the machine still is dV/dphi,
+    V = g sum(m y_centre) (uniform bars: their midpoints; the slider at D)."""
+    base = (MECH / "motor-linkage.yaml").read_text()
+    text = base.replace(
+        "motor: {stall: 50 N m, slope: 1.25 N m s}", "motor: {stall: 3 N m, slope: 1.25 N m s}"
+    ).replace("duration: 2.2 s", "duration: 6 s")
+    summary = " ".join(simulate(ms.loads(text)).summary().split())
+    rest = number(r"stalled at driver angle ([\d.]+)°", summary)
+    assert "the motor's torque at standstill, 3 N*m, balances the static load" in summary
+    h = 0.01
+    probe = text.replace("start: 0 deg}", f"start: {rest - h} deg}}").replace(
+        "sweep: {range: 360 deg, step: 1 deg}", f"sweep: {{range: {2 * h} deg, step: {h} deg}}"
+    )
+    res = ms.solve(ms.loads(probe), forces=False)
+    y = {p: res.point(p).y for p in ("A", "B", "K", "D")}
+    y["O"] = 0.0
+    y["O1"] = 0.37
+    mid = {"crank": ("O", "A", 1.5), "coupler": ("A", "B", 9.7), "rocker": ("O1", "B", 6.6)}
+    mid["rod"] = ("K", "D", 8.6)
+    V = 9.81 * (sum(m * 0.5 * (y[a] + y[b]) for a, b, m in mid.values()) + 2.0 * y["D"])
+    hold = (V[2] - V[0]) / math.radians(2 * h)
+    assert hold == pytest.approx(3.0, abs=2e-3)
