@@ -58,6 +58,7 @@ BYTES_PER_VALUE = 100
 # at rest (stalled): the driver stays this close (rad, or m) to its last position over this
 # part of the run at its end
 REST_BAND, REST_SPAN = math.radians(0.01), 0.05
+REST_BAND_LINEAR = 1e-4  # m: the band for a linear driver
 
 
 class ReducedModel:
@@ -1108,7 +1109,7 @@ class SimulationResults(Results):
             if sim.method == "rk4"
             else f"{sim.method}, {len(tr.t)} output rows"
         )
-        lines.append(f"  simulation: {how} to t = {tr.t[-1]:.6g} s; motor {self.motor.describe()}")
+        lines.append(f"  simulation: {how} to t = {tr.t[-1]:.6g} s; motor {self._motor_text()}")
         parts = []
         if np.any(np.isfinite(tr.omega)):
             k = int(np.nanargmax(np.abs(tr.omega)))  # the fastest, either way
@@ -1152,6 +1153,15 @@ class SimulationResults(Results):
             lines.append(f"  ended {tr.stopped}")
         return "\n".join(lines)
 
+    def _motor_text(self) -> str:
+        """The motor's law with its units (``M = 50 N*m - 1.25 N*m*s * omega``)."""
+        m = self.motor
+        if m.kind != "linear":
+            return m.describe()
+        if self.linear:
+            return f"F = {m.stall:.6g} N - {m.slope:.6g} N*s/m * v"
+        return f"M = {m.stall:.6g} N*m - {m.slope:.6g} N*m*s * omega"
+
     def _sense(self, omega: float) -> str:
         """The sense of a signed driver speed in words, against the driver's direction."""
         d = self.mechanism.driver.direction
@@ -1191,8 +1201,11 @@ class SimulationResults(Results):
             # the RMS over time too (the rows of an adaptive method are not evenly spaced)
             rms = math.sqrt(self.time_mean(e * e))
             kind, unit = self.effort_name
+            scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")  # as super's
             lines[0] = re.sub(
-                r", RMS [^,]*, time mean", f", RMS over time {rms:.6g} {unit}, time mean", lines[0]
+                r", RMS [^,]*, time mean",
+                f", RMS over time {rms / scale:.6g} {sym}{unit}, time mean",
+                lines[0],
             )
         return lines
 
@@ -1221,27 +1234,29 @@ class SimulationResults(Results):
 
     def stall(self) -> str:
         """``stalled at …`` when the machine comes to rest and stays (a motor too weak to
-        start it, or one that stops it): the driver stays within :data:`REST_BAND` of its
-        last position for the last :data:`REST_SPAN` of the run (at least 10 rows). The
-        position given is where the motor's effort at standstill balances the static
-        load (``M(0, t) = E0(phi, 0)``, solved next to the last position), if found there;
-        else the last position. ``does not turn …`` for a crank that swings to and fro
-        without completing a revolution. '' otherwise."""
+        start it, or one that stops it): the driver stays within :data:`REST_BAND` (a linear
+        driver: :data:`REST_BAND_LINEAR`) of its last position for the last
+        :data:`REST_SPAN` of the run (at least 10 rows). The position given is where the
+        motor's effort at standstill balances the static load (``M(0, t) = E0(phi, 0)``,
+        solved next to the last position), if found there; else the last position.
+        ``does not turn …`` for a crank that swings to and fro without completing a
+        revolution. '' otherwise."""
         tr = self.trajectory
         n = len(tr.t)
         if n < 12 or tr.early:
             return ""
         phi, t = tr.phi, tr.t
-        off = np.abs(phi - phi[-1]) > REST_BAND
+        band = REST_BAND_LINEAR if self.linear else REST_BAND
+        off = np.abs(phi - phi[-1]) > band
         k = int(np.flatnonzero(off)[-1]) + 1 if off.any() else 0
         if n - k >= 10 and t[-1] - t[k] >= REST_SPAN * t[-1] and k > 0:
-            u, balance = self._balance(float(phi[-1]), float(t[-1]))
+            u, balance = self._balance(float(phi[-1]), float(t[-1]), band)
             where = self.describe_u(n - 1).split("(", 1)[1].rstrip(")")
             if u is not None:
                 where = self._with_u(u)
             kind, unit = self.effort_name
-            band = f"{REST_BAND:g} m" if self.linear else f"{math.degrees(REST_BAND):.2g}°"
-            text = f"stalled at {where} after t = {t[k]:.6g} s (at rest from then on, to {band})"
+            within = f"{band * 1e3:g} mm" if self.linear else f"{math.degrees(band):.2g}°"
+            text = f"stalled at {where} after t = {t[k]:.6g} s (at rest from then on, to {within})"
             if balance is not None:
                 text += (
                     f": the motor's {kind} at standstill, {balance:.6g} {unit}, balances the "
@@ -1269,10 +1284,10 @@ class SimulationResults(Results):
             return f"driver angle {angle_deg(u):.6g}° (the start)"
         return f"driver angle {angle_deg(u):.6g}° ({abs(travel):.6g}°{back} from the start)"
 
-    def _balance(self, u: float, t: float):
+    def _balance(self, u: float, t: float, band: float):
         """``(u*, M)``: the driver position next to ``u`` where the motor's effort at
         standstill ``M = M(0, t)`` balances the static load ``E0(u*, 0)`` (secant
-        iterations on the equation of motion; None if they leave :data:`REST_BAND` or
+        iterations on the equation of motion; None if they leave ``band`` of ``u`` or
         fail), and ``M``."""
         model = getattr(self, "model", None)
         d = self.mechanism.driver.direction
@@ -1284,7 +1299,7 @@ class SimulationResults(Results):
             return M - model.terms(x, 0.0, t)[1]
 
         try:
-            x0, x1 = u - 1e-3 * REST_BAND, u + 1e-3 * REST_BAND
+            x0, x1 = u - 1e-3 * band, u + 1e-3 * band
             g0, g1 = g(x0), g(x1)
             for _ in range(50):
                 if g1 == g0:
@@ -1295,9 +1310,7 @@ class SimulationResults(Results):
                     break
         except _STOPS:
             return None, M
-        if not (
-            math.isfinite(x1) and abs(x1 - u) <= REST_BAND and abs(g1) <= 1e-9 * max(1.0, abs(M))
-        ):
+        if not (math.isfinite(x1) and abs(x1 - u) <= band and abs(g1) <= 1e-9 * max(1.0, abs(M))):
             return None, M
         return x1, M
 

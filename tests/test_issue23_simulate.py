@@ -355,3 +355,27 @@ def test_seed_004_with_a_weak_motor_stalls_where_its_weight_needs_the_motor_torq
     V = 9.81 * (sum(m * 0.5 * (y[a] + y[b]) for a, b, m in mid.values()) + 2.0 * y["D"])
     hold = (V[2] - V[0]) / math.radians(2 * h)
     assert hold == pytest.approx(3.0, abs=2e-3)
+
+
+def test_a_linear_driver_pushed_back_by_gravity_has_its_speed_and_law_with_units():
+    """A 2 kg block on a 30 deg incline, F = 5 N - 4 N s/m v along it, against the 9.81 N
+    of its weight along the incline: it slides back, v(t) = -1.2025 (1 - exp(-2 t)) m/s."""
+    text = """
+name: block on an incline
+ground: {P: [0, 0]}
+links:
+  block: {points: {C: [0, 0]}, mass: 2 kg, com: C}
+joints:
+  cyl: {slider: [ground, block], point: C, line: {through: [0, 0], angle: 30}}
+driver: {joint: cyl, start: 0 m}
+sweep: {range: 1 m, step: 0.1 m}
+gravity: 9.81 m/s^2
+motor: {stall: 5 N, slope: 4 N s/m}
+simulate: {duration: 3 s, step: 0.002 s, method: rk4, from: rest}
+"""
+    summary = " ".join(simulate(ms.loads(text)).summary().split())
+    v_end = (5 - 9.81) / 4 * (1 - math.exp(-2 * 3))
+    fastest = number(r"fastest \|v\| = ([\d.]+) m/s at t = 3 s", summary)
+    assert fastest == pytest.approx(-v_end, rel=1e-6)
+    assert "against the driver's direction (backwards)" in summary
+    assert "motor F = 5 N - 4 N*s/m * v" in summary and "reduced mass from 2 to 2 kg" in summary
