@@ -709,7 +709,7 @@ def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) ->
             "than half a turn in one step, or its speed grows without bound)",
             early=True,
         )
-    return _End("the driver's speed grows beyond the range of numbers", early=True)
+    return _End("the driver's motion left the range of numbers (inf or nan)", early=True)
 
 
 @dataclass
