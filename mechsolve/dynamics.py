@@ -1134,14 +1134,15 @@ class SimulationResults(Results):
                 f"  motor {kind}: from {np.nanmin(M):.6g} to {np.nanmax(M):.6g} {unit}, "
                 f"time mean {self.time_mean(M):.6g} {unit}"
             )
-        dl = steady_fluctuation(tr) if not lin else None
+        rest = self.stall()
+        # a machine come to rest has no cycle to speak of
+        dl = steady_fluctuation(tr) if not (lin or rest.startswith("stalled")) else None
         if dl is not None:
             mean, delta = dl
             lines.append(
                 f"  last full revolution: time mean of |omega| {mean:.6g} rad/s, coefficient "
                 f"of fluctuation delta = (max - min) / mean = {delta:.4g}"
             )
-        rest = self.stall()
         if rest:
             lines.append("  " + rest)
         if tr.early:

@@ -336,20 +336,11 @@ def test_the_shaper_summary_gives_speeds_as_sizes_with_their_sense_and_units():
     assert float(m.group(3)) == pytest.approx(travel - 360, abs=1e-3)
 
 
-def test_seed_004_with_a_weak_motor_stalls_where_its_weight_needs_the_motor_torque():
-    """The six-link machine of seed 004 with M = 3 - 1.25 omega N m: its links' weight
-    turns the crank back and it rests where the motor's 3 N m holds it. Check by virtual
-    work from the positions alone: the torque that holds the machine still is dV/dphi,
+def holding_torque(text: str, angle: float, h: float = 0.01) -> tuple[float, float]:
+    """Seed 004's machine: the torque that holds it still at the driver angle ``angle``
+    (deg), dV/dphi, and the stiffness d2V/dphi2, by virtual work from the positions alone:
     V = g sum(m y_centre) (uniform bars: their midpoints; the slider at D)."""
-    base = (MECH / "motor-linkage.yaml").read_text()
-    text = base.replace(
-        "motor: {stall: 50 N m, slope: 1.25 N m s}", "motor: {stall: 3 N m, slope: 1.25 N m s}"
-    ).replace("duration: 2.2 s", "duration: 6 s")
-    summary = " ".join(simulate(ms.loads(text)).summary().split())
-    rest = number(r"stalled at driver angle ([\d.]+)°", summary)
-    assert "the motor's torque at standstill, 3 N*m, balances the static load" in summary
-    h = 0.01
-    probe = text.replace("start: 0 deg}", f"start: {rest - h} deg}}").replace(
+    probe = text.replace("start: 0 deg}", f"start: {angle - h} deg}}").replace(
         "sweep: {range: 360 deg, step: 1 deg}", f"sweep: {{range: {2 * h} deg, step: {h} deg}}"
     )
     res = ms.solve(ms.loads(probe), forces=False)
@@ -359,8 +350,46 @@ def test_seed_004_with_a_weak_motor_stalls_where_its_weight_needs_the_motor_torq
     mid = {"crank": ("O", "A", 1.5), "coupler": ("A", "B", 9.7), "rocker": ("O1", "B", 6.6)}
     mid["rod"] = ("K", "D", 8.6)
     V = 9.81 * (sum(m * 0.5 * (y[a] + y[b]) for a, b, m in mid.values()) + 2.0 * y["D"])
-    hold = (V[2] - V[0]) / math.radians(2 * h)
-    assert hold == pytest.approx(3.0, abs=2e-3)
+    dx = math.radians(h)
+    return (V[2] - V[0]) / (2 * dx), (V[2] - 2 * V[1] + V[0]) / dx**2
+
+
+SEED_004 = (MECH / "motor-linkage.yaml").read_text()
+
+
+def test_seed_004_with_a_weak_motor_stalls_where_its_weight_needs_the_motor_torque():
+    """The six-link machine of seed 004 with M = 3 - 1.25 omega N m: its links' weight
+    turns the crank back and it rests where the motor's 3 N m holds it (virtual work)."""
+    text = SEED_004.replace(
+        "motor: {stall: 50 N m, slope: 1.25 N m s}", "motor: {stall: 3 N m, slope: 1.25 N m s}"
+    ).replace("duration: 2.2 s", "duration: 6 s")
+    summary = " ".join(simulate(ms.loads(text)).summary().split())
+    rest = number(r"stalled at driver angle ([\d.]+)°", summary)
+    assert "the motor's torque at standstill, 3 N*m, balances the static load" in summary
+    hold, stiffness = holding_torque(text, rest)
+    assert hold == pytest.approx(3.0, abs=2e-3) and stiffness > 0  # a stable rest
+
+
+def test_seed_004_stops_and_stays_when_its_motor_is_cut_off():
+    """The motor runs it up for 0.5 s, then only brakes (-1.25 omega): the machine turns
+    on, stops and stays, where its weight needs no torque (dV/dphi = 0, a minimum of V);
+    no 'last full revolution' figures for a machine at rest."""
+    text = SEED_004.replace(
+        "motor: {stall: 50 N m, slope: 1.25 N m s}",
+        'motor: {torque: "(50 - 1.25 * omega) * (t < 0.5) - 1.25 * omega"}',
+    ).replace("duration: 2.2 s", "duration: 12 s")
+    res = simulate(ms.loads(text))
+    summary = " ".join(res.summary().split())
+    rest = number(r"stalled at driver angle ([\d.]+)°", summary)
+    travel = number(r"stalled at driver angle [\d.]+° \(([\d.]+)° from the start\)", summary)
+    assert travel > 360 and (travel - rest) % 360 == pytest.approx(0, abs=1e-6)
+    assert "the motor's torque at standstill, 0 N*m, balances the static load" in summary
+    assert "last full revolution" not in summary
+    hold, stiffness = holding_torque(text, rest)
+    assert hold == pytest.approx(0.0, abs=2e-3) and stiffness > 0
+    t_rest = number(r"after t = ([\d.]+) s", summary)
+    tr = res.trajectory
+    assert np.ptp(np.degrees(tr.phi[tr.t >= t_rest])) <= 0.02
 
 
 def test_a_linear_driver_pushed_back_by_gravity_has_its_speed_and_law_with_units():
