@@ -1250,7 +1250,7 @@ class SimulationResults(Results):
         band = REST_BAND_LINEAR if self.linear else REST_BAND
         off = np.abs(phi - phi[-1]) > band
         k = int(np.flatnonzero(off)[-1]) + 1 if off.any() else 0
-        if n - k >= 10 and t[-1] - t[k] >= REST_SPAN * t[-1] and k > 0:
+        if n - k >= 10 and t[-1] - t[k] >= REST_SPAN * t[-1]:
             u, balance = self._balance(float(phi[-1]), float(t[-1]), band)
             where = self.describe_u(n - 1).split("(", 1)[1].rstrip(")")
             if u is not None:
@@ -1300,9 +1300,9 @@ class SimulationResults(Results):
             return M - model.terms(x, 0.0, t)[1]
 
         try:
-            x0, x1 = u - 1e-3 * band, u + 1e-3 * band
+            x0, x1 = u + 1e-3 * band, u
             g0, g1 = g(x0), g(x1)
-            for _ in range(50):
+            for _ in range(50 if abs(g1) > 1e-9 * max(1.0, abs(M)) else 0):
                 if g1 == g0:
                     break
                 x0, x1, g0 = x1, x1 - g1 * (x1 - x0) / (g1 - g0), g1

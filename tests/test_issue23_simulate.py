@@ -414,3 +414,14 @@ simulate: {duration: 3 s, step: 0.002 s, method: rk4, from: rest}
     assert fastest == pytest.approx(-v_end, rel=1e-6)
     assert "against the driver's direction (backwards)" in summary
     assert "motor F = 5 N - 4 N*s/m * v" in summary and "reduced mass from 2 to 2 kg" in summary
+
+
+def test_a_machine_that_never_moves_is_stalled_at_its_start():
+    """A balanced disc (centre on the pivot) and a motor with no torque at standstill:
+    nothing moves it; it is at rest at its start from t = 0 (any angle balances: the
+    start is given, not a point found by the balance's iterations)."""
+    text = bar("{stall: 0 N m, slope: 1 N m s}", gravity="gravity: off", duration="1 s")
+    text = text.replace("uniform_bar: [O, A]", "com: O, inertia: 1 kg m^2")
+    summary = " ".join(simulate(ms.loads(text)).summary().split())
+    assert "stalled at driver angle 0° (the start) after t = 0 s" in summary, summary
+    assert "fastest |omega| = 0 rad/s" in summary
