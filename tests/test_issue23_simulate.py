@@ -425,3 +425,21 @@ def test_a_machine_that_never_moves_is_stalled_at_its_start():
     summary = " ".join(simulate(ms.loads(text)).summary().split())
     assert "stalled at driver angle 0° (the start) after t = 0 s" in summary, summary
     assert "fastest |omega| = 0 rad/s" in summary
+
+
+def test_seed_004_with_a_negative_stall_torque_runs_backwards_as_the_mirrored_machine():
+    """M = -50 - 1.25 omega on the counter-clockwise driver is the seed's own law on the
+    same machine driven clockwise (a law is written along its driver's direction): the
+    same motion, and the summary gives the same fastest speed, clockwise both times,
+    'backwards' only for the first (was 'max omega = 0' at t = 0)."""
+    back = SEED_004.replace("stall: 50 N m", "stall: -50 N m")
+    mirrored = SEED_004.replace("start: 0 deg}", "start: 0 deg, direction: cw}")
+    a, b = simulate(ms.loads(back)), simulate(ms.loads(mirrored))
+    np.testing.assert_allclose(a.trajectory.omega, b.trajectory.omega, rtol=0, atol=1e-9)
+    sa, sb = (" ".join(r.summary().split()) for r in (a, b))
+    fast = r"fastest \|omega\| = ([\d.]+) rad/s at t = ([\d.]+) s"
+    assert re.search(fast, sa).groups() == re.search(fast, sb).groups()
+    w = number(fast, sa)
+    assert w == pytest.approx(float(np.max(np.abs(a.trajectory.omega))), rel=1e-6) and w > 30
+    assert "clockwise: backwards, against the driver's direction" in sa
+    assert "clockwise (the driver's direction)" in sb and "backwards" not in sb.split("fastest")[1]
