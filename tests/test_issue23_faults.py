@@ -695,3 +695,71 @@ def test_requirement_figures_swing_in_degrees_and_at_the_last_position():
     for at in ("0 deg", "360 deg"):
         got = evaluate_figure(f"at(rocker.angle, {at})", mech, res)
         assert (got - want + PI) % (2 * PI) - PI == pytest.approx(0, abs=1e-9), at
+
+
+POLYGON_EXAMPLES = [("shaper", "graphical"), ("shaper", None), ("fourbar", None),
+                    ("sixbar", None), ("slider-crank", None), ("motor-linkage", None),
+                    ("rod-to-rocker", None)]  # fmt: skip
+# a rod from the crank to a block sliding along the four-bar's rocker: a guide on a moving
+# link, drawn with Coriolis and sliding components
+ROD_TO_ROCKER = """
+name: rod to a block on the rocker
+units: {length: mm, angle: deg}
+ground: {O2: [0, 0], O4: [87.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [26.5, 0], E: [-20, 0]}}
+  coupler: {points: {A: [0, 0], B: [105.6, 0]}}
+  rocker: {points: {O4: [0, 0], B: [59, 0], T: [120, 0]}}
+  rod: {points: {E: [0, 0], M: [110, 0]}}
+  block: {points: {M: [0, 0]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+  E: [crank, rod]
+  M: [rod, block]
+  along: {slider: [rocker, block], point: M, line: [O4, T]}
+assembly: [B left of A -> O4, M.y > 0]
+driver: {joint: O2, speed: 5 rad/s, start: 0 deg}
+"""
+
+
+@pytest.mark.parametrize("file,variant", POLYGON_EXAMPLES)
+def test_every_polygon_arrow_joins_its_nodes(file, variant):
+    """polygons.py:569 (the sliding acceleration's vector ``arel * d`` as ``arel + d``):
+    every arrow drawn, in both polygons, is the vector from its tail node to its head
+    node (the polygons' own geometry: what is drawn closes)."""
+    from mechsolve.polygons import build_polygons
+
+    if file == "rod-to-rocker":
+        mech = ms.loads(ROD_TO_ROCKER)
+    else:
+        mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml", variant)
+    for at in (2, 5, 9):
+        r = build_polygons(mech, at)
+        for poly in (r.velocity, r.acceleration):
+            size = poly.extent()
+            for arrow in poly.arrows:
+                gap = poly.nodes[arrow.head] - poly.nodes[arrow.tail] - arrow.vec
+                assert np.abs(gap).max() <= 1e-12 * size, (file, at, arrow.name)
+                if arrow.along is not None:  # a vector along a guide: its signed length
+                    assert abs(arrow.along) == pytest.approx(
+                        float(np.hypot(*arrow.vec)), rel=1e-12, abs=1e-15 * size
+                    )
+
+
+@pytest.mark.parametrize("file,omega", [("fourbar", 1.0), ("slider-crank", 1500 * PI / 30)])
+def test_polygon_position_names_its_time(file, omega):
+    """polygons.py:869 (``du / speed`` as ``du % speed``): position k of 12 per turn is
+    (k - 1) 30 deg after the start, reached (k - 1) (pi / 6) / omega after it."""
+    import re
+
+    from mechsolve.polygons import build_polygons
+
+    mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml")
+    for k in (2, 5, 9, 12):
+        r = build_polygons(mech, k)
+        m = re.search(r"t = (\S+) s from position 1", r.label)
+        assert m, r.label
+        assert float(m.group(1)) == pytest.approx((k - 1) * PI / 6 / omega, rel=1e-5)
