@@ -578,6 +578,49 @@ def test_oscillating_flat_face_curvature_is_the_profiles():
         assert np.allclose(p.rho_profile[away], rho[away], rtol=2e-6, atol=0)
 
 
+@pytest.mark.parametrize("key", ["cycloidal", "polynomial-345", "polynomial-4567"])
+@pytest.mark.parametrize("e", [0.0, 0.01, -0.008])
+def test_smallest_base_radius_of_a_translating_follower(key, e):
+    """cam/design.py:122 (the refinement's bracket about the best coarse sample, 2 pi / n
+    as 2 - pi / n): the smallest base radius for the pressure-angle allowances equals
+    hypot(s0, e), s0 = max over the rise and the return of |s' - e| / tan(alpha) - s
+    (tan(alpha) = (s' - e) / (sqrt(r0^2 - e^2) + s)), the maximum found here from the
+    textbook law on a fine grid refined by Brent's method."""
+    from scipy.optimize import minimize_scalar
+
+    from mechsolve.cam.design import Allowance, min_base_translating
+
+    deg = math.radians
+    h, b_up, b_down = 0.03, deg(100), deg(140)
+    law = LAWS[key]
+    prog = build_program(
+        [("rise", b_up, h, law), ("dwell", deg(40), None, None),
+         ("return", b_down, None, law), ("dwell", deg(80), None, None)],
+        False,
+    )  # fmt: skip
+    a_up, a_down = deg(30), deg(50)
+
+    def need(x, b, alpha, up):
+        f, f1 = (float(v[0]) for v in _textbook(key, np.array([x]))[:2])
+        s, ds = (h * f, h * f1 / b) if up else (h * (1 - f), -h * f1 / b)
+        return abs(ds - e) / math.tan(alpha) - s
+
+    s0 = 0.0
+    for b, alpha, up in ((b_up, a_up, True), (b_down, a_down, False)):
+        x = np.linspace(0, 1, 20001)
+        f, f1 = _textbook(key, x)[:2]
+        s, ds = (h * f, h * f1 / b) if up else (h * (1 - f), -h * f1 / b)
+        i = int(np.argmax(np.abs(ds - e) / math.tan(alpha) - s))
+        lo, hi = x[max(i - 1, 0)], x[min(i + 1, len(x) - 1)]
+        best = minimize_scalar(
+            lambda t, b=b, alpha=alpha, up=up: -need(t, b, alpha, up), bounds=(lo, hi),
+            method="bounded", options={"xatol": 1e-13},
+        )  # fmt: skip
+        s0 = max(s0, -best.fun, need(lo, b, alpha, up), need(hi, b, alpha, up))
+    r0 = min_base_translating(prog, e, 1, Allowance(rise=a_up, ret=a_down))
+    assert r0 == pytest.approx(math.hypot(s0, e), rel=1e-10)
+
+
 def test_a_return_below_the_lowest_position_names_its_lift(tmp_path):
     """cam/model.py:248 (``level * (1 + 1e-9)`` as ``level + (1 + 1e-9)``): a return of
     30 mm after a rise of 25 mm is refused at its own key, saying so."""
