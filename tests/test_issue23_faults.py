@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -796,8 +797,6 @@ def test_every_polygon_arrow_joins_its_nodes(file, variant):
 def test_polygon_position_names_its_time(file, omega):
     """polygons.py:869 (``du / speed`` as ``du % speed``): position k of 12 per turn is
     (k - 1) 30 deg after the start, reached (k - 1) (pi / 6) / omega after it."""
-    import re
-
     from mechsolve.polygons import build_polygons
 
     mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml")
@@ -806,3 +805,21 @@ def test_polygon_position_names_its_time(file, omega):
         m = re.search(r"t = (\S+) s from position 1", r.label)
         assert m, r.label
         assert float(m.group(1)) == pytest.approx((k - 1) * PI / 6 / omega, rel=1e-5)
+
+
+def test_study_parameter_suggests_the_whole_key_path():
+    """study/params.py:133 (the key-path walk's depth counted twice): a parameter written
+    without its top key is answered with the full path of the number it names, five keys
+    deep (the closest of every number's key path in the file)."""
+    import yaml
+
+    from mechsolve.errors import InputError
+    from mechsolve.study.params import lookup
+
+    data = yaml.safe_load((ROOT / "mechanisms" / "fourbar.yaml").read_text())
+    for path, want in (
+        (("coupler", "points", "P", "length"), "links.coupler.points.P.length"),
+        (("rocker", "points", "B", 0), "links.rocker.points.B[0]"),
+    ):
+        with pytest.raises(InputError, match=re.escape(f"did you mean {want}?")):
+            lookup(data, path)
