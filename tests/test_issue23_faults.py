@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -544,3 +545,281 @@ def test_slider_on_a_coupler_point_rates(method):
     assert np.allclose(c.ay, 0.0, rtol=0, atol=1e-10)
     # the rates change sign over the turn: a swapped sign or factor cannot pass
     assert np.ptp(v) > 0.1 and np.ptp(acc) > 0.5
+
+
+# -- survivors of the mutation run (README, "Development"): real ones, each killed here ------
+
+
+def test_oscillating_flat_face_curvature_is_the_profiles():
+    """cam/profile.py:219 (h'' of an oscillating flat face, ``ds**2`` as ``ds - 2``): the
+    profile's radius of curvature against the curvature of the drawn profile itself,
+    |r'|^3 / |r' x r''| by central differences in the cam angle, both senses."""
+    from mechsolve.cam.profile import Follower, solve
+
+    law, deg = LAWS["cycloidal"], math.radians
+    prog = build_program(
+        [("rise", deg(120), deg(10), law), ("dwell", deg(30), None, None),
+         ("return", deg(120), None, law), ("dwell", deg(90), None, None)],
+        True,
+    )  # fmt: skip
+    a, r0 = 0.15, 0.06
+    f = Follower("oscillating", "flat-faced", r0, pivot=a, start_angle=math.asin(r0 / a))
+    th = np.linspace(0, 2 * PI, 7200, endpoint=False)
+    e = th[1] - th[0]
+    joins = np.radians([0, 120, 150, 270, 360])
+    away = np.min(np.abs(th[:, None] - joins[None, :]), axis=1) > 0.01
+    for sense in (1, -1):
+        p = solve(prog, f, sense, th)
+        assert p.valid and np.all(p.rho_profile > 0)
+        r = p.profile
+        r1 = (np.roll(r, -1, axis=0) - np.roll(r, 1, axis=0)) / (2 * e)
+        r2 = (np.roll(r, -1, axis=0) - 2 * r + np.roll(r, 1, axis=0)) / e**2
+        cross = r1[:, 0] * r2[:, 1] - r1[:, 1] * r2[:, 0]
+        rho = np.hypot(r1[:, 0], r1[:, 1]) ** 3 / np.abs(cross)
+        assert np.allclose(p.rho_profile[away], rho[away], rtol=2e-6, atol=0)
+
+
+@pytest.mark.parametrize("key", ["cycloidal", "polynomial-345", "polynomial-4567"])
+@pytest.mark.parametrize("e", [0.0, 0.01, -0.008])
+def test_smallest_base_radius_of_a_translating_follower(key, e):
+    """cam/design.py:122 (the refinement's bracket about the best coarse sample, 2 pi / n
+    as 2 - pi / n): the smallest base radius for the pressure-angle allowances equals
+    hypot(s0, e), s0 = max over the rise and the return of |s' - e| / tan(alpha) - s
+    (tan(alpha) = (s' - e) / (sqrt(r0^2 - e^2) + s)), the maximum found here from the
+    textbook law on a fine grid refined by Brent's method."""
+    from scipy.optimize import minimize_scalar
+
+    from mechsolve.cam.design import Allowance, min_base_translating
+
+    deg = math.radians
+    h, b_up, b_down = 0.03, deg(100), deg(140)
+    law = LAWS[key]
+    prog = build_program(
+        [("rise", b_up, h, law), ("dwell", deg(40), None, None),
+         ("return", b_down, None, law), ("dwell", deg(80), None, None)],
+        False,
+    )  # fmt: skip
+    a_up, a_down = deg(30), deg(50)
+
+    def need(x, b, alpha, up):
+        f, f1 = (float(v[0]) for v in _textbook(key, np.array([x]))[:2])
+        s, ds = (h * f, h * f1 / b) if up else (h * (1 - f), -h * f1 / b)
+        return abs(ds - e) / math.tan(alpha) - s
+
+    s0 = 0.0
+    for b, alpha, up in ((b_up, a_up, True), (b_down, a_down, False)):
+        x = np.linspace(0, 1, 20001)
+        f, f1 = _textbook(key, x)[:2]
+        s, ds = (h * f, h * f1 / b) if up else (h * (1 - f), -h * f1 / b)
+        i = int(np.argmax(np.abs(ds - e) / math.tan(alpha) - s))
+        lo, hi = x[max(i - 1, 0)], x[min(i + 1, len(x) - 1)]
+        best = minimize_scalar(
+            lambda t, b=b, alpha=alpha, up=up: -need(t, b, alpha, up), bounds=(lo, hi),
+            method="bounded", options={"xatol": 1e-13},
+        )  # fmt: skip
+        s0 = max(s0, -best.fun, need(lo, b, alpha, up), need(hi, b, alpha, up))
+    r0 = min_base_translating(prog, e, 1, Allowance(rise=a_up, ret=a_down))
+    assert r0 == pytest.approx(math.hypot(s0, e), rel=1e-10)
+
+
+def test_a_return_below_the_lowest_position_names_its_lift(tmp_path):
+    """cam/model.py:248 (``level * (1 + 1e-9)`` as ``level + (1 + 1e-9)``): a return of
+    30 mm after a rise of 25 mm is refused at its own key, saying so."""
+    from mechsolve.commands.cam import cam
+
+    text = (DATA / "cam_translating.yaml").read_text()
+    old = "{return: 90 deg, law: 3-4-5}"
+    assert old in text
+    f = tmp_path / "low.yaml"
+    f.write_text(text.replace(old, "{return: 90 deg, lift: 30 mm, law: 3-4-5}"))
+    r = CliRunner().invoke(cam, [str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert "cam.motion[2].lift: the return goes below the lowest position" in r.output
+
+
+def test_slider_crank_with_k_one():
+    """synth/slidercrank.py:32 (``1e-12 * h_len`` as ``1e-12 - h_len``): K = 1 with no
+    offset says any crank H/2 works; with an offset, that K = 1 needs none."""
+    from mechsolve.errors import InputError
+    from mechsolve.synth.slidercrank import slider_crank_at
+
+    with pytest.raises(InputError, match="any crank a = H/2 works"):
+        slider_crank_at(0.1, 0.0, 0.0)
+    with pytest.raises(InputError, match="needs a centred slider-crank"):
+        slider_crank_at(0.1, 0.0, 0.01)
+
+
+def _tr_min(stroke: float, theta: float, e: float) -> float:
+    """The smallest transmission angle of the offset slider-crank whose pivot sees the
+    limit positions (x1, e), (x1 + H, e) under theta: crank a and rod b from
+    b - a = |P C1|, b + a = |P C2|; the angle is least with the crank normal to the guide
+    on the side away from it: cos(mu_min) = (a + e) / b."""
+    x1 = (-stroke + math.sqrt(stroke**2 + 4 * (stroke * e / math.tan(theta) - e * e))) / 2
+    near, far = math.hypot(x1, e), math.hypot(x1 + stroke, e)
+    a, b = (far - near) / 2, (far + near) / 2
+    return math.acos(min(1.0, (a + e) / b))
+
+
+@pytest.mark.parametrize("k", [1.2, 1.4, 1.8])
+def test_slider_crank_offset_with_the_largest_transmission_angle(k):
+    """The offset synthesis chooses: its minimum transmission angle is the largest over all
+    offsets, found here from the closed form on a fine grid refined by Brent's method.
+    (The sampled mutant synth/slidercrank.py:113, the refinement's upper bound
+    ``best + step`` as ``best // step``, is equivalent: the bracket only widens.)"""
+    from scipy.optimize import minimize_scalar
+
+    from mechsolve.synth.slidercrank import slider_crank
+
+    H = 0.1
+    th = _theta_of_k(k)
+    (d,) = slider_crank(H, k)
+    e_max = H / math.tan(th)
+    grid = np.linspace(e_max * 1e-4, e_max * (1 - 1e-6), 20001)
+    vals = []
+    for e in grid:
+        try:
+            vals.append(_tr_min(H, th, e))
+        except ValueError:
+            vals.append(-1.0)
+    i = int(np.argmax(vals))
+    best = minimize_scalar(
+        lambda e: -_tr_min(H, th, e),
+        bounds=(grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]),
+        method="bounded",
+        options={"xatol": 1e-14},
+    )
+    assert d.min_transmission == pytest.approx(-best.fun, abs=1e-9)
+
+
+def test_flywheel_from_a_torque_curve_prints_rpm_and_refuses_bad_delta():
+    """flywheel.py:56 (rpm as ``omega * 30 % pi``) and :229 (``0 < delta < 1`` as
+    ``0 is not delta < 1``): the mean speed is printed in rpm = omega 30 / pi; a delta
+    of 0 or below is refused."""
+    from mechsolve.errors import InputError
+    from mechsolve.flywheel import size_from_torque
+
+    x = np.linspace(0, 2 * PI, 37)
+    T = 200 + 150 * np.sin(2 * x)
+    fw = size_from_torque(x, T, speed=1500 * PI / 30, delta=1 / 80)
+    assert "(1500 rpm)" in fw.text()
+    fw = size_from_torque(x, T, speed=12.0, delta=0.05)
+    assert f"({12.0 * 30 / PI:.6g} rpm)" in fw.text()
+    for bad in (-0.05, 0.0, 1.0, 1.5):
+        with pytest.raises(InputError, match="coefficient of fluctuation"):
+            size_from_torque(x, T, speed=12.0, delta=bad)
+
+
+FOURBAR_REQ = (ROOT / "mechanisms" / "fourbar.yaml").read_text()
+
+
+def test_requirement_figures_swing_in_degrees_and_at_the_last_position():
+    """requirements.py:182 (a rocker's swing given the unit m) and :243 (``at(q, w)``
+    with w the sweep's last position refused): the swing of the docs' four-bar is
+    printed in deg, and the rocker's angle at 360 deg of crank is the closed form's at 0."""
+    from mechsolve.requirements import check_requirements, evaluate_figure
+
+    a, b, c, d = 26.5e-3, 105.6e-3, 59e-3, 87.5e-3
+    folded, extended = b - a, b + a
+    swing = abs(
+        math.acos((d * d + c * c - folded**2) / (2 * d * c))
+        - math.acos((d * d + c * c - extended**2) / (2 * d * c))
+    )
+    text = FOURBAR_REQ + (
+        f"\nrequirements:\n  swing: rocker.swing >= {math.degrees(swing) - 0.01} deg\n"
+        "  bare: rocker.swing >= 0.5\n"  # SI (rad), shown in the figure's unit
+    )
+    mech = ms.loads(text)
+    res = ms.solve(mech)
+    for v in check_requirements(mech, res):
+        assert v.passed and v.unit == "deg", v.message
+        assert f"rocker.swing = {math.degrees(swing):.6g} deg >= " in v.message
+    # crank at 0 (and 360) deg: A = (a, 0); B above the frame, left of A -> O4
+    gamma = math.acos((c * c + (d - a) ** 2 - b * b) / (2 * c * (d - a)))
+    want = PI - gamma
+    for at in ("0 deg", "360 deg"):
+        got = evaluate_figure(f"at(rocker.angle, {at})", mech, res)
+        assert (got - want + PI) % (2 * PI) - PI == pytest.approx(0, abs=1e-9), at
+
+
+POLYGON_EXAMPLES = [("shaper", "graphical"), ("shaper", None), ("fourbar", None),
+                    ("sixbar", None), ("slider-crank", None), ("motor-linkage", None),
+                    ("rod-to-rocker", None)]  # fmt: skip
+# a rod from the crank to a block sliding along the four-bar's rocker: a guide on a moving
+# link, drawn with Coriolis and sliding components
+ROD_TO_ROCKER = """
+name: rod to a block on the rocker
+units: {length: mm, angle: deg}
+ground: {O2: [0, 0], O4: [87.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [26.5, 0], E: [-20, 0]}}
+  coupler: {points: {A: [0, 0], B: [105.6, 0]}}
+  rocker: {points: {O4: [0, 0], B: [59, 0], T: [120, 0]}}
+  rod: {points: {E: [0, 0], M: [110, 0]}}
+  block: {points: {M: [0, 0]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+  E: [crank, rod]
+  M: [rod, block]
+  along: {slider: [rocker, block], point: M, line: [O4, T]}
+assembly: [B left of A -> O4, M.y > 0]
+driver: {joint: O2, speed: 5 rad/s, start: 0 deg}
+"""
+
+
+@pytest.mark.parametrize("file,variant", POLYGON_EXAMPLES)
+def test_every_polygon_arrow_joins_its_nodes(file, variant):
+    """polygons.py:569 (the sliding acceleration's vector ``arel * d`` as ``arel + d``):
+    every arrow drawn, in both polygons, is the vector from its tail node to its head
+    node (the polygons' own geometry: what is drawn closes)."""
+    from mechsolve.polygons import build_polygons
+
+    if file == "rod-to-rocker":
+        mech = ms.loads(ROD_TO_ROCKER)
+    else:
+        mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml", variant)
+    for at in (2, 5, 9):
+        r = build_polygons(mech, at)
+        for poly in (r.velocity, r.acceleration):
+            size = poly.extent()
+            for arrow in poly.arrows:
+                gap = poly.nodes[arrow.head] - poly.nodes[arrow.tail] - arrow.vec
+                assert np.abs(gap).max() <= 1e-12 * size, (file, at, arrow.name)
+                if arrow.along is not None:  # a vector along a guide: its signed length
+                    assert abs(arrow.along) == pytest.approx(
+                        float(np.hypot(*arrow.vec)), rel=1e-12, abs=1e-15 * size
+                    )
+
+
+@pytest.mark.parametrize("file,omega", [("fourbar", 1.0), ("slider-crank", 1500 * PI / 30)])
+def test_polygon_position_names_its_time(file, omega):
+    """polygons.py:869 (``du / speed`` as ``du % speed``): position k of 12 per turn is
+    (k - 1) 30 deg after the start, reached (k - 1) (pi / 6) / omega after it."""
+    from mechsolve.polygons import build_polygons
+
+    mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml")
+    for k in (2, 5, 9, 12):
+        r = build_polygons(mech, k)
+        m = re.search(r"t = (\S+) s from position 1", r.label)
+        assert m, r.label
+        assert float(m.group(1)) == pytest.approx((k - 1) * PI / 6 / omega, rel=1e-5)
+
+
+def test_study_parameter_suggests_the_whole_key_path():
+    """study/params.py:133 (the key-path walk's depth counted twice): a parameter written
+    without its top key is answered with the full path of the number it names, five keys
+    deep (the closest of every number's key path in the file)."""
+    import yaml
+
+    from mechsolve.errors import InputError
+    from mechsolve.study.params import lookup
+
+    data = yaml.safe_load((ROOT / "mechanisms" / "fourbar.yaml").read_text())
+    for path, want in (
+        (("coupler", "points", "P", "length"), "links.coupler.points.P.length"),
+        (("rocker", "points", "B", 0), "links.rocker.points.B[0]"),
+    ):
+        with pytest.raises(InputError, match=re.escape(f"did you mean {want}?")):
+            lookup(data, path)

@@ -72,18 +72,20 @@ SEL = {
         "tests/test_issue23_faults.py",
     ],
     "mechsolve/dynamics.py": ["tests/test_dynamics.py"],
-    "mechsolve/flywheel.py": ["tests/test_dynamics.py"],
+    "mechsolve/flywheel.py": ["tests/test_dynamics.py", "tests/test_issue23_faults.py"],
     "mechsolve/requirements.py": [
         "tests/test_requirements.py",
         "tests/test_study.py",
         "tests/test_study_cli.py",
+        "tests/test_issue23_faults.py",
     ],
     "mechsolve/study/": [
         "tests/test_study.py",
         "tests/test_study_cli.py",
         "tests/test_study_exec.py",
+        "tests/test_issue23_faults.py",
     ],
-    "mechsolve/polygons.py": ["tests/test_polygons.py"],
+    "mechsolve/polygons.py": ["tests/test_polygons.py", "tests/test_issue23_faults.py"],
 }
 EXTRA = ["tests/test_mutants.py"]
 TIMEOUT = 600  # s per mutant
