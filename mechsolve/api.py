@@ -123,7 +123,17 @@ def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Resul
     exact driver values of its events: each rocker's and slider's limit positions, and
     where a conditional load switches, sampled on both sides (1e-9 apart) so that a curve
     jumps there instead of joining the samples around it. ``res`` itself when it is
-    already that fine and has no events to add, or has a motion law of time."""
+    already that fine and has no events to add, or has a motion law of time. Made once
+    per run: the summary, the plots and the requirements read the same figures."""
+    cached = getattr(res, "_plots_sweep", None)
+    if cached is not None and cached[0] is mech:
+        return cached[1]
+    fine = _for_plots(mech, res)
+    res._plots_sweep = (mech, fine)
+    return fine
+
+
+def _for_plots(mech: Mechanism, res: Results) -> Results:
     if mech.driver.motion is not None or len(res.u) < 2 or not np.all(res.ok[[0, -1]]):
         return res
     an = res.analysis

@@ -195,7 +195,9 @@ def _run_job(
     else:
         streamed = False
         res = api.solve(mech, step=st, method=method)
-        text = res.summary()
+        # the figures (extremes, limit positions, work) from the sweep the plots are
+        # drawn from, so that the terminal, the plots and the requirements agree
+        text = res.summary(figures=api.for_plots(mech, res, method))
         failed = res.incomplete()
         written = [res.to_csv(outdir / "results.csv")]
     if not no_plots:

@@ -1129,7 +1129,7 @@ class SimulationResults(Results):
             lines.append("  " + "; ".join(parts))
         M = self.motor_torque()
         kind, unit = self.effort_name
-        if f"  driving {kind}: max " not in lines[0]:  # else that line gives the same
+        if f"  driving {kind} (" not in lines[0]:  # else that line gives the same
             lines.append(
                 f"  motor {kind}: from {np.nanmin(M):.6g} to {np.nanmax(M):.6g} {unit}, "
                 f"time mean {self.time_mean(M):.6g} {unit}"
@@ -1195,8 +1195,11 @@ class SimulationResults(Results):
         e = np.where(self.forces.ok, self.forces.effort, np.nan)
         return self.time_mean(e), "time mean"
 
-    def force_summary(self) -> list[str]:
-        lines = super().force_summary()
+    def sample_spacing(self) -> str:
+        return f"{len(self.t)} time"  # "driving torque (1101 time samples)"
+
+    def force_summary(self, figures: Results | None = None) -> list[str]:
+        lines = super().force_summary(figures)
         e = np.where(self.forces.ok, self.forces.effort, np.nan)
         if lines and lines[0].startswith("  driving ") and np.any(np.isfinite(e)):
             # the RMS over time too (the rows of an adaptive method are not evenly spaced)

@@ -665,6 +665,16 @@ class Results:
             lines.append("  warning: " + w)
         return "\n".join(lines)
 
+    def sample_spacing(self) -> str:
+        """The spacing of the sweep's samples, as text ('1°', '2 mm'; 'uneven')."""
+        du = np.abs(np.diff(self.u))
+        if du.size == 0:
+            return "1"
+        step = float(np.median(du))
+        if self.linear:
+            return f"{step * 1e3:.4g} mm" if step < 1 else f"{step:.4g} m"
+        return f"{math.degrees(step):.4g}°"
+
     def force_summary(self, figures: Results | None = None) -> list[str]:
         """The summary's lines about the forces; ``figures``: a finer sweep of the same
         motion to take the figures from (see :meth:`summary`), the driving effort as
@@ -681,8 +691,11 @@ class Results:
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
         rms = float(np.sqrt(np.nanmean(e**2)))
         mean, what = src.mean_effort()
+        # the extremes are the largest and smallest samples (the requirements locate
+        # them between the samples: max(input.torque) in requirements:)
         lines.append(
-            f"  driving {kind}: max {e[imax] / scale:.6g} {sym}{unit} at {src.describe_u(imax)}, "
+            f"  driving {kind} ({src.sample_spacing()} samples): "
+            f"max {e[imax] / scale:.6g} {sym}{unit} at {src.describe_u(imax)}, "
             f"min {e[imin] / scale:.6g} {sym}{unit} at {src.describe_u(imin)}, "
             f"RMS {rms / scale:.6g} {sym}{unit}, {what} {mean / scale:.6g} {sym}{unit}"
         )

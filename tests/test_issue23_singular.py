@@ -183,7 +183,7 @@ def test_chain_started_collinear_runs_from_the_command_line(tmp_path):
     assert "start: loop B (crank2 O2-B, bar1 B-A): the branch nearest to the drawn pose" in r.output
     assert "the start is singular" in r.output
     # the torque's extremes are at the collinear positions, where it is its limit
-    assert "driving torque: max 34.335 N*m at driver angle" in r.output
+    assert "driving torque (1° samples): max 34.335 N*m at driver angle" in r.output
 
 
 @pytest.mark.parametrize("start", [30, 0])

@@ -298,9 +298,21 @@ class RRR(Group):
         s = -self.direction / np.where(nv > 0, nv, np.nan)
         ex, ey = s * dvx, s * dvy  # unit vector along d on the incoming side
         m = np.broadcast_to(mode, np.shape(g1x))
+        # within the tolerance the joints are apart by up to 1e-7 of the arms: M lies
+        # beside the midpoint of P-Q, not beside P, square to P-Q itself where that is
+        # known better than the rate's direction (|PQ| above sqrt(eps) of the arms:
+        # rounding turns d by eps L / |d|, the rate differs from it by about |d| / L)
+        dx, dy, D2 = self.ends(st)[4:]
+        hh = np.sqrt(np.maximum(self.L1 * self.L1 - 0.25 * D2, 0.0))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            D = np.sqrt(D2)
+            own = where & (D > 1.5e-8 * self.L1) & np.isfinite(ex)
+            side = np.sign(dx * ex + dy * ey)
+            ex = np.where(own, side * dx / D, ex)
+            ey = np.where(own, side * dy / D, ey)
         return (
-            np.where(where, -m * self.L1 * ey, g1x),
-            np.where(where, m * self.L1 * ex, g1y),
+            np.where(where, 0.5 * dx - m * hh * ey, g1x),
+            np.where(where, 0.5 * dy + m * hh * ex, g1y),
         )
 
     def disc(self, st: State):
