@@ -27,34 +27,51 @@ def guide_bar(
 ) -> list[Design]:
     """Two of frame d, crank r and time ratio K give the third; the bar length L, or the
     chord H of its end's stroke, gives the other (both optional)."""
+    def err(key: str, message: str) -> InputError:
+        exc = InputError(message)
+        exc.problem_key = key  # type: ignore[attr-defined]  (the problem file's key)
+        return exc
+
     given = [x is not None for x in (frame, crank, k)]
     if sum(given) != 2:
         raise InputError("give exactly two of frame, crank and time_ratio")
     for name, x in (("frame", frame), ("crank", crank), ("bar", bar), ("stroke", stroke)):
         if x is not None and not (math.isfinite(x) and x > 0):
-            raise InputError(f"{name} {x!r}: it must be positive")
+            raise err(name, f"{name} {x!r}: it must be positive")
     if bar is not None and stroke is not None:
-        raise InputError("give the bar length or the stroke, not both")
+        raise err("stroke", "give the bar length or the stroke, not both")
     if k is not None:
         theta = time_ratio_angle(k)
         if theta < 1e-12:
-            raise InputError("K = 1 is not possible with a guide bar (the crank would be 0)")
+            raise err(
+                "time_ratio", "K = 1 is not possible with a guide bar (the crank would be 0)"
+            )
         if frame is not None:
             crank = frame * math.sin(theta / 2)
         else:
             frame = crank / math.sin(theta / 2)
     if crank >= frame:
-        raise InputError(
+        raise err(
+            "crank",
             f"crank {crank:g} m >= frame {frame:g} m: the bar would turn fully (a rotating "
-            "guide bar), not oscillate"
+            "guide bar), not oscillate",
         )
     theta = 2 * math.asin(crank / frame)
     if stroke is not None:
         bar = stroke / (2 * math.sin(theta / 2))
     if bar is not None and bar < frame + crank:
-        raise InputError(
+        if stroke is not None:
+            raise err(
+                "stroke",
+                f"stroke {stroke:g} m needs a bar of H / (2 sin(theta/2)) = {bar:g} m, but "
+                f"the slot must reach the block at its farthest, d + r = "
+                f"{frame + crank:g} m: a stroke of at least "
+                f"{2 * (frame + crank) * math.sin(theta / 2):g} m",
+            )
+        raise err(
+            "bar",
             f"bar {bar:g} m: the slot must reach the block at its farthest, d + r = "
-            f"{frame + crank:g} m"
+            f"{frame + crank:g} m",
         )
     lengths = {"crank": crank, "frame": frame}
     if bar is not None:
