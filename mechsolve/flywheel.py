@@ -285,7 +285,7 @@ def size_flywheel(
     out.J_exact = max(0.0, float(jf))
     out.energy_mass = (J, W)
     if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
-        from .dynamics import simulate, steady_fluctuation
+        from .dynamics import MAX_STEPS, simulate, steady_fluctuation
         from .model.machine import Flywheel
 
         crank = an.system.body_names[an.plan[0].bodies[0]]
@@ -300,6 +300,13 @@ def size_flywheel(
         tau = (J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
         sim = copy.copy(mech.simulation)
         sim.duration = min(max(sim.duration, 10 * tau), 120.0)
+        # within the integrator's step budget (simulate refuses more, naming the file's
+        # simulate.step, which the file did not ask for here)
+        if sim.step and sim.duration / sim.step > MAX_STEPS - 1:
+            sim.duration = (MAX_STEPS - 1) * sim.step
+            short = f"the check ran {sim.duration:.4g} s ({MAX_STEPS - 1} steps of the file's step)"
+        else:
+            short = ""
         # from the steady mean speed, so that only the periodic part has to settle
         sim.speed0 = w
         sim.revolutions = None
@@ -311,6 +318,8 @@ def size_flywheel(
             out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
         else:
             out.delta_reached = fl[1]
+            if short and 10 * tau > sim.duration:
+                out.check_note = f"{short}, less than 10 time constants J/(-dM/domega)"
     elif check and mech.motor is not None and mech.simulation is None:
         out.check_note = "the file has no 'simulate:' section"
     return out

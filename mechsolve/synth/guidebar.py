@@ -27,6 +27,7 @@ def guide_bar(
 ) -> list[Design]:
     """Two of frame d, crank r and time ratio K give the third; the bar length L, or the
     chord H of its end's stroke, gives the other (both optional)."""
+
     def err(key: str, message: str) -> InputError:
         exc = InputError(message)
         exc.problem_key = key  # type: ignore[attr-defined]  (the problem file's key)
@@ -43,9 +44,7 @@ def guide_bar(
     if k is not None:
         theta = time_ratio_angle(k)
         if theta < 1e-12:
-            raise err(
-                "time_ratio", "K = 1 is not possible with a guide bar (the crank would be 0)"
-            )
+            raise err("time_ratio", "K = 1 is not possible with a guide bar (the crank would be 0)")
         if frame is not None:
             crank = frame * math.sin(theta / 2)
         else:
