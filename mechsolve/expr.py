@@ -226,6 +226,25 @@ def children(node: Any) -> tuple[Any, ...]:
     return ()
 
 
+def bottom_up(tree: Any, rule: Callable[[Any, list[Any]], Any]) -> Any:
+    """``rule(node, values of its children)`` over a tree, children first, with an
+    explicit stack (no recursion limit); each distinct node (shared sub-trees of a
+    derivative's graph) is visited once."""
+    done: dict[int, Any] = {}
+    stack: list[tuple[Any, bool]] = [(tree, False)]
+    while stack:
+        n, ready = stack.pop()
+        if id(n) in done:
+            continue
+        kids = children(n)
+        if kids and not ready:
+            stack.append((n, True))
+            stack.extend((k, False) for k in reversed(kids) if id(k) not in done)
+            continue
+        done[id(n)] = rule(n, [done[id(k)] for k in kids])
+    return done[id(tree)]
+
+
 def walk(tree: Any) -> Iterator[Any]:
     """Every node of a tree, parents before children, left to right (no recursion).
 
@@ -1282,19 +1301,7 @@ def _differentiate(tree: Any, var: str, b: _Builder) -> Any:
     Each distinct node is differentiated once (second derivatives differentiate a graph
     whose sub-trees are shared).
     """
-    done: dict[int, Any] = {}
-    stack: list[tuple[Any, bool]] = [(tree, False)]
-    while stack:
-        n, ready = stack.pop()
-        if id(n) in done:
-            continue
-        kids = children(n)
-        if kids and not ready:
-            stack.append((n, True))
-            stack.extend((k, False) for k in reversed(kids) if id(k) not in done)
-            continue
-        done[id(n)] = b.rule(n, [done[id(k)] for k in kids], var)
-    return done[id(tree)]
+    return bottom_up(tree, lambda n, kids: b.rule(n, kids, var))
 
 
 # --- dimensions ----------------------------------------------------------------------
@@ -1524,19 +1531,7 @@ def dimension_of(tree: Any, ref_dim: Callable[[Ref], Any], driver: Dim | None = 
     DimensionError
         Where two values of different kinds meet.
     """
-    done: dict[int, Any] = {}
-    stack: list[tuple[Any, bool]] = [(tree, False)]
-    while stack:
-        n, ready = stack.pop()
-        if id(n) in done:
-            continue
-        kids = children(n)
-        if kids and not ready:
-            stack.append((n, True))
-            stack.extend((k, False) for k in reversed(kids) if id(k) not in done)
-            continue
-        done[id(n)] = _dim_rule(n, [done[id(k)] for k in kids], ref_dim, driver)
-    return done[id(tree)]
+    return bottom_up(tree, lambda n, kids: _dim_rule(n, kids, ref_dim, driver))
 
 
 def condition_dim(ref: Ref) -> Dim | None:
