@@ -81,7 +81,9 @@ sweep: {{range: {sweep!r} deg, step: {step!r} deg}}
 """
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(
     a=hs.sampled_from([0.3, 1.0, 2.5]),
     ratio=hs.sampled_from([1.0, 1.3, 1.7, 4.0]),  # ratio 1: a rhombus
@@ -262,7 +264,9 @@ def _kite_B(a: float, b: float, th, sign: float):
     return r * np.cos(th / 2), r * np.sin(th / 2)
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(
     b_over_a=hs.sampled_from([1.2, 2.0, 3.5]),
     start=hs.one_of(
