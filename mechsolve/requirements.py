@@ -45,7 +45,7 @@ import functools
 import math
 import re
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -62,7 +62,7 @@ from .expr import (
     Num,
     Ref,
     Unary,
-    children,
+    bottom_up,
     dimension_of,
     walk,
 )
@@ -77,9 +77,9 @@ from .model.requirement import (
 )
 from .units import UnitError, parse_unit
 
-# (what a requirement is belongs to the model: mechsolve.model.requirement)
-Mechanism = Any
-Results = Any
+if TYPE_CHECKING:  # (what a requirement is belongs to the model: model/requirement.py)
+    from .model import Mechanism
+    from .results import Results
 
 __all__ = [
     "Requirement",
@@ -311,22 +311,16 @@ class _Reducer:
     # -- evaluation -------------------------------------------------------------------
     def value(self, tree) -> Any:
         """The value of a tree: each reduction replaced by its figure, bottom-up."""
-        done: dict[int, Any] = {}
-        stack: list[tuple[Any, bool]] = [(tree, False)]
-        while stack:
-            n, ready = stack.pop()
-            kids = children(n)
-            if kids and not ready:
-                stack.append((n, True))
-                stack.extend((k, False) for k in reversed(kids))
-                continue
-            node = _rebuild(n, [done[id(k)] for k in kids]) if kids else n
+
+        def figure(n, kids: list[Any]) -> Any:
+            node = _rebuild(n, kids) if kids else n
             if isinstance(node, Call) and node.func in REDUCE and len(node.args) == 1:
-                node = Num(self.reduce(node.func, node.args[0]))
-            elif isinstance(node, Call) and node.func == "at" and self.fine is not None:
-                node = Num(self.at(node.args[0], _scalar(_evaluate(node.args[1], self.ctx), "u")))
-            done[id(n)] = node
-        return _evaluate(done[id(tree)], self.ctx)
+                return Num(self.reduce(node.func, node.args[0]))
+            if isinstance(node, Call) and node.func == "at" and self.fine is not None:
+                return Num(self.at(node.args[0], _scalar(_evaluate(node.args[1], self.ctx), "u")))
+            return node
+
+        return _evaluate(bottom_up(tree, figure), self.ctx)
 
     def at(self, arg, x: float) -> float:
         """``arg`` at the driver value ``x``, solved there (next to the nearest solved

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..expr import (
     QUANTITY_DIMS,
@@ -21,7 +21,8 @@ from ..expr import (
 )
 from ..units import UnitError, parse_unit
 
-Mechanism = Any  # mechsolve.model.Mechanism (this module is imported by its parser)
+if TYPE_CHECKING:  # (the model's parser imports this module)
+    from . import Mechanism
 
 FULL_TURN = "full turn"
 _OPS = ("<=", ">=", "==", "!=", "<", ">")
