@@ -9,6 +9,7 @@ from __future__ import annotations
 import sys
 
 from mechsolve.model import schema
+from mechsolve.writers.atomic import write_text
 
 
 def main(argv: list[str]) -> int:
@@ -16,7 +17,7 @@ def main(argv: list[str]) -> int:
         same = schema.SHIPPED.exists() and schema.SHIPPED.read_text("utf-8") == schema.text()
         print(f"{schema.SHIPPED}: {'up to date' if same else 'OUT OF DATE (run this script)'}")
         return 0 if same else 1
-    print(f"wrote {schema.write()}")
+    print(f"wrote {write_text(schema.SHIPPED, schema.text())}")
     return 0
 
 

@@ -7,6 +7,7 @@ Every import between mechsolve's modules counts (at the top, inside functions, a
 from __future__ import annotations
 
 import ast
+import os
 from pathlib import Path
 
 import mechsolve
@@ -110,3 +111,19 @@ def test_the_solver_core_does_not_reach_up_to_results_or_writers():
                     todo.append(d)
         bad = {d for d in seen if d.startswith(("mechsolve.results", "mechsolve.writers"))}
         assert not bad, (mod, bad)
+
+
+def test_import_linter_contracts():
+    """The layer contracts of pyproject.toml ([tool.importlinter]) hold: import-linter,
+    run on the source tree (imports inside functions and under TYPE_CHECKING count)."""
+    from importlinter.cli import lint_imports
+
+    root = PKG.parent
+    assert (root / "pyproject.toml").exists(), "run from a checkout"
+    here = os.getcwd()
+    os.chdir(root)
+    try:
+        code = lint_imports(config_filename=str(root / "pyproject.toml"), no_cache=True)
+    finally:
+        os.chdir(here)
+    assert code == 0, "import-linter: a layer contract is broken (run lint-imports)"

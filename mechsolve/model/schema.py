@@ -222,10 +222,3 @@ def build() -> dict[str, Any]:
 def text() -> str:
     """The schema as the shipped file has it."""
     return json.dumps(build(), indent=2, ensure_ascii=False) + "\n"
-
-
-def write(path: str | Path = SHIPPED) -> Path:
-    """Write the schema to ``path`` (default: the package's copy)."""
-    from ..writers.atomic import write_text
-
-    return write_text(Path(path), text())

@@ -1,0 +1,1 @@
+"""Solvers of the core: Newton-Raphson on a group's equations, the force analysis."""
