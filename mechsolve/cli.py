@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import click
 
@@ -439,6 +440,27 @@ def check(file: Path, variant, draw) -> None:
         _fail(exc)
 
 
+def _bench_tool() -> ModuleType:
+    """The benchmark package ``mechsolve_bench``, imported here and nowhere else in mechsolve.
+
+    The benchmarks (their cases, the hand-written references, the peers' models) are a
+    tool beside the solver, not a part of it: this lazy import is the one edge from
+    mechsolve to them (tests/test_issue24_bench.py checks it), so that no solver module
+    loads them. They are installed with mechsolve; if they are missing, say how to get them.
+    """
+    try:
+        import mechsolve_bench
+    except ModuleNotFoundError as exc:
+        if exc.name != "mechsolve_bench":
+            raise  # something the bench imports is missing: a bug, not the install
+        raise InputError(
+            "mechsolve bench needs the benchmark package mechsolve_bench, which is not "
+            "installed: pip install 'mechsolve[bench]' (from a checkout of the "
+            "repository: pip install '.[bench]'; the extra adds the peers pylinkage and exudyn)"
+        ) from None
+    return mechsolve_bench
+
+
 @main.command()
 @click.option("--quick", is_flag=True, help="Few repetitions and small sizes (as CI runs it).")
 @click.option(
@@ -478,8 +500,7 @@ def bench(quick, cases, plot) -> None:
     Results measured on this project's machine are in benchmarks/README.md.
     """
     try:
-        from . import bench as b
-
+        b = _bench_tool()
         done = b.run(quick=quick, cases=list(cases) or None, echo=click.echo)
         if plot is not None:
             b.plot(done, plot)

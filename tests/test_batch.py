@@ -10,11 +10,11 @@ import pytest
 
 import mechsolve as ms
 from mechsolve.batch import solve_designs
-from mechsolve.bench.fourbar_batch import kinematics, kinetostatics
-from mechsolve.bench.study import _FOURBAR
 from mechsolve.errors import MechsolveError
 from mechsolve.model.source import load_text
 from mechsolve.study.designs import make_study
+from mechsolve_bench.fourbar_batch import kinematics, kinetostatics
+from mechsolve_bench.study import _FOURBAR
 
 from conftest import MECH
 

@@ -129,7 +129,7 @@ def test_missing_peers_are_skipped_cleanly(monkeypatch):
     whether they are installed or not) the peers case says so and skips them."""
     import sys
 
-    from mechsolve import bench
+    import mechsolve_bench as bench
 
     monkeypatch.setitem(sys.modules, "pylinkage", None)  # import raises ImportError
     monkeypatch.setitem(sys.modules, "exudyn", None)
@@ -143,9 +143,9 @@ def test_bench_data_is_package_data(tmp_path, monkeypatch):
     from a mechanisms/ folder beside the current directory or the repository."""
     from importlib import resources
 
-    from mechsolve import bench
+    import mechsolve_bench as bench
 
-    data = resources.files("mechsolve.bench") / "data"
+    data = resources.files("mechsolve_bench") / "data"
     assert {"crane.yaml", "fourbar.yaml"} <= {p.name for p in data.iterdir()}
     monkeypatch.chdir(tmp_path)  # no mechanisms/ here
     mech = bench._crane_mech(36, masses=True)
@@ -157,11 +157,11 @@ def test_bench_data_is_package_data(tmp_path, monkeypatch):
 @pytest.mark.parametrize("name", ["crane.yaml", "fourbar.yaml", "motor-linkage.yaml"])
 def test_bench_data_matches_the_examples(name):
     """The bench's copies are the examples of mechanisms/ (update both together)."""
-    from mechsolve import bench
+    import mechsolve_bench as bench
 
     ours = bench.case_file(name).read_text(encoding="utf-8")
     assert ours == (ROOT / "mechanisms" / name).read_text(encoding="utf-8"), (
-        f"mechsolve/bench/data/{name} differs from mechanisms/{name}: copy it over"
+        f"mechsolve_bench/data/{name} differs from mechanisms/{name}: copy it over"
     )
 
 
@@ -174,9 +174,8 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
     src.mkdir()
     for name in ("pyproject.toml", "README.md"):
         shutil.copy(ROOT / name, src / name)
-    shutil.copytree(
-        ROOT / "mechsolve", src / "mechsolve", ignore=shutil.ignore_patterns("__pycache__")
-    )
+    for pkg in ("mechsolve", "mechsolve_bench"):  # the solver and the benchmarks beside it
+        shutil.copytree(ROOT / pkg, src / pkg, ignore=shutil.ignore_patterns("__pycache__"))
     site = tmp_path / "site"
     subprocess.run(
         [sys.executable, "-c", "import setuptools; setuptools.setup()", "-q", "build_py"]
@@ -186,7 +185,8 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
         capture_output=True,
         timeout=300,
     )
-    assert (site / "mechsolve" / "bench" / "data" / "crane.yaml").is_file()
+    assert (site / "mechsolve_bench" / "data" / "crane.yaml").is_file()
+    assert not (site / "mechsolve" / "bench").exists()  # the solver package holds no bench
     run_dir = tmp_path / "elsewhere"
     run_dir.mkdir()
     env = dict(os.environ, PYTHONPATH=str(site))
@@ -194,8 +194,8 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
         [
             sys.executable,
             "-c",
-            "import mechsolve, sys; print(mechsolve.__file__); "
-            "from mechsolve.cli import main; sys.exit(main())",
+            "import mechsolve, mechsolve_bench, sys; print(mechsolve.__file__); "
+            "print(mechsolve_bench.__file__); from mechsolve.cli import main; sys.exit(main())",
         ]
         + ["bench", "--quick", "--case", "crane-kinematics"],
         capture_output=True,
@@ -205,7 +205,9 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
         timeout=600,
     )
     assert p.returncode == 0, p.stderr
-    assert p.stdout.splitlines()[0].startswith(str(site))  # the installed copy ran
+    # the installed copies ran, the solver's and the bench's
+    assert p.stdout.splitlines()[0].startswith(str(site))
+    assert p.stdout.splitlines()[1].startswith(str(site))
     assert "skipped" not in p.stdout
     assert "ratio mechsolve (whole call) / closed form:" in _section(p.stdout, "crane-kinematics")
 
@@ -224,7 +226,7 @@ SEED004_MAX_OMEGA_FINE = 69.385
 
 @pytest.fixture(scope="module")
 def motor_linkage():
-    from mechsolve import bench
+    import mechsolve_bench as bench
 
     return bench.load_case("motor-linkage.yaml")
 
@@ -235,7 +237,7 @@ def test_exudyn_seed004_agrees_on_max_omega(motor_linkage):
     gravity translated from the YAML model) reaches the seed's max omega up to its
     second-order integrator's error, and that difference shrinks with the step as h^2:
     a model mismatch (a wrong mass, inertia, load or joint) would not shrink."""
-    from mechsolve.bench import peers
+    from mechsolve_bench import peers
 
     coarse = peers.exudyn_seed004(motor_linkage, repeats=1)
     fine = peers.exudyn_seed004(motor_linkage, h=0.0005, repeats=1)
@@ -258,7 +260,7 @@ def test_exudyn_seed004_user_function_motor_law(motor_linkage):
     """The motor law M0 - nu0 omega evaluated by a Python load user function at the
     crank's angular velocity gives the same motion as exudyn's compiled torque plus
     rotational damper (and the slider's damper both ways)."""
-    from mechsolve.bench import peers
+    from mechsolve_bench import peers
 
     a = peers.exudyn_seed004(motor_linkage, loads="native", repeats=1)
     b = peers.exudyn_seed004(motor_linkage, loads="user functions", repeats=1)
@@ -270,7 +272,7 @@ def test_exudyn_seed004_user_function_motor_law(motor_linkage):
 def test_exudyn_seed004_reports_errors_as_dicts(motor_linkage):
     import copy
 
-    from mechsolve.bench import peers
+    from mechsolve_bench import peers
 
     mech = copy.deepcopy(motor_linkage)
     mech.motor.kind = "table"
@@ -280,7 +282,7 @@ def test_exudyn_seed004_reports_errors_as_dicts(motor_linkage):
 
 
 def test_exudyn_seed004_without_exudyn(monkeypatch, motor_linkage):
-    from mechsolve.bench import peers
+    from mechsolve_bench import peers
 
     monkeypatch.setattr(peers, "_import", lambda name: None)
     assert peers.exudyn_seed004(motor_linkage) is None

@@ -2,7 +2,7 @@
 
 The closed-form Assur groups (``method: auto``), Newton-Raphson per group
 (``split-newton``) and on the whole system (``newton``, batched and sequential) must give
-the same sweep; the benchmark's hand-written references (``mechsolve.bench.references``,
+the same sweep; the benchmark's hand-written references (``mechsolve_bench.references``,
 written independently of the solver) must agree with the fast path to the accuracy the
 benchmark reports: positions within 1e-12 relative, velocities and accelerations within
 1e-10, forces within 1e-9. No timings here: ``mechsolve bench`` measures those.
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.bench import _crane_mech, chain_yaml, fourbar_yaml, wrap
-from mechsolve.bench import references as R
 from mechsolve.sweep import Analysis
+from mechsolve_bench import _crane_mech, chain_yaml, fourbar_yaml, wrap
+from mechsolve_bench import references as R
 
 from conftest import MECH
 

@@ -1,4 +1,4 @@
-"""The hand-written batch reference of the study's four-bar (mechsolve.bench.fourbar_batch):
+"""The hand-written batch reference of the study's four-bar (mechsolve_bench.fourbar_batch):
 checked on its own (loop closure, rates by central differences, the power balance), then
 against mechsolve's solve of the same file for a few designs computed in one batch."""
 
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.bench.fourbar_batch import kinematics, kinetostatics
-from mechsolve.bench.study import _FOURBAR
+from mechsolve_bench.fourbar_batch import kinematics, kinetostatics
+from mechsolve_bench.study import _FOURBAR
 
 C, D = 0.059, 0.0875  # rocker and ground (m)
 M2, M3, M4 = 0.05, 0.2, 0.11  # kg

@@ -1,7 +1,7 @@
 """A hand-written numpy reference for a batch of four-bar crank-rockers: kinematics and
 kinetostatics of D designs at P positions at once, every result an array of shape (D, P).
 
-The mechanism is the design study's (``_FOURBAR`` in :mod:`mechsolve.bench.study`):
+The mechanism is the design study's (``_FOURBAR`` in :mod:`mechsolve_bench.study`):
 ground pivots O2 = (0, 0) and O4 = (d, 0); the crank O2-A (length a) driven at the angle
 u with the speed w2 and the acceleration al2; the coupler A-B (length b) with the point
 P at the distance ``p_len`` from A and the angle ``p_ang`` from A->B (counter-clockwise);

@@ -3,7 +3,7 @@
 Each case prints a table: the setting (a hand-written reference, or mechsolve with a
 given method), its median wall time over several interleaved repetitions, and its
 largest error against the reference; then the ratio of mechsolve's time to the closed
-form's. The references (:mod:`mechsolve.bench.references`) are written independently of
+form's. The references (:mod:`mechsolve_bench.references`) are written independently of
 the solver. Timings are medians of runs alternating between the reference and
 mechsolve, so that the machine's state affects both alike. Nothing here is asserted:
 the numbers are reported, and recorded in ``benchmarks/README.md``.
@@ -12,6 +12,12 @@ Cases: four-bar and crane kinematics and kinetostatics (3600 positions), growth 
 number of loops of a chain and with the number of positions, a streamed sweep of a
 million positions with its peak memory, start-up time of the command line, and, when
 they are installed, the peers pylinkage and exudyn.
+
+This is a package of its own, beside the solver: it imports mechsolve, and nothing in
+mechsolve imports it except the ``mechsolve bench`` command (a lazy import inside that
+command), so that the solver's import graph holds no peer's model and no hand-written
+reference. It is installed with mechsolve (the same distribution); the ``bench`` extra
+adds the peers (``pip install 'mechsolve[bench]'``).
 """
 
 from __future__ import annotations
@@ -33,7 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..writers.plots import save_figure
+from mechsolve.writers.plots import save_figure
+
 from . import references as R
 
 
@@ -505,14 +512,14 @@ def _crane_mech(n: int, masses: bool):
 
 def case_file(name: str) -> Traversable:
     """A mechanism file of the benchmarks, shipped inside the package
-    (``mechsolve/bench/data/``, copies of the examples in ``mechanisms/``), so that an
+    (``mechsolve_bench/data/``, copies of the examples in ``mechanisms/``), so that an
     installed mechsolve benchmarks every case wherever it is run from."""
     return resources.files(__name__) / "data" / name
 
 
 def load_case(name: str):
     """The benchmark's mechanism ``name`` (``"crane.yaml"``), loaded from package data."""
-    from .. import api
+    from mechsolve import api
 
     return api.loads(case_file(name).read_text(encoding="utf-8"), file=name)
 

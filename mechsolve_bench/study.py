@@ -8,7 +8,7 @@ kinematics and forces). Measured in one run:
   as one computation over design x position;
 * ``mechsolve.solve`` called once per design (what a user's loop over designs does);
 * a hand-written numpy closed form of the same designs' kinematics and kinetostatics,
-  vectorised over designs and positions (:mod:`mechsolve.bench.fourbar_batch`, written
+  vectorised over designs and positions (:mod:`mechsolve_bench.fourbar_batch`, written
   independently of the solver), with the batch's error against it;
 * the study's executor (each design's row: its figures, exact limit positions and
   work included) in this process, on the local pool with 1 and 2 workers, and on a
@@ -55,8 +55,8 @@ def _grid(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _study(n: int):
-    from ..model.source import load_text
-    from ..study.designs import make_study
+    from mechsolve.model.source import load_text
+    from mechsolve.study.designs import make_study
 
     a, b = _grid(n)
     opts = [
@@ -79,9 +79,9 @@ def case_study(quick: bool = False, designs: int | None = None):
     """Designs per second: the batch, separate solves, the hand-written closed form, and
     the study's executors (see the module's docstring)."""
     import mechsolve as ms
+    from mechsolve.batch import solve_designs
+    from mechsolve.study import execute as ex
 
-    from ..batch import solve_designs
-    from ..study import execute as ex
     from . import Case, Row
     from .fourbar_batch import kinematics, kinetostatics
 
