@@ -85,7 +85,7 @@ SEL = {
         "tests/test_study_exec.py",
         "tests/test_issue23_faults.py",
     ],
-    "mechsolve/polygons.py": ["tests/test_polygons.py", "tests/test_issue23_faults.py"],
+    "mechsolve/polygons": ["tests/test_polygons.py", "tests/test_issue23_faults.py"],
 }
 EXTRA = ["tests/test_mutants.py"]
 TIMEOUT = 600  # s per mutant
