@@ -71,7 +71,7 @@ SEL = {
         "tests/test_synth_cli.py",
         "tests/test_issue23_faults.py",
     ],
-    "mechsolve/dynamics.py": ["tests/test_dynamics.py"],
+    "mechsolve/dynamics": ["tests/test_dynamics.py"],
     "mechsolve/flywheel.py": ["tests/test_dynamics.py", "tests/test_issue23_faults.py"],
     "mechsolve/requirements.py": [
         "tests/test_requirements.py",
