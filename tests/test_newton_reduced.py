@@ -17,7 +17,7 @@ import pytest
 
 import mechsolve as ms
 from mechsolve.groups import NewtonGroup
-from mechsolve.groups.generic import _rowmax_abs, _solve_small
+from mechsolve.groups.reduced import _rowmax_abs, _solve_small
 from mechsolve.sweep import Analysis
 
 A, B, C, D = 0.0265, 0.1056, 0.059, 0.0875  # crank, coupler, rocker, ground (m)
@@ -239,7 +239,7 @@ def test_coarse_continuation_in_floats(monkeypatch, max_jump):
     along the tangent, every step is plain (no substeps); with a jump limit small enough
     that steps are not plain, those go through the general step (substeps) from the
     same history. Either way the whole turn matches the circles."""
-    from mechsolve.groups import generic
+    from mechsolve.groups import generic, newton_batched
 
     calls = []
     advance = NewtonGroup._advance
@@ -250,7 +250,9 @@ def test_coarse_continuation_in_floats(monkeypatch, max_jump):
 
     monkeypatch.setattr(NewtonGroup, "_advance", counting)
     if max_jump is not None:
+        # the continuation's step limit, where the sequential and the batched sweeps read it
         monkeypatch.setattr(generic, "MAX_JUMP", max_jump)
+        monkeypatch.setattr(newton_batched, "MAX_JUMP", max_jump)
     n = 3600
     an = Analysis(ms.loads(_fourbar(n)), "split-newton")
     u0 = an.start_value()

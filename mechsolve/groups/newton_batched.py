@@ -1,0 +1,372 @@
+"""A Newton group's sweep refined in one batch: a coarse continuation predicts every
+position, then Newton iterates on all of them at once (see :mod:`.generic`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..state import State
+from .base import Drive
+from .newton_common import COARSE, MAX_JUMP, _extrapolate_floats
+from .reduced import _rowmax_abs
+
+
+class BatchedSweep:
+    """Methods of :class:`~mechsolve.groups.generic.NewtonGroup`: see the module
+    docstring."""
+
+    def sweep_batched(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """Predict every position from a coarse continuation, then refine all positions
+        at once by batched Newton-Raphson.
+
+        1. every k-th position (about :data:`COARSE` of them) is solved by continuation
+           (:meth:`sweep_sequential`, with its jump checks and substeps);
+        2. the group's rates dq/du there (a linear solve) give a cubic Hermite
+           prediction of every position in between;
+        3. Newton-Raphson iterates on all positions together (one batched linear solve per
+           iteration); each position must converge and stay within :data:`MAX_JUMP` of
+           its prediction.
+
+        Returns None when any of this fails, so that the caller marches sequentially.
+        """
+        n = st.n
+        k = max(1, n // COARSE)
+        coarse = np.unique(np.r_[np.arange(0, n, k), n - 1])
+        sub = st.take(coarse)
+        dsub = drive.take(coarse)
+        # the coarse pass counts its own positions; prefix() wants the sweep's sample
+        sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
+        if self.red is not None and self.red.sub.nb <= 3:
+            itc = self._coarse_floats(sub, dsub, q_start, sub_prefix)
+            if itc is None:
+                return None
+        else:
+            okc, itc, _ = self.sweep_sequential(
+                sub, dsub, q_start, np.ones(len(coarse), bool), prefix=sub_prefix
+            )
+            if not okc.all():
+                return None
+        self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
+        qc = self._q_rows(sub)
+        dqc = self._q_rows(sub, rates=True)
+        if not np.all(np.isfinite(dqc)):
+            return None
+        # cubic Hermite between coarse positions, in the driver coordinate: each
+        # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
+        # segment are consecutive (the last position belongs to the last segment), so its
+        # coefficients are repeated rather than gathered (a fancy index costs 6x more)
+        u = drive.u
+        counts = np.diff(coarse)
+        counts[-1] += 1
+        uc = u[coarse]
+        hc = (uc[1:] - uc[:-1])[:, None]
+        q0, q1 = qc[:-1], qc[1:]
+        t = ((u - np.repeat(uc[:-1], counts)) / np.repeat(hc[:, 0], counts))[:, None]
+        if self.predictor == "linear":  # first order: the chord between coarse positions
+            pred = np.repeat(q1 - q0, counts, axis=0)
+            pred *= t
+            pred += np.repeat(q0, counts, axis=0)
+        else:  # q0 + t (m0 + t (3 (q1 - q0) - 2 m0 - m1 + t (2 (q0 - q1) + m0 + m1)))
+            m0, m1 = hc * dqc[:-1], hc * dqc[1:]
+            dq = q1 - q0
+            c2 = 3 * dq - 2 * m0 - m1
+            c3 = m0 + m1 - 2 * dq
+            pred = np.repeat(c3, counts, axis=0)
+            for c in (c2, m0, q0):
+                pred *= t
+                pred += np.repeat(c, counts, axis=0)
+        if self.red is not None:
+            iters = self._refine_angles(st, u, pred, coarse, qc)
+            if iters is None:
+                return None
+            q = self._q_rows(st)
+        else:
+            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
+            if q is None:
+                return None
+        d = np.abs(q - pred)
+        d[:, 0::3] /= self.scale
+        d[:, 1::3] /= self.scale
+        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
+            return None
+        if self.red is None:
+            self._set_q_rows_into(st, q)
+        iters[coarse] = itc
+        return np.ones(n, bool), iters, "newton (batched)"
+
+    def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
+        group, its plain steps in floats: a step that converges by Newton from the
+        extrapolated prediction and moves less than :data:`MAX_JUMP` from it is taken as
+        the general code would take it; any other goes through :meth:`_advance` (its
+        substeps, scipy, its error) with the same history. Returns the iterations per
+        position (the poses written into ``st``), or None when a position fails."""
+        red = self.red
+        sub = red.sub
+        Kall = red.known(st)
+        u = drive.u
+        Kr, thp = red.reduce(red.with_driver(Kall[0], u))
+        Kr, thp = Kr.tolist(), thp.tolist()
+        Px, Py = Kall[1].tolist(), Kall[2].tolist()
+        free, fixed, nb = red.free.tolist(), red.fixed.tolist(), red.nb
+        inv_scale = 1.0 / self.scale
+        hu: list[float] = []
+        hq: list[list[float]] = []
+        q_pred = [float(v) for v in q_start]
+        iters = np.zeros(st.n, int)
+        th = [0.0] * nb
+        jw = [1.0 if j % 3 == 2 else inv_scale for j in range(self.n)]  # the jump's weights
+        out: list[list[float]] = []
+        atol, its = self.atol, self.max_iterations
+        for i, ui in enumerate(u.tolist()):
+            if len(hq) == 1:  # the first step: along the tangent, not from the start's pose
+                q_pred = self._tangent_floats(hq[0], Kr[i], thp[i], Px[i], Py[i])
+            elif hq:
+                q_pred = _extrapolate_floats(hu, hq, ui)
+            thf, plain, it, _, _ = sub.newton_list(
+                Kr[i], [q_pred[3 * k + 2] for k in free], atol, its
+            )
+            if plain:
+                for j, k in enumerate(free):
+                    th[k] = thf[j]
+                for j, k in enumerate(fixed):
+                    th[k] = thp[i][j]
+                xs, ys = red.poses_one(th, Px[i], Py[i])
+                q = [v for k in range(nb) for v in (xs[k], ys[k], th[k])]
+                if hq:
+                    jump = max(abs(a - b) * w for a, b, w in zip(q, q_pred, jw))
+                    plain = jump <= MAX_JUMP
+            if not plain:  # the general step, as sweep_sequential takes it
+                Ki = [k[i : i + 1] for k in Kall]
+                if hq:
+                    hqa = [np.array(v) for v in hq]
+                    qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
+                else:
+                    qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+                    good = stats.converged
+                if not good:
+                    return None
+                q = qa.tolist()
+                it = stats.iterations
+            out.append(q)
+            iters[i] = it
+            if len(hq) == 3:
+                hu, hq = [hu[1], hu[2], ui], [hq[1], hq[2], q]
+            else:
+                hu, hq = hu + [ui], hq + [q]
+        self._set_q_rows(st, np.array(out))
+        return iters
+
+    def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
+        """A prediction of the next position from the pose ``q0`` (body coordinates) of
+        the previous one: the first Newton iterate from ``q0`` with the next position's
+        constant part ``Kr`` (the tangent step, ``-F_theta^-1 dF``, with the driver's
+        increment of the solved bodies' terms), the frames placed from those angles.
+        ``q0`` itself when that step cannot be taken (an exactly singular Jacobian)."""
+        red = self.red
+        free, fixed = red.free.tolist(), red.fixed.tolist()
+        th0 = [q0[3 * k + 2] for k in free]
+        thf = red.sub.newton_list(Kr, th0, self.atol, 1)[0]
+        th = [q0[3 * k + 2] for k in range(red.nb)]
+        for j, k in enumerate(free):
+            th[k] = thf[j]
+        for j, k in enumerate(fixed):
+            th[k] = thp[j]
+        if not all(math.isfinite(v) for v in th):
+            return list(q0)
+        xs, ys = red.poses_one(th, Px, Py)
+        return [v for k in range(red.nb) for v in (xs[k], ys[k], th[k])]
+
+    def _refine_angles(self, st: State, u, pred, coarse, qc):
+        """Batched Newton in the links' angles from the prediction; the poses are written
+        into ``st``. Returns the iterations per position, or None."""
+        red = self.red
+        sub = red.sub
+        n = st.n
+        K, Px, Py = red.known(st)
+        Kr, thp = red.reduce(red.with_driver(K, u))
+        th = pred[:, 2::3][:, red.free]
+        th[coarse] = qc[:, 2::3][:, red.free]
+        iters = np.zeros(n, int)
+        todo = np.ones(n, bool)
+        todo[coarse] = False
+        if sub.nb == 0:
+            todo[:] = False
+        if sub.nb == 2:
+            if not self._refine2(th, Kr, iters, todo):
+                return None
+            self._put_angles(st, red.join(th, thp), Px, Py)
+            return iters
+        last = np.full(n, np.inf)
+        J = np.empty((n, sub.nb, sub.nb))
+        tol = 1e-3 * self.atol
+        for _ in range(self.max_iterations):
+            count = np.count_nonzero(todo)
+            if count == 0:
+                break
+            if 2 * count >= n:  # most positions still iterate: whole arrays, masked
+                idx, t, Kk, lastk = None, th, Kr, last
+            else:
+                idx = np.flatnonzero(todo)
+                t, Kk, lastk = th[idx], Kr[idx], last[idx]
+            C, S = np.cos(t), np.sin(t)
+            f = sub.residual(t, C, S, Kk)
+            r = _rowmax_abs(f)
+            if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
+                dq = sub.step_small(C, S, f)
+            else:
+                Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
+                try:
+                    dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
+                except np.linalg.LinAlgError:
+                    return None
+            step = _rowmax_abs(dq)
+            # as below: converged when the residual is small and the step tiny or no
+            # longer shrinking (the rounding level); that last step is not taken
+            done = (r <= self.atol) & ((step <= tol) | (step >= lastk))
+            take = ~done | (step <= tol)
+            if idx is None:
+                take &= todo
+                th += np.where(take[:, None], dq, 0.0)
+                iters += todo
+                last = np.where(todo, step, last)
+                todo &= ~done
+            else:
+                th[idx[take]] += dq[take]
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+        if todo.any() or not np.all(np.isfinite(th)):
+            return None
+        self._put_angles(st, red.join(th, thp), Px, Py)
+        return iters
+
+    def _refine2(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo: np.ndarray):
+        """:meth:`_refine_angles`'s iterations for two angles (the four-bar's loop), on
+        each angle's own 1-D array: the same residual, step (by the adjugate), tests and
+        updates, without the (N, 2) products and reductions, which cost more than the
+        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place; False when a
+        position does not converge."""
+        n = th.shape[0]
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red.sub._rows
+        nd = self.red.sub.nd
+        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
+        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        last = np.full(n, np.inf)
+        tol = 1e-3 * self.atol
+        cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
+        for _ in range(self.max_iterations):
+            count = np.count_nonzero(todo)
+            if count == 0:
+                break
+            if 2 * count >= n:  # most positions still iterate: whole arrays, masked
+                idx, t0, t1, k0, k1, lastk = None, x0, x1, K0, K1, last
+            else:
+                idx = np.flatnonzero(todo)
+                t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
+            C0, S0, C1, S1 = cos(t0), sin(t0), cos(t1), sin(t1)
+            f0 = k0 + a1 * C0
+            f0 += a2 * S0
+            f0 += b1 * C1
+            f0 += b2 * S1
+            f1 = k1 + c1 * C0
+            f1 += c2 * S0
+            f1 += d1 * C1
+            f1 += d2 * S1
+            ja = a2 * C0
+            ja -= a1 * S0
+            jb = b2 * C1
+            jb -= b1 * S1
+            jc = c2 * C0
+            jc -= c1 * S0
+            jd = d2 * C1
+            jd -= d1 * S1
+            if nd:
+                f0 += a3 * t0
+                f0 += b3 * t1
+                f1 += c3 * t0
+                f1 += d3 * t1
+                ja += a3
+                jb += b3
+                jc += c3
+                jd += d3
+            r = maximum(absolute(f0), absolute(f1))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                det = ja * jd
+                det -= jb * jc
+                dq0 = jb * f1
+                dq0 -= jd * f0
+                dq0 /= det
+                dq1 = jc * f0
+                dq1 -= ja * f1
+                dq1 /= det
+            step = maximum(absolute(dq0), absolute(dq1))
+            step[det == 0] = np.nan  # exactly singular: not converged, fails below
+            # as _refine_angles: converged when the residual is small and the step tiny
+            # or no longer shrinking (the rounding level); that last step is not taken
+            small = step <= tol
+            done = (r <= self.atol) & (small | (step >= lastk))
+            take = ~done | small
+            if idx is None:
+                take &= todo
+                x0 += np.where(take, dq0, 0.0)
+                x1 += np.where(take, dq1, 0.0)
+                iters += todo
+                last = np.where(todo, step, last)
+                todo &= ~done
+            else:
+                it = idx[take]
+                x0[it] += dq0[take]
+                x1[it] += dq1[take]
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+        th[:, 0], th[:, 1] = x0, x1
+        return not todo.any() and bool(np.isfinite(x0).all() and np.isfinite(x1).all())
+
+    def _refine_bodies(self, st: State, u, pred, coarse, qc):
+        """Batched Newton in body coordinates from the prediction. Returns ``(q,
+        iterations)``, or ``(None, None)``."""
+        n = st.n
+        q = pred.copy()
+        iters = np.zeros(n, int)
+        todo = np.ones(n, bool)
+        todo[coarse] = False
+        q[coarse] = qc
+        last = np.full(n, np.inf)
+        for _ in range(self.max_iterations):
+            idx = np.flatnonzero(todo)
+            if idx.size == 0:
+                break
+            s1 = st.take(idx)
+            self._set_q_rows(s1, q[idx])
+            f = self.residual(s1, u[idx]).T  # (k, m)
+            r = np.max(np.abs(f), axis=1)
+            J = self.jacobian(s1)
+            try:
+                dq = np.linalg.solve(J, -f[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                return None, None
+            step = np.max(np.abs(dq), axis=1)
+            # converged: the residual was already small and the step tiny, or no longer
+            # shrinking (the rounding level); the last step is then not taken
+            done = (r <= self.atol) & ((step <= 1e-3 * self.atol) | (step >= last[idx]))
+            take = ~done | (step <= 1e-3 * self.atol)
+            q[idx[take]] += dq[take]
+            iters[idx] += 1
+            last[idx] = step
+            todo[idx[done]] = False
+        if todo.any():
+            return None, None
+        return q, iters
+
+    def _set_q_rows(self, st1: State, q: np.ndarray) -> None:
+        for b, k in self.col.items():
+            st1.x[b] = q[:, 3 * k]
+            st1.y[b] = q[:, 3 * k + 1]
+            st1.set_angle(b, q[:, 3 * k + 2])
+
+    def _set_q_rows_into(self, st: State, q: np.ndarray) -> None:
+        self._set_q_rows(st, q)

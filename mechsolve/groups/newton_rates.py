@@ -1,0 +1,200 @@
+"""A Newton group's velocities and accelerations: its block of the differentiated
+constraints, solved for all positions at once, and the bound of its conditioning."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..constraints import RevoluteConstraint
+from ..state import State
+from .base import Drive
+
+
+class NewtonRates:
+    """Methods of :class:`~mechsolve.groups.generic.NewtonGroup`: see the module
+    docstring."""
+
+    # -- derivatives --------------------------------------------------------------------
+    def _rhs(self, st: State, drive: Drive, order: int) -> np.ndarray:
+        rows = []
+        for c in self.constraints:
+            if order == 1:
+                r = c.nu(st, drive.ud)
+                vel = (st.vx, st.vy, st.w)
+            else:
+                r = c.gamma(st, drive.udd)
+                vel = (st.ax, st.ay, st.al)
+            r = np.array(r, dtype=float)
+            for body, blk in c.jacobian(st).items():
+                if body in self.col:
+                    continue
+                r -= blk[:, 0] * vel[0][body] + blk[:, 1] * vel[1][body] + blk[:, 2] * vel[2][body]
+            rows.append(r)
+        return np.concatenate(rows, axis=0).T  # (N, m)
+
+    def _solve_batch(self, st: State, rhs: np.ndarray) -> np.ndarray:
+        J = self.jacobian(st)
+        out = np.full((st.n, self.n), np.nan)
+        good = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(rhs), axis=1)
+        if np.any(good):
+            if self.m == self.n:
+                try:
+                    out[good] = np.linalg.solve(J[good], rhs[good][..., None])[..., 0]
+                except np.linalg.LinAlgError:
+                    for i in np.flatnonzero(good):
+                        out[i] = np.linalg.lstsq(J[i], rhs[i], rcond=None)[0]
+            else:
+                for i in np.flatnonzero(good):
+                    out[i] = np.linalg.lstsq(J[i], rhs[i], rcond=None)[0]
+        return out
+
+    # revolute groups: the rates of the links' angles, the frames' from the tree
+    def _angle_inverse(self, st: State) -> np.ndarray:
+        """The inverse of ``F_theta`` at every position of ``st`` (NaN where it is not
+        finite or exactly singular), computed once for the velocities, accelerations and
+        the singularity measure of the same poses."""
+        red = self.red
+        if red.sub.nb == 0:  # every angle fixed by a driver: a constant signed permutation
+            return np.broadcast_to(red.inv_fixed, (st.n, red.nb, red.nb))
+        th = st.th[self.bodies].T
+        c = self._inv_cache
+        if (
+            c is not None
+            and c[0] == st.token
+            and c[1].shape == th.shape
+            and (np.array_equal(c[1], th) or np.array_equal(c[1], th, equal_nan=True))
+        ):  # the exact test first: the one with NaN costs ~15 us on thousands
+            return c[2]
+        inv = red.inverse(st.c[self.bodies].T, st.s[self.bodies].T)
+        self._inv_cache = (st.token, th, inv)
+        return inv
+
+    def _angle_solve(self, st: State, rhs: np.ndarray) -> np.ndarray:
+        red = self.red
+        if red.sub.nb == 0:  # every angle fixed by a driver: theta_k' = sign (u' - K_d')
+            out = np.empty((rhs.shape[0], red.nb))
+            out[:, red.fixed] = rhs[:, red.frows] * red.fsign
+            return out
+        inv = self._angle_inverse(st)
+        out = inv[:, :, 0] * rhs[:, None, 0]  # inv @ rhs, elementwise: small matrices
+        for j in range(1, rhs.shape[1]):
+            out += inv[:, :, j] * rhs[:, None, j]
+        # exactly singular positions: least squares, as a singular body block would get
+        sing = np.isnan(inv[:, 0, 0])
+        for i in np.flatnonzero(sing & np.all(np.isfinite(rhs), axis=1)) if sing.any() else ():
+            t = st.th[self.bodies, i][None]
+            J = self.red.jacobian(np.cos(t), np.sin(t))[0]
+            if np.all(np.isfinite(J)):
+                out[i] = np.linalg.lstsq(J, rhs[i], rcond=None)[0]
+        return out
+
+    def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
+        red = self.red
+        nb = red.nb
+        K, Px, Py = red.known(st, order)  # fresh arrays: the right-hand side in place
+        if red.nd:  # the driver values' rates off the drivers' equations
+            K[:, 2 * red.ne :] -= (drive.ud if order == 1 else drive.udd)[:, None]
+        rhs = np.negative(K, out=K)
+        C, S = st.c[self.bodies].T, st.s[self.bodies].T
+        # the frames' rates: r_b = P_b + sum_k A(theta_k) W[b, k] differentiated, with
+        # A' = w A(theta + 90 deg) and A'' = al A(theta + 90 deg) - w^2 A: both are
+        # P @ Wr[:nb] + Q @ Wr[nb:], P = S w, Q = C w (velocities) or P = S al + C w^2,
+        # Q = C al - S w^2
+        if order == 1:
+            w = self._angle_solve(st, rhs)
+            P, Q = S * w, C * w
+            out = (st.vx, st.vy, st.w)
+        else:
+            wd = st.w[self.bodies].T
+            w2 = wd * wd
+            if red.ne:  # the closing joints' centripetal terms (none for drivers)
+                rhs += red.accel_terms(C, S, w2)
+            w = self._angle_solve(st, rhs)
+            P, Q = S * w, C * w
+            P += C * w2
+            Q -= S * w2
+            out = (st.ax, st.ay, st.al)
+        v = P @ red.Wr[:nb]
+        v += Q @ red.Wr[nb:]
+        vx, vy = Px + v[:, :nb], Py + v[:, nb:]
+        for b, k in self.col.items():
+            out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
+
+    def rcond_bound(self, st: State) -> np.ndarray | None:
+        """A lower bound of :func:`mechsolve.conditioning.rcond` of the group's block of
+        Phi_q at every position, from the inverse of ``F_theta`` (revolute groups; None
+        for others).
+
+        With the group's block ordered as ``[[T_P, T_th], [L_P, L_th]]`` (the tree's
+        joints and the others; the frames' positions and the angles), ``T_P`` is constant
+        and unimodular and ``F_theta`` is the Schur complement ``S = L_th - L_P T_P^-1
+        T_th``, so the block's inverse is ``[[T_P^-1 + M S^-1 K, -M S^-1], [-S^-1 K,
+        S^-1]]`` with ``M = T_P^-1 T_th``, ``K = L_P T_P^-1``. In Frobenius norms,
+        ``|J^-1| <= |T_P^-1| + (1 + |M|)(1 + |K|) |S^-1|``, where ``|T_P^-1|``, ``|K|`` and
+        the bound ``|T_P^-1| |T_th|`` of ``|M|`` do not depend on the angles (the entries
+        are 0, +-1 or rotated constant vectors). The equilibration's column norms are
+        constant too and its row norms bounded, so that with ``A = D_r^-1 J D_c^-1``,
+        ``rcond(A) >= 1 / (|A|_F |A^-1|_F) >= 1 / (sqrt(m) max D_c max D_r |J^-1|)``.
+        The bound is within a constant factor of the exact value, so it separates the
+        near-singular positions from the others at the cost of the inverse the
+        velocities already use.
+        """
+        if self.red is None:
+            return None
+        if self._bound is None:
+            self._bound = self._bound_constants(st)
+        c, a0, a1 = self._bound
+        red = self.red
+        if red.sub.nb == 0:  # all angles fixed: F_theta^-1 is constant
+            return np.full(st.n, 1.0 / (c * (a0 + a1 * float(np.linalg.norm(red.inv_fixed)))))
+        inv = self._angle_inverse(st)
+        nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
+        return 1.0 / (c * (a0 + a1 * nf))
+
+    def _bound_constants(self, st: State) -> tuple[float, float, float]:
+        st1 = st.take([0])
+        for b, k in self.col.items():  # any poses: the constants do not depend on them
+            st1.x[b, 0] = st1.y[b, 0] = 0.0
+            st1.set_angle(b, 0.3 + 0.7 * k, 0)
+        J = self.jacobian(st1)[0]
+        red = self.red
+        rows, r = {}, 0
+        for c in self.constraints:
+            rows[id(c)] = list(range(r, r + c.m))
+            r += c.m
+        tree = [i for c in red.tree for i in rows[id(c)]]
+        loop = [i for i in range(self.m) if i not in set(tree)]
+        P = [i for i in range(self.n) if i % 3 != 2]
+        T = list(range(2, self.n, 3))
+        tpi = np.linalg.inv(J[np.ix_(tree, P)])
+        a0 = float(np.linalg.norm(tpi))
+        m_norm = a0 * float(np.linalg.norm(J[np.ix_(tree, T)]))
+        k_norm = float(np.linalg.norm(J[np.ix_(loop, P)] @ tpi))
+        cs = np.linalg.norm(J, axis=0)
+        cs[cs == 0] = 1.0
+        ub = np.abs(J)
+        for c in self.constraints:  # a joint's two rows: (-r_y, r_x) has the norm |s|
+            if type(c) is RevoluteConstraint:
+                i = rows[id(c)][0]
+                ub[i : i + 2, T] = np.hypot(J[i, T], J[i + 1, T])
+        rs = float(np.max(np.sqrt(np.sum((ub / cs) ** 2, axis=1))))
+        scale = math.sqrt(self.m) * float(np.max(cs)) * rs
+        return scale, a0, (1.0 + m_norm) * (1.0 + k_norm)
+
+    def velocity(self, st: State, drive: Drive) -> None:
+        if self.red is not None:
+            self._angle_rates(st, drive, 1)
+            return
+        qd = self._solve_batch(st, self._rhs(st, drive, 1))
+        for b, k in self.col.items():
+            st.vx[b], st.vy[b], st.w[b] = qd[:, 3 * k], qd[:, 3 * k + 1], qd[:, 3 * k + 2]
+
+    def acceleration(self, st: State, drive: Drive) -> None:
+        if self.red is not None:
+            self._angle_rates(st, drive, 2)
+            return
+        qdd = self._solve_batch(st, self._rhs(st, drive, 2))
+        for b, k in self.col.items():
+            st.ax[b], st.ay[b], st.al[b] = qdd[:, 3 * k], qdd[:, 3 * k + 1], qdd[:, 3 * k + 2]

@@ -1,0 +1,502 @@
+"""A revolute Newton group in its links' angles alone (reduced coordinates): a spanning
+tree places the frames, the loop equations F = K + sum A(theta) V are solved in the
+angles (see :mod:`.generic`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..constraints import AngleDriverConstraint, RevoluteConstraint
+from ..solvers.newton import SolveStats
+from ..state import State
+
+
+class _Eqs:
+    """Equations ``F = K + [M1 M2 M3] (cos theta, sin theta, theta)`` in angles."""
+
+    def __init__(self, M: np.ndarray) -> None:
+        nb = M.shape[0]
+        self.nb = nb
+        self.MT = M.T.copy()
+        self.M1, self.M2 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy()
+        self.M3 = M[:, 2 * nb :].copy()
+        self.nd = bool(np.any(self.M3))
+        # rows of (M1, M2, M3) as Python floats, for one small position at a time
+        self._rows = [
+            tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
+            for e in range(nb)
+        ]
+
+    def newton_floats(
+        self, K, th0, atol: float, max_iterations: int
+    ) -> tuple[np.ndarray, SolveStats]:
+        """:func:`~mechsolve.solvers.newton.newton_lean` on ``F = 0`` at one position,
+        with ``K`` (n,) the constant part, in Python floats (up to 3 angles: a stacked
+        NumPy call per operation costs more than the arithmetic there). Same
+        convergence test; no scipy fallback (the caller's)."""
+        x, ok, it, r, nfev = self.newton_list(K, th0, atol, max_iterations)
+        return np.array(x), SolveStats(ok, "newton", it, nfev, nfev, r)
+
+    def newton_list(self, K, th0, atol: float, max_iterations: int):
+        """:meth:`newton_floats` as ``(angles (list), converged, iterations, residual,
+        evaluations)``:
+        the coarse continuation's form, without an array and a record per position."""
+        nb, rows = self.nb, self._rows
+        x = [float(v) for v in th0]
+        K = [float(v) for v in K]
+        xtol = 1e-3 * atol
+        last = r = r_prev = math.inf
+        cos, sin = math.cos, math.sin
+        if nb == 2:  # unrolled: the four-bar's loop, the commonest group
+            ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
+            k0, k1 = K
+            x0, x1 = x
+            for it in range(max_iterations + 1):
+                C0, C1, S0, S1 = cos(x0), cos(x1), sin(x0), sin(x1)
+                f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
+                f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
+                r = max(abs(f0), abs(f1))
+                if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, diverging
+                    break
+                r_prev = r
+                if r <= atol and (last <= xtol or r == 0.0):
+                    return [x0, x1], True, it, r, it + 1
+                if it == max_iterations:
+                    break
+                ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+                jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+                det = ja * jd - jb * jc  # as _solve_small
+                if det == 0:
+                    break
+                dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
+                step = max(abs(dx0), abs(dx1))
+                if not step <= 1e300:
+                    break
+                if r <= atol and step >= last:  # converged already: rounding level
+                    return [x0, x1], True, it, r, it + 1
+                x0, x1 = x0 + dx0, x1 + dx1
+                last = step
+            return [x0, x1], r <= atol, max_iterations, r, max_iterations
+        for it in range(max_iterations + 1):
+            c = [cos(v) for v in x]
+            s = [sin(v) for v in x]
+            f = []
+            J = []
+            for e in range(nb):
+                fe = K[e]
+                Je = []
+                for k, (m1, m2, m3) in enumerate(rows[e]):
+                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
+                    Je.append(m2 * c[k] - m1 * s[k] + m3)
+                f.append(fe)
+                J.append(Je)
+            r = max(abs(v) for v in f)
+            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, or diverging
+                break
+            r_prev = r
+            if r <= atol and (last <= xtol or r == 0.0):
+                return x, True, it, r, it + 1
+            if it == max_iterations:
+                break
+            dx = _solve_small(J, f)
+            if dx is None:
+                break
+            step = max(abs(v) for v in dx)
+            if not step <= 1e300:
+                break
+            if r <= atol and step >= last:  # converged already: rounding level
+                return x, True, it, r, it + 1
+            x = [a + b for a, b in zip(x, dx)]
+            last = step
+        return x, r <= atol, max_iterations, r, max_iterations
+
+    def step_small(self, C, S, f) -> np.ndarray:
+        """The Newton step ``-F_theta^-1 F`` (N, n) for one or two angles, elementwise
+        (NaN where ``F_theta`` is exactly singular)."""
+        M1, M2, M3 = self.M1, self.M2, self.M3
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if self.nb == 1:
+                return -f / (M2[0, 0] * C - M1[0, 0] * S + M3[0, 0])
+            c0, c1, s0, s1 = C[:, 0], C[:, 1], S[:, 0], S[:, 1]
+            a = M2[0, 0] * c0 - M1[0, 0] * s0 + M3[0, 0]
+            b = M2[0, 1] * c1 - M1[0, 1] * s1 + M3[0, 1]
+            c = M2[1, 0] * c0 - M1[1, 0] * s0 + M3[1, 0]
+            d = M2[1, 1] * c1 - M1[1, 1] * s1 + M3[1, 1]
+            det = a * d - b * c
+            out = np.empty_like(f)
+            out[:, 0] = (b * f[:, 1] - d * f[:, 0]) / det
+            out[:, 1] = (c * f[:, 0] - a * f[:, 1]) / det
+        out[det == 0] = np.nan
+        return out
+
+    def residual(self, th, C, S, Ku) -> np.ndarray:
+        """``F`` (N, n) at angles ``th`` (with their cosines ``C`` and sines ``S``);
+        ``Ku``: the constant part (:meth:`_Angles.known` with :meth:`_Angles.with_driver`)."""
+        f = Ku + C @ self.M1.T  # three small products: concatenating costs more
+        f += S @ self.M2.T
+        if self.nd:
+            f += th @ self.M3.T
+        return f
+
+    def inverse(self, C, S) -> np.ndarray:
+        """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
+        from the entries directly (a broadcast product over (N, n, n) costs more)."""
+        if self.nb != 2:
+            return _batch_inverse(self.jacobian(C, S))
+        (a1, b1), (c1, d1) = self.M1.tolist()
+        (a2, b2), (c2, d2) = self.M2.tolist()
+        (a3, b3), (c3, d3) = self.M3.tolist()
+        c0, c1_, s0, s1 = C[:, 0], C[:, 1], S[:, 0], S[:, 1]
+        J = np.empty((C.shape[0], 2, 2))
+        J[:, 0, 0] = a2 * c0 - a1 * s0 + a3
+        J[:, 0, 1] = b2 * c1_ - b1 * s1 + b3
+        J[:, 1, 0] = c2 * c0 - c1 * s0 + c3
+        J[:, 1, 1] = d2 * c1_ - d1 * s1 + d3
+        return _batch_inverse(J)
+
+    def jacobian(self, C, S, out=None) -> np.ndarray:
+        """``F_theta`` (N, n, n), into ``out`` when given."""
+        J = np.empty((C.shape[0], self.nb, self.nb)) if out is None else out
+        np.multiply(C[:, None, :], self.M2, out=J)
+        J -= S[:, None, :] * self.M1
+        if self.nd:
+            J += self.M3
+        return J
+
+
+class _Angles(_Eqs):
+    """A group of revolute joints (and angle drivers) written in its links' angles alone.
+
+    A spanning tree of the group's joints, grown from the bodies solved before it (the
+    ground among them), places every link's frame from its angles: a child ``c`` pinned
+    to its parent ``p`` at local points ``s_p``, ``s_c`` has ``r_c = r_p + A_p s_p -
+    A_c s_c``, so that ``r_b = P_b + sum_k A(theta_k) W[b, k]`` with ``P_b`` a point of a
+    solved body (the root of its branch of the tree) and constant local vectors ``W``.
+    The tree's joints then hold identically; the others (the loops' closing joints, two
+    equations each, and the drivers, one each) are as many equations as angles::
+
+        F_e = K_e + sum_k A(theta_k) V[e, k]          (a closing joint)
+        F_d = K_d + sum_k D[d, k] theta_k - u          (a driver)
+
+    ``K`` collects the points (angles) of solved bodies. The Jacobian ``F_theta`` is the
+    Schur complement of the tree's (constant, unimodular) block in the group's block of
+    Phi_q, so both are singular at the same positions; see :meth:`rcond_bound`.
+    """
+
+    def __init__(self, bodies, constraints) -> None:
+        self.k = {b: i for i, b in enumerate(bodies)}
+        nb = len(bodies)
+        self.nb = nb
+        W = np.zeros((nb, nb, 2))
+        anchor: dict[int, tuple[int, np.ndarray]] = {}
+        revs = [c for c in constraints if type(c) is RevoluteConstraint]
+        drivers = [c for c in constraints if type(c) is AngleDriverConstraint]
+        if len(revs) + len(drivers) != len(constraints):
+            raise ValueError("not a revolute group")
+        inside = set(bodies)
+        tree: list[int] = []
+        grown = True
+        while grown:
+            grown = False
+            for j, c in enumerate(revs):
+                if j in tree:
+                    continue
+                for child, s_c, par, s_p in ((c.b, c.sb, c.a, c.sa), (c.a, c.sa, c.b, c.sb)):
+                    if child not in inside or child in anchor:
+                        continue
+                    if par in inside and par not in anchor:
+                        continue
+                    kc = self.k[child]
+                    if par in inside:
+                        anchor[child] = anchor[par]
+                        W[kc] = W[self.k[par]]
+                        W[kc, self.k[par]] += s_p
+                    else:
+                        anchor[child] = (par, np.asarray(s_p, float))
+                    W[kc, kc] -= s_c
+                    tree.append(j)
+                    grown = True
+                    break
+        if len(anchor) != nb:
+            raise ValueError("a link is not reached through revolute joints")
+        loops = [c for j, c in enumerate(revs) if j not in tree]
+        if 2 * len(loops) + len(drivers) != nb:
+            raise ValueError("not square")
+        self.tree = [revs[j] for j in tree]
+        self.loops = loops
+        self.drivers = drivers
+        self.anchor = [anchor[b] for b in bodies]
+        self._kplan: tuple | None = None  # see _known_plan()
+        self.Wx, self.Wy = W[..., 0].copy(), W[..., 1].copy()  # (body, angle)
+        self._wx, self._wy = self.Wx.tolist(), self.Wy.tolist()
+        self._wterms = [
+            [(k, a, b) for k, (a, b) in enumerate(zip(wx, wy)) if a or b]
+            for wx, wy in zip(self._wx, self._wy)
+        ]
+        self.Wr = np.block([[-self.Wx.T, -self.Wy.T], [-self.Wy.T, self.Wx.T]])
+        ne = len(loops)
+        V = np.zeros((ne, nb, 2))
+        self.kterms: list[list[tuple[float, int, np.ndarray]]] = []
+        for e, c in enumerate(loops):
+            terms = []
+            for sign, body, s in ((1.0, c.a, c.sa), (-1.0, c.b, c.sb)):
+                if body in inside:
+                    kb = self.k[body]
+                    V[e] += sign * W[kb]
+                    V[e, kb] += sign * np.asarray(s, float)
+                    terms.append((sign,) + anchor[body])
+                else:
+                    terms.append((sign, body, np.asarray(s, float)))
+            self.kterms.append(terms)
+        self.Vx, self.Vy = V[..., 0].copy(), V[..., 1].copy()  # (equation, angle)
+        self.ne = ne
+        D = np.zeros((len(drivers), nb))
+        self.dterms: list[list[tuple[float, int]]] = []
+        for d, c in enumerate(drivers):  # theta_b + delta - theta_a - u
+            terms = []
+            for sign, body in ((1.0, c.b), (-1.0, c.a)):
+                if body in inside:
+                    D[d, self.k[body]] += sign
+                else:
+                    terms.append((sign, body))
+            self.dterms.append(terms)
+        self.D = D
+        self.delta = np.array([c.delta for c in drivers])
+        # a driver on one link of the group fixes its angle: theta_k = sign (u - K_d),
+        # set exactly so (as the closed-form driver link does) after each solve
+        self.pinned = [
+            (int(np.flatnonzero(row)[0]), float(row[np.flatnonzero(row)[0]]), 2 * ne + d)
+            for d, row in enumerate(D)
+            if np.count_nonzero(row) == 1
+        ]
+        # F = K + [M1 M2 M3] (cos, sin, theta): one product for all equations
+        M = np.zeros((nb, 3 * nb))
+        M[:ne, :nb], M[:ne, nb : 2 * nb] = self.Vx, -self.Vy
+        M[ne : 2 * ne, :nb], M[ne : 2 * ne, nb : 2 * nb] = self.Vy, self.Vx
+        M[2 * ne :, 2 * nb :] = D
+        _Eqs.__init__(self, M)
+        self.nd = len(drivers)
+        # what a Newton solve iterates on: the angles no driver fixes alone, in the other
+        # equations (the fixed angles' terms move into the constant part, see reduce())
+        fixed = [k for k, _, _ in self.pinned]
+        if len(set(fixed)) != len(fixed):  # one angle fixed twice: iterate on all
+            fixed = []
+        frows = [row for k, _, row in self.pinned] if fixed else []
+        self.fixed = np.array(fixed, int)
+        self.fsign = np.array([sign for _, sign, _ in self.pinned] if fixed else [])
+        self.frows = np.array(frows, int)
+        self.free = np.array([k for k in range(nb) if k not in fixed], int)
+        rows = [r for r in range(nb) if r not in frows]
+
+        def cols(ks):
+            return [k for k in ks] + [nb + k for k in ks] + [2 * nb + k for k in ks]
+
+        self.sub = _Eqs(M[np.ix_(rows, cols(self.free))]) if fixed else self
+        self.rows = np.array(rows, int)
+        self.MTf = M[np.ix_(rows, cols(fixed))].T.copy()
+        # all angles fixed: F_theta is the drivers' signed permutation, its inverse exact
+        self.inv_fixed = np.linalg.inv(self.D) if not self.free.size else None
+
+    def reduce(self, Ku: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The constant part ``Kr`` (N, free) of :attr:`sub`'s equations and the angles
+        the drivers fix alone (N, fixed), exactly, from ``Ku`` (:meth:`with_driver`): a
+        driver ``sign theta_k + K_d - u = 0`` gives ``theta_k = sign (u - K_d)``, and the
+        Jacobian of the whole is that of :attr:`sub` bordered by those rows (+-1 on the
+        diagonal), so both are singular together."""
+        if not self.fixed.size:
+            return Ku, Ku[:, :0]
+        thp = self.fixed_angles(Ku)
+        Kr = Ku[:, self.rows] + np.concatenate([np.cos(thp), np.sin(thp), thp], axis=1) @ self.MTf
+        return Kr, thp
+
+    def fixed_angles(self, Ku: np.ndarray) -> np.ndarray:
+        """The angles the drivers fix alone (N, fixed), from ``Ku``: ``sign (u - K_d)``."""
+        return -Ku[:, self.frows] * self.fsign
+
+    def join(self, thf: np.ndarray, thp: np.ndarray) -> np.ndarray:
+        """All angles (N, links) from the free ones and the fixed ones."""
+        if not self.fixed.size:
+            return thf
+        th = np.empty((thf.shape[0], self.nb))
+        th[:, self.free] = thf
+        th[:, self.fixed] = thp
+        return th
+
+    # -- the solved bodies' part ---------------------------------------------------------
+    def known(self, st: State, order: int = 0):
+        """The solved bodies' terms ``K`` (N, n) in the order of the equations (closing
+        joints' x, their y, drivers; order 0), or their first or second time derivatives,
+        and the tree's root points ``(Px, Py)`` (N, links), or their derivatives."""
+        f = (st.point, st.point_velocity, st.point_acceleration)[order]
+        ang = (st.th, st.w, st.al)[order]
+        kc, pxc, pyc, points, kmov, dmov, pmov = self._known_plan(st.nb)
+        n, ne = st.n, self.ne
+        pts = [f(body, s) for body, s in points]  # each moving point once
+        K = np.empty((n, self.nb))
+        K[:] = kc if order == 0 else 0.0
+        for e, sign, j in kmov:
+            px, py = pts[j]
+            K[:, e] += sign * px
+            K[:, ne + e] += sign * py
+        for col, sign, body in dmov:
+            K[:, col] += sign * ang[body]
+        Px = np.empty((n, self.nb))
+        Py = np.empty((n, self.nb))
+        Px[:] = pxc if order == 0 else 0.0
+        Py[:] = pyc if order == 0 else 0.0
+        for kb, j in pmov:
+            Px[:, kb], Py[:, kb] = pts[j]
+        return K, Px, Py
+
+    def _known_plan(self, ground: int):
+        """:meth:`known`'s terms split once: the ground's points (fixed local vectors) and
+        the drivers' offsets as constant rows of ``K`` and ``(Px, Py)`` at order 0 (zero
+        at orders 1 and 2), and the moving bodies' terms, evaluated at each call."""
+        plan = self._kplan
+        if plan is not None and plan[0] == ground:
+            return plan[1]
+        ne = self.ne
+        kc = np.zeros(self.nb)
+        pxc, pyc = np.zeros(self.nb), np.zeros(self.nb)
+        kmov, dmov, pmov = [], [], []
+        points: list[tuple[int, np.ndarray]] = []  # the moving points, each once
+
+        def point(body, s):
+            for j, (b, v) in enumerate(points):
+                if b == body and v.shape == s.shape and np.array_equal(v, s):
+                    return j
+            points.append((body, s))
+            return len(points) - 1
+
+        for e, terms in enumerate(self.kterms):
+            for sign, body, s in terms:
+                if body == ground and s.ndim == 1:
+                    kc[e] += sign * s[0]
+                    kc[ne + e] += sign * s[1]
+                else:
+                    kmov.append((e, sign, point(body, s)))
+        for d, terms in enumerate(self.dterms):
+            kc[2 * ne + d] = self.delta[d]
+            dmov += [(2 * ne + d, sign, body) for sign, body in terms if body != ground]
+        for kb, (body, s) in enumerate(self.anchor):
+            if body == ground and s.ndim == 1:
+                pxc[kb], pyc[kb] = s[0], s[1]
+            else:
+                pmov.append((kb, point(body, s)))
+        out = (kc, pxc, pyc, points, kmov, dmov, pmov)
+        self._kplan = (ground, out)
+        return out
+
+    def pin(self, th: np.ndarray, K: np.ndarray, u: np.ndarray) -> None:
+        """Set the angles a driver fixes alone to their exact values, in place (a Newton
+        solution has them to rounding, which can put a zero angle at -1e-32)."""
+        for k, sign, row in self.pinned:
+            th[:, k] = sign * (u - K[:, row])
+
+    def with_driver(self, K: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """``K`` with the driver values ``u`` (N,) taken off the drivers' equations."""
+        if not self.nd:
+            return K
+        out = K.copy()
+        out[:, 2 * self.ne :] -= u[:, None]
+        return out
+
+    def poses(self, C, S, Px, Py):
+        """The links' frame origins (N, links) from their angles."""
+        x = Px + C @ self.Wx.T - S @ self.Wy.T
+        y = Py + S @ self.Wx.T + C @ self.Wy.T
+        return x, y
+
+    def poses_one(self, th, Px, Py) -> tuple[list, list]:
+        """:meth:`poses` at one position, in floats (the angles ``th``, the roots'
+        points ``Px``, ``Py``: (links,), arrays or lists)."""
+        if isinstance(th, np.ndarray):
+            th, Px, Py = th.tolist(), Px.tolist(), Py.tolist()
+        c = [math.cos(v) for v in th]
+        s = [math.sin(v) for v in th]
+        xs, ys = [], []
+        for px, py, terms in zip(Px, Py, self._wterms):
+            for k, a, b in terms:  # the tree's nonzero local vectors only
+                ck, sk = c[k], s[k]
+                px += ck * a - sk * b
+                py += sk * a + ck * b
+            xs.append(px)
+            ys.append(py)
+        return xs, ys
+
+    def accel_terms(self, C, S, wd2) -> np.ndarray:
+        """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
+        closing joints' second derivative (zero for drivers)."""
+        return (C * wd2) @ self.M1.T + (S * wd2) @ self.M2.T
+
+
+def _rowmax_abs(a: np.ndarray) -> np.ndarray:
+    """``max |a|`` along the rows of ``a`` (N, k), k small, NaN kept (a reduction along a
+    short last axis costs more than k elementwise maxima)."""
+    m = np.abs(a[:, 0])
+    for k in range(1, a.shape[1]):
+        np.maximum(m, np.abs(a[:, k]), out=m)
+    return m
+
+
+def _solve_small(J: list, f: list) -> list | None:
+    """``J dx = -f`` for 1 to 3 unknowns by Cramer's rule in floats; None when ``J`` is
+    exactly singular."""
+    n = len(f)
+    if n == 1:
+        return None if J[0][0] == 0 else [-f[0] / J[0][0]]
+    if n == 2:
+        (a, b), (c, d) = J
+        det = a * d - b * c
+        if det == 0:
+            return None
+        return [-(d * f[0] - b * f[1]) / det, -(a * f[1] - c * f[0]) / det]
+    (a, b, c), (d, e, g), (h, i, k) = J
+    A, B, C = e * k - g * i, g * h - d * k, d * i - e * h
+    det = a * A + b * B + c * C
+    if det == 0:
+        return None
+    D, E, G = c * i - b * k, a * k - c * h, b * h - a * i
+    H, I, L = b * g - c * e, c * d - a * g, a * e - b * d
+    f0, f1, f2 = f
+    return [
+        -(A * f0 + D * f1 + H * f2) / det,
+        -(B * f0 + E * f1 + I * f2) / det,
+        -(C * f0 + G * f1 + L * f2) / det,
+    ]
+
+
+def _batch_inverse(J: np.ndarray) -> np.ndarray:
+    """Inverses of the matrices (N, n, n); NaN where one is not finite or is exactly
+    singular (a zero pivot in its LU factorisation, a zero determinant up to 2 x 2).
+    Up to 2 x 2 by the adjugate, elementwise (a stacked LAPACK call costs more there)."""
+    n = J.shape[1]
+    if n <= 2:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if n == 1:
+                out = 1.0 / J
+            else:
+                a, b, c, d = J[:, 0, 0], J[:, 0, 1], J[:, 1, 0], J[:, 1, 1]
+                det = a * d - b * c
+                out = np.empty_like(J)
+                out[:, 0, 0], out[:, 0, 1] = d / det, -b / det
+                out[:, 1, 0], out[:, 1, 1] = -c / det, a / det
+        if not np.isfinite(out).all():  # (a reduction over two short axes costs ~50 us)
+            out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
+        return out
+    good = np.all(np.isfinite(J), axis=(1, 2))
+    if good.all():
+        try:
+            return np.linalg.inv(J)
+        except np.linalg.LinAlgError:
+            pass
+    out = np.full(J.shape, np.nan)
+    idx = np.flatnonzero(good)
+    if idx.size:
+        d = np.linalg.det(J[idx])
+        idx = idx[np.isfinite(d) & (d != 0)]
+        if idx.size:
+            out[idx] = np.linalg.inv(J[idx])
+    return out
