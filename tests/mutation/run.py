@@ -42,6 +42,13 @@ SEL = {
         "tests/test_force_elements.py",
         "tests/test_moving_guides.py",
     ],
+    # the loads and the work per cycle, split from forces.py (issue 24)
+    "mechsolve/solvers/loads.py": [
+        "tests/test_forces.py",
+        "tests/test_force_elements.py",
+        "tests/test_issue23_study.py",
+    ],
+    "mechsolve/solvers/work.py": ["tests/test_force_elements.py", "tests/test_issue23_study.py"],
     "mechsolve/results.py": [
         "tests/test_design_figures.py",
         "tests/test_api.py",
