@@ -27,6 +27,7 @@ from .clikit import (
     output_folder,
     warn,
     writes_to,
+    writing,
 )
 from .clikit import progress_bar as _progress_bar
 from .clikit import stream_above as _stream_above
@@ -231,10 +232,8 @@ def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
     if junit is not None:
         from .writers.atomic import write_text
 
-        try:
+        with writing(junit, "--junit"):
             write_text(junit, junit_xml(verdicts, mech.name, str(mech.source.file or "")))
-        except OSError as exc:
-            raise InputError(f"--junit {junit}: cannot write it: {exc.strerror or exc}") from None
     return verdicts
 
 
@@ -410,10 +409,8 @@ def check(file: Path, variant, draw) -> None:
     if draw is not None:
         from .writers.plots import draw_start
 
-        try:
+        with writing(draw, "--draw"):
             draw_start(report.analysis, report.assembly.state, draw, f"{mech.name}: start position")
-        except OSError as exc:
-            raise InputError(f"--draw {draw}: cannot write it: {exc.strerror or exc}") from None
         click.echo(f"  drew the start position to {draw}")
     sys.exit(EXIT_OK)
 

@@ -8,7 +8,8 @@ import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any, NoReturn
 
@@ -136,6 +137,21 @@ def _ancestor_problem(path: Path) -> str | None:
                 return f"{parent} is a file, not a folder"
             return None
     return None
+
+
+@contextmanager
+def writing(path: Path, option: str | None = None) -> Iterator[None]:
+    """Write the one file ``path`` (given by ``option``, such as ``--junit``): an OS error
+    meanwhile (a missing folder, a full disk, a refused permission) is an input error
+    naming the option and the file, exit 2."""
+    try:
+        yield
+    except OSError as exc:
+        why = exc.strerror or str(exc)
+        text = (
+            f"{option} {path}: cannot write it: {why}" if option else f"cannot write {path}: {why}"
+        )
+        raise InputError(text) from None
 
 
 def writes_to(path: Path) -> None:
@@ -352,4 +368,5 @@ __all__ = [
     "watch",
     "write_error",
     "writes_to",
+    "writing",
 ]

@@ -28,6 +28,7 @@ from mechsolve.cli import main
 from conftest import MECH
 
 BAD_INPUTS = Path(__file__).parent / "bad_inputs"
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def mechsolve(*args: str, script: str | None = None, timeout: float = 180):
@@ -35,6 +36,8 @@ def mechsolve(*args: str, script: str | None = None, timeout: float = 180):
     it after injecting a fault); no traceback may reach the user."""
     cmd = [sys.executable, "-m", "mechsolve"] if script is None else [sys.executable, script]
     env = {k: v for k, v in os.environ.items() if k != "MECHSOLVE_DEBUG"}
+    # a script in a temporary folder imports this checkout, not an installed copy
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
     p = subprocess.run(cmd + list(args), capture_output=True, text=True, timeout=timeout, env=env)
     assert "Traceback" not in p.stdout + p.stderr, p.stderr
     return p

@@ -154,6 +154,13 @@ def test_animate_0_2_and_a_partial_animation_is_0(tmp_path, nongrashof):
     assert mechsolve("animate", MECH / "fourbar.yaml", "-o", tmp_path / "x.avi").returncode == 2
 
 
+def test_bench_2():
+    """A case bench does not have is a mistake on the command line (its 0 is in
+    tests/test_bench.py, which runs the cases)."""
+    p = mechsolve("bench", "--case", "no-such-case")
+    assert p.returncode == 2 and "no-such-case" in p.stderr
+
+
 def test_schema_and_synth_0_2(tmp_path):
     assert mechsolve("schema", "-o", tmp_path / "s.json").returncode == 0
     assert mechsolve("schema", "-o", tmp_path / "no" / "s.json").returncode == 2
@@ -350,3 +357,39 @@ def test_help_states_the_rule_once():
         tail = q.stdout[q.stdout.index("Exit codes") :]
         assert len(tail.strip().splitlines()) <= 4, (cmd, tail)
         assert "5 a design check failed" in " ".join(tail.split())
+
+
+def test_one_wrapper_no_command_catches_errors_itself():
+    """The mapping of errors to codes lives in mechsolve/clikit.py alone: no command
+    module has a handler for Exception, KeyboardInterrupt or OSError of its own, nor a
+    literal exit code, and every command is a clikit.Command."""
+    import ast
+
+    import click
+
+    from mechsolve import clikit
+    from mechsolve.cli import main
+
+    files = [ROOT / "mechsolve" / "cli.py", *sorted((ROOT / "mechsolve" / "commands").glob("*.py"))]
+    for f in files:
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ExceptHandler):
+                names = (
+                    {n.id for n in ast.walk(node.type) if isinstance(n, ast.Name)}
+                    if node.type
+                    else {"*"}
+                )
+                assert not names & {
+                    "Exception",
+                    "BaseException",
+                    "KeyboardInterrupt",
+                    "OSError",
+                    "*",
+                }, f"{f.name}:{node.lineno}: a handler of its own"
+            if isinstance(node, ast.Call) and ast.unparse(node.func) == "sys.exit":
+                assert not (node.args and isinstance(node.args[0], ast.Constant)), (
+                    f"{f.name}:{node.lineno}: a literal exit code"
+                )
+    for name, cmd in main.commands.items():
+        assert isinstance(cmd, clikit.Command), name
+        assert not isinstance(cmd, click.Group), name

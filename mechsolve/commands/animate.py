@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from ..clikit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to, writing
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -79,10 +79,8 @@ def animate(file: Path, output, variant, frames, fps, forces, size_text, quiet) 
     mech = api.load(file, variant)
     writes_to(output)
     fr = solve_frames(mech, frames, forces=forces)
-    try:
+    with writing(output, "-o"):
         write_animation(fr, output, fps=fps, size=size)
-    except OSError as exc:
-        raise InputError(f"-o {output}: cannot write it: {exc.strerror or exc}") from None
     missing = int(np.count_nonzero(~fr.ok))
     if not quiet:
         seconds = len(fr) / fps

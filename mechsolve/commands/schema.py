@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, Command
+from ..clikit import EPILOG, Command, writing
 
 SCHEMA_FILE = "mechanism.schema.json"
 
@@ -41,7 +41,6 @@ def schema(output: Path | None, show_path: bool) -> None:
 
     in a mechanism file gives completion, hover help and checks of every key (the path is
     relative to the YAML file, or absolute: see --path)."""
-    from ..errors import InputError
 
     here = shipped_path()
     if show_path:
@@ -53,8 +52,6 @@ def schema(output: Path | None, show_path: bool) -> None:
         return
     from ..writers.atomic import write_text
 
-    try:
+    with writing(output):
         write_text(output, text)
-    except OSError as exc:
-        raise InputError(f"cannot write {output}: {exc.strerror or exc}") from None
     click.echo(f"wrote {output}")

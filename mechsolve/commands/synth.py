@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, FILE_ARG, QUIET, Command
+from ..clikit import EPILOG, FILE_ARG, QUIET, Command, writing
 
 
 @click.command(cls=Command, epilog=EPILOG)
@@ -55,14 +55,8 @@ def synth(file: Path, output, pick, solution, quiet) -> None:
         if output is not None:
             from ..writers.atomic import write_text
 
-            try:
+            with writing(output, "-o"):
                 write_text(output, out.yaml)
-            except OSError as exc:
-                from ..errors import InputError
-
-                raise InputError(
-                    f"-o {output}: cannot write the file: {exc.strerror or exc}"
-                ) from None
             if not quiet:
                 click.echo(f"  wrote {output}")
     elif output is not None:
