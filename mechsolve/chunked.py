@@ -100,7 +100,7 @@ class StreamSummary:
         return out
 
     def incomplete(self) -> bool:
-        """Whether the command line exits with 1, as for :meth:`Results.incomplete`:
+        """Whether the command line warns (exit 0), as for :meth:`Results.incomplete`:
         positions not solved, values not determined at singular positions, a warning."""
         return bool(
             self.failures or self.undetermined or self.forces_singular or self.all_warnings()

@@ -14,23 +14,25 @@ import click
 
 from .clikit import (
     EPILOG,
+    EXIT_CHECK_FAILED,
+    EXIT_CODES,
     EXIT_INPUT,
-    EXIT_INTERRUPTED,
     EXIT_OK,
-    EXIT_WARNINGS,
     FILE_ARG,
     NO_PLOTS,
     QUIET,
     VARIANT,
     Group,
+    finish,
     outdir_option,
     output_folder,
+    warn,
+    writes_to,
+    writing,
 )
-from .clikit import fail as _fail
-from .clikit import interrupt_on_sigterm as _interrupt_on_sigterm
 from .clikit import progress_bar as _progress_bar
 from .clikit import stream_above as _stream_above
-from .clikit import write_error as _write_error
+from .clikit import watch as _watch
 from .commands.animate import animate
 from .commands.cam import cam
 from .commands.polygons import polygons
@@ -38,10 +40,13 @@ from .commands.report import report
 from .commands.schema import schema
 from .commands.sweep import sweep
 from .commands.synth import synth
-from .errors import EXIT_REQUIREMENTS, InputError
+from .errors import InputError
+
+INCOMPLETE = "the results are incomplete: the summary says what is missing, the CSV rows why"
+INCOMPLETE_INSTANTS = "some instants are not solved: the table says why"
 
 
-@click.group(cls=Group, epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=Group, epilog=EXIT_CODES, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="mechsolve")
 def main() -> None:
     """Solve planar mechanisms described in YAML files.
@@ -121,37 +126,22 @@ def main() -> None:
 @QUIET
 def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, quiet) -> None:
     """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
-    _interrupt_on_sigterm()
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
     args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt)
+    writes_to(outdir)
     if watch:
-        try:
-            from .watch import watch_file
-
-            watch_file(file, lambda: _run_job(*args), echo=click.echo, outdir=outdir)
-        except KeyboardInterrupt:  # the way a watch ends: it said "stopped watching"
-            sys.exit(EXIT_INTERRUPTED)
-        except Exception as exc:  # noqa: BLE001 - no watchfiles, a missing folder
-            _fail(exc)
-        sys.exit(EXIT_OK)
-    try:
-        code, _ = _run_job(*args)
-        sys.exit(code)
-    except KeyboardInterrupt:
-        # Ctrl-C or SIGTERM: partial files were removed on the way out; finished ones stay
-        click.echo("interrupted: the files not yet finished were not written", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except OSError as exc:
-        _fail(_write_error(exc, outdir) or exc)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        _fail(exc)
+        _watch(file, lambda: _run_job(*args), outdir=outdir)
+    code, _ = _run_job(*args)
+    sys.exit(code)
 
 
 def _run_job(
     file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet, fmt="png"
 ):
-    """One run: solve, write, print; ``(exit code, results or None)``. Errors raise."""
+    """One run: solve, write, print; ``(exit code, results or None)``: 5 when a
+    requirement failed, else 0 (with a warning on stderr when the results lack
+    something). Errors raise."""
     import numpy as np
 
     from . import api
@@ -174,7 +164,9 @@ def _run_job(
             click.echo(instants_table(ires))
             click.echo(f"  wrote {path}")
         if at:  # only the instants asked for
-            return (EXIT_WARNINGS if instants_failed else EXIT_OK), None
+            if instants_failed:
+                warn(INCOMPLETE_INSTANTS)
+            return EXIT_OK, None
     if n > _stream_above() and mech.driver.motion is None:
         # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
         # sweep of the same range; a bar on a terminal, moved on after each chunk
@@ -218,8 +210,10 @@ def _run_job(
 
         click.echo(verdict_table(verdicts))
     if any(not v.passed for v in verdicts):
-        return EXIT_REQUIREMENTS, res
-    return (EXIT_WARNINGS if failed or instants_failed else EXIT_OK), res
+        return EXIT_CHECK_FAILED, res
+    if failed or instants_failed:
+        warn(INCOMPLETE)
+    return EXIT_OK, res
 
 
 def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
@@ -239,10 +233,8 @@ def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
     if junit is not None:
         from .writers.atomic import write_text
 
-        try:
+        with writing(junit, "--junit"):
             write_text(junit, junit_xml(verdicts, mech.name, str(mech.source.file or "")))
-        except OSError as exc:
-            raise InputError(f"--junit {junit}: cannot write it: {exc.strerror or exc}") from None
     return verdicts
 
 
@@ -269,56 +261,49 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
     """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
     write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
     quantity and joint force) and plots."""
-    _interrupt_on_sigterm()
+    import numpy as np
+
+    from . import api
+    from .dynamics import check_size
+    from .dynamics import simulate as run_simulation
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    mech = api.load(file, variant)
+    check_size(mech, max_steps)  # before anything is computed or created
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+    output_folder(outdir)
+    sim = mech.simulation
+    steps = int(sim.duration / sim.step) if sim is not None and sim.step else 0
+    bar = _progress_bar(steps, quiet) if sim is not None and sim.method == "rk4" else None
     try:
-        import numpy as np
+        res = run_simulation(
+            mech,
+            exact=exact,
+            progress=None if bar is None else bar.update,
+            max_steps=max_steps,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    written = [res.to_csv(outdir / "simulation.csv")]
+    if not no_plots:
+        from .writers.simulation import write_simulation_plots
 
-        from . import api
-        from .dynamics import check_size
-        from .dynamics import simulate as run_simulation
-
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        mech = api.load(file, variant)
-        check_size(mech, max_steps)  # before anything is computed or created
-        if outdir is None:
-            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-        output_folder(outdir)
-        sim = mech.simulation
-        steps = int(sim.duration / sim.step) if sim is not None and sim.step else 0
-        bar = _progress_bar(steps, quiet) if sim is not None and sim.method == "rk4" else None
-        try:
-            res = run_simulation(
-                mech,
-                exact=exact,
-                progress=None if bar is None else bar.update,
-                max_steps=max_steps,
-            )
-        finally:
-            if bar is not None:
-                bar.close()
-        written = [res.to_csv(outdir / "simulation.csv")]
-        if not no_plots:
-            from .writers.simulation import write_simulation_plots
-
-            written += write_simulation_plots(res, res.model, outdir)
-        tr = res.trajectory
-        if not quiet:
-            click.echo(res.summary())
-            upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
-            click.echo(
-                f"  wrote {len(written)} file(s){upto} to {outdir}/: "
-                + ", ".join(p.name for p in written)
-            )
-        if tr.error is not None:  # the file's motor law stopped it: an input error
-            raise tr.error
-        sys.exit(EXIT_WARNINGS if res.incomplete() else EXIT_OK)
-    except KeyboardInterrupt:
-        click.echo("interrupted: the files not yet finished were not written", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except OSError as exc:
-        _fail((outdir is not None and _write_error(exc, outdir)) or exc)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        _fail(exc)
+        written += write_simulation_plots(res, res.model, outdir)
+    tr = res.trajectory
+    if not quiet:
+        click.echo(res.summary())
+        upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
+        click.echo(
+            f"  wrote {len(written)} file(s){upto} to {outdir}/: "
+            + ", ".join(p.name for p in written)
+        )
+    if tr.error is not None:  # the file's motor law stopped it: an input error
+        raise tr.error
+    if tr.early:
+        finish(warning=f"the motion stopped early, at t = {tr.t[-1]:.6g} s: the summary says why")
+    finish(warning=INCOMPLETE if res.incomplete() else None)
 
 
 @main.command(epilog=EPILOG)
@@ -344,69 +329,66 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     simulating the machine with it); FILE is a mechanism, or a torque curve over a cycle
     as textbook flywheel problems give it (a 'torque:' section, no links), or a power
     diagram (a 'power:' section: the driving and resisting powers over the cycle)."""
-    try:
-        import numpy as np
+    import numpy as np
 
-        from . import api
-        from .errors import InputError
-        from .flywheel import (
-            is_power_problem,
-            parse_delta,
-            read_power_problem,
-            size_flywheel,
-            size_from_power,
-            size_from_torque,
+    from . import api
+    from .errors import InputError
+    from .flywheel import (
+        is_power_problem,
+        parse_delta,
+        read_power_problem,
+        size_flywheel,
+        size_from_power,
+        size_from_torque,
+    )
+    from .model.parse import is_torque_problem, read_torque_problem
+    from .model.source import load_file
+    from .units import UnitError, parse_quantity
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    dl = parse_delta(delta_given if delta_given is not None else "1/40")
+    w = None
+    if speed is not None:
+        try:
+            w = parse_quantity(speed, "angular speed")
+        except UnitError as exc:
+            raise InputError(f"--speed {speed!r}: {exc}") from None
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+    src = load_file(file)
+    if is_power_problem(src.data):  # a power diagram, as course books pose the shaper
+        q = read_power_problem(src)
+        if delta_given is None and q["delta"] is not None:
+            dl = q["delta"]
+        output_folder(outdir)
+        try:
+            res = size_from_power(
+                q["driving"], q["resisting"], cycle=q["cycle"], speed=w or q["speed"],
+                delta=dl,
+            )  # fmt: skip
+        except InputError as exc:
+            raise q["reader"].fail(("power",), exc.message) from None
+        name = q["name"]
+    elif is_torque_problem(src):  # a torque curve given directly, as textbooks do
+        p = read_torque_problem(src)
+        if delta_given is None and p["delta"] is not None:
+            dl = p["delta"]
+        output_folder(outdir)
+        res = size_from_torque(
+            p["angles"], p["torque"], speed=w or p["speed"], delta=dl, resisting=p["resisting"]
         )
-        from .model.parse import is_torque_problem, read_torque_problem
-        from .model.source import load_file
-        from .units import UnitError, parse_quantity
+        name = p["name"]
+    else:
+        mech = api.load(file, variant)
+        output_folder(outdir)
+        res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
+        name = mech.name
+    from .writers.simulation import write_energy_mass_plot, write_energy_plot
 
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        dl = parse_delta(delta_given if delta_given is not None else "1/40")
-        w = None
-        if speed is not None:
-            try:
-                w = parse_quantity(speed, "angular speed")
-            except UnitError as exc:
-                raise InputError(f"--speed {speed!r}: {exc}") from None
-        if outdir is None:
-            outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-        src = load_file(file)
-        if is_power_problem(src.data):  # a power diagram, as course books pose the shaper
-            q = read_power_problem(src)
-            if delta_given is None and q["delta"] is not None:
-                dl = q["delta"]
-            output_folder(outdir)
-            try:
-                res = size_from_power(
-                    q["driving"], q["resisting"], cycle=q["cycle"], speed=w or q["speed"],
-                    delta=dl,
-                )  # fmt: skip
-            except InputError as exc:
-                raise q["reader"].fail(("power",), exc.message) from None
-            name = q["name"]
-        elif is_torque_problem(src):  # a torque curve given directly, as textbooks do
-            p = read_torque_problem(src)
-            if delta_given is None and p["delta"] is not None:
-                dl = p["delta"]
-            output_folder(outdir)
-            res = size_from_torque(
-                p["angles"], p["torque"], speed=w or p["speed"], delta=dl, resisting=p["resisting"]
-            )
-            name = p["name"]
-        else:
-            mech = api.load(file, variant)
-            output_folder(outdir)
-            res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
-            name = mech.name
-        from .writers.simulation import write_energy_mass_plot, write_energy_plot
-
-        paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
-        click.echo(res.text())
-        click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
-        sys.exit(EXIT_REQUIREMENTS if res.check_missed() else EXIT_OK)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        _fail(exc)
+    paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
+    click.echo(res.text())
+    click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
+    finish(check_failed=res.check_missed())
 
 
 @main.command(epilog=EPILOG)
@@ -418,26 +400,20 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     help="Draw the assembled start position to this PNG file.",
 )
 def check(file: Path, variant, draw) -> None:
-    """Validate FILE, report its degrees of freedom and assemble the start position."""
-    try:
-        from . import api
+    """Validate FILE, report its degrees of freedom and assemble the start position (a
+    mechanism that cannot be assembled there is an input error, 2)."""
+    from . import api
 
-        mech = api.load(file, variant)
-        report = api.check(mech)
-        click.echo(report.text())
-        if draw is not None:
-            from .writers.plots import draw_start
+    mech = api.load(file, variant)
+    report = api.check(mech)
+    click.echo(report.text())
+    if draw is not None:
+        from .writers.plots import draw_start
 
-            try:
-                draw_start(
-                    report.analysis, report.assembly.state, draw, f"{mech.name}: start position"
-                )
-            except OSError as exc:
-                raise InputError(f"--draw {draw}: cannot write it: {exc.strerror or exc}") from None
-            click.echo(f"  drew the start position to {draw}")
-        sys.exit(EXIT_OK)
-    except Exception as exc:  # noqa: BLE001
-        _fail(exc)
+        with writing(draw, "--draw"):
+            draw_start(report.analysis, report.assembly.state, draw, f"{mech.name}: start position")
+        click.echo(f"  drew the start position to {draw}")
+    sys.exit(EXIT_OK)
 
 
 def _bench_tool() -> ModuleType:
@@ -499,19 +475,16 @@ def bench(quick, cases, plot) -> None:
     against an independent reference, then the ratio to the hand-written closed form.
     Results measured on this project's machine are in benchmarks/README.md.
     """
-    try:
-        b = _bench_tool()
-        done = b.run(quick=quick, cases=list(cases) or None, echo=click.echo)
-        if plot is not None:
-            b.plot(done, plot)
-            click.echo(f"wrote the work-precision diagram to {plot}")
-            dyn = [c for c in done if c.name == "dynamics-work-precision"]
-            if dyn:
-                p = Path(plot)
-                out = b.plot_dynamics(dyn[0], p.with_name(p.stem + "-dynamics" + p.suffix))
-                click.echo(f"wrote the integrators' work-precision diagram to {out}")
-    except Exception as exc:  # noqa: BLE001
-        _fail(exc)
+    b = _bench_tool()
+    done = b.run(quick=quick, cases=list(cases) or None, echo=click.echo)
+    if plot is not None:
+        b.plot(done, plot)
+        click.echo(f"wrote the work-precision diagram to {plot}")
+        dyn = [c for c in done if c.name == "dynamics-work-precision"]
+        if dyn:
+            p = Path(plot)
+            out = b.plot_dynamics(dyn[0], p.with_name(p.stem + "-dynamics" + p.suffix))
+            click.echo(f"wrote the integrators' work-precision diagram to {out}")
 
 
 # commands with a module of their own (mechsolve/commands/)

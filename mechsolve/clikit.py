@@ -8,39 +8,51 @@ import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any, NoReturn
 
 import click
 
-from .errors import EXIT_INPUT, EXIT_OK, EXIT_WARNINGS, InputError, MechsolveError
+from .errors import (
+    EXIT_CHECK_FAILED,
+    EXIT_INPUT,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    InputError,
+    MechsolveError,
+)
 from .writers.atomic import ENVIRONMENT_ERRNOS
 
-EXIT_INTERNAL = 4
-EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
 # the reader of the output went away (`mechsolve run ... | head`): the code the shell
 # reports for a tool that SIGPIPE ends (128 + 13), as `cat` or `grep` in the same place
 EXIT_BROKEN_PIPE = 141
 STREAM_ABOVE = 200_000  # positions: longer sweeps are solved and written chunk by chunk
 PROGRESS_DELAY = 1.0  # seconds: a streamed run that ends sooner never shows its bar
 
-EPILOG = """\b
-Exit codes:
-  0  success
-  1  completed with warnings: some positions could not be solved, or
-     some values are not determined at singular positions (their CSV
-     rows say why), or a check failed; everything else was written
-  2  input error: the file or the command line is wrong
-  3  solver failure: the mechanism cannot be assembled or solved
-  4  internal error (a bug in mechsolve; please report it)
-  5  a requirement of the file failed (run: its table says which;
-     everything was written)
+EXIT_CODES = """\b
+Exit codes (the same for every command):
+  0    done (a partial result too: positions that cannot close, values
+       not determined at singular positions, a simulation stopped early;
+       a warning on stderr and the summary say what is missing)
+  2    bad input: the file, the command line, a mechanism that cannot be
+       assembled where it must be, a full disk or a refused permission
+  4    internal error (a bug in mechsolve; please report it)
+  5    a design check failed: a requirement (run, report; sweep when no
+       design meets them all), a cam's allowances, a flywheel whose
+       check misses its delta; everything was written
   130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
   141  the output's reader went away (`... | head`): stopped quietly
-A full disk or a file that cannot be written for want of permission
-is an input error (2); every file is written whole or not at all.
 """
+# each command's --help points at the rule instead of repeating it
+EPILOG = (
+    "Exit codes: 0 done, 2 bad input, 4 internal error, 5 a design check failed, "
+    "130 interrupted (mechsolve --help lists them)."
+)
+# where a command keeps what the error handler needs to know (click's shared ctx.meta)
+_OUTDIR = "mechsolve.outdir"
 
 
 def broken_pipe() -> NoReturn:
@@ -61,7 +73,20 @@ def broken_pipe() -> NoReturn:
 
 def interrupted(message: str = "interrupted") -> NoReturn:
     """Ctrl-C or SIGTERM: one line on stderr, exit 130 (files not yet finished were
-    removed on the way out; finished ones stay)."""
+    removed on the way out; finished ones stay). A Ctrl-C pressed again while the
+    interpreter ends (a process pool's or Dask's exit handlers) is ignored: it would only
+    turn the exit into a traceback. (An exit handler, so that a caller that catches the
+    exit, as click's test runner does, keeps its Ctrl-C.)"""
+    import atexit
+    import signal
+
+    def ignore() -> None:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        except ValueError:  # not the main thread
+            pass
+
+    atexit.register(ignore)  # runs before the handlers registered earlier (Dask's)
     try:
         click.echo(message, err=True)
     except (OSError, ValueError):
@@ -69,19 +94,24 @@ def interrupted(message: str = "interrupted") -> NoReturn:
     sys.exit(EXIT_INTERRUPTED)
 
 
-def fail(exc: BaseException) -> NoReturn:
-    """Report ``exc`` in one line and exit with its code: a mechsolve error its own
-    (2 input, 3 solver...); a full disk or a permission refused 2; the reader of the
-    output gone 141 (quietly); anything else is a bug, 4."""
+def fail(exc: BaseException, outdir: Path | None = None) -> NoReturn:
+    """Report ``exc`` in one line and exit with its code, the one mapping of errors to
+    exit codes: a mechsolve error its own (2); a full disk or a permission refused, or
+    an OS error while writing into ``outdir``, 2; Ctrl-C 130; the reader of the output
+    gone 141 (quietly); anything else is a bug, 4. Click's own exits pass through."""
+    if isinstance(exc, (click.exceptions.Exit, click.ClickException, SystemExit)):
+        raise exc
     if isinstance(exc, BrokenPipeError):
         broken_pipe()
-    if isinstance(exc, KeyboardInterrupt):
-        interrupted()
+    if isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
+        if outdir is None:
+            interrupted()
+        interrupted("interrupted: the files not yet finished were not written")
+    if isinstance(exc, OSError) and outdir is not None:
+        exc = write_error(exc, outdir) or exc
     if isinstance(exc, MechsolveError):
         click.echo(f"error: {exc}", err=True)
         sys.exit(exc.exit_code)
-    if isinstance(exc, (click.exceptions.Exit, click.ClickException, SystemExit)):
-        raise exc
     if isinstance(exc, OSError) and exc.errno in ENVIRONMENT_ERRNOS:
         # the machine refused (a full disk, a quota, permissions): the user can act on it
         names = [str(n) for n in (exc.filename, exc.filename2) if n is not None]
@@ -109,9 +139,34 @@ def _ancestor_problem(path: Path) -> str | None:
     return None
 
 
+@contextmanager
+def writing(path: Path, option: str | None = None) -> Iterator[None]:
+    """Write the one file ``path`` (given by ``option``, such as ``--junit``): an OS error
+    meanwhile (a missing folder, a full disk, a refused permission) is an input error
+    naming the option and the file, exit 2."""
+    try:
+        yield
+    except OSError as exc:
+        why = exc.strerror or str(exc)
+        text = (
+            f"{option} {path}: cannot write it: {why}" if option else f"cannot write {path}: {why}"
+        )
+        raise InputError(text) from None
+
+
+def writes_to(path: Path) -> None:
+    """Tell the error handler (:class:`Group`) that the command writes into the folder
+    or file ``path``: an OS error there is reported as writing it (exit 2), and Ctrl-C
+    says that the files not yet finished were not written."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        ctx.meta[_OUTDIR] = Path(path)
+
+
 def output_folder(outdir: Path) -> Path:
     """Create ``outdir`` and make sure a file can be written in it, before anything is
     solved (a long sweep must not fail at its end); an OS refusal is an input error."""
+    writes_to(outdir)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
         fd, probe = tempfile.mkstemp(prefix=".mechsolve-", suffix=".probe", dir=outdir)
@@ -204,22 +259,67 @@ def interrupt_on_sigterm() -> None:
         pass
 
 
-class Group(click.Group):
-    """The ``mechsolve`` command group: the rules every command shares, in one place.
-    SIGTERM unwinds like Ctrl-C; Ctrl-C is exit 130 with "interrupted" (not click's
-    "Aborted!" and 1); a closed output pipe stops quietly (:func:`broken_pipe`); a full
-    disk or a refused permission that escapes a command is exit 2 in one line."""
+def finish(*, check_failed: bool = False, warning: str | None = None) -> NoReturn:
+    """End a command that ran to completion: exit 5 when a design check failed (a
+    requirement, a cam's allowance, a flywheel's check), else 0. ``warning`` (what the
+    result lacks: positions that cannot close, values left blank, a motion stopped
+    early) goes to stderr, even under ``-q``; it does not change the code."""
+    if warning:
+        warn(warning)
+    sys.exit(EXIT_CHECK_FAILED if check_failed else EXIT_OK)
+
+
+def warn(text: str) -> None:
+    """One ``warning:`` line on stderr (shown under ``-q`` too): what a finished result
+    lacks. It does not change the exit code (0 done; see :func:`finish`)."""
+    click.echo(f"warning: {text}", err=True)
+
+
+def watch(file: Path, job: Any, outdir: Path | None = None) -> NoReturn:
+    """``--watch``: run ``job`` now and after every save of ``file`` until Ctrl-C, which
+    ends it with 130 (the watcher has said "stopped watching")."""
+    from .watch import watch_file
+
+    try:
+        watch_file(file, job, echo=click.echo, outdir=outdir)
+    except KeyboardInterrupt:
+        sys.exit(EXIT_INTERRUPTED)
+    sys.exit(EXIT_OK)
+
+
+def _guarded(invoke: Any, ctx: click.Context) -> Any:
+    """``invoke(ctx)`` under the rules every command shares, in one place, and the one
+    mapping of errors to exit codes (:func:`fail`), so that no command catches errors
+    itself. SIGTERM unwinds like Ctrl-C; Ctrl-C is exit 130 with "interrupted" (not
+    click's "Aborted!" and 1); a closed output pipe stops quietly (:func:`broken_pipe`); a
+    mechsolve error, a full disk or a refused permission is exit 2 in one line; anything
+    else is a bug, 4. Click's own exits (usage errors: 2) pass through."""
+    interrupt_on_sigterm()
+    try:
+        return invoke(ctx)
+    except (click.exceptions.Exit, click.ClickException, SystemExit):
+        raise
+    except BaseException as exc:  # noqa: BLE001 - every error becomes its exit code
+        fail(exc, ctx.meta.get(_OUTDIR))
+
+
+class Command(click.Command):
+    """Every ``mechsolve`` command (``@click.command(cls=Command)``, or ``@main.command``):
+    its errors become exit codes by :func:`_guarded`, also when it is invoked on its own
+    (a test, an embedding application) rather than through the group."""
 
     def invoke(self, ctx: click.Context) -> Any:
-        interrupt_on_sigterm()
-        try:
-            return super().invoke(ctx)
-        except KeyboardInterrupt:
-            interrupted()
-        except BrokenPipeError:
-            broken_pipe()
-        except OSError as exc:
-            fail(exc)
+        return _guarded(super().invoke, ctx)
+
+
+class Group(click.Group):
+    """The ``mechsolve`` command group: its commands are :class:`Command`, and what
+    escapes them or the group itself is mapped the same way (:func:`_guarded`)."""
+
+    command_class = Command
+
+    def invoke(self, ctx: click.Context) -> Any:
+        return _guarded(super().invoke, ctx)
 
 
 # options that several commands share
@@ -242,18 +342,21 @@ def outdir_option(what: str = "results"):
 __all__ = [
     "EPILOG",
     "EXIT_BROKEN_PIPE",
+    "EXIT_CHECK_FAILED",
+    "EXIT_CODES",
     "EXIT_INPUT",
     "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
     "EXIT_OK",
-    "EXIT_WARNINGS",
     "FILE_ARG",
     "NO_PLOTS",
     "QUIET",
     "VARIANT",
+    "Command",
     "Group",
     "broken_pipe",
     "fail",
+    "finish",
     "interrupt_on_sigterm",
     "interrupted",
     "outdir_option",
@@ -261,5 +364,9 @@ __all__ = [
     "progress_bar",
     "progress_wanted",
     "stream_above",
+    "warn",
+    "watch",
     "write_error",
+    "writes_to",
+    "writing",
 ]

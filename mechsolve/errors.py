@@ -3,32 +3,36 @@
 Every error a user can cause derives from :class:`MechsolveError`. The CLI turns
 them into one clear message and an exit code, never a traceback.
 
-Exit codes (also listed in ``mechsolve --help`` and the README):
+Exit codes: one rule for every command (also in ``mechsolve --help`` and the README's
+"Exit codes"; :mod:`mechsolve.clikit` maps errors to them in one place):
 
 =====  ==============================================================
 code   meaning
 =====  ==============================================================
-0      success
-1      completed with warnings: some positions could not be solved, or
-       some values are not determined at singular positions, or a check
-       such as the power balance failed (the CSV rows say why); the
-       rest was written
-2      input error: the file, the command line, an output folder that
-       cannot be written
-3      solver failure: the mechanism cannot be assembled or solved
+0      done (a partial result, such as positions that cannot close or
+       values not determined at singular positions, is done: the
+       summary and a warning on stderr say what is missing, the CSV
+       rows say why)
+2      bad input: the file, the command line, a mechanism that cannot
+       be assembled where it must be, an output that cannot be written
+       (a full disk, a refused permission)
 4      internal error: a bug in mechsolve (``MECHSOLVE_DEBUG=1`` shows
        the traceback)
+5      a design check failed: a requirement of the file (run, report,
+       sweep: no design meets them all), a cam's allowances, a flywheel
+       whose checking simulation misses its delta; everything was written
 130    interrupted (Ctrl-C or SIGTERM); no half-written file is left
+141    the reader of standard output went away (``... | head``)
 =====  ==============================================================
 """
 
 from __future__ import annotations
 
 EXIT_OK = 0
-EXIT_WARNINGS = 1
 EXIT_INPUT = 2
-EXIT_SOLVER = 3
-EXIT_REQUIREMENTS = 5  # the run completed and a requirement of the file failed
+EXIT_INTERNAL = 4
+EXIT_CHECK_FAILED = 5  # the command completed and a design check failed
+EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
 
 
 class MechsolveError(Exception):
@@ -79,9 +83,10 @@ class InputError(MechsolveError):
 
 
 class AssemblyError(MechsolveError):
-    """The mechanism cannot be closed (assembled) where it must be."""
+    """The mechanism cannot be closed (assembled) where it must be: the file describes
+    a mechanism that cannot be built there, a mistake in the input (exit 2)."""
 
-    exit_code = EXIT_SOLVER
+    exit_code = EXIT_INPUT
 
 
 class CannotCloseAtStart(AssemblyError):
@@ -98,6 +103,8 @@ class CannotCloseAtStart(AssemblyError):
 
 
 class SolverError(MechsolveError):
-    """A solver could not produce a trustworthy answer."""
+    """A solver could not produce a trustworthy answer where the input asks for one (no
+    position closes, a branch that needs a smaller step, a polygon asked for at a
+    dead-centre): the message says what to change in the input (exit 2)."""
 
-    exit_code = EXIT_SOLVER
+    exit_code = EXIT_INPUT

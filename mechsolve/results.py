@@ -479,7 +479,7 @@ class Results:
     def incomplete(self) -> bool:
         """Whether anything asked for was left out or is doubtful: positions not solved,
         rates or forces not determined at singular positions, or a warning (call after
-        :meth:`summary`, which runs the checks). The command line exits with 1 then."""
+        :meth:`summary`, which runs the checks). The command line warns then (exit 0)."""
         sol = self.solution
         return bool(
             self.failures

@@ -89,7 +89,7 @@ def test_a_failing_run_keeps_a_previous_complete_csv(tmp_path):
     assert r.exit_code == 0
     before = (tmp_path / "results.csv").read_text()
     r, _ = run(["run", str(BAD / "cannot_assemble.yaml"), "-o", str(tmp_path), "--no-plots"])
-    assert r.exit_code == 3
+    assert r.exit_code == 2
     assert (tmp_path / "results.csv").read_text() == before
     assert not list(tmp_path.glob("*.part"))
 

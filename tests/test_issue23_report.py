@@ -127,14 +127,15 @@ def test_default_polygon_position_that_cannot_close(tmp_path):
 
 def test_requested_polygon_position_that_cannot_close(tmp_path):
     """A position asked for with --polygons-at that cannot close: the report is still
-    written, with the reason, and the command exits 1 (something asked for is missing)."""
+    written, with the reason, and the command exits 0 with a warning (something asked for
+    is missing; issue 24: one rule, no 1)."""
     src = tmp_path / "rocker.yaml"
     src.write_text(DOUBLE_ROCKER)
     out = tmp_path / "rocker.html"
     r = CliRunner().invoke(
         report, [str(src), "-o", str(out), "--frames", "6", "--polygons-at", "130 deg"]
     )
-    assert r.exit_code == 1, r.output
+    assert r.exit_code == 0 and "warning: the report is incomplete" in r.output, r.output
     text = _section(out.read_text(encoding="utf-8"), "polygons")
     assert "driver angle 130°" in text and "loop B" in text
     # a position it reaches is drawn

@@ -112,11 +112,11 @@ def read_csv(path, *columns: str) -> list[np.ndarray]:
 
 @pytest.mark.parametrize("method", ["rk4", "RK45", "LSODA", "DOP853", "Radau"])
 def test_leaving_the_closing_range_writes_the_computed_part(tmp_path, method):
-    """Exit 1 (completed with warnings, as `run` when positions cannot be solved: the
+    """Exit 0 with a warning (as `run` when positions cannot be solved: the
     mechanism reaching where it cannot close is a finding of the run, not bad input), the
     CSV and the plots hold the motion up to there, and the message says so and where."""
     r, out = run_cli(tmp_path, NON_GRASHOF.replace("METHOD", method))
-    assert r.exit_code == 1, r.output
+    assert r.exit_code == 0 and "warning: the motion stopped early" in r.output, r.output
     assert "Traceback" not in r.output
     names = sorted(p.name for p in out.iterdir())
     assert any(n.endswith(".csv") for n in names) and any(n.endswith(".png") for n in names)
@@ -222,12 +222,12 @@ def test_max_steps_sets_the_limit_and_the_estimate_counts_the_columns_written(tm
 
 def test_an_adaptive_integrator_stops_after_max_steps_and_keeps_its_motion(tmp_path):
     """RK45 over 1e9 s (an output every 2e6 s) of a disc run up to a constant speed: the
-    integrator's own steps are capped; the motion so far is written, exit 1."""
+    integrator's own steps are capped; the motion so far is written, exit 0, warned."""
     text = bar(
         "{stall: -5 N m, slope: 0.5 N m s}", gravity="gravity: off", duration="1e9 s", method="RK45"
     ).replace("step: 0.002 s, ", "")
     r, out = run_process(tmp_path, text, "--max-steps", "500", "--no-plots", timeout=120)
-    assert r.exit_code == 1, r.output
+    assert r.exit_code == 0, r.output
     assert "the integrator took 500 steps, the limit (--max-steps raises it" in r.output
     assert the_csv(out).stat().st_size > 0
 

@@ -147,7 +147,7 @@ def test_shaper_damper_work_is_one_figure_in_terminal_plot_and_report(tmp_path):
     damped = _damped_shaper(tmp_path, 20.0)
     out = tmp_path / "out"
     r = CliRunner().invoke(main, ["run", str(damped), "-o", str(out), "--no-plots"])
-    assert r.exit_code in (0, 1), r.output
+    assert r.exit_code == 0, r.output
     m = re.search(r"work of the driver per cycle: (\S+) J", r.output)
     assert m, r.output
     mean_line = re.search(r"mean (-?[\d.]+) N\*m", r.output)
@@ -204,7 +204,8 @@ def test_design_that_assembles_in_part_has_blank_figures_and_no_pass(tmp_path):
             "-q",
         ],
     )
-    assert r.exit_code == 1, r.output  # a design is not solved everywhere
+    assert r.exit_code == 0, r.output  # a design is not solved everywhere: warned
+    assert "warning: " in r.output
     rows = read_csv(out / "study.csv")
     bad, good = rows
     assert bad["status"].startswith("not assemblable at 8 of 37 positions"), bad["status"]

@@ -237,7 +237,7 @@ def test_a_cam_file(tmp_path):
     out = tmp_path / "cam.html"
     r = make_report(MECH / "shaper-cam.yaml", out, "-q")
     # as `mechsolve cam` does: the file's adopted base exceeds its allowed 40 deg
-    assert r.exit_code == 1, r.output
+    assert r.exit_code == 5, r.output
     page = Page(out.read_text(encoding="utf-8"))
     assert "Cam" in page.h2 and len(page.images) >= 2
     assert page.h1 == ["shaper feed cam (seed 001)"]

@@ -63,11 +63,11 @@ def test_no_design_meets_the_requirements_exits_5(tmp_path):
     assert "0 of 6 designs meet every requirement" in r.output
 
 
-def test_invalid_designs_exit_1_and_are_rows(tmp_path):
+def test_invalid_designs_exit_0_and_are_rows(tmp_path):
     r = invoke(
         FOURBAR, "-o", tmp_path, "-j", "1", "--no-plots", "-p", "links.coupler.mass=0.2, -1 kg"
     )
-    assert r.exit_code == 1, r.output
+    assert r.exit_code == 0 and "warning: 6 of 12 designs" in r.output, r.output
     rows = read(tmp_path / "study.csv")
     assert len(rows) == 12
     assert sum(r["status"].startswith("invalid") for r in rows) == 6

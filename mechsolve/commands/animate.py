@@ -2,22 +2,11 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
 
-from ..clikit import (
-    EPILOG,
-    EXIT_INTERRUPTED,
-    EXIT_OK,
-    EXIT_WARNINGS,
-    FILE_ARG,
-    QUIET,
-    VARIANT,
-    fail,
-    interrupt_on_sigterm,
-)
+from ..clikit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to, writing
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -33,7 +22,7 @@ def _size(text: str) -> tuple[int, int]:
     return size
 
 
-@click.command("animate", epilog=EPILOG)
+@click.command("animate", cls=Command, epilog=EPILOG)
 @FILE_ARG
 @click.option(
     "-o",
@@ -64,54 +53,45 @@ def animate(file: Path, output, variant, frames, fps, forces, size_text, quiet) 
     """Animate FILE: the mechanism to scale over its sweep, the paths of its output points
     traced, the driver's angle (or position) and the time shown; frames from a fine sweep
     (1 degree by default) whatever the file's step."""
-    interrupt_on_sigterm()
-    try:
-        import numpy as np
+    import numpy as np
 
-        from .. import api
-        from ..animate import (
-            FFMPEG_HINT,
-            check_frame_count,
-            ffmpeg_available,
-            solve_frames,
-            write_animation,
+    from .. import api
+    from ..animate import (
+        FFMPEG_HINT,
+        check_frame_count,
+        ffmpeg_available,
+        solve_frames,
+        write_animation,
+    )
+    from ..errors import InputError
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    check_frame_count(frames)  # before loading or solving anything
+    size = _size(size_text)
+    if output is None:
+        output = Path(file.stem + (f"-{variant}" if variant else "") + ".gif")
+    if output.suffix.lower() not in (".gif", ".mp4"):
+        raise InputError(f"-o {output}: the animation is written as .gif or .mp4")
+    if output.suffix.lower() == ".mp4" and not ffmpeg_available():
+        raise InputError(f"-o {output}: {FFMPEG_HINT}")
+    if not output.parent.is_dir():
+        raise InputError(f"-o {output}: the folder {output.parent} does not exist")
+    mech = api.load(file, variant)
+    writes_to(output)
+    fr = solve_frames(mech, frames, forces=forces)
+    with writing(output, "-o"):
+        write_animation(fr, output, fps=fps, size=size)
+    missing = int(np.count_nonzero(~fr.ok))
+    if not quiet:
+        seconds = len(fr) / fps
+        click.echo(
+            f"{mech.name}: {len(fr)} frames ({fr.label(0)} to {fr.label(len(fr) - 1)}), "
+            f"{seconds:.3g} s at {fps:g} frames/s, {size[0]}x{size[1]} pixels"
         )
-        from ..errors import InputError
-
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        check_frame_count(frames)  # before loading or solving anything
-        size = _size(size_text)
-        if output is None:
-            output = Path(file.stem + (f"-{variant}" if variant else "") + ".gif")
-        if output.suffix.lower() not in (".gif", ".mp4"):
-            raise InputError(f"-o {output}: the animation is written as .gif or .mp4")
-        if output.suffix.lower() == ".mp4" and not ffmpeg_available():
-            raise InputError(f"-o {output}: {FFMPEG_HINT}")
-        if not output.parent.is_dir():
-            raise InputError(f"-o {output}: the folder {output.parent} does not exist")
-        mech = api.load(file, variant)
-        fr = solve_frames(mech, frames, forces=forces)
-        try:
-            write_animation(fr, output, fps=fps, size=size)
-        except OSError as exc:
-            raise InputError(f"-o {output}: cannot write it: {exc.strerror or exc}") from None
-        missing = int(np.count_nonzero(~fr.ok))
-        if not quiet:
-            seconds = len(fr) / fps
-            click.echo(
-                f"{mech.name}: {len(fr)} frames ({fr.label(0)} to {fr.label(len(fr) - 1)}), "
-                f"{seconds:.3g} s at {fps:g} frames/s, {size[0]}x{size[1]} pixels"
-            )
-            click.echo(f"  wrote {output}")
-        if missing:
-            click.echo(
-                f"warning: the mechanism cannot close in {missing} of {len(fr)} frames "
-                "(drawn empty; `mechsolve run` says where and why)",
-                err=True,
-            )
-        sys.exit(EXIT_WARNINGS if missing else EXIT_OK)
-    except KeyboardInterrupt:
-        click.echo("interrupted: the animation was not written", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        fail(exc)
+        click.echo(f"  wrote {output}")
+    finish(
+        warning=f"the mechanism cannot close in {missing} of {len(fr)} frames "
+        "(drawn empty; `mechsolve run` says where and why)"
+        if missing
+        else None
+    )

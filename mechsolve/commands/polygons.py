@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, EXIT_INTERRUPTED, EXIT_OK, FILE_ARG, QUIET, VARIANT, fail
+from ..clikit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
 
 SHEET_SUFFIXES = (".png", ".svg")
 
 
-@click.command("polygons", epilog=EPILOG)
+@click.command("polygons", cls=Command, epilog=EPILOG)
 @FILE_ARG
 @click.option(
     "--at",
@@ -60,47 +59,42 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
     the intersection of two direction lines), print the vectors read from them with the
     links' angular velocities and accelerations, and check them against mechsolve's
     analytic solution."""
-    try:
-        from .. import api
-        from ..clikit import output_folder
-        from ..errors import InputError
-        from ..polygons import draw_polygons
-        from ..writers.atomic import write_text
+    from .. import api
+    from ..clikit import output_folder
+    from ..errors import InputError
+    from ..polygons import draw_polygons
+    from ..writers.atomic import write_text
 
-        sheet = None
-        if output is not None and output.suffix.lower() in SHEET_SUFFIXES:
-            sheet = output
-            if not output.parent.is_dir():
-                raise InputError(f"-o {output}: the folder {output.parent} does not exist")
-            outdir = output.parent
-        else:
-            outdir = output or Path(file.stem + (f"-{variant}" if variant else ""))
-        mech = api.load(file, variant)
-        if sheet is None:
-            output_folder(outdir)
-        res = draw_polygons(
-            mech,
-            at,
-            outdir,
-            scale_v=scale_v,
-            scale_a=scale_a,
-            per_turn=per_turn,
-            svg=svg,
-            sheet=sheet,
-        )
-        text = res.text()
-        written = list(res.images)
-        if sheet is None:
-            txt = outdir / "polygons.txt"
-            write_text(txt, text + "\n")
-            written.append(txt)
-        if not quiet:
-            click.echo(text)
-            where = f"{outdir}/: " if sheet is None else ""
-            click.echo(f"  wrote {where}" + ", ".join(str(p.name) for p in written))
-        sys.exit(EXIT_OK)
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        fail(exc)
+    sheet = None
+    if output is not None and output.suffix.lower() in SHEET_SUFFIXES:
+        sheet = output
+        if not output.parent.is_dir():
+            raise InputError(f"-o {output}: the folder {output.parent} does not exist")
+        outdir = output.parent
+        writes_to(output)
+    else:
+        outdir = output or Path(file.stem + (f"-{variant}" if variant else ""))
+    mech = api.load(file, variant)
+    if sheet is None:
+        output_folder(outdir)
+    res = draw_polygons(
+        mech,
+        at,
+        outdir,
+        scale_v=scale_v,
+        scale_a=scale_a,
+        per_turn=per_turn,
+        svg=svg,
+        sheet=sheet,
+    )
+    text = res.text()
+    written = list(res.images)
+    if sheet is None:
+        txt = outdir / "polygons.txt"
+        write_text(txt, text + "\n")
+        written.append(txt)
+    if not quiet:
+        click.echo(text)
+        where = f"{outdir}/: " if sheet is None else ""
+        click.echo(f"  wrote {where}" + ", ".join(str(p.name) for p in written))
+    finish()

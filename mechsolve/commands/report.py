@@ -9,18 +9,19 @@ import click
 
 from ..clikit import (
     EPILOG,
-    EXIT_INTERRUPTED,
+    EXIT_CHECK_FAILED,
     EXIT_OK,
-    EXIT_WARNINGS,
     FILE_ARG,
     QUIET,
     VARIANT,
-    fail,
-    interrupt_on_sigterm,
+    Command,
+    warn,
+    writes_to,
 )
+from ..clikit import watch as watch_file
 
 
-@click.command("report", epilog=EPILOG)
+@click.command("report", cls=Command, epilog=EPILOG)
 @FILE_ARG
 @click.option(
     "-o",
@@ -65,42 +66,29 @@ def report(file: Path, output, variant, pdf, paper, frames, polygons_at, watch, 
     the mechanism drawn to scale, the figures of the motion, the position tables at the
     file's step, every plot of `run`, the requirements, the dynamics (with a motor), the
     cam (a cam file) and the mechanism in motion (play, pause, a slider)."""
-    interrupt_on_sigterm()
-    try:
-        import numpy as np
+    import numpy as np
 
-        from ..animate import check_frame_count
-        from ..errors import EXIT_REQUIREMENTS
-        from ..report import write_report
+    from ..animate import check_frame_count
+    from ..report import write_report
 
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        check_frame_count(frames)  # before loading or solving anything (as animate does)
-        if output is None:
-            output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    check_frame_count(frames)  # before loading or solving anything (as animate does)
+    if output is None:
+        output = Path(file.stem + (f"-{variant}" if variant else "") + ".html")
+    writes_to(output)
 
-        def once():
-            at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
-            done = write_report(
-                file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper
-            )
-            if not quiet:
-                click.echo(done.text())
-                click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
-            if done.failed_requirements:
-                return EXIT_REQUIREMENTS, None
-            return (EXIT_WARNINGS if done.incomplete else EXIT_OK), None
+    def once():
+        at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
+        done = write_report(
+            file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper
+        )
+        if not quiet:
+            click.echo(done.text())
+            click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
+        if done.incomplete:
+            warn("the report is incomplete: its summary says what is missing")
+        return (EXIT_CHECK_FAILED if done.check_failed else EXIT_OK), None
 
-        if watch:
-            from ..watch import watch_file
-
-            try:
-                watch_file(file, once, echo=click.echo)
-            except KeyboardInterrupt:  # how a watch ends: it said "stopped watching"
-                sys.exit(EXIT_INTERRUPTED)
-            sys.exit(EXIT_OK)
-        sys.exit(once()[0])
-    except KeyboardInterrupt:
-        click.echo("interrupted: the report was not written", err=True)
-        sys.exit(EXIT_INTERRUPTED)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        fail(exc)
+    if watch:
+        watch_file(file, once)
+    sys.exit(once()[0])

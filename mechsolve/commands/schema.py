@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, fail
+from ..clikit import EPILOG, Command, writing
 
 SCHEMA_FILE = "mechanism.schema.json"
 
@@ -18,7 +18,7 @@ def shipped_path() -> Path:
     return Path(str(files("mechsolve.schema").joinpath(SCHEMA_FILE)))
 
 
-@click.command("schema", epilog=EPILOG)
+@click.command("schema", cls=Command, epilog=EPILOG)
 @click.option(
     "-o",
     "--output",
@@ -41,23 +41,17 @@ def schema(output: Path | None, show_path: bool) -> None:
 
     in a mechanism file gives completion, hover help and checks of every key (the path is
     relative to the YAML file, or absolute: see --path)."""
-    try:
-        from ..errors import InputError
 
-        here = shipped_path()
-        if show_path:
-            click.echo(str(here))
-            return
-        text = here.read_text(encoding="utf-8")
-        if output is None:
-            click.echo(text, nl=False)
-            return
-        from ..writers.atomic import write_text
+    here = shipped_path()
+    if show_path:
+        click.echo(str(here))
+        return
+    text = here.read_text(encoding="utf-8")
+    if output is None:
+        click.echo(text, nl=False)
+        return
+    from ..writers.atomic import write_text
 
-        try:
-            write_text(output, text)
-        except OSError as exc:
-            raise InputError(f"cannot write {output}: {exc.strerror or exc}") from None
-        click.echo(f"wrote {output}")
-    except Exception as exc:  # every failure through fail(): a message, never a traceback
-        fail(exc)
+    with writing(output):
+        write_text(output, text)
+    click.echo(f"wrote {output}")

@@ -3,7 +3,6 @@ tabulate the figures that decide it (see :mod:`mechsolve.study`)."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -11,29 +10,21 @@ import click
 from .. import clikit
 from ..clikit import (
     EPILOG,
-    EXIT_INTERRUPTED,
-    EXIT_OK,
-    EXIT_WARNINGS,
     FILE_ARG,
     NO_PLOTS,
     QUIET,
     VARIANT,
-    fail,
-    interrupt_on_sigterm,
+    Command,
     outdir_option,
     output_folder,
-    write_error,
 )
 
-EXIT_REQUIREMENTS = getattr(clikit, "EXIT_REQUIREMENTS", 5)
 MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
 MAX_TIME = "1 h"  # default --max-time
 
 SWEEP_EPILOG = (
-    EPILOG.rstrip("\n")
-    + "\n  (sweep: 1 when some designs are invalid or cannot be solved, their rows\n"
-    "   say why; 5 when the file has requirements and no design meets them all;\n"
-    "   130 keeps the rows finished before Ctrl-C in the table)\n"
+    EPILOG + " A study's design check: 5 when the file has requirements and no design "
+    "meets them all; Ctrl-C (130) keeps the rows already finished."
 )
 
 
@@ -46,29 +37,11 @@ def _round_up(seconds: float) -> str:
     return f"'{math.ceil(seconds * 1.2 / 3600)} h'"
 
 
-def _exit_interrupted() -> None:
-    """Exit 130; a Ctrl-C pressed again while the interpreter ends (Dask's and the
-    pool's exit handlers) is ignored: it would only turn the exit into a traceback. (An
-    exit handler, so that a caller that catches the exit, as click's test runner does,
-    keeps its Ctrl-C.)"""
-    import atexit
-    import signal
-
-    def ignore() -> None:
-        try:
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-        except ValueError:  # not the main thread
-            pass
-
-    atexit.register(ignore)  # runs before the handlers registered earlier (Dask's)
-    sys.exit(EXIT_INTERRUPTED)
-
-
 def _bar(total: int, quiet: bool):
     return clikit.progress_bar(total, quiet, desc="designs", unit=" designs")
 
 
-@click.command(epilog=SWEEP_EPILOG)
+@click.command(cls=Command, epilog=SWEEP_EPILOG)
 @FILE_ARG
 @click.option(
     "-p",
@@ -184,89 +157,86 @@ def sweep(
           links.jib.mass: normal(3500 kg, 100 kg)  # random studies
         best: min range(K.y)
     """
-    interrupt_on_sigterm()
-    bar = None
+    import numpy as np
+
+    from .. import api
+    from ..errors import InputError
+    from ..model.parse import from_source
+    from ..model.source import load_file
+    from ..study.best import pick_best, write_best
+    from ..study.designs import make_study
+    from ..study.execute import cpu_count, execute, precheck, time_first_chunk
+    from ..study.table import write_table
+    from ..units import UnitError, parse_quantity
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    if jobs is not None and jobs < 1:
+        raise InputError(f"--jobs {jobs}: give 1 or more workers")
+    if use_dask and scheduler:
+        raise InputError("give --dask (a local cluster) or --scheduler ADDRESS, not both")
+    if max_designs < 1:
+        raise InputError(f"--max-designs {max_designs}: give 1 or more")
     try:
-        import numpy as np
-
-        from .. import api
-        from ..errors import InputError
-        from ..model.parse import from_source
-        from ..model.source import load_file
-        from ..study.best import pick_best, write_best
-        from ..study.designs import make_study
-        from ..study.execute import cpu_count, execute, precheck, time_first_chunk
-        from ..study.table import write_table
-        from ..units import UnitError, parse_quantity
-
-        np.seterr(divide="ignore", invalid="ignore", over="ignore")
-        if jobs is not None and jobs < 1:
-            raise InputError(f"--jobs {jobs}: give 1 or more workers")
-        if use_dask and scheduler:
-            raise InputError("give --dask (a local cluster) or --scheduler ADDRESS, not both")
-        if max_designs < 1:
-            raise InputError(f"--max-designs {max_designs}: give 1 or more")
-        try:
-            limit_s = parse_quantity(max_time, "time", "s")
-        except UnitError as exc:
-            raise InputError(f"--max-time {max_time!r}: {exc}") from None
-        if not limit_s > 0:
-            raise InputError(f"--max-time {max_time!r}: give a positive duration")
-        src = load_file(file)
-        study = make_study(
-            src,
-            list(params),
-            variant=variant,
-            design=design,
-            samples=samples,
-            seed=seed,
-            best=best,
-            figures=list(figures),
-        )
-        nominal = from_source(study.source)  # the file itself must be valid
-        if step is not None:
-            study.step = api.parse_step(nominal, step)
-        precheck(study, nominal)
-        if outdir is None:
-            outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
-        results_dir = None
-        if keep_results:  # the first designs, timed, write theirs too
-            output_folder(outdir)
-            results_dir = output_folder(outdir / "designs")
-        n = len(study)
-        if not quiet:
-            shape = " x ".join(str(len(p.values)) for p in study.params)
-            what = f"a grid of {shape}" if study.design == "grid" else study.design
-            click.echo(
-                f"{nominal.name}: {n} designs ({what}) of "
-                + ", ".join(p.name for p in study.params)
-            )
-        # the first chunk of designs, solved here and timed: what the rest will cost
-        if scheduler is not None:
-            workers, where = 1, "one worker of the scheduler"
-        else:
-            workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
-            kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
-            where = "this process" if workers == 1 else kind.format(workers)
-        est = time_first_chunk(study, workers, results_dir=results_dir)
-        if est.timed < n:
-            if not quiet:
-                click.echo(f"  estimate: {est.text(where)}")
-            if n > max_designs:
-                raise InputError(
-                    f"{n} designs are more than --max-designs {max_designs}: "
-                    f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
-                )
-            if est.seconds > limit_s:
-                raise InputError(
-                    f"{n} designs would take more than --max-time {max_time}: "
-                    f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
-                    "them, or fewer values or a larger --step"
-                )
+        limit_s = parse_quantity(max_time, "time", "s")
+    except UnitError as exc:
+        raise InputError(f"--max-time {max_time!r}: {exc}") from None
+    if not limit_s > 0:
+        raise InputError(f"--max-time {max_time!r}: give a positive duration")
+    src = load_file(file)
+    study = make_study(
+        src,
+        list(params),
+        variant=variant,
+        design=design,
+        samples=samples,
+        seed=seed,
+        best=best,
+        figures=list(figures),
+    )
+    nominal = from_source(study.source)  # the file itself must be valid
+    if step is not None:
+        study.step = api.parse_step(nominal, step)
+    precheck(study, nominal)
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
+    results_dir = None
+    if keep_results:  # the first designs, timed, write theirs too
         output_folder(outdir)
-        bar = _bar(n, quiet)
-        if bar is not None:
-            bar.update(est.timed)
+        results_dir = output_folder(outdir / "designs")
+    n = len(study)
+    if not quiet:
+        shape = " x ".join(str(len(p.values)) for p in study.params)
+        what = f"a grid of {shape}" if study.design == "grid" else study.design
+        click.echo(
+            f"{nominal.name}: {n} designs ({what}) of " + ", ".join(p.name for p in study.params)
+        )
+    # the first chunk of designs, solved here and timed: what the rest will cost
+    if scheduler is not None:
+        workers, where = 1, "one worker of the scheduler"
+    else:
+        workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
+        kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
+        where = "this process" if workers == 1 else kind.format(workers)
+    est = time_first_chunk(study, workers, results_dir=results_dir)
+    if est.timed < n:
+        if not quiet:
+            click.echo(f"  estimate: {est.text(where)}")
+        if n > max_designs:
+            raise InputError(
+                f"{n} designs are more than --max-designs {max_designs}: "
+                f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
+            )
+        if est.seconds > limit_s:
+            raise InputError(
+                f"{n} designs would take more than --max-time {max_time}: "
+                f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
+                "them, or fewer values or a larger --step"
+            )
+    output_folder(outdir)
+    bar = _bar(n, quiet)
+    if bar is not None:
+        bar.update(est.timed)
+    try:
         outcome = execute(
             study,
             jobs=jobs,
@@ -276,66 +246,57 @@ def sweep(
             results_dir=results_dir,
             first=est.rows,
         )
+    finally:  # whatever ends the study (errors: the group's one handler)
         if bar is not None:
             bar.close()
-            bar = None
-        rows = outcome.rows
-        written = [write_table(study, rows, outdir, fmt)]
-        if outcome.interrupted:
-            click.echo(
-                f"interrupted: {len(rows)} of {n} designs were finished; their rows are in "
-                f"{written[0]}",
-                err=True,
-            )
-            _exit_interrupted()
-        pick = pick_best(study, rows) if study.best is not None else None
-        if pick is not None:
-            written.append(write_best(study, pick, outdir / "best.yaml"))
-        if not no_plots:
-            from ..study.plots import write_plots
+    rows = outcome.rows
+    written = [write_table(study, rows, outdir, fmt)]
+    if outcome.interrupted:
+        click.echo(
+            f"interrupted: {len(rows)} of {n} designs were finished; their rows are in "
+            f"{written[0]}",
+            err=True,
+        )
+        clikit.interrupted()
+    pick = pick_best(study, rows) if study.best is not None else None
+    if pick is not None:
+        written.append(write_best(study, pick, outdir / "best.yaml"))
+    if not no_plots:
+        from ..study.plots import write_plots
 
-            written += write_plots(study, rows, outdir)
-        ok = sum(r["status"] == "ok" for r in rows)
-        invalid = sum(r["status"].startswith("invalid") for r in rows)
-        has_req = any("requirements.pass [-]" in r for r in rows)
-        passing = sum(r.get("requirements.pass [-]") is True for r in rows)
-        if not quiet:
-            click.echo(
-                f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
-                f"position"
-                + (f", {invalid} invalid" if invalid else "")
-                + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
-            )
-            if has_req:
-                click.echo(f"  requirements: {passing} of {n} designs meet every requirement")
-            if study.best is not None:
-                sense, expr = study.best
-                if pick is None:
-                    click.echo(f"  best ({sense} {expr}): no design has this figure")
-                else:
-                    click.echo(
-                        f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
-                        f"{pick.value:.6g}: {study.describe(pick.design)}"
-                        + (f" ({pick.note})" if pick.note else "")
-                    )
-            click.echo(
-                f"  wrote {len(written)} file(s) to {outdir}/: "
-                + ", ".join(p.name for p in written)
-                + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
-            )
-        if has_req and passing == 0:
-            sys.exit(EXIT_REQUIREMENTS)
-        sys.exit(EXIT_WARNINGS if ok < n else EXIT_OK)
-    except KeyboardInterrupt:
-        if bar is not None:
-            bar.close()
-        click.echo("interrupted before any design was finished", err=True)
-        _exit_interrupted()
-    except OSError as exc:
-        if bar is not None:
-            bar.close()
-        fail((outdir is not None and write_error(exc, outdir)) or exc)
-    except Exception as exc:  # noqa: BLE001 - every error becomes a message
-        if bar is not None:
-            bar.close()
-        fail(exc)
+        written += write_plots(study, rows, outdir)
+    ok = sum(r["status"] == "ok" for r in rows)
+    invalid = sum(r["status"].startswith("invalid") for r in rows)
+    has_req = any("requirements.pass [-]" in r for r in rows)
+    passing = sum(r.get("requirements.pass [-]") is True for r in rows)
+    if not quiet:
+        click.echo(
+            f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
+            f"position"
+            + (f", {invalid} invalid" if invalid else "")
+            + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
+        )
+        if has_req:
+            click.echo(f"  requirements: {passing} of {n} designs meet every requirement")
+        if study.best is not None:
+            sense, expr = study.best
+            if pick is None:
+                click.echo(f"  best ({sense} {expr}): no design has this figure")
+            else:
+                click.echo(
+                    f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
+                    f"{pick.value:.6g}: {study.describe(pick.design)}"
+                    + (f" ({pick.note})" if pick.note else "")
+                )
+        click.echo(
+            f"  wrote {len(written)} file(s) to {outdir}/: "
+            + ", ".join(p.name for p in written)
+            + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
+        )
+    clikit.finish(
+        check_failed=has_req and passing == 0,
+        warning=f"{n - ok} of {n} designs are invalid or do not assemble at every "
+        "position: their rows say why"
+        if ok < n
+        else None,
+    )

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from ..clikit import EPILOG, FILE_ARG, QUIET, fail
+from ..clikit import EPILOG, FILE_ARG, QUIET, Command, writing
 
 
-@click.command(epilog=EPILOG)
+@click.command(cls=Command, epilog=EPILOG)
 @FILE_ARG
 @click.option(
     "-o",
@@ -40,35 +40,26 @@ def synth(file: Path, output, pick, solution, quiet) -> None:
     guide-bar, three-positions (motion generation), window (the input window that makes a
     point's path straightest). See mechanisms/synth/.
     """
-    try:
-        from ..synth.problem import confirm, solve_problem
+    from ..synth.problem import confirm, solve_problem
 
-        if solution is not None and pick is not None:
-            from ..errors import InputError
+    if solution is not None and pick is not None:
+        from ..errors import InputError
 
-            raise InputError("--solution and --pick: give one of them")
-        out = solve_problem(file, pick, solution)
+        raise InputError("--solution and --pick: give one of them")
+    out = solve_problem(file, pick, solution)
+    if not quiet:
+        click.echo(out.text)
+    if out.yaml is not None:
         if not quiet:
-            click.echo(out.text)
-        if out.yaml is not None:
+            click.echo(confirm(out))
+        if output is not None:
+            from ..writers.atomic import write_text
+
+            with writing(output, "-o"):
+                write_text(output, out.yaml)
             if not quiet:
-                click.echo(confirm(out))
-            if output is not None:
-                from ..writers.atomic import write_text
+                click.echo(f"  wrote {output}")
+    elif output is not None:
+        from ..errors import InputError
 
-                try:
-                    write_text(output, out.yaml)
-                except OSError as exc:
-                    from ..errors import InputError
-
-                    raise InputError(
-                        f"-o {output}: cannot write the file: {exc.strerror or exc}"
-                    ) from None
-                if not quiet:
-                    click.echo(f"  wrote {output}")
-        elif output is not None:
-            from ..errors import InputError
-
-            raise InputError("-o: a window problem chooses a range and writes no mechanism")
-    except Exception as exc:  # noqa: BLE001
-        fail(exc)
+        raise InputError("-o: a window problem chooses a range and writes no mechanism")

@@ -42,6 +42,11 @@ class ReportOutcome:
     def failed_requirements(self) -> int:
         return self.content.failed_requirements
 
+    @property
+    def check_failed(self) -> bool:
+        """A design check failed (exit 5): a requirement, or a cam's allowances."""
+        return bool(self.content.failed_requirements or self.content.cam_problems)
+
     def text(self) -> str:
         c = self.content
         lines = [f"{c.title}: report of {c.file or 'the model'}"]

@@ -592,6 +592,7 @@ class Content:
     # for the command's exit status
     incomplete: bool = False
     failed_requirements: int = 0
+    cam_problems: list[str] = field(default_factory=list)  # allowances exceeded, undercut
     verdicts: list = field(default_factory=list)
 
 
@@ -697,7 +698,7 @@ def mechanism_content(
                     + "give a position the mechanism reaches with --polygons-at (a position "
                     "number, 1 at the start, or a driver angle such as '100 deg')."
                 )
-                # asked for and not drawn: the report lacks it (exit 1); the default is not
+                # asked for and not drawn: the report lacks it (warned); the default is not
                 c.incomplete = c.incomplete or polygons_at is not None
             else:
                 c.polygons_text = pol.text()
@@ -726,7 +727,7 @@ def cam_content(path: Path, variant: str | None) -> Content:
         raise InputError(str(exc), file=str(path), keypath="cam") from None
     c = Content(model.name, _description(load_file(path)), str(path), variant, "cam")
     c.cam_text = res.summary()
-    c.incomplete = bool(res.problems)
+    c.cam_problems = list(res.problems)
     with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
         d = Path(tmp)
         c.cam_plots = [embed(p) for p in write_plots(res, d)]
