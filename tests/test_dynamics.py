@@ -403,7 +403,7 @@ def test_energy_balance_column_is_small_and_converges(seed004):
 
 
 def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
-    import mechsolve.cli as cli
+    import mechsolve.commands.simulate as simulate_cmd
 
     calls = []
 
@@ -414,7 +414,7 @@ def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
         def close(self):
             calls.append("closed")
 
-    monkeypatch.setattr(cli, "_progress_bar", lambda total, quiet: Bar())
+    monkeypatch.setattr(simulate_cmd, "_progress_bar", lambda total, quiet: Bar())
     r = CliRunner().invoke(
         main,
         ["simulate", str(MECH / "motor-linkage.yaml"), "--no-plots", "-q", "-o", str(tmp_path)],

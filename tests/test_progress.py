@@ -18,6 +18,7 @@ import pytest
 import mechsolve as ms
 import mechsolve.cli as cli
 import mechsolve.clikit as kit
+import mechsolve.commands.run as run_cmd
 
 from conftest import MECH
 
@@ -51,7 +52,7 @@ def test_without_tqdm_no_bar_and_no_error(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "tqdm", None)  # import tqdm raises ImportError
     assert not kit.progress_wanted(False, FakeTTY(), {})
     monkeypatch.setattr(kit, "progress_wanted", lambda quiet, *a: True)  # pretend a terminal
-    monkeypatch.setattr(cli, "_progress_bar", lambda total, quiet: None)
+    monkeypatch.setattr(run_cmd, "_progress_bar", lambda total, quiet: None)
     monkeypatch.setenv("MECHSOLVE_STREAM_ABOVE", "100")
     from click.testing import CliRunner
 
