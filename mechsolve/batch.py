@@ -347,7 +347,7 @@ def _assemble(ab, u0: float, nd: int):
     design, then branch -. Returns the modes (groups, nd), the reasons, the state at the
     start (nd columns, rates per unit driver coordinate) and the designs it could not
     decide (their own assembly says why)."""
-    from .assembly import _PendingConditions
+    from .branch_choice import _PendingConditions
 
     n2 = 2 * nd
     st2 = State(ab.system.nb, n2)

@@ -20,11 +20,8 @@ import math
 
 import numpy as np
 
-from .assembly import (
-    Redundancy,
-    StartAssembler,
-    _PendingConditions,
-)
+from .assembly import Redundancy, StartAssembler
+from .branch_choice import _PendingConditions
 from .branches import (
     EVENT_STEP,
     BranchEvents,
