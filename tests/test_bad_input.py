@@ -79,7 +79,7 @@ CASES = [
     (
         "B: [3.5, 0]}",
         "B: [9.5, 0]}",
-        3,
+        2,  # a mechanism that cannot be assembled is bad input (one exit-code rule)
         ["bad.yaml", "cannot assemble at driver angle 0°", "loop B", "cannot close"],
     ),
     (

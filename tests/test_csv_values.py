@@ -158,8 +158,11 @@ def run_cli(path: Path, out: Path, how: str = "inprocess") -> str:
     else:
         r = CliRunner().invoke(main, args)
         code, text = r.exit_code, r.output
-    expected = 1 if "non-Grashof" in path.read_text() else 0
-    assert code == expected, text
+    # one exit-code rule (README, Exit codes): positions that do not close are a result,
+    # exit 0, said on stderr as a warning
+    assert code == 0, text
+    if "non-Grashof" in path.read_text():
+        assert "warning: the results are incomplete" in text
     return text
 
 
