@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from mechsolve.model import schema
+from mechsolve.schema import build as schema
 from mechsolve.writers.atomic import write_text
 
 

@@ -600,7 +600,7 @@ def _interrupt(*args, **kwargs):
          ["flywheel", str(MECH / "shaper.yaml"), "-o", "{tmp}"]),
         ("mechsolve.synth.problem.solve_problem",
          ["synth", str(MECH / "synth" / "crane-crank-rocker.yaml")]),
-        ("mechsolve.model.schema.text", ["schema", "-o", "{tmp}/s.json"]),
+        ("mechsolve.schema.build.text", ["schema", "-o", "{tmp}/s.json"]),
     ],
     ids=["check", "flywheel", "synth", "schema"],
 )  # fmt: skip
@@ -611,7 +611,7 @@ def test_ctrl_c_is_130_in_every_command(monkeypatch, tmp_path, where, argv):
     import importlib
 
     monkeypatch.setattr(importlib.import_module(mod), attr, _interrupt)
-    if where.endswith("schema.text"):  # schema -o copies the shipped file: interrupt that
+    if where.endswith("schema.build.text"):  # schema -o copies the shipped file: interrupt that
         from mechsolve.commands import schema
 
         monkeypatch.setattr(schema, "shipped_path", _interrupt)

@@ -20,8 +20,8 @@ from click.testing import CliRunner
 from mechsolve.commands.schema import schema as schema_command
 from mechsolve.errors import InputError
 from mechsolve.model import keys, parse
-from mechsolve.model import schema as gen
 from mechsolve.model.source import load_file, load_text
+from mechsolve.schema import build as gen
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED = ROOT / "mechsolve" / "schema" / "mechanism.schema.json"

@@ -3,7 +3,7 @@
 Each mapping of the file format is a :class:`Section`: its keys in the order the error
 messages list them, which of them are required, what kind of value each takes and a
 one-line description. The parser (:mod:`mechsolve.model.parse`) reads its allowed and
-required keys from here; :mod:`mechsolve.model.schema` turns the same declarations into
+required keys from here; :mod:`mechsolve.schema.build` turns the same declarations into
 the JSON Schema that editors use for completion and hover help.
 
 The value kinds are small immutable descriptions (:class:`Kind`): a quantity of a

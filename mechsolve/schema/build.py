@@ -18,11 +18,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from . import keys
-from .keys import Key, Kind, Section
+from ..model import keys
+from ..model.keys import Key, Kind, Section
 
 DRAFT = "http://json-schema.org/draft-07/schema#"
-SHIPPED = Path(__file__).resolve().parent.parent / "schema" / "mechanism.schema.json"
+SHIPPED = Path(__file__).resolve().parent / "mechanism.schema.json"
 
 # The parser's number (mechsolve.units) at the start of a quantity's text.
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
