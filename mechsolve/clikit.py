@@ -103,7 +103,7 @@ def fail(exc: BaseException, outdir: Path | None = None) -> NoReturn:
         raise exc
     if isinstance(exc, BrokenPipeError):
         broken_pipe()
-    if isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
+    if isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)) or _SIGNALLED:
         if outdir is None:
             interrupted()
         interrupted("interrupted: the files not yet finished were not written")
@@ -246,15 +246,24 @@ def stream_above() -> int:
         ) from None
 
 
+_SIGNALLED: list[int] = []  # Ctrl-C or SIGTERM received by this process
+
+
 def interrupt_on_sigterm() -> None:
-    """Make SIGTERM unwind like Ctrl-C, so that a half-written file is removed."""
+    """Make SIGTERM unwind like Ctrl-C, so that a half-written file is removed; and
+    remember either signal, so that what it turns into on its way up (a C extension
+    being imported when it arrives fails with "ImportError: initialization failed")
+    still ends as an interruption (130), not as a bug (4)."""
     import signal
 
     def handler(signum, frame):  # noqa: ARG001
+        _SIGNALLED.append(signum)
         raise KeyboardInterrupt
 
     try:
         signal.signal(signal.SIGTERM, handler)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, handler)
     except ValueError:  # not the main thread (an embedding application): leave it
         pass
 
