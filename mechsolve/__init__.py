@@ -7,11 +7,10 @@ Describe a linkage in YAML (or build a :class:`~mechsolve.model.Mechanism` in co
     res.point("K").x, res.point("K").vx      # arrays over the sweep
     res.to_csv("crane.csv")
 
-The pipeline, one module per stage: YAML (:mod:`mechsolve.model.source`) -> validated model
-(:mod:`mechsolve.model`) -> constraint system (:mod:`mechsolve.constraints`) -> structure
-and group solvers (:mod:`mechsolve.structure`, :mod:`mechsolve.groups`) -> sweep
-(:mod:`mechsolve.sweep`) -> results (:mod:`mechsolve.results`) -> writers
-(:mod:`mechsolve.writers`) -> CLI (:mod:`mechsolve.cli`).
+The package's folders are the pipeline's layers, and data flows one way: base -> model
+(the file) -> system (the constraint equations) -> groups -> core (the sweep, states and
+forces) -> results -> writers -> analyses, reached through :mod:`mechsolve.api` -> report
+-> cli (see CONTRIBUTING.md).
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ _API = {
     "run": "api",
     "check": "api",
     "stream": "api",
-    "solve_designs": "batch",
+    "solve_designs": "analyses.batch",
     "Mechanism": "model",
     "Link": "model",
     "PinJoint": "model",
@@ -42,11 +41,11 @@ _API = {
     "Torque": "model",
     "Spring": "model",
     "Damper": "model",
-    "Results": "results",
-    "MechsolveError": "errors",
-    "InputError": "errors",
-    "AssemblyError": "errors",
-    "SolverError": "errors",
+    "Results": "results.results",
+    "MechsolveError": "base.errors",
+    "InputError": "base.errors",
+    "AssemblyError": "base.errors",
+    "SolverError": "base.errors",
 }
 
 __all__ = sorted(_API)

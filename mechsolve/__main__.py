@@ -1,3 +1,3 @@
-from .cli import main
+from mechsolve.cli.main import main
 
 main()

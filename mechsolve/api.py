@@ -14,14 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import core
-from .errors import InputError
-from .model import Mechanism, PinJoint
-from .model.parse import load, loads
-from .results import Results
-from .structure import grubler
-from .sweep import Analysis, StartAssembly
-from .units import UnitError, parse_quantity
+from mechsolve.core.sweep import Analysis, StartAssembly
+from mechsolve.model import Mechanism, PinJoint
+from mechsolve.model.parse import load, loads
+from mechsolve.results.results import Results
+from mechsolve.results.run import PLOT_STEP, for_plots, parse_step, positions, solve  # noqa: F401
+from mechsolve.system.structure import grubler
 
 __all__ = [
     "load",
@@ -36,168 +34,12 @@ __all__ = [
 ]
 
 
-def parse_step(mech: Mechanism, text: str | float) -> float:
-    """A sweep step from the command line: an angle (``"5 deg"``), a length for a linear
-    driver (``"2 mm"``) or a time (``"0.01 s"``), converted to the driver's coordinate."""
-    from .model import SliderJoint
-
-    linear = mech.driver is not None and isinstance(mech.joint(mech.driver.joint), SliderJoint)
-    if mech.driver is not None and mech.sweep.duration is not None:  # swept in time
-        try:
-            val = parse_quantity(text, "time")
-        except UnitError:
-            raise InputError(
-                f"--step {text!r}: this driver follows a motion law of time: give a time "
-                "step such as '0.01 s'"
-            ) from None
-        if not val > 0:
-            raise InputError(f"--step {text!r}: the step must be positive")
-        return val
-    kind = "length" if linear else "angle"
-    default = mech.length_unit if linear else "deg"
-    try:
-        val = parse_quantity(text, kind, default)
-    except UnitError:
-        try:
-            val = parse_quantity(text, "time") * abs(mech.driver.speed)
-            if val == 0:
-                raise InputError("--step: a driver at rest (speed 0) has no time step")
-        except UnitError:
-            raise InputError(
-                f"--step {text!r}: expected {'a length' if linear else 'an angle'} such as "
-                f"{'2 mm' if linear else '5 deg'}, or a time such as '0.01 s'"
-            ) from None
-    if not val > 0:
-        raise InputError(f"--step {text!r}: the step must be positive")
-    return val
-
-
-def solve(
-    mech: Mechanism,
-    *,
-    step: float | None = None,
-    method: str | None = None,
-    velocity: bool | None = None,
-    acceleration: bool | None = None,
-    forces: bool | None = None,
-) -> Results:
-    """Solve the mechanism's sweep.
-
-    Parameters
-    ----------
-    mech
-        A mechanism from :func:`load`, or built in code (validated here if it was not).
-    step
-        Override the sweep step (rad, or m for a linear driver).
-    method
-        ``"auto"`` or ``"newton"``; default from the file.
-    velocity, acceleration
-        Override the file's ``outputs.quantities``.
-    forces
-        Run the force analysis (default: when the model has masses or loads).
-    """
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
-    an = Analysis(mech, method)
-    ud = udd = None
-    if mech.driver.motion is not None:  # a motion law of time
-        u, t, ud, udd = an.motion_values(step if mech.sweep.duration is not None else None)
-    else:
-        u, t = an.sweep_values(an.start_value(), step=step)
-    vel = mech.outputs.velocity if velocity is None else velocity
-    acc = mech.outputs.acceleration if acceleration is None else acceleration
-    forces = mech.needs_forces if forces is None else forces
-    if forces:
-        vel = acc = True
-    sol = core.states(an, u, ud, udd, t=t, velocity=vel or bool(acc), acceleration=bool(acc))
-    force_result = core.forces(an, sol) if forces else None
-    return Results(an, sol, force_result)
-
-
-PLOT_STEP = math.radians(1.0)  # plots are drawn from a sweep at least this fine
-
-
-def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Results:
-    """The results that plots are drawn from: the same sweep at 1 degree or finer (a 360th
-    of a linear driver's range), whatever step the file gives for its table, plus the
-    exact driver values of its events: each rocker's and slider's limit positions, and
-    where a conditional load switches, sampled on both sides (1e-9 apart) so that a curve
-    jumps there instead of joining the samples around it. ``res`` itself when it is
-    already that fine and has no events to add, or has a motion law of time. Made once
-    per run: the summary, the plots and the requirements read the same figures."""
-    cached = getattr(res, "_plots_sweep", None)
-    if cached is not None and cached[0] is mech:
-        return cached[1]
-    fine = _for_plots(mech, res)
-    res._plots_sweep = (mech, fine)
-    return fine
-
-
-def _for_plots(mech: Mechanism, res: Results) -> Results:
-    if mech.driver.motion is not None or len(res.u) < 2 or not np.all(res.ok[[0, -1]]):
-        return res
-    an = res.analysis
-    travel = abs(float(res.u[-1] - res.u[0]))
-    fine = travel / 360 if an.linear else PLOT_STEP
-    coarse = travel / max(len(res.u) - 1, 1)
-    switching = res.forces is not None and any(
-        np.any(on[1:] != on[:-1]) for on in res.forces.active.values()
-    )
-    if coarse <= fine * (1 + 1e-9) and not switching:
-        return res
-    step = min(fine, coarse)
-    u, t = an.sweep_values(an.start_value(), step=step, travel=travel)
-    vel, acc = res.solution.has_velocity, res.solution.has_acceleration
-    sol = core.states(an, u, t=t, velocity=vel, acceleration=acc)
-    # stroke(q) over the extremes of the results' own sweep: one definition of a
-    # conditional load's range, so the plots' work and mean effort are the table's
-    f = core.forces(an, sol, res.forces.stroke_extremes) if res.forces is not None else None
-    first = Results(an, sol, f)
-    extra: list[float] = []
-    for lp in first.limit_positions():
-        extra += [lp.u_low, lp.u_high]
-    if f is not None:
-        from .solvers.forces import switch_points
-
-        h = 1e-9 * (an.scale if an.linear else 1.0)
-        for us in switch_points(an, sol, f):
-            extra += [us - h, us + h]
-    d = mech.driver.direction
-    lo, hi = (u[0], u[-1]) if d > 0 else (u[-1], u[0])
-    extra = [x for x in extra if lo < x < hi]
-    if not extra:
-        return first
-    uu = np.concatenate([u, extra])
-    order = np.argsort(d * (uu - u[0]), kind="stable")
-    uu = uu[order]
-    tt = np.interp(d * (uu - u[0]), d * (u - u[0]), t)
-    sol = core.states(an, uu, t=tt, velocity=vel, acceleration=acc)
-    f = core.forces(an, sol, f.stroke_extremes) if f is not None else None
-    return Results(an, sol, f)
-
-
-def positions(mech: Mechanism, step: float | None = None) -> int:
-    """How many positions the sweep has (without solving it)."""
-    sw = mech.sweep
-    if sw.duration is not None:  # swept in time
-        dt = step if step is not None else sw.time_step
-        return max(0, math.ceil(sw.duration / dt - 1e-9)) + 1
-    travel = sw.travel if sw.travel is not None else 2 * math.pi
-    step = step if step is not None else sw.step
-    if step is None:
-        return 361
-    ratio = travel / step
-    if not ratio < 1e15:  # absurd (or infinite): the sweep itself says so
-        return 10**15
-    return max(0, math.ceil(ratio - 1e-9)) + 1
-
-
 def stream(mech: Mechanism, csv_path, **kwargs):
-    """Solve a long sweep chunk by chunk and stream its CSV (see :mod:`mechsolve.chunked`).
+    """Solve a long sweep chunk by chunk and stream its CSV (see :mod:`mechsolve.analyses.chunked`).
 
-    Returns a :class:`~mechsolve.chunked.StreamSummary` and the Results of a coarse sweep
+    Returns a :class:`~mechsolve.analyses.chunked.StreamSummary` and the Results of a coarse sweep
     of the same range."""
-    from .chunked import stream as _stream
+    from mechsolve.analyses.chunked import stream as _stream
 
     return _stream(mech, csv_path, **kwargs)
 
@@ -274,7 +116,7 @@ def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     u0 = an.start_value()
     asm = an.assemble(u0)
     st = asm.state
-    from .constraints import ConstraintSystem
+    from mechsolve.system.constraints import ConstraintSystem
 
     free = ConstraintSystem(mech, with_driver=False)
     J = free.jacobian(st)[0]

@@ -40,8 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.writers.plots import save_figure
-
-from . import references as R
+from mechsolve_bench import references as R
 
 
 @dataclass
@@ -209,7 +208,7 @@ def _kinematic_rows(
     mech, ref: Callable, compare: Callable, repeats: int, newton_n: int
 ) -> list[Row]:
     import mechsolve as ms
-    from mechsolve.sweep import Analysis
+    from mechsolve.core.sweep import Analysis
 
     an = Analysis(mech)
     start = an.assemble(0.0)
@@ -366,7 +365,7 @@ def case_newton(n: int, repeats: int) -> Case:
     unknowns, coarse continuation, Hermite prediction, two batched updates) on the same
     mechanism, in one run; with one-position calls."""
     import mechsolve as ms
-    from mechsolve.sweep import Analysis
+    from mechsolve.core.sweep import Analysis
 
     th2 = np.arange(n) * 2 * np.pi / n
     tht = R.TRIAD_START + th2
@@ -527,7 +526,7 @@ def load_case(name: str):
 def _compare_crane(sol, want):
     st = sol.state if hasattr(sol, "state") else sol.solution.state
     # K on the boom (body 3): from the state
-    from mechsolve.results import Results
+    from mechsolve.results.results import Results
 
     res = sol if isinstance(sol, Results) else None
     if res is not None:
@@ -641,7 +640,7 @@ def case_startup_dynamics(repeats: int) -> Case:
     """Seed 004's motor-driven start-up (RK4, h = 0.002 s, 1100 steps): mechsolve
     simulate (the equation of motion from its force analysis, then every state and joint
     force along the motion) against the seed's reduced equation written by hand."""
-    from mechsolve.dynamics import simulate
+    from mechsolve.analyses.dynamics import simulate
 
     mech = load_case("motor-linkage.yaml")
 
@@ -678,7 +677,7 @@ def _startup_exudyn(case: Case, mech, ours: float, max_ref: float, repeats: int)
     function; and at 0.5 ms, the step where its max omega is as close to the converged
     value as RK4's at 2 ms (equal accuracy)."""
     try:
-        from . import peers
+        from mechsolve_bench import peers
     except ImportError:
         return
     if not peers.available().get("exudyn"):
@@ -732,7 +731,7 @@ def case_dynamics_work_precision(quick: bool) -> Case:
     motion tabulated, no reactions)."""
     import copy
 
-    from mechsolve.dynamics import ReducedModel, integrate
+    from mechsolve.analyses.dynamics import ReducedModel, integrate
 
     mech = load_case("motor-linkage.yaml")
     model = ReducedModel(mech)
@@ -914,7 +913,7 @@ def case_startup(repeats: int) -> Case:
 
 def case_peers(n: int) -> Case | None:
     try:
-        from . import peers
+        from mechsolve_bench import peers
     except ImportError:
         return None
     import mechsolve as ms
@@ -981,7 +980,7 @@ def case_peers(n: int) -> Case | None:
 
 
 def _case_study(quick: bool) -> Case:
-    from .study import case_study
+    from mechsolve_bench.study import case_study
 
     return case_study(quick)
 

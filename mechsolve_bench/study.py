@@ -4,7 +4,7 @@ The designs are four-bar crank-rockers (crank and coupler lengths varied over a 
 uniform bars, gravity, a conditional load at the coupler point, 361 positions with
 kinematics and forces). Measured in one run:
 
-* the batch (:func:`mechsolve.batch.solve_designs`): every design's kinematics and forces
+* the batch (:func:`mechsolve.analyses.batch.solve_designs`): every design's kinematics and forces
   as one computation over design x position;
 * ``mechsolve.solve`` called once per design (what a user's loop over designs does);
 * a hand-written numpy closed form of the same designs' kinematics and kinetostatics,
@@ -55,8 +55,8 @@ def _grid(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _study(n: int):
+    from mechsolve.analyses.study.designs import make_study
     from mechsolve.model.source import load_text
-    from mechsolve.study.designs import make_study
 
     a, b = _grid(n)
     opts = [
@@ -79,11 +79,10 @@ def case_study(quick: bool = False, designs: int | None = None):
     """Designs per second: the batch, separate solves, the hand-written closed form, and
     the study's executors (see the module's docstring)."""
     import mechsolve as ms
-    from mechsolve.batch import solve_designs
-    from mechsolve.study import execute as ex
-
-    from . import Case, Row
-    from .fourbar_batch import kinematics, kinetostatics
+    from mechsolve.analyses.batch import solve_designs
+    from mechsolve.analyses.study import execute as ex
+    from mechsolve_bench import Case, Row
+    from mechsolve_bench.fourbar_batch import kinematics, kinetostatics
 
     n_batch = 24 if quick else 1000
     study = _study(n_batch)

@@ -1,6 +1,6 @@
 """Regenerate the shipped JSON Schema of the mechanism file from mechsolve.model.keys.
 
-python scripts/make_schema.py          # writes mechsolve/schema/mechanism.schema.json
+python scripts/make_schema.py          # writes mechsolve/analyses/schema/mechanism.schema.json
 python scripts/make_schema.py --check  # exit 1 if the shipped file is out of date
 """
 
@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import sys
 
-from mechsolve.schema import build as schema
-from mechsolve.writers.atomic import write_text
+from mechsolve.analyses.schema import build as schema
+from mechsolve.base.atomic import write_text
 
 
 def main(argv: list[str]) -> int:

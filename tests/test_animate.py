@@ -15,8 +15,8 @@ from click.testing import CliRunner
 from PIL import Image
 
 import mechsolve as ms
-from mechsolve.animate import fine_step, frames_of, solve_frames
-from mechsolve.commands.animate import animate
+from mechsolve.cli.commands.animate import animate
+from mechsolve.report.animate import fine_step, frames_of, solve_frames
 
 from closed_form import slider_crank
 from conftest import MECH, MECHANISMS
@@ -105,7 +105,7 @@ def test_forces_need_masses_or_loads(tmp_path):
 
 
 def test_mp4_without_ffmpeg_says_what_to_install(tmp_path, monkeypatch):
-    import mechsolve.animate as an
+    import mechsolve.report.animate as an
 
     monkeypatch.setattr(an, "ffmpeg_available", lambda: False)
     out = tmp_path / "a.mp4"
@@ -178,7 +178,7 @@ def test_real_process(tmp_path):
         [
             sys.executable,
             "-c",
-            "import sys; from mechsolve.commands.animate import animate; "
+            "import sys; from mechsolve.cli.commands.animate import animate; "
             "animate.main(sys.argv[1:], prog_name='mechsolve animate')",
             str(MECH / "crane.yaml"),
             "-o",

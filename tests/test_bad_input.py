@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 GOOD = """\
 name: four-bar

@@ -1,4 +1,4 @@
-"""Designs solved as one batch (mechsolve.batch): every design's results equal its own
+"""Designs solved as one batch (mechsolve.analyses.batch): every design's results equal its own
 separate solve, the batched ones agree with the hand-written closed form of the
 four-bar, and designs the batch must not take (near a toggle, unassemblable, another
 structure, a condition over the stroke) are solved alone, with the reason."""
@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.batch import solve_designs
-from mechsolve.errors import MechsolveError
+from mechsolve.analyses.batch import solve_designs
+from mechsolve.analyses.study.designs import make_study
+from mechsolve.base.errors import MechsolveError
 from mechsolve.model.source import load_text
-from mechsolve.study.designs import make_study
 from mechsolve_bench.fourbar_batch import kinematics, kinetostatics
 from mechsolve_bench.study import _FOURBAR
 
@@ -95,7 +95,7 @@ def test_fourbar_grid_equals_separate_solves_and_the_closed_form():
 def test_designs_split_over_several_passes_equal_separate_solves(monkeypatch):
     """A batch larger than a pass (CHUNK_COLUMNS) is solved pass by pass: each design
     lands in its own pass and slot and equals its separate solve."""
-    import mechsolve.batch as mb
+    import mechsolve.analyses.batch as mb
 
     study = _grid_study()
     mechs = [study.mechanism(k) for k in range(len(study))]

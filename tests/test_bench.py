@@ -195,7 +195,8 @@ def test_installed_package_benchmarks_the_crane(tmp_path):
             sys.executable,
             "-c",
             "import mechsolve, mechsolve_bench, sys; print(mechsolve.__file__); "
-            "print(mechsolve_bench.__file__); from mechsolve.cli import main; sys.exit(main())",
+            "print(mechsolve_bench.__file__); "
+            "from mechsolve.cli.main import main; sys.exit(main())",
         ]
         + ["bench", "--quick", "--case", "crane-kinematics"],
         capture_output=True,

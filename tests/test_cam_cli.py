@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.commands.cam import cam
+from mechsolve.cli.commands.cam import cam
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data"

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from mechsolve.cam.design import Allowance, extremes, min_base_translating, size
-from mechsolve.cam.laws import LAWS
-from mechsolve.cam.profile import Follower, base_radius_of, solve
-from mechsolve.cam.program import build_program
+from mechsolve.analyses.cam.design import Allowance, extremes, min_base_translating, size
+from mechsolve.analyses.cam.laws import LAWS
+from mechsolve.analyses.cam.profile import Follower, base_radius_of, solve
+from mechsolve.analyses.cam.program import build_program
 
 d = math.radians
 

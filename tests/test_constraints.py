@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.constraints import ConstraintSystem
-from mechsolve.state import State
+from mechsolve.base.state import State
+from mechsolve.system.constraints import ConstraintSystem
 
 from conftest import MECH
 

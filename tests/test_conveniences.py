@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.errors import InputError
+from mechsolve.base.errors import InputError
+from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.model import GROUND, PinJoint
-from mechsolve.units import UnitError, parse_quantity
 
 from closed_form import fourbar
 
@@ -344,7 +344,7 @@ def test_us_units_are_exact(text, kind, exact):
 
 
 def test_psi():
-    from mechsolve.units import parse_unit
+    from mechsolve.base.units import parse_unit
 
     assert parse_unit("psi").factor == pytest.approx(float(LBF / IN**2), rel=1e-15)
     assert parse_unit("ksi").factor == pytest.approx(float(1000 * LBF / IN**2), rel=1e-15)

@@ -35,7 +35,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from closed_form import fourbar_disc, slider_crank
 from handcalc import fourbar_kinematics

@@ -16,8 +16,8 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.instants import parse_instant, solve_instants
+from mechsolve.analyses.instants import parse_instant, solve_instants
+from mechsolve.cli.main import main
 
 from refsol import Body, Rigid, newton_euler
 

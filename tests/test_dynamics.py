@@ -11,8 +11,8 @@ from click.testing import CliRunner
 from scipy.integrate import solve_ivp
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.dynamics import ReducedModel, simulate
+from mechsolve.analyses.dynamics import ReducedModel, simulate
+from mechsolve.cli.main import main
 
 from conftest import MECH, ref
 
@@ -74,7 +74,7 @@ def test_the_states_along_the_motion_are_a_sweep_over_its_turns(seed004):
     """The states along the motion are solved within the reference turn and carried on
     by whole turns: they must equal the sweep's own continuation over the many turns of
     the start-up (angles running on, not wrapped), and close the constraints."""
-    from mechsolve import core
+    from mechsolve.core import evaluate as core
 
     tr, sol = seed004.trajectory, seed004.solution
     assert tr.phi[-1] - tr.phi[0] > 10 * 2 * np.pi
@@ -104,7 +104,7 @@ def test_the_tables_interpolant_against_closed_forms():
     Hermite table reproduces it and its slope between the grid points; a function with a
     kink in its third derivative (|sin x|^3) never converges and is returned unconverged
     at the largest grid."""
-    from mechsolve.dynamics import _harmonics, _spectral_samples, _Table
+    from mechsolve.analyses.dynamics import _harmonics, _spectral_samples, _Table
 
     def smooth(x):
         return np.array([np.exp(np.cos(x)), 3.0 + np.sin(2 * x)])
@@ -144,7 +144,7 @@ def test_a_sharp_peak_gets_a_finer_table_or_none(e):
     need more angles and the table more intervals to keep its tolerance; where that would
     take more than TABLE_MAX intervals (and the splines through the samples are not good
     enough either) there is no table, and the equation is solved at every stage."""
-    from mechsolve.dynamics import TABLE_MAX, _harmonics, _spectral_samples, _Table
+    from mechsolve.analyses.dynamics import TABLE_MAX, _harmonics, _spectral_samples, _Table
 
     def f(x):
         return np.array([1.0 / (1.0 + e - np.cos(x))])
@@ -164,8 +164,8 @@ def test_a_linkage_that_does_not_come_back_after_a_turn_is_not_periodic():
     """A crank's motion is tabulated over one turn only if the whole linkage comes back
     as it started (poses and rates per unit angle); otherwise it is solved at every
     stage."""
-    from mechsolve.dynamics import _repeats
-    from mechsolve.state import State
+    from mechsolve.analyses.dynamics import _repeats
+    from mechsolve.base.state import State
 
     st = State(2, 3)
     st.x[0] = [0.1, 0.5, 0.1]
@@ -178,7 +178,7 @@ def test_a_linkage_that_does_not_come_back_after_a_turn_is_not_periodic():
 def test_the_integrators_inline_equation_equals_the_models_terms():
     """The RK4 inner loop evaluates the table in line; it must be the equation of
     motion (M(omega) - E0(phi, omega)) / J(phi) that ReducedModel.terms gives."""
-    from mechsolve.dynamics import _acceleration, _with_flywheel, drive_torque
+    from mechsolve.analyses.dynamics import _acceleration, _with_flywheel, drive_torque
 
     mech = ms.load(MECH / "motor-linkage.yaml")
     model = ReducedModel(_with_flywheel(mech))
@@ -317,7 +317,7 @@ def test_a_flywheel_adds_its_inertia_and_smooths_the_speed():
     phi, Ja, _ = a.model.inertia_curve()
     _, Jb, _ = b.model.inertia_curve()
     np.testing.assert_allclose(Jb - Ja, 2.0, atol=1e-9)  # on the crank: theta' = 1
-    from mechsolve.dynamics import steady_fluctuation
+    from mechsolve.analyses.dynamics import steady_fluctuation
 
     assert steady_fluctuation(b.trajectory)[1] < 0.25 * steady_fluctuation(a.trajectory)[1]
 
@@ -336,7 +336,7 @@ def test_flywheel_for_a_pure_sine_torque_against_the_hand_formula(tmp_path):
     """A uniform crank under gravity at constant speed needs T = m g (l/2) cos(phi): mean
     zero, so dE(phi) = -m g (l/2) sin(phi) and dE_max = m g l; J_F = m g l / (w^2 delta)
     minus the crank's own m l^2 / 3."""
-    from mechsolve.flywheel import size_flywheel
+    from mechsolve.analyses.flywheel import size_flywheel
 
     m, g, l, w, delta = 3.0, 9.81, 0.8, 10.0, 1 / 40
     fw = size_flywheel(ms.loads(CRANK), delta)
@@ -354,7 +354,7 @@ def test_flywheel_for_a_pure_sine_torque_against_the_hand_formula(tmp_path):
 def test_flywheel_checked_by_simulation_on_seed_004():
     """The energy method takes the machine's inertia as constant; simulating the machine
     with the flywheel it gives, to steady state, reaches nearly the fluctuation asked."""
-    from mechsolve.flywheel import size_flywheel
+    from mechsolve.analyses.flywheel import size_flywheel
 
     fw = size_flywheel(ms.load(MECH / "motor-linkage.yaml"), 1 / 20)
     assert fw.J_flywheel > 1.0
@@ -403,7 +403,7 @@ def test_energy_balance_column_is_small_and_converges(seed004):
 
 
 def test_simulate_shows_progress_on_a_terminal(monkeypatch, tmp_path):
-    import mechsolve.commands.simulate as simulate_cmd
+    import mechsolve.cli.commands.simulate as simulate_cmd
 
     calls = []
 
@@ -427,7 +427,7 @@ def test_shaper_flywheel_with_its_conditional_cutting_force():
     """The shaper's cutting force switches with the ram's stroke and direction; the
     flywheel by the energy method needs the cycle's mean torque (its work per cycle over
     2 pi)."""
-    from mechsolve.flywheel import size_flywheel
+    from mechsolve.analyses.flywheel import size_flywheel
 
     mech = ms.load(MECH / "shaper.yaml")
     mech.simulation.duration = 0.1
@@ -445,7 +445,7 @@ def test_switching_loads_are_tabulated_with_exact_switch_angles():
     position (solved here by the sweep, not by the table) is at 5 % and 95 % of the
     stroke's ends (the ram's limit positions, from the closed-form stroke 2 l r / d), and
     the tabulated motion equals the one solved at every stage."""
-    from mechsolve.dynamics import ReducedModel, _with_flywheel
+    from mechsolve.analyses.dynamics import ReducedModel, _with_flywheel
 
     mech = ms.load(MECH / "shaper.yaml")
     model = ReducedModel(_with_flywheel(mech))  # the rotor's inertia, as simulate adds it
@@ -454,7 +454,7 @@ def test_switching_loads_are_tabulated_with_exact_switch_angles():
     on0, switches = model._masks["cutting", float(d)]  # the crank's own sense
     assert not on0 and len(switches) == 2
     angles = model.u0 + d * switches
-    from mechsolve import core
+    from mechsolve.core import evaluate as core
 
     an = model.an
     ram, c = an.system.index["ram"], mech.local_point("ram", "C")
@@ -481,7 +481,7 @@ def test_a_condition_on_the_size_of_a_speed_is_solved_at_every_stage():
     """Whether ``C.vx > 0.3`` holds depends on how fast the crank turns, not only on its
     angle: such a load cannot be tabulated over the angle, and the simulation solves it at
     every stage (the same motion as --exact)."""
-    from mechsolve.dynamics import ReducedModel
+    from mechsolve.analyses.dynamics import ReducedModel
 
     text = (MECH / "shaper.yaml").read_text().replace("when: C.vx > 0 and", "when: C.vx > 0.3 and")
     assert "C.vx > 0.3" in text
@@ -508,7 +508,7 @@ def test_a_machine_without_inertia_where_it_stops_is_refused(tmp_path):
 
 
 def test_energy_mass_method_reduces_to_the_classic_one_for_a_constant_inertia():
-    from mechsolve.flywheel import size_flywheel
+    from mechsolve.analyses.flywheel import size_flywheel
 
     fw = size_flywheel(ms.loads(CRANK), 1 / 40, check=False)  # J = m l^2 / 3 everywhere
     assert fw.J_exact == pytest.approx(fw.J_flywheel, rel=1e-9)
@@ -520,8 +520,8 @@ def test_energy_mass_method_on_seed_004_reaches_the_fluctuation_asked():
     constant-J estimate is off by about 2 %; the motor's torque also varies with speed)."""
     import copy
 
-    from mechsolve.dynamics import steady_fluctuation
-    from mechsolve.flywheel import size_flywheel
+    from mechsolve.analyses.dynamics import steady_fluctuation
+    from mechsolve.analyses.flywheel import size_flywheel
     from mechsolve.model.machine import Flywheel
 
     mech = ms.load(MECH / "motor-linkage.yaml")
@@ -754,7 +754,7 @@ def test_a_parallelogram_is_tabulated_whatever_its_start(start):
     stage takes them: its equation is tabulated from any start (it had fallen back to
     solving every stage, a hundred times slower, unless a sample hit the singular angle
     exactly), with J at its closed-form 0.6 kg m^2."""
-    from mechsolve.dynamics import _with_flywheel
+    from mechsolve.analyses.dynamics import _with_flywheel
 
     mech = ms.loads(PARALLELOGRAM_MOTOR.replace("start: 30 deg", f"start: {start}"))
     model = ReducedModel(_with_flywheel(mech))

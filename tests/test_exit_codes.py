@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from conftest import MECH
 
@@ -130,10 +130,10 @@ def test_0_warned_failed_check_power_balance(tmp_path):
         tmp_path,
         "inject.py",
         "import sys\n"
-        "import mechsolve.solvers.forces as f\n"
+        "import mechsolve.core.kinetostatics as f\n"
         "p = f.ForceResult.power_input\n"
         "f.ForceResult.power_input = property(lambda self: 1.01 * p.fget(self))\n"
-        "from mechsolve.cli import main\n"
+        "from mechsolve.cli.main import main\n"
         "sys.exit(main())\n",
     )
     args = ("run", str(MECH / "fourbar.yaml"), "-o", str(tmp_path), "--no-plots")
@@ -263,7 +263,7 @@ def read_ground(*args, **kwargs):
     raise ValueError("injected: not an input error")
 
 parse.read_ground = read_ground
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 sys.exit(main())
 """
 

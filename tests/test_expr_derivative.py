@@ -1,6 +1,6 @@
 """Symbolic derivatives of motion laws written as expressions of time (issue 12).
 
-A driver's law ``u(t)`` is differentiated symbolically by :mod:`mechsolve.expr`. Each law
+A driver's law ``u(t)`` is differentiated symbolically by :mod:`mechsolve.model.expr`. Each law
 here is checked twice: against derivatives worked out by hand (to 1e-12) and, as an
 independent cross-check that shares no code with the differentiation, against
 high-order central differences of :meth:`Expression.evaluate_at`.
@@ -16,7 +16,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from mechsolve.expr import MAX_DEPTH, MAX_LENGTH, ExprError, Expression, walk
+from mechsolve.model.expr import MAX_DEPTH, MAX_LENGTH, ExprError, Expression, walk
 
 T = np.linspace(0.15, 1.85, 61)  # away from the kinks and poles of the laws below
 Fn = Callable[[np.ndarray], np.ndarray]

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
-from mechsolve.expr import MAX_DEPTH, MAX_LENGTH, ExprError, Expression
+from mechsolve.cli.main import main
+from mechsolve.model.expr import MAX_DEPTH, MAX_LENGTH, ExprError, Expression
 
 ROOT = Path(__file__).resolve().parents[1]
 FOURBAR = (ROOT / "mechanisms" / "fourbar.yaml").read_text()

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.sweep import Analysis
+from mechsolve.core.sweep import Analysis
 from mechsolve_bench import _crane_mech, chain_yaml, fourbar_yaml, wrap
 from mechsolve_bench import references as R
 
@@ -163,7 +163,7 @@ def test_lazy_start_equals_a_separate_assembly():
 def test_split_newton_from_the_file_and_the_command_line(tmp_path):
     from click.testing import CliRunner
 
-    from mechsolve.cli import main
+    from mechsolve.cli.main import main
 
     text = fourbar_yaml(90).replace("outputs:", "solver: {method: split-newton}\noutputs:")
     mech = ms.loads(text)

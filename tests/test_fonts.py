@@ -117,7 +117,7 @@ def test_names_in_any_script_in_conditions_and_requirements():
         "\nrequirements:\n  臂架摆角: 臂架.swing >= 40 deg\n  转速: max(曲柄.omega) > 0.1 rad/s\n"
     )
     mech = ms.loads(text)
-    from mechsolve.requirements import check_requirements
+    from mechsolve.results.requirements import check_requirements
 
     v = check_requirements(mech, ms.solve(mech))
     assert [x.passed for x in v] == [True, True], [x.message for x in v]
@@ -128,7 +128,7 @@ def test_svg_plots_keep_names_as_text(tmp_path):
     its own fonts, whatever this machine has)."""
     from click.testing import CliRunner
 
-    from mechsolve.cli import main
+    from mechsolve.cli.main import main
 
     r = CliRunner().invoke(
         main, ["run", str(MECH / "crane-zh.yaml"), "--format", "svg", "-o", str(tmp_path), "-q"]

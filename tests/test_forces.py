@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from closed_form import slider_crank
 from conftest import MECH, MECHANISMS, ref

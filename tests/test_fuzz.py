@@ -32,7 +32,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 from mechsolve.model.source import load_text
 
 from conftest import MECHANISMS

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from closed_form import fourbar
 from conftest import MECH, ref
@@ -741,8 +741,8 @@ def test_states_on_a_solved_turns_branches_stay_a_parallelogram():
     sweep from the start found, without a new branch analysis: through the parallelogram's
     bifurcations (0 and 180 deg) it must stay a parallelogram (closed form: the coupler
     translates, the rocker turns with the crank), as the full path does."""
-    from mechsolve import core
-    from mechsolve.sweep import Analysis
+    from mechsolve.core import evaluate as core
+    from mechsolve.core.sweep import Analysis
 
     an = Analysis(ms.loads(parallelogram("auto", 1, 10)))
     u0 = an.start_value()

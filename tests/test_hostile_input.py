@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 BAD = Path(__file__).resolve().parent / "bad_inputs"
 FILES = sorted(BAD.glob("*.yaml"))
@@ -149,7 +149,7 @@ def test_weight_under_a_tiny_gravity(tmp_path):
 
 def test_a_model_built_in_code_with_a_huge_number():
     import mechsolve as ms
-    from mechsolve.errors import InputError
+    from mechsolve.base.errors import InputError
 
     mech = ms.load(FOURBAR)
     mech.links[2].points["B"] = (1e308, 0.0)
@@ -247,7 +247,7 @@ def test_nesting_beyond_libyamls_own_limit_names_a_clean_key_path():
     """libyaml (PyYAML 6.0.4) refuses more than 1000 flow levels while scanning ahead;
     the message is ours, with the key path read so far and no placeholder in it."""
     import mechsolve as ms
-    from mechsolve.errors import InputError
+    from mechsolve.base.errors import InputError
 
     with pytest.raises(InputError) as exc:
         ms.loads("a: " + "[" * 1200 + "]" * 1200)

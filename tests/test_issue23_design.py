@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 MECH = Path(__file__).resolve().parent.parent / "mechanisms"
 
@@ -102,7 +102,7 @@ def test_flywheel_check_by_simulation_that_misses_is_flagged(tmp_path):
     method's flywheel, checked by simulation, reaches a delta several times smaller than
     asked. That is flagged (a WARNING line) and exits 5; the file's own soft motor
     (1.25 N m s) reaches the target within the tolerance and exits 0."""
-    from mechsolve.flywheel import CHECK_TOLERANCE
+    from mechsolve.analyses.flywheel import CHECK_TOLERANCE
 
     r = _run("flywheel", _stiff_motor(tmp_path, 3000), "--delta", "0.05", "-o", tmp_path / "a")
     assert r.exit_code == 5, r.output
@@ -148,7 +148,7 @@ def test_synth_reads_1e6_style_numbers(tmp_path):
     out = tmp_path / "sc-design.yaml"
     r = _run("synth", f, "-o", out)
     assert r.exit_code == 0, r.output
-    from mechsolve.synth.problem import solve_problem
+    from mechsolve.analyses.synth.problem import solve_problem
 
     d = solve_problem(f).chosen
     a, b, e = d.lengths["crank"], d.lengths["rod"], 0.020
@@ -298,7 +298,7 @@ cam:
     f.write_text(text)
     r = _run("cam", f, "-o", tmp_path / "o", "--no-plots", "--no-dxf")
     assert r.exit_code == 0, r.output
-    from mechsolve.cam.model import load
+    from mechsolve.analyses.cam.model import load
 
     model = load(f)
     a, phi0, fo, sg = 0.100, math.radians(25), 0.005, -1
@@ -500,7 +500,7 @@ def test_synth_crank_rocker_from_one_limit_gives_both_solutions(tmp_path, pivot)
     crank-rockers. Each, written with --solution N and solved by mechsolve's own run,
     and by the closed form of its lengths, has K = 1.2 and the given limit 135 deg."""
     from mechsolve import api
-    from mechsolve.synth.problem import solve_problem
+    from mechsolve.analyses.synth.problem import solve_problem
 
     f = tmp_path / "one.yaml"
     f.write_text(ONE_LIMIT.replace("PIVOT", pivot))

@@ -23,8 +23,8 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cam.laws import LAWS
-from mechsolve.cam.program import build_program
+from mechsolve.analyses.cam.laws import LAWS
+from mechsolve.analyses.cam.program import build_program
 
 PI = math.pi
 ROOT = Path(__file__).parent.parent
@@ -214,7 +214,7 @@ def test_cam_motion_csv_jerk_in_time(tmp_path):
     """The motion table the user reads: velocity, acceleration and jerk in m/s, m/s^2,
     m/s^3 at 120 rpm equal omega, omega^2, omega^3 times the closed forms (a cycloidal rise
     of 25 mm over 120 deg, a 3-4-5 return over 90 deg)."""
-    from mechsolve.commands.cam import cam
+    from mechsolve.cli.commands.cam import cam
 
     r = CliRunner().invoke(
         cam, [str(DATA / "cam_translating.yaml"), "-o", str(tmp_path), "--no-plots"]
@@ -253,7 +253,7 @@ def test_cam_motion_csv_angular_jerk_of_an_oscillating_follower(tmp_path):
     """The seed's oscillating follower (15 deg over 75 deg of cam angle, back over 75 deg,
     60 rpm) with a cycloidal law: swing, angular velocity, acceleration and jerk in the
     table against omega^n times the closed forms."""
-    from mechsolve.commands.cam import cam
+    from mechsolve.cli.commands.cam import cam
 
     text = (ROOT / "mechanisms" / "shaper-cam.yaml").read_text()
     assert "law: equal acceleration" in text
@@ -301,7 +301,7 @@ def test_guide_bar_from_a_stroke(k, stroke):
     """A guide bar with time ratio K on a frame d, given the stroke H of the bar's end:
     the bar swings psi = theta (the crank is perpendicular to the bar at both limits), the
     crank is r = d sin(theta/2) and the bar L = H / (2 sin(theta/2))."""
-    from mechsolve.synth.guidebar import guide_bar
+    from mechsolve.analyses.synth.guidebar import guide_bar
 
     th = _theta_of_k(k)
     L = stroke / (2 * math.sin(th / 2))
@@ -318,7 +318,7 @@ def test_guide_bar_stroke_through_synth_and_the_solver(tmp_path):
     """`mechsolve synth` on a guide bar given K = 1.5 and a 300 mm stroke: the written
     mechanism, solved, swings its bar by theta = 36 deg, and the bar's end B sweeps a
     chord 2 |O4B| sin(swing/2) equal to the stroke; the crank is d sin(18 deg)."""
-    from mechsolve.commands.synth import synth
+    from mechsolve.cli.commands.synth import synth
 
     prob = tmp_path / "gb.yaml"
     prob.write_text(
@@ -373,7 +373,7 @@ DEFINITIONS = {
 def test_every_unit_of_the_table_is_its_definition():
     """Every symbol of the units table converts by its definition (to rounding), with its
     dimension; a symbol the table gains must be defined here as well."""
-    from mechsolve.units import _UNITS, parse_unit
+    from mechsolve.base.units import _UNITS, parse_unit
 
     missing = sorted(set(_UNITS) - set(DEFINITIONS))
     assert not missing, f"define these units in DEFINITIONS: {missing}"
@@ -389,7 +389,7 @@ def test_every_unit_of_the_table_is_its_definition():
 def test_units_against_printed_conversion_values():
     """A few conversions as the tables print them (NIST SP 811, appendix B), and compound
     units through the parser."""
-    from mechsolve.units import parse_quantity, parse_unit
+    from mechsolve.base.units import parse_quantity, parse_unit
 
     assert parse_unit("psi").factor == pytest.approx(6894.757293168, rel=1e-12)
     assert parse_unit("slug").factor == pytest.approx(14.59390293720636, rel=1e-13)
@@ -554,7 +554,7 @@ def test_oscillating_flat_face_curvature_is_the_profiles():
     """cam/profile.py:219 (h'' of an oscillating flat face, ``ds**2`` as ``ds - 2``): the
     profile's radius of curvature against the curvature of the drawn profile itself,
     |r'|^3 / |r' x r''| by central differences in the cam angle, both senses."""
-    from mechsolve.cam.profile import Follower, solve
+    from mechsolve.analyses.cam.profile import Follower, solve
 
     law, deg = LAWS["cycloidal"], math.radians
     prog = build_program(
@@ -589,7 +589,7 @@ def test_smallest_base_radius_of_a_translating_follower(key, e):
     textbook law on a fine grid refined by Brent's method."""
     from scipy.optimize import minimize_scalar
 
-    from mechsolve.cam.design import Allowance, min_base_translating
+    from mechsolve.analyses.cam.design import Allowance, min_base_translating
 
     deg = math.radians
     h, b_up, b_down = 0.03, deg(100), deg(140)
@@ -625,7 +625,7 @@ def test_smallest_base_radius_of_a_translating_follower(key, e):
 def test_a_return_below_the_lowest_position_names_its_lift(tmp_path):
     """cam/model.py:248 (``level * (1 + 1e-9)`` as ``level + (1 + 1e-9)``): a return of
     30 mm after a rise of 25 mm is refused at its own key, saying so."""
-    from mechsolve.commands.cam import cam
+    from mechsolve.cli.commands.cam import cam
 
     text = (DATA / "cam_translating.yaml").read_text()
     old = "{return: 90 deg, law: 3-4-5}"
@@ -640,8 +640,8 @@ def test_a_return_below_the_lowest_position_names_its_lift(tmp_path):
 def test_slider_crank_with_k_one():
     """synth/slidercrank.py:32 (``1e-12 * h_len`` as ``1e-12 - h_len``): K = 1 with no
     offset says any crank H/2 works; with an offset, that K = 1 needs none."""
-    from mechsolve.errors import InputError
-    from mechsolve.synth.slidercrank import slider_crank_at
+    from mechsolve.analyses.synth.slidercrank import slider_crank_at
+    from mechsolve.base.errors import InputError
 
     with pytest.raises(InputError, match="any crank a = H/2 works"):
         slider_crank_at(0.1, 0.0, 0.0)
@@ -668,7 +668,7 @@ def test_slider_crank_offset_with_the_largest_transmission_angle(k):
     ``best + step`` as ``best // step``, is equivalent: the bracket only widens.)"""
     from scipy.optimize import minimize_scalar
 
-    from mechsolve.synth.slidercrank import slider_crank
+    from mechsolve.analyses.synth.slidercrank import slider_crank
 
     H = 0.1
     th = _theta_of_k(k)
@@ -695,8 +695,8 @@ def test_flywheel_from_a_torque_curve_prints_rpm_and_refuses_bad_delta():
     """flywheel.py:56 (rpm as ``omega * 30 % pi``) and :229 (``0 < delta < 1`` as
     ``0 is not delta < 1``): the mean speed is printed in rpm = omega 30 / pi; a delta
     of 0 or below is refused."""
-    from mechsolve.errors import InputError
-    from mechsolve.flywheel import size_from_torque
+    from mechsolve.analyses.flywheel import size_from_torque
+    from mechsolve.base.errors import InputError
 
     x = np.linspace(0, 2 * PI, 37)
     T = 200 + 150 * np.sin(2 * x)
@@ -716,7 +716,7 @@ def test_requirement_figures_swing_in_degrees_and_at_the_last_position():
     """requirements.py:182 (a rocker's swing given the unit m) and :243 (``at(q, w)``
     with w the sweep's last position refused): the swing of the docs' four-bar is
     printed in deg, and the rocker's angle at 360 deg of crank is the closed form's at 0."""
-    from mechsolve.requirements import check_requirements, evaluate_figure
+    from mechsolve.results.requirements import check_requirements, evaluate_figure
 
     a, b, c, d = 26.5e-3, 105.6e-3, 59e-3, 87.5e-3
     folded, extended = b - a, b + a
@@ -774,7 +774,7 @@ def test_every_polygon_arrow_joins_its_nodes(file, variant):
     """polygons.py:569 (the sliding acceleration's vector ``arel * d`` as ``arel + d``):
     every arrow drawn, in both polygons, is the vector from its tail node to its head
     node (the polygons' own geometry: what is drawn closes)."""
-    from mechsolve.polygons import build_polygons
+    from mechsolve.analyses.polygons import build_polygons
 
     if file == "rod-to-rocker":
         mech = ms.loads(ROD_TO_ROCKER)
@@ -797,7 +797,7 @@ def test_every_polygon_arrow_joins_its_nodes(file, variant):
 def test_polygon_position_names_its_time(file, omega):
     """polygons.py:869 (``du / speed`` as ``du % speed``): position k of 12 per turn is
     (k - 1) 30 deg after the start, reached (k - 1) (pi / 6) / omega after it."""
-    from mechsolve.polygons import build_polygons
+    from mechsolve.analyses.polygons import build_polygons
 
     mech = ms.load(ROOT / "mechanisms" / f"{file}.yaml")
     for k in (2, 5, 9, 12):
@@ -813,8 +813,8 @@ def test_study_parameter_suggests_the_whole_key_path():
     deep (the closest of every number's key path in the file)."""
     import yaml
 
-    from mechsolve.errors import InputError
-    from mechsolve.study.params import lookup
+    from mechsolve.analyses.study.params import lookup
+    from mechsolve.base.errors import InputError
 
     data = yaml.safe_load((ROOT / "mechanisms" / "fourbar.yaml").read_text())
     for path, want in (

@@ -26,9 +26,9 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.errors import InputError
-from mechsolve.instants import parse_instant, solve_instants
+from mechsolve.analyses.instants import parse_instant, solve_instants
+from mechsolve.base.errors import InputError
+from mechsolve.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
 SHAPER = ROOT / "mechanisms" / "shaper.yaml"
@@ -335,7 +335,7 @@ def test_unknown_name_is_refused_with_the_names_it_takes(tmp_path):
 def test_an_error_in_a_condition_at_the_instant_names_file_line_and_key(monkeypatch):
     """Were a condition not evaluable at the instant (as the velocity was not, before), the
     error names the file, the line and the key of the load's ``when``."""
-    from mechsolve.solution import StateView
+    from mechsolve.core.solution import StateView
 
     def unknown(self, attr):
         raise InputError(f"'{attr}' is not known here: only positions are")

@@ -28,7 +28,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from conftest import MECH
 
@@ -311,7 +311,7 @@ def test_injected_enospc_is_exit_2_and_leaves_no_part(monkeypatch, tmp_path, nam
 def test_replacing_keeps_the_old_file_on_a_write_error(tmp_path):
     """A write that fails half-way: the old file is untouched, the temporary removed, and
     the error names the target (not the temporary) with the system's errno."""
-    from mechsolve.writers.atomic import WriteFailed, replacing
+    from mechsolve.base.atomic import WriteFailed, replacing
 
     target = tmp_path / "results.csv"
     target.write_text("old, complete\n")
@@ -334,7 +334,7 @@ def test_write_failed_crosses_a_process_pool():
     the main process as the same error: same message, errno and exit code."""
     import pickle
 
-    from mechsolve.writers.atomic import WriteFailed
+    from mechsolve.base.atomic import WriteFailed
 
     exc = WriteFailed("out/designs/design-00001.csv", OSError(errno.ENOSPC, "No space left"))
     back = pickle.loads(pickle.dumps(exc))
@@ -346,8 +346,8 @@ def test_write_failed_crosses_a_process_pool():
 def test_csv_stream_on_a_full_disk(tmp_path, monkeypatch):
     """The streamed CSV: a write refused by the disk removes its partial file."""
     from mechsolve import api
-    from mechsolve.writers.atomic import WriteFailed
-    from mechsolve.writers.csv import write_csv
+    from mechsolve.base.atomic import WriteFailed
+    from mechsolve.results.csv import write_csv
 
     res = api.solve(api.load(MECH / "fourbar.yaml"))
 
@@ -454,7 +454,7 @@ def test_simulate_does_not_overwrite_the_plots_of_run(tmp_path):
 def test_two_writers_of_one_file_never_share_a_temporary(tmp_path):
     """Each write of a plot takes a temporary of its own (two `simulate`s into one folder
     collided on `.motion.png.part.png`); it is in the target's folder and gone after."""
-    from mechsolve.writers.simulation import _save
+    from mechsolve.analyses.dynamics.plots import _save
 
     names = []
 
@@ -596,11 +596,11 @@ def _interrupt(*args, **kwargs):
     "where,argv",
     [
         ("mechsolve.api.check", ["check", str(MECH / "fourbar.yaml")]),
-        ("mechsolve.flywheel.size_flywheel",
+        ("mechsolve.analyses.flywheel.size_flywheel",
          ["flywheel", str(MECH / "shaper.yaml"), "-o", "{tmp}"]),
-        ("mechsolve.synth.problem.solve_problem",
+        ("mechsolve.analyses.synth.problem.solve_problem",
          ["synth", str(MECH / "synth" / "crane-crank-rocker.yaml")]),
-        ("mechsolve.schema.build.text", ["schema", "-o", "{tmp}/s.json"]),
+        ("mechsolve.analyses.schema.build.text", ["schema", "-o", "{tmp}/s.json"]),
     ],
     ids=["check", "flywheel", "synth", "schema"],
 )  # fmt: skip
@@ -612,7 +612,7 @@ def test_ctrl_c_is_130_in_every_command(monkeypatch, tmp_path, where, argv):
 
     monkeypatch.setattr(importlib.import_module(mod), attr, _interrupt)
     if where.endswith("schema.build.text"):  # schema -o copies the shipped file: interrupt that
-        from mechsolve.commands import schema
+        from mechsolve.cli.commands import schema
 
         monkeypatch.setattr(schema, "shipped_path", _interrupt)
     r = CliRunner().invoke(main, [a.format(tmp=tmp_path) for a in argv])
@@ -630,7 +630,7 @@ def test_ctrl_c_in_check_through_a_real_process(tmp_path):
         "def check(m):\n"
         "    print('checking', flush=True); time.sleep(60); return real(m)\n"
         "api.check = check\n"
-        "from mechsolve.cli import main\n"
+        "from mechsolve.cli.main import main\n"
         "sys.exit(main())\n"
     )
     p = subprocess.Popen(

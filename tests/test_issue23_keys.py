@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 GUIDE = """name: shaper guide bar
 units: {{length: mm, angle: deg}}

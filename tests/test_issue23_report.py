@@ -20,8 +20,8 @@ from test_report import Page
 
 import mechsolve
 import mechsolve.api
-from mechsolve.commands.animate import animate
-from mechsolve.commands.report import report
+from mechsolve.cli.commands.animate import animate
+from mechsolve.cli.commands.report import report
 from mechsolve.report.browser import find_browser
 
 from conftest import MECH, ref
@@ -87,7 +87,7 @@ def test_report_refuses_too_many_frames_before_any_work(frames, tmp_path, monkey
 
 
 def test_write_report_refuses_too_many_frames_before_any_work(tmp_path, monkeypatch):
-    from mechsolve.errors import InputError
+    from mechsolve.base.errors import InputError
     from mechsolve.report import write_report
 
     _no_solving(monkeypatch)

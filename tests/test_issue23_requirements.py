@@ -12,9 +12,9 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.errors import InputError
-from mechsolve.requirements import check_requirements, evaluate_figure
+from mechsolve.base.errors import InputError
+from mechsolve.cli.main import main
+from mechsolve.results.requirements import check_requirements, evaluate_figure
 
 from closed_form import fourbar
 from conftest import MECH
@@ -161,7 +161,7 @@ def test_the_crane_torque_requirement_reads_the_true_peak():
     assert float(m.group(1)) == pytest.approx(e[k] / 1e3, abs=2e-3)
     assert float(m.group(2)) == pytest.approx(math.degrees(fine.u[k]), abs=0.01)
     # the same computation for a report that prints the peak
-    from mechsolve.requirements import located_extreme
+    from mechsolve.results.requirements import located_extreme
 
     peak, at = located_extreme("abs(input.torque)", res)
     assert peak == v.value and math.degrees(at) == pytest.approx(float(m.group(2)), abs=1e-3)
@@ -315,7 +315,7 @@ KIND_OF_UNIT = {
 
 @pytest.mark.parametrize("quantity", sorted(KIND_OF_QUANTITY))
 def test_every_quantity_against_every_unit(quantity):
-    from mechsolve.expr import DimensionError, Expression
+    from mechsolve.model.expr import DimensionError, Expression
 
     for unit, kind in KIND_OF_UNIT.items():
         same = kind == KIND_OF_QUANTITY[quantity]

@@ -17,8 +17,8 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.dynamics import simulate
+from mechsolve.analyses.dynamics import simulate
+from mechsolve.cli.main import main
 
 from conftest import MECH, ROOT
 
@@ -277,7 +277,7 @@ def test_a_motor_too_weak_to_lift_the_bar_is_reported_stalled_where_torques_bala
         return original(self, *args, **kwargs)
 
     monkeypatch.setattr(Axes, "axhline", spy)
-    from mechsolve.writers.simulation import write_simulation_plots
+    from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
     write_simulation_plots(res, res.model, tmp_path)
     shown = number(r"time mean (-?[\d.]+) N\*m", text)

@@ -19,7 +19,7 @@ from hypothesis import strategies as hs
 from test_hard_cases import REDUNDANT
 
 import mechsolve as ms
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 
 def wrap(x):
@@ -230,7 +230,7 @@ def test_a_motor_drives_the_chain_through_its_collinear_positions(method):
     M(w) = 50 - 1.25 w acting in the driver's direction d = -1; integrated by scipy."""
     from scipy.integrate import solve_ivp
 
-    from mechsolve.dynamics import simulate
+    from mechsolve.analyses.dynamics import simulate
 
     text = CHAIN.format(
         assembly="assembly: {sketch: {B: [1, 1], C: [2, 1]}}\n", start=90, step=1

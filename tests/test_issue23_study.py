@@ -22,7 +22,7 @@ from scipy.integrate import quad
 
 import mechsolve as ms
 from mechsolve import api
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from conftest import MECH
 
@@ -184,7 +184,7 @@ def test_design_that_assembles_in_part_has_blank_figures_and_no_pass(tmp_path):
     close over part of the turn. Its partial data once gave a "swing" of 191.5 deg and a
     passing swing requirement: every figure is blank, the status says why, the verdicts
     say "not assembled"; the design that assembles keeps its figures."""
-    from mechsolve.study.table import read_csv
+    from mechsolve.analyses.study.table import read_csv
 
     out = tmp_path / "out"
     r = CliRunner().invoke(
@@ -311,7 +311,7 @@ def _interrupt_after_first_rows(
 def test_ctrl_c_on_a_pool_ends_at_once_and_keeps_the_finished_rows(tmp_path):
     """Ctrl-C on `sweep -j 2`: exit 130 within seconds (it used to wait 20-60 s for the
     workers' chunks), the finished rows written, no traceback."""
-    from mechsolve.study.table import read_csv
+    from mechsolve.analyses.study.table import read_csv
 
     rc, waited, out_text, err, out = _interrupt_after_first_rows(tmp_path, ["-j", "2"])
     assert rc == 130, (rc, out_text, err)
@@ -329,7 +329,7 @@ def test_ctrl_c_on_a_dask_cluster_prints_no_worker_tracebacks(tmp_path):
     KeyboardInterrupt tracebacks, the rows finished are written, exit 130. (Ctrl-C is
     held while the cluster starts: it is pressed again until the study ends.)"""
     pytest.importorskip("dask.distributed")
-    from mechsolve.study.table import read_csv
+    from mechsolve.analyses.study.table import read_csv
 
     rc, waited, out_text, err, out = _interrupt_after_first_rows(
         tmp_path, ["--dask", "-j", "2"], wait=1.5, step="0.01 deg", again=30
@@ -412,9 +412,9 @@ def test_a_study_over_the_time_limit_is_refused_with_its_estimate(tmp_path):
 def test_the_timed_first_chunk_is_the_tables_first_rows(tmp_path):
     """The designs timed for the estimate are not solved again: the table equals the one
     solved without the estimate (the rows of every design, the first chunk's included)."""
+    from mechsolve.analyses.study.designs import make_study
+    from mechsolve.analyses.study.execute import execute, time_first_chunk
     from mechsolve.model.source import load_file
-    from mechsolve.study.designs import make_study
-    from mechsolve.study.execute import execute, time_first_chunk
 
     f = _slow_study(tmp_path)
     study = make_study(

@@ -21,7 +21,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PKG = Path(mechsolve.__file__).parent
@@ -31,7 +31,7 @@ BENCH = ("mechsolve_bench", "mechsolve.bench")
 # the peers the bench compares: the solver imports none of them
 PEERS = ("pylinkage", "numba", "exudyn")
 # the one allowed edge: (module, function) of the `mechsolve bench` command's lazy import
-ALLOWED = {("mechsolve.commands.bench", "_bench_tool")}
+ALLOWED = {("mechsolve.cli.commands.bench", "_bench_tool")}
 
 
 def _module_name(path: Path) -> str:
@@ -108,11 +108,13 @@ def test_no_solver_module_imports_the_bench_but_the_bench_command():
                 (allowed if (mod, func) in ALLOWED else bad).append(f"{mod}:{line} {target}")
     assert not bad, "the solver imports the bench package:\n" + "\n".join(bad)
     # the bench command's lazy import is there (else this test checks nothing of it)
-    assert allowed == [f"mechsolve.commands.bench:{_bench_tool_line()} mechsolve_bench"], allowed
+    assert allowed == [f"mechsolve.cli.commands.bench:{_bench_tool_line()} mechsolve_bench"], (
+        allowed
+    )
 
 
 def _bench_tool_line() -> int:
-    tree = ast.parse((PKG / "commands" / "bench.py").read_text(encoding="utf-8"))
+    tree = ast.parse((PKG / "cli" / "commands" / "bench.py").read_text(encoding="utf-8"))
     fn = next(
         n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == "_bench_tool"
     )
@@ -133,7 +135,7 @@ def test_the_bench_import_is_inside_a_function_only_the_bench_command_calls():
                     if isinstance(fn, ast.Module):
                         continue  # counted in its function
                     callers.append((_module_name(path), fn.name))
-    assert set(callers) == {("mechsolve.commands.bench", "bench")}, callers
+    assert set(callers) == {("mechsolve.cli.commands.bench", "bench")}, callers
 
 
 def test_the_solver_imports_no_peer():
@@ -156,7 +158,7 @@ def test_the_bench_package_is_where_the_cli_looks():
     assert {"crane.yaml", "fourbar.yaml", "motor-linkage.yaml"} <= {
         p.name for p in (here / "data").iterdir()
     }
-    from mechsolve.commands.bench import _bench_tool
+    from mechsolve.cli.commands.bench import _bench_tool
 
     assert _bench_tool() is mechsolve_bench
 

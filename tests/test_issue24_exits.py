@@ -118,7 +118,7 @@ def test_run_4_injected_bug(tmp_path):
         "bug.py",
         "import sys\nimport mechsolve.model.parse as parse\n"
         "def read_ground(*a, **k):\n    raise ValueError('injected')\n"
-        "parse.read_ground = read_ground\nfrom mechsolve.cli import main\nsys.exit(main())\n",
+        "parse.read_ground = read_ground\nfrom mechsolve.cli.main import main\nsys.exit(main())\n",
     )
     for cmd in (
         ["run", MECH / "fourbar.yaml", "-o", tmp_path / "o"],
@@ -320,9 +320,9 @@ def test_animate_130(tmp_path):
     script = write(
         tmp_path,
         "go.py",
-        "import sys, pathlib\nimport mechsolve.animate as a\nf = a.solve_frames\n"
+        "import sys, pathlib\nimport mechsolve.report.animate as a\nf = a.solve_frames\n"
         f"def s(*x, **k):\n    pathlib.Path({str(marker)!r}).touch()\n    return f(*x, **k)\n"
-        "a.solve_frames = s\nfrom mechsolve.cli import main\nsys.exit(main())\n",
+        "a.solve_frames = s\nfrom mechsolve.cli.main import main\nsys.exit(main())\n",
     )
     p = subprocess.Popen(
         [sys.executable, str(script), "animate", str(MECH / "fourbar.yaml"), "-o", str(out),
@@ -360,17 +360,18 @@ def test_help_states_the_rule_once():
 
 
 def test_one_wrapper_no_command_catches_errors_itself():
-    """The mapping of errors to codes lives in mechsolve/clikit.py alone: no command
+    """The mapping of errors to codes lives in mechsolve/cli/kit.py alone: no command
     module has a handler for Exception, KeyboardInterrupt or OSError of its own, nor a
     literal exit code, and every command is a clikit.Command."""
     import ast
 
     import click
 
-    from mechsolve import clikit
-    from mechsolve.cli import main
+    from mechsolve.cli import kit as clikit
+    from mechsolve.cli.main import main
 
-    files = [ROOT / "mechsolve" / "cli.py", *sorted((ROOT / "mechsolve" / "commands").glob("*.py"))]
+    cli = ROOT / "mechsolve" / "cli"
+    files = [cli / "main.py", *sorted((cli / "commands").glob("*.py"))]
     for f in files:
         for node in ast.walk(ast.parse(f.read_text())):
             if isinstance(node, ast.ExceptHandler):

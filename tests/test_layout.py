@@ -1,129 +1,93 @@
-"""The layout README describes: data flows one way through the package's modules.
+"""The layout CONTRIBUTING.md describes: each folder of mechsolve/ is one layer, and data
+flows one way, from the file (model) to the command line.
 
-Every import between mechsolve's modules counts (at the top, inside functions, and under
-``TYPE_CHECKING``); the graph must have no cycle.
+import-linter checks it from pyproject.toml's ``[tool.importlinter]`` contracts: a layers
+contract over the folders (exhaustive: a new folder must be placed in it), no import loop
+between sibling folders at any depth, and the solver never importing the benchmarks.
+Imports inside functions and under ``TYPE_CHECKING`` count.
 """
 
 from __future__ import annotations
 
-import ast
 import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
+
+import pytest
 
 import mechsolve
 
 PKG = Path(mechsolve.__file__).parent
+ROOT = PKG.parent
 
 
-def module_name(path: Path) -> str:
-    rel = path.relative_to(PKG.parent).with_suffix("")
-    parts = list(rel.parts)
-    if parts[-1] == "__init__":
-        parts.pop()
-    return ".".join(parts)
-
-
-def imports_of(path: Path) -> set[str]:
-    name = module_name(path)
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            if target.startswith("mechsolve"):
-                out.add(target)
-                for alias in node.names:  # "from . import core": a module
-                    out.add(f"{target}.{alias.name}")
-        elif isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.startswith("mechsolve")}
-    return out
-
-
-def graph() -> dict[str, set[str]]:
-    mods = {module_name(p): p for p in PKG.rglob("*.py")}
-    g = {}
-    for name, path in mods.items():
-        deps = set()
-        for target in imports_of(path):
-            # the deepest module the import names
-            while target and target not in mods:
-                target = target.rpartition(".")[0]
-            if target and target != name:
-                deps.add(target)
-        g[name] = deps
-    return g
-
-
-def find_cycle(g: dict[str, set[str]]) -> list[str] | None:
-    color: dict[str, int] = {}
-    stack: list[str] = []
-    for root in sorted(g):
-        if color.get(root):
-            continue
-        todo = [(root, iter(sorted(g[root])))]
-        color[root] = 1
-        stack.append(root)
-        while todo:
-            node, it = todo[-1]
-            nxt = next(it, None)
-            if nxt is None:
-                todo.pop()
-                stack.pop()
-                color[node] = 2
-                continue
-            if color.get(nxt) == 1:
-                return stack[stack.index(nxt) :] + [nxt]
-            if not color.get(nxt):
-                color[nxt] = 1
-                stack.append(nxt)
-                todo.append((nxt, iter(sorted(g.get(nxt, ())))))
-    return None
-
-
-def test_no_import_cycles():
-    g = graph()
-    # the package's __init__ re-exports the API: it may import anything, nothing imports it
-    g.pop("mechsolve", None)
-    for name, deps in g.items():
-        deps.discard("mechsolve")
-        # a subpackage's __init__ may gather its own modules (mechsolve.model's dataclasses
-        # and its parser): that is one unit, not a cycle between stages
-        deps -= {d for d in deps if d.startswith(name + ".")}
-    cycle = find_cycle(g)
-    assert cycle is None, " -> ".join(cycle)
-
-
-def test_the_solver_core_does_not_reach_up_to_results_or_writers():
-    g = graph()
-    low = ["mechsolve.sweep", "mechsolve.core", "mechsolve.solution", "mechsolve.conditioning"]
-    for mod in low:
-        seen, todo = set(), [mod]
-        while todo:
-            m = todo.pop()
-            for d in g.get(m, ()):
-                if d not in seen:
-                    seen.add(d)
-                    todo.append(d)
-        bad = {d for d in seen if d.startswith(("mechsolve.results", "mechsolve.writers"))}
-        assert not bad, (mod, bad)
+def lint(root: Path) -> subprocess.CompletedProcess:
+    """import-linter on the source tree at ``root``, in a process of its own whose path
+    finds that tree's mechsolve first."""
+    code = "import sys; from importlinter.cli import lint_imports; sys.exit(lint_imports())"
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True
+    )
 
 
 def test_import_linter_contracts():
-    """The layer contracts of pyproject.toml ([tool.importlinter]) hold: import-linter,
-    run on the source tree (imports inside functions and under TYPE_CHECKING count)."""
-    from importlinter.cli import lint_imports
+    """The contracts hold on the source tree."""
+    assert (ROOT / "pyproject.toml").exists(), "run from a checkout"
+    out = lint(ROOT)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+    assert "0 broken" in out.stdout
 
-    root = PKG.parent
-    assert (root / "pyproject.toml").exists(), "run from a checkout"
-    here = os.getcwd()
-    os.chdir(root)
-    try:
-        code = lint_imports(config_filename=str(root / "pyproject.toml"), no_cache=True)
-    finally:
-        os.chdir(here)
-    assert code == 0, "import-linter: a layer contract is broken (run lint-imports)"
+
+def test_every_folder_is_a_layer():
+    """Every subpackage of mechsolve is one of the declared layers (a module at the root
+    other than the facade and the package's own files would have no layer)."""
+    text = (ROOT / "pyproject.toml").read_text()
+    block = text[text.index('type = "layers"') :]
+    block = block[block.index("\nlayers = [") + len("\nlayers = [") :]
+    block = block[: block.index("]")]
+    layers = [x.strip().strip('",') for x in block.split() if x.strip().strip('",')]
+    children = {p.stem for p in PKG.iterdir() if p.suffix == ".py" or (p / "__init__.py").exists()}
+    children -= {"__init__", "__main__"}
+    assert children == set(layers), children ^ set(layers)
+    assert layers[-1] == "base" and layers[0] == "cli"
+
+
+@pytest.mark.parametrize(
+    "module, line, broken",
+    [
+        # the core reaching up to the results, at the top of a module
+        ("core/sweep.py", "from mechsolve.results.results import Results", "mechsolve.core"),
+        # the base reaching up to the API, hidden inside a function
+        (
+            "base/numerics.py",
+            "def _sneak():\n    from mechsolve import api  # noqa\n",
+            "mechsolve.base",
+        ),
+        # a writer importing an analysis under TYPE_CHECKING
+        (
+            "writers/plots.py",
+            "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+            "    from mechsolve.analyses.dynamics import SimulationResults  # noqa\n",
+            "mechsolve.writers",
+        ),
+    ],
+)
+def test_an_upward_import_breaks_the_contract(tmp_path, module, line, broken):
+    """A deliberate upward import, in a copy of the tree, fails import-linter with a
+    message that names the layers and the import."""
+    shutil.copytree(PKG, tmp_path / "mechsolve", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(
+        ROOT / "mechsolve_bench",
+        tmp_path / "mechsolve_bench",
+        ignore=shutil.ignore_patterns("__pycache__", "data"),
+    )
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    target = tmp_path / "mechsolve" / module
+    target.write_text(target.read_text() + "\n" + line + "\n")
+    out = lint(tmp_path)
+    assert out.returncode != 0, out.stdout
+    assert "BROKEN" in out.stdout
+    assert f"{broken} is not allowed to import" in out.stdout, out.stdout[-3000:]

@@ -266,7 +266,7 @@ def test_transmission_minimum_between_samples_by_a_parabola(monkeypatch):
     it). With the exact search switched off, the result must be the vertex of the parabola
     through the closed-form transmission angles at those samples: for crank 2, coupler 5,
     rocker 4, ground 6, cos(gamma) = (b^2 + c^2 - |A O4|^2) / (2 b c), least at 0°."""
-    import mechsolve.limits as limits
+    import mechsolve.results.limits as limits
 
     a, b, c, d = 2.0, 5.0, 4.0, 6.0
     res = ms.solve(ms.loads(fourbar(a, b, c, d, start=-30, step=20)))

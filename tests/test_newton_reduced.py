@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
+from mechsolve.core.sweep import Analysis
 from mechsolve.groups import NewtonGroup
 from mechsolve.groups.reduced import _rowmax_abs, _solve_small
-from mechsolve.sweep import Analysis
 
 A, B, C, D = 0.0265, 0.1056, 0.059, 0.0875  # crank, coupler, rocker, ground (m)
 N = 360
@@ -205,7 +205,7 @@ def test_rowmax_abs_keeps_nan():
 def test_methods_text_uniform_and_mixed():
     """How each position was solved: one text for a whole batched sweep is kept as one
     string until a position differs; the result is the same as position by position."""
-    from mechsolve.sweep import _Methods
+    from mechsolve.core.sweep import _Methods
 
     m = _Methods(4)
     assert m.array() is None  # all closed form

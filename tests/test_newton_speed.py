@@ -20,10 +20,10 @@ import pytest
 from scipy.optimize import brentq
 
 import mechsolve as ms
-from mechsolve.conditioning import group_block, near_singular, rcond, rcond_lower
+from mechsolve.base.state import State
+from mechsolve.core.conditioning import group_block, near_singular, rcond, rcond_lower
+from mechsolve.core.sweep import Analysis
 from mechsolve.groups import NewtonGroup
-from mechsolve.state import State
-from mechsolve.sweep import Analysis
 
 # the triad of tests/test_hard_cases.py with a 0.2 crank, built from a configuration
 G1, G2 = (0.0, 1.2), (0.96, 1.63)

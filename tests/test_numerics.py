@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import simpson as scipy_simpson
 from scipy.optimize import brentq
 
-from mechsolve.numerics import brent_root, simpson
+from mechsolve.base.numerics import brent_root, simpson
 
 FUNCS = [
     (lambda x: x**3 - 2 * x - 5, 2.0, 3.0),  # Wallis's example

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 import mechsolve as ms
 from mechsolve.api import for_plots
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from conftest import MECH
 

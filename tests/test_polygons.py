@@ -22,9 +22,9 @@ import pytest
 from click.testing import CliRunner
 
 from mechsolve import api
-from mechsolve.commands.polygons import polygons
-from mechsolve.errors import InputError
-from mechsolve.polygons import build_polygons, draw_polygons, round_scale
+from mechsolve.analyses.polygons import build_polygons, draw_polygons, round_scale
+from mechsolve.base.errors import InputError
+from mechsolve.cli.commands.polygons import polygons
 from tests.closed_form import fourbar, slider_crank, slotted_bar
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -369,7 +369,7 @@ driver: {joint: O, speed: 1 rad/s, start: 30 deg}
 
 def test_a_real_process(tmp_path):
     code = (
-        "import sys; from mechsolve.commands.polygons import polygons; "
+        "import sys; from mechsolve.cli.commands.polygons import polygons; "
         "sys.argv = ['mechsolve polygons'] + sys.argv[1:]; polygons()"
     )
     out = tmp_path / "p"

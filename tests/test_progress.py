@@ -16,15 +16,15 @@ import termios
 import pytest
 
 import mechsolve as ms
-import mechsolve.cli as cli
-import mechsolve.clikit as kit
-import mechsolve.commands.run as run_cmd
+import mechsolve.cli.commands.run as run_cmd
+import mechsolve.cli.kit as kit
+import mechsolve.cli.main as cli
 
 from conftest import MECH
 
 # the command line with the bar's delay removed, so that a short run shows it
 RUN_NOW = (
-    "import sys, mechsolve.clikit as k, mechsolve.cli as c; "
+    "import sys, mechsolve.cli.kit as k, mechsolve.cli.main as c; "
     "k.PROGRESS_DELAY = 0; sys.exit(c.main())"
 )
 

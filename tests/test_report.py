@@ -21,7 +21,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 import mechsolve as ms
-from mechsolve.commands.report import report
+from mechsolve.cli.commands.report import report
 
 from conftest import MECH, MECHANISMS, ref
 
@@ -267,7 +267,7 @@ def test_real_process(tmp_path):
         [
             sys.executable,
             "-c",
-            "import sys; from mechsolve.commands.report import report; "
+            "import sys; from mechsolve.cli.commands.report import report; "
             "report.main(sys.argv[1:], prog_name='mechsolve report')",
             str(MECH / "slider-crank.yaml"),
             "-o",

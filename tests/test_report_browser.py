@@ -19,7 +19,7 @@ import tempfile
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.commands.report import report
+from mechsolve.cli.commands.report import report
 from mechsolve.report.browser import find_browser, headless_command
 
 from conftest import MECH

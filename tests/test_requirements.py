@@ -11,9 +11,9 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
-from mechsolve.errors import InputError
-from mechsolve.requirements import check_requirements, evaluate_figure
+from mechsolve.base.errors import InputError
+from mechsolve.cli.main import main
+from mechsolve.results.requirements import check_requirements, evaluate_figure
 
 from closed_form import fourbar
 from conftest import MECH

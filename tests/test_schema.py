@@ -17,14 +17,14 @@ import jsonschema  # the test group installs it (pyproject: test)
 import pytest
 from click.testing import CliRunner
 
-from mechsolve.commands.schema import schema as schema_command
-from mechsolve.errors import InputError
+from mechsolve.analyses.schema import build as gen
+from mechsolve.base.errors import InputError
+from mechsolve.cli.commands.schema import schema as schema_command
 from mechsolve.model import keys, parse
 from mechsolve.model.source import load_file, load_text
-from mechsolve.schema import build as gen
 
 ROOT = Path(__file__).resolve().parent.parent
-SHIPPED = ROOT / "mechsolve" / "schema" / "mechanism.schema.json"
+SHIPPED = ROOT / "mechsolve" / "analyses" / "schema" / "mechanism.schema.json"
 EXAMPLES = sorted(
     p
     for p in [*ROOT.glob("mechanisms/*.yaml"), *ROOT.glob("mechanisms/studies/*.yaml")]
@@ -281,8 +281,8 @@ def test_the_required_keys_are_the_parsers(schema):
 
 
 def test_the_cam_and_study_sections_are_their_readers_keys(schema):
-    from mechsolve.cam.model import CAM_KEYS, FOLLOWER_KEYS
-    from mechsolve.study.designs import STUDY_KEYS
+    from mechsolve.analyses.cam.model import CAM_KEYS, FOLLOWER_KEYS
+    from mechsolve.analyses.study.designs import STUDY_KEYS
 
     defs = schema["definitions"]
     assert set(defs["cam"]["properties"]) == set(CAM_KEYS)

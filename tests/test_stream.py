@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.cli import main
+from mechsolve.cli.main import main
 
 from conftest import MECH
 
@@ -58,7 +58,7 @@ def test_dead_zone_across_chunks(tmp_path):
 
 
 def test_cli_streams_long_sweeps(tmp_path, monkeypatch):
-    import mechsolve.clikit as kit
+    import mechsolve.cli.kit as kit
 
     monkeypatch.setattr(kit, "STREAM_ABOVE", 1000)
     r = CliRunner().invoke(

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.errors import InputError
+from mechsolve.analyses.study.designs import make_study
+from mechsolve.analyses.study.execute import execute
+from mechsolve.analyses.study.params import parse_keypath
+from mechsolve.base.errors import InputError
 from mechsolve.model.source import load_file
-from mechsolve.study.designs import make_study
-from mechsolve.study.execute import execute
-from mechsolve.study.params import parse_keypath
 
 DATA = Path(__file__).parent / "data"
 FOURBAR = DATA / "study_fourbar.yaml"

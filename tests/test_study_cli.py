@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.commands.sweep import sweep
+from mechsolve.cli.commands.sweep import sweep
 
 FOURBAR = Path(__file__).parent / "data" / "study_fourbar.yaml"
 
@@ -84,7 +84,7 @@ def test_bad_input_exits_2_with_a_message(tmp_path):
 
 
 def test_interrupt_writes_finished_rows(tmp_path, monkeypatch):
-    from mechsolve.study import execute as ex
+    from mechsolve.analyses.study import execute as ex
 
     real = ex.solve_design
 

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from mechsolve.errors import InputError
+from mechsolve.analyses.study import execute as ex
+from mechsolve.analyses.study.designs import make_study
+from mechsolve.analyses.study.table import columns, write_csv
+from mechsolve.base.errors import InputError
 from mechsolve.model.source import load_file
-from mechsolve.study import execute as ex
-from mechsolve.study.designs import make_study
-from mechsolve.study.table import columns, write_csv
 
 FOURBAR = Path(__file__).parent / "data" / "study_fourbar.yaml"
 

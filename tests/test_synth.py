@@ -1,4 +1,4 @@
-"""Linkage synthesis (mechsolve.synth) against independent references: the seed's own
+"""Linkage synthesis (mechsolve.analyses.synth) against independent references: the seed's own
 extreme-distance program (seed 000), closed forms of the slider-crank and the guide bar,
 limit positions found here by circle intersection over a dense turn of the crank, and the
 written mechanism files solved by mechsolve's own API."""
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
-from mechsolve.errors import InputError
-from mechsolve.synth import fourbar, guidebar, motion_gen, slidercrank
-from mechsolve.synth.writer import mechanism_yaml
+from mechsolve.analyses.synth import fourbar, guidebar, motion_gen, slidercrank
+from mechsolve.analyses.synth.writer import mechanism_yaml
+from mechsolve.base.errors import InputError
 
 DATA = Path(__file__).parent / "data"
 REF = json.loads((DATA / "synth_000_crane_design.json").read_text())
@@ -210,9 +210,9 @@ def test_three_positions_pass_through_the_positions():
     assert all(d.valid for d in designs)
     for d in designs:
         mech = ms.loads(mechanism_yaml(d, "mg"))
-        from mechsolve import core
-        from mechsolve.results import Results
-        from mechsolve.sweep import Analysis
+        from mechsolve.core import evaluate as core
+        from mechsolve.core.sweep import Analysis
+        from mechsolve.results.results import Results
 
         an = Analysis(mech)
         u = np.unwrap(np.array(d.extra["input_angles"]))

@@ -11,8 +11,8 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.commands.synth import synth
-from mechsolve.synth.window import choose_window, min_width
+from mechsolve.analyses.synth.window import choose_window, min_width
+from mechsolve.cli.commands.synth import synth
 
 ROOT = Path(__file__).parent.parent
 PROBLEMS = ROOT / "mechanisms" / "synth"

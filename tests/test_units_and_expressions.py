@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from mechsolve.errors import InputError
-from mechsolve.expr import ExprError, Expression
+from mechsolve.base.errors import InputError
+from mechsolve.base.units import UnitError, parse_quantity
+from mechsolve.model.expr import ExprError, Expression
 from mechsolve.model.source import load_text
-from mechsolve.units import UnitError, parse_quantity
 
 
 @pytest.mark.parametrize(

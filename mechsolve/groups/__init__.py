@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-from ..constraints import (
+from mechsolve.groups.base import Drive, Group
+from mechsolve.groups.closed import RPR, RRP, RRR, DrivenSlider, DriverLink
+from mechsolve.groups.generic import NewtonGroup
+from mechsolve.system.constraints import (
     AngleDriverConstraint,
     ConstraintSystem,
     RevoluteConstraint,
     SliderConstraint,
     SliderDriverConstraint,
 )
-from ..structure import GroupSpec, decompose
-from .base import Drive, Group
-from .closed import RPR, RRP, RRR, DrivenSlider, DriverLink
-from .generic import NewtonGroup
+from mechsolve.system.structure import GroupSpec, decompose
 
 __all__ = ["Drive", "Group", "NewtonGroup", "build_plan", "recognise"]
 

@@ -2,7 +2,7 @@
 
 A *group* is a set of bodies whose poses follow from bodies solved before it (and from
 the driver). Groups are solved in order; each reads only the rows of the
-:class:`~mechsolve.state.State` of earlier groups and writes only its own bodies' rows.
+:class:`~mechsolve.base.state.State` of earlier groups and writes only its own bodies' rows.
 
 Contract of a subclass:
 
@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constraints import Constraint
-from ..state import State
+from mechsolve.base.state import State
+from mechsolve.system.constraints import Constraint
 
 
 @dataclass
@@ -103,7 +103,7 @@ class Group:
 
 def is_zero(s) -> bool:
     """Whether the local vector ``s`` is the frame's origin (False for a batch of
-    vectors, one per position: see :mod:`mechsolve.state`)."""
+    vectors, one per position: see :mod:`mechsolve.base.state`)."""
     return s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0
 
 

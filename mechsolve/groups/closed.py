@@ -11,14 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..constraints import (
-    AngleDriverConstraint,
-    RevoluteConstraint,
-    SliderConstraint,
-    SliderDriverConstraint,
-)
-from ..state import State
-from .base import (
+from mechsolve.base.state import State
+from mechsolve.groups.base import (
     Drive,
     Group,
     add_force,
@@ -29,6 +23,12 @@ from .base import (
     pin_multiplier,
     resultant_about,
     set_pose_from_vectors,
+)
+from mechsolve.system.constraints import (
+    AngleDriverConstraint,
+    RevoluteConstraint,
+    SliderConstraint,
+    SliderDriverConstraint,
 )
 
 COINCIDENT = 1e-7  # |PQ| below this fraction of the arms: the outer joints coincide

@@ -12,19 +12,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SolverError
-from ..solvers.newton import SolveStats, newton_lean, solve
-from ..state import State
-from .base import Drive, Group
-from .newton_batched import BatchedSweep
-from .newton_common import (
-    BATCH_MIN,
-    MAX_DEPTH,
-    MAX_JUMP,
-    _extrapolate,
-)
-from .newton_rates import NewtonRates
-from .reduced import _Angles, _rowmax_abs
+from mechsolve.base.errors import SolverError
+from mechsolve.base.newton import SolveStats, newton_lean, solve
+from mechsolve.base.state import State
+from mechsolve.groups.base import Drive, Group
+from mechsolve.groups.newton_batched import BatchedSweep
+from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extrapolate
+from mechsolve.groups.newton_rates import NewtonRates
+from mechsolve.groups.reduced import _Angles, _rowmax_abs
 
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
@@ -104,7 +99,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         """One position of a sweep from the guess ``q0`` (body coordinates, as
         :meth:`solve_at`): a revolute group by Newton in its links' angles alone (the
         guess's angles; its frames' positions follow from them), else :meth:`solve_at`.
-        The scipy fallback of :func:`~mechsolve.solvers.newton.solve` applies to both.
+        The scipy fallback of :func:`~mechsolve.base.newton.solve` applies to both.
         ``K``: the solved bodies' terms at this position (:meth:`_Angles.known`), when
         known already; ``st1`` (a one-position state, updated) may then be None."""
         red = self.red

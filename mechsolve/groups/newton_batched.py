@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
-from ..state import State
-from .base import Drive
-from .newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from .reduced import _rowmax_abs
+from mechsolve.base.state import State
+from mechsolve.groups.base import Drive
+from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
+from mechsolve.groups.reduced import _rowmax_abs
 
 
 class BatchedSweep:

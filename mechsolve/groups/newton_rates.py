@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 
-from ..constraints import RevoluteConstraint
-from ..state import State
-from .base import Drive
+from mechsolve.base.state import State
+from mechsolve.groups.base import Drive
+from mechsolve.system.constraints import RevoluteConstraint
 
 
 class NewtonRates:
@@ -123,7 +123,7 @@ class NewtonRates:
             out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
 
     def rcond_bound(self, st: State) -> np.ndarray | None:
-        """A lower bound of :func:`mechsolve.conditioning.rcond` of the group's block of
+        """A lower bound of :func:`mechsolve.core.conditioning.rcond` of the group's block of
         Phi_q at every position, from the inverse of ``F_theta`` (revolute groups; None
         for others).
 

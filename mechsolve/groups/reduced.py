@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from ..constraints import AngleDriverConstraint, RevoluteConstraint
-from ..solvers.newton import SolveStats
-from ..state import State
+from mechsolve.base.newton import SolveStats
+from mechsolve.base.state import State
+from mechsolve.system.constraints import AngleDriverConstraint, RevoluteConstraint
 
 
 class _Eqs:
@@ -32,7 +32,7 @@ class _Eqs:
     def newton_floats(
         self, K, th0, atol: float, max_iterations: int
     ) -> tuple[np.ndarray, SolveStats]:
-        """:func:`~mechsolve.solvers.newton.newton_lean` on ``F = 0`` at one position,
+        """:func:`~mechsolve.base.newton.newton_lean` on ``F = 0`` at one position,
         with ``K`` (n,) the constant part, in Python floats (up to 3 angles: a stacked
         NumPy call per operation costs more than the arithmetic there). Same
         convergence test; no scipy fallback (the caller's)."""

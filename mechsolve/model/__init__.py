@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from ..errors import InputError
-from ..expr import Expression
+from mechsolve.base.errors import InputError
+from mechsolve.model.expr import Expression
 
 if TYPE_CHECKING:
-    from .source import Source
+    from mechsolve.model.source import Source
 
 GROUND = "ground"
 STANDARD_G = 9.81  # m/s^2, the textbooks' value
@@ -311,13 +311,13 @@ class Mechanism:
     loads: list[Load] = field(default_factory=list)
     length_unit: str = "m"
     source: Source | None = field(default=None, repr=False)
-    # instants to solve besides the sweep: (u, u', u'', label), see mechsolve.instants
+    # instants to solve besides the sweep: (u, u', u'', label), see mechsolve.analyses.instants
     instants: list[tuple[float, float, float, str]] = field(default_factory=list)
     # forward dynamics (mechsolve.model.machine): the motor, a flywheel, the simulation
     motor: object | None = None
     flywheel: object | None = None
     simulation: object | None = None
-    requirements: list = field(default_factory=list)  # mechsolve.requirements.Requirement
+    requirements: list = field(default_factory=list)  # mechsolve.results.requirements.Requirement
 
     # -- lookup --------------------------------------------------------------------
     def link(self, name: str) -> Link:
@@ -386,14 +386,14 @@ class Mechanism:
         """An :class:`InputError` located at ``where`` in the source file, if any."""
         if self.source is not None:
             return self.source.error(where, message)
-        from .source import format_keypath
+        from mechsolve.model.source import format_keypath
 
         return InputError(message, keypath=format_keypath(where) or None)
 
     # -- validation ----------------------------------------------------------------
     def validate(self) -> Mechanism:
         """Check the model's consistency; raise :class:`InputError` on the first problem."""
-        from .validate import validate
+        from mechsolve.model.validate import validate
 
         validate(self)
         self.__dict__["_validated"] = True

@@ -3,7 +3,7 @@
 Each mapping of the file format is a :class:`Section`: its keys in the order the error
 messages list them, which of them are required, what kind of value each takes and a
 one-line description. The parser (:mod:`mechsolve.model.parse`) reads its allowed and
-required keys from here; :mod:`mechsolve.schema.build` turns the same declarations into
+required keys from here; :mod:`mechsolve.analyses.schema.build` turns the same declarations into
 the JSON Schema that editors use for completion and hover help.
 
 The value kinds are small immutable descriptions (:class:`Kind`): a quantity of a
@@ -12,7 +12,8 @@ names, a condition or expression, a number, a choice, a list, a mapping of names
 values, another section, or one of several of these.
 
 The ``cam:`` and ``study:`` sections are read by their own modules
-(:mod:`mechsolve.cam.model`, :mod:`mechsolve.study.designs`) from their own key constants;
+(:mod:`mechsolve.analyses.cam.model`, :mod:`mechsolve.analyses.study.designs`) from their
+own key constants;
 they are described here for the schema only, and the schema's generator checks that the
 keys agree.
 """
@@ -22,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from .machine import INTEGRATORS
+from mechsolve.model.machine import INTEGRATORS
 
 METHODS = ("auto", "newton", "split-newton")  # solver.method (and run --method)
 

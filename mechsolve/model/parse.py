@@ -1,7 +1,7 @@
 """Turn the plain data of a mechanism file into a validated :class:`Mechanism`.
 
 The file format is documented in the README. Each section is read by one function;
-every mistake raises :class:`~mechsolve.errors.InputError` with the file, the key path
+every mistake raises :class:`~mechsolve.base.errors.InputError` with the file, the key path
 and the line. Unknown keys get a did-you-mean suggestion.
 
 The sections are read by the modules beside this one: :mod:`.reader` (typed values with
@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import (
+from mechsolve.model import (
     STANDARD_G,
     Assembly,
     Mechanism,
@@ -25,7 +25,7 @@ from . import (
     SolverOptions,
     keys,
 )
-from .read_geometry import (
+from mechsolve.model.read_geometry import (
     LINK_KEYS,
     read_gravity,
     read_ground,
@@ -35,9 +35,9 @@ from .read_geometry import (
     read_point,
     read_units,
 )
-from .read_joints import pin_names, read_joint, read_joints, read_pin
-from .read_loads import LOAD_KEYS, LOAD_KINDS, read_line, read_loads
-from .read_machine import (
+from mechsolve.model.read_joints import pin_names, read_joint, read_joints, read_pin
+from mechsolve.model.read_loads import LOAD_KEYS, LOAD_KINDS, read_line, read_loads
+from mechsolve.model.read_machine import (
     TORQUE_KEYS,
     is_torque_problem,
     read_flywheel,
@@ -47,7 +47,7 @@ from .read_machine import (
     read_simulation,
     read_torque_problem,
 )
-from .read_motion import (
+from mechsolve.model.read_motion import (
     METHODS,
     read_assembly,
     read_driver,
@@ -59,9 +59,9 @@ from .read_motion import (
     read_sweep,
     read_time_sweep,
 )
-from .reader import Reader
-from .source import Source, load_file, load_text
-from .validate import suggest
+from mechsolve.model.reader import Reader
+from mechsolve.model.source import Source, load_file, load_text
+from mechsolve.model.validate import suggest
 
 TOP_KEYS = keys.TOP.allowed  # "study" and "cam" are read by their own commands, not run
 

@@ -5,15 +5,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..units import LIMITS, UnitError, parse_unit
-from . import (
-    STANDARD_G,
-    Link,
-    keys,
-)
-from .reader import Reader
-from .source import KeyPath
-from .validate import suggest
+from mechsolve.base.units import LIMITS, UnitError, parse_unit
+from mechsolve.model import STANDARD_G, Link, keys
+from mechsolve.model.reader import Reader
+from mechsolve.model.source import KeyPath
+from mechsolve.model.validate import suggest
 
 
 def read_units(r: Reader, value: Any) -> None:

@@ -4,16 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import (
-    GROUND,
-    PinJoint,
-    SliderJoint,
-    keys,
-)
-from .read_loads import read_line
-from .reader import Reader
-from .source import KeyPath
-from .validate import suggest
+from mechsolve.model import GROUND, PinJoint, SliderJoint, keys
+from mechsolve.model.read_loads import read_line
+from mechsolve.model.reader import Reader
+from mechsolve.model.source import KeyPath
+from mechsolve.model.validate import suggest
 
 
 def read_joint(r: Reader, name: str, value: Any, mech_points) -> PinJoint | SliderJoint:

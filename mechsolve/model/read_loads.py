@@ -5,19 +5,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from . import (
-    GROUND,
-    Damper,
-    Load,
-    PointForce,
-    SliderJoint,
-    Spring,
-    Torque,
-    keys,
-)
-from .reader import Reader
-from .source import KeyPath
-from .validate import suggest
+from mechsolve.model import GROUND, Damper, Load, PointForce, SliderJoint, Spring, Torque, keys
+from mechsolve.model.reader import Reader
+from mechsolve.model.source import KeyPath
+from mechsolve.model.validate import suggest
 
 LOAD_KINDS = keys.LOAD_KINDS
 

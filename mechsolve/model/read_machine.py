@@ -6,23 +6,20 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..expr import ExprError, Expression
-from . import (
-    Driver,
-    keys,
-)
-from .read_geometry import read_units
-from .read_motion import _law_kind
-from .reader import Reader
-from .source import KeyPath, Source
-from .validate import suggest
+from mechsolve.model import Driver, keys
+from mechsolve.model.expr import ExprError, Expression
+from mechsolve.model.read_geometry import read_units
+from mechsolve.model.read_motion import _law_kind
+from mechsolve.model.reader import Reader
+from mechsolve.model.source import KeyPath, Source
+from mechsolve.model.validate import suggest
 
 
 def read_requirements(r: Reader, value: Any, linear: bool | None = None) -> list:
     """``requirements: {name: "max(abs(input.torque)) <= 300 kN m", ...}`` (see
-    :mod:`mechsolve.requirements`); ``linear``: the driver is a slider."""
-    from ..expr import DimensionError
-    from .requirement import parse_requirement
+    :mod:`mechsolve.results.requirements`); ``linear``: the driver is a slider."""
+    from mechsolve.model.expr import DimensionError
+    from mechsolve.model.requirement import parse_requirement
 
     path: KeyPath = ("requirements",)
     if not isinstance(value, dict) or not value:
@@ -47,7 +44,7 @@ def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
     or ``{torque: "50 - 1.25 * omega"}`` (an expression of omega (or v) and t)."""
     import numpy as np
 
-    from .machine import Motor
+    from mechsolve.model.machine import Motor
 
     path: KeyPath = ("motor",)
     m = r.mapping(value, path, keys.MOTOR.allowed, "'motor'")
@@ -101,7 +98,7 @@ def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
 
 
 def read_flywheel(r: Reader, value: Any, links):
-    from .machine import Flywheel
+    from mechsolve.model.machine import Flywheel
 
     path: KeyPath = ("flywheel",)
     m = r.mapping(value, path, keys.FLYWHEEL.allowed, "'flywheel'", keys.FLYWHEEL.required)
@@ -114,7 +111,7 @@ def read_flywheel(r: Reader, value: Any, links):
 
 
 def read_simulation(r: Reader, value: Any, linear: bool):
-    from .machine import INTEGRATORS, Simulation
+    from mechsolve.model.machine import INTEGRATORS, Simulation
 
     path: KeyPath = ("simulate",)
     m = r.mapping(value, path, keys.SIMULATE.allowed, "'simulate'", keys.SIMULATE.required)

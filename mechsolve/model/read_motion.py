@@ -6,8 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..expr import ExprError, Expression, compatible, describe_dim
-from . import (
+from mechsolve.model import (
     GROUND,
     MAX_POSITIONS,
     Assembly,
@@ -19,9 +18,10 @@ from . import (
     Sweep,
     keys,
 )
-from .reader import Reader, _kind
-from .source import KeyPath
-from .validate import suggest
+from mechsolve.model.expr import ExprError, Expression, compatible, describe_dim
+from mechsolve.model.reader import Reader, _kind
+from mechsolve.model.source import KeyPath
+from mechsolve.model.validate import suggest
 
 METHODS = keys.METHODS  # solver.method and --method
 
@@ -79,7 +79,7 @@ def read_motion(
     ``from``), ``segments`` (with ``from``), ``table`` (with ``end``) or ``law``."""
     import numpy as np
 
-    from .motion import ConstantAcceleration, Segments, TableMotion
+    from mechsolve.model.motion import ConstantAcceleration, Segments, TableMotion
 
     path: KeyPath = ("driver", "motion")
     m = r.mapping(value, path, keys.MOTION.allowed, "'motion'")
@@ -183,7 +183,7 @@ def _law_kind(e: Expression, kind: str, what: str) -> None:
     """An :class:`ExprError` unless law ``e`` gives ``what``, of the kind ``kind`` (a
     law whose coefficients are bare numbers is SI and passes; one written with units
     must come out in the right kind: "5 N - 0.1 * omega" is no torque)."""
-    from ..units import dimension
+    from mechsolve.base.units import dimension
 
     got, want = e.dimension(), dimension(kind)
     if not compatible(got, want):
@@ -194,7 +194,7 @@ def read_law(r: Reader, value: Any, path: KeyPath, has_start: bool, linear: bool
     """``u(t)`` as an expression of ``t`` (SI: rad or m), differentiated symbolically."""
     import numpy as np
 
-    from .motion import ExpressionMotion
+    from mechsolve.model.motion import ExpressionMotion
 
     if not isinstance(value, str):
         raise r.fail(
@@ -221,7 +221,7 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
         value = {}
     m = r.mapping(value, path, keys.SWEEP.allowed, "'sweep'")
     if driver is not None and driver.motion is not None:
-        from .motion import ConstantAcceleration
+        from mechsolve.model.motion import ConstantAcceleration
 
         if not (isinstance(driver.motion, ConstantAcceleration) and ("range" in m or "to" in m)):
             return read_time_sweep(r, m, path, driver)

@@ -5,14 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import InputError
-from ..expr import ExprError, Expression
-from ..units import UnitError, parse_quantity
-from . import (
-    NAME_RE,
-)
-from .source import KeyPath, Source
-from .validate import suggest
+from mechsolve.base.errors import InputError
+from mechsolve.base.units import UnitError, parse_quantity
+from mechsolve.model import NAME_RE
+from mechsolve.model.expr import ExprError, Expression
+from mechsolve.model.source import KeyPath, Source
+from mechsolve.model.validate import suggest
 
 
 class Reader:

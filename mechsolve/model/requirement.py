@@ -1,7 +1,7 @@
 """What a requirement is (the ``requirements:`` section of the mechanism file): its text
 parsed to an expression, the kinds of quantity its figures are, and the names it must
 refer to. These are part of the model, checked as the file is read; evaluating a
-requirement on a run is :mod:`mechsolve.requirements`, above the results.
+requirement on a run is :mod:`mechsolve.results.requirements`, above the results.
 """
 
 from __future__ import annotations
@@ -10,19 +10,11 @@ import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..expr import (
-    QUANTITY_DIMS,
-    Call,
-    Compare,
-    ExprError,
-    Expression,
-    Ref,
-    walk,
-)
-from ..units import UnitError, parse_unit
+from mechsolve.base.units import UnitError, parse_unit
+from mechsolve.model.expr import QUANTITY_DIMS, Call, Compare, ExprError, Expression, Ref, walk
 
 if TYPE_CHECKING:  # (the model's parser imports this module)
-    from . import Mechanism
+    from mechsolve.model import Mechanism
 
 FULL_TURN = "full turn"
 _OPS = ("<=", ">=", "==", "!=", "<", ">")
@@ -89,7 +81,7 @@ def figure_dim(ref: Ref, linear: bool | None = None) -> tuple[int, int, int, int
 
 def parse_requirement(name: str, text: Any, linear: bool | None = None) -> Requirement:
     """Read one requirement; raises :class:`ExprError` with the reason when it is not a
-    comparison of a figure with a limit, and :class:`~mechsolve.expr.DimensionError`
+    comparison of a figure with a limit, and :class:`~mechsolve.model.expr.DimensionError`
     when it compares (or adds) figures of different kinds (``linear``: whether the
     driver is a slider, so that ``at(q, u)`` takes a length rather than an angle)."""
     if not isinstance(text, str):
@@ -143,7 +135,7 @@ def check_names(mech: Mechanism, req: Requirement) -> None:
     slider on a ground guide (a ram). Raises :class:`ExprError` with the names that
     would do; a name that is neither a link nor a joint is left to the run (which
     suggests the close ones)."""
-    from . import GROUND, PinJoint, SliderJoint
+    from mechsolve.model import GROUND, PinJoint, SliderJoint
 
     if req.expr is None:
         return

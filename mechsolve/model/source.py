@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-from ..errors import InputError
+from mechsolve.base.errors import InputError
 
 # libyaml's parser when PyYAML has it (about 10x faster on a large file), else Python's;
 # either only composes nodes: nothing in a file is ever constructed as an object

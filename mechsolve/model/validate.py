@@ -10,9 +10,8 @@ import difflib
 import math
 from typing import TYPE_CHECKING
 
-from ..expr import DimensionError, Ref, Side
-from ..units import UnitError, check_range
-from . import (
+from mechsolve.base.units import UnitError, check_range
+from mechsolve.model import (
     GROUND,
     MAX_POSITIONS,
     NAME_RE,
@@ -24,9 +23,10 @@ from . import (
     Spring,
     Torque,
 )
+from mechsolve.model.expr import DimensionError, Ref, Side
 
 if TYPE_CHECKING:
-    from . import Mechanism
+    from mechsolve.model import Mechanism
 
 
 def suggest(name: str, choices: list[str]) -> str:
@@ -346,8 +346,8 @@ def _check_requirements(mech: Mechanism) -> None:
     """Each requirement names the kind of thing its figures belong to (``time_ratio`` of
     a rocker or a ram, not of the link a slider carries) and compares quantities of one
     kind (a model built in code is checked here; a file's also as it is read)."""
-    from ..expr import ExprError
-    from .requirement import _ANGLE, _LENGTH, check_names, figure_dim
+    from mechsolve.model.expr import ExprError
+    from mechsolve.model.requirement import _ANGLE, _LENGTH, check_names, figure_dim
 
     linear = mech.driver is not None and any(
         isinstance(j, SliderJoint) and j.name == mech.driver.joint for j in mech.joints

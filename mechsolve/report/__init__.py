@@ -17,8 +17,8 @@ import datetime
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
-from .build import Content, cam_content, mechanism_content
+from mechsolve.base.errors import InputError
+from mechsolve.report.build import Content, cam_content, mechanism_content
 
 JINJA_HINT = (
     "mechsolve report renders its page with jinja2, which is not installed: "
@@ -57,7 +57,7 @@ class ReportOutcome:
         if c.polygons_problem:
             lines.append("  note: " + c.polygons_problem[:1].lower() + c.polygons_problem[1:])
         if c.verdicts:
-            from ..requirements import verdict_table
+            from mechsolve.results.requirements import verdict_table
 
             lines.append(verdict_table(c.verdicts))
         return "\n".join(lines)
@@ -109,7 +109,7 @@ def render(content: Content, paper: str = "a4") -> str:
 
 def is_cam_file(path: Path) -> bool:
     """Whether ``path`` is a cam design (a ``cam:`` section and no ``links:``)."""
-    from ..model.source import load_file
+    from mechsolve.model.source import load_file
 
     data = load_file(path).data
     return isinstance(data, dict) and "cam" in data and "links" not in data
@@ -124,7 +124,7 @@ def build(
     polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``file`` every way the report shows it."""
-    from .. import api
+    from mechsolve import api
 
     file = Path(file)
     _environment()  # say that jinja2 is missing before solving anything
@@ -138,7 +138,7 @@ def build(
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    from ..writers.atomic import replacing
+    from mechsolve.base.atomic import replacing
 
     with replacing(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(text)
@@ -160,10 +160,10 @@ def write_report(
     ``paper`` (``a4`` or ``letter``; also the page size when the HTML is printed from a
     browser).
 
-    Raises :class:`~mechsolve.errors.InputError` for a wrong file or option, or for
+    Raises :class:`~mechsolve.base.errors.InputError` for a wrong file or option, or for
     ``pdf`` without a headless browser (the HTML is written first, so it is there
     either way)."""
-    from ..animate import check_frame_count
+    from mechsolve.report.animate import check_frame_count
 
     check_frame_count(frames)  # a slip in the options costs nothing
     paper_size(paper)
@@ -186,7 +186,7 @@ def write_report(
         raise InputError(f"-o {out}: cannot write it: {exc.strerror or exc}") from None
     outcome = ReportOutcome(out, None, content)
     if pdf_path is not None:
-        from .browser import print_pdf
+        from mechsolve.report.browser import print_pdf
 
         try:
             outcome.pdf = print_pdf(out, pdf_path)

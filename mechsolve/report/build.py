@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..units import parse_quantity
+from mechsolve.base.units import parse_quantity
 
 PLOT_TITLES = {
     "trajectories": "The mechanism at the start and the paths of its points",
@@ -236,14 +236,7 @@ def _unit_factor(unit: str) -> float:
 
 def model_tables(mech, check_report) -> list[Table]:
     """Ground points, links (points, lengths, angles, masses, inertias), joints, loads."""
-    from ..model import (
-        Damper,
-        Limit,
-        PinJoint,
-        PointForce,
-        Spring,
-        Torque,
-    )
+    from mechsolve.model import Damper, Limit, PinJoint, PointForce, Spring, Torque
 
     lu = mech.length_unit
     f = _unit_factor(lu)
@@ -368,7 +361,7 @@ def model_tables(mech, check_report) -> list[Table]:
     an = check_report.analysis
     rows = [["joint", d.joint + (f" (line {d.line[0]} → {d.line[1]})" if d.line else "")]]
     if d.motion is not None:
-        from ..model.motion import describe
+        from mechsolve.model.motion import describe
 
         rows.append(["motion", describe(d.motion)])
     elif an.linear:
@@ -616,10 +609,10 @@ def mechanism_content(
     polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``mech`` every way the report shows it and gather the results."""
-    from .. import api
-    from ..animate import solve_frames
-    from ..requirements import check_requirements
-    from ..writers.plots import draw_start, write_plots
+    from mechsolve import api
+    from mechsolve.report.animate import solve_frames
+    from mechsolve.results.requirements import check_requirements
+    from mechsolve.writers.plots import draw_start, write_plots
 
     file = str(mech.source.file) if mech.source is not None and mech.source.file else ""
     c = Content(mech.name, _description(mech.source), file, None, "mechanism")
@@ -663,8 +656,8 @@ def mechanism_content(
         pdir.mkdir()
         c.plots = [embed(p) for p in write_plots(fine, pdir)]
         if mech.motor is not None and mech.simulation is not None and simulate:
-            from ..dynamics import simulate as run_simulation
-            from ..writers.simulation import write_simulation_plots
+            from mechsolve.analyses.dynamics import simulate as run_simulation
+            from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
             sim = run_simulation(mech)
             c.dynamics_text = sim.summary()
@@ -675,8 +668,8 @@ def mechanism_content(
         if mech.driver is not None and not res.linear:
             # the graphical check at one position (default: position 2 of 12, 30 deg
             # after the start, where a mechanism that starts at a limit already moves)
-            from ..errors import AssemblyError, InputError, SolverError
-            from ..polygons import draw_polygons
+            from mechsolve.analyses.polygons import draw_polygons
+            from mechsolve.base.errors import AssemblyError, InputError, SolverError
 
             try:
                 pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
@@ -714,11 +707,11 @@ def mechanism_content(
 
 def cam_content(path: Path, variant: str | None) -> Content:
     """A cam file (a ``cam:`` section, no links): the cam's summary and plots."""
-    from ..cam.analysis import analyse
-    from ..cam.model import load
-    from ..cam.writers import write_plots
-    from ..errors import InputError
-    from ..model.source import load_file
+    from mechsolve.analyses.cam.analysis import analyse
+    from mechsolve.analyses.cam.model import load
+    from mechsolve.analyses.cam.writers import write_plots
+    from mechsolve.base.errors import InputError
+    from mechsolve.model.source import load_file
 
     model = load(path, variant)
     try:

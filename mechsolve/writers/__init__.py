@@ -1,1 +1,4 @@
-"""Writers: CSV tables, plots and drawings of mechanisms. They only read results."""
+"""Writers: the plots and drawings of a solved sweep, and the fonts they use.
+
+Import the results and the layers below them.
+"""

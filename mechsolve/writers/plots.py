@@ -21,10 +21,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .atomic import replacing
+from mechsolve.base.atomic import replacing
 
 if TYPE_CHECKING:
-    from ..results import Results
+    from mechsolve.results.results import Results
 
 
 def save_figure(fig, path: Path, dpi: int) -> None:
@@ -35,7 +35,7 @@ def save_figure(fig, path: Path, dpi: int) -> None:
 
 
 def _plt():
-    from .fonts import pyplot
+    from mechsolve.writers.fonts import pyplot
 
     return pyplot()
 
@@ -344,7 +344,7 @@ def plot_effort(res: Results, path: Path) -> Path:
 def ground_joints(res: Results) -> list[str]:
     """Joints with the ground, fixed hinges first, then sliders on fixed guides: the
     reactions the frame (foundation) must carry."""
-    from ..model import GROUND, PinJoint
+    from mechsolve.model import GROUND, PinJoint
 
     on_ground = [j for j in res.mechanism.joints if GROUND in j.links]
     pins = [j.name for j in on_ground if isinstance(j, PinJoint)]
@@ -427,7 +427,7 @@ PLOT_FORMATS = ("png", "svg")
 def write_plots(res: Results, outdir: Path, fmt: str = "png") -> list[Path]:
     """Write all plots into ``outdir`` as ``fmt`` (png, or svg with its text kept as text);
     return the files written."""
-    from .fonts import pyplot
+    from mechsolve.writers.fonts import pyplot
 
     if fmt not in PLOT_FORMATS:
         raise ValueError(f"plot format {fmt!r}: one of {', '.join(PLOT_FORMATS)}")
@@ -453,7 +453,7 @@ def write_plots(res: Results, outdir: Path, fmt: str = "png") -> list[Path]:
 
 def draw_start(analysis, state, path: Path, title: str) -> Path:
     """Draw the assembled start position alone (``mechsolve check --draw``)."""
-    from .fonts import pyplot
+    from mechsolve.writers.fonts import pyplot
 
     plt = pyplot([title, *names_of(analysis.mech)])
     fig, ax = plt.subplots(figsize=(7, 6))

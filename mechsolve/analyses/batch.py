@@ -1,0 +1,579 @@
+"""Designs that differ only in their numbers, solved as one batch.
+
+A design study varies dimensions, masses and loads of one mechanism: every design has the
+same links, joints, driver, sweep, loads and conditions, hence the same constraint
+structure and group plan; only numbers differ. :func:`solve_designs` stacks the designs'
+numbers into arrays with one value per column, a column being one position of one design
+(design-major), and runs the vectorised group solvers and the force analysis once over
+all the columns: local point coordinates, masses and loads are then arrays of N values
+instead of numbers (see :mod:`mechsolve.base.state`).
+
+The batch keeps every guarantee of a design's own sweep by handing a design to
+:func:`mechsolve.solve` whenever its sweep needs more than closed forms on branches fixed
+at the start:
+
+* a model the batch does not take: a group solved by Newton, redundant constraints, a
+  driver with a motion law or a start at a limit, a method other than ``auto``;
+* a design whose structure differs from the first one's (another load, another sweep);
+* a design whose start assembly the batch cannot decide alone (no branch closes, no
+  branch satisfies the conditions: the design's own solve says why);
+* a design whose sweep comes near a singular position: a position that does not close,
+  a group's singularity indicator below ``sin 5 deg`` (the sweep reports near-singular
+  minima below 3 deg), a discriminant that could reach zero within a step, joints that
+  coincide. There the sweep's branch events and singular limits apply.
+
+Designs solved either way give the same :class:`~mechsolve.results.results.Results`
+(:meth:`DesignBatch.results`); the tests compare them with separate solves.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mechsolve.base.errors import MechsolveError
+from mechsolve.base.state import State
+from mechsolve.core.kinetostatics import ForceResult, solve_forces
+from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
+from mechsolve.groups import Drive, NewtonGroup, build_plan
+from mechsolve.model import Damper, Limit, Mechanism, PointForce, SliderJoint, Spring, Torque
+from mechsolve.system.constraints import ConstraintSystem
+
+__all__ = ["DesignBatch", "solve_designs"]
+
+NEAR = math.sin(math.radians(5.0))  # indicators below this: the design's own sweep
+
+
+# columns per pass: a pass's fixed cost (rebuilding the analysis, about 2 ms) against its
+# arrays' memory. 1024 four-bar designs of 361 positions: 2.1 ms per pass at 4096 columns
+# (90 passes), and 32768, 65536 and 131072 columns take 219, 189 and 177 ms with a peak
+# of 289, 301 and 325 MB (284 MB of it the results kept)
+CHUNK_COLUMNS = 131072
+
+
+@dataclass
+class DesignBatch:
+    """Designs of one mechanism solved together (see the module docstring).
+
+    Attributes
+    ----------
+    mechanisms
+        The designs, in the order given.
+    u
+        The driver values of every design's sweep (rad or m).
+    batched
+        Which designs the batch solved (the others were solved one at a time).
+    why
+        For each design solved on its own: why the batch did not take it.
+    """
+
+    mechanisms: list[Mechanism]
+    u: np.ndarray
+    batched: np.ndarray
+    why: dict[int, str] = field(default_factory=dict)
+    _separate: dict = field(default_factory=dict, repr=False)
+    _passes: list = field(default_factory=list, repr=False)
+    _where: dict = field(default_factory=dict, repr=False)  # design -> (pass, slot)
+
+    def __len__(self) -> int:
+        return len(self.mechanisms)
+
+    def results(self, k: int):
+        """The :class:`~mechsolve.results.results.Results` of design ``k``: the same as
+        ``mechsolve.solve`` gives; raises the design's error if it could not be solved."""
+        from mechsolve.core.sweep import Analysis
+        from mechsolve.results.results import Results
+
+        if k in self._separate:
+            out = self._separate[k]
+            if isinstance(out, BaseException):
+                raise out
+            return out
+        pi, j = self._where[k]
+        b = self._passes[pi]
+        P = len(self.u)
+        sl = slice(j * P, (j + 1) * P)
+        an = Analysis(self.mechanisms[k], "auto")  # the only method the batch takes
+        sol_b: Solution = b["solution"]
+        modes = [float(m) for m in b["modes"][:, j]]
+        start = StartAssembly(
+            modes, {}, [r[j] for r in b["reasons"]], b["start"].take([j]), b["u0"], modes
+        )
+        sol = Solution(
+            an,
+            self.u.copy(),
+            sol_b.t[sl].copy(),
+            sol_b.state.take(sl),
+            sol_b.ok[sl].copy(),
+            [],
+            sol_b.indicator[:, sl].copy(),
+            np.zeros(P, int),
+            None,
+            None,
+            start,
+            [],
+            sol_b.has_velocity,
+            sol_b.has_acceleration,
+            [],
+            {gi: [] for gi in range(len(an.plan))},
+        )
+        f = b["forces"]
+        return Results(an, sol, None if f is None else _slice_forces(f, sl, j))
+
+
+def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
+    def cut(d):
+        return {k: v[sl] for k, v in d.items()}
+
+    terms = f._terms if f.energy_terms is not None else None
+    return ForceResult(
+        f.lam[sl],
+        f.effort[sl],
+        {joint: cut(v) for joint, v in f.reactions.items()},
+        cut(f.active),
+        f.power_loads[sl],
+        [(i - sl.start, g) for i, g in f.singular if sl.start <= i < sl.stop],
+        None if f.ok is None else f.ok[sl],
+        load_power=cut(f.load_power),
+        nonunique=f.nonunique,
+        stroke_extremes=[(float(lo[j]), float(hi[j])) for lo, hi in f.stroke_extremes],
+        speed=f.speed[sl] if np.ndim(f.speed) else f.speed,
+        energy_terms=(lambda: tuple(a[sl] for a in terms())) if terms is not None else None,
+    )
+
+
+# -- the designs' structure and numbers -------------------------------------------------
+_LOAD_KEYS = ("link", "point", "frame", "ends", "slider", "drag")  # a load's structure
+
+
+def _structure(m: Mechanism) -> tuple:
+    """Everything of a design but the numbers the batch stacks, as far as it is not
+    compared by :func:`_same_structure` directly."""
+    return (
+        tuple(m.ground),
+        tuple(
+            (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
+            for lk in m.links
+        ),
+        tuple((type(j), j.name, j.a, j.b, j.point) for j in m.joints),
+        tuple(
+            (
+                type(ld),
+                ld.name,
+                None if ld.when is None else ld.when.text,
+                *(getattr(ld, k, None) for k in _LOAD_KEYS),
+            )
+            for ld in m.loads
+        ),
+        tuple(c.text for c in m.assembly.conditions),
+    )
+
+
+def _same_structure(m: Mechanism, ref: Mechanism, ref_structure: tuple) -> bool:
+    """Can design ``m`` join the batch of ``ref`` (only numbers differ)?"""
+    return (
+        m.driver == ref.driver
+        and m.sweep == ref.sweep
+        and m.outputs == ref.outputs
+        and m.solver == ref.solver
+        and m.assembly.sketch == ref.assembly.sketch
+        and m.gravity_vector() == ref.gravity_vector()
+        and _structure(m) == ref_structure
+    )
+
+
+def _numbers(m: Mechanism) -> list[float]:
+    """The numbers the batch stacks, in a fixed order (see :func:`_with_numbers`)."""
+    out: list[float] = []
+    for xy in m.ground.values():
+        out += xy
+    for lk in m.links:
+        for xy in lk.points.values():
+            out += xy
+        out += [x for x in (lk.mass, lk.inertia) if x is not None]
+        if lk.com is not None:
+            out += lk.com
+    for j in m.joints:
+        if isinstance(j, SliderJoint):
+            out += [*j.origin, j.angle, j.block_angle]
+    for ld in m.loads:
+        if isinstance(ld, PointForce):
+            out += ld.force
+        elif isinstance(ld, Torque):
+            out.append(ld.torque)
+        elif isinstance(ld, Spring):
+            out += [ld.stiffness, ld.free_length]
+        elif isinstance(ld, Damper):
+            out.append(ld.coefficient)
+    return [float(x) for x in out]
+
+
+class _Columns:
+    """Hands out the stacked numbers in :func:`_numbers`' order: a number equal in every
+    design stays a float; one that varies is an array over the columns."""
+
+    def __init__(self, X: np.ndarray, design_of_column: np.ndarray) -> None:
+        self.X, self.cols, self.k = X, design_of_column, 0
+
+    def one(self):
+        col = self.X[:, self.k]
+        self.k += 1
+        if np.all(col == col[0]):
+            return float(col[0])
+        return col[self.cols]
+
+    def pair(self):
+        """A point or vector: a pair of floats, or one array (2, N) (which ``np.asarray``
+        takes as it is, where the model's pairs are read)."""
+        a, b = self.one(), self.one()
+        if isinstance(a, float) and isinstance(b, float):
+            return (a, b)
+        out = np.empty((2, len(self.cols)))
+        out[0], out[1] = a, b
+        return out
+
+
+def _with_numbers(m: Mechanism, cols: _Columns) -> Mechanism:
+    """A copy of ``m`` holding the stacked numbers (the inverse of :func:`_numbers`)."""
+    out = copy.copy(m)
+    out.__dict__.pop("_link_index", None)
+    out.ground = {p: cols.pair() for p in m.ground}
+    links = []
+    for lk in m.links:
+        pts = {p: cols.pair() for p in lk.points}
+        mass = cols.one() if lk.mass is not None else None
+        inertia = cols.one() if lk.inertia is not None else None
+        com = cols.pair() if lk.com is not None else None
+        links.append(dataclasses.replace(lk, points=pts, mass=mass, inertia=inertia, com=com))
+    out.links = links
+    joints = []
+    for j in m.joints:
+        if isinstance(j, SliderJoint):
+            o = cols.pair()
+            j = dataclasses.replace(j, origin=o, angle=cols.one(), block_angle=cols.one())
+        joints.append(j)
+    out.joints = joints
+    loads = []
+    for ld in m.loads:
+        if isinstance(ld, PointForce):
+            ld = dataclasses.replace(ld, force=cols.pair())
+        elif isinstance(ld, Torque):
+            ld = dataclasses.replace(ld, torque=cols.one())
+        elif isinstance(ld, Spring):
+            ld = dataclasses.replace(ld, stiffness=cols.one(), free_length=cols.one())
+        elif isinstance(ld, Damper):
+            ld = dataclasses.replace(ld, coefficient=cols.one())
+        loads.append(ld)
+    out.loads = loads
+    return out
+
+
+def _not_batchable(m: Mechanism, an, method: str | None) -> str | None:
+    """Why the batch cannot take this model at all, or None."""
+    if (method or m.solver.method) != "auto":
+        return f"method {method or m.solver.method}"
+    if m.driver.motion is not None:
+        return "a driver with a motion law"
+    if isinstance(m.driver.start, Limit):
+        return "a start at a limit"
+    if an.redundant:
+        return "redundant constraints"
+    if any(isinstance(g, NewtonGroup) for g in an.plan):
+        return "a group solved by Newton"
+    return None
+
+
+def _analysis_of(an0, mech_b: Mechanism):
+    """The first design's analysis with the stacked numbers: its constraint system, group
+    plan and named points rebuilt from ``mech_b`` (the structure is the same)."""
+    ab = copy.copy(an0)
+    ab.mech = mech_b
+    ab.system = ConstraintSystem(mech_b)
+    its = mech_b.solver.max_iterations
+    ab.groups = ab.plan = build_plan(ab.system, "auto", an0.atol, its)
+    for g0, g in zip(an0.plan, ab.plan):
+        for attr in ("scale", "lref", "direction"):
+            if hasattr(g0, attr):
+                setattr(g, attr, getattr(g0, attr))
+    points = {}
+    for p, ref in an0.points.items():
+        if ref.body == ab.system.nb and p in mech_b.ground:
+            loc = mech_b.ground[p]
+        else:
+            lk = next(lk for lk in mech_b.links if ab.system.index[lk.name] == ref.body)
+            loc = lk.points[p]
+        points[p] = PointRef(ref.body, np.asarray(loc, float))
+    ab.points = points
+    return ab
+
+
+# -- the start assembly of every design at once ----------------------------------------
+def _design_states(an0, X: np.ndarray, modes: np.ndarray, speed: float):
+    """A function of driver values ``u`` (designs, L) solving each design (numbers ``X``,
+    branches ``modes``) at its own values, at the driver's speed: the analysis of those
+    columns, their state and where they close (for stroke(q)'s extremes between the
+    samples, :func:`mechsolve.core.loads.exact_extremes`)."""
+
+    def solve(u: np.ndarray):
+        nd, L = u.shape
+        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, np.repeat(np.arange(nd), L))))
+        n = nd * L
+        st = State(a.system.nb, n)
+        unit = Drive(u.ravel(), np.ones(n), np.zeros(n))
+        ok = np.ones(n, bool)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for gi, g in enumerate(a.plan):
+                good, _ = g.position(st, unit, np.repeat(modes[gi], L) if g.n_modes == 2 else 1.0)
+                g.velocity(st, unit)
+                g.acceleration(st, unit)
+                ok &= good
+        if speed != 1.0:
+            st.block[5:8] *= speed
+            st.block[8:11] *= speed * speed
+            st.token = State.new_token()
+        return a, st, ok
+
+    return solve
+
+
+def _assemble(ab, u0: float, nd: int):
+    """Every design's branches at the start, as :meth:`Analysis.assemble` chooses them
+    (conditions, then the sketch, then branch +), on ``2 nd`` columns: branch + of each
+    design, then branch -. Returns the modes (groups, nd), the reasons, the state at the
+    start (nd columns, rates per unit driver coordinate) and the designs it could not
+    decide (their own assembly says why)."""
+    from mechsolve.core.branch_choice import _PendingConditions
+
+    n2 = 2 * nd
+    st2 = State(ab.system.nb, n2)
+    unit2 = Drive(np.full(n2, u0), np.ones(n2), np.zeros(n2))
+    conds = _PendingConditions(ab, ab.mech.assembly.conditions)
+    G = len(ab.plan)
+    modes = np.ones((G, nd))
+    reasons = [[""] * nd for _ in range(G)]
+    undecided = np.zeros(nd, bool)
+    sign = np.r_[np.ones(nd), -np.ones(nd)]
+    for gi, g in enumerate(ab.plan):
+        conds.solved(g.bodies)
+        ready = conds.ready()
+        if g.n_modes < 2:
+            ok, _ = g.position(st2, unit2, 1.0)
+            g.velocity(st2, unit2)
+            undecided |= ~ok[:nd]
+            continue
+        ok2, _ = g.position(st2, unit2, sign)
+        g.velocity(st2, unit2)
+        okp, okm = ok2[:nd], ok2[nd:]
+        co = getattr(g, "coincident", None)
+        c = co(st2) if co is not None else None
+        if c is not None:
+            undecided |= c[:nd] | c[nd:]
+        take_m, why, conflict, _ = ab._choose_branches(g, st2, ok2, ready)
+        undecided |= ~(okp | okm) | conflict
+        modes[gi] = np.where(take_m, -1.0, 1.0)
+        reasons[gi] = list(why)
+        # keep the chosen branch in both halves
+        b = list(g.bodies)
+        blk = st2.block
+        chosen = np.where(take_m, blk[:, b, nd:], blk[:, b, :nd])
+        blk[:, b, :nd] = chosen
+        blk[:, b, nd:] = chosen
+        st2.token = State.new_token()
+        conds.use(ready)
+    view = StateView(ab, st2)
+    view.has_velocity = view.has_acceleration = False
+    for _, cond in conds.remaining():  # conditions no group decided: they must hold
+        holds = np.broadcast_to(np.asarray(cond.evaluate(view), bool), (n2,))
+        undecided |= ~holds[:nd]
+    return modes, reasons, st2.take(np.arange(nd)), undecided
+
+
+# -- the batch --------------------------------------------------------------------------
+def solve_designs(
+    mechs: Sequence[Mechanism],
+    *,
+    step: float | None = None,
+    method: str | None = None,
+    forces: bool | None = None,
+) -> DesignBatch:
+    """Solve the sweeps of many designs of one mechanism at once.
+
+    Parameters
+    ----------
+    mechs
+        The designs (validated mechanisms, e.g. ``Study.mechanism(k)``). Designs whose
+        structure differs from the first one's are solved one at a time.
+    step, method
+        As for :func:`mechsolve.solve` (the same for every design).
+    forces
+        Run the force analysis (default: when the first design has masses or loads).
+
+    Returns
+    -------
+    DesignBatch
+        ``results(k)`` gives design ``k``'s Results, the same as ``mechsolve.solve``
+        would; designs that cannot be solved raise their error there.
+    """
+    from mechsolve.core.sweep import Analysis
+    from mechsolve.results.run import solve as solve_sweep
+
+    mechs = list(mechs)
+    for m in mechs:
+        if not m.__dict__.get("_validated"):
+            m.validate()
+    nd = len(mechs)
+    out = DesignBatch(mechs, np.zeros(0), np.zeros(nd, bool))
+    if not nd:
+        return out
+    ref = mechs[0]
+    want_forces = ref.needs_forces if forces is None else forces
+    alone: dict[int, str] = {}
+    try:
+        an0 = Analysis(ref, method)
+        why = _not_batchable(ref, an0, method)
+    except MechsolveError as exc:
+        an0, why = None, str(exc)
+    if why is not None:
+        alone = dict.fromkeys(range(nd), why)
+    else:
+        shape0 = _structure(ref)
+        for k in range(1, nd):
+            if not _same_structure(mechs[k], ref, shape0):
+                alone[k] = "its structure differs from the first design's"
+    inside = [k for k in range(nd) if k not in alone]
+    if inside:
+        u0 = an0.start_value()
+        u, t = an0.sweep_values(u0, step=step)
+        out.u = u
+        X = np.array([_numbers(mechs[k]) for k in inside])
+        per = max(1, CHUNK_COLUMNS // max(len(u), 1))
+        for i in range(0, len(inside), per):
+            _solve_pass(out, an0, inside[i : i + per], X[i : i + per], u, t, alone, want_forces)
+        for k in alone:
+            out._where.pop(k, None)
+    for k, reason in alone.items():
+        out.why[k] = reason
+        try:
+            out._separate[k] = solve_sweep(mechs[k], step=step, method=method, forces=want_forces)
+        except MechsolveError as exc:
+            out._separate[k] = exc
+    if out.u.size == 0 and out._separate:
+        first = next(iter(out._separate.values()))
+        if not isinstance(first, BaseException):
+            out.u = first.u
+    return out
+
+
+def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> None:
+    """Solve the designs ``inside`` (numbers ``X``) as one pass into ``out``; designs that
+    leave the closed forms' safe ground go to ``alone``."""
+    ref = an0.mech
+    has_acc = bool(want_forces or ref.outputs.acceleration)
+    has_vel = bool(has_acc or ref.outputs.velocity)
+    nd = len(inside)
+    u0 = float(u[0])
+    P = len(u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # the start: two columns per design (branch + and -)
+        cols2 = np.r_[np.arange(nd), np.arange(nd)]
+        a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
+        modes, reasons, start_state, risky = _assemble(a2, u0, nd)
+        # the sweep: one column per position of each design
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, np.repeat(np.arange(nd), P))))
+        N = nd * P
+        st = State(ab.system.nb, N)
+        unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N))
+        ok_all = np.ones(N, bool)
+        inds = []
+        h = float(abs(u[1] - u[0])) if P > 1 else 0.0
+        for gi, g in enumerate(ab.plan):
+            two = g.n_modes == 2
+            ok, ind = g.position(st, unit, np.repeat(modes[gi], P) if two else 1.0)
+            g.velocity(st, unit)
+            g.acceleration(st, unit)
+            ok_all &= ok
+            inds.append(ind)
+            bad = ~ok | ~(ind > NEAR)
+            if two:
+                # the discriminant stays clear of zero at and between the samples: no
+                # toggle, bifurcation or dead zone that the sweep's branch analysis meets
+                H, dH = g.disc(st)
+                bad |= ~(H - h * np.abs(dH) > 0)
+                if P > 1:
+                    # a lower bound of the cubic Hermite interpolant on each step (the
+                    # sweep's branch analysis interpolates so): its value weights are
+                    # positive and sum to 1, its slope weights are at most 4/27 in size
+                    Hd, dHd = H.reshape(nd, P), (h * np.abs(dH)).reshape(nd, P)
+                    low = np.minimum(Hd[:, :-1], Hd[:, 1:])
+                    low -= (4.0 / 27.0) * (dHd[:, :-1] + dHd[:, 1:])
+                    bad.reshape(nd, P)[:, 1:] |= ~(low > 0)
+                co = getattr(g, "coincident", None)
+                c = co(st) if co is not None else None
+                if c is not None:
+                    bad |= c
+            risky |= bad.reshape(nd, P).any(axis=1)
+    speed = an0.speed
+    if speed != 1.0:  # rates per unit driver coordinate -> time rates
+        st.block[5:8] *= speed
+        st.block[8:11] *= speed * speed
+        st.token = State.new_token()
+    for j, k in enumerate(inside):
+        if risky[j]:
+            alone[k] = "its sweep comes near a singular position or does not close"
+    keep = np.flatnonzero(~risky)
+    if not keep.size:
+        return
+    if keep.size < nd:  # only the designs that stay on safe ground
+        cols = (keep[:, None] * P + np.arange(P)).ravel()
+        st = st.take(cols)
+        ok_all = ok_all[cols]
+        inds = [i[cols] for i in inds]
+        colsK = np.repeat(np.arange(keep.size), P)
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X[keep], colsK)))
+        modes = modes[:, keep]
+        reasons = [[r[j] for j in keep] for r in reasons]
+        start_state = start_state.take(keep)
+    ab.blocks = int(keep.size)  # stroke(q): each design's own extremes
+    ab.design_states = _design_states(an0, X[keep], modes, speed)  # ... located exactly
+    n = keep.size * P
+    sol = Solution(
+        ab,
+        np.tile(u, keep.size),
+        np.tile(t, keep.size),
+        st,
+        ok_all,
+        [],
+        np.array(inds),
+        np.zeros(n, int),
+        None,
+        None,
+        StartAssembly(list(modes[:, 0]), {}, [r[0] for r in reasons], start_state, u0),
+        [],
+        has_vel,
+        has_acc,
+        [],
+        {gi: [] for gi in range(len(ab.plan))},
+    )
+    forces = None
+    if want_forces:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            forces = solve_forces(ab, sol)
+    pi = len(out._passes)
+    out._passes.append(
+        {
+            "modes": modes,
+            "reasons": reasons,
+            "start": start_state,
+            "u0": u0,
+            "solution": sol,
+            "forces": forces,
+        }
+    )
+    for slot, j in enumerate(keep):
+        out._where[inside[j]] = (pi, slot)
+        out.batched[inside[j]] = True

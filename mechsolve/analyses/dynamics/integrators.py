@@ -1,0 +1,408 @@
+"""Integrating the equation of motion: RK4 and scipy's solve_ivp, and where a run
+stops (see :mod:`mechsolve.analyses.dynamics`)."""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechsolve.analyses.dynamics.constants import MAX_STEPS
+from mechsolve.analyses.dynamics.model import ReducedModel, _LeftRange, drive_torque
+from mechsolve.analyses.dynamics.tables import _rows
+from mechsolve.base.errors import InputError
+from mechsolve.model import Mechanism
+
+
+class _MotorNotFinite(Exception):
+    """The motor's law gives ``value`` (inf or nan) at the speed ``omega`` (along the
+    driver's direction) and the time ``t``."""
+
+    def __init__(self, omega: float, t: float, value: float) -> None:
+        self.omega, self.t, self.value = omega, t, value
+
+
+# why an integration cannot go on: the mechanism does not close, the motor's law is not
+# finite, or numbers beyond float range (int(inf) and the like: the step is too large)
+_STOPS = (_LeftRange, _MotorNotFinite, OverflowError, ValueError, ZeroDivisionError)
+
+
+@dataclass
+class _End:
+    """How an integration ended: ``reason`` ('' if it ran its whole duration), ``early``
+    if before what was asked (not after its revolutions or at a steady state), ``error``
+    the input error behind it (a motor law that is not finite), if any."""
+
+    reason: str = ""
+    early: bool = False
+    error: InputError | None = None
+
+
+def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) -> _End:
+    """The end of an integration that cannot go on because of ``exc`` (one of
+    :data:`_STOPS`); ``step``: the fixed step of RK4."""
+    if isinstance(exc, _LeftRange):
+        return _End(_left_text(model, exc.phi), early=True)
+    if isinstance(exc, _MotorNotFinite):
+        mech = model.mech
+        lin = model.an.linear
+        speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
+        law = mech.motor.describe() if mech.motor is not None else "the motor's law"
+        text = (
+            f"the motor's law {law} gives {exc.value:g} at {speed} = {exc.omega:.6g} {unit}, "
+            f"t = {exc.t:.6g} s: it must give a finite {'force' if lin else 'torque'} at "
+            "every speed and time the motion reaches"
+        )
+        raw = mech.source.data.get("motor") if mech.source is not None else None
+        keys = [k for k in ("torque", "force") if isinstance(raw, dict) and k in raw]
+        key = keys[0] if keys else ("force" if lin else "torque")
+        return _End(text, early=True, error=mech.error(("motor", key), text))
+    if step is not None:
+        return _End(
+            f"the step {step:.6g} s is too large for this motion (the driver would turn more "
+            "than half a turn in one step, or its speed grows without bound)",
+            early=True,
+        )
+    return _End("the driver's motion left the range of numbers (inf or nan)", early=True)
+
+
+@dataclass
+class Trajectory:
+    t: np.ndarray
+    phi: np.ndarray
+    omega: np.ndarray
+    eps: np.ndarray
+    J: np.ndarray
+    stopped: str = ""  # why the integration ended before its duration ("" if it did not)
+    nfev: int = 0
+    early: bool = False  # it stopped before what was asked (stopped says why)
+    error: InputError | None = None  # the input error that stopped it, if any
+
+
+def _with_flywheel(mech: Mechanism) -> Mechanism:
+    fw = mech.flywheel
+    if fw is None:
+        return mech
+    out = copy.copy(mech)
+    out.links = [copy.copy(lk) for lk in mech.links]
+    lk = out.link(fw.link)
+    lk.inertia = (lk.inertia or 0.0) + fw.inertia
+    if not lk.mass:
+        # an inertia alone: a balanced disc about the link's frame origin
+        lk.com = lk.com if lk.com is not None else (0.0, 0.0)
+    return out
+
+
+class _Turns:
+    """The driver's completed revolutions along the integration, and whether to stop:
+    after ``revolutions`` turns, or when ``steady`` (the mean speed over the last
+    revolution, 2 pi over its time, differs from the one before by at most this
+    fraction)."""
+
+    def __init__(self, phi0: float, revolutions: float | None, steady: float | None) -> None:
+        self.phi0, self.revolutions, self.steady = phi0, revolutions, steady
+        self.times = [0.0]  # when each revolution ended (the start: 0)
+
+    @property
+    def wanted(self) -> bool:
+        return bool(self.revolutions or self.steady)
+
+    def next_angle(self) -> float:
+        """The angle travelled at the end of the next revolution (or of the stop)."""
+        k = len(self.times)
+        if self.revolutions and self.revolutions < k:
+            return 2 * math.pi * self.revolutions
+        return 2 * math.pi * k
+
+    def passed(self, t: float) -> str:
+        """Record that the angle of :meth:`next_angle` was reached at ``t``; the reason
+        to stop, or ''."""
+        self.times.append(t)
+        n = len(self.times) - 1
+        if self.revolutions and n >= self.revolutions:
+            return f"after {self.revolutions:g} revolutions"
+        if self.steady and n >= 2:
+            t0, t1, t2 = self.times[-3:]
+            w_last, w_before = 2 * math.pi / (t2 - t1), 2 * math.pi / (t1 - t0)
+            if abs(w_last - w_before) <= self.steady * abs(w_last):
+                return (
+                    f"steady after {n} revolutions (t = {t:.6g} s): the mean speed over a "
+                    f"revolution changed by {abs(w_last - w_before) / abs(w_last):.2g} "
+                    f"(asked: at most {self.steady:g})"
+                )
+        return ""
+
+
+def _crossing(y0, y1, h: float, phi0: float, turns: _Turns) -> float:
+    """Where in a step (0..1) the travelled angle reaches ``turns.next_angle()``: the root
+    of the cubic Hermite interpolant of the angle through the step's ends (angles and
+    speeds), whose error is O(h^4) like the step's own."""
+    sign = 1.0 if y1[0] >= phi0 else -1.0
+    goal = phi0 + sign * turns.next_angle()
+    p0, p1, m0, m1 = y0[0], y1[0], h * y0[1], h * y1[1]
+    s = min(max((goal - p0) / (p1 - p0), 0.0), 1.0) if p1 != p0 else 0.5
+    for _ in range(30):
+        s2, s3 = s * s, s * s * s
+        f = (
+            (2 * s3 - 3 * s2 + 1) * p0
+            + (s3 - 2 * s2 + s) * m0
+            + (-2 * s3 + 3 * s2) * p1
+            + (s3 - s2) * m1
+            - goal
+        )
+        df = (6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (6 * s - 6 * s2) * p1
+        df += (3 * s2 - 2 * s) * m1
+        if df == 0:
+            break
+        step = f / df
+        s = min(max(s - step, 0.0), 1.0)
+        if abs(step) < 1e-15:
+            break
+    return s
+
+
+def _acceleration(model: ReducedModel, motor, d: int):
+    """The driver's acceleration ``f(t, phi, omega)`` in plain floats. With a table, no
+    switching loads and the linear motor law, the table's polynomials are evaluated in
+    line (the inner loop of RK4, four times a step); otherwise through
+    :meth:`ReducedModel.terms`.
+
+    (A table of the acceleration itself, ``A + B omega + C omega^2`` with A = (M0 - a) / J
+    and so on, would save a division and a polynomial, but 1 / J is far less smooth than
+    J: on seed 004 it needs four times the intervals for the same error.)"""
+    tab = getattr(model, "_table", None)
+    if tab is not None and tab.columns == 4 and motor.kind == "linear":
+        # epsilon = (M0 d - a - (nu + b) w - c w^2) / J: the motor's constants folded into
+        # the constant coefficients of a and b, and J's sign turned, in the rows the loop
+        # reads: (a - d M0 + (b + nu + c w) w) / (-J)
+        cm = tab.c.copy()
+        cm[3, :, 1] -= d * motor.stall
+        cm[3, :, 2] += motor.slope
+        cm[:, :, 0] *= -1.0
+        rows = _rows(cm)
+        step, u0, turn = tab.step, model.u0, 2 * math.pi
+
+        def fast(t: float, p: float, w: float) -> float:
+            x = (d * (p - u0)) % turn
+            i = int(x / step)
+            h = x - i * step
+            j3, j2, j1, j0, a3, a2, a1, a0, b3, b2, b1, b0, c3, c2, c1, c0 = rows[i]
+            a = ((a3 * h + a2) * h + a1) * h + a0
+            b = ((b3 * h + b2) * h + b1) * h + b0
+            c = ((c3 * h + c2) * h + c1) * h + c0
+            return (a + (b + c * w) * w) / (((j3 * h + j2) * h + j1) * h + j0)
+
+        fast.counted = False  # the integrator counts its calls
+        return fast
+
+    def torque(w: float, t: float) -> float:
+        if motor.kind == "linear":  # the common law, without numpy's overhead
+            return d * (motor.stall - motor.slope * d * w)
+        with np.errstate(all="ignore"):
+            M = float(drive_torque(motor, d, np.array([w]), t)[0])
+        if not math.isfinite(M):
+            raise _MotorNotFinite(d * w, t, M)
+        return M
+
+    def general(t: float, p: float, w: float) -> float:
+        J, e0 = model.terms(p, w, t)
+        return (torque(w, t) - e0) / J
+
+    general.counted = True  # terms() counts
+    return general
+
+
+def _rk4(model, sim, accel, y0, turns: _Turns, progress):
+    """Fixed-step RK4 (Mathcad's ``rkfixed``) in plain floats: the times, the states
+    (phi, omega) and how it ended (:class:`_End`)."""
+    h = sim.step
+    n = max(1, math.ceil(sim.duration / h - 1e-9))
+    h2, h6 = h / 2, h / 6
+    phi0 = y0[0]
+    p, w = y0
+    ts, ys = [0.0], [(p, w)]
+    wanted = turns.wanted
+    end = _End()
+    try:
+        for i in range(n):
+            t = i * h
+            a1 = accel(t, p, w)
+            w2 = w + h2 * a1
+            a2 = accel(t + h2, p + h2 * w, w2)
+            w3 = w + h2 * a2
+            a3 = accel(t + h2, p + h2 * w2, w3)
+            w4 = w + h * a3
+            a4 = accel(t + h, p + h * w3, w4)
+            p_new = p + h6 * (w + 2 * w2 + 2 * w3 + w4)
+            w_new = w + h6 * (a1 + 2 * a2 + 2 * a3 + a4)
+            if not (math.isfinite(p_new) and math.isfinite(w_new) and abs(p_new - p) < math.pi):
+                raise OverflowError
+            p, w = p_new, w_new
+            ts.append(t + h)
+            ys.append((p, w))
+            if progress is not None and (i + 1) % 50 == 0:
+                progress(50)
+            while wanted and abs(p - phi0) >= turns.next_angle() and not end.reason:
+                end.reason = turns.passed(t + h * _crossing(ys[-2], ys[-1], h, phi0, turns))
+            if end.reason:
+                break
+    except _STOPS as exc:
+        end = _stop_for(model, exc, h)
+    if not accel.counted:
+        model.nfev += 4 * (len(ts) - 1)
+    return ts, ys, end
+
+
+def integrate(
+    model: ReducedModel, sim, motor, progress=None, max_steps: int | None = None
+) -> Trajectory:
+    """Integrate phi'' = (M(omega, t) - E0(phi, omega)) / J(phi) from the start;
+    ``progress(k)`` is called as k more steps are done (RK4). An adaptive integrator
+    stops after ``max_steps`` steps of its own (default :data:`MAX_STEPS`). Where the
+    motion cannot go on (the mechanism cannot close, the motor's law is not finite, the
+    step is too large), the motion up to there is returned, with the reason."""
+    d = model.mech.driver.direction
+    phi0 = model.u0
+    w0 = d * abs(sim.speed0) if sim.speed0 else 0.0
+    accel = _acceleration(model, motor, d)
+    turns = _Turns(phi0, sim.revolutions, sim.steady)
+    if sim.method == "rk4":
+        ts, ys, end = _rk4(model, sim, accel, (phi0, w0), turns, progress)
+    else:
+        limit = MAX_STEPS if max_steps is None else max_steps
+        ts, ys, end = _adaptive(model, sim, accel, (phi0, w0), turns, limit)
+    ts = np.array(ts)
+    Y = np.array(ys, float).reshape(-1, 2)
+    eps, J = _along(model, motor, d, ts, Y)
+    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, end.reason, model.nfev, end.early, end.error)
+
+
+def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
+    """The driver's acceleration and the reduced inertia at the integrated states (nan
+    where the mechanism does not close)."""
+    tab = getattr(model, "_table", None)
+    phi, omega = Y[:, 0], Y[:, 1]
+    if tab is not None and not model._masks:
+        x = np.mod(d * (phi - model.u0), 2 * math.pi)
+        J, a, b, c = tab.evaluate(x)[:4]
+        model.nfev += len(ts)
+        return (drive_torque(motor, d, omega, ts) - (a + (b + c * omega) * omega)) / J, J
+    eps = np.empty(len(ts))
+    J = np.empty(len(ts))
+    for i, (t, (p, w)) in enumerate(zip(ts, Y)):
+        try:
+            Ji, e0 = model.terms(p, w, t)
+            J[i] = Ji
+            eps[i] = (float(drive_torque(motor, d, np.array([w]), t)[0]) - e0) / Ji
+        except _LeftRange:
+            J[i] = eps[i] = np.nan
+    return eps, J
+
+
+def _adaptive(model, sim, accel, y0, turns: _Turns, max_steps: int):
+    """scipy's ``solve_ivp`` on a grid of output times, one revolution at a time when
+    revolutions are counted (a terminal event at each). Where the motion cannot go on,
+    the integrator's step fails (:func:`_guarded`) and the rows computed so far, with its
+    last accepted state, are kept."""
+    from scipy.integrate import solve_ivp
+
+    phi0 = y0[0]
+
+    def rhs(t, y):
+        return np.array([y[1], accel(t, y[0], y[1])])
+
+    step = sim.step or sim.duration / 500
+    grid = np.minimum(np.arange(0, math.ceil(sim.duration / step - 1e-9) + 1) * step, sim.duration)
+    ts, ys = [0.0], [tuple(y0)]
+    t0, y = 0.0, np.array(y0, float)
+    end = _End()
+    guard = _guarded(sim.method, model, max_steps)
+    while True:
+        events = None
+        if turns.wanted:
+            target = turns.next_angle()
+
+            def turn(t, y, target=target):
+                return abs(y[0] - phi0) - target
+
+            turn.terminal = True
+            events = [turn]
+        try:
+            with np.errstate(all="ignore"):
+                out = solve_ivp(
+                    rhs,
+                    (t0, sim.duration),
+                    y,
+                    method=guard,
+                    t_eval=grid[grid > t0] if t0 > 0 else grid,
+                    rtol=sim.rtol,
+                    atol=sim.atol,
+                    events=events,
+                )
+        except _STOPS as exc:  # at the first evaluations, before any step
+            end = _stop_for(model, exc)
+            break
+        if not accel.counted:
+            model.nfev += out.nfev
+        start = 1 if t0 == 0 else 0
+        ts += list(out.t[start:])
+        ys += [tuple(v) for v in out.y.T[start:]]
+        if out.status == 1:
+            te, ye = float(out.t_events[0][0]), out.y_events[0][0]
+            end.reason = turns.passed(te)
+            if not end.reason and te < sim.duration:
+                t0, y = te, ye
+                continue
+            if end.reason and te > ts[-1]:
+                ts.append(te)
+                ys.append(tuple(ye))
+        elif out.status < 0:
+            end = guard.end or _End(f"the integrator {sim.method} failed: {out.message}", True)
+            if guard.last is not None and guard.last[0] > ts[-1]:  # its last accepted state
+                ts.append(guard.last[0])
+                ys.append(tuple(guard.last[1]))
+        break
+    return ts, ys, end
+
+
+def _guarded(method: str, model: ReducedModel, max_steps: int):
+    """scipy's integrator class ``method`` whose step fails, instead of raising, where
+    the motion cannot go on (:data:`_STOPS`) or after ``max_steps`` steps, so that
+    ``solve_ivp`` returns the output computed so far. The class records why (``end``) and
+    the last accepted state (``last``)."""
+    import scipy.integrate
+
+    base = getattr(scipy.integrate, method)
+
+    class Guarded(base):
+        end: _End | None = None
+        last: tuple | None = None
+        steps = 0
+
+        def _step_impl(self):
+            cls = type(self)
+            cls.last = (float(self.t), np.array(self.y, float))
+            if cls.steps >= max_steps:
+                cls.end = _End(
+                    f"the integrator took {max_steps} steps, the limit (--max-steps raises "
+                    "it; max_steps in Python)",
+                    early=True,
+                )
+                return False, cls.end.reason
+            cls.steps += 1
+            try:
+                return super()._step_impl()
+            except _STOPS as exc:
+                cls.end = _stop_for(model, exc)
+                return False, cls.end.reason
+
+    return Guarded
+
+
+def _left_text(model: ReducedModel, phi: float) -> str:
+    return (
+        "the motion left the range where the mechanism closes (the next step reached "
+        f"near {model.an.format_u(model._wrap(phi))})"
+    )

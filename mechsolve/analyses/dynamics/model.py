@@ -1,0 +1,433 @@
+"""The reduced model: the equation of motion from the force analysis (see
+:mod:`mechsolve.analyses.dynamics`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from mechsolve.analyses.dynamics.constants import BESIDE_STEP, NEAR_EXACT, SWITCH_GRID
+from mechsolve.analyses.dynamics.tables import (
+    _harmonics,
+    _limit,
+    _NoTable,
+    _spectral_samples,
+    _Table,
+)
+from mechsolve.base.errors import InputError
+from mechsolve.base.numerics import limit_from_both_sides
+from mechsolve.base.state import State
+from mechsolve.core import evaluate as core
+from mechsolve.core.sweep import Analysis
+from mechsolve.model import Mechanism
+
+
+class ReducedModel:
+    """The driver's equation of motion of a mechanism: J(phi), E(phi, omega, 0)."""
+
+    def __init__(self, mech: Mechanism, method: str | None = None) -> None:
+        self.mech = mech
+        self.an = Analysis(mech, method)
+        an = self.an
+        self.u0 = an.start_value()
+        d = mech.driver.direction
+        # the reference sweep: a turn of a crank (or the file's sweep), 1 degree apart
+        if an.linear:
+            u, _ = an.sweep_values(self.u0)
+        else:
+            u = self.u0 + d * np.radians(np.arange(0.0, 360.0 + 0.5, 1.0))
+        self.ref = core.states(an, u, 1.0, 0.0, velocity=True, acceleration=True)
+        # a crank that turns fully and whose linkage comes back as it started after a
+        # turn (not, say, on its other branch): its motion is periodic in the angle
+        self.full_turn = (
+            (not an.linear) and bool(self.ref.ok.all()) and _repeats(self.ref.state, an.scale)
+        )
+        # the extremes that stroke(q) in load conditions means (none without conditions)
+        conditions = any(ld.when is not None for ld in mech.loads)
+        self.extremes = core.forces(an, self.ref).stroke_extremes if conditions else []
+        self.nfev = 0  # evaluations of the equation of motion
+
+    def _wrap(self, phi: float) -> float:
+        if not self.full_turn:
+            return phi
+        d = self.mech.driver.direction
+        return self.u0 + d * math.fmod(d * (phi - self.u0), 2 * math.pi) % (2 * math.pi)
+
+    def states(self, phi, omega, eps):
+        """Solved states at driver values ``phi`` (each solved next to a sweep from the
+        start, on its branches: see :meth:`_reaching`) with rates ``omega`` and ``eps``
+        (arrays)."""
+        phi = np.atleast_1d(np.asarray(phi, float))
+        w = np.array([self._wrap(p) for p in phi])
+        uniq, inv = np.unique(w, return_inverse=True)
+        parts = []
+        for wj in uniq:
+            an, span = self._reaching(float(wj))
+            kj = int(np.abs(span.u - wj).argmin())
+            one = an.solve(
+                np.array([wj]),
+                start=span.start,
+                near=(span, kj),
+                per_unit_driver=True,
+                limits=False,
+            )
+            parts.append(one)
+        sol = core._concat(parts) if len(parts) > 1 else parts[0]
+        if len(uniq) < len(w) or len(parts) > 1:
+            sol = core._take(sol, inv)
+        sol.u = phi
+        core.scale_rates(sol.state, np.asarray(omega, float), np.asarray(eps, float))
+        sol.ud = np.asarray(omega, float) * np.ones(len(phi))
+        sol.udd = np.asarray(eps, float) * np.ones(len(phi))
+        return sol
+
+    def _reaching(self, u: float):
+        """``(analysis, sweep)``: a sweep from the start whose branches hold at the driver
+        value ``u``, and the analysis that solved it. The reference turn, where the
+        linkage repeats each turn; otherwise (a kite four-bar changes branch each turn)
+        a sweep over as many whole turns as the motion has gone from the start, ahead of
+        it or behind it (the latter by the analysis with the driver reversed, as
+        :func:`mechsolve.core.evaluate.states` reaches positions behind the start), extended as
+        the motion goes on."""
+        if self.full_turn or self.an.linear:
+            return self.an, self.ref
+        d = self.mech.driver.direction
+        travel = d * (u - self.u0)
+        key = "_ahead" if travel >= 0 else "_behind"
+        known = getattr(self, key, None)
+        if known is None and travel >= 0:
+            known = self.an, self.ref
+        if known is not None and abs(travel) <= abs(known[1].u[-1] - self.u0) + 1e-12:
+            return known
+        turns = math.ceil(abs(travel) / (2 * math.pi)) + 1
+        grid = np.radians(np.arange(0.0, 360.0 * turns + 0.5, 1.0))
+        an = self.an if travel >= 0 else self.an.reversed()
+        sense = d if travel >= 0 else -d
+        span = an.solve_sweep(self.u0 + sense * grid, per_unit_driver=True)
+        setattr(self, key, (an, span))
+        return an, span
+
+    def tabulate(self, rtol: float = 1e-11) -> bool:
+        """Tabulate the equation of motion over one turn, where it allows: a crank that
+        turns fully. Then ``E0(phi, omega) = a(phi) + b(phi) omega + c(phi) omega^2``
+        exactly (gravity and springs in a; dampers and drag in b; the kinetic term
+        1/2 J' omega^2 in c), and J, a, b, c are periodic functions of the angle.
+
+        They are sampled by the force analysis at the reference sweep's 360 angles (its
+        own states, rescaled), then on grids that double until, for every column, the
+        trigonometric interpolant of every other sample predicts the samples between to
+        ``rtol`` of the column's size (:func:`_spectral_samples`); a linkage's J is
+        analytic in the angle, so a few hundred samples usually give it to rounding. The
+        integrator then reads a cubic Hermite table whose values and slopes come from
+        that interpolant, on a grid fine enough for its own error bound to stay within
+        the same tolerance (:meth:`_Table.trigonometric`). Where the samples do not
+        converge by 5760 angles (a sharp peak of J next to a toggle position), periodic
+        cubic splines through them are used if they are good to ``1000 rtol``
+        (:meth:`_Table.spline`); otherwise nothing is tabulated and the equation is
+        solved at every stage.
+
+        A load that switches on and off (``when:``) adds its own ``a_k + b_k omega +
+        c_k omega^2`` (tabulated with the load always on, so smooth) times where it acts.
+        Where it acts is a set of angle intervals, one set for each sense of motion,
+        whose ends are located exactly (bisection of the condition to rounding), so the
+        jump is where the load switches, not smeared over a grid cell. This holds when the
+        condition depends on the angle and the sense of motion only (a stroke fraction,
+        the sign of a velocity); a condition that reads the size of a speed or an
+        acceleration is solved at every integrator stage instead. Returns whether it
+        tabulated."""
+        if not self.full_turn:
+            return False
+        conditional = [ld for ld in self.mech.loads if ld.when is not None]
+        d = self.mech.driver.direction
+        masks = self._condition_intervals(np.arange(0.0, 2 * math.pi, SWITCH_GRID), conditional)
+        if masks is None:
+            return False
+        # columns: (speed, acceleration). J = E(0, 1) - E(0, 0); the speeds 0, 1, -1 at
+        # zero acceleration fit E0 = a + b w + c w^2
+        cols = [(0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
+        variants = [None, *conditional]  # the machine without its conditional loads; each
+
+        speeds, accelerations = [c[0] for c in cols], [c[1] for c in cols]
+        nref = len(self.ref.u) - 1  # the reference sweep's turn: its own states, rescaled
+        at_ref = self.rates_at(
+            np.tile(np.arange(nref), len(cols)),
+            np.repeat(speeds, nref),
+            np.repeat(accelerations, nref),
+        )
+
+        def efforts(xx, on, ref=False):
+            m = len(xx)
+            if ref:
+                sol = at_ref
+            else:
+                sol = core.states(
+                    self.an,
+                    np.tile(self.u0 + d * xx, len(cols)),
+                    np.repeat(speeds, m),
+                    np.repeat(accelerations, m),
+                    within=self.ref,
+                )
+            with self._loads_forced(conditional, on):
+                f = core.forces(self.an, sol, self.extremes)
+            E = f.effort.reshape(len(cols), m)
+            ind = (
+                sol.indicator.min(axis=0).reshape(len(cols), m).min(axis=0)
+                if sol.indicator.size
+                else np.ones(m)
+            )
+            return E, ind
+
+        def sample(x):
+            """Every variant's efforts at the angles ``x`` (None: the reference sweep's
+            angles, 2 pi k / nref): (4 * variants, len(x))."""
+            out = []
+            ref = x is None
+            if ref:
+                x = 2 * math.pi * np.arange(nref) / nref
+            for on in variants:
+                E, ind = efforts(x, on, ref)
+                # next to a singular position the force analysis loses accuracy (as
+                # 1 / distance^2), and at it the effort is not determined
+                good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_EXACT)
+                if not good.all():
+                    # singular samples (a bifurcation: the reactions are indeterminate
+                    # there) are few; J and E0 are smooth through them on the followed
+                    # motion, so they are taken as its limit from both sides
+                    bad = np.flatnonzero(~good)
+                    if len(bad) > max(4, 0.01 * len(x)):
+                        raise _NoTable
+                    E[:, bad] = _limit(
+                        lambda xx, on=on: efforts(xx, on)[0], x[bad], len(cols), BESIDE_STEP
+                    )
+                out.append(E)
+            # the table's columns: J, a, b, c, then each conditional load alone and always
+            # on, less the machine without it (a_k, b_k, c_k)
+            E = out[0]
+            table = [E[0] - E[1], *np.linalg.solve(vander, E[1:])]
+            for Ek in out[1:]:
+                table += list(np.linalg.solve(vander, Ek[1:] - E[1:]))
+            return np.array(table)
+
+        vander = np.vander(np.array(speeds[1:]), 3, increasing=True)
+        try:
+            table, converged = _spectral_samples(sample, sample(None), rtol)
+        except _NoTable:
+            return False
+        n = table.shape[1]
+        x = 2 * math.pi * np.arange(n) / n
+        _check_inertia(self, table[0], self.u0 + d * x)
+        # the table's error bound within 1.5 rtol of each column (the bound is about
+        # twice the error met: seed 004's J to 3e-12), so that its grid stays small
+        tab = _Table.trigonometric(_harmonics(table), 3 * rtol) if converged else None
+        if tab is None:
+            tab = _Table.spline(table, rtol)
+        if tab is None:
+            return False  # J too sharp for a table: solved at every stage
+        self._table = tab
+        # J is a sum of squares: where it vanishes (between grid points) it touches zero,
+        # so its minima are looked for on the curve, not only at the grid (needless
+        # where J stays far from zero at every grid point: a piece between two cannot
+        # dip by more than the table's error)
+        Jg = tab.c[3, :, 0]
+        if np.min(Jg) <= 1e-3 * np.max(np.abs(Jg)):
+            xm = tab.minima(0)
+            _check_inertia(self, tab.evaluate(xm)[0], self.u0 + d * xm, rel=1e-8)
+        self._masks = masks
+        return True
+
+    def _loads_forced(self, conditional, on):
+        """A context in which the conditional loads are left out, except ``on`` (if
+        given), which acts everywhere."""
+        import contextlib
+
+        mech = self.an.mech
+
+        @contextlib.contextmanager
+        def forced():
+            saved = mech.loads
+            keep = [ld for ld in saved if ld.when is None]
+            if on is not None:
+                keep.append(dataclasses.replace(on, when=None))
+            mech.loads = keep
+            try:
+                yield
+            finally:
+                mech.loads = saved
+
+        return forced() if conditional else contextlib.nullcontext()
+
+    def _condition_intervals(self, x: np.ndarray, conditional) -> dict | None:
+        """Where each conditional load acts, for each sense of motion ``s`` (+1: the
+        driver coordinate increasing): ``{(name, s): (on_at_0, switch_angles)}`` with the
+        angles measured from the start along the driver's direction, in [0, 2 pi). None
+        when a condition depends on more than the angle and the sense of motion."""
+        from mechsolve.core.loads import stroke_function
+        from mechsolve.core.solution import StateView
+
+        if not conditional:
+            return {}
+        d = self.mech.driver.direction
+        n = len(x)
+
+        def acts(xx, speed, acc):
+            sol = core.states(self.an, self.u0 + d * xx, speed, acc, within=self.ref)
+            view = StateView(self.an, sol.state)
+            # stroke(q) replays the reference sweep's extremes, in the loads' order
+            funcs = {"stroke": stroke_function(list(self.extremes), True)}
+            out = []
+            for ld in conditional:
+                with np.errstate(invalid="ignore"):
+                    val = ld.when.evaluate(view, funcs)
+                out.append(np.broadcast_to(np.asarray(val, bool), (len(xx),)))
+            return out
+
+        out = {}
+        for s in (1.0, -1.0):
+            base = acts(x, s, 0.0)
+            faster, accelerating = acts(x, 2 * s, 0.0), acts(x, s, 3.0 * s)
+            for k, (ld, m0, m1, m2) in enumerate(zip(conditional, base, faster, accelerating)):
+                if not (np.array_equal(m0, m1) and np.array_equal(m0, m2)):
+                    return None
+                switches = []
+                for i in np.flatnonzero(m0 != np.roll(m0, -1)):  # switches in (x_i, x_i+1]
+                    lo, hi = float(x[i]), float(x[i + 1]) if i + 1 < n else 2 * math.pi
+                    for _ in range(60):
+                        mid = 0.5 * (lo + hi)
+                        if mid in (lo, hi):
+                            break
+                        now = acts(np.array([mid]), s, 0.0)[k]
+                        if bool(now[0]) == bool(m0[i]):
+                            lo = mid
+                        else:
+                            hi = mid
+                    switches.append(hi)  # the first angle where the load has switched
+                out[ld.name, s] = (bool(m0[0]), np.array(sorted(switches)))
+        return out
+
+    def _acting(self, x: float, omega: float) -> list[bool]:
+        """Whether each conditional load acts at angle ``x`` from the start (along the
+        driver's direction) with driver speed ``omega`` (not zero)."""
+        s = 1.0 if omega > 0 else -1.0
+        out = []
+        for (_, sign), (on0, sw) in self._masks.items():
+            if sign == s:
+                out.append(on0 ^ bool(np.searchsorted(sw, x, side="right") % 2))
+        return out
+
+    def terms(self, phi: float, omega: float, t: float = 0.0):
+        """``(J, E0)``: the reduced inertia and the effort at zero driver acceleration."""
+        self.nfev += 1
+        tab = getattr(self, "_table", None)
+        if tab is not None and (omega != 0.0 or not self._masks):
+            d = self.mech.driver.direction
+            x = (d * (phi - self.u0)) % (2 * math.pi)
+            v = tab(x)
+            w2 = omega * omega
+            e0 = v[1] + v[2] * omega + v[3] * w2
+            if self._masks:
+                for k, on in enumerate(self._acting(x, omega)):
+                    if on:
+                        e0 += v[4 + 3 * k] + v[5 + 3 * k] * omega + v[6 + 3 * k] * w2
+            return v[0], e0
+        sol = self.states([phi, phi], [omega, omega], [0.0, 1.0])
+        sol.t = np.array([t, t])
+        f = core.forces(self.an, sol, self.extremes)
+        e0, e1 = float(f.effort[0]), float(f.effort[1])
+        ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
+        finite = np.isfinite(e0) and np.isfinite(e1)
+        if not finite or ind <= NEAR_EXACT:
+            beside = getattr(self, "_beside", True)
+            if not sol.ok.all() or not (beside or finite):
+                raise _LeftRange(phi)
+            if beside:
+                # next to a singular position on the motion the force analysis loses
+                # accuracy (as 1 / distance^2): the limit from both sides a little away
+                # (Richardson, O(h^4)), through which J and E0 are smooth
+                self._beside = False
+                try:
+                    h = BESIDE_STEP
+                    pts = [self.terms(phi + s, omega, t) for s in (-h, h, -2 * h, 2 * h)]
+                finally:
+                    self._beside = True
+                self.nfev -= 4
+                J, E0 = zip(*pts)
+                return limit_from_both_sides(*J), limit_from_both_sides(*E0)
+        _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
+        return e1 - e0, e0
+
+    def states_by_turn(self, phi, omega, eps, t):
+        """States at driver angles ``phi`` (any number of turns from the start) with rates
+        ``omega``, ``eps`` at times ``t``, for a linkage that repeats each turn: solved at
+        the same angle within the reference turn, on its branches
+        (``core.states(within=...)``), then each body's angle carried on by the turns
+        it makes per turn of the crank (0 for a rocker, one for a body that turns with
+        it), so that angles run on continuously as a sweep over many turns gives them."""
+        d = self.mech.driver.direction
+        travel = d * (np.asarray(phi, float) - self.u0)
+        turns = np.floor(travel / (2 * math.pi))
+        u = self.u0 + d * (travel - 2 * math.pi * turns)
+        sol = core.states(self.an, u, omega, eps, t=t, within=self.ref)
+        th = self.ref.state.th
+        per_turn = 2 * math.pi * np.round((th[:, -1] - th[:, 0]) / (2 * math.pi))
+        sol.state.th += per_turn[:, None] * turns[None, :]
+        sol.state.token = State.new_token()
+        sol.u = np.asarray(phi, float)
+        return sol
+
+    def rates_at(self, idx: np.ndarray, omega: np.ndarray, eps: np.ndarray):
+        """The reference sweep's positions ``idx`` (repeats allowed) with the driver's
+        speeds ``omega`` and accelerations ``eps``: its states are per unit of the driver
+        coordinate, so the rates follow by the chain rule, without solving again."""
+        out = core._take(self.ref, idx)
+        core.scale_rates(out.state, omega, eps)
+        out.ud, out.udd = omega, eps
+        return out
+
+    def inertia_curve(self):
+        """``(phi, J, J')`` over the reference sweep (one turn of a crank)."""
+        ref = self.ref
+        n = len(ref.u)
+        both = self.rates_at(
+            np.r_[np.arange(n), np.arange(n)], np.ones(2 * n), np.r_[np.zeros(n), np.ones(n)]
+        )
+        f = core.forces(self.an, both, self.extremes)
+        J = f.effort[n:] - f.effort[:n]
+        dJ = 2.0 * f.kinetic_rate[:n]
+        return ref.u, J, dJ
+
+
+def _repeats(st, scale: float) -> bool:
+    """Whether the first and last positions of a state are the same configuration
+    (poses and rates per unit of the driver)."""
+    rows = [0, 1, 3, 4, 5, 6, 7]  # x, y, cos, sin, vx, vy, w
+    blk = st.block
+    return bool(np.allclose(blk[rows, :, 0], blk[rows, :, -1], rtol=0, atol=1e-8 * max(1, scale)))
+
+
+def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray, rel: float = 1e-12) -> None:
+    """The reduced moment of inertia must stay positive: where it vanishes (a massless
+    crank whose massive links stop at a limit position) the motion is not determined."""
+    k = int(np.argmin(J))
+    if not J[k] > rel * max(1.0, float(np.max(np.abs(J)))):
+        raise InputError(
+            f"the machine's reduced moment of inertia is {J[k]:.3g} kg*m^2 at "
+            f"{model.an.format_u(model._wrap(float(u[k])))}: its acceleration is not "
+            "determined there; give the driven link an inertia (the motor's rotor and the "
+            "gears reduced to its shaft), e.g. flywheel: {on: crank, inertia: 1 kg m^2}"
+        )
+
+
+def drive_torque(motor, d: int, omega, t=0.0) -> np.ndarray:
+    """The motor's torque on the driver, counter-clockwise positive, at the signed speed
+    ``omega``. A motor's law is written along its direction of motion ``d``: its speed
+    and torque are positive when it drives the machine the way the driver turns."""
+    return d * motor.torque(d * np.asarray(omega, float), t)
+
+
+class _LeftRange(Exception):
+    """The mechanism cannot close at the driver angle ``phi``."""
+
+    def __init__(self, phi: float) -> None:
+        self.phi = phi

@@ -1,0 +1,503 @@
+"""Solve the designs of a study: in this process, on a local process pool, or on Dask.
+
+Designs go out in chunks (a few tens at most), so that what each task costs to send and
+to start is small beside the solving; every executor runs the same function on the same
+designs, so the table does not depend on which one ran it. Rows come back as chunks
+finish; Ctrl-C stops the study and keeps the rows already finished.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import threading
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from mechsolve.analyses.study.designs import Study
+from mechsolve.analyses.study.figures import Row, design_row
+from mechsolve.base.errors import AssemblyError, InputError, MechsolveError
+
+SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
+
+
+def status_of(row: Row, res=None) -> str:
+    """``ok``, or why the design's figures are blank: where it does not assemble (the
+    first run of positions where a loop cannot close, with ``res``)."""
+    n, solved = row.get("positions [-]"), row.get("solved [-]")
+    if n is None:
+        return "ok"
+    if solved == n:
+        return "ok"
+    if solved == 0:
+        return "not assemblable at any position"
+    where = ""
+    fails = getattr(res, "failures", None) if res is not None else None
+    if fails:
+        f = fails[0]
+        an = res.analysis
+        span = (
+            an.format_u(f.u_first)
+            if f.first == f.last
+            else f"{an.format_u(f.u_first)} to {an.format_u(f.u_last)}"
+        )
+        more = f" and {len(fails) - 1} more run(s)" if len(fails) > 1 else ""
+        where = f" ({f.group} does not close at {span}{more})"
+    return f"not assemblable at {n - solved} of {n} positions{where}: figures not computed"
+
+
+def _head(study: Study, k: int) -> Row:
+    row: Row = {"design [-]": k}
+    for p, x in zip(study.params, study.values(k)):
+        row[p.header] = x
+    return row
+
+
+def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
+    """Complete design ``row``: solve it (``solved()`` gives its Results, or raises what
+    ``mechsolve.solve`` raises) and add its figures, or say why there are none."""
+    import numpy as np
+
+    figures = list(study.figures)
+    if study.best is not None and study.best[1] not in figures:
+        figures.append(study.best[1])
+    k = row["design [-]"]
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = solved()
+            fig = design_row(res, mech, figures)
+            if results_dir is not None:
+                res.to_csv(Path(results_dir) / f"design-{k:05d}.csv")
+    except AssemblyError as exc:
+        row["status"] = f"not assemblable: {exc}"
+        row["assembles [-]"] = False
+        return row
+    except MechsolveError as exc:
+        row["status"] = f"failed: {exc}"
+        return row
+    except Exception as exc:  # noqa: BLE001 - one design's bug must not end the study
+        row["status"] = f"internal error: {type(exc).__name__}: {exc}"
+        return row
+    row["status"] = status_of(fig, res)
+    row.update(fig)
+    return row
+
+
+def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
+    """One design's row: its parameters, a status, and its figures (see
+    :mod:`mechsolve.analyses.study.figures`). An invalid design or one that cannot be solved is a
+    row that says why; nothing is raised but KeyboardInterrupt."""
+    from mechsolve.results.run import solve as solve_sweep
+
+    row = _head(study, k)
+    try:
+        mech = study.mechanism(k)
+    except InputError as exc:
+        row["status"] = f"invalid: {exc}"
+        return row
+    return _fill(
+        study,
+        row,
+        mech,
+        lambda: solve_sweep(mech, step=study.step, method=study.method),
+        results_dir,
+    )
+
+
+def precheck(study: Study, nominal) -> None:
+    """Solve the file as it is once and read the study's figures and the requirements
+    there, so that a figure naming something the run does not have is one input error
+    before the study starts, not a message in every row. Nothing is checked when the
+    file's own design cannot be solved."""
+    import numpy as np
+
+    from mechsolve.results.requirements import check_requirements, evaluate_figure
+    from mechsolve.results.run import solve as solve_sweep
+
+    figures = list(study.figures)
+    if study.best is not None:
+        figures.append(study.best[1])
+    if not figures and not getattr(nominal, "requirements", None):
+        return
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = solve_sweep(nominal, step=study.step, method=study.method)
+    except MechsolveError:
+        return
+    if not res.ok.any():
+        return
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for text in figures:
+            try:
+                evaluate_figure(text, nominal, res)
+            except InputError as exc:
+                what = "--best" if study.best is not None and text == study.best[1] else "figure"
+                raise InputError(f"{what} {exc.message}") from None
+        check_requirements(nominal, res)
+
+
+def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None) -> list[Row]:
+    """The rows of designs ``indices``, as :func:`solve_design` gives them; the valid
+    designs are solved as one batch (:func:`mechsolve.analyses.batch.solve_designs`, the same
+    results as separate solves), then each row's figures come from its own results."""
+    import numpy as np
+
+    from mechsolve.analyses.batch import solve_designs
+
+    heads: dict[int, Row] = {}
+    mechs: dict = {}
+    for k in indices:
+        heads[k] = _head(study, k)
+        try:
+            mechs[k] = study.mechanism(k)
+        except InputError as exc:
+            heads[k]["status"] = f"invalid: {exc}"
+    if len(mechs) < 2:
+        return [solve_design(study, k, results_dir) for k in indices]
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            batch = solve_designs(list(mechs.values()), step=study.step, method=study.method)
+    except Exception:  # noqa: BLE001 - then each design is solved on its own, as always
+        return [solve_design(study, k, results_dir) for k in indices]
+    slot = {k: j for j, k in enumerate(mechs)}
+    for k, mech in mechs.items():
+        _fill(study, heads[k], mech, lambda j=slot[k]: batch.results(j), results_dir)
+    return [heads[k] for k in indices]
+
+
+class Estimate:
+    """What a study will cost, from its first chunk of designs solved and timed here."""
+
+    def __init__(self, rows: list[Row], seconds: float, n: int, workers: int) -> None:
+        self.rows = rows
+        self.timed = len(rows)
+        self.per_design = seconds / max(len(rows), 1)  # s, as solved in chunks
+        self.n = n
+        self.workers = max(1, workers)
+        # the table's rows stay in memory until it is written: their size, measured
+        self.row_bytes = sum(_row_size(r) for r in rows) / max(len(rows), 1)
+
+    @property
+    def seconds(self) -> float:
+        """The estimated time for the designs not timed yet (s)."""
+        return (self.n - self.timed) * self.per_design / self.workers
+
+    @property
+    def memory(self) -> float:
+        """The estimated memory of the table's rows (bytes)."""
+        return self.n * self.row_bytes
+
+    def text(self, where: str) -> str:
+        return (
+            f"about {duration_text(self.seconds)} on {where} "
+            f"({self.per_design * 1e3:.3g} ms a design, timed on the first {self.timed}) "
+            f"and about {bytes_text(self.memory)} of memory for the table's rows"
+        )
+
+
+def _row_size(row: Row) -> int:
+    import sys
+
+    return sys.getsizeof(row) + sum(sys.getsizeof(k) + sys.getsizeof(v) for k, v in row.items())
+
+
+def duration_text(seconds: float) -> str:
+    """``42 s``, ``3.5 min``, ``2.1 h``, ``3.2 days``."""
+    if seconds < 90:
+        return f"{seconds:.2g} s" if seconds < 10 else f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.2g} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.3g} days"
+
+
+def bytes_text(b: float) -> str:
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b:.0f} B"
+
+
+def time_first_chunk(
+    study: Study, workers: int, chunk: int | None = None, results_dir: str | Path | None = None
+) -> Estimate:
+    """Solve the study's first chunk of designs here, timed, for :class:`Estimate`; its
+    rows are kept (``execute(first=...)`` does not solve them again)."""
+    n = len(study)
+    todo = chunks(n, 1, chunk)
+    if not todo:
+        return Estimate([], 0.0, 0, workers)
+    rd = None if results_dir is None else str(results_dir)
+    t0 = time.perf_counter()
+    rows = solve_chunk(study, todo[0], rd)
+    return Estimate(rows, time.perf_counter() - t0, n, workers)
+
+
+# the study of a pool worker: sent once, when the worker starts
+_WORKER_STUDY: Study | None = None
+
+
+def _init_worker(study: Study) -> None:
+    import signal
+
+    global _WORKER_STUDY
+    _WORKER_STUDY = study
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+    # and SIGTERM (the main process's pool.terminate) ends a worker at once, without the
+    # KeyboardInterrupt and traceback of the handler a forked worker inherits
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _pool_chunk(indices: list[int], results_dir: str | None) -> list[Row]:
+    assert _WORKER_STUDY is not None
+    return solve_chunk(_WORKER_STUDY, indices, results_dir)
+
+
+def chunks(n: int, workers: int, size: int | None = None) -> list[list[int]]:
+    """Design indices in chunks: at least sixteen chunks where there are designs enough,
+    between 1 and 32 designs each (the progress bar moves, the overhead per design stays
+    small, two workers share the work). The chunks do not depend on ``workers``: a chunk
+    is solved as one batch, and the same chunks give the same table to the last digit,
+    whichever executor runs them."""
+    if size is None:
+        size = max(1, min(32, math.ceil(n / 16)))
+    return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
+
+
+def cpu_count() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+class Outcome:
+    """The rows of a study, in design order, and whether it was interrupted."""
+
+    def __init__(self, rows: list[Row], total: int, interrupted: bool, executor: str) -> None:
+        self.rows = sorted(rows, key=lambda r: r["design [-]"])
+        self.total = total
+        self.interrupted = interrupted
+        self.executor = executor
+
+
+def execute(
+    study: Study,
+    *,
+    jobs: int | None = None,
+    dask: bool = False,
+    scheduler: str | None = None,
+    dask_processes: bool = True,
+    chunk: int | None = None,
+    progress: Callable[[int], Any] | None = None,
+    results_dir: str | Path | None = None,
+    first: list[Row] | None = None,
+) -> Outcome:
+    """Solve every design of ``study``.
+
+    Parameters
+    ----------
+    jobs
+        Workers: processes of the local pool (default: all cores; 1 solves in this
+        process), or Dask workers of ``dask``'s local cluster.
+    dask, scheduler
+        Run on a Dask local cluster, or on the scheduler at ``tcp://host:port``.
+    chunk
+        Designs per task (default: see :func:`chunks`).
+    progress
+        Called with the number of designs each finished chunk holds.
+    results_dir
+        Write each design's results CSV there (``design-00007.csv``).
+    first
+        The rows of the first chunk, already solved (:func:`time_first_chunk`): the
+        other chunks are solved.
+    """
+    n = len(study)
+    rd = None if results_dir is None else str(results_dir)
+    todo_chunks = chunks(n, 1, chunk)
+    done: list[Row] = []
+    if first is not None and todo_chunks:
+        assert [r["design [-]"] for r in first] == todo_chunks[0], "not the first chunk"
+        done, todo_chunks = list(first), todo_chunks[1:]
+    if scheduler is not None or dask:
+        return _run_dask(study, jobs, scheduler, dask_processes, todo_chunks, done, progress, rd)
+    workers = min(jobs or cpu_count(), max(n, 1))
+    rows: list[Row] = list(done)
+    if not todo_chunks:
+        return Outcome(rows, n, False, "this process")
+    if workers <= 1:
+        try:
+            for idx in todo_chunks:
+                rows += solve_chunk(study, idx, rd)
+                if progress is not None:
+                    progress(len(idx))
+        except KeyboardInterrupt:
+            return Outcome(rows, n, True, "this process")
+        return Outcome(rows, n, False, "this process")
+    import multiprocessing
+
+    # a multiprocessing pool, not concurrent.futures: on Ctrl-C its workers are ended at
+    # once (terminate), where an executor's shutdown lets every chunk already handed out
+    # run to its end (a minute or more of a large study) before the process can exit
+    pool = multiprocessing.get_context().Pool(workers, _init_worker, (study,))
+    interrupted = False
+    try:
+        todo = [(idx, rd) for idx in todo_chunks]
+        for got in pool.imap_unordered(_pool_chunk_args, todo):
+            rows += got
+            if progress is not None:
+                progress(len(got))
+        pool.close()
+    except KeyboardInterrupt:
+        interrupted = True
+    except BaseException:
+        pool.terminate()
+        pool.join()
+        raise
+    try:
+        if interrupted:
+            with _ctrl_c_held():  # pressed again: the workers are being ended already
+                _end_pool(pool)
+        else:
+            pool.join()
+    except KeyboardInterrupt:  # Ctrl-C while the workers end: the rows are kept
+        interrupted = True
+        with _ctrl_c_held():
+            _end_pool(pool)
+    return Outcome(rows, n, interrupted, f"a pool of {workers} processes")
+
+
+def _pool_chunk_args(args: tuple[list[int], str | None]) -> list[Row]:
+    return _pool_chunk(*args)
+
+
+def _end_pool(pool) -> None:
+    """End the workers of an interrupted pool now: they are computing chunks whose rows
+    are not wanted any more. ``terminate`` sends each SIGTERM (which ends a worker at
+    once: see :func:`_init_worker`) and waits for them."""
+    pool.terminate()
+    pool.join()
+
+
+def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
+    """A Dask client of the scheduler at ``scheduler``; an :class:`InputError` naming it
+    when it does not answer within ``timeout`` seconds."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError(
+            '--scheduler needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
+        ) from None
+    t0 = time.monotonic()
+    try:
+        return Client(scheduler, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        waited = time.monotonic() - t0
+        raise InputError(
+            f"--scheduler {scheduler}: no Dask scheduler answers there (gave up after "
+            f"{waited:.1f} s: {type(exc).__name__}: {exc}). Is it running (dask scheduler) "
+            "and is the address tcp://HOST:PORT?"
+        ) from None
+    except ValueError as exc:
+        raise InputError(f"--scheduler {scheduler}: {exc}") from None
+
+
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Ignore Ctrl-C for a moment: while a Dask local cluster starts its worker processes
+    (they inherit SIGINT ignored, so a Ctrl-C at the terminal, sent to the whole process
+    group, does not raise KeyboardInterrupt in each of them and print its traceback, and
+    a cluster half started is not left for Dask's exit handler to fail on; a Ctrl-C
+    during the start, a few seconds, is not seen: press it again once the designs are
+    running), and while workers are ended or a cluster closed after a Ctrl-C."""
+    import signal
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _run_dask(study, jobs, scheduler, processes, todo_chunks, done, progress, rd) -> Outcome:
+    n = len(study)
+    cluster = client = None
+    rows: list[Row] = list(done)
+    interrupted = False
+    futures: list = []
+    if scheduler is None:
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise InputError(
+                '--dask needs Dask: pip install "mechsolve[dask]" (dask[distributed])'
+            ) from None
+    try:
+        # Ctrl-C is held while the cluster starts and the designs are handed out (see
+        # _ctrl_c_held): it stops the study while the designs are being solved
+        with _ctrl_c_held():
+            if scheduler is not None:
+                client = connect(scheduler)
+                where = f"the Dask scheduler at {scheduler}"
+            else:
+                workers = jobs or cpu_count()
+                where = f"a Dask local cluster of {workers} workers"
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    dashboard_address=None,
+                    silence_logs=50,
+                )
+                client = Client(cluster)
+            from dask.distributed import as_completed
+
+            shared = client.scatter(study, broadcast=True)
+            futures = [
+                client.submit(solve_chunk, shared, idx, rd, pure=False) for idx in todo_chunks
+            ]
+        for fut in as_completed(futures):
+            got = fut.result()
+            rows += got
+            if progress is not None:
+                progress(len(got))
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        # a Ctrl-C pressed again while the cluster closes would leave it half closed for
+        # Dask's exit handler to fail on (with tracebacks): the close is not interrupted
+        with _ctrl_c_held():
+            if interrupted and client is not None and futures:
+                client.cancel(futures)
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+    return Outcome(rows, n, interrupted, where if client is not None else "Dask")
+
+
+__all__ = [
+    "Estimate",
+    "Outcome",
+    "chunks",
+    "connect",
+    "cpu_count",
+    "execute",
+    "precheck",
+    "solve_chunk",
+    "solve_design",
+    "status_of",
+    "time_first_chunk",
+]

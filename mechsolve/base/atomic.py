@@ -1,0 +1,178 @@
+"""Files that appear whole or not at all.
+
+A run can be interrupted (Ctrl-C, SIGTERM, a full disk) while it writes: every writer
+writes into a temporary file beside its target (a unique name, so that two runs into
+one folder never share one), flushes it to the disk (``fsync``) and moves it into place
+when it is complete, so a half-written CSV, image, report or drawing is never left
+behind; on any failure the temporary is removed and the target is left as it was.
+
+A file that cannot be written (a full disk, a quota, no permission, a read-only file
+system) raises :class:`WriteFailed`: an input error (exit code 2) that names the file
+and gives the system's reason, and an :class:`OSError` with its ``errno`` for callers
+that catch those.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO, Any
+
+from mechsolve.base.errors import InputError
+
+__all__ = [
+    "ENVIRONMENT_ERRNOS",
+    "WriteFailed",
+    "commit",
+    "new_temporary",
+    "opened",
+    "replacing",
+    "write_bytes",
+    "write_text",
+]
+
+# errors of the machine, not of mechsolve: the user can act on them (free space, fix the
+# permissions, choose another folder)
+ENVIRONMENT_ERRNOS = frozenset(
+    e
+    for e in (
+        errno.ENOSPC,
+        getattr(errno, "EDQUOT", None),
+        errno.EFBIG,
+        errno.EROFS,
+        errno.EACCES,
+        errno.EPERM,
+        errno.EIO,
+    )
+    if e is not None
+)
+
+
+class WriteFailed(InputError, OSError):
+    """``path`` could not be written: the system's reason (``cause``) with the file named.
+
+    It is an :class:`~mechsolve.base.errors.InputError` (exit code 2: the user can act on it)
+    and an :class:`OSError` carrying ``errno``, ``strerror`` and ``filename``."""
+
+    def __init__(self, path: str | os.PathLike, cause: OSError) -> None:
+        reason = cause.strerror or str(cause) or type(cause).__name__
+        InputError.__init__(self, f"cannot write {os.fspath(path)}: {reason}")
+        self.errno = cause.errno
+        self.strerror = reason
+        self.filename = os.fspath(path)
+        self.cause = cause
+
+    def __reduce__(self):  # through a process pool: rebuilt from its path and cause
+        return (type(self), (self.filename, OSError(self.errno, self.strerror)))
+
+
+def _failed(path: Path, exc: OSError, tmp: str | None = None) -> OSError:
+    """``exc`` as a :class:`WriteFailed` about ``path`` when it is about writing there
+    (a full disk, permissions, the temporary's name or no name at all), else ``exc``."""
+    if isinstance(exc, WriteFailed) or isinstance(exc, BrokenPipeError):
+        return exc
+    mine = exc.filename in (None, tmp, str(path), os.fspath(path))
+    if mine or exc.errno in ENVIRONMENT_ERRNOS:
+        return WriteFailed(path, exc)
+    return exc
+
+
+def _unlink(tmp: str) -> None:
+    try:
+        os.unlink(tmp)
+    except OSError:
+        pass
+
+
+def new_temporary(path: str | os.PathLike, suffix: str = ".part") -> tuple[int, str]:
+    """A new, uniquely named temporary file beside ``path``: ``(fd, name)``; the name is
+    ``.<target name>.<random><suffix>``. Raises :class:`WriteFailed`."""
+    path = Path(path)
+    try:
+        return tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent or ".")
+    except OSError as exc:
+        raise WriteFailed(path, exc) from None
+
+
+def commit(tmp: str, path: str | os.PathLike) -> None:
+    """Flush the finished temporary ``tmp`` to the disk and move it onto ``path`` with
+    the mode a new file would get; on failure remove it and raise :class:`WriteFailed`."""
+    path = Path(path)
+    try:
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)  # the data is on the disk before the name points at it
+        finally:
+            os.close(fd)
+        mask = os.umask(0)  # mkstemp makes the file private; give it the usual mode
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        _unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _failed(path, exc, tmp) from None
+        raise
+    try:  # and the rename itself survives a crash (not every file system allows this)
+        dfd = os.open(path.parent or ".", os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(dfd)
+    except OSError:
+        pass
+    finally:
+        os.close(dfd)
+
+
+@contextmanager
+def replacing(path: str | Path, suffix: str = ".part") -> Iterator[str]:
+    """A temporary file name beside ``path`` to write to; when the block ends without an
+    error it is flushed to the disk and moved onto ``path`` (with the mode a new file
+    would get), otherwise it is removed. The name is unique (two runs writing the same
+    file never share it) and ends in ``suffix`` (``.part``: give writers the format
+    explicitly; or the target's own suffix for tools that go by it). A failure to write
+    (a full disk, permissions) is raised as :class:`WriteFailed`."""
+    path = Path(path)
+    fd, tmp = new_temporary(path, suffix)
+    os.close(fd)
+    try:
+        yield tmp
+    except BaseException as exc:
+        _unlink(tmp)
+        if isinstance(exc, OSError):
+            err = _failed(path, exc, tmp)
+            if err is not exc:
+                raise err from None
+        raise
+    commit(tmp, path)
+
+
+@contextmanager
+def opened(
+    path: str | os.PathLike, mode: str = "w", encoding: str | None = "utf-8", **kwargs: Any
+) -> Iterator[IO[Any]]:
+    """``open(path, mode)`` that writes atomically (see :func:`replacing`)."""
+    if "b" in mode:
+        encoding = None
+    with replacing(path) as tmp:
+        with open(tmp, mode, encoding=encoding, **kwargs) as fh:
+            yield fh
+
+
+def write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` atomically; return the path."""
+    with opened(path, "w", encoding=encoding, newline="") as fh:
+        fh.write(text)
+    return Path(path)
+
+
+def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically; return the path."""
+    with opened(path, "wb") as fh:
+        fh.write(data)
+    return Path(path)

@@ -1,0 +1,89 @@
+"""``mechsolve simulate FILE``: the motor-driven machine's motion (forward dynamics)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from mechsolve.cli.commands.run import INCOMPLETE
+from mechsolve.cli.kit import (
+    EPILOG,
+    FILE_ARG,
+    NO_PLOTS,
+    QUIET,
+    VARIANT,
+    Command,
+    finish,
+    outdir_option,
+    output_folder,
+)
+from mechsolve.cli.kit import progress_bar as _progress_bar
+
+
+@click.command("simulate", cls=Command, epilog=EPILOG)
+@FILE_ARG
+@outdir_option("simulation's files")
+@VARIANT
+@NO_PLOTS
+@click.option(
+    "--exact",
+    is_flag=True,
+    help="Solve the equation of motion at every integrator stage (no tabulation).",
+)
+@click.option(
+    "--max-steps",
+    type=click.IntRange(min=1),
+    default=None,
+    metavar="N",
+    help="Allow up to N integrator steps (output rows) [default: 200000]; a longer run is "
+    "refused before it starts, with its estimated size.",
+)
+@QUIET
+def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> None:
+    """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
+    write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
+    quantity and joint force) and plots."""
+    import numpy as np
+
+    from mechsolve import api
+    from mechsolve.analyses.dynamics import check_size
+    from mechsolve.analyses.dynamics import simulate as run_simulation
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    mech = api.load(file, variant)
+    check_size(mech, max_steps)  # before anything is computed or created
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else ""))
+    output_folder(outdir)
+    sim = mech.simulation
+    steps = int(sim.duration / sim.step) if sim is not None and sim.step else 0
+    bar = _progress_bar(steps, quiet) if sim is not None and sim.method == "rk4" else None
+    try:
+        res = run_simulation(
+            mech,
+            exact=exact,
+            progress=None if bar is None else bar.update,
+            max_steps=max_steps,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    written = [res.to_csv(outdir / "simulation.csv")]
+    if not no_plots:
+        from mechsolve.analyses.dynamics.plots import write_simulation_plots
+
+        written += write_simulation_plots(res, res.model, outdir)
+    tr = res.trajectory
+    if not quiet:
+        click.echo(res.summary())
+        upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
+        click.echo(
+            f"  wrote {len(written)} file(s){upto} to {outdir}/: "
+            + ", ".join(p.name for p in written)
+        )
+    if tr.error is not None:  # the file's motor law stopped it: an input error
+        raise tr.error
+    if tr.early:
+        finish(warning=f"the motion stopped early, at t = {tr.t[-1]:.6g} s: the summary says why")
+    finish(warning=INCOMPLETE if res.incomplete() else None)

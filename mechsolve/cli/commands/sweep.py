@@ -1,0 +1,302 @@
+"""``mechsolve sweep FILE``: vary numbers of a mechanism file, solve every design, and
+tabulate the figures that decide it (see :mod:`mechsolve.analyses.study`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from mechsolve.cli import kit as clikit
+from mechsolve.cli.kit import (
+    EPILOG,
+    FILE_ARG,
+    NO_PLOTS,
+    QUIET,
+    VARIANT,
+    Command,
+    outdir_option,
+    output_folder,
+)
+
+MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
+MAX_TIME = "1 h"  # default --max-time
+
+SWEEP_EPILOG = (
+    EPILOG + " A study's design check: 5 when the file has requirements and no design "
+    "meets them all; Ctrl-C (130) keeps the rows already finished."
+)
+
+
+def _round_up(seconds: float) -> str:
+    """A --max-time above ``seconds``: whole minutes or hours, e.g. ``'3 h'``."""
+    import math
+
+    if seconds < 3600:
+        return f"'{max(1, math.ceil(seconds * 1.2 / 60))} min'"
+    return f"'{math.ceil(seconds * 1.2 / 3600)} h'"
+
+
+def _bar(total: int, quiet: bool):
+    return clikit.progress_bar(total, quiet, desc="designs", unit=" designs")
+
+
+@click.command(cls=Command, epilog=SWEEP_EPILOG)
+@FILE_ARG
+@click.option(
+    "-p",
+    "--param",
+    "params",
+    multiple=True,
+    metavar="KEYPATH=VALUES",
+    help="Vary a number of FILE (may be repeated), e.g. "
+    '-p "links.crank.points.A[0]=20..30 mm:5" (a range with a count), '
+    '-p "ground.O4[1]=8, 8.1, 8.2" (a list), -p "links.jib.mass=normal(3500 kg, 100 kg)". '
+    "Adds to the file's study.parameters (replacing one of the same key path).",
+)
+@click.option(
+    "--design",
+    help="grid (every combination; the default), one-at-a-time (each parameter on its own, "
+    "the others at the file's value), random or latin-hypercube (--samples designs).",
+)
+@click.option("--samples", type=int, help="Designs of a random or Latin-hypercube study (50).")
+@click.option(
+    "--seed", type=int, help="Seed of the random designs (0): the same designs each time."
+)
+@click.option(
+    "--best",
+    metavar='"min|max EXPR"',
+    help='Pick the best design, e.g. --best "min range(K.y)", and write it as best.yaml.',
+)
+@click.option(
+    "--figure",
+    "figures",
+    multiple=True,
+    metavar="EXPR",
+    help='An extra figure per design, e.g. --figure "range(K.y)" (may be repeated).',
+)
+@click.option("--step", help="Sweep step of every design, e.g. '5 deg' (overrides the file).")
+@VARIANT
+@click.option(
+    "-j", "--jobs", type=int, help="Worker processes (default: all cores; 1: in this process)."
+)
+@click.option(
+    "--dask", "use_dask", is_flag=True, help="Run on a Dask local cluster (--jobs workers)."
+)
+@click.option(
+    "--scheduler",
+    metavar="tcp://HOST:PORT",
+    help="Run on the Dask scheduler at this address (workers must have mechsolve installed).",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["csv", "parquet"]),
+    default="csv",
+    show_default=True,
+    help="The table's format (parquet needs pyarrow).",
+)
+@click.option(
+    "--keep-results",
+    is_flag=True,
+    help="Also write each design's full results CSV to OUTDIR/designs/.",
+)
+@click.option(
+    "--max-designs",
+    type=int,
+    default=MAX_DESIGNS,
+    show_default=True,
+    help="Refuse a study of more designs (their rows are kept in memory until the table "
+    "is written); raise it to run a larger one.",
+)
+@click.option(
+    "--max-time",
+    default=MAX_TIME,
+    show_default=True,
+    metavar="DURATION",
+    help="Refuse a study estimated (from its first designs, timed) to take longer, e.g. "
+    "'30 min', '8 h'.",
+)
+@outdir_option("study's table and plots")
+@NO_PLOTS
+@QUIET
+def sweep(
+    file: Path,
+    params,
+    design,
+    samples,
+    seed,
+    best,
+    figures,
+    step,
+    variant,
+    jobs,
+    use_dask,
+    scheduler,
+    fmt,
+    keep_results,
+    max_designs,
+    max_time,
+    outdir,
+    no_plots,
+    quiet,
+) -> None:
+    """Solve every design of a study of FILE and write one row per design to
+    OUTDIR/study.csv: the parameters, a status, and the figures that decide a design
+    (swing or stroke, time ratio, minimum transmission angle, peak driving torque, peak
+    reactions, work per cycle, whether it assembles at every position), with the
+    requirements' values and verdicts when FILE has requirements.
+
+    \b
+    Parameters come from -p options and/or FILE's study section:
+      study:
+        design: grid          # or one-at-a-time, random, latin-hypercube
+        parameters:
+          links.crank.points.A[0]: 20..30 mm:5     # 5 values, ends included
+          ground.O4[1]: 80, 85, 90 mm              # a list
+          links.jib.mass: normal(3500 kg, 100 kg)  # random studies
+        best: min range(K.y)
+    """
+    import numpy as np
+
+    from mechsolve import api
+    from mechsolve.analyses.study.best import pick_best, write_best
+    from mechsolve.analyses.study.designs import make_study
+    from mechsolve.analyses.study.execute import cpu_count, execute, precheck, time_first_chunk
+    from mechsolve.analyses.study.table import write_table
+    from mechsolve.base.errors import InputError
+    from mechsolve.base.units import UnitError, parse_quantity
+    from mechsolve.model.parse import from_source
+    from mechsolve.model.source import load_file
+
+    np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    if jobs is not None and jobs < 1:
+        raise InputError(f"--jobs {jobs}: give 1 or more workers")
+    if use_dask and scheduler:
+        raise InputError("give --dask (a local cluster) or --scheduler ADDRESS, not both")
+    if max_designs < 1:
+        raise InputError(f"--max-designs {max_designs}: give 1 or more")
+    try:
+        limit_s = parse_quantity(max_time, "time", "s")
+    except UnitError as exc:
+        raise InputError(f"--max-time {max_time!r}: {exc}") from None
+    if not limit_s > 0:
+        raise InputError(f"--max-time {max_time!r}: give a positive duration")
+    src = load_file(file)
+    study = make_study(
+        src,
+        list(params),
+        variant=variant,
+        design=design,
+        samples=samples,
+        seed=seed,
+        best=best,
+        figures=list(figures),
+    )
+    nominal = from_source(study.source)  # the file itself must be valid
+    if step is not None:
+        study.step = api.parse_step(nominal, step)
+    precheck(study, nominal)
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
+    results_dir = None
+    if keep_results:  # the first designs, timed, write theirs too
+        output_folder(outdir)
+        results_dir = output_folder(outdir / "designs")
+    n = len(study)
+    if not quiet:
+        shape = " x ".join(str(len(p.values)) for p in study.params)
+        what = f"a grid of {shape}" if study.design == "grid" else study.design
+        click.echo(
+            f"{nominal.name}: {n} designs ({what}) of " + ", ".join(p.name for p in study.params)
+        )
+    # the first chunk of designs, solved here and timed: what the rest will cost
+    if scheduler is not None:
+        workers, where = 1, "one worker of the scheduler"
+    else:
+        workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
+        kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
+        where = "this process" if workers == 1 else kind.format(workers)
+    est = time_first_chunk(study, workers, results_dir=results_dir)
+    if est.timed < n:
+        if not quiet:
+            click.echo(f"  estimate: {est.text(where)}")
+        if n > max_designs:
+            raise InputError(
+                f"{n} designs are more than --max-designs {max_designs}: "
+                f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
+            )
+        if est.seconds > limit_s:
+            raise InputError(
+                f"{n} designs would take more than --max-time {max_time}: "
+                f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
+                "them, or fewer values or a larger --step"
+            )
+    output_folder(outdir)
+    bar = _bar(n, quiet)
+    if bar is not None:
+        bar.update(est.timed)
+    try:
+        outcome = execute(
+            study,
+            jobs=jobs,
+            dask=use_dask,
+            scheduler=scheduler,
+            progress=None if bar is None else bar.update,
+            results_dir=results_dir,
+            first=est.rows,
+        )
+    finally:  # whatever ends the study (errors: the group's one handler)
+        if bar is not None:
+            bar.close()
+    rows = outcome.rows
+    written = [write_table(study, rows, outdir, fmt)]
+    if outcome.interrupted:
+        click.echo(
+            f"interrupted: {len(rows)} of {n} designs were finished; their rows are in "
+            f"{written[0]}",
+            err=True,
+        )
+        clikit.interrupted()
+    pick = pick_best(study, rows) if study.best is not None else None
+    if pick is not None:
+        written.append(write_best(study, pick, outdir / "best.yaml"))
+    if not no_plots:
+        from mechsolve.analyses.study.plots import write_plots
+
+        written += write_plots(study, rows, outdir)
+    ok = sum(r["status"] == "ok" for r in rows)
+    invalid = sum(r["status"].startswith("invalid") for r in rows)
+    has_req = any("requirements.pass [-]" in r for r in rows)
+    passing = sum(r.get("requirements.pass [-]") is True for r in rows)
+    if not quiet:
+        click.echo(
+            f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
+            f"position"
+            + (f", {invalid} invalid" if invalid else "")
+            + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
+        )
+        if has_req:
+            click.echo(f"  requirements: {passing} of {n} designs meet every requirement")
+        if study.best is not None:
+            sense, expr = study.best
+            if pick is None:
+                click.echo(f"  best ({sense} {expr}): no design has this figure")
+            else:
+                click.echo(
+                    f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
+                    f"{pick.value:.6g}: {study.describe(pick.design)}"
+                    + (f" ({pick.note})" if pick.note else "")
+                )
+        click.echo(
+            f"  wrote {len(written)} file(s) to {outdir}/: "
+            + ", ".join(p.name for p in written)
+            + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
+        )
+    clikit.finish(
+        check_failed=has_req and passing == 0,
+        warning=f"{n - ok} of {n} designs are invalid or do not assemble at every "
+        "position: their rows say why"
+        if ok < n
+        else None,
+    )

@@ -1,0 +1,195 @@
+"""Watch mode (``mechsolve run FILE --watch``): run again whenever the file is saved.
+
+Editing a design is a loop: change a length, save, look. The watcher runs the job once,
+then after every save of the file (editors that save by writing a new file and renaming
+it are seen too), prints the summary and the figures that moved since the last good run,
+and on a mistake in the file prints the message (file, key path, line) and keeps waiting:
+a user's error never ends the watch; Ctrl-C does (exit 130). While the file is broken,
+the output folder holds ``STALE.txt`` (the error, and when the last good run was), so
+the plots there are never taken for the file as it is; the next good run removes it.
+File events come from ``watchfiles`` (an optional dependency: ``pip install
+"mechsolve[watch]"``), not from a polling loop.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from mechsolve.base.errors import InputError, MechsolveError
+
+__all__ = ["STALE", "changes", "clear_stale", "figures_of", "mark_stale", "watch_file"]
+
+
+def figures_of(res: Any) -> dict[str, tuple[float, str]]:
+    """The figures a designer watches, ``{name: (value, unit)}`` in display units:
+    positions solved, each rocker's swing and slider's stroke, time ratios, each loop's
+    smallest transmission angle, the peak driving effort, the work per cycle, the peak
+    reaction of each joint."""
+    out: dict[str, tuple[float, str]] = {}
+    if res is None:
+        return out
+    out["positions solved"] = (float(sum(bool(x) for x in res.ok)), "")
+    for lp in res.limit_positions():
+        if lp.kind == "slider":
+            out[f"{lp.name} stroke"] = ((lp.high - lp.low) * 1e3, "mm")
+        else:
+            out[f"{lp.name} swing"] = (math.degrees(lp.high - lp.low), "deg")
+        if lp.time_ratio is not None:
+            out[f"{lp.name} time ratio"] = (lp.time_ratio, "")
+    for t in res.transmission_angles():
+        out[f"min transmission angle, {t.group}"] = (math.degrees(t.angle), "deg")
+    if res.forces is not None:
+        import numpy as np
+
+        e = np.asarray(res.driving_effort, float)
+        if np.any(np.isfinite(e)):
+            kind, unit = res.effort_name
+            out[f"peak driving {kind}"] = (float(np.nanmax(np.abs(e))), unit)
+        out["work of the driver"] = (float(res.work()), "J")
+        for c in res.force_columns() if hasattr(res, "force_columns") else []:
+            name = getattr(c, "name", "")
+            if name.endswith(".F"):
+                v = np.asarray(c.values, float)
+                if np.any(np.isfinite(v)):
+                    out[f"peak reaction {name[:-2]}"] = (float(np.nanmax(v)), c.unit)
+    return out
+
+
+def changes(before: dict, after: dict, rel: float = 1e-9) -> list[str]:
+    """Lines saying which figures moved, by how much, and which appeared or went."""
+    lines = []
+    for name, (v, unit) in after.items():
+        u = f" {unit}" if unit else ""
+        if name not in before:
+            lines.append(f"  new: {name} = {v:.6g}{u}")
+            continue
+        v0 = before[name][0]
+        if math.isfinite(v) and math.isfinite(v0) and abs(v - v0) <= rel * max(abs(v), abs(v0)):
+            continue
+        if v0 == v:
+            continue
+        pct = f" ({(v - v0) / abs(v0):+.2%})" if v0 and math.isfinite(v0) else ""
+        lines.append(f"  {name}: {v0:.6g} -> {v:.6g}{u}{pct}")
+    for name in before:
+        if name not in after:
+            lines.append(f"  gone: {name}")
+    return lines
+
+
+STALE = "STALE.txt"  # in the output folder while the file is broken
+
+
+def mark_stale(outdir: Path, path: Path, error: str, good: str | None) -> Path | None:
+    """Write ``outdir/STALE.txt``: the files beside it are not from ``path`` as it is
+    now (its last save failed with ``error``); ``good`` is when the last good run was.
+    Returns the marker, or None when there is no folder to mark (nothing was written)."""
+    from mechsolve.base.atomic import write_text
+
+    outdir = Path(outdir)
+    if not outdir.is_dir():
+        return None
+    since = f"the last good run ({good})" if good else "an earlier run"
+    text = (
+        f"The files in this folder are from {since} of {path}, not from the file as it\n"
+        "is now: its last save could not be run. They are replaced, and this file is\n"
+        "removed, by the next run that succeeds.\n\n"
+        f"{error}\n"
+    )
+    try:
+        return write_text(outdir / STALE, text)
+    except OSError:  # a full disk: the terminal line still says it
+        return None
+
+
+def clear_stale(outdir: Path | None) -> None:
+    """Remove the marker of :func:`mark_stale` after a good run."""
+    if outdir is None:
+        return
+    try:
+        (Path(outdir) / STALE).unlink()
+    except FileNotFoundError:
+        pass
+
+
+def watch_file(
+    path: Path,
+    job: Callable[[], tuple[int, Any]],
+    echo: Callable[[str], None] = print,
+    stop: Callable[[], bool] | None = None,
+    outdir: Path | None = None,
+) -> None:
+    """Run ``job`` now and after every save of ``path`` until Ctrl-C (or ``stop()``).
+
+    A save that cannot be run prints its error and keeps watching; with ``outdir`` (the
+    folder the job writes) the files there are marked stale (:data:`STALE`, with the
+    error) and the terminal says they are from the last good run, until a run succeeds.
+    Ctrl-C prints "stopped watching" and raises :class:`KeyboardInterrupt` (exit 130).
+    """
+    try:
+        from watchfiles import watch
+    except ImportError:
+        raise InputError(
+            '--watch needs the watchfiles package: pip install "mechsolve[watch]"'
+        ) from None
+    path = Path(path)
+    folder = path.resolve().parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: its folder does not exist, there is nothing to watch")
+    target = path.resolve()
+    last: dict[str, tuple[float, str]] | None = None
+    good: str | None = None  # when the last run that succeeded ended
+
+    def broken(message: str) -> None:
+        echo(message)
+        if outdir is not None:
+            marker = mark_stale(outdir, path, message, good)
+            if marker is not None:
+                since = f"the last good run ({good})" if good else "an earlier run"
+                echo(f"the files in {outdir}/ are from {since}, not from this save: see {marker}")
+
+    def once() -> None:
+        nonlocal last, good
+        try:
+            code, res = job()
+        except KeyboardInterrupt:
+            raise
+        except MechsolveError as exc:
+            broken(f"error: {exc}")
+            echo(f"watching {path}: fix it and save")
+            return
+        except OSError as exc:
+            broken(f"error: {exc.strerror or exc}: {exc.filename or path}")
+            echo(f"watching {path}: fix it and save")
+            return
+        except Exception as exc:  # noqa: BLE001 - a bug must not end the user's session
+            broken(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)")
+            echo(f"watching {path}")
+            return
+        clear_stale(outdir)
+        good = time.strftime("%H:%M:%S")
+        figs = figures_of(res)
+        if last is not None and figs:
+            moved = changes(last, figs)
+            echo("changed since the last run:" if moved else "no figure changed")
+            for line in moved:
+                echo(line)
+        if figs:
+            last = figs
+        echo(f"watching {path} (exit code of this run: {code}); Ctrl-C stops")
+
+    def is_target(change: Any, name: str) -> bool:  # noqa: ARG001
+        return Path(name).resolve() == target
+
+    try:
+        once()
+        for _ in watch(folder, watch_filter=is_target, debounce=200, step=50, recursive=False):
+            once()
+            if stop is not None and stop():
+                break
+    except KeyboardInterrupt:
+        echo("stopped watching")
+        raise

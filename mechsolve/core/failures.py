@@ -1,0 +1,208 @@
+"""Where the mechanism cannot close: runs of failed positions with their reasons, the
+exact edges of each range, a sweep that starts inside one (skips ahead), and the
+Newton polish of positions whose residual is too large.
+
+:class:`FailureReports` is a part of :class:`~mechsolve.core.sweep.Analysis`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from mechsolve.base.errors import CannotCloseAtStart
+from mechsolve.base.newton import solve as newton_solve
+from mechsolve.base.state import State
+from mechsolve.core.branches import TOUCH, _Context
+from mechsolve.core.solution import Failure, Solution
+from mechsolve.groups import Drive, NewtonGroup
+
+
+def _prepend_gap(an: Any, sol: Solution, u: np.ndarray, k: int, exc) -> Solution:
+    """The sweep's solution with its first ``k`` positions, where the mechanism could not
+    close, put back in front of ``sol`` (solved from position ``k``) as failures."""
+    n = len(u)
+    nb = an.system.nb
+    st = State(nb, n)
+    st.block[:, :, k:] = sol.state.block
+    st.block[:, :nb, :k] = np.nan
+    st.block[:, nb, :k] = sol.state.block[:, nb, :1]  # the ground stays where it is
+    ok = np.zeros(n, bool)
+    ok[k:] = sol.ok
+    fails = [Failure(0, k - 1, exc.group, exc.reason, float(u[0]), float(u[k - 1]))]
+    for f in sol.failures:
+        fails.append(Failure(f.first + k, f.last + k, f.group, f.reason, f.u_first, f.u_last))
+    ind = np.zeros((sol.indicator.shape[0], n))
+    ind[:, k:] = sol.indicator
+    iters = np.zeros(n, int)
+    iters[k:] = sol.iterations
+    methods = None
+    if sol.methods is not None:
+        methods = np.full(n, "failed", dtype=object)
+        methods[k:] = sol.methods
+    res = None
+    if sol.residual_ is not None:
+        res = np.full(n, np.nan)
+        res[k:] = sol.residual_
+    for e in sol.events:
+        e.after += k
+    warnings = [
+        f"the mechanism cannot close at the start of the sweep: from {an.format_u(u[0])} to "
+        f"{an.format_u(u[k - 1])} the {exc.reason}; the sweep starts at "
+        f"{an.format_u(u[k])}, the first position that closes, on the branches chosen there"
+    ] + sol.warnings
+    speed = an.speed
+    out = Solution(
+        an,
+        u,
+        (u - u[0]) / speed if speed else np.zeros(n),
+        st,
+        ok,
+        fails,
+        ind,
+        iters,
+        methods,
+        res,
+        dataclasses.replace(sol.start, u0=float(u[0])),  # the sweep still starts at u[0]
+        warnings,
+        sol.has_velocity,
+        sol.has_acceleration,
+        sol.events,
+        sol.flips,
+        [i + k for i in sol.rates_by_limit],
+        [i + k for i in sol.rates_undetermined],
+    )
+    out.skipped_start = k
+    return out
+
+
+class FailureReports:
+    """Methods of :class:`~mechsolve.core.sweep.Analysis`: see the module docstring."""
+
+    def solve_sweep(
+        self,
+        u: np.ndarray,
+        velocity: bool = True,
+        acceleration: bool = True,
+        per_unit_driver: bool = False,
+    ):
+        """Solve a sweep from its start, as :meth:`solve`; where the mechanism cannot close
+        at the start (a dead zone there), skip ahead to the first position where it
+        closes, assemble there (on the branches the conditions and sketch ask for), and
+        keep the positions skipped as unassemblable rows."""
+        u = np.asarray(u, float)
+        k = 0
+        first: CannotCloseAtStart | None = None
+        while True:
+            try:
+                sol = self.solve(
+                    u[k:],
+                    velocity=velocity,
+                    acceleration=acceleration,
+                    per_unit_driver=per_unit_driver,
+                )
+                break
+            except CannotCloseAtStart as exc:
+                if first is None:
+                    first = exc
+                nxt = k + (exc.first_ok if exc.first_ok else 1)
+                if nxt >= len(u) or nxt <= k:
+                    raise first from None
+                k = nxt
+        if k:
+            sol = _prepend_gap(self, sol, u, k, first)
+        self.locate_edges(sol)
+        return sol
+
+    def locate_edges(self, sol: Solution) -> None:
+        """Where each unassemblable range truly begins and ends: the root of the failing
+        loop's discriminant between the last position that closes and the first that does
+        not (bisection to rounding, the end kept on the side that closes)."""
+        if not sol.failures:
+            return
+        ctx = _Context(self, sol.state, sol.u, sol.start, sol.flips, {})
+        ctx.is_start = False
+        labels = {g.label: gi for gi, g in enumerate(self.plan)}
+        n = len(sol.u)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for f in sol.failures:
+                gi = labels.get(f.group)
+                if gi is None or self.plan[gi].n_modes != 2:
+                    continue
+                if f.first > 0 and sol.ok[f.first - 1]:
+                    f.edge_in = self._edge(ctx, gi, f.first - 1, f.first)
+                if f.last < n - 1 and sol.ok[f.last + 1]:
+                    f.edge_out = self._edge(ctx, gi, f.last + 1, f.last)
+
+    def _edge(self, ctx: _Context, gi: int, good: int, bad: int) -> float:
+        g = self.plan[gi]
+        near = min(good, bad)
+
+        def H(x: float) -> float:
+            return float(g.disc(ctx.prefix(gi, np.array([x]), near))[0][0])
+
+        a, b = float(ctx.u[good]), float(ctx.u[bad])
+        if not (H(a) >= -TOUCH and H(b) < -TOUCH):
+            return math.nan
+        for _ in range(200):
+            m = 0.5 * (a + b)
+            if m in (a, b):
+                break
+            if H(m) >= 0.0:
+                a = m
+            else:
+                b = m
+        return a
+
+    def _failures(self, st: State, oks, ok, st_u) -> list[Failure]:
+        out: list[Failure] = []
+        if ok.all():
+            return out
+        bad = np.concatenate(([False], ~ok, [False]))
+        edges = np.flatnonzero(bad[1:] != bad[:-1])  # starts and ends of runs of failures
+        for i, j in zip(edges[0::2], edges[1::2] - 1):
+            i, j = int(i), int(j)
+            gi = next((k for k, o in enumerate(oks) if not o[i]), None)
+            if gi is None:
+                group, reason = "the whole system", "the constraint residual stays above tolerance"
+            else:
+                g = self.plan[gi]
+                group = g.label
+                reason = (
+                    g.fail_reason(st, i)
+                    if not isinstance(g, NewtonGroup)
+                    else (f"{g.label}: Newton-Raphson and scipy found no closed position")
+                )
+            out.append(Failure(i, j, group, reason, float(st_u[i]), float(st_u[j])))
+        return out
+
+    def _polish(self, st: State, drive: Drive, i: int):
+        """Newton on the whole system at position ``i`` from the closed-form answer."""
+        st1 = st.take([i])
+        sys_ = self.system
+        u1 = drive.u[i : i + 1]
+
+        def setq(q):
+            for b in range(sys_.nb):
+                st1.x[b, 0], st1.y[b, 0] = q[3 * b], q[3 * b + 1]
+                st1.set_angle(b, q[3 * b + 2], 0)
+
+        def fun(q):
+            setq(q)
+            return sys_.residual(st1, u1)[:, 0]
+
+        def jac(q):
+            setq(q)
+            return sys_.jacobian(st1)[0]
+
+        q0 = st1.q()[0]
+        if not np.all(np.isfinite(q0)):
+            return False, np.nan, 0
+        q, stats = newton_solve(fun, jac, q0, self.atol, self.mech.solver.max_iterations)
+        if stats.converged:
+            setq(q)
+            st.put([i], st1)
+        return stats.converged, stats.residual, stats.iterations

@@ -1,0 +1,230 @@
+"""Rates at singular positions: the limits along the followed motion.
+
+:class:`SingularRates` is a part of :class:`~mechsolve.core.sweep.Analysis`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mechsolve.base.numerics import limit_from_both_sides
+from mechsolve.base.state import State
+from mechsolve.core.conditioning import (
+    NEAR_SINGULAR_INDICATOR,
+    NEAR_SINGULAR_RCOND,
+    SINGULAR_INDICATOR,
+    SINGULAR_RCOND,
+    near_singular,
+)
+from mechsolve.core.solution import Solution
+from mechsolve.groups import NewtonGroup
+
+
+class SingularRates:
+    """Methods of :class:`~mechsolve.core.sweep.Analysis`: see the module docstring."""
+
+    def _downstream(self) -> list[set[int]]:
+        """For each group of the plan, its bodies and those of every later group that
+        depends on them (through a joint, directly or through other groups)."""
+        if getattr(self, "_down", None) is None:
+            down = []
+            for gi, g in enumerate(self.plan):
+                bodies = set(g.bodies)
+                for h in self.plan[gi + 1 :]:
+                    touches = {b for c in h.constraints for b in (c.a, c.b)}
+                    if touches & bodies:
+                        bodies |= set(h.bodies)
+                down.append(bodies)
+            self._down = down
+        return self._down
+
+    def _rates_at_singular(
+        self, sol: Solution, velocity: bool, acceleration: bool, per_unit_driver: bool
+    ) -> None:
+        """Rates at the positions where a group is singular or near it (a toggle or a
+        bifurcation point: the sine of a loop's transmission angle below
+        ``NEAR_SINGULAR_INDICATOR``, or a Newton group's reciprocal condition number below
+        ``NEAR_SINGULAR_RCOND``; see :mod:`mechsolve.core.conditioning` for the measurements).
+
+        At a singular position the differentiated constraints do not determine the rates
+        (0 / 0 in the group's formulas, rounding noise in practice); next to it they carry
+        the pose's rounding amplified by 1/s^2 (accelerations 1/s^3). The motion the
+        sweep follows is
+        smooth through such a point, so its rates are their limits: the analytic rates
+        are evaluated at ``u -+ d`` and ``u -+ 2d`` on the followed branches and
+        extrapolated to ``u`` (Richardson, error O(d^4)); at the first or last sample of
+        a sweep, from the side the sweep follows (``u + d ... u + 4d``, cubic). ``d`` is
+        5e-3 rad, or 5e-3 of the mechanism's size for a linear driver: rounding grows
+        near the singular point as d shrinks (about eps / d^3 in accelerations), the
+        extrapolation error as d^4; the limits are good to about 1e-9 of the rates'
+        natural sizes. A Newton group's points on each side are reached by continuation
+        from the neighbouring sample on that side, which lies on the followed motion.
+        Where the motion does not exist on both sides (a limit position of a driven
+        rocker: the rates grow without bound) or the two sides disagree, the computed
+        rates are kept where the group is only near singular (they are large there, and
+        right), and below ``SINGULAR_INDICATOR`` / ``SINGULAR_RCOND`` the rates of the
+        singular group and of the groups that depend on it stay NaN; the other rates
+        (the driver's, groups before it or beside it) keep their values.
+        """
+        ind = sol.indicator
+        st = sol.state
+        n = len(sol.u)
+        sing_by: dict[int, list[int]] = {}  # position -> its (near) singular groups
+        newton = np.zeros(n, bool)
+        deep = np.zeros(n, bool)  # singular to rounding: no value but a limit
+        for gi, g in enumerate(self.plan):
+            if g.n_modes == 2 and gi < len(ind):
+                where = ind[gi] <= NEAR_SINGULAR_INDICATOR
+                deep |= ind[gi] <= SINGULAR_INDICATOR
+            elif isinstance(g, NewtonGroup):
+                # a Newton solve stops within the square root of the rounding error of
+                # a singular point, so its block is only nearly singular there
+                where = near_singular(g, st, NEAR_SINGULAR_RCOND)
+                if where.any():
+                    deep |= near_singular(g, st, SINGULAR_RCOND)
+                newton |= where & sol.ok
+            else:
+                continue
+            for i in np.flatnonzero(where & sol.ok):
+                sing_by.setdefault(int(i), []).append(gi)
+        sol.rates_undetermined = []
+        if not sing_by:
+            return
+        rows = slice(5, 8) if not acceleration else slice(5, 11)
+        d = 5e-3 * (self.scale if self.linear else 1.0)
+        # natural sizes of the rates, for telling a jump from rounding
+        ws = (1.0 if per_unit_driver else abs(self.speed)) / (self.scale if self.linear else 1.0)
+        kind = np.array([self.scale * ws, self.scale * ws, ws] + [self.scale * ws * ws] * 2)
+        kind = np.append(kind, ws * ws)[rows, None]
+        down = self._downstream()
+        kw = dict(
+            start=sol.start,
+            velocity=velocity,
+            acceleration=acceleration,
+            per_unit_driver=per_unit_driver,
+            limits=False,
+        )
+
+        def undetermined(i: int, bodies: list[int]) -> None:
+            # no limit: near a singular position the computed rates are right (and
+            # large); at it (to rounding) they are noise and left blank
+            if deep[i]:
+                st.block[rows, bodies, i] = np.nan
+                sol.rates_undetermined.append(int(i))
+
+        for i, groups in sorted(sing_by.items()):
+            ui = float(sol.u[i])
+            one_sided = n > 1 and i in (0, n - 1)
+            if one_sided:
+                # the first or last sample: the followed motion lies on one side only
+                into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
+                x = ui + into * d * np.arange(1.0, 5.0)
+                if newton[i]:
+                    k = i + 1 if i == 0 else i - 1  # continue from the neighbour inward
+                    side = self._side_solve(sol, k, x[::-1], kw)
+                    r = None if side is None else side.block[:, :, ::-1]
+                else:
+                    near = self.solve(x, near=(sol, int(i)), **kw)
+                    r = near.state.block if near.ok.all() else None
+            elif newton[i]:
+                lo = self._side_solve(sol, i - 1, ui - d * np.array([2.0, 1.0]), kw)
+                hi = self._side_solve(sol, i + 1, ui + d * np.array([2.0, 1.0]), kw)
+                r = None
+                if lo is not None and hi is not None:
+                    a, b = lo.block, hi.block
+                    r = np.stack([a[:, :, 1], b[:, :, 1], a[:, :, 0], b[:, :, 0]], axis=2)
+            else:
+                near = self.solve(ui + d * np.array([-1.0, 1.0, -2.0, 2.0]), near=(sol, i), **kw)
+                r = near.state.block if near.ok.all() else None
+            bodies = sorted(set().union(*(down[gi] for gi in groups)))
+            if r is None:
+                undetermined(i, bodies)
+                continue
+            self._pose_by_limit(st, i, r[:3], one_sided)
+            r = r[rows]
+            if one_sided:  # cubic extrapolation, checked against the quadratic one
+                est = r @ np.array([4.0, -6.0, 4.0, -1.0])
+                quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
+                if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
+                    st.block[rows, :, i] = est
+                    sol.rates_by_limit.append(int(i))
+                else:  # not smooth there: the rates grow without bound (a limit position)
+                    undetermined(i, bodies)
+                continue
+            lo1, hi1, lo2, hi2 = (r[:, :, k] for k in range(4))
+            # a smooth motion changes twice as much over 4d as over 2d; a jump does not
+            smooth = np.abs((hi2 - lo2) - 2.0 * (hi1 - lo1)) <= (
+                0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
+            )
+            est = limit_from_both_sides(lo1, hi1, lo2, hi2)
+            if smooth.all() and not deep[i]:
+                # near (not at) a singular position: the computed values are kept where
+                # they agree with the limit to within the limit's own error (bounded by
+                # its difference from the plain mean of the two sides, and 1e-6 of the
+                # rates' size: near a kite's fold the limit itself is good to only about
+                # that); where they do not, rounding amplified by 1/s^2 (1/s^3 for
+                # accelerations) spoiled them, and the limit is taken
+                comp = st.block[rows, :, i]
+                err_lim = np.abs(est - 0.5 * (lo1 + hi1)) + 1e-6 * kind[:, 0][:, None]
+                better = np.abs(comp - est) > err_lim
+                st.block[rows, :, i] = np.where(better, est, st.block[rows, :, i])
+                if better.any():
+                    sol.rates_by_limit.append(int(i))
+            elif smooth.all():
+                st.block[rows, :, i] = est
+                sol.rates_by_limit.append(int(i))
+            elif not newton[i] and self._one_sided(sol, i, d, rows, kind, kw):
+                sol.rates_by_limit.append(int(i))
+            else:
+                undetermined(i, bodies)
+        st.token = State.new_token()
+
+    def _one_sided(self, sol: Solution, i: int, d: float, rows, kind, kw) -> bool:
+        """The rates at position ``i`` as their limit from one side, the side the sweep
+        comes from, else the one it goes to (a sample next to the sweep's last one, where
+        the motion beyond it is on a branch the sweep did not follow): cubic
+        extrapolation from ``u -+ d ... 4d``, checked against the quadratic one."""
+        st = sol.state
+        ui = float(sol.u[i])
+        back = -math.copysign(1.0, sol.u[-1] - sol.u[0])
+        for side in (back, -back):
+            near = self.solve(ui + side * d * np.arange(1.0, 5.0), near=(sol, int(i)), **kw)
+            if not near.ok.all():
+                continue
+            r = near.state.block[rows]
+            est = r @ np.array([4.0, -6.0, 4.0, -1.0])
+            quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
+            if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
+                st.block[rows, :, i] = est
+                return True
+        return False
+
+    @staticmethod
+    def _pose_by_limit(st: State, i: int, p: np.ndarray, one_sided: bool) -> None:
+        """Poses left undetermined at position ``i`` (NaN: a loop whose outer joints
+        coincide at the same position where an earlier group is singular too, so that
+        the direction of the limit is not known there) as the limit of the poses ``p``
+        next to it (x, y, angle; the same points as the rates)."""
+        lost = ~np.all(np.isfinite(st.block[:3, :, i]), axis=0)
+        if not lost.any():
+            return
+        q = p[:, lost, :].copy()
+        q[2] = np.unwrap(q[2], axis=-1)
+        if one_sided:
+            est = q @ np.array([4.0, -6.0, 4.0, -1.0])
+        else:
+            est = limit_from_both_sides(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
+        st.block[:3, lost, i] = est
+
+    def _side_solve(self, sol: Solution, k: int, x: np.ndarray, kw) -> State | None:
+        """Positions ``x`` reached by continuation from solved sample ``k`` (which is
+        solved again first, so that the march starts on its pose); None if sample ``k``
+        was not solved or a position does not close."""
+        if not (0 <= k < len(sol.u)) or not sol.ok[k]:
+            return None
+        near = self.solve(np.r_[sol.u[k], x], near=(sol, k), **kw)
+        if not near.ok.all():
+            return None
+        return near.state.take(np.arange(1, len(x) + 1))

@@ -1,0 +1,228 @@
+"""The driver's work over the sweep, by the energy method, with the work of the loads
+that are not state functions integrated exactly (Gauss-Kronrod; see :mod:`.forces`)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mechsolve.core.force_result import ForceResult
+from mechsolve.core.loads import _Q, _switch, apply_loads, states_between, stroke_function
+from mechsolve.model import PointForce, Spring, Torque
+
+if TYPE_CHECKING:
+    from mechsolve.core.sweep import Analysis, Solution
+
+
+def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
+    """Work done by the driver over the sweep (J); NaN where it is not defined (see
+    :func:`driver_work_why`)."""
+    return driver_work_why(an, sol, fr)[0]
+
+
+def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float, str]:
+    """Work done by the driver over the sweep (J), by the energy method, and why it is
+    not defined when it is NaN (else "").
+
+    ``W = (T + V)(end) - (T + V)(start) - W_loads``. The kinetic and potential energies are
+    state functions, exact at the ends. A constant force (global components) or torque does
+    work ``F . (r_1 - r_0)`` (``T (theta_1 - theta_0)``) over each interval where it acts;
+    where a condition switches between two samples, the switch is located by bisection on
+    the driver coordinate, so the result does not depend on the step. The work of the other
+    loads (dampers, drag, springs under a condition, link-fixed forces) is the integral of
+    their power over the motion, ``integral of P dt`` (a damper's ``-c v^2``), by adaptive
+    quadrature on states solved between the samples (:func:`_power_integral`), to a
+    relative 1e-11: not a rule on the samples, so it does not depend on the step either.
+    The energies need only the motion, so positions where the forces are indeterminate
+    (singular) do not matter; if the mechanism could not be solved at some position, the
+    work is not defined (NaN).
+    """
+    if len(sol.u) < 2:
+        return float("nan"), "not enough positions"
+    if not np.all(sol.ok):
+        missing = int(np.sum(~sol.ok))
+        return float("nan"), f"{missing} position(s) not solved"
+    mech, sys_ = an.mech, an.system
+    st = sol.state
+    energy = fr.kinetic + fr.potential
+    work = energy[-1] - energy[0]
+    integrated = []  # loads whose work is the integral of their power
+    for load in mech.loads:
+        # "pos" is the load's potential-like function: its work is a difference of it;
+        # "phi" its values at every sample
+        if isinstance(load, PointForce) and load.frame == "global":
+            b = sys_.index[load.link]
+            s = mech.local_point(load.link, load.point)
+            f = load.force
+            x, y = st.point(b, s)
+            phi = f[0] * x + f[1] * y
+
+            def pos(state, i, b=b, s=s, f=f):
+                x, y = state.point(b, s, [i])
+                return f[0] * float(x[0]) + f[1] * float(y[0])
+
+        elif isinstance(load, Torque):
+            b = sys_.index[load.link]
+            phi = load.torque * st.th[b]
+
+            def pos(state, i, b=b, t=load.torque):
+                return t * float(state.th[b, i])
+
+        else:
+            if not (isinstance(load, Spring) and load.when is None):  # else in V
+                integrated.append(load)
+            continue
+        on = fr.active.get(load.name)
+        if on is None:
+            work -= float(phi[-1] - phi[0])
+            continue
+        both = on[:-1] & on[1:]
+        work -= float(np.sum(np.diff(phi)[both]))  # the intervals where it acts throughout
+        for k in np.flatnonzero(on[:-1] != on[1:]):  # and the parts where it switches
+            k = int(k)
+            us, ss = _switch(an, sol, fr, load, k)
+            if on[k]:
+                work -= pos(ss, 0) - float(phi[k])
+            else:
+                work -= float(phi[k + 1]) - pos(ss, 0)
+    if integrated:
+        w_loads, why = _power_integral(an, sol, fr, integrated)
+        if why:
+            return float("nan"), why
+        work -= w_loads
+    return float(work), ""
+
+
+# Gauss-Kronrod 7-15 on [-1, 1] (QUADPACK's qk15): the 15 Kronrod nodes and weights, and
+# the weights of the 7-point Gauss rule on its nodes (every second Kronrod node)
+_XK = np.array(
+    [
+        0.991455371120812639206854697526329,
+        0.949107912342758524526189684047851,
+        0.864864423359769072789712788640926,
+        0.741531185599394439863864773280788,
+        0.586087235467691130294144845693013,
+        0.405845151377397166906606412076961,
+        0.207784955007898467600689403773245,
+    ]
+)
+
+
+_WK = np.array(
+    [
+        0.022935322010529224963732008058970,
+        0.063092092629978553290700663189204,
+        0.104790010322250183839876322541518,
+        0.140653259715525918745189590510238,
+        0.169004726639267902826583426598550,
+        0.190350578064785409913256402421014,
+        0.204432940075298892414161999234649,
+    ]
+)
+
+
+_WG = np.array(
+    [
+        0.129484966168869693270611432679082,
+        0.279705391489276667901467771423780,
+        0.381830050505118944950369775488975,
+    ]
+)
+
+
+GK_NODES = np.r_[-_XK, 0.0, _XK[::-1]]
+
+
+GK_WEIGHTS = np.r_[_WK, 0.209482141084727828012999174891714, _WK[::-1]]
+
+
+G7_WEIGHTS = np.r_[_WG, 0.417959183673469387755102040816327, _WG[::-1]]  # at nodes 1::2
+WORK_RTOL = 1e-11  # the quadrature's tolerance, relative to the integral of |P|
+
+
+def _power_integral(
+    an: Analysis, sol: Solution, fr: ForceResult, loads: list, rtol: float = WORK_RTOL
+) -> tuple[float, str]:
+    """The work of ``loads`` over the motion of ``sol``, ``integral of P dt`` (J), and why
+    it could not be found ("" if it was).
+
+    Adaptive Gauss-Kronrod (7-15) quadrature in time: the panels start as the intervals
+    between samples, cut where a condition of one of the loads switches (located by
+    bisection, so that each panel's power is smooth); a panel whose Kronrod and Gauss
+    estimates differ by more than its share of ``rtol`` times the integral of ``|P|`` is
+    halved, all such panels of a round solved at once. The states at the nodes are the
+    mechanism's own at those driver values (:func:`mechsolve.core.evaluate.states`, on the sweep's
+    branches), with the driver's rates there: the file's speed, or its motion law of time.
+    """
+    from mechsolve.core.sweep import StateView
+
+    t = np.asarray(sol.t, float)
+    u = np.asarray(sol.u, float)
+    ud, udd = sol.driver_rates()
+    law = an.mech.driver.motion
+    panels: list[tuple[float, float, int]] = []
+    for k in range(len(u) - 1):
+        a, b = float(t[k]), float(t[k + 1])
+        if not b > a:
+            continue  # no time passes (a repeated sample, a sweep at rest): no work
+        cuts = []
+        if law is None and u[k + 1] != u[k]:
+            for load in loads:
+                on = fr.active.get(load.name)
+                if on is not None and on[k] != on[k + 1]:
+                    us = _switch(an, sol, fr, load, k)[0]
+                    cuts.append(a + (b - a) * (us - u[k]) / (u[k + 1] - u[k]))
+        edges = [a, *sorted(c for c in cuts if a < c < b), b]
+        panels += [(lo, hi, k) for lo, hi in zip(edges[:-1], edges[1:])]
+    if not panels:
+        return 0.0, ""
+    total_time = float(t[-1] - t[0]) if t[-1] != t[0] else 1.0
+
+    def power(tau: np.ndarray, ks: np.ndarray) -> np.ndarray:
+        if law is not None:
+            uu, vv, ww = law.at(tau)
+        else:  # a constant speed: u is linear in t between samples
+            frac = (tau - t[ks]) / (t[ks + 1] - t[ks])
+            uu = u[ks] + (u[ks + 1] - u[ks]) * frac
+            vv, ww = ud[ks], udd[ks]
+        st, ok = states_between(an, sol, uu, vv, ww)
+        view = StateView(an, st)
+        funcs = {"stroke": stroke_function(list(fr.stroke_extremes), True)}
+        active = {}
+        for ld in an.mech.loads:
+            if ld.when is not None:
+                with np.errstate(invalid="ignore"):
+                    on = np.asarray(ld.when.evaluate(view, funcs), bool)
+                active[ld.name] = np.broadcast_to(on, uu.shape) & ok
+        _, per_load, _ = apply_loads(an, st, active, _Q(an, st))
+        p = sum(per_load[ld.name] for ld in loads)
+        return np.where(ok, p, np.nan)
+
+    lo = np.array([p[0] for p in panels])
+    hi = np.array([p[1] for p in panels])
+    ks = np.array([p[2] for p in panels])
+    total = 0.0
+    scale = None
+    for _ in range(60):
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        tau = mid[:, None] + half[:, None] * GK_NODES[None, :]
+        p = power(tau.ravel(), np.repeat(ks, len(GK_NODES))).reshape(tau.shape)
+        if not np.all(np.isfinite(p)):
+            i = int(np.argmax(~np.all(np.isfinite(p), axis=1)))
+            return float("nan"), (
+                "the mechanism could not be solved between the positions at "
+                f"{an.format_u(float(u[ks[i]]))} and {an.format_u(float(u[ks[i] + 1]))}"
+            )
+        kron = half * (p @ GK_WEIGHTS)
+        gauss = half * (p[:, 1::2] @ G7_WEIGHTS)
+        if scale is None:  # the integral of |P|: what the tolerance is relative to
+            scale = float(np.sum(half * (np.abs(p) @ GK_WEIGHTS)))
+        err = np.abs(kron - gauss)
+        done = (err <= rtol * scale * (hi - lo) / total_time) | (hi - lo <= 1e-13 * total_time)
+        total += float(np.sum(kron[done]))
+        if done.all():
+            return total, ""
+        lo, hi, ks, mid = lo[~done], hi[~done], ks[~done], mid[~done]
+        lo, hi, ks = np.r_[lo, mid], np.r_[mid, hi], np.r_[ks, ks]
+    return float("nan"), "the power of the loads could not be integrated to tolerance"

@@ -1,0 +1,580 @@
+"""The mechanism in motion: frames from a fine sweep, written as a GIF or MP4 (matplotlib)
+or handed to the report's HTML player as plain numbers.
+
+The frames come from their own sweep, 1 degree apart by default (a 360th of a linear
+driver's travel, or of a sweep in time), whatever step the file tabulates, so that the
+motion is smooth. Each frame draws the links to scale, the ground pivots and guides, the
+paths of the output points traced so far, the driver's value and the time; with
+``forces`` also the reaction at each joint as an arrow (the force on the joint's second
+link by its first, the convention of the CSV), all arrows on one scale.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mechsolve.base.atomic import replacing
+from mechsolve.base.errors import InputError
+
+if TYPE_CHECKING:
+    from mechsolve.model import Mechanism
+    from mechsolve.results.results import Results
+
+PALETTE = [
+    "#1f77b4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#d62728",
+    "#9467bd",
+    "#8c564b",
+    "#e377c2",
+    "#17becf",
+]
+DEFAULT_FRAME_STEP = math.radians(1.0)
+MAX_FRAMES = 20_000  # a longer animation is a mistake on the command line
+FFMPEG_HINT = (
+    "an MP4 needs ffmpeg on the PATH (Debian/Ubuntu: apt-get install ffmpeg; macOS: brew "
+    "install ffmpeg; Windows: winget install ffmpeg); write a .gif instead, which needs "
+    "nothing more"
+)
+
+
+@dataclass
+class Outline:
+    """What is drawn of one link in every frame: a closed polygon (its points' convex
+    hull, or a small block for a slider), or a bar between two points."""
+
+    name: str
+    color: str
+    x: np.ndarray  # (frames, corners)
+    y: np.ndarray
+    closed: bool
+
+
+@dataclass
+class Frames:
+    """The mechanism at each frame of a fine sweep, in global coordinates (m)."""
+
+    name: str
+    driver: str
+    u: np.ndarray  # driver value: deg (revolute) or m (linear)
+    u_unit: str
+    t: np.ndarray  # s
+    timed: bool  # whether the times are meaningful (a driver at rest has none)
+    outlines: list[Outline]
+    points: dict[str, tuple[np.ndarray, np.ndarray]]  # every named point
+    ground: list[str]  # fixed pivots (joints on the ground)
+    joints: list[str]  # points that are joints between moving links
+    paths: list[str]  # the output points whose paths are traced
+    guides: list[tuple[float, float, float, float]]  # fixed slider guides: x0, y0, x1, y1
+    ok: np.ndarray
+    forces: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(
+        default_factory=dict
+    )  # joint -> (x, y, Fx, Fy) per frame
+    force_scale: float = 0.0  # m of arrow per N
+    force_points: dict[str, str] = field(default_factory=dict)  # joint -> its point
+
+    def __len__(self) -> int:
+        return len(self.u)
+
+    def names(self) -> list[str]:
+        """Every name a frame shows (for the font check of :mod:`.writers.fonts`)."""
+        return [self.name, *(o.name for o in self.outlines), *self.points, *self.forces]
+
+    def bounds(self, margin: float = 0.08) -> tuple[float, float, float, float]:
+        """xmin, xmax, ymin, ymax over every frame (and the force arrows), with a margin."""
+        xs = [o.x for o in self.outlines] + [p[0] for p in self.points.values()]
+        ys = [o.y for o in self.outlines] + [p[1] for p in self.points.values()]
+        for x, y, fx, fy in self.forces.values():
+            xs.append(x + fx * self.force_scale)
+            ys.append(y + fy * self.force_scale)
+        for g in self.guides:
+            xs.append(np.array(g[0::2]))
+            ys.append(np.array(g[1::2]))
+        x = np.concatenate([np.ravel(a) for a in xs])
+        y = np.concatenate([np.ravel(a) for a in ys])
+        x, y = x[np.isfinite(x)], y[np.isfinite(y)]
+        if not x.size:
+            return (-1.0, 1.0, -1.0, 1.0)
+        x0, x1, y0, y1 = float(x.min()), float(x.max()), float(y.min()), float(y.max())
+        pad = margin * max(x1 - x0, y1 - y0, 1e-9)
+        return (x0 - pad, x1 + pad, y0 - pad, y1 + pad)
+
+    def label(self, i: int) -> str:
+        """``driver O1 = 120°, t = 18.87 s`` for frame ``i``."""
+        u = float(self.u[i])
+        text = (
+            f"driver {self.driver} = {u:.1f}°"
+            if self.u_unit == "deg"
+            else f"driver {self.driver} = {u:.4g} m"
+        )
+        if self.timed:
+            text += f", t = {float(self.t[i]):.3f} s"
+        return text
+
+    def to_json(self, digits: int = 5) -> dict[str, Any]:
+        """The frames as plain lists for the report's player (coordinates rounded to
+        ``digits`` significant figures of the drawing's size; NaN as null)."""
+        x0, x1, y0, y1 = self.bounds()
+        q = 10.0 ** (digits - math.ceil(math.log10(max(x1 - x0, y1 - y0, 1e-12))))
+
+        def arr(a: np.ndarray, scale: float = q) -> list:
+            a = np.asarray(a, float)
+            return [None if not math.isfinite(v) else round(v * scale) / scale for v in a.flat]
+
+        out: dict[str, Any] = {
+            "name": self.name,
+            "labels": [self.label(i) for i in range(len(self))],
+            "bounds": [x0, x1, y0, y1],
+            "outlines": [
+                {
+                    "name": o.name,
+                    "color": o.color,
+                    "closed": o.closed,
+                    "corners": o.x.shape[1],
+                    "x": arr(o.x),
+                    "y": arr(o.y),
+                }
+                for o in self.outlines
+            ],
+            "points": {p: [arr(x), arr(y)] for p, (x, y) in self.points.items()},
+            "ground": self.ground,
+            "joints": self.joints,
+            "paths": self.paths,
+            "guides": [list(g) for g in self.guides],
+        }
+        if self.forces:
+            out["forces"] = {
+                j: {
+                    "at": self.force_points[j],
+                    "fx": arr(fx * self.force_scale),
+                    "fy": arr(fy * self.force_scale),
+                }
+                for j, (x, y, fx, fy) in self.forces.items()
+            }
+            out["force_unit"] = (
+                force_text(1 / self.force_scale) if self.force_scale > 0 else "no force"
+            )
+        return out
+
+
+def _hull(pts: np.ndarray) -> list[int]:
+    """Indices of the convex hull of ``pts`` (counter-clockwise), or of the two farthest
+    points when they are collinear."""
+    n = len(pts)
+    if n <= 2:
+        return list(range(n))
+    order = sorted(range(n), key=lambda k: (round(pts[k][0], 12), round(pts[k][1], 12)))
+
+    def cross(o, a, b):
+        return (pts[a][0] - pts[o][0]) * (pts[b][1] - pts[o][1]) - (pts[a][1] - pts[o][1]) * (
+            pts[b][0] - pts[o][0]
+        )
+
+    lower: list[int] = []
+    for k in order:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], k) <= 1e-15:
+            lower.pop()
+        lower.append(k)
+    upper: list[int] = []
+    for k in reversed(order):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], k) <= 1e-15:
+            upper.pop()
+        upper.append(k)
+    hull = lower[:-1] + upper[:-1]
+    if len(hull) < 3:  # collinear: the two ends
+        return [order[0], order[-1]]
+    return hull
+
+
+def force_text(f: float) -> str:
+    """``69.09 kN``, ``3.2 N``: a force with the prefix engineers read."""
+    for scale, unit in ((1e6, "MN"), (1e3, "kN")):
+        if abs(f) >= scale:
+            return f"{f / scale:.4g} {unit}"
+    return f"{f:.4g} N"
+
+
+def check_frame_count(count: int | None) -> None:
+    """Refuse a number of frames outside 2 .. :data:`MAX_FRAMES` (None: the default).
+
+    ``animate`` and ``report`` call it before loading or solving anything, so that a slip
+    on the command line costs nothing; :func:`fine_step` calls it too."""
+    if count is not None and count < 2:
+        raise InputError(f"--frames {count}: an animation needs at least 2 frames")
+    if count is not None and count > MAX_FRAMES:
+        raise InputError(f"--frames {count}: at most {MAX_FRAMES} frames")
+
+
+def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | None]:
+    """The sweep step that gives ``count`` frames over the file's range (or 1 degree, a
+    360th of a linear travel or of a sweep in time when ``count`` is None), and the count
+    it gives. (None, None) when the file's own positions must be used (a motion law
+    without a duration)."""
+    from mechsolve.model import SliderJoint
+
+    check_frame_count(count)
+    sw = mech.sweep
+    if mech.driver.motion is not None:
+        if sw.duration is None:
+            return None, None
+        n = count or 361
+        return sw.duration / (n - 1), n
+    linear = isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    travel = sw.travel if sw.travel is not None else 2 * math.pi
+    if linear:
+        n = count or 361
+    else:
+        n = count or max(2, round(travel / DEFAULT_FRAME_STEP) + 1)
+    if n > MAX_FRAMES:
+        n = MAX_FRAMES
+    return travel / (n - 1), n
+
+
+def frames_of(res: Results, forces: bool = False) -> Frames:
+    """The drawing of every position of ``res``."""
+    an = res.analysis
+    mech = res.mechanism
+    st = res.solution.state
+    sys_ = an.system
+    n = len(res.u)
+    outlines = []
+    for k, lk in enumerate(mech.links):
+        b = sys_.index[lk.name]
+        locs = np.array([lk.points[p] for p in lk.points], float)
+        col = PALETTE[k % len(PALETTE)]
+        if len(locs) == 1:  # a slider block: a small square turning with the block
+            size = 0.03 * an.scale
+            sq = np.array([[-1, -0.6], [1, -0.6], [1, 0.6], [-1, 0.6]]) * size + locs[0]
+            xs, ys = [], []
+            for c in sq:
+                x, y = st.point(b, c)
+                xs.append(np.broadcast_to(x, (n,)))
+                ys.append(np.broadcast_to(y, (n,)))
+            outlines.append(Outline(lk.name, col, np.stack(xs, 1), np.stack(ys, 1), True))
+            continue
+        idx = _hull(locs)
+        xs, ys = [], []
+        for i in idx:
+            x, y = st.point(b, locs[i])
+            xs.append(np.broadcast_to(x, (n,)))
+            ys.append(np.broadcast_to(y, (n,)))
+        outlines.append(
+            Outline(lk.name, col, np.stack(xs, 1), np.stack(ys, 1), closed=len(idx) >= 3)
+        )
+    points = {}
+    for p, ref in an.points.items():
+        x, y = st.point(ref.body, ref.local)
+        points[p] = (np.array(np.broadcast_to(x, (n,)), float), np.array(np.broadcast_to(y, (n,))))
+    joint_pts = {j.point for j in mech.joints}
+    ground = [p for p in points if an.points[p].body == sys_.nb and p in joint_pts]
+    joints = [p for p in points if an.points[p].body != sys_.nb and p in joint_pts]
+    guides = []
+    for j in mech.sliders:
+        sl = sys_.by_joint[j.name]
+        if sl.a != sys_.nb:
+            continue
+        s = sl.displacement(st)
+        s = s[np.isfinite(s)]
+        if not s.size:
+            continue
+        lo, hi = float(s.min()), float(s.max())
+        pad = 0.15 * (hi - lo) + 0.05 * an.scale
+        ox, oy = sl.o
+        ux, uy = sl.u_loc
+        guides.append(
+            (
+                float(ox + (lo - pad) * ux),
+                float(oy + (lo - pad) * uy),
+                float(ox + (hi + pad) * ux),
+                float(oy + (hi + pad) * uy),
+            )
+        )
+    u = res.u if res.linear else np.degrees(res.u)
+    timed = bool(np.any(np.asarray(res.t) != 0)) and bool(np.all(np.isfinite(res.t)))
+    fr = Frames(
+        name=mech.name,
+        driver=mech.driver.joint,
+        u=np.asarray(u, float),
+        u_unit="m" if res.linear else "deg",
+        t=np.asarray(res.t, float),
+        timed=timed,
+        outlines=outlines,
+        points=points,
+        ground=ground,
+        joints=joints,
+        paths=[p for p in res.point_names() if p in points],
+        guides=guides,
+        ok=np.asarray(res.ok, bool),
+    )
+    if forces:
+        if res.forces is None:
+            raise InputError(
+                f"--forces: {mech.name} has no masses or loads, so no joint forces to draw"
+            )
+        ok = res.forces.ok
+        big = 0.0
+        for j in mech.joints:
+            r = res.reaction(j.name)
+            fx = np.where(ok, r["Fx"], np.nan)
+            fy = np.where(ok, r["Fy"], np.nan)
+            x, y = points[j.point]
+            fr.forces[j.name] = (x, y, fx, fy)
+            fr.force_points[j.name] = j.point
+            mag = np.hypot(fx, fy)
+            if np.any(np.isfinite(mag)):
+                big = max(big, float(np.nanmax(mag)))
+        x0, x1, y0, y1 = fr.bounds(0.0)
+        fr.force_scale = 0.25 * max(x1 - x0, y1 - y0) / big if big > 0 else 0.0
+    return fr
+
+
+def solve_frames(
+    mech: Mechanism, count: int | None = None, forces: bool = False, method: str | None = None
+) -> Frames:
+    """Solve the fine sweep of ``mech`` for an animation of ``count`` frames (see
+    :func:`fine_step`) and draw it."""
+    from mechsolve import api
+
+    if forces and not mech.needs_forces:
+        raise InputError(
+            f"--forces: {mech.name} has no masses or loads, so no joint forces to draw"
+        )
+    step, _ = fine_step(mech, count)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        res = api.solve(
+            mech,
+            step=step,
+            method=method,
+            velocity=False,
+            acceleration=False,
+            forces=forces,
+        )
+        return frames_of(res, forces)
+
+
+def ffmpeg_available() -> bool:
+    """Whether matplotlib can write MP4 (ffmpeg on the PATH, or where matplotlib's
+    ``animation.ffmpeg_path`` points)."""
+    import matplotlib
+
+    path = matplotlib.rcParams["animation.ffmpeg_path"]
+    return shutil.which(path) is not None
+
+
+def render(fr: Frames, size: tuple[int, int] = (800, 600), dpi: int = 100):
+    """Yield each frame as an RGB image (an array of shape (height, width, 3), uint8).
+
+    The axes, grid, guides, pivots and faint full paths are drawn once; each frame
+    redraws only what moves (blitting), which keeps a 361-frame animation to seconds."""
+    from mechsolve.writers.fonts import pyplot
+
+    plt = pyplot(fr.names())
+    fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
+    try:
+        yield from _render(fr, fig)
+    finally:
+        plt.close(fig)
+
+
+def _render(fr: Frames, fig):
+    ax = fig.add_axes((0.1, 0.09, 0.86, 0.83))
+    x0, x1, y0, y1 = fr.bounds()
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(fr.name)
+    for g in fr.guides:
+        ax.plot(g[0::2], g[1::2], "--", color="0.4", lw=1)
+    for p in fr.ground:
+        x, y = fr.points[p]
+        ax.plot(x[:1], y[:1], marker="^", ms=11, color="0.3", zorder=3)
+    for k, p in enumerate(fr.paths):
+        x, y = fr.points[p]
+        ax.plot(x, y, "-", lw=0.6, color=f"C{k % 10}", alpha=0.3)  # the whole path, faint
+    if fr.forces and fr.force_scale > 0:
+        ax.text(
+            0.01,
+            0.01,
+            "joint reactions (on the second link by the first): an arrow 1 m long is "
+            + force_text(1 / fr.force_scale),
+            transform=ax.transAxes,
+            fontsize=8,
+            color="C3",
+        )
+    moving = []
+
+    def add(artist):
+        artist.set_animated(True)
+        moving.append(artist)
+        return artist
+
+    polys = []
+    for o in fr.outlines:
+        fill = (
+            add(ax.fill(o.x[0], o.y[0], color=o.color, alpha=0.25, lw=0)[0]) if o.closed else None
+        )
+        line = add(ax.plot(o.x[0], o.y[0], color=o.color, lw=2.5, solid_capstyle="round")[0])
+        lab = add(ax.text(0, 0, o.name, fontsize=7, color=o.color, ha="center", va="center"))
+        polys.append((o, fill, line, lab))
+    traces = {}
+    for k, p in enumerate(fr.paths):
+        traces[p] = add(ax.plot([], [], "-", lw=1.5, color=f"C{k % 10}", label=f"path of {p}")[0])
+    if traces:
+        ax.legend(handles=list(traces.values()), fontsize=7, loc="upper right")
+    shown = [p for p in fr.points if p in set(fr.ground) | set(fr.joints) | set(fr.paths)]
+    pins = add(ax.plot([], [], "o", ms=5, mfc="white", mec="k", zorder=4)[0])
+    names = {p: add(ax.text(0, 0, p, fontsize=8, zorder=5)) for p in shown}
+    arrows = {}
+    for j in fr.forces:
+        arrows[j] = add(
+            ax.annotate(
+                "",
+                xy=(0, 0),
+                xytext=(0, 0),
+                arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.5},
+                zorder=6,
+            )
+        )
+    info = add(ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=9))
+    canvas = fig.canvas
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    span = x1 - x0
+    for i in range(len(fr)):
+        for o, fill, line, lab in polys:
+            xs, ys = o.x[i], o.y[i]
+            good = bool(np.all(np.isfinite(xs)) and np.all(np.isfinite(ys)))
+            if o.closed:
+                xs, ys = np.append(xs, xs[0]), np.append(ys, ys[0])
+                if good:
+                    fill.set_xy(np.column_stack([xs, ys]))
+                fill.set_visible(good)
+            line.set_data(xs, ys)
+            line.set_visible(good)
+            lab.set_visible(good)
+            if good:
+                lab.set_position((float(np.mean(o.x[i])), float(np.mean(o.y[i]))))
+        for p, tr in traces.items():
+            x, y = fr.points[p]
+            tr.set_data(x[: i + 1], y[: i + 1])
+        pins.set_data(
+            [fr.points[p][0][i] for p in fr.joints + fr.ground],
+            [fr.points[p][1][i] for p in fr.joints + fr.ground],
+        )
+        for p, t in names.items():
+            x, y = fr.points[p][0][i], fr.points[p][1][i]
+            good = math.isfinite(x) and math.isfinite(y)
+            t.set_visible(good)
+            if good:
+                t.set_position((x + 0.008 * span, y + 0.008 * span))
+        for j, a in arrows.items():
+            x, y, fx, fy = (float(v[i]) for v in fr.forces[j])
+            good = all(math.isfinite(v) for v in (x, y, fx, fy)) and (fx, fy) != (0.0, 0.0)
+            a.set_visible(good)
+            if good:
+                a.xy = (x + fx * fr.force_scale, y + fy * fr.force_scale)
+                a.set_position((x, y))
+        info.set_text(fr.label(i) + ("" if fr.ok[i] else "  (cannot close here)"))
+        canvas.restore_region(background)
+        for a in moving:
+            ax.draw_artist(a)
+        canvas.blit(fig.bbox)
+        yield np.array(canvas.buffer_rgba())[:, :, :3]
+
+
+def write_animation(
+    fr: Frames,
+    path: Path,
+    fps: float = 30.0,
+    size: tuple[int, int] = (800, 600),
+    dpi: int = 100,
+) -> Path:
+    """Write the frames as an animated GIF (Pillow) or an MP4 (H.264 through ffmpeg),
+    chosen by the suffix of ``path``, looping once per sweep; the file appears only when
+    complete."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise InputError(f"-o {path}: the animation is written as .gif or .mp4")
+    if not (fps > 0 and math.isfinite(fps)):
+        raise InputError(f"--fps {fps}: the frame rate must be a positive number")
+    if suffix == ".mp4" and not ffmpeg_available():
+        raise InputError(f"-o {path}: {FFMPEG_HINT}")
+    with replacing(path, suffix) as tmp:  # Pillow and ffmpeg go by the suffix
+        if suffix == ".gif":
+            _write_gif(render(fr, size, dpi), tmp, fps)
+        else:
+            _write_mp4(render(fr, size, dpi), tmp, fps, size)
+    return path
+
+
+def _write_gif(images, path: str, fps: float) -> None:
+    from PIL import Image
+
+    # one palette for all frames (from the first and the last, where every traced path
+    # is complete): quantizing to a given palette is several times faster than choosing
+    # one per frame, and the colours do not flicker
+    rgb = list(images)
+    both = np.concatenate([rgb[0], rgb[-1]], axis=0)
+    pal = Image.fromarray(both).quantize(colors=255, method=Image.Quantize.MEDIANCUT)
+    frames = [Image.fromarray(a).quantize(palette=pal, dither=Image.Dither.NONE) for a in rgb]
+    frames[0].save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=frames[1:],
+        duration=max(20, round(1000 / fps)),  # ms; browsers treat less than 20 as 100
+        loop=0,
+        disposal=1,
+    )
+
+
+def _write_mp4(images, path: str, fps: float, size: tuple[int, int]) -> None:
+    import subprocess
+
+    import matplotlib
+
+    exe = shutil.which(matplotlib.rcParams["animation.ffmpeg_path"])
+    proc = None
+    try:
+        for a in images:
+            if proc is None:
+                h, w = a.shape[:2]
+                proc = subprocess.Popen(
+                    [exe, "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
+                     "-s", f"{w}x{h}", "-r", f"{fps:g}", "-i", "-", "-an", "-c:v", "libx264",
+                     "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                     "-f", "mp4", path],
+                    stdin=subprocess.PIPE,
+                    stderr=subprocess.PIPE,
+                )  # fmt: skip
+            proc.stdin.write(np.ascontiguousarray(a).tobytes())
+    finally:
+        if proc is not None:
+            proc.stdin.close()
+            err = proc.stderr.read().decode(errors="replace")
+            if proc.wait() != 0:
+                raise InputError(f"ffmpeg could not write {path}: {err.strip()}")
+
+
+__all__ = [
+    "FFMPEG_HINT",
+    "Frames",
+    "ffmpeg_available",
+    "fine_step",
+    "check_frame_count",
+    "frames_of",
+    "render",
+    "solve_frames",
+    "write_animation",
+]

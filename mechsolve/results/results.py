@@ -1,0 +1,449 @@
+"""Results of a sweep: named quantities as arrays, the CSV table, and a summary.
+
+:class:`Results` is what the Python API returns and what the writers read. Arrays run
+over the positions of the sweep; unsolved positions hold NaN and are listed in
+:attr:`Results.failures`.
+
+Conventions: SI units (m, m/s, m/s^2, rad/s, rad/s^2); angles are reported in degrees,
+unwrapped along the sweep so that they change continuously, with the first value in
+[0, 360). Angles are counter-clockwise from +x.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
+from mechsolve.model import GROUND, Mechanism
+from mechsolve.results.summary import Summary
+
+
+@dataclass
+class PointMotion:
+    """Position, velocity and acceleration of a point (arrays over positions)."""
+
+    name: str
+    x: np.ndarray
+    y: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    ax: np.ndarray
+    ay: np.ndarray
+
+
+@dataclass
+class LinkMotion:
+    """Angle (rad, unwrapped), angular velocity and angular acceleration of a link."""
+
+    name: str
+    angle: np.ndarray
+    omega: np.ndarray
+    alpha: np.ndarray
+
+
+@dataclass
+class SliderMotion:
+    """Displacement, velocity and acceleration of a slider along its guide."""
+
+    name: str
+    s: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+
+@dataclass
+class Column:
+    """One CSV column: a quantity name, its unit, its values and an optional note."""
+
+    name: str
+    unit: str
+    values: np.ndarray
+    note: str = ""
+
+    @property
+    def header(self) -> str:
+        head = f"{self.name} [{self.unit}]" if self.unit else self.name
+        return f"{head} ({self.note})" if self.note else head
+
+
+def unwrap_angle(th: np.ndarray, near: float | None = None) -> np.ndarray:
+    """Unwrap an angle along the sweep: the first finite value in [0, 2 pi), or within
+    half a turn of ``near`` (to continue a previous chunk of the sweep)."""
+    out = np.array(th, dtype=float)
+    good = np.isfinite(out)
+    if not np.any(good):
+        return out
+    out[good] = np.unwrap(out[good])
+    first = out[good][0]
+    if near is None or not math.isfinite(near):
+        out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi))
+    else:
+        out[good] -= 2 * math.pi * round((first - near) / (2 * math.pi))
+    return out
+
+
+class Results(Summary):
+    """The solved sweep of a mechanism.
+
+    Attributes
+    ----------
+    mechanism
+        The model that was solved.
+    u
+        Driver coordinate at each position (rad or m).
+    t
+        Time at each position (s), from the start of the sweep.
+    ok
+        True where the position was solved.
+    failures
+        Runs of positions where the mechanism cannot close, with the loop and reason.
+    """
+
+    def __init__(self, analysis: Analysis, solution: Solution, forces=None) -> None:
+        self.analysis = analysis
+        self.solution = solution
+        self.forces = forces  # a ForceResult, or None when no force analysis was asked
+        self.mechanism: Mechanism = analysis.mech
+        self.u = solution.u
+        self.t = solution.t
+        self.ok = solution.ok
+        self.failures: list[Failure] = solution.failures
+        self.view = StateView(analysis, solution.state)
+        self.view.has_velocity = solution.has_velocity
+        self.view.has_acceleration = solution.has_acceleration
+        self.warnings: list[str] = list(solution.warnings)
+        self.angle_origin: dict[str, float] = {}  # a previous chunk's last link angles
+
+    # -- sizes and names ----------------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self.u)
+
+    @property
+    def linear(self) -> bool:
+        return self.analysis.linear
+
+    @property
+    def driver_value(self) -> np.ndarray:
+        """Driver coordinate in report units: degrees for a revolute driver, m for a slider."""
+        return self.u if self.linear else np.degrees(self.u)
+
+    @property
+    def driver_travel(self) -> np.ndarray:
+        """Distance travelled by the driver from the start (deg or m), always increasing."""
+        d = np.abs(self.u - self.solution.start.u0)
+        return d if self.linear else np.degrees(d)
+
+    def point_names(self) -> list[str]:
+        """Named points reported (the file's ``outputs.points``, default all moving ones)."""
+        mech = self.mechanism
+        if mech.outputs.points is not None:
+            return list(mech.outputs.points)
+        nb = self.analysis.system.nb
+        return [p for p, ref in self.analysis.points.items() if ref.body != nb]
+
+    def link_names(self) -> list[str]:
+        mech = self.mechanism
+        return list(mech.outputs.links) if mech.outputs.links is not None else mech.link_names
+
+    def slider_names(self) -> list[str]:
+        mech = self.mechanism
+        if mech.outputs.sliders is not None:
+            return list(mech.outputs.sliders)
+        return [j.name for j in mech.sliders]
+
+    # -- quantities ---------------------------------------------------------------------
+    def _nan(self) -> np.ndarray:
+        return np.full(len(self.u), np.nan)
+
+    def point(self, name: str) -> PointMotion:
+        """Kinematics of a named point."""
+        if name not in self.analysis.points:
+            raise KeyError(f"no point named {name!r}")
+        v = self.view
+        x, y = v.quantity(name, "x"), v.quantity(name, "y")
+        if v.has_velocity:
+            vx, vy = v.quantity(name, "vx"), v.quantity(name, "vy")
+        else:
+            vx = vy = self._nan()
+        if v.has_acceleration:
+            ax, ay = v.quantity(name, "ax"), v.quantity(name, "ay")
+        else:
+            ax = ay = self._nan()
+        b = np.broadcast_to
+        n = len(self.u)
+        return PointMotion(name, *(np.array(b(a, (n,)), float) for a in (x, y, vx, vy, ax, ay)))
+
+    def link(self, name: str) -> LinkMotion:
+        """Kinematics of a link (its frame's x axis)."""
+        if name == GROUND or name not in self.analysis.system.index:
+            raise KeyError(f"no link named {name!r}")
+        b = self.analysis.system.index[name]
+        st = self.solution.state
+        om = st.w[b] if self.view.has_velocity else self._nan()
+        al = st.al[b] if self.view.has_acceleration else self._nan()
+        return LinkMotion(
+            name, unwrap_angle(st.th[b], self.angle_origin.get(name)), om.copy(), al.copy()
+        )
+
+    def slider(self, name: str) -> SliderMotion:
+        """Relative motion of a slider along its guide."""
+        if name not in [j.name for j in self.mechanism.sliders]:
+            raise KeyError(f"no slider named {name!r}")
+        v = self.view
+        s = v.quantity(name, "s")
+        sv = v.quantity(name, "v") if v.has_velocity else self._nan()
+        sa = v.quantity(name, "a") if v.has_acceleration else self._nan()
+        return SliderMotion(name, s, sv, sa)
+
+    # -- the table ----------------------------------------------------------------------
+    def columns(self) -> list[Column]:
+        """All reported quantities as CSV columns, in a stable order."""
+        cols: list[Column] = [Column("t", "s", self.t)]
+        if self.linear:
+            cols += [
+                Column("input.s", "m", self.u),
+                Column("input.travel", "m", self.driver_travel),
+            ]
+        else:
+            cols += [
+                Column("input.angle", "deg", self.driver_value),
+                Column("input.travel", "deg", self.driver_travel),
+            ]
+        vel, acc = self.view.has_velocity, self.view.has_acceleration
+        for p in self.point_names():
+            m = self.point(p)
+            cols += [Column(f"{p}.x", "m", m.x), Column(f"{p}.y", "m", m.y)]
+            if vel:
+                cols += [Column(f"{p}.vx", "m/s", m.vx), Column(f"{p}.vy", "m/s", m.vy)]
+            if acc:
+                cols += [Column(f"{p}.ax", "m/s^2", m.ax), Column(f"{p}.ay", "m/s^2", m.ay)]
+        for ln in self.link_names():
+            m = self.link(ln)
+            cols.append(Column(f"{ln}.angle", "deg", np.degrees(m.angle)))
+            if vel:
+                cols.append(Column(f"{ln}.omega", "rad/s", m.omega))
+            if acc:
+                cols.append(Column(f"{ln}.alpha", "rad/s^2", m.alpha))
+        for a, b in self.mechanism.outputs.relative:
+            m = self.relative(a, b)
+            cols.append(Column(f"{m.name}.angle", "deg", np.degrees(m.angle)))
+            if vel:
+                cols.append(Column(f"{m.name}.omega", "rad/s", m.omega))
+            if acc:
+                cols.append(Column(f"{m.name}.alpha", "rad/s^2", m.alpha))
+        for sn in self.slider_names():
+            m = self.slider(sn)
+            cols.append(Column(f"{sn}.s", "m", m.s))
+            if vel:
+                cols.append(Column(f"{sn}.v", "m/s", m.v))
+            if acc:
+                cols.append(Column(f"{sn}.a", "m/s^2", m.a))
+        if self.forces is not None:
+            cols += self.force_columns()
+        sol = self.solution
+        cols += [
+            Column("jacobian.rcond", "-", np.where(self.ok, self.jacobian_rcond(), np.nan)),
+            Column("solver.iterations", "-", sol.iterations.astype(float)),
+            Column("solver.residual", "m", sol.residual),
+        ]
+        return cols
+
+    def relative(self, a: str, b: str) -> LinkMotion:
+        """Motion of link ``a`` relative to link ``b`` (either may be ``ground``), named
+        ``a/b``: the angle of a's frame minus b's (rad, unwrapped like a link's angle, the
+        first value in [0, 2 pi)), and the differences of their angular velocities and
+        accelerations."""
+        name = f"{a}/{b}"
+        zero = np.zeros(len(self.u))
+        rows = []
+        for ln in (a, b):
+            if ln == GROUND:
+                rows.append((zero, zero, zero))
+                continue
+            if ln not in self.analysis.system.index:
+                raise KeyError(f"no link named {ln!r}")
+            k = self.analysis.system.index[ln]
+            st = self.solution.state
+            om = st.w[k] if self.view.has_velocity else self._nan()
+            al = st.al[k] if self.view.has_acceleration else self._nan()
+            rows.append((st.th[k], om, al))
+        (tha, wa, ala), (thb, wb, alb) = rows
+        th = unwrap_angle(np.asarray(tha, float) - thb, self.angle_origin.get(name))
+        return LinkMotion(name, th, np.asarray(wa - wb, float), np.asarray(ala - alb, float))
+
+    # -- conditioning and design figures --------------------------------------------------
+    def jacobian_rcond(self) -> np.ndarray:
+        """Reciprocal condition number of the constraint equations at each position (the
+        smallest over the groups, see :func:`mechsolve.core.conditioning.jacobian_rcond`):
+        1 well conditioned, 0 singular."""
+        if not hasattr(self, "_rcond"):
+            from mechsolve.core.conditioning import jacobian_rcond
+
+            with np.errstate(invalid="ignore", divide="ignore"):
+                sol = self.solution
+                self._rcond = jacobian_rcond(self.analysis.plan, sol.state, sol.indicator)
+        return self._rcond
+
+    def limit_positions(self):
+        """Limit positions of the rockers and sliders (see :mod:`mechsolve.results.limits`)."""
+        if not hasattr(self, "_limits"):
+            from mechsolve.results.limits import limit_positions
+
+            self._limits = limit_positions(self.solution)
+        return self._limits
+
+    def transmission_angles(self):
+        """The smallest transmission angle of each loop (see :mod:`mechsolve.results.limits`)."""
+        if not hasattr(self, "_transmission"):
+            from mechsolve.results.limits import transmission_angles
+
+            self._transmission = transmission_angles(self.solution)
+        return self._transmission
+
+    @property
+    def events(self):
+        """Bifurcations, dead zones stepped over, near-singular minima met by the sweep."""
+        return self.solution.events
+
+    # -- forces -------------------------------------------------------------------------
+    @property
+    def effort_name(self) -> tuple[str, str]:
+        """("torque", "N*m") for a revolute driver, ("force", "N") for a linear one."""
+        return ("force", "N") if self.linear else ("torque", "N*m")
+
+    def joint_label(self, name: str) -> str:
+        """``O1(ground->crank)``: the reaction is the force on the second link by the first."""
+        j = self.mechanism.joint(name)
+        return f"{name}({j.links[0]}->{j.links[1]})"
+
+    def reaction(self, name: str) -> dict[str, np.ndarray]:
+        """Reaction components of a joint: Fx, Fy, F (revolute) or N, M, Fx, Fy (slider)."""
+        if self.forces is None:
+            raise KeyError("no force analysis was run (the model has no masses or loads)")
+        return self.forces.reactions[name]
+
+    @property
+    def driving_effort(self) -> np.ndarray:
+        """The driving torque (N m) or force (N) the driver applies to the driven link."""
+        if self.forces is None:
+            raise KeyError("no force analysis was run (the model has no masses or loads)")
+        f = self.forces
+        ok = f.ok.copy()
+        ok[f.effort_by_limit] = True  # its limit along the motion at a singular position
+        return np.where(ok, f.effort, np.nan)
+
+    def force_columns(self) -> list[Column]:
+        f = self.forces
+        ok = f.ok
+
+        def m(a):
+            return np.where(ok, a, np.nan)
+
+        kind, unit = self.effort_name
+        cols = [Column(f"input.{kind}", unit, self.driving_effort, self._note("driver", "effort"))]
+        for j in self.mechanism.joints:
+            lab = self.joint_label(j.name)
+            r = f.reactions[j.name]
+            comps = (
+                [("Fx", "N"), ("Fy", "N"), ("F", "N")]
+                if "F" in r
+                else [("N", "N"), ("M", "N*m"), ("Fx", "N"), ("Fy", "N")]
+            )
+            cols += [Column(f"{lab}.{c}", un, m(r[c]), self._note(j.name, c)) for c, un in comps]
+        for name, on in f.active.items():
+            cols.append(Column(f"load.{name}.active", "-", on.astype(float)))
+        cols += [
+            Column("energy.kinetic", "J", m(f.kinetic)),
+            Column("energy.potential", "J", m(f.potential)),
+            Column("power.input", "W", m(f.power_input)),
+            Column("power.kinetic_rate", "W", m(f.kinetic_rate)),
+            Column("power.potential_rate", "W", m(f.potential_rate)),
+            Column("power.loads", "W", m(f.power_loads)),
+            Column("power.residual", "W", m(f.residual)),
+        ]
+        return cols
+
+    def _note(self, joint: str, component: str) -> str:
+        """``minimum-norm`` for a reaction component that redundant constraints leave
+        indeterminate."""
+        return "minimum-norm" if component in self.forces.nonunique.get(joint, ()) else ""
+
+    def power_scale(self) -> float:
+        """The largest power term over the sweep: the scale of the power-balance check."""
+        f = self.forces
+        terms = [f.power_input, f.kinetic_rate, f.potential_rate, f.power_loads]
+        vals = [np.nanmax(np.abs(np.where(f.ok, t, np.nan))) for t in terms if np.any(f.ok)]
+        return float(max(vals)) if vals else 0.0
+
+    def work(self) -> float:
+        """Work done by the driver over the sweep (J); for a full turn, the work per cycle.
+        See :func:`mechsolve.core.work.driver_work`."""
+        return self._work_why()[0]
+
+    def _work_why(self) -> tuple[float, str]:
+        """The driver's work and why it is not defined (see
+        :func:`mechsolve.core.work.driver_work_why`), computed once."""
+        from mechsolve.core.work import driver_work_why
+
+        if not hasattr(self, "_work"):
+            self._work = driver_work_why(self.analysis, self.solution, self.forces)
+        return self._work
+
+    def incomplete(self) -> bool:
+        """Whether anything asked for was left out or is doubtful: positions not solved,
+        rates or forces not determined at singular positions, or a warning (call after
+        :meth:`summary`, which runs the checks). The command line warns then (exit 0)."""
+        sol = self.solution
+        return bool(
+            self.failures
+            or sol.rates_undetermined
+            or (self.forces is not None and self.forces.singular)
+            or self.warnings
+        )
+
+    def mean_effort(self) -> tuple[float, str]:
+        """The driver's mean effort and what it is: the work over the travel when the
+        motion has no gaps (the exact mean over the sweep, between samples too), else
+        the average of the solved samples, said so."""
+        work = self.work()
+        travel = self.u[-1] - self.u[0]
+        if math.isfinite(work) and travel != 0:
+            return work / travel, "mean"
+        e = np.where(self.forces.ok, self.forces.effort, np.nan)
+        if not np.any(np.isfinite(e)):
+            return float("nan"), "mean"
+        return float(np.nanmean(e)), "mean of the solved positions"
+
+    def is_full_cycle(self) -> bool:
+        from mechsolve.core.solution import full_cycle
+
+        return full_cycle(self.linear, self.u)
+
+    def status(self) -> list[str]:
+        """Per position: ``ok`` or why it was not solved."""
+        out = ["ok"] * len(self.u)
+        for f in self.failures:
+            for i in range(f.first, f.last + 1):
+                out[i] = "unassemblable: " + f.group
+        if self.forces is not None:
+            for i, label in self.forces.singular:
+                if out[i] == "ok":
+                    out[i] = f"singular: forces indeterminate in {label}"
+        return out
+
+    def methods(self) -> list[str]:
+        """How each position was solved (``closed form``, ``newton``, ``scipy-hybr``...)."""
+        m = self.solution.methods
+        if m is None:
+            return ["closed form" if ok else "" for ok in self.ok]
+        return [str(x) if ok else "" for x, ok in zip(m, self.ok)]
+
+    def to_csv(self, path) -> Path:
+        """Write the table as CSV (see :mod:`mechsolve.results.csv`); return the path."""
+        from mechsolve.results.csv import write_csv
+
+        return write_csv(self, path)

@@ -1,3 +1,0 @@
-"""Package data: ``mechanism.schema.json``, the JSON Schema of the mechanism file, and
-its builder (:mod:`mechsolve.schema.build`, from the model's key declarations;
-``mechsolve schema`` prints the file)."""

@@ -1,1 +1,0 @@
-"""Solvers of the core: Newton-Raphson on a group's equations, the force analysis."""
