@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.core.sweep import Analysis, StartAssembly
-from mechsolve.model import Mechanism, PinJoint
+from mechsolve.joints.registry import KINDS
+from mechsolve.model import Mechanism
 from mechsolve.model.parse import load, loads
 from mechsolve.results.results import Results
 from mechsolve.results.run import PLOT_STEP, for_plots, parse_step, positions, solve  # noqa: F401
@@ -68,11 +69,13 @@ class CheckReport:
 
     def text(self) -> str:
         mech = self.mechanism
-        n_rev = sum(isinstance(j, PinJoint) for j in mech.joints)
+        count = {kind: 0 for kind in KINDS}
+        for j in mech.joints:
+            count[j.kind] += 1
+        kinds = ", ".join(f"{n} {k}" for k, n in count.items() if n or k in ("revolute", "slider"))
         lines = [
             f"{mech.name}: the file is valid",
-            f"  {len(mech.links)} moving links, {len(mech.joints)} joints "
-            f"({n_rev} revolute, {len(mech.joints) - n_rev} slider)",
+            f"  {len(mech.links)} moving links, {len(mech.joints)} joints ({kinds})",
             f"  degrees of freedom: {self.grubler} by Grübler (3*{len(mech.links)} - "
             f"2*{len(mech.joints)}), {self.jacobian_dof} by the rank of the constraint Jacobian "
             f"({self.jacobian_rank} of {self.n_coordinates} coordinates)",

@@ -41,7 +41,7 @@ from mechsolve.base.state import State
 from mechsolve.core.kinetostatics import ForceResult, solve_forces
 from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
 from mechsolve.groups import Drive, NewtonGroup, build_plan
-from mechsolve.model import Damper, Limit, Mechanism, PointForce, SliderJoint, Spring, Torque
+from mechsolve.model import Damper, Limit, Mechanism, PointForce, Spring, Torque
 from mechsolve.system.constraints import ConstraintSystem
 
 __all__ = ["DesignBatch", "solve_designs"]
@@ -160,7 +160,7 @@ def _structure(m: Mechanism) -> tuple:
             (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
             for lk in m.links
         ),
-        tuple((type(j), j.name, j.a, j.b, j.point) for j in m.joints),
+        tuple((j.kind, j.name, j.a, j.b, j.point) for j in m.joints),
         tuple(
             (
                 type(ld),
@@ -199,8 +199,7 @@ def _numbers(m: Mechanism) -> list[float]:
         if lk.com is not None:
             out += lk.com
     for j in m.joints:
-        if isinstance(j, SliderJoint):
-            out += [*j.origin, j.angle, j.block_angle]
+        out += j.geometry()
     for ld in m.loads:
         if isinstance(ld, PointForce):
             out += ld.force
@@ -253,10 +252,7 @@ def _with_numbers(m: Mechanism, cols: _Columns) -> Mechanism:
     out.links = links
     joints = []
     for j in m.joints:
-        if isinstance(j, SliderJoint):
-            o = cols.pair()
-            j = dataclasses.replace(j, origin=o, angle=cols.one(), block_angle=cols.one())
-        joints.append(j)
+        joints.append(j.with_geometry(cols))
     out.joints = joints
     loads = []
     for ld in m.loads:

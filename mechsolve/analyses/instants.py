@@ -64,9 +64,8 @@ def instant_names(mech: Mechanism) -> dict[str, str]:
 
 
 def _is_linear(mech: Mechanism) -> bool:
-    from mechsolve.model import SliderJoint
 
-    return isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    return mech.joint(mech.driver.joint).coordinate == "length"
 
 
 @dataclass

@@ -28,6 +28,8 @@ code   meaning
 
 from __future__ import annotations
 
+import difflib
+
 EXIT_OK = 0
 EXIT_INPUT = 2
 EXIT_INTERNAL = 4
@@ -108,3 +110,9 @@ class SolverError(MechsolveError):
     dead-centre): the message says what to change in the input (exit 2)."""
 
     exit_code = EXIT_INPUT
+
+
+def suggest(name: str, choices: list[str]) -> str:
+    """A ``" (did you mean 'x'?)"`` hint, or an empty string."""
+    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""

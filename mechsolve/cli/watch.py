@@ -34,7 +34,7 @@ def figures_of(res: Any) -> dict[str, tuple[float, str]]:
         return out
     out["positions solved"] = (float(sum(bool(x) for x in res.ok)), "")
     for lp in res.limit_positions():
-        if lp.kind == "slider":
+        if lp.travels:
             out[f"{lp.name} stroke"] = ((lp.high - lp.low) * 1e3, "mm")
         else:
             out[f"{lp.name} swing"] = (math.degrees(lp.high - lp.low), "deg")

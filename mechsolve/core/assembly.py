@@ -331,7 +331,7 @@ class StartAssembler(BranchChoice):
             b = todo.pop(0)
             anchor = None
             for c in g.constraints:
-                if c.kind != "revolute" or b not in (c.a, c.b):
+                if c.letter != "R" or b not in (c.a, c.b):
                     continue
                 other = c.b if c.a == b else c.a
                 if other in placed:

@@ -144,12 +144,7 @@ def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]
         f = free[row.start : row.start + c.m]
         if not np.any(f):
             continue
-        if c.kind == "revolute":
-            comps = {k for k, on in zip(("Fx", "Fy"), f) if on} | {"F"}
-        elif c.kind == "slider":
-            comps = ({"N", "Fx", "Fy"} if f[0] else set()) | ({"M"} if f[1] else set())
-        else:
-            comps = {"effort"}
+        comps = c.indeterminate(f)
         out[c.name] = comps
     return out
 
@@ -264,12 +259,7 @@ def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndar
     out: dict[str, dict[str, np.ndarray]] = {}
     for row in an.system.rows:
         c = row.constraint
-        if c.kind == "revolute":
-            fx, fy = lam[:, row.start], lam[:, row.start + 1]
-            out[c.name] = {"Fx": fx, "Fy": fy, "F": np.sqrt(fx * fx + fy * fy)}
-        elif c.kind == "slider":
-            nrm = -lam[:, row.start]
-            mom = -lam[:, row.start + 1]
-            ux, uy, nx, ny, _, _ = c.frame(st)
-            out[c.name] = {"N": nrm, "M": mom, "Fx": nrm * nx, "Fy": nrm * ny}
+        r = c.reaction(st, lam[:, row.start : row.start + c.m])
+        if r is not None:
+            out[c.name] = r
     return out

@@ -38,7 +38,7 @@ from mechsolve.core.solution import (
     angle_deg,
 )
 from mechsolve.groups import Drive, Group, NewtonGroup, build_plan
-from mechsolve.model import MAX_POSITIONS, Limit, Mechanism, PinJoint, SliderJoint
+from mechsolve.model import MAX_POSITIONS, Limit, Mechanism
 from mechsolve.model.expr import Ref
 from mechsolve.system.constraints import ConstraintSystem
 from mechsolve.system.structure import RedundantStructure
@@ -117,13 +117,10 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             for p, xy in lk.points.items():
                 self.points.setdefault(p, PointRef(b, np.asarray(xy, float)))
         d = mech.driver
-        self.linear = isinstance(mech.joint(d.joint), SliderJoint)
+        self.linear = mech.joint(d.joint).coordinate == "length"
         self.speed = d.speed
         # for messages: the name of the inner point of each joint
-        self.joint_point = {
-            self.system.by_joint[j.name]: (j.point if isinstance(j, PinJoint) else j.name)
-            for j in mech.joints
-        }
+        self.joint_point = {self.system.by_joint[j.name]: j.label for j in mech.joints}
         self.joint_point[self.system.driver] = d.joint
 
     def reversed(self) -> Analysis:

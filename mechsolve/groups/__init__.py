@@ -8,8 +8,6 @@ from mechsolve.groups.generic import NewtonGroup
 from mechsolve.system.constraints import (
     AngleDriverConstraint,
     ConstraintSystem,
-    RevoluteConstraint,
-    SliderConstraint,
     SliderDriverConstraint,
 )
 from mechsolve.system.structure import GroupSpec, decompose
@@ -22,7 +20,9 @@ def recognise(spec: GroupSpec, system: ConstraintSystem, atol: float, max_iterat
     names = system.body_names
     bodies = spec.bodies
     cons = spec.constraints
-    kinds = sorted(c.kind for c in cons)
+    # the group's pattern in the Assur notation: the letters of its joints (R, P), and its
+    # driver (D); each closed form below solves one pattern
+    pattern = "".join(sorted(c.letter for c in cons))
     inside = set(bodies)
 
     def generic() -> Group:
@@ -30,13 +30,13 @@ def recognise(spec: GroupSpec, system: ConstraintSystem, atol: float, max_iterat
 
     if len(bodies) == 1:
         (b,) = bodies
-        if kinds == ["driver", "revolute"]:
-            pin = next(c for c in cons if isinstance(c, RevoluteConstraint))
-            drv = next(c for c in cons if isinstance(c, AngleDriverConstraint))
+        if pattern == "DR":
+            pin = next(c for c in cons if c.letter == "R")
+            drv = next((c for c in cons if isinstance(c, AngleDriverConstraint)), None)
             if drv is not None:
                 return DriverLink(b, pin, drv, names)
-        if kinds == ["driver", "slider"]:
-            sl = next(c for c in cons if isinstance(c, SliderConstraint))
+        if pattern == "DP":
+            sl = next(c for c in cons if c.letter == "P")
             drv = next((c for c in cons if isinstance(c, SliderDriverConstraint)), None)
             if drv is not None and drv.slider is sl and sl.b == b:
                 return DrivenSlider(b, sl, drv, names)
@@ -57,20 +57,15 @@ def recognise(spec: GroupSpec, system: ConstraintSystem, atol: float, max_iterat
     o1, o2 = outer_of(b1), outer_of(b2)
     if o1 is None or o2 is None:
         return generic()
-    if kinds == ["revolute", "revolute", "revolute"]:
+    if pattern == "RRR":
         return RRR(b1, b2, o1, jm, o2, names)
-    if isinstance(jm, RevoluteConstraint):
+    if jm.letter == "R":
         # RRP: a rod pinned to a solved body, its block on a solved guide
         for rod, blk, jr, js in ((b1, b2, o1, o2), (b2, b1, o2, o1)):
-            if (
-                isinstance(jr, RevoluteConstraint)
-                and isinstance(js, SliderConstraint)
-                and js.b == blk
-                and js.a not in inside
-            ):
+            if jr.letter == "R" and js.letter == "P" and js.b == blk and js.a not in inside:
                 return RRP(rod, blk, jr, jm, js, names)
         return generic()
-    if isinstance(jm, SliderConstraint) and all(isinstance(c, RevoluteConstraint) for c in outer):
+    if jm.letter == "P" and all(c.letter == "R" for c in outer):
         bar, blk = jm.a, jm.b
         jq = o1 if bar == b1 else o2
         jp = o2 if bar == b1 else o1

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.base.state import State
-from mechsolve.system.constraints import Constraint
+from mechsolve.joints.base import Constraint
 
 
 @dataclass

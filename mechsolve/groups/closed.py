@@ -24,12 +24,9 @@ from mechsolve.groups.base import (
     resultant_about,
     set_pose_from_vectors,
 )
-from mechsolve.system.constraints import (
-    AngleDriverConstraint,
-    RevoluteConstraint,
-    SliderConstraint,
-    SliderDriverConstraint,
-)
+from mechsolve.joints.revolute import RevoluteConstraint
+from mechsolve.joints.slider import SliderConstraint
+from mechsolve.system.constraints import AngleDriverConstraint, SliderDriverConstraint
 
 COINCIDENT = 1e-7  # |PQ| below this fraction of the arms: the outer joints coincide
 

@@ -9,7 +9,6 @@ import numpy as np
 
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
-from mechsolve.system.constraints import RevoluteConstraint
 
 
 class NewtonRates:
@@ -176,7 +175,7 @@ class NewtonRates:
         cs[cs == 0] = 1.0
         ub = np.abs(J)
         for c in self.constraints:  # a joint's two rows: (-r_y, r_x) has the norm |s|
-            if type(c) is RevoluteConstraint:
+            if c.letter == "R":
                 i = rows[id(c)][0]
                 ub[i : i + 2, T] = np.hypot(J[i, T], J[i + 1, T])
         rs = float(np.max(np.sqrt(np.sum((ub / cs) ** 2, axis=1))))

@@ -10,7 +10,7 @@ import numpy as np
 
 from mechsolve.base.newton import SolveStats
 from mechsolve.base.state import State
-from mechsolve.system.constraints import AngleDriverConstraint, RevoluteConstraint
+from mechsolve.system.constraints import AngleDriverConstraint
 
 
 class _Eqs:
@@ -191,7 +191,7 @@ class _Angles(_Eqs):
         self.nb = nb
         W = np.zeros((nb, nb, 2))
         anchor: dict[int, tuple[int, np.ndarray]] = {}
-        revs = [c for c in constraints if type(c) is RevoluteConstraint]
+        revs = [c for c in constraints if c.letter == "R"]
         drivers = [c for c in constraints if type(c) is AngleDriverConstraint]
         if len(revs) + len(drivers) != len(constraints):
             raise ValueError("not a revolute group")

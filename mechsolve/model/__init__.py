@@ -11,7 +11,6 @@ links means the same physical point, so those links must be joined there.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
@@ -19,12 +18,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from mechsolve.base.errors import InputError
+from mechsolve.joints.base import GROUND, Joint  # noqa: F401 (the model holds joints)
+from mechsolve.joints.revolute import PinJoint  # noqa: F401
+from mechsolve.joints.slider import SliderJoint  # noqa: F401
 from mechsolve.model.expr import Expression
 
 if TYPE_CHECKING:
     from mechsolve.model.source import Source
 
-GROUND = "ground"
 STANDARD_G = 9.81  # m/s^2, the textbooks' value
 NAME_RE = re.compile(r"^[^\W\d]\w*$")  # letters of any script (曲柄, кривошип), digits, _
 KeyPath = tuple[Any, ...]
@@ -62,67 +63,6 @@ class Link:
     def local(self, point: str) -> np.ndarray:
         """Local coordinates of a point of this link."""
         return np.asarray(self.points[point], dtype=float)
-
-
-@dataclass
-class PinJoint:
-    """A revolute joint: the point ``point`` of link ``a`` and of link ``b`` coincide.
-
-    Reactions are reported as the force exerted on ``b`` by ``a``.
-    """
-
-    name: str
-    a: str
-    b: str
-    point: str
-    where: KeyPath = ()
-
-    kind = "revolute"
-
-    @property
-    def links(self) -> tuple[str, str]:
-        return (self.a, self.b)
-
-
-@dataclass
-class SliderJoint:
-    """A prismatic joint: ``block`` slides along a straight line fixed in ``guide``.
-
-    The block's point ``point`` stays on the line through ``origin`` (guide frame) in the
-    direction ``angle`` (guide frame); the block keeps the orientation of the guide plus
-    ``block_angle``. The slider's displacement ``s`` is measured from ``origin`` along
-    the line direction.
-    """
-
-    name: str
-    guide: str
-    block: str
-    point: str
-    origin: tuple[float, float]
-    angle: float
-    block_angle: float = 0.0
-    where: KeyPath = ()
-
-    kind = "slider"
-
-    @property
-    def a(self) -> str:
-        return self.guide
-
-    @property
-    def b(self) -> str:
-        return self.block
-
-    @property
-    def links(self) -> tuple[str, str]:
-        return (self.guide, self.block)
-
-    @property
-    def direction(self) -> np.ndarray:
-        return np.array([math.cos(self.angle), math.sin(self.angle)])
-
-
-Joint = PinJoint | SliderJoint
 
 
 @dataclass
@@ -378,8 +318,10 @@ class Mechanism:
         return (0.0, -STANDARD_G) if self.has_masses else (0.0, 0.0)
 
     @property
-    def sliders(self) -> list[SliderJoint]:
-        return [j for j in self.joints if isinstance(j, SliderJoint)]
+    def sliders(self) -> list[Joint]:
+        """The joints with a relative travel (a length): sliders, whose displacement,
+        velocity and acceleration the results report."""
+        return [j for j in self.joints if j.coordinate == "length"]
 
     # -- errors --------------------------------------------------------------------
     def error(self, where: KeyPath, message: str) -> InputError:

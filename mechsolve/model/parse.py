@@ -16,12 +16,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from mechsolve.joints.slider import read_line
 from mechsolve.model import (
     STANDARD_G,
     Assembly,
     Mechanism,
     Outputs,
-    SliderJoint,
     SolverOptions,
     keys,
 )
@@ -36,7 +36,7 @@ from mechsolve.model.read_geometry import (
     read_units,
 )
 from mechsolve.model.read_joints import pin_names, read_joint, read_joints, read_pin
-from mechsolve.model.read_loads import LOAD_KEYS, LOAD_KINDS, read_line, read_loads
+from mechsolve.model.read_loads import LOAD_KEYS, LOAD_KINDS, read_loads
 from mechsolve.model.read_machine import (
     TORQUE_KEYS,
     is_torque_problem,
@@ -150,7 +150,7 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
     loads = read_loads(r, data["loads"], ground, links, joints) if "loads" in data else []
     driver = read_driver(r, data["driver"], joints) if "driver" in data else None
     linear = driver is not None and any(
-        isinstance(j, SliderJoint) and j.name == driver.joint for j in joints
+        j.coordinate == "length" and j.name == driver.joint for j in joints
     )
     name = data.get("name", Path(src.file).stem if src.file else "mechanism")
     if not isinstance(name, str):

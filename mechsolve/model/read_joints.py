@@ -1,45 +1,39 @@
-"""Reading joints: pins and sliders (see :mod:`mechsolve.model.parse`)."""
+"""Reading joints: each kind reads its own mapping (:meth:`mechsolve.joints.base.Joint.read`);
+here, the shorthand ``A: [crank, coupler]`` and pins through three or more links (see
+:mod:`mechsolve.model.parse`)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from mechsolve.model import GROUND, PinJoint, SliderJoint, keys
-from mechsolve.model.read_loads import read_line
+from mechsolve.joints.registry import KINDS
+from mechsolve.model import GROUND, Joint, PinJoint, keys
 from mechsolve.model.reader import Reader
 from mechsolve.model.source import KeyPath
 from mechsolve.model.validate import suggest
 
 
-def read_joint(r: Reader, name: str, value: Any, mech_points) -> PinJoint | SliderJoint:
+def read_joint(r: Reader, name: str, value: Any, mech_points) -> Joint:
     path: KeyPath = ("joints", name)
     if isinstance(value, list):  # shorthand: A: [crank, coupler]
         a, b = r.names(value, path, "link", 2)
         return PinJoint(name, a, b, name, where=path)
-    m = r.mapping(value, path, keys.JOINT.allowed, f"joint {name!r}")
-    kinds = [k for k in ("revolute", "slider") if k in m]
+    m = r.mapping(value, path, keys.joint_section().allowed, f"joint {name!r}")
+    kinds = [k for k in KINDS if k in m]
     if len(kinds) != 1:
         raise r.fail(
             path,
-            f"joint {name!r} needs exactly one of 'revolute: [link, link]' or "
-            "'slider: [guide, block]'",
+            f"joint {name!r} needs exactly one of "
+            + " or ".join(f"'{k}: [{', '.join(c.roles)}]'" for k, c in KINDS.items()),
         )
-    kind = kinds[0]
-    a, b = r.names(m[kind], path + (kind,), "link", 2)
-    point = r.name(m.get("point", name), path + ("point",), "point")
-    if kind == "revolute":
-        for key in ("line", "block_angle"):
-            if key in m:
-                raise r.fail(path + (key,), f"{key!r} applies to a slider, not a revolute joint")
-        return PinJoint(name, a, b, point, where=path)
-    if "line" not in m:
-        raise r.fail(path, f"slider {name!r} needs 'line': the guide line on {a!r}")
-    guide_points = mech_points.get(a)
-    if guide_points is None:
-        raise r.fail(path + ("slider",), f"no link named {a!r}" + suggest(a, list(mech_points)))
-    origin, angle = read_line(r, m["line"], path + ("line",), a, guide_points)
-    block_angle = r.quantity(m.get("block_angle", 0.0), path + ("block_angle",), "angle")
-    return SliderJoint(name, a, b, point, origin, angle, block_angle, where=path)
+    cls = KINDS[kinds[0]]
+    for other in KINDS.values():
+        for key in other.keys:
+            if key in m and key not in cls.keys and key not in KINDS:
+                raise r.fail(
+                    path + (key,), f"{key!r} applies to a {other.kind}, not a {cls.kind} joint"
+                )
+    return cls.read(r, name, m, path, mech_points)
 
 
 def pin_names(name: str, count: int) -> list[str]:
@@ -91,12 +85,12 @@ def read_pin(r: Reader, name: str, value: Any, mech_points) -> list[PinJoint]:
     ]
 
 
-def read_joints(r: Reader, value: Any, ground, links) -> list[PinJoint | SliderJoint]:
+def read_joints(r: Reader, value: Any, ground, links) -> list[Joint]:
     if not isinstance(value, dict) or not value:
         raise r.fail(("joints",), "'joints' must map joint names to their definitions")
     pts = {GROUND: ground}
     pts.update({lk.name: lk.points for lk in links})
-    out: list[PinJoint | SliderJoint] = []
+    out: list[Joint] = []
     for n, v in value.items():
         name = r.ident(str(n), ("joints", n), "joint")
         many = _pin_links(v)

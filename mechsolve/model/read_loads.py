@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from mechsolve.model import GROUND, Damper, Load, PointForce, SliderJoint, Spring, Torque, keys
+from mechsolve.model import GROUND, Damper, Load, PointForce, Spring, Torque, keys
 from mechsolve.model.reader import Reader
 from mechsolve.model.source import KeyPath
 from mechsolve.model.validate import suggest
@@ -64,7 +64,7 @@ def read_loads(r: Reader, value: Any, ground, links_list, joints) -> list[Load]:
     if not isinstance(value, dict):
         raise r.fail(path0, "'loads' must map load names to their definitions")
     owners = _Owners(r, ground, links_list)
-    sliders = {j.name for j in joints if isinstance(j, SliderJoint)}
+    sliders = {j.name for j in joints if j.coordinate == "length"}
     out: list[Load] = []
     for name, spec in value.items():
         path = path0 + (name,)
@@ -157,38 +157,3 @@ def _coefficient(r: Reader, m: dict, path: KeyPath, name: str) -> float:
     if c < 0:
         raise r.fail(path + ("coefficient",), "a damping coefficient must be zero or positive")
     return c
-
-
-def read_line(
-    r: Reader, value: Any, path: KeyPath, guide: str, points: dict[str, tuple[float, float]]
-) -> tuple[tuple[float, float], float]:
-    """A guide line: ``[P, Q]`` (two points of the guide), ``{through, angle}`` or
-    ``{offset, angle}``."""
-    where = "the ground" if guide == GROUND else f"link {guide!r}"
-    if isinstance(value, list) and len(value) == 2 and all(isinstance(v, str) for v in value):
-        if not any("," in v for v in value) and all(v in points for v in value):
-            (x0, y0), (x1, y1) = points[value[0]], points[value[1]]
-            if x0 == x1 and y0 == y1:
-                raise r.fail(path, f"the line {value[0]} -> {value[1]} has zero length")
-            return (x0, y0), math.atan2(y1 - y0, x1 - x0)
-        bad = [v for v in value if v not in points]
-        if bad and not any(ch.isdigit() for ch in bad[0][:1]) and " " not in bad[0]:
-            raise r.fail(path, f"{where} has no point {bad[0]!r}" + suggest(bad[0], list(points)))
-    m = r.mapping(value, path, keys.GUIDE_LINE.allowed, "a guide line ([P, Q] or {through, angle})")
-    angle = r.quantity(m.get("angle", 0.0), path + ("angle",), "angle")
-    if "through" in m and "offset" in m:
-        raise r.fail(path, "give either 'through' or 'offset', not both")
-    if "through" in m:
-        t = m["through"]
-        if isinstance(t, str) and t in points:
-            origin = points[t]
-        elif isinstance(t, str) and "," not in t:
-            raise r.fail(
-                path + ("through",), f"{where} has no point {t!r}" + suggest(t, list(points))
-            )
-        else:
-            origin = r.xy(t, path + ("through",))
-    else:
-        e = r.quantity(m.get("offset", 0.0), path + ("offset",), "length")
-        origin = (-e * math.sin(angle), e * math.cos(angle))
-    return origin, angle

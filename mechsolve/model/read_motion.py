@@ -13,7 +13,6 @@ from mechsolve.model import (
     Driver,
     Limit,
     Outputs,
-    SliderJoint,
     SolverOptions,
     Sweep,
     keys,
@@ -31,7 +30,7 @@ def read_driver(r: Reader, value: Any, joints) -> Driver:
     m = r.mapping(value, path, keys.DRIVER.allowed, "'driver'", keys.DRIVER.required)
     jname = r.name(m["joint"], path + ("joint",), "joint")
     joint = next((j for j in joints if j.name == jname), None)
-    linear = isinstance(joint, SliderJoint)
+    linear = joint is not None and joint.coordinate == "length"
     d = Driver(jname, where=path)
     if "speed" in m:
         d.speed = r.quantity(m["speed"], path + ("speed",), "speed" if linear else "angular speed")

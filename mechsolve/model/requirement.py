@@ -135,7 +135,7 @@ def check_names(mech: Mechanism, req: Requirement) -> None:
     slider on a ground guide (a ram). Raises :class:`ExprError` with the names that
     would do; a name that is neither a link nor a joint is left to the run (which
     suggests the close ones)."""
-    from mechsolve.model import GROUND, PinJoint, SliderJoint
+    from mechsolve.model import GROUND
 
     if req.expr is None:
         return
@@ -145,11 +145,11 @@ def check_names(mech: Mechanism, req: Requirement) -> None:
     rockers = [
         x
         for j in mech.joints
-        if isinstance(j, PinJoint) and GROUND in j.links and j.name != driven
+        if j.coordinate == "angle" and GROUND in j.links and j.name != driven
         for x in j.links
         if x != GROUND
     ]
-    sliders = [j for j in mech.joints if isinstance(j, SliderJoint) and j.name != driven]
+    sliders = [j for j in mech.sliders if j.name != driven]
     slider_names = [j.name for j in sliders]
     rams = [j.name for j in sliders if GROUND in (j.guide, j.block)]
     driven_links = set(joints[driven].links) - {GROUND} if driven in joints else set()

@@ -23,6 +23,7 @@ from typing import Any
 import yaml
 
 from mechsolve.base.errors import InputError
+from mechsolve.joints.registry import KINDS
 
 # libyaml's parser when PyYAML has it (about 10x faster on a large file), else Python's;
 # either only composes nodes: nothing in a file is ever constructed as an object
@@ -173,7 +174,7 @@ EXCLUSIVE: dict[KeyPath, tuple[tuple[str, ...], ...]] = {
     ("driver",): (("speed", "motion"),),
     ("driver", "motion"): (("accelerate", "segments", "table", "law"),),
     ("links", "*"): (("mass", "weight"),),
-    ("joints", "*"): (("revolute", "slider"),),
+    ("joints", "*"): (tuple(KINDS),),
     ("joints", "*", "line"): (("through", "offset"),),
     ("loads", "*"): (("force", "torque", "spring", "damper", "drag"),),
 }

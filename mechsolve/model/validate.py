@@ -6,10 +6,10 @@ sections were read one by one. Each failure names the key where the user must lo
 
 from __future__ import annotations
 
-import difflib
 import math
 from typing import TYPE_CHECKING
 
+from mechsolve.base.errors import suggest  # noqa: F401 (re-exported for the readers)
 from mechsolve.base.units import UnitError, check_range
 from mechsolve.model import (
     GROUND,
@@ -17,9 +17,7 @@ from mechsolve.model import (
     NAME_RE,
     Damper,
     Limit,
-    PinJoint,
     PointForce,
-    SliderJoint,
     Spring,
     Torque,
 )
@@ -27,12 +25,6 @@ from mechsolve.model.expr import DimensionError, Ref, Side
 
 if TYPE_CHECKING:
     from mechsolve.model import Mechanism
-
-
-def suggest(name: str, choices: list[str]) -> str:
-    """A ``" (did you mean 'x'?)"`` hint, or an empty string."""
-    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _check_name(mech: Mechanism, name: str, where, what: str) -> None:
@@ -121,36 +113,7 @@ def validate(mech: Mechanism) -> None:
         a, b = j.links
         if a == b:
             raise mech.error(j.where, f"joint {j.name!r} joins the link {a!r} to itself")
-        if isinstance(j, PinJoint):
-            for ln in (a, b):
-                if not mech.has_point(ln, j.point):
-                    pts = list(mech.ground) if ln == GROUND else list(links[ln].points)
-                    raise mech.error(
-                        j.where,
-                        f"joint {j.name!r} is at point {j.point!r}, but "
-                        + ("the ground" if ln == GROUND else f"link {ln!r}")
-                        + f" has no point {j.point!r}"
-                        + suggest(j.point, pts),
-                    )
-        elif isinstance(j, SliderJoint):
-            if j.block == GROUND:
-                raise mech.error(
-                    j.where,
-                    f"slider {j.name!r}: the ground cannot be the sliding block; "
-                    "list the guide first: slider: [guide, block]",
-                )
-            if not mech.has_point(j.block, j.point):
-                pts = list(links[j.block].points)
-                raise mech.error(
-                    j.where,
-                    f"slider {j.name!r}: link {j.block!r} has no point {j.point!r}"
-                    + suggest(j.point, pts),
-                )
-            if not all(math.isfinite(v) for v in (*j.origin, j.angle, j.block_angle)):
-                raise mech.error(j.where, "the guide line must have finite coordinates")
-            _in_range(mech, j.where + ("line",), "length", *j.origin)
-            _in_range(mech, j.where + ("line",), "angle", j.angle)
-            _in_range(mech, j.where + ("block_angle",), "angle", j.block_angle)
+        j.check(mech, _in_range)
 
     # the same point name on two links must be a joint between them (directly or in a chain)
     owners = mech.point_owners()
@@ -174,7 +137,7 @@ def validate(mech: Mechanism) -> None:
             continue
         parent = {ln: ln for ln in ls}
         for j in mech.joints:
-            if isinstance(j, PinJoint) and j.point == p and j.a in parent and j.b in parent:
+            if j.joins(p) and j.a in parent and j.b in parent:
                 parent[_find(parent, j.a)] = _find(parent, j.b)
         roots = {_find(parent, ln) for ln in ls}
         if len(roots) > 1:
@@ -229,7 +192,7 @@ def validate(mech: Mechanism) -> None:
             )
         j = mech.joint(d.joint)
         if d.line is not None:
-            if not isinstance(j, PinJoint):
+            if j.coordinate != "angle":
                 raise mech.error(d.where + ("line",), "'line' applies to a revolute driver only")
             for p in d.line:
                 if not mech.has_point(j.b, p):
@@ -244,7 +207,13 @@ def validate(mech: Mechanism) -> None:
                 raise mech.error(d.where + ("line",), "the driver's line needs two distinct points")
         if not math.isfinite(d.speed):
             raise mech.error(d.where + ("speed",), "the driver speed must be a finite number")
-        linear = isinstance(j, SliderJoint)
+        if j.coordinate is None:
+            raise mech.error(
+                d.where + ("joint",),
+                f"the driver names the joint {d.joint!r}, a {j.kind}, which has no coordinate "
+                "a driver could drive",
+            )
+        linear = j.coordinate == "length"
         _in_range(mech, d.where + ("speed",), "speed" if linear else "angular speed", d.speed)
         if not isinstance(d.start, Limit):
             _in_range(mech, d.where + ("start",), "length" if linear else "angle", d.start)
@@ -350,7 +319,7 @@ def _check_requirements(mech: Mechanism) -> None:
     from mechsolve.model.requirement import _ANGLE, _LENGTH, check_names, figure_dim
 
     linear = mech.driver is not None and any(
-        isinstance(j, SliderJoint) and j.name == mech.driver.joint for j in mech.joints
+        j.coordinate == "length" and j.name == mech.driver.joint for j in mech.joints
     )
     for req in getattr(mech, "requirements", None) or []:
         if req.expr is None:

@@ -217,7 +217,6 @@ def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | N
     360th of a linear travel or of a sweep in time when ``count`` is None), and the count
     it gives. (None, None) when the file's own positions must be used (a motion law
     without a duration)."""
-    from mechsolve.model import SliderJoint
 
     check_frame_count(count)
     sw = mech.sweep
@@ -226,7 +225,7 @@ def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | N
             return None, None
         n = count or 361
         return sw.duration / (n - 1), n
-    linear = isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    linear = mech.joint(mech.driver.joint).coordinate == "length"
     travel = sw.travel if sw.travel is not None else 2 * math.pi
     if linear:
         n = count or 361
@@ -275,27 +274,11 @@ def frames_of(res: Results, forces: bool = False) -> Frames:
     joint_pts = {j.point for j in mech.joints}
     ground = [p for p in points if an.points[p].body == sys_.nb and p in joint_pts]
     joints = [p for p in points if an.points[p].body != sys_.nb and p in joint_pts]
-    guides = []
-    for j in mech.sliders:
-        sl = sys_.by_joint[j.name]
-        if sl.a != sys_.nb:
-            continue
-        s = sl.displacement(st)
-        s = s[np.isfinite(s)]
-        if not s.size:
-            continue
-        lo, hi = float(s.min()), float(s.max())
-        pad = 0.15 * (hi - lo) + 0.05 * an.scale
-        ox, oy = sl.o
-        ux, uy = sl.u_loc
-        guides.append(
-            (
-                float(ox + (lo - pad) * ux),
-                float(oy + (lo - pad) * uy),
-                float(ox + (hi + pad) * ux),
-                float(oy + (hi + pad) * uy),
-            )
-        )
+    guides = []  # what the joints draw beyond the links: fixed guide lines
+    for c in sys_.constraints:
+        seg = c.guide(st, an.scale)
+        if seg is not None:
+            guides.append(tuple(float(v) for v in seg.ravel()))
     u = res.u if res.linear else np.degrees(res.u)
     timed = bool(np.any(np.asarray(res.t) != 0)) and bool(np.all(np.isfinite(res.t)))
     fr = Frames(

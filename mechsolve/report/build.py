@@ -236,7 +236,7 @@ def _unit_factor(unit: str) -> float:
 
 def model_tables(mech, check_report) -> list[Table]:
     """Ground points, links (points, lengths, angles, masses, inertias), joints, loads."""
-    from mechsolve.model import Damper, Limit, PinJoint, PointForce, Spring, Torque
+    from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 
     lu = mech.length_unit
     f = _unit_factor(lu)
@@ -299,20 +299,8 @@ def model_tables(mech, check_report) -> list[Table]:
     )
     rows = []
     for j in mech.joints:
-        if isinstance(j, PinJoint):
-            rows.append([j.name, "revolute", f"{j.a} – {j.b}", j.point, ""])
-        else:
-            ox, oy = j.origin
-            rows.append(
-                [
-                    j.name,
-                    "slider",
-                    f"{j.guide} (guide) – {j.block} (block)",
-                    j.point,
-                    f"line through ({num(ox / f)}, {num(oy / f)}) {lu} at "
-                    f"{num(math.degrees(j.angle), 4)}° in the guide's frame",
-                ]
-            )
+        links, point, own = j.describe(lambda x: num(x / f), lambda a: num(math.degrees(a), 4), lu)
+        rows.append([j.name, j.kind, links, point, own])
     tables.append(
         Table(
             "Joints (a reaction is the force on the second link by the first)",

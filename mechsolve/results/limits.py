@@ -25,7 +25,7 @@ import numpy as np
 
 from mechsolve.base.numerics import brent_root
 from mechsolve.core.solution import full_cycle
-from mechsolve.model import GROUND, PinJoint, SliderJoint
+from mechsolve.model import GROUND
 
 if TYPE_CHECKING:
     from mechsolve.core.solution import Solution
@@ -72,6 +72,11 @@ class LimitPositions:
     @property
     def swing(self) -> float:
         return self.high - self.low
+
+    @property
+    def travels(self) -> bool:
+        """A travel (a slider's stroke, m) rather than a swing (a rocker's angle, rad)."""
+        return self.kind != "rocker"
 
 
 @dataclass
@@ -154,7 +159,7 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
     driven = mech.joint(mech.driver.joint)
     items = []
     for j in mech.joints:
-        if isinstance(j, PinJoint) and GROUND in j.links and j is not driven:
+        if j.coordinate == "angle" and GROUND in j.links and j is not driven:
             link = j.b if j.a == GROUND else j.a
             b = sys_.index[link]
 
@@ -162,7 +167,7 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
                 return st.th[b], st.w[b]
 
             items.append((link, "rocker", vr, True))
-        elif isinstance(j, SliderJoint) and j is not driven:
+        elif j.coordinate == "length" and j is not driven:
             sl = sys_.by_joint[j.name]
 
             def vr(st, sl=sl):

@@ -173,9 +173,9 @@ class RunContext:
         if not figures:
             return
         for lp in res.limit_positions():
-            kind = "stroke" if lp.kind == "slider" else "swing"
+            kind = "stroke" if lp.travels else "swing"
             self.values[f"{lp.name}.{kind}"] = lp.high - lp.low
-            self.units[f"{lp.name}.{kind}"] = "m" if lp.kind == "slider" else "deg"
+            self.units[f"{lp.name}.{kind}"] = "m" if lp.travels else "deg"
             if lp.time_ratio is not None:
                 self.values[f"{lp.name}.time_ratio"] = lp.time_ratio
                 self.units[f"{lp.name}.time_ratio"] = ""

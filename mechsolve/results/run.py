@@ -14,14 +14,14 @@ from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
-from mechsolve.model import Mechanism, SliderJoint
+from mechsolve.model import Mechanism
 from mechsolve.results.results import Results
 
 
 def parse_step(mech: Mechanism, text: str | float) -> float:
     """A sweep step from the command line: an angle (``"5 deg"``), a length for a linear
     driver (``"2 mm"``) or a time (``"0.01 s"``), converted to the driver's coordinate."""
-    linear = mech.driver is not None and isinstance(mech.joint(mech.driver.joint), SliderJoint)
+    linear = mech.driver is not None and mech.joint(mech.driver.joint).coordinate == "length"
     if mech.driver is not None and mech.sweep.duration is not None:  # swept in time
         try:
             val = parse_quantity(text, "time")

@@ -1,14 +1,9 @@
 """The constraint system Phi(q, t) = 0 in body coordinates, with its analytic derivatives.
 
 Generalised coordinates are ``q = (x_1, y_1, theta_1, ..., x_n, y_n, theta_n)`` for the n
-moving links. Each joint contributes equations:
-
-* revolute joint (2): ``r_a + A_a s_a - r_b - A_b s_b = 0``; its multipliers are the
-  force exerted on ``b`` by ``a``;
-* slider joint (2): the block's point lies on the guide's line,
-  ``n . (r_b + A_b s_b - r_a - A_a o_a) = 0`` with ``n`` the line's normal, and the
-  block keeps the guide's orientation, ``theta_b - theta_a - beta = 0``;
-* driver (1): the driven joint coordinate equals ``u(t)``.
+moving links. Each joint contributes the equations its kind knows
+(:meth:`mechsolve.joints.base.Joint.equations`: a revolute two, a slider two, ...); the
+driver contributes one: the driven joint coordinate equals ``u(t)``.
 
 Everything is evaluated for N positions at once from a :class:`~mechsolve.base.state.State`.
 Velocities solve ``Phi_q qdot = nu`` and accelerations ``Phi_q qddot = gamma`` with
@@ -23,175 +18,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.base.state import State
-from mechsolve.model import GROUND, Driver, Mechanism, PinJoint, SliderJoint
-
-
-def _perp(vx, vy):
-    """k x v: the vector rotated by +90 degrees."""
-    return -vy, vx
-
-
-class Constraint:
-    """Base class. ``m`` equations between bodies ``a`` and ``b`` (index ``nb`` is ground).
-
-    Subclasses return arrays of shape (m, N) for the residual, the velocity right-hand
-    side ``nu`` and the acceleration right-hand side ``gamma``, and for each moving body
-    involved the Jacobian block of shape (m, 3, N).
-    """
-
-    m: int = 0
-    name: str = ""
-    a: int
-    b: int
-    kind: str = ""
-
-    def residual(self, st: State, u) -> np.ndarray:
-        raise NotImplementedError
-
-    def jacobian(self, st: State) -> dict[int, np.ndarray]:
-        raise NotImplementedError
-
-    def nu(self, st: State, ud) -> np.ndarray:
-        return np.zeros((self.m, st.n))
-
-    def gamma(self, st: State, udd) -> np.ndarray:
-        raise NotImplementedError
-
-    @property
-    def bodies(self) -> tuple[int, int]:
-        return (self.a, self.b)
-
-
-class RevoluteConstraint(Constraint):
-    kind = "revolute"
-    m = 2
-
-    def __init__(self, name: str, a: int, b: int, sa, sb) -> None:
-        self.name, self.a, self.b = name, a, b
-        self.sa = np.asarray(sa, float)
-        self.sb = np.asarray(sb, float)
-
-    def residual(self, st: State, u=None) -> np.ndarray:
-        xa, ya = st.point(self.a, self.sa)
-        xb, yb = st.point(self.b, self.sb)
-        return np.stack([xa - xb, ya - yb])
-
-    def jacobian(self, st: State) -> dict[int, np.ndarray]:
-        out = {}
-        for body, s, sign in ((self.a, self.sa, 1.0), (self.b, self.sb, -1.0)):
-            if body == st.nb:
-                continue
-            rx, ry = st.rotated(body, s)
-            blk = np.zeros((2, 3, st.n))
-            blk[0, 0] = sign
-            blk[1, 1] = sign
-            blk[0, 2] = -sign * ry
-            blk[1, 2] = sign * rx
-            out[body] = blk
-        return out
-
-    def gamma(self, st: State, udd=None) -> np.ndarray:
-        rax, ray = st.rotated(self.a, self.sa)
-        rbx, rby = st.rotated(self.b, self.sb)
-        wa2 = st.w[self.a] ** 2
-        wb2 = st.w[self.b] ** 2
-        return np.stack([rax * wa2 - rbx * wb2, ray * wa2 - rby * wb2])
-
-
-class SliderConstraint(Constraint):
-    kind = "slider"
-    m = 2
-
-    def __init__(self, name: str, a: int, b: int, origin, angle: float, sb, beta: float) -> None:
-        self.name, self.a, self.b = name, a, b
-        self.o = np.asarray(origin, float)
-        self.u_loc = np.array([math.cos(angle), math.sin(angle)])
-        self.sb = np.asarray(sb, float)
-        self.beta = beta
-
-    # helpers shared with the slider driver and the slider outputs
-    def frame(self, st: State):
-        """Global line direction u, normal n, and d = r_P(block) - r_O(guide)."""
-        ux, uy = st.rotated(self.a, self.u_loc)
-        nx, ny = -uy, ux
-        xo, yo = st.point(self.a, self.o)
-        xp, yp = st.point(self.b, self.sb)
-        return ux, uy, nx, ny, xp - xo, yp - yo
-
-    def ddot(self, st: State):
-        """Time derivative of d."""
-        vox, voy = st.point_velocity(self.a, self.o)
-        vpx, vpy = st.point_velocity(self.b, self.sb)
-        return vpx - vox, vpy - voy
-
-    def residual(self, st: State, u=None) -> np.ndarray:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        return np.stack([nx * dx + ny * dy, st.th[self.b] - st.th[self.a] - self.beta])
-
-    def jacobian(self, st: State) -> dict[int, np.ndarray]:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        out = {}
-        if self.a != st.nb:
-            xp, yp = st.point(self.b, self.sb)
-            blk = np.zeros((2, 3, st.n))
-            blk[0, 0] = -nx
-            blk[0, 1] = -ny
-            blk[0, 2] = -(ux * (xp - st.x[self.a]) + uy * (yp - st.y[self.a]))
-            blk[1, 2] = -1.0
-            out[self.a] = blk
-        if self.b != st.nb:
-            rx, ry = st.rotated(self.b, self.sb)
-            blk = np.zeros((2, 3, st.n))
-            blk[0, 0] = nx
-            blk[0, 1] = ny
-            blk[0, 2] = ux * rx + uy * ry
-            blk[1, 2] = 1.0
-            out[self.b] = blk
-        return out
-
-    def gamma(self, st: State, udd=None) -> np.ndarray:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        ddx, ddy = self.ddot(st)
-        wa, wb = st.w[self.a], st.w[self.b]
-        rax, ray = st.rotated(self.a, self.o)
-        rbx, rby = st.rotated(self.b, self.sb)
-        g1 = (
-            wa**2 * (nx * dx + ny * dy)
-            + 2 * wa * (ux * ddx + uy * ddy)
-            + wb**2 * (nx * rbx + ny * rby)
-            - wa**2 * (nx * rax + ny * ray)
-        )
-        return np.stack([g1, np.zeros(st.n)])
-
-    # the slider's relative motion, for outputs and for a linear driver
-    def displacement(self, st: State) -> np.ndarray:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        return ux * dx + uy * dy
-
-    def velocity(self, st: State) -> np.ndarray:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        ddx, ddy = self.ddot(st)
-        return st.w[self.a] * (nx * dx + ny * dy) + ux * ddx + uy * ddy
-
-    def acceleration(self, st: State) -> np.ndarray:
-        ux, uy, nx, ny, dx, dy = self.frame(st)
-        ddx, ddy = self.ddot(st)
-        aox, aoy = st.point_acceleration(self.a, self.o)
-        apx, apy = st.point_acceleration(self.b, self.sb)
-        wa, al = st.w[self.a], st.al[self.a]
-        return (
-            al * (nx * dx + ny * dy)
-            - wa**2 * (ux * dx + uy * dy)
-            + 2 * wa * (nx * ddx + ny * ddy)
-            + ux * (apx - aox)
-            + uy * (apy - aoy)
-        )
+from mechsolve.joints.base import Constraint
+from mechsolve.joints.slider import SliderConstraint
+from mechsolve.model import GROUND, Driver, Mechanism
 
 
 class AngleDriverConstraint(Constraint):
     """``theta_b + delta - theta_a - u(t) = 0``: the driven relative angle."""
 
     kind = "driver"
+    letter = "D"
     m = 1
 
     def __init__(self, name: str, a: int, b: int, delta: float) -> None:
@@ -218,11 +54,18 @@ class AngleDriverConstraint(Constraint):
     def gamma(self, st: State, udd) -> np.ndarray:
         return np.broadcast_to(np.asarray(udd, float), (st.n,))[None, :].copy()
 
+    def incidence(self, nb: int) -> list[list[int]]:
+        return [[3 * b + 2 for b in (self.a, self.b) if b != nb]]
+
+    def equation_names(self) -> list[str]:
+        return [f"{self.name} (driver)"]
+
 
 class SliderDriverConstraint(Constraint):
     """``s - u(t) = 0``: the driven slider displacement."""
 
     kind = "driver"
+    letter = "D"
     m = 1
 
     def __init__(self, name: str, slider: SliderConstraint) -> None:
@@ -274,6 +117,12 @@ class SliderDriverConstraint(Constraint):
         )
         return (np.broadcast_to(np.asarray(udd, float), (st.n,)) + g)[None, :]
 
+    def incidence(self, nb: int) -> list[list[int]]:
+        return [[3 * b + k for b in (self.a, self.b) if b != nb for k in range(3)]]
+
+    def equation_names(self) -> list[str]:
+        return [f"{self.name} (driver)"]
+
 
 class RowSubset(Constraint):
     """Some of the equations of another constraint (the rest being redundant)."""
@@ -285,6 +134,14 @@ class RowSubset(Constraint):
         self.name = base.name
         self.kind = base.kind + " (part)"
         self.a, self.b = base.a, base.b
+
+    def incidence(self, nb: int) -> list[list[int]]:
+        full = self.base.incidence(nb)
+        return [full[k] for k in self.rows]
+
+    def equation_names(self) -> list[str]:
+        full = self.base.equation_names()
+        return [full[k] for k in self.rows]
 
     def residual(self, st: State, u) -> np.ndarray:
         return self.base.residual(st, u)[self.rows]
@@ -328,16 +185,7 @@ class ConstraintSystem:
         self.constraints: list[Constraint] = []
         self.by_joint: dict[str, Constraint] = {}
         for j in mech.joints:
-            a, b = self.index[j.a], self.index[j.b]
-            if isinstance(j, PinJoint):
-                c: Constraint = RevoluteConstraint(
-                    j.name, a, b, mech.local_point(j.a, j.point), mech.local_point(j.b, j.point)
-                )
-            else:
-                assert isinstance(j, SliderJoint)
-                c = SliderConstraint(
-                    j.name, a, b, j.origin, j.angle, mech.local_point(j.b, j.point), j.block_angle
-                )
+            c = j.equations(mech, self.index)
             self.constraints.append(c)
             self.by_joint[j.name] = c
         self.driver: Constraint | None = None
@@ -389,13 +237,7 @@ class ConstraintSystem:
         """
         out = np.zeros(st.n)
         for c in self.constraints:
-            if type(c) is RevoluteConstraint:
-                xa, ya = st.point(c.a, c.sa)
-                xb, yb = st.point(c.b, c.sb)
-                np.maximum(out, np.abs(xa - xb), out=out)
-                np.maximum(out, np.abs(ya - yb), out=out)
-            else:
-                np.maximum(out, np.abs(c.residual(st, u)).max(axis=0), out=out)
+            c.max_residual_into(st, u, out)
         return out
 
     def jacobian(self, st: State) -> np.ndarray:
@@ -415,23 +257,14 @@ class ConstraintSystem:
         return np.concatenate([c.gamma(st, udd) for c in self.constraints], axis=0)
 
     def equation_names(self) -> list[str]:
-        names = []
-        for c in self.constraints:
-            if c.kind == "revolute":
-                names += [f"{c.name} (x)", f"{c.name} (y)"]
-            elif c.kind == "slider":
-                names += [f"{c.name} (on line)", f"{c.name} (angle)"]
-            else:
-                names += [f"{c.name} (driver)"]
-        return names
+        return [n for c in self.constraints for n in c.equation_names()]
 
 
 def make_driver(mech: Mechanism, d: Driver, system: ConstraintSystem) -> Constraint:
     j = mech.joint(d.joint)
     a, b = system.index[j.a], system.index[j.b]
-    if isinstance(j, SliderJoint):
+    if j.coordinate == "length":
         sl = system.by_joint[j.name]
-        assert isinstance(sl, SliderConstraint)
         return SliderDriverConstraint("driver", sl)
     delta = 0.0
     if d.line is not None:

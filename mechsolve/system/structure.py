@@ -13,37 +13,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from mechsolve.base.errors import InputError
+from mechsolve.joints.base import Constraint
 from mechsolve.model import Mechanism
-from mechsolve.system.constraints import Constraint, ConstraintSystem
+from mechsolve.system.constraints import ConstraintSystem
 
 
 def grubler(mech: Mechanism) -> int:
-    """Mobility by the Grübler-Kutzbach count: ``3 n - 2 j`` (n moving links, j joints).
-
-    Revolute and slider joints each remove two degrees of freedom.
-    """
-    return 3 * len(mech.links) - 2 * len(mech.joints)
-
-
-def _incidence(c: Constraint, nb: int) -> list[list[int]]:
-    """For each equation of ``c``, the coordinates (3*body + k) it involves."""
-    base = getattr(c, "base", None)
-    if base is not None:  # a subset of another constraint's equations
-        full = _incidence(base, nb)
-        return [full[k] for k in c.rows]
-    rows: list[list[int]] = []
-    bodies = [b for b in (c.a, c.b) if b != nb]
-    if c.kind == "revolute":
-        for k in (0, 1):
-            rows.append([3 * b + k for b in bodies] + [3 * b + 2 for b in bodies])
-    elif c.kind == "slider":
-        rows.append([3 * b + k for b in bodies for k in range(3)])
-        rows.append([3 * b + 2 for b in bodies])
-    elif getattr(c, "slider", None) is not None:  # linear driver
-        rows.append([3 * b + k for b in bodies for k in range(3)])
-    else:  # angle driver
-        rows.append([3 * b + 2 for b in bodies])
-    return rows
+    """Mobility by the Grübler-Kutzbach count: ``3 n - sum of what each joint removes``
+    (n moving links; a lower pair removes 2, a higher pair 1: ``3 n - 2 Pl - Ph``)."""
+    return 3 * len(mech.links) - sum(j.removes for j in mech.joints)
 
 
 @dataclass
@@ -190,7 +168,7 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
     rows: list[list[int]] = []
     row_con: list[int] = []
     for ci, c in enumerate(system.constraints):
-        for r in _incidence(c, nb):
+        for r in c.incidence(nb):
             rows.append(r)
             row_con.append(ci)
     first = [r for r, ci in enumerate(row_con) if system.constraints[ci].kind == "driver"]

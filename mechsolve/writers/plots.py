@@ -119,20 +119,11 @@ def draw_mechanism(
         if labels:
             cx, cy = pts.mean(axis=0)
             ax.annotate(lk.name, (cx, cy), fontsize=7, color=col, ha="center", va="center")
-    # guides of sliders on the ground
-    for j in mech.sliders:
-        sl = sys_.by_joint[j.name]
-        if sl.a == sys_.nb:
-            s_all = sl.displacement(state)
-            s_all = s_all[np.isfinite(s_all)]
-            if s_all.size == 0:
-                continue
-            lo, hi = float(s_all.min()), float(s_all.max())
-            pad = 0.15 * (hi - lo) + 0.05 * an.scale
-            ox, oy = sl.o
-            ux, uy = sl.u_loc
-            ss = np.array([lo - pad, hi + pad])
-            ax.plot(ox + ss * ux, oy + ss * uy, "--", color="0.4", lw=1)
+    # what the joints draw beyond the links: the guides of sliders on the ground
+    for c in sys_.constraints:
+        seg = c.guide(state, an.scale)
+        if seg is not None:
+            ax.plot(seg[:, 0], seg[:, 1], "--", color="0.4", lw=1)
     # joints and ground pivots
     for p, ref in an.points.items():
         x, y = state.point(ref.body, ref.local, [i])
@@ -344,11 +335,11 @@ def plot_effort(res: Results, path: Path) -> Path:
 def ground_joints(res: Results) -> list[str]:
     """Joints with the ground, fixed hinges first, then sliders on fixed guides: the
     reactions the frame (foundation) must carry."""
-    from mechsolve.model import GROUND, PinJoint
+    from mechsolve.model import GROUND
 
     on_ground = [j for j in res.mechanism.joints if GROUND in j.links]
-    pins = [j.name for j in on_ground if isinstance(j, PinJoint)]
-    return pins + [j.name for j in on_ground if not isinstance(j, PinJoint)]
+    hinges = [j.name for j in on_ground if j.coordinate == "angle"]
+    return hinges + [j.name for j in on_ground if j.coordinate != "angle"]
 
 
 def plot_hodographs(res: Results, path: Path) -> Path | None:
@@ -403,11 +394,11 @@ def plot_reactions(res: Results, path: Path) -> Path:
     mags = {}
     for j in res.mechanism.joints:
         r = res.reaction(j.name)
-        mag = np.abs(r["F"]) if "F" in r else np.abs(r["N"])
+        mag = np.abs(r[j.magnitude])
         mags[j.name] = np.where(res.forces.ok, mag, np.nan)
     sc, su = _scaled(np.concatenate(list(mags.values())), "N")
     for j in res.mechanism.joints:
-        label = res.joint_label(j.name) + ("" if j.kind == "revolute" else " normal")
+        label = res.joint_label(j.name) + j.magnitude_note
         bx, bm = _broken(res, xs, mags[j.name] / sc)
         ax.plot(bx, bm, lw=1.3, label=label)
     ax.set_xlabel(xlabel)

@@ -63,7 +63,7 @@ def _columns_estimate(mech: Mechanism) -> int:
     pin's reaction and seven a slider's (reaction and travel), the energies and powers."""
     ground = set(mech.ground)
     points = {p for lk in mech.links for p in lk.points} - ground
-    sliders = sum(1 for j in mech.joints if type(j).__name__ == "SliderJoint")
+    sliders = len(mech.sliders)
     return 20 + 6 * len(points) + 3 * len(mech.links) + 3 * len(mech.joints) + 4 * sliders
 
 

@@ -18,8 +18,9 @@ from mechsolve.analyses.polygons.vectors import Arrow, _k_cross
 from mechsolve.base.errors import InputError, SolverError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.core.sweep import Analysis
-from mechsolve.model import Mechanism, SliderJoint
-from mechsolve.system.constraints import RevoluteConstraint, SliderConstraint
+from mechsolve.joints.revolute import RevoluteConstraint
+from mechsolve.joints.slider import SliderConstraint
+from mechsolve.model import Mechanism
 
 PAGE_MM = 120.0  # the largest extent of a polygon drawn at an automatic scale
 
@@ -233,9 +234,9 @@ class _Construction(DyadConstructions):
 
     def group(self, g) -> None:
         cons = list(g.constraints)
-        kinds = sorted(c.kind for c in cons)
+        pattern = "".join(sorted(c.letter for c in cons))  # the Assur notation
         inside = set(g.bodies)
-        if len(g.bodies) == 1 and kinds == ["driver", "revolute"]:
+        if len(g.bodies) == 1 and pattern == "DR":
             return self.driver_link(g.bodies[0], cons)
         if len(g.bodies) == 2 and len(cons) == 3:
             inner = [c for c in cons if c.a in inside and c.b in inside]
@@ -245,14 +246,14 @@ class _Construction(DyadConstructions):
                 if all(len(v) == 1 for v in outer.values()):
                     b1, b2 = g.bodies
                     o1, o2 = outer[b1][0], outer[b2][0]
-                    rev = [isinstance(c, RevoluteConstraint) for c in (o1, jm, o2)]
+                    rev = [c.letter == "R" for c in (o1, jm, o2)]
                     if rev == [True, True, True]:
                         return self.rrr(b1, b2, o1, jm, o2)
                     if rev == [True, True, False]:
                         return self.rrp(b1, b2, o1, jm, o2)
                     if rev == [False, True, True]:
                         return self.rrp(b2, b1, o2, jm, o1)
-                    if rev == [True, False, True] and isinstance(jm, SliderConstraint):
+                    if rev == [True, False, True] and jm.letter == "P":
                         blk, bar = jm.b, jm.a
                         jp = o1 if blk == b1 else o2
                         jq = o2 if blk == b1 else o1
@@ -469,7 +470,7 @@ def build_polygons(
     for name, val in (("--scale-v", scale_v), ("--scale-a", scale_a)):
         if val is not None and not (val > 0 and math.isfinite(val)):
             raise InputError(f"{name} {val!r}: a scale is a positive number of units per mm")
-    if isinstance(mech.joint(mech.driver.joint), SliderJoint):
+    if mech.joint(mech.driver.joint).coordinate == "length":
         raise InputError(
             "polygons: the graphical method here starts from a crank (a revolute driver); "
             f"{mech.driver.joint} is a slider"

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from mechsolve.analyses.polygons.vectors import Arrow, _intersect, _k_cross
-from mechsolve.system.constraints import AngleDriverConstraint, RevoluteConstraint, SliderConstraint
+from mechsolve.joints.slider import SliderConstraint
+from mechsolve.system.constraints import AngleDriverConstraint
 
 
 class DyadConstructions:
@@ -14,7 +15,7 @@ class DyadConstructions:
     per kind of group."""
 
     def driver_link(self, b: int, cons) -> None:
-        pin = next(c for c in cons if isinstance(c, RevoluteConstraint))
+        pin = next(c for c in cons if c.letter == "R")
         drv = next(c for c in cons if isinstance(c, AngleDriverConstraint))
         k = pin.a if pin.b == b else pin.b
         pname, P = self.pin_point(pin)

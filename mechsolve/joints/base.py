@@ -1,0 +1,212 @@
+"""The joint contract: what every joint kind knows and answers.
+
+A joint kind is two small classes in one module:
+
+* a :class:`Joint` (a dataclass the model holds, built from the file or in code): which
+  links it joins and where, its share of Grübler's count, the relative coordinate a
+  driver may drive, its keys and reader, its own checks, its description and drawing;
+* a :class:`Constraint`: its equations bound to body indices, ``m`` equations
+  ``Phi(q, t) = 0`` between bodies ``a`` and ``b`` with their Jacobian blocks, the
+  velocity and acceleration right-hand sides, the coordinates each equation involves
+  (for the structural split), the names of its equations, and the reaction its
+  multipliers stand for.
+
+Everything is evaluated for N positions at once from a :class:`~mechsolve.base.state.State`.
+Velocities solve ``Phi_q qdot = nu`` and accelerations ``Phi_q qddot = gamma`` with
+``nu = -Phi_t`` and ``gamma = -(Phi_q qdot)_q qdot - 2 Phi_qt qdot - Phi_tt``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+import numpy as np
+
+from mechsolve.base.keyspec import Key
+from mechsolve.base.state import State
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+
+GROUND = "ground"
+KeyPath = tuple[Any, ...]
+
+
+class Constraint:
+    """``m`` equations between bodies ``a`` and ``b`` (index ``nb`` is the ground).
+
+    Subclasses return arrays of shape (m, N) for the residual, the velocity right-hand
+    side ``nu`` and the acceleration right-hand side ``gamma``, and for each moving body
+    involved the Jacobian block of shape (m, 3, N).
+
+    ``letter`` is the kind's letter in the names of structural groups (``R``: revolute,
+    ``P``: prismatic, ``D``: a driver; ``RRP`` is a dyad of two revolutes and a slider);
+    the closed-form groups are recognised by these letters.
+    """
+
+    m: int = 0
+    name: str = ""
+    a: int
+    b: int
+    kind: str = ""
+    letter: str = ""
+
+    def residual(self, st: State, u) -> np.ndarray:
+        raise NotImplementedError
+
+    def jacobian(self, st: State) -> dict[int, np.ndarray]:
+        raise NotImplementedError
+
+    def nu(self, st: State, ud) -> np.ndarray:
+        return np.zeros((self.m, st.n))
+
+    def gamma(self, st: State, udd) -> np.ndarray:
+        raise NotImplementedError
+
+    def max_residual_into(self, st: State, u, out: np.ndarray) -> None:
+        """``out = max(out, max |Phi|)`` over this constraint's equations, in place."""
+        np.maximum(out, np.abs(self.residual(st, u)).max(axis=0), out=out)
+
+    def incidence(self, nb: int) -> list[list[int]]:
+        """For each equation, the coordinates (``3 * body + k``) it involves."""
+        raise NotImplementedError
+
+    def equation_names(self) -> list[str]:
+        """One short name per equation, for messages about redundant equations."""
+        return [f"{self.name} ({k + 1})" for k in range(self.m)]
+
+    def reaction(self, st: State, lam: np.ndarray) -> dict[str, np.ndarray] | None:
+        """The named reaction components from this constraint's multipliers ``lam`` (N, m),
+        or ``None`` when its multipliers are not a joint's reaction (a driver's effort)."""
+        return None
+
+    def guide(self, st: State, scale: float) -> np.ndarray | None:
+        """How a drawing shows this constraint beyond its links' outlines: a fixed guide
+        line's segment ``[[x0, y0], [x1, y1]]`` over the travel seen in ``st`` (padded by
+        a fraction of the mechanism's ``scale``), or ``None``."""
+        return None
+
+    def indeterminate(self, free: np.ndarray) -> set[str]:
+        """The reaction components that the multipliers flagged ``free`` (m,) leave
+        undetermined (redundant constraints)."""
+        return {"effort"}
+
+    @property
+    def bodies(self) -> tuple[int, int]:
+        return (self.a, self.b)
+
+
+class Reader(Protocol):
+    """What a joint's reader uses of the model's file reader (:mod:`mechsolve.model.reader`)."""
+
+    def fail(self, path: tuple, message: str) -> Exception: ...
+
+    def name(self, value: Any, path: tuple, what: str) -> str: ...
+
+    def names(self, value: Any, path: tuple, what: str, count: int | None = None) -> list: ...
+
+    def quantity(self, value: Any, path: tuple, kind: str) -> float: ...
+
+    def xy(self, value: Any, path: tuple) -> tuple[float, float]: ...
+
+    def mapping(self, value: Any, path: tuple, allowed: tuple, what: str) -> dict: ...
+
+
+class Joint:
+    """The contract of a joint kind (subclasses are dataclasses with ``name`` and ``where``).
+
+    Class attributes
+    ----------------
+    kind
+        The file's key of the kind (``revolute: [a, b]``) and its name in messages.
+    title
+        What it is, in a few words (the schema's description).
+    roles
+        What its two links are called in messages (``[guide, block]``).
+    letter
+        Its letter in the names of structural groups (``R``, ``P``).
+    pair
+        ``"lower"`` (surface contact: revolute, prismatic) or ``"higher"`` (line or point
+        contact: gears, cams): Grübler's count lists them apart (Pl, Ph).
+    removes
+        The degrees of freedom it takes away (2 for a lower pair, 1 for a higher pair).
+    coordinate
+        The dimension of its relative coordinate (``"angle"``, ``"length"``), which a
+        driver may drive and the results report; ``None`` if it has none.
+    magnitude
+        The reaction component plots show as its magnitude (``"F"``, ``"N"``), and
+        ``magnitude_note`` what to add to its label.
+    keys
+        Its own keys in the file, beyond ``point`` and ``description``, in the order the
+        messages list them.
+    """
+
+    kind: ClassVar[str]
+    title: ClassVar[str]
+    roles: ClassVar[tuple[str, str]] = ("link", "link")
+    letter: ClassVar[str]
+    pair: ClassVar[str] = "lower"
+    removes: ClassVar[int] = 2
+    coordinate: ClassVar[str | None] = None
+    magnitude: ClassVar[str] = "F"
+    magnitude_note: ClassVar[str] = ""
+    keys: ClassVar[dict[str, Key]] = {}
+
+    name: str
+    point: str
+    where: KeyPath
+    a: str  # the first link of :attr:`links`
+    b: str  # the second
+
+    @property
+    def links(self) -> tuple[str, str]:
+        """The two links it joins, in the order the file gives them."""
+        raise NotImplementedError
+
+    @property
+    def label(self) -> str:
+        """Where the joint is, for messages: its point, or its own name."""
+        return self.name
+
+    def joins(self, point: str) -> bool:
+        """Does the joint make ``point`` one place on both its links?"""
+        return False
+
+    # -- the file ---------------------------------------------------------------------
+    @classmethod
+    def read(
+        cls, r: Reader, name: str, m: Mapping, path: tuple, points: Mapping[str, Mapping]
+    ) -> Joint:
+        """The joint from its mapping ``m`` in the file at ``path`` (``points``: every
+        link's named points, the ground's under ``"ground"``)."""
+        raise NotImplementedError
+
+    def check(self, mech: Any, in_range: Callable[..., None]) -> None:
+        """The kind's own checks on a mechanism (``mech.error(where, message)`` raises);
+        ``in_range(mech, path, dimension, *values)`` refuses absurd magnitudes."""
+
+    # -- numbers that a batch of designs may vary -------------------------------------
+    def geometry(self) -> list[float]:
+        """The joint's own numbers (its points belong to its links)."""
+        return []
+
+    def with_geometry(self, cols: Any) -> Joint:
+        """The same joint with its numbers taken in the order of :meth:`geometry` from
+        ``cols`` (``cols.one()``: a number, ``cols.pair()``: a point; a batch of designs
+        gives arrays)."""
+        return self
+
+    # -- the system -------------------------------------------------------------------
+    def equations(self, mech: Any, index: Mapping[str, int]) -> Constraint:
+        """Its constraint equations, bound to the body indices ``index``."""
+        raise NotImplementedError
+
+    # -- what is written ---------------------------------------------------------------
+    def describe(
+        self, length: Callable[[float], str], angle: Callable[[float], str], unit: str
+    ) -> tuple[str, str, str]:
+        """The report's row: the links, the point, the kind's own geometry (``length``
+        and ``angle`` format a length in ``unit`` and an angle in degrees)."""
+        return (f"{self.a} – {self.b}", self.point, "")

@@ -1,0 +1,143 @@
+"""The revolute joint (a pin): the point ``point`` of link ``a`` and of link ``b`` coincide.
+
+Equations (2): ``r_a + A_a s_a - r_b - A_b s_b = 0``; its multipliers are the force
+exerted on ``b`` by ``a`` (``Fx``, ``Fy`` and the magnitude ``F``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from mechsolve.base.errors import suggest
+from mechsolve.base.keyspec import K, Key, names
+from mechsolve.base.state import State
+from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
+
+
+@dataclass
+class PinJoint(Joint):
+    """A revolute joint: the point ``point`` of link ``a`` and of link ``b`` coincide.
+
+    Reactions are reported as the force exerted on ``b`` by ``a``.
+    """
+
+    name: str
+    a: str
+    b: str
+    point: str
+    where: KeyPath = ()
+
+    kind: ClassVar[str] = "revolute"
+    title: ClassVar[str] = "a pin"
+    letter: ClassVar[str] = "R"
+    coordinate: ClassVar[str | None] = "angle"
+    keys: ClassVar[dict[str, Key]] = {
+        "revolute": K(
+            names("link"),
+            "The links pinned together: [link, link] (three or more: one pin through all).",
+        ),
+    }
+
+    @property
+    def links(self) -> tuple[str, str]:
+        return (self.a, self.b)
+
+    @property
+    def label(self) -> str:
+        return self.point
+
+    def joins(self, point: str) -> bool:
+        return point == self.point
+
+    @classmethod
+    def read(
+        cls, r: Reader, name: str, m: Mapping, path: tuple, points: Mapping[str, Mapping]
+    ) -> PinJoint:
+        a, b = r.names(m["revolute"], path + ("revolute",), "link", 2)
+        point = r.name(m.get("point", name), path + ("point",), "point")
+        return cls(name, a, b, point, where=path)
+
+    def check(self, mech: Any, in_range: Callable[..., None]) -> None:
+        for ln in self.links:
+            if not mech.has_point(ln, self.point):
+                pts = list(mech.ground) if ln == GROUND else list(mech.link(ln).points)
+                raise mech.error(
+                    self.where,
+                    f"joint {self.name!r} is at point {self.point!r}, but "
+                    + ("the ground" if ln == GROUND else f"link {ln!r}")
+                    + f" has no point {self.point!r}"
+                    + suggest(self.point, pts),
+                )
+
+    def equations(self, mech: Any, index: Mapping[str, int]) -> RevoluteConstraint:
+        return RevoluteConstraint(
+            self.name,
+            index[self.a],
+            index[self.b],
+            mech.local_point(self.a, self.point),
+            mech.local_point(self.b, self.point),
+        )
+
+
+class RevoluteConstraint(Constraint):
+    """The pin's two equations between bodies ``a`` and ``b`` at local points ``sa``, ``sb``."""
+
+    kind = "revolute"
+    letter = "R"
+    m = 2
+
+    def __init__(self, name: str, a: int, b: int, sa, sb) -> None:
+        self.name, self.a, self.b = name, a, b
+        self.sa = np.asarray(sa, float)
+        self.sb = np.asarray(sb, float)
+
+    def residual(self, st: State, u=None) -> np.ndarray:
+        xa, ya = st.point(self.a, self.sa)
+        xb, yb = st.point(self.b, self.sb)
+        return np.stack([xa - xb, ya - yb])
+
+    def max_residual_into(self, st: State, u, out: np.ndarray) -> None:
+        # row by row: stacking (2, N) temporaries is slower on long sweeps
+        xa, ya = st.point(self.a, self.sa)
+        xb, yb = st.point(self.b, self.sb)
+        np.maximum(out, np.abs(xa - xb), out=out)
+        np.maximum(out, np.abs(ya - yb), out=out)
+
+    def jacobian(self, st: State) -> dict[int, np.ndarray]:
+        out = {}
+        for body, s, sign in ((self.a, self.sa, 1.0), (self.b, self.sb, -1.0)):
+            if body == st.nb:
+                continue
+            rx, ry = st.rotated(body, s)
+            blk = np.zeros((2, 3, st.n))
+            blk[0, 0] = sign
+            blk[1, 1] = sign
+            blk[0, 2] = -sign * ry
+            blk[1, 2] = sign * rx
+            out[body] = blk
+        return out
+
+    def gamma(self, st: State, udd=None) -> np.ndarray:
+        rax, ray = st.rotated(self.a, self.sa)
+        rbx, rby = st.rotated(self.b, self.sb)
+        wa2 = st.w[self.a] ** 2
+        wb2 = st.w[self.b] ** 2
+        return np.stack([rax * wa2 - rbx * wb2, ray * wa2 - rby * wb2])
+
+    def incidence(self, nb: int) -> list[list[int]]:
+        bodies = [b for b in (self.a, self.b) if b != nb]
+        return [[3 * b + k for b in bodies] + [3 * b + 2 for b in bodies] for k in (0, 1)]
+
+    def equation_names(self) -> list[str]:
+        return [f"{self.name} (x)", f"{self.name} (y)"]
+
+    def reaction(self, st: State, lam: np.ndarray) -> dict[str, np.ndarray]:
+        fx, fy = lam[:, 0], lam[:, 1]
+        return {"Fx": fx, "Fy": fy, "F": np.sqrt(fx * fx + fy * fy)}
+
+    def indeterminate(self, free: np.ndarray) -> set[str]:
+        return {k for k, on in zip(("Fx", "Fy"), free) if on} | {"F"}
