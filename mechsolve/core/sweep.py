@@ -302,112 +302,18 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
         unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
         analyse = near is None and n > 1
         derivs = velocity or acceleration or analyse
-        q_start = dict(start.q_start)
-        flips = {gi: [] for gi in range(len(self.plan))}
-        if near is not None or follow is not None:
-            # near: single positions next to a solved sweep; follow: the next chunk of a
-            # sweep, starting at the previous chunk's last position, on its branches
-            sol0 = near[0] if near is not None else follow
-            solved = np.flatnonzero(sol0.ok)
-            i0 = near[1] if near is not None else (int(solved[-1]) if solved.size else -1)
-            flips = {gi: list(v) for gi, v in sol0.flips.items()}
-            for gi, g in enumerate(self.plan):
-                if isinstance(g, NewtonGroup) and i0 >= 0:
-                    q_start[gi] = g.get_q(sol0.state, i0)
-        ok_all = np.ones(n, bool)
-        oks, inds = [], []
-        iters = np.zeros(n, int)
-        methods = _Methods(n)
-        events: list[Event] = []
-        warnings: list[str] = []
-        ctx = _Context(self, st, u, start, flips, q_start)
-        ctx.is_start = near is None and follow is None
-        two = [gi for gi, g in enumerate(self.plan) if g.n_modes == 2]
-        if analyse and two:
-            ctx.build_grid(EVENT_STEP * (self.scale if self.linear else 1.0))
-            ctx.grid_upto = max(two)
+        q_start, flips = self._continued_from(start, near, follow)
+        ctx = self._context(st, u, start, flips, q_start, near is None and follow is None, analyse)
         with np.errstate(invalid="ignore", divide="ignore"):
-            for gi, g in enumerate(self.plan):
-                if isinstance(g, NewtonGroup):
-                    ok, it, meth = g.sweep(
-                        st,
-                        unit,
-                        q_start[gi],
-                        ok_all,
-                        prefix=lambda uu, k, gi=gi: ctx.prefix(gi, uu, k),
-                        restart=lambda i, g=g: _restart_guess(self, g, float(u[i]), start),
-                    )
-                    iters = np.maximum(iters, it)
-                    methods.merge(meth)
-                    if derivs:
-                        g.velocity(st, unit)
-                    if acceleration:
-                        g.acceleration(st, unit)
-                    ind = np.ones(n)  # conditioning of Newton groups: see jacobian_rcond()
-                else:
-                    if g.n_modes == 2 and analyse:
-                        evs, warn = self._branch_events(gi, g, ctx, ok_all)
-                        events += evs
-                        warnings += warn
-                    if lazy:
-                        conds.solved(g.bodies)
-                        if g.n_modes == 2:
-                            self._decide_at_start(gi, g, st, start, conds)
-                    if (
-                        ctx.is_start
-                        and n
-                        and (_coincident_at(g, st, 0) or self._singular_just_ahead(g, st))
-                    ):
-                        # the start's branch is the one taken from the start; the pose at
-                        # the start itself is the limit from that side (see RRR)
-                        flips[gi][:0] = [-math.inf * self.mech.driver.direction, float(u[0])]
-                    sigma = self.sigma_at(start.modes[gi], flips[gi], u)
-                    ok, ind = g.position(st, unit, sigma)
-                    if lazy and not ok[0]:
-                        closes = np.flatnonzero(ok & ok_all)
-                        raise self._cannot_close(
-                            g, st, start.u0, int(closes[0]) if closes.size else None
-                        )
-                    if derivs:
-                        g.velocity(st, unit)
-                    if acceleration:
-                        g.acceleration(st, unit)
-                ok = ok & ok_all
-                oks.append(ok)
-                inds.append(ind)
-                ok_all = ok_all & ok
-                ctx.extend_grid(gi)
+            ok_all, oks, inds, iters, methods, events, warnings = self._solve_groups(
+                ctx, unit, conds if lazy else None, derivs, acceleration, analyse
+            )
         if lazy:
-            start.state = st.take([0])
-            start.group_modes = list(start.modes)
-            view = StateView(self, start.state)
-            view.has_velocity = view.has_acceleration = False
-            for _, c in conds.remaining():  # conditions no group decided: they must hold
-                if not bool(np.all(c.evaluate(view))):
-                    raise AssemblyError(
-                        f"{self._file()}the start position does not satisfy the assembly "
-                        f"condition {c.text!r}, and no loop's branch can change that"
-                    )
+            self._finish_lazy_start(start, st, conds)
         ok = ok_all.copy()
-        res = None
-        if any(isinstance(g, NewtonGroup) for g in self.plan):
-            # check the full constraint residual everywhere; polish where needed
-            with np.errstate(invalid="ignore"):
-                res = self.system.max_residual(st, u)
-            bad = ok & ~(res <= self.atol)
-            for i in np.flatnonzero(bad):
-                ok[i], res[i], it = self._polish(st, unit, i)
-                iters[i] += it
-                methods.append(i, "newton polish")
-            res = np.where(ok, res, np.nan)
-        # derivatives per unit driver coordinate -> time derivatives at constant speed
-        w = 1.0 if per_unit_driver else self.speed
-        if w != 1.0:
-            for arr in (st.vx, st.vy, st.w):
-                arr *= w
-            for arr in (st.ax, st.ay, st.al):
-                arr *= w * w
-        failures = self._failures(st, oks, ok, u)
+        res = self._check_residual(st, unit, ok, iters, methods)
+        if not per_unit_driver:  # per unit driver coordinate -> time derivatives
+            _scale_rates(st, self.speed)
         events.sort(key=lambda e: e.after)
         sol = Solution(
             self,
@@ -415,7 +321,7 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             (u - start.u0) / self.speed if n and self.speed else np.zeros_like(u),
             st,
             ok,
-            failures,
+            self._failures(st, oks, ok, u),
             np.array(inds) if inds else np.zeros((0, n)),
             iters,
             methods.array(),
@@ -430,6 +336,137 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
         if limits and derivs and inds:
             self._rates_at_singular(sol, velocity, acceleration, per_unit_driver)
         return sol
+
+    def _solve_groups(
+        self, ctx: _Context, unit: Drive, conds, derivs: bool, acceleration: bool, analyse: bool
+    ):
+        """Solve the groups one after another for all positions at once: positions on their
+        branches (the branch events between samples when ``analyse``), then rates. Returns
+        where every group closed, each group's success and conditioning, the iterations and
+        methods of the Newton groups, the branch events and the warnings."""
+        st, u, start, q_start = ctx.st, ctx.u, ctx.start, ctx.q_start
+        n = len(u)
+        ok_all = np.ones(n, bool)
+        oks, inds = [], []
+        iters = np.zeros(n, int)
+        methods = _Methods(n)
+        events: list[Event] = []
+        warnings: list[str] = []
+        for gi, g in enumerate(self.plan):
+            if isinstance(g, NewtonGroup):
+                ok, it, meth = g.sweep(
+                    st,
+                    unit,
+                    q_start[gi],
+                    ok_all,
+                    prefix=lambda uu, k, gi=gi: ctx.prefix(gi, uu, k),
+                    restart=lambda i, g=g: _restart_guess(self, g, float(u[i]), start),
+                )
+                iters = np.maximum(iters, it)
+                methods.merge(meth)
+                ind = np.ones(n)  # conditioning of Newton groups: see jacobian_rcond()
+            else:
+                if g.n_modes == 2 and analyse:
+                    evs, warn = self._branch_events(gi, g, ctx, ok_all)
+                    events += evs
+                    warnings += warn
+                ok, ind = self._closed_form_positions(gi, g, ctx, unit, ok_all, conds)
+            if derivs:
+                g.velocity(st, unit)
+            if acceleration:
+                g.acceleration(st, unit)
+            ok = ok & ok_all
+            oks.append(ok)
+            inds.append(ind)
+            ok_all = ok_all & ok
+            ctx.extend_grid(gi)
+        return ok_all, oks, inds, iters, methods, events, warnings
+
+    def _continued_from(
+        self, start: StartAssembly, near: tuple[Solution, int] | None, follow: Solution | None
+    ) -> tuple[dict, dict]:
+        """The Newton groups' first guesses and the branches' flips: the start's, or those
+        of a solved sweep at sample ``near[1]`` (single positions next to it) or at the last
+        solved position of ``follow`` (the next chunk of a sweep, on its branches)."""
+        q_start = dict(start.q_start)
+        if near is None and follow is None:
+            return q_start, {gi: [] for gi in range(len(self.plan))}
+        sol0 = near[0] if near is not None else follow
+        solved = np.flatnonzero(sol0.ok)
+        i0 = near[1] if near is not None else (int(solved[-1]) if solved.size else -1)
+        flips = {gi: list(v) for gi, v in sol0.flips.items()}
+        for gi, g in enumerate(self.plan):
+            if isinstance(g, NewtonGroup) and i0 >= 0:
+                q_start[gi] = g.get_q(sol0.state, i0)
+        return q_start, flips
+
+    def _context(self, st, u, start, flips, q_start, is_start: bool, analyse: bool) -> _Context:
+        """The branch analysis's context, with its grid between samples when a group has
+        two branches and the sweep is analysed."""
+        ctx = _Context(self, st, u, start, flips, q_start)
+        ctx.is_start = is_start
+        two = [gi for gi, g in enumerate(self.plan) if g.n_modes == 2]
+        if analyse and two:
+            ctx.build_grid(EVENT_STEP * (self.scale if self.linear else 1.0))
+            ctx.grid_upto = max(two)
+        return ctx
+
+    def _closed_form_positions(
+        self,
+        gi: int,
+        g,
+        ctx: _Context,
+        unit: Drive,
+        ok_all: np.ndarray,
+        conds: _PendingConditions | None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Positions of closed-form group ``gi`` on its branch over the sweep (deciding the
+        branch at the start as it goes when ``conds`` holds the pending conditions)."""
+        st, u, start, flips = ctx.st, ctx.u, ctx.start, ctx.flips
+        n = len(u)
+        if conds is not None:
+            conds.solved(g.bodies)
+            if g.n_modes == 2:
+                self._decide_at_start(gi, g, st, start, conds)
+        if ctx.is_start and n and (_coincident_at(g, st, 0) or self._singular_just_ahead(g, st)):
+            # the start's branch is the one taken from the start; the pose at the start
+            # itself is the limit from that side (see RRR)
+            flips[gi][:0] = [-math.inf * self.mech.driver.direction, float(u[0])]
+        sigma = self.sigma_at(start.modes[gi], flips[gi], u)
+        ok, ind = g.position(st, unit, sigma)
+        if conds is not None and not ok[0]:
+            closes = np.flatnonzero(ok & ok_all)
+            raise self._cannot_close(g, st, start.u0, int(closes[0]) if closes.size else None)
+        return ok, ind
+
+    def _finish_lazy_start(
+        self, start: StartAssembly, st: State, conds: _PendingConditions
+    ) -> None:
+        """Keep the start's state, and check the assembly conditions no group decided."""
+        start.state = st.take([0])
+        start.group_modes = list(start.modes)
+        view = StateView(self, start.state)
+        view.has_velocity = view.has_acceleration = False
+        for _, c in conds.remaining():  # conditions no group decided: they must hold
+            if not bool(np.all(c.evaluate(view))):
+                raise AssemblyError(
+                    f"{self._file()}the start position does not satisfy the assembly "
+                    f"condition {c.text!r}, and no loop's branch can change that"
+                )
+
+    def _check_residual(self, st: State, unit: Drive, ok: np.ndarray, iters, methods):
+        """With Newton groups, the full constraint residual at every position (nan where
+        not solved), polished where it exceeds the tolerance; ``None`` without them."""
+        if not any(isinstance(g, NewtonGroup) for g in self.plan):
+            return None
+        with np.errstate(invalid="ignore"):
+            res = self.system.max_residual(st, unit.u)
+        bad = ok & ~(res <= self.atol)
+        for i in np.flatnonzero(bad):
+            ok[i], res[i], it = self._polish(st, unit, i)
+            iters[i] += it
+            methods.append(i, "newton polish")
+        return np.where(ok, res, np.nan)
 
 
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
@@ -512,3 +549,12 @@ def check_solution(sol: Solution) -> None:
         raise SolverError(
             "no position of the sweep could be solved" + (f": {f.reason}" if f else "")
         )
+
+
+def _scale_rates(st: State, w: float) -> None:
+    """Rates per unit driver coordinate -> time derivatives at a constant speed ``w``."""
+    if w != 1.0:
+        for arr in (st.vx, st.vy, st.w):
+            arr *= w
+        for arr in (st.ax, st.ay, st.al):
+            arr *= w * w

@@ -24,7 +24,7 @@ from mechsolve.model import (
 from mechsolve.model.expr import DimensionError, Ref, Side
 
 if TYPE_CHECKING:
-    from mechsolve.model import Mechanism
+    from mechsolve.model import Link, Mechanism
 
 
 def _check_name(mech: Mechanism, name: str, where, what: str) -> None:
@@ -54,8 +54,23 @@ def _find(parent: dict[str, str], x: str) -> str:
 
 
 def validate(mech: Mechanism) -> None:
+    """Check a mechanism built from a file or in code; raise an :class:`InputError` that
+    names the key path (and so the file's line) of the first mistake found."""
+    links = _check_links(mech)
+    names = _check_joints(mech, links)
+    owners = _check_point_names(mech, links)
+    _check_connected(mech)
+    _check_joint_points_distinct(mech)
+    _check_driver(mech, names)
+    _check_sweep(mech)
+    _check_loads(mech, links)
+    _check_requirements(mech)
+    _check_references(mech, links, owners)
+
+
+def _check_links(mech: Mechanism) -> dict[str, Link]:
+    """The links and the ground: unique names, finite points of sensible size, masses."""
     links = {lk.name: lk for lk in mech.links}
-    link_names = [GROUND] + list(links)
     if len(links) != len(mech.links):
         seen: set[str] = set()
         for lk in mech.links:
@@ -95,8 +110,12 @@ def validate(mech: Mechanism) -> None:
             _in_range(mech, lk.where + ("inertia",), "moment of inertia", lk.inertia)
         if lk.com is not None:
             _in_range(mech, lk.where + ("com",), "length", *lk.com)
+    return links
 
-    # joints
+
+def _check_joints(mech: Mechanism, links: dict[str, Link]) -> set[str]:
+    """The joints: unique names, existing links, and each kind's own checks."""
+    link_names = [GROUND] + list(links)
     names: set[str] = set()
     for j in mech.joints:
         _check_name(mech, j.name, j.where, "joint")
@@ -114,7 +133,11 @@ def validate(mech: Mechanism) -> None:
         if a == b:
             raise mech.error(j.where, f"joint {j.name!r} joins the link {a!r} to itself")
         j.check(mech, _in_range)
+    return names
 
+
+def _check_point_names(mech: Mechanism, links: dict[str, Link]) -> dict[str, list[str]]:
+    """Points, links and sliders share one namespace; a point on two links is a joint."""
     # the same point name on two links must be a joint between them (directly or in a chain)
     owners = mech.point_owners()
     # points, links and sliders share one namespace in conditions and CSV headers
@@ -148,9 +171,13 @@ def validate(mech: Mechanism) -> None:
                 f"point {p!r} is on " + ", ".join(repr(x) for x in ls) + " but no joint pins "
                 "them together there; add a revolute joint or rename one of the points",
             )
+    return owners
 
+
+def _check_connected(mech: Mechanism) -> None:
+    """Every link is connected to the ground by a chain of joints."""
     # every link must be connected to the ground
-    adj: dict[str, set[str]] = {ln: set() for ln in link_names}
+    adj: dict[str, set[str]] = {ln: set() for ln in [GROUND] + [lk.name for lk in mech.links]}
     for j in mech.joints:
         adj[j.links[0]].add(j.links[1])
         adj[j.links[1]].add(j.links[0])
@@ -167,6 +194,9 @@ def validate(mech: Mechanism) -> None:
                 lk.where, f"link {lk.name!r} is not connected to the ground by any chain of joints"
             )
 
+
+def _check_joint_points_distinct(mech: Mechanism) -> None:
+    """The joint points of a link are distinct places (no zero-length links)."""
     # joint points of a link must be distinct places (no zero-length links)
     for lk in mech.links:
         used = sorted({j.point for j in mech.joints if lk.name in j.links and j.point in lk.points})
@@ -181,6 +211,9 @@ def validate(mech: Mechanism) -> None:
                         "them has zero length",
                     )
 
+
+def _check_driver(mech: Mechanism, names: set[str]) -> None:
+    """The driver: an existing joint with a coordinate to drive, its line, speed and start."""
     # driver
     d = mech.driver
     if d is not None:
@@ -219,6 +252,10 @@ def validate(mech: Mechanism) -> None:
             _in_range(mech, d.where + ("start",), "length" if linear else "angle", d.start)
         if isinstance(d.start, Limit):
             check_refs(mech, d.start.quantity, d.where + ("start",))
+
+
+def _check_sweep(mech: Mechanism) -> None:
+    """The sweep: a positive step and range, not more positions than one run solves."""
     sw = mech.sweep
     if sw.step is not None and not (sw.step > 0 and math.isfinite(sw.step)):
         raise mech.error(sw.where + ("step",), "the step must be positive")
@@ -233,6 +270,9 @@ def validate(mech: Mechanism) -> None:
             "range",
         )
 
+
+def _check_loads(mech: Mechanism, links: dict[str, Link]) -> None:
+    """Gravity, the sketch's coordinates and the loads with their conditions."""
     if mech.gravity is not None:
         _in_range(mech, ("gravity",), "acceleration", *mech.gravity)
     for p, xy in mech.assembly.sketch.items():
@@ -242,8 +282,11 @@ def validate(mech: Mechanism) -> None:
         if load.when is not None:
             check_refs(mech, load.when, load.where + ("when",))
 
-    _check_requirements(mech)
 
+def _check_references(
+    mech: Mechanism, links: dict[str, Link], owners: dict[str, list[str]]
+) -> None:
+    """The assembly's conditions and sketch, and the outputs, name existing things."""
     # assembly and outputs refer to existing things
     for k, cond in enumerate(mech.assembly.conditions):
         check_refs(mech, cond, mech.assembly.where_of(k))
