@@ -215,35 +215,7 @@ def size_flywheel(
         T = d * core.forces(an, sol).effort  # the torque along the motion
         return T, float(np.trapezoid(T, x) / (2 * math.pi))
 
-    motor = mech.motor
-    if omega_mean is None and motor is not None:
-        # the steady speed with the motor: its torque equals the cycle's mean torque, which
-        # is affine in the speed (inertia terms average out over a cycle, dampers do not)
-
-        def mismatch(w: float):
-            T, M = cycle(w)  # one sweep and force analysis per speed tried
-            return float(motor.torque(np.array([w]))[0]) - M, T, M
-
-        w1, w2 = 1.0, 2.0
-        m1 = mismatch(w1)[0]
-        m2, T, M = mismatch(w2)
-        for _ in range(30):  # secant (exact in one step for a linear motor)
-            if m2 == m1:
-                break
-            w1, w2, m1 = w2, w2 - m2 * (w2 - w1) / (m2 - m1), m2
-            m2, T, M = mismatch(w2)
-            if abs(m2) < 1e-12 * (1 + abs(M)):
-                break
-        w = abs(w2)
-        if not w > 0:
-            raise InputError("the steady speed with this motor is zero: check its law")
-        if w != w2:  # reached turning the other way: solve the cycle there
-            T, M = cycle(w)
-    else:
-        w = abs(omega_mean if omega_mean is not None else mech.driver.speed)
-        if not w > 0:
-            raise InputError("the mean speed is zero: give the driver's speed or --speed")
-        T, M = cycle(w)
+    w, T, M = _speed_and_cycle(mech, omega_mean, cycle)
     work = _cumulative(M - T, x)
     dE = float(work.max() - work.min())
     J, dJ = _reduced_inertia(an, u)
@@ -274,55 +246,102 @@ def size_flywheel(
             f"the mechanism's own mean inertia ({J_mean:.6g} kg*m^2) exceeds the "
             f"{need:.6g} kg*m^2 required: no flywheel is needed"
         )
-    # the energy-mass (Wittenbauer) method, exact for a varying J: the kinetic energy is
-    # T0 + W(phi), W the work of the motor and the external loads (the driving torque at
-    # constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
-    # omega^2 = 2 (T0 + W) / (J + J_F) must stay between omega_min and omega_max
-    Q = 0.5 * d * dJ * w * w - T  # external loads' torque along the motion
-    W = _cumulative(M + Q, x)
+    _energy_mass(out, J, 0.5 * d * dJ * w * w - T, x)
+    if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
+        _check_by_simulation(out, mech, an)
+    elif check and mech.motor is not None and mech.simulation is None:
+        out.check_note = "the file has no 'simulate:' section"
+    return out
+
+
+def _speed_and_cycle(mech: Mechanism, omega_mean: float | None, cycle):
+    """The mean speed (the one given, else the steady speed with the file's motor, else
+    the driver's), and the driving torque along the motion and its mean there (``cycle``
+    gives both at a speed)."""
+    motor = mech.motor
+    if omega_mean is None and motor is not None:
+        # the steady speed with the motor: its torque equals the cycle's mean torque, which
+        # is affine in the speed (inertia terms average out over a cycle, dampers do not)
+
+        def mismatch(w: float):
+            T, M = cycle(w)  # one sweep and force analysis per speed tried
+            return float(motor.torque(np.array([w]))[0]) - M, T, M
+
+        w1, w2 = 1.0, 2.0
+        m1 = mismatch(w1)[0]
+        m2, T, M = mismatch(w2)
+        for _ in range(30):  # secant (exact in one step for a linear motor)
+            if m2 == m1:
+                break
+            w1, w2, m1 = w2, w2 - m2 * (w2 - w1) / (m2 - m1), m2
+            m2, T, M = mismatch(w2)
+            if abs(m2) < 1e-12 * (1 + abs(M)):
+                break
+        w = abs(w2)
+        if not w > 0:
+            raise InputError("the steady speed with this motor is zero: check its law")
+        if w != w2:  # reached turning the other way: solve the cycle there
+            T, M = cycle(w)
+    else:
+        w = abs(omega_mean if omega_mean is not None else mech.driver.speed)
+        if not w > 0:
+            raise InputError("the mean speed is zero: give the driver's speed or --speed")
+        T, M = cycle(w)
+    return w, T, M
+
+
+def _energy_mass(out: FlywheelSizing, J: np.ndarray, Q: np.ndarray, x: np.ndarray) -> None:
+    """The energy-mass (Wittenbauer) method, exact for a varying J: the kinetic energy is
+    T0 + W(phi), W the work of the motor and the external loads ``Q`` (the driving torque
+    at constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
+    omega^2 = 2 (T0 + W) / (J + J_F) must stay between omega_min and omega_max."""
+    w, delta = out.omega_mean, out.delta
+    W = _cumulative(out.motor_torque + Q, x)
     wmax2, wmin2 = (w * (1 + delta / 2)) ** 2, (w * (1 - delta / 2)) ** 2
     jf = (np.max(0.5 * wmin2 * J - W) - np.min(0.5 * wmax2 * J - W)) / (0.5 * (wmax2 - wmin2))
     out.J_exact = max(0.0, float(jf))
     out.energy_mass = (J, W)
-    if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
-        from mechsolve.analyses.dynamics import MAX_STEPS, simulate, steady_fluctuation
-        from mechsolve.model.machine import Flywheel
 
-        crank = an.system.body_names[an.plan[0].bodies[0]]
-        machine = copy.copy(mech)
-        have = mech.flywheel.inertia if mech.flywheel is not None else 0.0
-        if mech.flywheel is not None:
-            crank = mech.flywheel.link
-        machine.flywheel = Flywheel(crank, have + out.J_flywheel)
-        # to steady state: many time constants J / (-dM/domega) of the machine
-        lo, hi = mech.motor.torque(np.array([w - 1e-3, w + 1e-3]))
-        slope = float(lo - hi) / 2e-3  # -dM/domega along the motion
-        tau = (J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
-        sim = copy.copy(mech.simulation)
-        sim.duration = min(max(sim.duration, 10 * tau), 120.0)
-        # within the integrator's step budget (simulate refuses more, naming the file's
-        # simulate.step, which the file did not ask for here)
-        if sim.step and sim.duration / sim.step > MAX_STEPS - 1:
-            sim.duration = (MAX_STEPS - 1) * sim.step
-            short = f"the check ran {sim.duration:.4g} s ({MAX_STEPS - 1} steps of the file's step)"
-        else:
-            short = ""
-        # from the steady mean speed, so that only the periodic part has to settle
-        sim.speed0 = w
-        sim.revolutions = None
-        sim.steady = None
-        machine.simulation = sim
-        res = simulate(machine)
-        fl = steady_fluctuation(res.trajectory)
-        if fl is None:
-            out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
-        else:
-            out.delta_reached = fl[1]
-            if short and 10 * tau > sim.duration:
-                out.check_note = f"{short}, less than 10 time constants J/(-dM/domega)"
-    elif check and mech.motor is not None and mech.simulation is None:
-        out.check_note = "the file has no 'simulate:' section"
-    return out
+
+def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> None:
+    """Simulate the machine with the flywheel added, from the mean speed to steady state,
+    and record the fluctuation it reaches (or why the check fell short)."""
+    from mechsolve.analyses.dynamics import MAX_STEPS, simulate, steady_fluctuation
+    from mechsolve.model.machine import Flywheel
+
+    w = out.omega_mean
+    crank = an.system.body_names[an.plan[0].bodies[0]]
+    machine = copy.copy(mech)
+    have = mech.flywheel.inertia if mech.flywheel is not None else 0.0
+    if mech.flywheel is not None:
+        crank = mech.flywheel.link
+    machine.flywheel = Flywheel(crank, have + out.J_flywheel)
+    # to steady state: many time constants J / (-dM/domega) of the machine
+    lo, hi = mech.motor.torque(np.array([w - 1e-3, w + 1e-3]))
+    slope = float(lo - hi) / 2e-3  # -dM/domega along the motion
+    tau = (out.J_mean + out.J_flywheel) / slope if slope > 0 else 0.0
+    sim = copy.copy(mech.simulation)
+    sim.duration = min(max(sim.duration, 10 * tau), 120.0)
+    # within the integrator's step budget (simulate refuses more, naming the file's
+    # simulate.step, which the file did not ask for here)
+    if sim.step and sim.duration / sim.step > MAX_STEPS - 1:
+        sim.duration = (MAX_STEPS - 1) * sim.step
+        short = f"the check ran {sim.duration:.4g} s ({MAX_STEPS - 1} steps of the file's step)"
+    else:
+        short = ""
+    # from the steady mean speed, so that only the periodic part has to settle
+    sim.speed0 = w
+    sim.revolutions = None
+    sim.steady = None
+    machine.simulation = sim
+    res = simulate(machine)
+    fl = steady_fluctuation(res.trajectory)
+    if fl is None:
+        out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
+    else:
+        out.delta_reached = fl[1]
+        if short and 10 * tau > sim.duration:
+            out.check_note = f"{short}, less than 10 time constants J/(-dM/domega)"
 
 
 def _cumulative(f: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -514,7 +533,6 @@ def read_power_problem(src) -> dict:
     power holds from its angle to the next, the last to the end of the cycle), ``table``
     ([angle, power] points, piecewise linear, closed with its first point) or ``law`` (an
     expression of ``angle`` in rad, giving W)."""
-    from mechsolve.model.expr import ExprError, Expression
     from mechsolve.model.parse import Reader, read_units
 
     r = Reader(src)
@@ -525,59 +543,7 @@ def read_power_problem(src) -> dict:
     p = r.mapping(m["power"], ("power",), ("resisting", "driving", "cycle"), "'power'",
                   ("resisting", "driving"))  # fmt: skip
     span = r.positive(p.get("cycle", "360 deg"), ("power", "cycle"), "angle")
-    sides = {}
-    for side in ("driving", "resisting"):
-        path = ("power", side)
-        v = p[side]
-        if v == "mean":
-            sides[side] = PowerCurve("mean")
-            continue
-        if not isinstance(v, dict):
-            sides[side] = PowerCurve("constant", _power(r, v, path))
-            continue
-        c = r.mapping(v, path, POWER_SIDE_KEYS, f"'power.{side}'")
-        if len(c) != 1:
-            raise r.fail(path, "give the power as one of: steps, table, law (or mean, or a "
-                         "constant such as 2 kW)")  # fmt: skip
-        kind = next(iter(c))
-        if kind == "law":
-            if not isinstance(c["law"], str):
-                raise r.fail(path + ("law",), "'law' is an expression of angle (rad), in W")
-            try:
-                e = Expression(c["law"], variables=("angle",))
-                x = np.linspace(0.0, span, 36001)
-                y = np.broadcast_to(np.asarray(e.evaluate_at({"angle": x}), float), x.shape)
-            except ExprError as exc:
-                raise r.fail(path + ("law",), str(exc)) from None
-            if not np.all(np.isfinite(y)):
-                raise r.fail(path + ("law",), "the law is not finite over the cycle")
-            sides[side] = PowerCurve("linear", x=x, y=np.array(y, float))
-            continue
-        rows = c[kind]
-        q = path + (kind,)
-        least = 1 if kind == "steps" else 2
-        if not isinstance(rows, list) or len(rows) < least:
-            raise r.fail(q, f"'{kind}' lists at least {least} point(s) [angle, power]")
-        xs, ys = [], []
-        for k, row in enumerate(rows):
-            if not isinstance(row, list) or len(row) != 2:
-                raise r.fail(q + (k,), "a point is [angle, power]")
-            xs.append(r.quantity(row[0], q + (k, 0), "angle"))
-            ys.append(_power(r, row[1], q + (k, 1)))
-        x, y = np.array(xs), np.array(ys)
-        if np.any(np.diff(x) <= 0):
-            raise r.fail(q, "the angles must increase")
-        if x[0] < 0 or x[-1] > span * (1 + 1e-12) or (kind == "steps" and x[-1] >= span):
-            raise r.fail(q, f"the angles must lie in the cycle, 0 to {math.degrees(span):g} deg")
-        if kind == "steps":
-            if x[0] > 0:  # before the first angle: the last power, round the cycle
-                x, y = np.r_[0.0, x], np.r_[y[-1], y]
-            sides[side] = PowerCurve("steps", x=x, y=y)
-        else:
-            # periodic: closed round the cycle from the last point to the first
-            xe, ye = np.r_[x[-1] - span, x, x[0] + span], np.r_[y[-1], y, y[0]]
-            x = np.unique(np.r_[0.0, x, span])
-            sides[side] = PowerCurve("linear", x=x, y=np.interp(x, xe, ye))
+    sides = {side: _power_side(r, p[side], side, span) for side in ("driving", "resisting")}
     if sides["driving"].kind == "mean" and sides["resisting"].kind == "mean":
         raise r.fail(("power",), "only one side can be 'mean': give the other's power")
     delta = None
@@ -595,6 +561,69 @@ def read_power_problem(src) -> dict:
         "delta": delta,
         "reader": r,
     }
+
+
+def _power_side(r, v, side: str, span: float) -> PowerCurve:
+    """One side of the power diagram (``power.<side>``): mean, a constant, or a curve
+    (steps, table or law) over the cycle ``span``."""
+    path = ("power", side)
+    if v == "mean":
+        return PowerCurve("mean")
+    if not isinstance(v, dict):
+        return PowerCurve("constant", _power(r, v, path))
+    c = r.mapping(v, path, POWER_SIDE_KEYS, f"'power.{side}'")
+    if len(c) != 1:
+        raise r.fail(path, "give the power as one of: steps, table, law (or mean, or a "
+                     "constant such as 2 kW)")  # fmt: skip
+    kind = next(iter(c))
+    if kind == "law":
+        return _power_law(r, c["law"], path + ("law",), span)
+    return _power_points(r, c[kind], kind, path + (kind,), span)
+
+
+def _power_law(r, law, q: tuple, span: float) -> PowerCurve:
+    """A power given as an expression of ``angle`` (rad), in W, sampled at 36001 points
+    of the cycle."""
+    from mechsolve.model.expr import ExprError, Expression
+
+    if not isinstance(law, str):
+        raise r.fail(q, "'law' is an expression of angle (rad), in W")
+    try:
+        e = Expression(law, variables=("angle",))
+        x = np.linspace(0.0, span, 36001)
+        y = np.broadcast_to(np.asarray(e.evaluate_at({"angle": x}), float), x.shape)
+    except ExprError as exc:
+        raise r.fail(q, str(exc)) from None
+    if not np.all(np.isfinite(y)):
+        raise r.fail(q, "the law is not finite over the cycle")
+    return PowerCurve("linear", x=x, y=np.array(y, float))
+
+
+def _power_points(r, rows, kind: str, q: tuple, span: float) -> PowerCurve:
+    """A power given by [angle, power] points: ``steps`` (each holds to the next, the last
+    round the cycle) or ``table`` (piecewise linear, closed with its first point)."""
+    least = 1 if kind == "steps" else 2
+    if not isinstance(rows, list) or len(rows) < least:
+        raise r.fail(q, f"'{kind}' lists at least {least} point(s) [angle, power]")
+    xs, ys = [], []
+    for k, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != 2:
+            raise r.fail(q + (k,), "a point is [angle, power]")
+        xs.append(r.quantity(row[0], q + (k, 0), "angle"))
+        ys.append(_power(r, row[1], q + (k, 1)))
+    x, y = np.array(xs), np.array(ys)
+    if np.any(np.diff(x) <= 0):
+        raise r.fail(q, "the angles must increase")
+    if x[0] < 0 or x[-1] > span * (1 + 1e-12) or (kind == "steps" and x[-1] >= span):
+        raise r.fail(q, f"the angles must lie in the cycle, 0 to {math.degrees(span):g} deg")
+    if kind == "steps":
+        if x[0] > 0:  # before the first angle: the last power, round the cycle
+            x, y = np.r_[0.0, x], np.r_[y[-1], y]
+        return PowerCurve("steps", x=x, y=y)
+    # periodic: closed round the cycle from the last point to the first
+    xe, ye = np.r_[x[-1] - span, x, x[0] + span], np.r_[y[-1], y, y[0]]
+    x = np.unique(np.r_[0.0, x, span])
+    return PowerCurve("linear", x=x, y=np.interp(x, xe, ye))
 
 
 def size_from_power(

@@ -265,8 +265,18 @@ class BranchEvents:
         takes from there (see :meth:`assemble`).
         """
         d = self.mech.driver.direction
-        u_s = ctx.u
         u, H, Hs, good, near, at_sample, known = self._analysis_grid(gi, g, ctx, ok_prev)
+        found = self._minima_between_samples(gi, g, ctx, u, H, Hs, good, near, at_sample)
+        _minima_at_grid_points(found, u, H, known, near)
+        _near_singular_at_grid_points(found, u, H, good, near)
+        found.sort(key=lambda f: d * f[1])
+        return self._events_at(gi, g, ctx, _merge_minima(found))
+
+    def _minima_between_samples(
+        self, gi: int, g: Group, ctx: _Context, u, H, Hs, good, near, at_sample
+    ) -> list[tuple[int, float, float]]:
+        """The minima of H between two grid points where H' changes sign, refined, in
+        intervals between two samples where the group closes: (sample before, u*, H*)."""
         # intervals between two samples where the group closes (a minimum elsewhere is
         # part of a range where it cannot close, reported as such)
         hs_ = H[at_sample]
@@ -278,39 +288,20 @@ class BranchEvents:
         h = np.abs(u[inside + 1] - u[inside])
         est = _hermite_min(H[inside], H[inside + 1], Hs[inside] * h, Hs[inside + 1] * h)
         cand = inside[est < EVENT_CHECK]
-        events: list[Event] = []
-        warnings: list[str] = []
         found: list[tuple[int, float, float]] = []  # (sample before, u*, H*)
         if cand.size:
             us, hs = self._refine_minima(gi, g, ctx, cand, u, H, Hs, near)
             found += list(zip(near[cand].tolist(), us.tolist(), hs.tolist()))
-        # minima exactly at a grid point (one that a refined minimum next to it already
-        # is, a sample 1e-5 past a bifurcation that touches zero to rounding, is not a
-        # second event: two would flip the branch twice)
-        refined = list(found)
-        for k in np.flatnonzero(known[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
-            if known[k - 1] and known[k + 1] and H[k - 1] > H[k] < H[k + 1]:
-                span = abs(u[k + 1] - u[k - 1])
-                if any(1e-9 * (1.0 + abs(f[1])) < abs(f[1] - u[k]) <= span for f in refined):
-                    continue
-                found.append((int(near[k - 1]), float(u[k]), float(H[k])))
-        # near-singular minima seen at the grid points themselves (where the group closes)
-        closable = good & (H >= -TOUCH)
-        for k in np.flatnonzero(closable[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
-            if not (closable[k - 1] and closable[k + 1]):
-                continue
-            if H[k - 1] >= H[k] <= H[k + 1] and not any(
-                abs(f[1] - u[k]) <= abs(u[k + 1] - u[k - 1]) for f in found
-            ):
-                found.append((int(near[k - 1]), float(u[k]), float(H[k])))
-        found.sort(key=lambda f: d * f[1])
-        merged: list[tuple[int, float, float]] = []
-        for f in found:  # one minimum seen from both sides of a point is one event
-            if merged and abs(f[1] - merged[-1][1]) <= 1e-9 * (1.0 + abs(f[1])):
-                if f[2] < merged[-1][2]:
-                    merged[-1] = (merged[-1][0], merged[-1][1], f[2])
-                continue
-            merged.append(f)
+        return found
+
+    def _events_at(
+        self, gi: int, g: Group, ctx: _Context, merged: list[tuple[int, float, float]]
+    ) -> tuple[list[Event], list[str]]:
+        """The events at the minima of H (in the sweep's order): a dead zone below zero, a
+        bifurcation (the branch flips) at zero, a near-singular position close to it."""
+        u_s = ctx.u
+        events: list[Event] = []
+        warnings: list[str] = []
         for k, us, hs in merged:
             # a minimum on a sample (to rounding) is that sample: the sample keeps the
             # branch it comes in on, and the flip applies after it
@@ -346,3 +337,42 @@ class BranchEvents:
             elif mu < math.radians(3.0):
                 events.append(Event("near-singular", g.label, us, k, mu))
         return events, warnings
+
+
+def _minima_at_grid_points(found: list, u, H, known, near) -> None:
+    """Add the minima exactly at a grid point where H touches zero (one that a refined
+    minimum next to it already is, a sample 1e-5 past a bifurcation that touches zero to
+    rounding, is not a second event: two would flip the branch twice)."""
+    refined = list(found)
+    for k in np.flatnonzero(known[1:-1] & (np.abs(H[1:-1]) <= TOUCH)) + 1:
+        if known[k - 1] and known[k + 1] and H[k - 1] > H[k] < H[k + 1]:
+            span = abs(u[k + 1] - u[k - 1])
+            if any(1e-9 * (1.0 + abs(f[1])) < abs(f[1] - u[k]) <= span for f in refined):
+                continue
+            found.append((int(near[k - 1]), float(u[k]), float(H[k])))
+
+
+def _near_singular_at_grid_points(found: list, u, H, good, near) -> None:
+    """Add the near-singular minima seen at the grid points themselves (where the group
+    closes) that no minimum found so far is next to."""
+    closable = good & (H >= -TOUCH)
+    for k in np.flatnonzero(closable[1:-1] & (H[1:-1] < NEAR_SINGULAR**2)) + 1:
+        if not (closable[k - 1] and closable[k + 1]):
+            continue
+        if H[k - 1] >= H[k] <= H[k + 1] and not any(
+            abs(f[1] - u[k]) <= abs(u[k + 1] - u[k - 1]) for f in found
+        ):
+            found.append((int(near[k - 1]), float(u[k]), float(H[k])))
+
+
+def _merge_minima(found: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
+    """One minimum seen from both sides of a point is one event (the lower H kept);
+    ``found`` is in the sweep's order."""
+    merged: list[tuple[int, float, float]] = []
+    for f in found:
+        if merged and abs(f[1] - merged[-1][1]) <= 1e-9 * (1.0 + abs(f[1])):
+            if f[2] < merged[-1][2]:
+                merged[-1] = (merged[-1][0], merged[-1][1], f[2])
+            continue
+        merged.append(f)
+    return merged

@@ -195,11 +195,29 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
     if not T > 0:
         return list(sampled)
     periodic = full_cycle(an.linear, u)
-    # brackets: one per (argument, block, min/max)
-    nq = len(args)
     Q = np.stack([np.asarray(q, float).reshape(B, P) for q in args])  # (nq, B, P)
-    sign = np.array([-1.0, 1.0])  # min, max
-    score = sign[:, None, None, None] * Q[None]  # (2, nq, B, P): larger is better
+    best, a, b = _brackets(Q, x, T, periodic)
+    best = _refine_brackets(evaluate, u[0], d, T, periodic, best, a, b)
+    values = _SIGN[:, None, None] * best  # (2, nq, B)
+    out = []
+    for j in range(len(args)):
+        lo, hi = values[0, j], values[1, j]
+        slo, shi = sampled[j]
+        lo = np.where(np.isfinite(lo), lo, np.asarray(slo, float).reshape(-1))
+        hi = np.where(np.isfinite(hi), hi, np.asarray(shi, float).reshape(-1))
+        out.append((lo, hi) if blocks else (float(lo[0]), float(hi[0])))
+    return out
+
+
+_SIGN = np.array([-1.0, 1.0])  # min, max: the sign that makes each a maximum
+
+
+def _brackets(Q: np.ndarray, x: np.ndarray, T: float, periodic: bool):
+    """One bracket per (min/max, argument, block) around its extreme sample: the best
+    sample's (signed) value, shape (2, nq, B), and the bracket's ends in travel ``x``
+    (the two neighbouring samples; across the ends of a full turn, which are one pose)."""
+    P = Q.shape[-1]
+    score = _SIGN[:, None, None, None] * Q[None]  # (2, nq, B, P): larger is better
     score = np.where(np.isfinite(score), score, -np.inf)
     k = np.argmax(score, axis=-1)  # (2, nq, B)
     best = np.take_along_axis(score, k[..., None], -1)[..., 0]
@@ -208,6 +226,14 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
     if periodic:  # the ends of a full turn are one pose: the bracket goes across
         a = np.where(k == 0, x[P - 2] - T, a)
         b = np.where(k == P - 1, x[1] + T, b)
+    return best, a, b
+
+
+def _refine_brackets(evaluate, u0: float, d: float, T: float, periodic: bool, best, a, b):
+    """Narrow every bracket around the best of :data:`EXTREME_POINTS` positions in it,
+    solved together (every block's nodes of every bracket at once), until each is 1e-11
+    of the travel ``T`` wide; the best (signed) values found, never worse than ``best``."""
+    nq, B = best.shape[1], best.shape[2]
     active = np.isfinite(best)
     frac = np.linspace(0.0, 1.0, EXTREME_POINTS)
     for _ in range(12):
@@ -219,14 +245,14 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
         nodes = np.clip(nodes, 0.0, T)
         # every block's nodes of every bracket, solved together: (B, 2 * nq * M)
         per_block = np.moveaxis(nodes, 2, 0).reshape(B, -1)
-        vals = evaluate(u[0] + d * per_block)  # list over arguments of (B, L)
+        vals = evaluate(u0 + d * per_block)  # list over arguments of (B, L)
         if vals is None:
             break
         V = np.stack(vals)  # (nq, B, L)
         V = V.reshape(nq, B, 2, nq, EXTREME_POINTS)  # value of q_i at bracket (s, j)
         idx = np.arange(nq)
         mine = V[idx, :, :, idx, :]  # (nq, B, 2, M): q_j at its own brackets
-        got = sign[None, None, :, None] * mine
+        got = _SIGN[None, None, :, None] * mine
         got = np.moveaxis(got, 2, 0)  # (2, nq, B, M)
         got = np.where(np.isfinite(got), got, -np.inf)
         i = np.argmax(got, axis=-1)
@@ -238,15 +264,7 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
         a = np.where(found, centre - width, a)
         b = np.where(found, centre + width, b)
         active = found
-    values = sign[:, None, None] * best  # (2, nq, B)
-    out = []
-    for j in range(nq):
-        lo, hi = values[0, j], values[1, j]
-        slo, shi = sampled[j]
-        lo = np.where(np.isfinite(lo), lo, np.asarray(slo, float).reshape(-1))
-        hi = np.where(np.isfinite(hi), hi, np.asarray(shi, float).reshape(-1))
-        out.append((lo, hi) if blocks else (float(lo[0]), float(hi[0])))
-    return out
+    return best
 
 
 def states_between(an: Analysis, sol: Solution, u: np.ndarray, ud, udd):

@@ -68,6 +68,54 @@ class SingularRates:
         singular group and of the groups that depend on it stay NaN; the other rates
         (the driver's, groups before it or beside it) keep their values.
         """
+        sing_by, newton, deep = self._singular_positions(sol)
+        sol.rates_undetermined = []
+        if not sing_by:
+            return
+        st = sol.state
+        rows = slice(5, 8) if not acceleration else slice(5, 11)
+        d = 5e-3 * (self.scale if self.linear else 1.0)
+        kind = self._rate_sizes(rows, per_unit_driver)
+        down = self._downstream()
+        kw = dict(
+            start=sol.start,
+            velocity=velocity,
+            acceleration=acceleration,
+            per_unit_driver=per_unit_driver,
+            limits=False,
+        )
+        n = len(sol.u)
+        for i, groups in sorted(sing_by.items()):
+            one_sided = n > 1 and i in (0, n - 1)
+            if one_sided:
+                r = self._samples_on_one_side(sol, i, d, bool(newton[i]), kw)
+            else:
+                r = self._samples_on_both_sides(sol, i, d, bool(newton[i]), kw)
+            bodies = sorted(set().union(*(down[gi] for gi in groups)))
+            if r is None:
+                self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+                continue
+            self._pose_by_limit(st, i, r[:3], one_sided)
+            r = r[rows]
+            if one_sided:
+                if self._cubic_limit(st, i, r, rows, kind):
+                    sol.rates_by_limit.append(int(i))
+                else:  # not smooth there: the rates grow without bound (a limit position)
+                    self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+                continue
+            if not self._two_sided_limit(sol, i, r, rows, kind, bool(deep[i])):
+                if not newton[i] and self._one_sided(sol, i, d, rows, kind, kw):
+                    sol.rates_by_limit.append(int(i))
+                else:
+                    self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+        st.token = State.new_token()
+
+    def _singular_positions(
+        self, sol: Solution
+    ) -> tuple[dict[int, list[int]], np.ndarray, np.ndarray]:
+        """The solved positions where groups are singular or near it: position -> its
+        (near) singular groups; where a Newton group is among them; where a group is
+        singular to rounding (no value there but a limit)."""
         ind = sol.indicator
         st = sol.state
         n = len(sol.u)
@@ -89,97 +137,98 @@ class SingularRates:
                 continue
             for i in np.flatnonzero(where & sol.ok):
                 sing_by.setdefault(int(i), []).append(gi)
-        sol.rates_undetermined = []
-        if not sing_by:
-            return
-        rows = slice(5, 8) if not acceleration else slice(5, 11)
-        d = 5e-3 * (self.scale if self.linear else 1.0)
-        # natural sizes of the rates, for telling a jump from rounding
+        return sing_by, newton, deep
+
+    def _rate_sizes(self, rows: slice, per_unit_driver: bool) -> np.ndarray:
+        """The natural sizes of the rates ``rows`` (a column), for telling a jump from
+        rounding."""
         ws = (1.0 if per_unit_driver else abs(self.speed)) / (self.scale if self.linear else 1.0)
         kind = np.array([self.scale * ws, self.scale * ws, ws] + [self.scale * ws * ws] * 2)
-        kind = np.append(kind, ws * ws)[rows, None]
-        down = self._downstream()
-        kw = dict(
-            start=sol.start,
-            velocity=velocity,
-            acceleration=acceleration,
-            per_unit_driver=per_unit_driver,
-            limits=False,
+        return np.append(kind, ws * ws)[rows, None]
+
+    def _samples_on_one_side(
+        self, sol: Solution, i: int, d: float, newton: bool, kw
+    ) -> np.ndarray | None:
+        """The first or last sample: the followed motion lies on one side only. The
+        blocks at ``u + d ... u + 4d`` into the sweep (nearest first), or None."""
+        ui = float(sol.u[i])
+        into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
+        x = ui + into * d * np.arange(1.0, 5.0)
+        if newton:
+            k = i + 1 if i == 0 else i - 1  # continue from the neighbour inward
+            side = self._side_solve(sol, k, x[::-1], kw)
+            return None if side is None else side.block[:, :, ::-1]
+        near = self.solve(x, near=(sol, int(i)), **kw)
+        return near.state.block if near.ok.all() else None
+
+    def _samples_on_both_sides(
+        self, sol: Solution, i: int, d: float, newton: bool, kw
+    ) -> np.ndarray | None:
+        """The blocks at ``u - d, u + d, u - 2d, u + 2d`` on the followed branches (a
+        Newton group's reached by continuation from the neighbouring sample on each
+        side), or None."""
+        ui = float(sol.u[i])
+        if newton:
+            lo = self._side_solve(sol, i - 1, ui - d * np.array([2.0, 1.0]), kw)
+            hi = self._side_solve(sol, i + 1, ui + d * np.array([2.0, 1.0]), kw)
+            if lo is None or hi is None:
+                return None
+            a, b = lo.block, hi.block
+            return np.stack([a[:, :, 1], b[:, :, 1], a[:, :, 0], b[:, :, 0]], axis=2)
+        near = self.solve(ui + d * np.array([-1.0, 1.0, -2.0, 2.0]), near=(sol, i), **kw)
+        return near.state.block if near.ok.all() else None
+
+    @staticmethod
+    def _undetermined(sol: Solution, i: int, rows: slice, bodies: list[int], deep: bool) -> None:
+        """No limit: near a singular position the computed rates are right (and large);
+        at it (to rounding) they are noise and left blank."""
+        if deep:
+            sol.state.block[rows, bodies, i] = np.nan
+            sol.rates_undetermined.append(int(i))
+
+    @staticmethod
+    def _cubic_limit(st: State, i: int, r: np.ndarray, rows: slice, kind: np.ndarray) -> bool:
+        """The rates at ``i`` by cubic extrapolation from ``r`` (the rates at ``u + d ...
+        u + 4d`` on one side), if it agrees with the quadratic one; False if not."""
+        est = r @ np.array([4.0, -6.0, 4.0, -1.0])
+        quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
+        if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
+            st.block[rows, :, i] = est
+            return True
+        return False
+
+    @staticmethod
+    def _two_sided_limit(
+        sol: Solution, i: int, r: np.ndarray, rows: slice, kind: np.ndarray, deep: bool
+    ) -> bool:
+        """The rates at ``i`` from the rates ``r`` at ``u -+ d`` and ``u -+ 2d``
+        (Richardson): False where the two sides disagree (a jump, not a smooth motion)."""
+        st = sol.state
+        lo1, hi1, lo2, hi2 = (r[:, :, k] for k in range(4))
+        # a smooth motion changes twice as much over 4d as over 2d; a jump does not
+        smooth = np.abs((hi2 - lo2) - 2.0 * (hi1 - lo1)) <= (
+            0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
         )
-
-        def undetermined(i: int, bodies: list[int]) -> None:
-            # no limit: near a singular position the computed rates are right (and
-            # large); at it (to rounding) they are noise and left blank
-            if deep[i]:
-                st.block[rows, bodies, i] = np.nan
-                sol.rates_undetermined.append(int(i))
-
-        for i, groups in sorted(sing_by.items()):
-            ui = float(sol.u[i])
-            one_sided = n > 1 and i in (0, n - 1)
-            if one_sided:
-                # the first or last sample: the followed motion lies on one side only
-                into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
-                x = ui + into * d * np.arange(1.0, 5.0)
-                if newton[i]:
-                    k = i + 1 if i == 0 else i - 1  # continue from the neighbour inward
-                    side = self._side_solve(sol, k, x[::-1], kw)
-                    r = None if side is None else side.block[:, :, ::-1]
-                else:
-                    near = self.solve(x, near=(sol, int(i)), **kw)
-                    r = near.state.block if near.ok.all() else None
-            elif newton[i]:
-                lo = self._side_solve(sol, i - 1, ui - d * np.array([2.0, 1.0]), kw)
-                hi = self._side_solve(sol, i + 1, ui + d * np.array([2.0, 1.0]), kw)
-                r = None
-                if lo is not None and hi is not None:
-                    a, b = lo.block, hi.block
-                    r = np.stack([a[:, :, 1], b[:, :, 1], a[:, :, 0], b[:, :, 0]], axis=2)
-            else:
-                near = self.solve(ui + d * np.array([-1.0, 1.0, -2.0, 2.0]), near=(sol, i), **kw)
-                r = near.state.block if near.ok.all() else None
-            bodies = sorted(set().union(*(down[gi] for gi in groups)))
-            if r is None:
-                undetermined(i, bodies)
-                continue
-            self._pose_by_limit(st, i, r[:3], one_sided)
-            r = r[rows]
-            if one_sided:  # cubic extrapolation, checked against the quadratic one
-                est = r @ np.array([4.0, -6.0, 4.0, -1.0])
-                quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
-                if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
-                    st.block[rows, :, i] = est
-                    sol.rates_by_limit.append(int(i))
-                else:  # not smooth there: the rates grow without bound (a limit position)
-                    undetermined(i, bodies)
-                continue
-            lo1, hi1, lo2, hi2 = (r[:, :, k] for k in range(4))
-            # a smooth motion changes twice as much over 4d as over 2d; a jump does not
-            smooth = np.abs((hi2 - lo2) - 2.0 * (hi1 - lo1)) <= (
-                0.1 * np.abs(hi2 - lo2) + 1e-6 * kind + 1e-300
-            )
-            est = limit_from_both_sides(lo1, hi1, lo2, hi2)
-            if smooth.all() and not deep[i]:
-                # near (not at) a singular position: the computed values are kept where
-                # they agree with the limit to within the limit's own error (bounded by
-                # its difference from the plain mean of the two sides, and 1e-6 of the
-                # rates' size: near a kite's fold the limit itself is good to only about
-                # that); where they do not, rounding amplified by 1/s^2 (1/s^3 for
-                # accelerations) spoiled them, and the limit is taken
-                comp = st.block[rows, :, i]
-                err_lim = np.abs(est - 0.5 * (lo1 + hi1)) + 1e-6 * kind[:, 0][:, None]
-                better = np.abs(comp - est) > err_lim
-                st.block[rows, :, i] = np.where(better, est, st.block[rows, :, i])
-                if better.any():
-                    sol.rates_by_limit.append(int(i))
-            elif smooth.all():
-                st.block[rows, :, i] = est
+        if not smooth.all():
+            return False
+        est = limit_from_both_sides(lo1, hi1, lo2, hi2)
+        if not deep:
+            # near (not at) a singular position: the computed values are kept where
+            # they agree with the limit to within the limit's own error (bounded by
+            # its difference from the plain mean of the two sides, and 1e-6 of the
+            # rates' size: near a kite's fold the limit itself is good to only about
+            # that); where they do not, rounding amplified by 1/s^2 (1/s^3 for
+            # accelerations) spoiled them, and the limit is taken
+            comp = st.block[rows, :, i]
+            err_lim = np.abs(est - 0.5 * (lo1 + hi1)) + 1e-6 * kind[:, 0][:, None]
+            better = np.abs(comp - est) > err_lim
+            st.block[rows, :, i] = np.where(better, est, st.block[rows, :, i])
+            if better.any():
                 sol.rates_by_limit.append(int(i))
-            elif not newton[i] and self._one_sided(sol, i, d, rows, kind, kw):
-                sol.rates_by_limit.append(int(i))
-            else:
-                undetermined(i, bodies)
-        st.token = State.new_token()
+        else:
+            st.block[rows, :, i] = est
+            sol.rates_by_limit.append(int(i))
+        return True
 
     def _one_sided(self, sol: Solution, i: int, d: float, rows, kind, kw) -> bool:
         """The rates at position ``i`` as their limit from one side, the side the sweep
@@ -193,11 +242,7 @@ class SingularRates:
             near = self.solve(ui + side * d * np.arange(1.0, 5.0), near=(sol, int(i)), **kw)
             if not near.ok.all():
                 continue
-            r = near.state.block[rows]
-            est = r @ np.array([4.0, -6.0, 4.0, -1.0])
-            quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
-            if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
-                st.block[rows, :, i] = est
+            if self._cubic_limit(st, i, near.state.block[rows], rows, kind):
                 return True
         return False
 

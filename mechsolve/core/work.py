@@ -155,26 +155,11 @@ def _power_integral(
     mechanism's own at those driver values (:func:`mechsolve.core.evaluate.states`, on the sweep's
     branches), with the driver's rates there: the file's speed, or its motion law of time.
     """
-    from mechsolve.core.sweep import StateView
-
     t = np.asarray(sol.t, float)
     u = np.asarray(sol.u, float)
     ud, udd = sol.driver_rates()
     law = an.mech.driver.motion
-    panels: list[tuple[float, float, int]] = []
-    for k in range(len(u) - 1):
-        a, b = float(t[k]), float(t[k + 1])
-        if not b > a:
-            continue  # no time passes (a repeated sample, a sweep at rest): no work
-        cuts = []
-        if law is None and u[k + 1] != u[k]:
-            for load in loads:
-                on = fr.active.get(load.name)
-                if on is not None and on[k] != on[k + 1]:
-                    us = _switch(an, sol, fr, load, k)[0]
-                    cuts.append(a + (b - a) * (us - u[k]) / (u[k + 1] - u[k]))
-        edges = [a, *sorted(c for c in cuts if a < c < b), b]
-        panels += [(lo, hi, k) for lo, hi in zip(edges[:-1], edges[1:])]
+    panels = _panels(an, sol, fr, loads)
     if not panels:
         return 0.0, ""
     total_time = float(t[-1] - t[0]) if t[-1] != t[0] else 1.0
@@ -186,18 +171,7 @@ def _power_integral(
             frac = (tau - t[ks]) / (t[ks + 1] - t[ks])
             uu = u[ks] + (u[ks + 1] - u[ks]) * frac
             vv, ww = ud[ks], udd[ks]
-        st, ok = states_between(an, sol, uu, vv, ww)
-        view = StateView(an, st)
-        funcs = {"stroke": stroke_function(list(fr.stroke_extremes), True)}
-        active = {}
-        for ld in an.mech.loads:
-            if ld.when is not None:
-                with np.errstate(invalid="ignore"):
-                    on = np.asarray(ld.when.evaluate(view, funcs), bool)
-                active[ld.name] = np.broadcast_to(on, uu.shape) & ok
-        _, per_load, _ = apply_loads(an, st, active, _Q(an, st))
-        p = sum(per_load[ld.name] for ld in loads)
-        return np.where(ok, p, np.nan)
+        return _load_power(an, sol, fr, loads, uu, vv, ww)
 
     lo = np.array([p[0] for p in panels])
     hi = np.array([p[1] for p in panels])
@@ -226,3 +200,48 @@ def _power_integral(
         lo, hi, ks, mid = lo[~done], hi[~done], ks[~done], mid[~done]
         lo, hi, ks = np.r_[lo, mid], np.r_[mid, hi], np.r_[ks, ks]
     return float("nan"), "the power of the loads could not be integrated to tolerance"
+
+
+def _panels(an: Analysis, sol: Solution, fr: ForceResult, loads: list):
+    """The quadrature's first panels (t_lo, t_hi, sample before): the intervals between
+    samples where time passes, cut where a condition of one of ``loads`` switches."""
+    t = np.asarray(sol.t, float)
+    u = np.asarray(sol.u, float)
+    law = an.mech.driver.motion
+    panels: list[tuple[float, float, int]] = []
+    for k in range(len(u) - 1):
+        a, b = float(t[k]), float(t[k + 1])
+        if not b > a:
+            continue  # no time passes (a repeated sample, a sweep at rest): no work
+        cuts = []
+        if law is None and u[k + 1] != u[k]:
+            for load in loads:
+                on = fr.active.get(load.name)
+                if on is not None and on[k] != on[k + 1]:
+                    us = _switch(an, sol, fr, load, k)[0]
+                    cuts.append(a + (b - a) * (us - u[k]) / (u[k + 1] - u[k]))
+        edges = [a, *sorted(c for c in cuts if a < c < b), b]
+        panels += [(lo, hi, k) for lo, hi in zip(edges[:-1], edges[1:])]
+    return panels
+
+
+def _load_power(
+    an: Analysis, sol: Solution, fr: ForceResult, loads: list, uu, vv, ww
+) -> np.ndarray:
+    """The power of ``loads`` at the driver values ``uu`` with rates ``vv``, ``ww`` (on
+    the sweep's branches; each conditional load where its condition holds there); NaN
+    where the mechanism cannot be solved."""
+    from mechsolve.core.sweep import StateView
+
+    st, ok = states_between(an, sol, uu, vv, ww)
+    view = StateView(an, st)
+    funcs = {"stroke": stroke_function(list(fr.stroke_extremes), True)}
+    active = {}
+    for ld in an.mech.loads:
+        if ld.when is not None:
+            with np.errstate(invalid="ignore"):
+                on = np.asarray(ld.when.evaluate(view, funcs), bool)
+            active[ld.name] = np.broadcast_to(on, uu.shape) & ok
+    _, per_load, _ = apply_loads(an, st, active, _Q(an, st))
+    p = sum(per_load[ld.name] for ld in loads)
+    return np.where(ok, p, np.nan)

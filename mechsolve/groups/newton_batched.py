@@ -250,13 +250,12 @@ class BatchedSweep:
         arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place; False when a
         position does not converge."""
         n = th.shape[0]
-        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red.sub._rows
+        rows = self.red.sub._rows
         nd = self.red.sub.nd
         x0, x1 = th[:, 0].copy(), th[:, 1].copy()
         K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
-        cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
         for _ in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
@@ -266,44 +265,7 @@ class BatchedSweep:
             else:
                 idx = np.flatnonzero(todo)
                 t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
-            C0, S0, C1, S1 = cos(t0), sin(t0), cos(t1), sin(t1)
-            f0 = k0 + a1 * C0
-            f0 += a2 * S0
-            f0 += b1 * C1
-            f0 += b2 * S1
-            f1 = k1 + c1 * C0
-            f1 += c2 * S0
-            f1 += d1 * C1
-            f1 += d2 * S1
-            ja = a2 * C0
-            ja -= a1 * S0
-            jb = b2 * C1
-            jb -= b1 * S1
-            jc = c2 * C0
-            jc -= c1 * S0
-            jd = d2 * C1
-            jd -= d1 * S1
-            if nd:
-                f0 += a3 * t0
-                f0 += b3 * t1
-                f1 += c3 * t0
-                f1 += d3 * t1
-                ja += a3
-                jb += b3
-                jc += c3
-                jd += d3
-            r = maximum(absolute(f0), absolute(f1))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                det = ja * jd
-                det -= jb * jc
-                dq0 = jb * f1
-                dq0 -= jd * f0
-                dq0 /= det
-                dq1 = jc * f0
-                dq1 -= ja * f1
-                dq1 /= det
-            step = maximum(absolute(dq0), absolute(dq1))
-            step[det == 0] = np.nan  # exactly singular: not converged, fails below
+            r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1)
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken
             small = step <= tol
@@ -370,3 +332,52 @@ class BatchedSweep:
 
     def _set_q_rows_into(self, st: State, q: np.ndarray) -> None:
         self._set_q_rows(st, q)
+
+
+def _newton_step2(rows, nd, t0, t1, k0, k1):
+    """One Newton step of the two-angle loop at the angles ``t0``, ``t1`` (1-D arrays):
+    the residual's size, the step (by the adjugate of the 2 x 2 Jacobian) and its size
+    (NaN where the Jacobian is exactly singular). ``rows``: the loop's coefficients
+    ((a, b), (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the
+    constant terms. In-place arithmetic: no (N, 2) products or reductions."""
+    ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
+    cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
+    C0, S0, C1, S1 = cos(t0), sin(t0), cos(t1), sin(t1)
+    f0 = k0 + a1 * C0
+    f0 += a2 * S0
+    f0 += b1 * C1
+    f0 += b2 * S1
+    f1 = k1 + c1 * C0
+    f1 += c2 * S0
+    f1 += d1 * C1
+    f1 += d2 * S1
+    ja = a2 * C0
+    ja -= a1 * S0
+    jb = b2 * C1
+    jb -= b1 * S1
+    jc = c2 * C0
+    jc -= c1 * S0
+    jd = d2 * C1
+    jd -= d1 * S1
+    if nd:
+        f0 += a3 * t0
+        f0 += b3 * t1
+        f1 += c3 * t0
+        f1 += d3 * t1
+        ja += a3
+        jb += b3
+        jc += c3
+        jd += d3
+    r = maximum(absolute(f0), absolute(f1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        det = ja * jd
+        det -= jb * jc
+        dq0 = jb * f1
+        dq0 -= jd * f0
+        dq0 /= det
+        dq1 = jc * f0
+        dq1 -= ja * f1
+        dq1 /= det
+    step = maximum(absolute(dq0), absolute(dq1))
+    step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
+    return r, dq0, dq1, step

@@ -18,83 +18,12 @@ class Summary:
         figures; ``figures``: a finer sweep of the same motion to take the limit positions
         and transmission angles from (see :meth:`summary`)."""
         src = self if figures is None else figures
-        lines = []
         if len(self.u) < 2:
-            return lines
-        ev = self.events
-        if ev:
-            parts = []
-            for e in ev[:8]:
-                where = self.analysis.format_u(e.u)
-                if e.kind == "bifurcation":
-                    parts.append(
-                        f"{e.group} passes a bifurcation at {where}: followed the smooth motion "
-                        "onto its other branch"
-                    )
-                elif e.kind == "dead zone":
-                    parts.append(f"{e.group} cannot close near {where} (between two samples)")
-                else:
-                    parts.append(
-                        f"{e.group} near-singular at {where} (transmission angle "
-                        f"{math.degrees(e.transmission):.3g}°)"
-                    )
-            more = f"; and {len(ev) - 8} more" if len(ev) > 8 else ""
-            lines.append("  singular positions: " + "; ".join(parts) + more)
-        sol = self.solution
-        for idx, what in (
-            (sol.rates_by_limit, "are their limits along the motion"),
-            (sol.rates_undetermined, "are not determined (left blank)"),
-        ):
-            if idx:
-                where = ", ".join(self.describe_u(i) for i in idx[:5])
-                more = f" and {len(idx) - 5} more" if len(idx) > 5 else ""
-                lines.append(
-                    f"  velocities and accelerations at {len(idx)} singular position(s) "
-                    f"{what}: {where}{more}"
-                )
-        rc = np.where(self.ok, self.jacobian_rcond(), np.nan)
-        if np.any(np.isfinite(rc)):
-            i = int(np.nanargmin(rc))
-            lines.append(
-                f"  conditioning: smallest reciprocal condition of the constraint Jacobian "
-                f"{rc[i]:.3g} at {self.describe_u(i)}"
-            )
-        lim = src.limit_positions()
-        if lim:
-            parts = []
-            ratios = []
-            for lp in lim:
-                fmt = self.analysis.format_u
-                a = " and at ".join(fmt(u) for u in lp.u_lows)  # an extreme reached twice
-                b = " and at ".join(fmt(u) for u in lp.u_highs)
-                if lp.kind == "rocker":
-                    parts.append(
-                        f"rocker {lp.name} {math.degrees(lp.low):.6g}° at {a} to "
-                        f"{math.degrees(lp.high):.6g}° at {b} (swing {math.degrees(lp.swing):.6g}°)"
-                    )
-                else:
-                    parts.append(
-                        f"slider {lp.name} {lp.low:.6g} m at {a} to {lp.high:.6g} m at {b} "
-                        f"(stroke {lp.swing:.6g} m)"
-                    )
-                if lp.time_ratio is not None:
-                    ratios.append(
-                        f"{lp.name} K = {lp.time_ratio:.4g} "
-                        f"({math.degrees(max(lp.forward, lp.back)):.5g}° "
-                        f"/ {math.degrees(min(lp.forward, lp.back)):.5g}° of the driver)"
-                    )
-            lines.append("  limit positions: " + "; ".join(parts))
-            if ratios:
-                lines.append("  time ratio: " + "; ".join(ratios))
-        tr = src.transmission_angles()
-        if tr:
-            lines.append(
-                "  minimum transmission angle: "
-                + "; ".join(
-                    f"{t.group} {math.degrees(t.angle):.4g}° at {self.analysis.format_u(t.u)}"
-                    for t in tr
-                )
-            )
+            return []
+        lines = _event_lines(self)
+        lines += _singular_rate_lines(self)
+        lines += _limit_lines(self, src)
+        lines += _transmission_lines(self, src)
         return lines
 
     def work_text(self) -> str:
@@ -165,65 +94,9 @@ class Summary:
             f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}" + (f" over {self.t[-1]:.6g} s" if n else "")
         )
         lines += self.motion_summary()
-        start = self.solution.start
-        for g, why in zip(self.analysis.groups, getattr(start, "reasons", []) or []):
-            if "the start is singular" in why:
-                lines.append(f"  start: {g.label}: the branch {why}")
-        for f in self.failures:
-            lines.append(
-                f"  unassemblable at {self.describe_u(f.first)}"
-                + (f" to {self.describe_u(f.last)}" if f.last != f.first else "")
-                + f" ({f.last - f.first + 1} position(s)): {f.reason}"
-                + (
-                    f"; it stops closing at {self.analysis.format_u(f.edge_in)}"
-                    if np.isfinite(f.edge_in)
-                    else ""
-                )
-                + (
-                    f"; it closes again from {self.analysis.format_u(f.edge_out)}"
-                    if np.isfinite(f.edge_out)
-                    else ""
-                )
-            )
-        for p in self.point_names()[:12]:
-            m = self.point(p)
-            if np.any(np.isfinite(m.x)):
-                lines.append(
-                    f"  {p}: x {np.nanmin(m.x):.6g} .. {np.nanmax(m.x):.6g} m, "
-                    f"y {np.nanmin(m.y):.6g} .. {np.nanmax(m.y):.6g} m"
-                    + (
-                        f", |v| max {np.nanmax(np.hypot(m.vx, m.vy)):.4g} m/s"
-                        if self.view.has_velocity
-                        else ""
-                    )
-                )
-        if len(self.point_names()) > 12:
-            lines.append(f"  ... and {len(self.point_names()) - 12} more points in the CSV")
-        methods = self.methods()
-        meth = {m for m, ok in zip(methods, self.ok) if ok}
-        fallback = sum(1 for m in methods if "scipy" in m)
-        its = self.solution.iterations[self.ok]
-        lines.append(
-            "  solver: "
-            + ", ".join(sorted(meth))
-            + (f"; Newton iterations max {int(its.max())}" if its.size and its.max() > 0 else "")
-            + (f"; scipy fallback at {fallback} position(s)" if fallback else "")
-            + (
-                f"; max constraint residual {np.nanmax(self.solution.residual):.2g} m"
-                if np.any(self.ok)
-                else ""
-            )
-        )
-        red = self.analysis.redundancy
-        if red is not None:
-            lines.append(
-                f"  redundant constraints: {red.count} equation(s) repeat the others "
-                f"(the constraint Jacobian has rank {red.rank} for {self.analysis.system.nc} "
-                f"equations), among: {', '.join(red.equations)}; solved by least squares on "
-                "all of them"
-            )
-            if red.removable:
-                lines.append("  " + red.suggestion())
+        lines += _start_and_failure_lines(self)
+        lines += _point_lines(self)
+        lines += _solver_lines(self)
         lines += self.design_summary(figures)
         if self.forces is not None:
             lines += self.force_summary(figures)
@@ -318,3 +191,175 @@ class Summary:
                 "the pose's rounding amplified by the near-singular loop)"
             )
         return lines
+
+
+def _event_lines(res) -> list[str]:
+    """The singular positions met along the sweep (the first eight)."""
+    ev = res.events
+    if not ev:
+        return []
+    parts = []
+    for e in ev[:8]:
+        where = res.analysis.format_u(e.u)
+        if e.kind == "bifurcation":
+            parts.append(
+                f"{e.group} passes a bifurcation at {where}: followed the smooth motion "
+                "onto its other branch"
+            )
+        elif e.kind == "dead zone":
+            parts.append(f"{e.group} cannot close near {where} (between two samples)")
+        else:
+            parts.append(
+                f"{e.group} near-singular at {where} (transmission angle "
+                f"{math.degrees(e.transmission):.3g}°)"
+            )
+    more = f"; and {len(ev) - 8} more" if len(ev) > 8 else ""
+    return ["  singular positions: " + "; ".join(parts) + more]
+
+
+def _singular_rate_lines(res) -> list[str]:
+    """Where the rates are limits or undetermined, and the worst conditioning."""
+    lines = []
+    sol = res.solution
+    for idx, what in (
+        (sol.rates_by_limit, "are their limits along the motion"),
+        (sol.rates_undetermined, "are not determined (left blank)"),
+    ):
+        if idx:
+            where = ", ".join(res.describe_u(i) for i in idx[:5])
+            more = f" and {len(idx) - 5} more" if len(idx) > 5 else ""
+            lines.append(
+                f"  velocities and accelerations at {len(idx)} singular position(s) "
+                f"{what}: {where}{more}"
+            )
+    rc = np.where(res.ok, res.jacobian_rcond(), np.nan)
+    if np.any(np.isfinite(rc)):
+        i = int(np.nanargmin(rc))
+        lines.append(
+            f"  conditioning: smallest reciprocal condition of the constraint Jacobian "
+            f"{rc[i]:.3g} at {res.describe_u(i)}"
+        )
+    return lines
+
+
+def _limit_lines(res, src) -> list[str]:
+    """The limit positions of rockers and sliders (from ``src``, the figures' sweep) and
+    their time ratios."""
+    lim = src.limit_positions()
+    if not lim:
+        return []
+    parts = []
+    ratios = []
+    for lp in lim:
+        fmt = res.analysis.format_u
+        a = " and at ".join(fmt(u) for u in lp.u_lows)  # an extreme reached twice
+        b = " and at ".join(fmt(u) for u in lp.u_highs)
+        if lp.kind == "rocker":
+            parts.append(
+                f"rocker {lp.name} {math.degrees(lp.low):.6g}° at {a} to "
+                f"{math.degrees(lp.high):.6g}° at {b} (swing {math.degrees(lp.swing):.6g}°)"
+            )
+        else:
+            parts.append(
+                f"slider {lp.name} {lp.low:.6g} m at {a} to {lp.high:.6g} m at {b} "
+                f"(stroke {lp.swing:.6g} m)"
+            )
+        if lp.time_ratio is not None:
+            ratios.append(
+                f"{lp.name} K = {lp.time_ratio:.4g} "
+                f"({math.degrees(max(lp.forward, lp.back)):.5g}° "
+                f"/ {math.degrees(min(lp.forward, lp.back)):.5g}° of the driver)"
+            )
+    lines = ["  limit positions: " + "; ".join(parts)]
+    if ratios:
+        lines.append("  time ratio: " + "; ".join(ratios))
+    return lines
+
+
+def _transmission_lines(res, src) -> list[str]:
+    """Each group's minimum transmission angle (from ``src``, the figures' sweep)."""
+    tr = src.transmission_angles()
+    if not tr:
+        return []
+    return [
+        "  minimum transmission angle: "
+        + "; ".join(
+            f"{t.group} {math.degrees(t.angle):.4g}° at {res.analysis.format_u(t.u)}" for t in tr
+        )
+    ]
+
+
+def _start_and_failure_lines(res) -> list[str]:
+    """A start that is singular, and the ranges of positions that cannot be assembled."""
+    lines = []
+    start = res.solution.start
+    for g, why in zip(res.analysis.groups, getattr(start, "reasons", []) or []):
+        if "the start is singular" in why:
+            lines.append(f"  start: {g.label}: the branch {why}")
+    for f in res.failures:
+        lines.append(
+            f"  unassemblable at {res.describe_u(f.first)}"
+            + (f" to {res.describe_u(f.last)}" if f.last != f.first else "")
+            + f" ({f.last - f.first + 1} position(s)): {f.reason}"
+            + (
+                f"; it stops closing at {res.analysis.format_u(f.edge_in)}"
+                if np.isfinite(f.edge_in)
+                else ""
+            )
+            + (
+                f"; it closes again from {res.analysis.format_u(f.edge_out)}"
+                if np.isfinite(f.edge_out)
+                else ""
+            )
+        )
+    return lines
+
+
+def _point_lines(res) -> list[str]:
+    """The ranges of the first twelve points (and their largest speed)."""
+    lines = []
+    for p in res.point_names()[:12]:
+        m = res.point(p)
+        if np.any(np.isfinite(m.x)):
+            lines.append(
+                f"  {p}: x {np.nanmin(m.x):.6g} .. {np.nanmax(m.x):.6g} m, "
+                f"y {np.nanmin(m.y):.6g} .. {np.nanmax(m.y):.6g} m"
+                + (
+                    f", |v| max {np.nanmax(np.hypot(m.vx, m.vy)):.4g} m/s"
+                    if res.view.has_velocity
+                    else ""
+                )
+            )
+    if len(res.point_names()) > 12:
+        lines.append(f"  ... and {len(res.point_names()) - 12} more points in the CSV")
+    return lines
+
+
+def _solver_lines(res) -> list[str]:
+    """The methods used, Newton iterations, fallbacks, residual, and redundant constraints."""
+    methods = res.methods()
+    meth = {m for m, ok in zip(methods, res.ok) if ok}
+    fallback = sum(1 for m in methods if "scipy" in m)
+    its = res.solution.iterations[res.ok]
+    lines = [
+        "  solver: "
+        + ", ".join(sorted(meth))
+        + (f"; Newton iterations max {int(its.max())}" if its.size and its.max() > 0 else "")
+        + (f"; scipy fallback at {fallback} position(s)" if fallback else "")
+        + (
+            f"; max constraint residual {np.nanmax(res.solution.residual):.2g} m"
+            if np.any(res.ok)
+            else ""
+        )
+    ]
+    red = res.analysis.redundancy
+    if red is not None:
+        lines.append(
+            f"  redundant constraints: {red.count} equation(s) repeat the others "
+            f"(the constraint Jacobian has rank {red.rank} for {res.analysis.system.nc} "
+            f"equations), among: {', '.join(red.equations)}; solved by least squares on "
+            "all of them"
+        )
+        if red.removable:
+            lines.append("  " + red.suggestion())
+    return lines

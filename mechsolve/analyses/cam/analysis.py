@@ -183,6 +183,21 @@ def _sense_name(s: int) -> str:
 
 
 def _summary(res: CamResult) -> str:
+    """The cam's text summary: program, base values, displacement table, pressure angles,
+    curvature, face size, undercut and profile, sizing and the verdict."""
+    lines = _program_lines(res)
+    lines += _base_lines(res)
+    lines += _table_lines(res)
+    lines += _pressure_lines(res)
+    lines += _curvature_lines(res)
+    lines += _face_lines(res)
+    lines += _profile_lines(res)
+    lines += _sizing_lines(res)
+    return "\n".join(lines)
+
+
+def _program_lines(res: CamResult) -> list[str]:
+    """The cam and its follower, its speed, the motion program and its continuity."""
     m = res.model
     f = res.follower
     osc = f.oscillating
@@ -213,7 +228,17 @@ def _summary(res: CamResult) -> str:
         lines.append("    velocity and acceleration continuous over the whole cycle")
     for r in res.remarks:
         lines.append(f"    at {math.degrees(r.angle):7.2f} deg: {r.text}")
-    # base values
+    return lines
+
+
+def _base_lines(res: CamResult) -> list[str]:
+    """The base values (designed or as given), the roller's base circle, the model's notes."""
+    m = res.model
+    f = res.follower
+    osc = f.oscillating
+    L = m.unit
+    u = L.name
+    lines: list[str] = []
     if osc:
         base = (f"a = {L(f.pivot):.4f} {u}, phi0 = {math.degrees(f.start_angle):.4f} deg, "
                 f"r0 = {L(f.base_radius):.4f} {u}")  # fmt: skip
@@ -230,7 +255,17 @@ def _summary(res: CamResult) -> str:
         )
     for note in m.notes:
         lines.append(f"    {note}")
-    # table of the moving segments, as textbooks print it
+    return lines
+
+
+def _table_lines(res: CamResult) -> list[str]:
+    """The displacement table of the moving segments, as textbooks print it."""
+    m = res.model
+    prog = m.program
+    osc = res.follower.oscillating
+    L = m.unit
+    u = L.name
+    lines: list[str] = []
     lines.append(
         f"  displacement table (every {math.degrees(m.table_step):g} deg of each segment):"
     )
@@ -250,7 +285,15 @@ def _summary(res: CamResult) -> str:
             row = range(k, min(k + 8, n + 1))
             lines.append("      " + " ".join(f"{math.degrees(th[j] - g.start):8g}" for j in row))
             lines.append("      " + " ".join(f"{vals[j]:8.3f}" for j in row))
-    # pressure angles for both senses
+    return lines
+
+
+def _pressure_lines(res: CamResult) -> list[str]:
+    """The largest pressure angles on rise and return for both senses, the allowances,
+    and the better sense."""
+    m = res.model
+    prog = m.program
+    lines: list[str] = []
     allow = m.allowance
     lines.append("  maximum pressure angle     rise                    return")
     for prof, tag in ((res.profile, "as given"), (res.other, "reversed")):
@@ -277,7 +320,16 @@ def _summary(res: CamResult) -> str:
         f"    better sense: {_sense_name(best)} ({why})"
         + ("" if best == m.sense else ": reverse the cam or mirror the follower")
     )
-    # curvature
+    return lines
+
+
+def _curvature_lines(res: CamResult) -> list[str]:
+    """The smallest radius of curvature of the pitch curve (or of the profile)."""
+    f = res.follower
+    osc = f.oscillating
+    L = res.model.unit
+    u = L.name
+    lines: list[str] = []
     prof = res.profile
     if prof.rho_pitch is not None:
         cv = prof.rho_pitch > 0
@@ -298,6 +350,16 @@ def _summary(res: CamResult) -> str:
             f"at {math.degrees(prof.theta[i]):.1f} deg "
             + ("(h + d2h/dmu2 of the face's envelope)" if osc else "(r0 + s + s'')")
         )
+    return lines
+
+
+def _face_lines(res: CamResult) -> list[str]:
+    """A flat face's needed length or width, with its margin (nothing for other followers)."""
+    m = res.model
+    osc = res.follower.oscillating
+    L = m.unit
+    u = L.name
+    lines: list[str] = []
     ext = res.face_extent()
     if ext is not None:
         lo, hi, a_lo, a_hi = ext
@@ -324,6 +386,15 @@ def _summary(res: CamResult) -> str:
             )
         else:
             lines.append("    no clearance added at the ends (give follower.face_margin)")
+    return lines
+
+
+def _profile_lines(res: CamResult) -> list[str]:
+    """Undercut, and whether the working profile closes without crossing itself."""
+    allow = res.model.allowance
+    L = res.model.unit
+    u = L.name
+    lines: list[str] = []
     und = res.undercut_ranges()
     margin = f" (margin {L(allow.rho_min):g} {u})" if allow.rho_min else ""
     lines.append(
@@ -336,6 +407,17 @@ def _summary(res: CamResult) -> str:
         + ", "
         + ("no self-intersection" if not res.crossings else f"{len(res.crossings)} crossing(s)")
     )
+    return lines
+
+
+def _sizing_lines(res: CamResult) -> list[str]:
+    """The smallest base for the allowances (or how the base was designed), and the verdict."""
+    m = res.model
+    f = res.follower
+    osc = f.oscillating
+    L = m.unit
+    u = L.name
+    lines: list[str] = []
     if res.sizing is not None and not m.designed:
         sz = res.sizing.follower
         if osc:
@@ -356,4 +438,4 @@ def _summary(res: CamResult) -> str:
         lines.append("  THE DESIGN FAILS: " + "; ".join(res.problems))
     else:
         lines.append("  design: acceptable")
-    return "\n".join(lines)
+    return lines

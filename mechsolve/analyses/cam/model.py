@@ -162,6 +162,8 @@ def _norm(text: str) -> str:
 
 
 def from_source(src: Source) -> CamModel:
+    """The cam model of the ``cam:`` section of ``src``: follower, rotation and speed,
+    motion program, base values (given or designed), allowances, table step."""
     r = Reader(src)
     data = src.data
     if "units" in data:
@@ -170,21 +172,65 @@ def from_source(src: Source) -> CamModel:
         raise r.fail((), "no 'cam:' section: a cam file describes its cam under the key 'cam'")
     cam = r.mapping(data["cam"], ("cam",), CAM_KEYS, "'cam'", ("follower", "motion"))
     p = ("cam",)
-
-    # follower
     fm = r.mapping(cam["follower"], p + ("follower",), FOLLOWER_KEYS, "'follower'", ("type",))
+    kind, contact = _follower_type(r, fm, p + ("follower",))
+    osc = kind == "oscillating"
+    roller, arm, offset, face_margin = _follower_sizes(r, fm, p + ("follower",), osc, contact)
+    unit = file_length_unit(src, r)
+    sense, speed = _rotation_and_speed(r, cam, p)
+
+    # the geometry first: an arm's contact moves away from the cam's centre only while the
+    # arm's angle from the line of centres stays below 180 deg (a roller or knife edge;
+    # the distance is sqrt(a^2 + l^2 - 2 a l cos(phi))), below 90 deg for a flat face (the
+    # face's distance a sin(phi) - face_offset)
+    limit = None if not osc else (math.pi / 2 if contact == "flat-faced" else math.pi)
+    program = _read_motion(r, cam, osc, limit)
+
+    given = _given_base_values(r, cam, p, osc)
+    follower, designed, notes = _base(r, p, kind, contact, roller, offset, arm, given, unit)
+    if limit is not None and not designed:
+        _check_swing(r, p, follower, program, limit, given)
+    allow = _allowance(r, cam, p, program)
+    step = _table_step(r, cam, p)
+    name = data.get("name") if isinstance(data.get("name"), str) else None
+    return CamModel(
+        name=name or (Path(src.file).stem if src.file else "cam"),
+        file=src.file,
+        program=program,
+        follower=follower,
+        sense=sense,
+        speed=speed,
+        allowance=allow,
+        table_step=step,
+        designed=designed,
+        given=given,
+        notes=notes,
+        unit=unit,
+        face_margin=face_margin,
+    )
+
+
+def _follower_type(r: Reader, fm: dict, fp: tuple) -> tuple[str, str]:
+    """The follower's motion (translating, oscillating) and contact (knife-edge, roller,
+    flat-faced) from its 'type' (a contact alone is translating)."""
     ftype = _norm(fm["type"]) if isinstance(fm["type"], str) else ""
     words = ftype.split()
     if len(words) == 1 and words[0] in ("knife-edge", "roller", "flat-faced"):
         words = ["translating", words[0]]
     if len(words) != 2 or " ".join(words) not in TYPES:
         raise r.fail(
-            p + ("follower", "type"),
+            fp + ("type",),
             f"unknown follower type {fm['type']!r}; known: {', '.join(TYPES)}",
         )
     kind, contact = words
-    osc = kind == "oscillating"
-    fp = p + ("follower",)
+    return kind, contact
+
+
+def _follower_sizes(
+    r: Reader, fm: dict, fp: tuple, osc: bool, contact: str
+) -> tuple[float, float, float, float | None]:
+    """The follower's roller radius, arm, offset (a flat face's face_offset) and face
+    margin (SI), refusing the keys its kind does not have."""
     roller = 0.0
     if contact == "roller":
         if "roller_radius" not in fm:
@@ -215,9 +261,11 @@ def from_source(src: Source) -> CamModel:
             raise r.fail(fp + ("face_margin",), "only a flat face has a face_margin")
         face_margin = r.positive(fm["face_margin"], fp + ("face_margin",), "length",
                                  allow_zero=True)  # fmt: skip
-    unit = file_length_unit(src, r)
+    return roller, arm, offset, face_margin
 
-    # rotation and speed
+
+def _rotation_and_speed(r: Reader, cam: dict, p: tuple) -> tuple[int, float]:
+    """The cam's sense (+1 ccw, -1 cw) and speed (rad/s); both are required."""
     sense = -1
     if "rotation" in cam:
         t = str(cam["rotation"]).strip().lower()
@@ -230,15 +278,12 @@ def from_source(src: Source) -> CamModel:
     if "speed" not in cam:
         raise r.fail(p, "'cam' needs the key 'speed' (e.g. '60 rpm')")
     speed = r.positive(cam["speed"], p + ("speed",), "angular speed")
+    return sense, speed
 
-    # the geometry first: an arm's contact moves away from the cam's centre only while the
-    # arm's angle from the line of centres stays below 180 deg (a roller or knife edge;
-    # the distance is sqrt(a^2 + l^2 - 2 a l cos(phi))), below 90 deg for a flat face (the
-    # face's distance a sin(phi) - face_offset)
-    limit = None if not osc else (math.pi / 2 if contact == "flat-faced" else math.pi)
-    program = _read_motion(r, cam, osc, limit)
 
-    # base values
+def _given_base_values(r: Reader, cam: dict, p: tuple, osc: bool) -> dict[str, float]:
+    """The base values the file gives (base_radius; pivot_distance and start_angle for an
+    oscillating follower only)."""
     given: dict[str, float] = {}
     for key in ("base_radius", "pivot_distance", "start_angle"):
         if key in cam:
@@ -248,41 +293,34 @@ def from_source(src: Source) -> CamModel:
         for key in ("pivot_distance", "start_angle"):
             if key in given:
                 raise r.fail(p + (key,), "only an oscillating follower has a " + key)
-    follower, designed, notes = _base(r, p, kind, contact, roller, offset, arm, given, unit)
-    if limit is not None and not designed:
-        top = follower.start_angle + program.stroke
-        if top >= limit:
-            raise r.fail(
-                p + ("start_angle" if "start_angle" in given else "base_radius",),
-                f"the arm starts {math.degrees(follower.start_angle):.6g} deg from the line "
-                f"of centres (phi0) and swings {math.degrees(program.stroke):.6g} deg: at "
-                f"{math.degrees(top):.6g} deg it passes {math.degrees(limit):g} deg, where "
-                "its contact stops moving away from the cam's centre; the swing must stay "
-                f"below {math.degrees(limit - follower.start_angle):.6g} deg with this phi0",
-            )
+    return given
 
-    allow = _allowance(r, cam, p, program)
+
+def _check_swing(
+    r: Reader, p: tuple, follower: Follower, program: Program, limit: float, given: dict
+) -> None:
+    """Refuse given base values whose arm, at the top of its swing, passes ``limit`` (its
+    angle from the line of centres where the contact stops moving away from the cam)."""
+    top = follower.start_angle + program.stroke
+    if top >= limit:
+        raise r.fail(
+            p + ("start_angle" if "start_angle" in given else "base_radius",),
+            f"the arm starts {math.degrees(follower.start_angle):.6g} deg from the line "
+            f"of centres (phi0) and swings {math.degrees(program.stroke):.6g} deg: at "
+            f"{math.degrees(top):.6g} deg it passes {math.degrees(limit):g} deg, where "
+            "its contact stops moving away from the cam's centre; the swing must stay "
+            f"below {math.degrees(limit - follower.start_angle):.6g} deg with this phi0",
+        )
+
+
+def _table_step(r: Reader, cam: dict, p: tuple) -> float:
+    """The displacement table's step (1 deg unless given; it must divide 360 deg)."""
     step = math.radians(1.0)
     if "table_step" in cam:
         step = r.positive(cam["table_step"], p + ("table_step",), "angle")
         if step > math.pi / 2 or abs(2 * math.pi / step - round(2 * math.pi / step)) > 1e-6:
             raise r.fail(p + ("table_step",), "must divide 360 deg (e.g. 1, 2, 5 or 10 deg)")
-    name = data.get("name") if isinstance(data.get("name"), str) else None
-    return CamModel(
-        name=name or (Path(src.file).stem if src.file else "cam"),
-        file=src.file,
-        program=program,
-        follower=follower,
-        sense=sense,
-        speed=speed,
-        allowance=allow,
-        table_step=step,
-        designed=designed,
-        given=given,
-        notes=notes,
-        unit=unit,
-        face_margin=face_margin,
-    )
+    return step
 
 
 def _read_motion(r: Reader, cam: dict, osc: bool, limit: float | None = None) -> Program:

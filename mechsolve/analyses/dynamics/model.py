@@ -144,73 +144,7 @@ class ReducedModel:
         masks = self._condition_intervals(np.arange(0.0, 2 * math.pi, SWITCH_GRID), conditional)
         if masks is None:
             return False
-        # columns: (speed, acceleration). J = E(0, 1) - E(0, 0); the speeds 0, 1, -1 at
-        # zero acceleration fit E0 = a + b w + c w^2
-        cols = [(0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0)]
-        variants = [None, *conditional]  # the machine without its conditional loads; each
-
-        speeds, accelerations = [c[0] for c in cols], [c[1] for c in cols]
-        nref = len(self.ref.u) - 1  # the reference sweep's turn: its own states, rescaled
-        at_ref = self.rates_at(
-            np.tile(np.arange(nref), len(cols)),
-            np.repeat(speeds, nref),
-            np.repeat(accelerations, nref),
-        )
-
-        def efforts(xx, on, ref=False):
-            m = len(xx)
-            if ref:
-                sol = at_ref
-            else:
-                sol = core.states(
-                    self.an,
-                    np.tile(self.u0 + d * xx, len(cols)),
-                    np.repeat(speeds, m),
-                    np.repeat(accelerations, m),
-                    within=self.ref,
-                )
-            with self._loads_forced(conditional, on):
-                f = core.forces(self.an, sol, self.extremes)
-            E = f.effort.reshape(len(cols), m)
-            ind = (
-                sol.indicator.min(axis=0).reshape(len(cols), m).min(axis=0)
-                if sol.indicator.size
-                else np.ones(m)
-            )
-            return E, ind
-
-        def sample(x):
-            """Every variant's efforts at the angles ``x`` (None: the reference sweep's
-            angles, 2 pi k / nref): (4 * variants, len(x))."""
-            out = []
-            ref = x is None
-            if ref:
-                x = 2 * math.pi * np.arange(nref) / nref
-            for on in variants:
-                E, ind = efforts(x, on, ref)
-                # next to a singular position the force analysis loses accuracy (as
-                # 1 / distance^2), and at it the effort is not determined
-                good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_EXACT)
-                if not good.all():
-                    # singular samples (a bifurcation: the reactions are indeterminate
-                    # there) are few; J and E0 are smooth through them on the followed
-                    # motion, so they are taken as its limit from both sides
-                    bad = np.flatnonzero(~good)
-                    if len(bad) > max(4, 0.01 * len(x)):
-                        raise _NoTable
-                    E[:, bad] = _limit(
-                        lambda xx, on=on: efforts(xx, on)[0], x[bad], len(cols), BESIDE_STEP
-                    )
-                out.append(E)
-            # the table's columns: J, a, b, c, then each conditional load alone and always
-            # on, less the machine without it (a_k, b_k, c_k)
-            E = out[0]
-            table = [E[0] - E[1], *np.linalg.solve(vander, E[1:])]
-            for Ek in out[1:]:
-                table += list(np.linalg.solve(vander, Ek[1:] - E[1:]))
-            return np.array(table)
-
-        vander = np.vander(np.array(speeds[1:]), 3, increasing=True)
+        sample = _EffortSampler(self, conditional)
         try:
             table, converged = _spectral_samples(sample, sample(None), rtol)
         except _NoTable:
@@ -396,6 +330,85 @@ class ReducedModel:
         J = f.effort[n:] - f.effort[:n]
         dJ = 2.0 * f.kinetic_rate[:n]
         return ref.u, J, dJ
+
+
+class _EffortSampler:
+    """The columns of :meth:`ReducedModel.tabulate`'s table at given angles: J, a, b, c,
+    then each conditional load's a_k, b_k, c_k, from the driving effort at four (speed,
+    acceleration) columns: J = E(0, 1) - E(0, 0); the speeds 0, 1, -1 at zero
+    acceleration fit E0 = a + b w + c w^2."""
+
+    cols = ((0.0, 1.0), (0.0, 0.0), (1.0, 0.0), (-1.0, 0.0))  # (speed, acceleration)
+
+    def __init__(self, model: ReducedModel, conditional: list) -> None:
+        self.model = model
+        self.conditional = conditional
+        self.variants = [None, *conditional]  # the machine without its conditional loads; each
+        self.speeds = [c[0] for c in self.cols]
+        self.accelerations = [c[1] for c in self.cols]
+        self.nref = len(model.ref.u) - 1  # the reference sweep's turn: its own states, rescaled
+        self.at_ref = model.rates_at(
+            np.tile(np.arange(self.nref), len(self.cols)),
+            np.repeat(self.speeds, self.nref),
+            np.repeat(self.accelerations, self.nref),
+        )
+        self.vander = np.vander(np.array(self.speeds[1:]), 3, increasing=True)
+
+    def efforts(self, xx, on, ref=False):
+        """The efforts of the columns at the angles ``xx`` with the conditional load
+        ``on`` forced on (the others off), and the smallest singularity indicator there."""
+        model, ncols = self.model, len(self.cols)
+        m = len(xx)
+        if ref:
+            sol = self.at_ref
+        else:
+            sol = core.states(
+                model.an,
+                np.tile(model.u0 + model.mech.driver.direction * xx, ncols),
+                np.repeat(self.speeds, m),
+                np.repeat(self.accelerations, m),
+                within=model.ref,
+            )
+        with model._loads_forced(self.conditional, on):
+            f = core.forces(model.an, sol, model.extremes)
+        E = f.effort.reshape(ncols, m)
+        ind = (
+            sol.indicator.min(axis=0).reshape(ncols, m).min(axis=0)
+            if sol.indicator.size
+            else np.ones(m)
+        )
+        return E, ind
+
+    def __call__(self, x):
+        """Every variant's efforts at the angles ``x`` (None: the reference sweep's
+        angles, 2 pi k / nref): (4 * variants, len(x))."""
+        out = []
+        ref = x is None
+        if ref:
+            x = 2 * math.pi * np.arange(self.nref) / self.nref
+        for on in self.variants:
+            E, ind = self.efforts(x, on, ref)
+            # next to a singular position the force analysis loses accuracy (as
+            # 1 / distance^2), and at it the effort is not determined
+            good = np.all(np.isfinite(E), axis=0) & (ind > NEAR_EXACT)
+            if not good.all():
+                # singular samples (a bifurcation: the reactions are indeterminate
+                # there) are few; J and E0 are smooth through them on the followed
+                # motion, so they are taken as its limit from both sides
+                bad = np.flatnonzero(~good)
+                if len(bad) > max(4, 0.01 * len(x)):
+                    raise _NoTable
+                E[:, bad] = _limit(
+                    lambda xx, on=on: self.efforts(xx, on)[0], x[bad], len(self.cols), BESIDE_STEP
+                )
+            out.append(E)
+        # the table's columns: J, a, b, c, then each conditional load alone and always
+        # on, less the machine without it (a_k, b_k, c_k)
+        E = out[0]
+        table = [E[0] - E[1], *np.linalg.solve(self.vander, E[1:])]
+        for Ek in out[1:]:
+            table += list(np.linalg.solve(self.vander, Ek[1:] - E[1:]))
+        return np.array(table)
 
 
 def _repeats(st, scale: float) -> bool:

@@ -171,6 +171,27 @@ def make_study(
     data.pop("study", None)
     base = copy.copy(src)
     base.data = data
+    params = _parameters(src, sec, data, options)
+    mode = _design_mode(src, sec, design, params)
+    n = samples if samples is not None else sec.get("samples")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        msg = f"the number of samples must be a whole number of 1 or more, got {n!r}"
+        if samples is None:
+            raise src.error(("study", "samples"), msg)
+        raise InputError(f"--samples: {msg}")
+    sd = seed if seed is not None else sec.get("seed", 0)
+    if isinstance(sd, bool) or not isinstance(sd, int) or sd < 0:
+        raise src.error(("study", "seed"), f"the seed is a whole number, got {sd!r}")
+    bst = _best(src, sec, best)
+    figs = _figures(src, sec, figures)
+    study = Study(base, params, mode, n, sd, figures=figs, best=bst, variant=variant)
+    study.designs = list_designs(study)
+    return study
+
+
+def _parameters(src: Source, sec: dict, data: dict, options) -> list:
+    """The parameters of the file's study section, then the ``-p`` options (one of the
+    same key path replaces the file's); at least one, none given twice."""
     units = data.get("units") if isinstance(data.get("units"), dict) else {}
     given: dict[str, tuple[Any, tuple]] = {}
     raw = sec.get("parameters", {})
@@ -198,6 +219,12 @@ def make_study(
             f"{src.file}: nothing to vary: give parameters with -p KEYPATH=VALUES "
             '(e.g. -p "links.crank.points.A[0]=20..30 mm:5") or in the file\'s study section'
         )
+    return params
+
+
+def _design_mode(src: Source, sec: dict, design: str | None, params: list) -> str:
+    """The kind of design (--design, else the file's; by default random when a parameter
+    is a distribution, else a grid), by its canonical name."""
     mode = design or sec.get("design")
     if mode is None:
         mode = "random" if any(p.is_random for p in params) else "grid"
@@ -206,34 +233,31 @@ def make_study(
         if design is None:
             raise src.error(("study", "design"), msg)
         raise InputError(f"--design: {msg}")
-    mode = DESIGNS[mode]
-    n = samples if samples is not None else sec.get("samples")
-    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
-        msg = f"the number of samples must be a whole number of 1 or more, got {n!r}"
-        if samples is None:
-            raise src.error(("study", "samples"), msg)
-        raise InputError(f"--samples: {msg}")
-    sd = seed if seed is not None else sec.get("seed", 0)
-    if isinstance(sd, bool) or not isinstance(sd, int) or sd < 0:
-        raise src.error(("study", "seed"), f"the seed is a whole number, got {sd!r}")
-    bst = None
+    return DESIGNS[mode]
+
+
+def _best(src: Source, sec: dict, best: str | None):
+    """The figure that picks the best design (--best, else the file's), or None."""
     if best is not None:
-        bst = parse_best(best, "--best")
-    elif sec.get("best") is not None:
+        return parse_best(best, "--best")
+    if sec.get("best") is not None:
         try:
-            bst = parse_best(sec["best"], "best")
+            return parse_best(sec["best"], "best")
         except InputError as exc:
             raise src.error(("study", "best"), exc.message) from None
+    return None
+
+
+def _figures(src: Source, sec: dict, figures) -> list[str]:
+    """The extra figures per design: the file's, then the command line's (blank ones
+    dropped)."""
     figs = list(figures)
     extra = sec.get("figures", [])
     if isinstance(extra, str):
         extra = [extra]
     if not isinstance(extra, list) or not all(isinstance(f, str) for f in extra):
         raise src.error(("study", "figures"), "'figures' is a list of expressions")
-    figs = [f for f in [*extra, *figs] if f.strip()]
-    study = Study(base, params, mode, n, sd, figures=figs, best=bst, variant=variant)
-    study.designs = list_designs(study)
-    return study
+    return [f for f in [*extra, *figs] if f.strip()]
 
 
 def list_designs(study: Study) -> list[dict[int, float]]:

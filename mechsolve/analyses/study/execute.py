@@ -335,14 +335,41 @@ def execute(
     if not todo_chunks:
         return Outcome(rows, n, False, "this process")
     if workers <= 1:
-        try:
-            for idx in todo_chunks:
-                rows += solve_chunk(study, idx, rd)
-                if progress is not None:
-                    progress(len(idx))
-        except KeyboardInterrupt:
-            return Outcome(rows, n, True, "this process")
-        return Outcome(rows, n, False, "this process")
+        return _run_here(study, todo_chunks, rows, n, progress, rd)
+    return _run_pool(study, workers, todo_chunks, rows, n, progress, rd)
+
+
+def _run_here(
+    study: Study,
+    todo_chunks: list[list[int]],
+    rows: list[Row],
+    n: int,
+    progress: Callable[[int], Any] | None,
+    rd: str | None,
+) -> Outcome:
+    """Solve the chunks in this process, adding their rows to ``rows`` (Ctrl-C keeps
+    those finished)."""
+    try:
+        for idx in todo_chunks:
+            rows += solve_chunk(study, idx, rd)
+            if progress is not None:
+                progress(len(idx))
+    except KeyboardInterrupt:
+        return Outcome(rows, n, True, "this process")
+    return Outcome(rows, n, False, "this process")
+
+
+def _run_pool(
+    study: Study,
+    workers: int,
+    todo_chunks: list[list[int]],
+    rows: list[Row],
+    n: int,
+    progress: Callable[[int], Any] | None,
+    rd: str | None,
+) -> Outcome:
+    """Solve the chunks on a pool of ``workers`` processes, adding their rows to ``rows``
+    as they finish (Ctrl-C ends the workers at once and keeps the rows finished)."""
     import multiprocessing
 
     # a multiprocessing pool, not concurrent.futures: on Ctrl-C its workers are ended at

@@ -160,16 +160,48 @@ def sweep(
     import numpy as np
 
     from mechsolve import api
-    from mechsolve.analyses.study.best import pick_best, write_best
-    from mechsolve.analyses.study.designs import make_study
-    from mechsolve.analyses.study.execute import cpu_count, execute, precheck, time_first_chunk
-    from mechsolve.analyses.study.table import write_table
-    from mechsolve.base.errors import InputError
-    from mechsolve.base.units import UnitError, parse_quantity
-    from mechsolve.model.parse import from_source
-    from mechsolve.model.source import load_file
+    from mechsolve.analyses.study.execute import precheck, time_first_chunk
 
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
+    limit_s = _check_options(jobs, use_dask, scheduler, max_designs, max_time)
+    study, nominal = _load_study(file, params, variant, design, samples, seed, best, figures)
+    if step is not None:
+        study.step = api.parse_step(nominal, step)
+    precheck(study, nominal)
+    if outdir is None:
+        outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
+    results_dir = None
+    if keep_results:  # the first designs, timed, write theirs too
+        output_folder(outdir)
+        results_dir = output_folder(outdir / "designs")
+    n = len(study)
+    if not quiet:
+        _echo_study(study, nominal)
+    # the first chunk of designs, solved here and timed: what the rest will cost
+    workers, where = _workers(n, jobs, use_dask, scheduler)
+    est = time_first_chunk(study, workers, results_dir=results_dir)
+    if est.timed < n:
+        _check_estimate(est, n, where, max_designs, max_time, limit_s, quiet)
+    output_folder(outdir)
+    outcome = _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet)
+    written, pick = _write_outputs(study, outcome, outdir, fmt, no_plots)
+    counts = _Counts(outcome.rows, n)
+    if not quiet:
+        _echo_outcome(study, outcome, counts, pick, written, outdir, keep_results)
+    clikit.finish(
+        check_failed=counts.has_req and counts.passing == 0,
+        warning=f"{n - counts.ok} of {n} designs are invalid or do not assemble at every "
+        "position: their rows say why"
+        if counts.ok < n
+        else None,
+    )
+
+
+def _check_options(jobs, use_dask, scheduler, max_designs: int, max_time: str) -> float:
+    """Refuse contradictory or out-of-range options; return --max-time in seconds."""
+    from mechsolve.base.errors import InputError
+    from mechsolve.base.units import UnitError, parse_quantity
+
     if jobs is not None and jobs < 1:
         raise InputError(f"--jobs {jobs}: give 1 or more workers")
     if use_dask and scheduler:
@@ -182,6 +214,16 @@ def sweep(
         raise InputError(f"--max-time {max_time!r}: {exc}") from None
     if not limit_s > 0:
         raise InputError(f"--max-time {max_time!r}: give a positive duration")
+    return limit_s
+
+
+def _load_study(file: Path, params, variant, design, samples, seed, best, figures):
+    """The study of ``file`` with the -p options added, and its nominal mechanism (the
+    file itself must be valid)."""
+    from mechsolve.analyses.study.designs import make_study
+    from mechsolve.model.parse import from_source
+    from mechsolve.model.source import load_file
+
     src = load_file(file)
     study = make_study(
         src,
@@ -193,51 +235,59 @@ def sweep(
         best=best,
         figures=list(figures),
     )
-    nominal = from_source(study.source)  # the file itself must be valid
-    if step is not None:
-        study.step = api.parse_step(nominal, step)
-    precheck(study, nominal)
-    if outdir is None:
-        outdir = Path(file.stem + (f"-{variant}" if variant else "") + "-study")
-    results_dir = None
-    if keep_results:  # the first designs, timed, write theirs too
-        output_folder(outdir)
-        results_dir = output_folder(outdir / "designs")
+    return study, from_source(study.source)
+
+
+def _echo_study(study, nominal) -> None:
+    """One line: how many designs, of which design kind, varying which parameters."""
     n = len(study)
-    if not quiet:
-        shape = " x ".join(str(len(p.values)) for p in study.params)
-        what = f"a grid of {shape}" if study.design == "grid" else study.design
-        click.echo(
-            f"{nominal.name}: {n} designs ({what}) of " + ", ".join(p.name for p in study.params)
-        )
-    # the first chunk of designs, solved here and timed: what the rest will cost
+    shape = " x ".join(str(len(p.values)) for p in study.params)
+    what = f"a grid of {shape}" if study.design == "grid" else study.design
+    click.echo(
+        f"{nominal.name}: {n} designs ({what}) of " + ", ".join(p.name for p in study.params)
+    )
+
+
+def _workers(n: int, jobs, use_dask, scheduler) -> tuple[int, str]:
+    """How many workers will share the designs, and where they run (for the estimate)."""
+    from mechsolve.analyses.study.execute import cpu_count
+
     if scheduler is not None:
-        workers, where = 1, "one worker of the scheduler"
-    else:
-        workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
-        kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
-        where = "this process" if workers == 1 else kind.format(workers)
-    est = time_first_chunk(study, workers, results_dir=results_dir)
-    if est.timed < n:
-        if not quiet:
-            click.echo(f"  estimate: {est.text(where)}")
-        if n > max_designs:
-            raise InputError(
-                f"{n} designs are more than --max-designs {max_designs}: "
-                f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
-            )
-        if est.seconds > limit_s:
-            raise InputError(
-                f"{n} designs would take more than --max-time {max_time}: "
-                f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
-                "them, or fewer values or a larger --step"
-            )
-    output_folder(outdir)
-    bar = _bar(n, quiet)
+        return 1, "one worker of the scheduler"
+    workers = 1 if jobs == 1 else min(jobs or cpu_count(), n)
+    kind = "a Dask local cluster of {} workers" if use_dask else "a pool of {} processes"
+    return workers, "this process" if workers == 1 else kind.format(workers)
+
+
+def _check_estimate(est, n: int, where: str, max_designs, max_time, limit_s, quiet) -> None:
+    """Show the estimate from the timed designs; refuse a study over --max-designs or
+    --max-time."""
+    from mechsolve.base.errors import InputError
+
+    if not quiet:
+        click.echo(f"  estimate: {est.text(where)}")
+    if n > max_designs:
+        raise InputError(
+            f"{n} designs are more than --max-designs {max_designs}: "
+            f"{est.text(where)}; give --max-designs {n} to run them, or fewer values"
+        )
+    if est.seconds > limit_s:
+        raise InputError(
+            f"{n} designs would take more than --max-time {max_time}: "
+            f"{est.text(where)}; give --max-time {_round_up(est.seconds)} to run "
+            "them, or fewer values or a larger --step"
+        )
+
+
+def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
+    """Solve the designs not yet timed, with a progress bar that starts at the timed ones."""
+    from mechsolve.analyses.study.execute import execute
+
+    bar = _bar(len(study), quiet)
     if bar is not None:
         bar.update(est.timed)
     try:
-        outcome = execute(
+        return execute(
             study,
             jobs=jobs,
             dask=use_dask,
@@ -249,12 +299,20 @@ def sweep(
     finally:  # whatever ends the study (errors: the group's one handler)
         if bar is not None:
             bar.close()
+
+
+def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
+    """Write the table (then exit 130 if the study was interrupted), the best design and
+    the plots; return the files written and the best design's pick (or None)."""
+    from mechsolve.analyses.study.best import pick_best, write_best
+    from mechsolve.analyses.study.table import write_table
+
     rows = outcome.rows
     written = [write_table(study, rows, outdir, fmt)]
     if outcome.interrupted:
         click.echo(
-            f"interrupted: {len(rows)} of {n} designs were finished; their rows are in "
-            f"{written[0]}",
+            f"interrupted: {len(rows)} of {len(study)} designs were finished; their rows "
+            f"are in {written[0]}",
             err=True,
         )
         clikit.interrupted()
@@ -265,38 +323,43 @@ def sweep(
         from mechsolve.analyses.study.plots import write_plots
 
         written += write_plots(study, rows, outdir)
-    ok = sum(r["status"] == "ok" for r in rows)
-    invalid = sum(r["status"].startswith("invalid") for r in rows)
-    has_req = any("requirements.pass [-]" in r for r in rows)
-    passing = sum(r.get("requirements.pass [-]") is True for r in rows)
-    if not quiet:
-        click.echo(
-            f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
-            f"position"
-            + (f", {invalid} invalid" if invalid else "")
-            + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
-        )
-        if has_req:
-            click.echo(f"  requirements: {passing} of {n} designs meet every requirement")
-        if study.best is not None:
-            sense, expr = study.best
-            if pick is None:
-                click.echo(f"  best ({sense} {expr}): no design has this figure")
-            else:
-                click.echo(
-                    f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
-                    f"{pick.value:.6g}: {study.describe(pick.design)}"
-                    + (f" ({pick.note})" if pick.note else "")
-                )
-        click.echo(
-            f"  wrote {len(written)} file(s) to {outdir}/: "
-            + ", ".join(p.name for p in written)
-            + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
-        )
-    clikit.finish(
-        check_failed=has_req and passing == 0,
-        warning=f"{n - ok} of {n} designs are invalid or do not assemble at every "
-        "position: their rows say why"
-        if ok < n
-        else None,
+    return written, pick
+
+
+class _Counts:
+    """How the designs of a finished study ended."""
+
+    def __init__(self, rows, n: int) -> None:
+        self.n = n
+        self.ok = sum(r["status"] == "ok" for r in rows)
+        self.invalid = sum(r["status"].startswith("invalid") for r in rows)
+        self.has_req = any("requirements.pass [-]" in r for r in rows)
+        self.passing = sum(r.get("requirements.pass [-]") is True for r in rows)
+
+
+def _echo_outcome(study, outcome, counts: _Counts, pick, written, outdir, keep_results) -> None:
+    """The closing lines: designs that assemble, requirements met, the best design, files."""
+    n, ok, invalid = counts.n, counts.ok, counts.invalid
+    click.echo(
+        f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
+        f"position"
+        + (f", {invalid} invalid" if invalid else "")
+        + (f", {n - ok - invalid} do not assemble or fail" if n - ok - invalid else "")
+    )
+    if counts.has_req:
+        click.echo(f"  requirements: {counts.passing} of {n} designs meet every requirement")
+    if study.best is not None:
+        sense, expr = study.best
+        if pick is None:
+            click.echo(f"  best ({sense} {expr}): no design has this figure")
+        else:
+            click.echo(
+                f"  best ({sense} {expr}): design {pick.design}, {pick.column} = "
+                f"{pick.value:.6g}: {study.describe(pick.design)}"
+                + (f" ({pick.note})" if pick.note else "")
+            )
+    click.echo(
+        f"  wrote {len(written)} file(s) to {outdir}/: "
+        + ", ".join(p.name for p in written)
+        + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
     )

@@ -83,122 +83,149 @@ class _Parser:
         return t
 
     def parse(self) -> Any:
+        """The tree of the whole text: operands go to ``_out``, operators and open
+        parentheses wait on ``_ops`` until one of lower precedence (or a closing
+        parenthesis, or the end) reduces them."""
         if self.tok.kind == "end":
             raise ExprError("the condition is empty")
-        out: list[Any] = []  # operands, and the nodes built from them
-        ops: list[_Frame] = []
-        depth = 0
-        expect_operand = True
-        logic_ok = True  # 'not' and 'P left of A -> B' may stand here
-        after_side = False
-
-        def push(frame: _Frame) -> None:
-            nonlocal depth
-            if frame.kind in _NESTING:
-                depth += 1
-                if depth > MAX_DEPTH:
-                    raise self.fail(
-                        f"the expression nests deeper than {MAX_DEPTH} levels (each '(', "
-                        "function call, '-', 'not' and '^' opens one)"
-                    )
-            ops.append(frame)
-
-        def reduce() -> None:
-            nonlocal depth
-            fr = ops.pop()
-            if fr.kind in _NESTING:
-                depth -= 1
-            if fr.kind == "neg":
-                out[-1] = Unary("-", out[-1])
-            elif fr.kind == "not":
-                out[-1] = Not(out[-1])
-            elif fr.kind == "pow":
-                right = out.pop()
-                out[-1] = Binary("^", out[-1], right)
-            else:  # chain
-                k = len(fr.ops) + 1
-                args = tuple(out[-k:])
-                del out[-k:]
-                op = fr.ops[0]
-                if op in ("and", "or"):
-                    out.append(BoolOp(op, args))
-                elif op in _CMP:
-                    out.append(Compare(tuple(fr.ops), args))
-                else:
-                    out.append(Chain(tuple(fr.ops), args))
-
-        def reduce_above(prec: int) -> None:
-            while ops and ops[-1].kind not in ("paren", "call") and ops[-1].prec > prec:
-                reduce()
-
+        self._out: list[Any] = []  # operands, and the nodes built from them
+        self._ops: list[_Frame] = []
+        self._depth = 0
+        self._expect_operand = True
+        self._logic_ok = True  # 'not' and 'P left of A -> B' may stand here
+        self._after_side = False
         while True:
             tok = self.tok
-            if expect_operand:
-                if tok.kind == "op" and tok.text == "(":
-                    push(_Frame("paren", tok=tok))
-                    self.i += 1
-                    logic_ok = True
-                elif tok.kind == "name" and tok.text == "not" and logic_ok:
-                    push(_Frame("not", _NOT_PREC, tok=tok))
-                    self.i += 1
-                elif tok.kind == "op" and tok.text in ("-", "+"):
-                    if tok.text == "-":
-                        push(_Frame("neg", _NEG_PREC, tok=tok))
-                    self.i += 1
-                    logic_ok = False
-                else:
-                    out.append(self.operand(logic_ok, push))
-                    if out[-1] is None:  # a function call opened: its arguments follow
-                        out.pop()
-                        logic_ok = True
-                        continue
-                    after_side = isinstance(out[-1], Side)
-                    expect_operand = False
-                continue
-            t = tok.text
-            is_logic = tok.kind == "name" and t in ("and", "or")
-            if tok.kind == "end":
+            if self._expect_operand:
+                self._prefix_or_operand(tok)
+            elif tok.kind == "end":
                 break
-            if after_side and not is_logic and t not in (")", ","):
-                raise self.fail(f"unexpected {t!r}")
-            after_side = False
-            if is_logic or (tok.kind == "op" and t in _PREC):
-                prec = _PREC[t]
-                reduce_above(prec)
-                if t == "^":
-                    push(_Frame("pow", prec, tok=tok))
-                elif ops and ops[-1].kind == "chain" and ops[-1].prec == prec:
-                    ops[-1].ops.append(t)
-                else:
-                    push(_Frame("chain", prec, ops=[t], tok=tok))
-                self.i += 1
-                expect_operand = True
-                logic_ok = is_logic
-            elif tok.kind == "op" and t in (",", ")"):
-                reduce_above(0)
-                if not ops or (t == "," and ops[-1].kind != "call"):
-                    raise self.fail(f"unexpected {t!r}")
-                self.i += 1
-                if t == ",":
-                    ops[-1].args += 1
-                    expect_operand = True
-                    logic_ok = True
-                    continue
-                fr = ops.pop()
-                depth -= 1
-                if fr.kind == "call":
-                    assert fr.tok is not None
-                    k = fr.args + 1
-                    args = tuple(out[-k:])
-                    del out[-k:]
-                    out.append(self.call(fr.tok, args))
             else:
-                raise self.fail(f"unexpected {t!r}")
-        reduce_above(0)
-        if ops:
+                self._after_operand(tok)
+        self._reduce_above(0)
+        if self._ops:
             raise self.fail("expected ')' but found the end")
-        assert len(out) == 1
-        return out[0]
+        assert len(self._out) == 1
+        return self._out[0]
+
+    def _push(self, frame: _Frame) -> None:
+        """Put an operator or an open parenthesis on the stack (refusing too deep a nest)."""
+        if frame.kind in _NESTING:
+            self._depth += 1
+            if self._depth > MAX_DEPTH:
+                raise self.fail(
+                    f"the expression nests deeper than {MAX_DEPTH} levels (each '(', "
+                    "function call, '-', 'not' and '^' opens one)"
+                )
+        self._ops.append(frame)
+
+    def _reduce(self) -> None:
+        """Apply the operator on top of the stack to the operands it takes."""
+        out = self._out
+        fr = self._ops.pop()
+        if fr.kind in _NESTING:
+            self._depth -= 1
+        if fr.kind == "neg":
+            out[-1] = Unary("-", out[-1])
+        elif fr.kind == "not":
+            out[-1] = Not(out[-1])
+        elif fr.kind == "pow":
+            right = out.pop()
+            out[-1] = Binary("^", out[-1], right)
+        else:  # chain
+            k = len(fr.ops) + 1
+            args = tuple(out[-k:])
+            del out[-k:]
+            op = fr.ops[0]
+            if op in ("and", "or"):
+                out.append(BoolOp(op, args))
+            elif op in _CMP:
+                out.append(Compare(tuple(fr.ops), args))
+            else:
+                out.append(Chain(tuple(fr.ops), args))
+
+    def _reduce_above(self, prec: int) -> None:
+        """Reduce the operators above ``prec`` back to the innermost open parenthesis."""
+        ops = self._ops
+        while ops and ops[-1].kind not in ("paren", "call") and ops[-1].prec > prec:
+            self._reduce()
+
+    def _prefix_or_operand(self, tok: Token) -> None:
+        """Where an operand is expected: '(', 'not', a sign, or the operand itself (a
+        function call only opens, its arguments follow)."""
+        if tok.kind == "op" and tok.text == "(":
+            self._push(_Frame("paren", tok=tok))
+            self.i += 1
+            self._logic_ok = True
+        elif tok.kind == "name" and tok.text == "not" and self._logic_ok:
+            self._push(_Frame("not", _NOT_PREC, tok=tok))
+            self.i += 1
+        elif tok.kind == "op" and tok.text in ("-", "+"):
+            if tok.text == "-":
+                self._push(_Frame("neg", _NEG_PREC, tok=tok))
+            self.i += 1
+            self._logic_ok = False
+        else:
+            self._out.append(self.operand(self._logic_ok, self._push))
+            if self._out[-1] is None:  # a function call opened: its arguments follow
+                self._out.pop()
+                self._logic_ok = True
+                return
+            self._after_side = isinstance(self._out[-1], Side)
+            self._expect_operand = False
+
+    def _after_operand(self, tok: Token) -> None:
+        """After an operand: a binary operator, a comma or a closing parenthesis."""
+        t = tok.text
+        is_logic = tok.kind == "name" and t in ("and", "or")
+        if self._after_side and not is_logic and t not in (")", ","):
+            raise self.fail(f"unexpected {t!r}")
+        self._after_side = False
+        if is_logic or (tok.kind == "op" and t in _PREC):
+            self._binary(tok, is_logic)
+        elif tok.kind == "op" and t in (",", ")"):
+            self._comma_or_close(tok)
+        else:
+            raise self.fail(f"unexpected {t!r}")
+
+    def _binary(self, tok: Token, is_logic: bool) -> None:
+        """A binary operator: '^' nests (right to left); others of the same precedence
+        join one chain (``a < b < c``, ``a - b + c``)."""
+        ops, t = self._ops, tok.text
+        prec = _PREC[t]
+        self._reduce_above(prec)
+        if t == "^":
+            self._push(_Frame("pow", prec, tok=tok))
+        elif ops and ops[-1].kind == "chain" and ops[-1].prec == prec:
+            ops[-1].ops.append(t)
+        else:
+            self._push(_Frame("chain", prec, ops=[t], tok=tok))
+        self.i += 1
+        self._expect_operand = True
+        self._logic_ok = is_logic
+
+    def _comma_or_close(self, tok: Token) -> None:
+        """A comma between a call's arguments, or a ')' that closes a parenthesis or a
+        call (which is then built from its arguments)."""
+        t = tok.text
+        self._reduce_above(0)
+        ops = self._ops
+        if not ops or (t == "," and ops[-1].kind != "call"):
+            raise self.fail(f"unexpected {t!r}")
+        self.i += 1
+        if t == ",":
+            ops[-1].args += 1
+            self._expect_operand = True
+            self._logic_ok = True
+            return
+        fr = ops.pop()
+        self._depth -= 1
+        if fr.kind == "call":
+            assert fr.tok is not None
+            k = fr.args + 1
+            args = tuple(self._out[-k:])
+            del self._out[-k:]
+            self._out.append(self.call(fr.tok, args))
 
     def call(self, tok: Token, args: tuple[Any, ...]) -> Call:
         func = tok.text
