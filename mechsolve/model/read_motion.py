@@ -76,9 +76,8 @@ def read_motion(
 ) -> None:
     """The driver's motion law (see :mod:`mechsolve.model.motion`): ``accelerate`` (with
     ``from``), ``segments`` (with ``from``), ``table`` (with ``end``) or ``law``."""
-    import numpy as np
 
-    from mechsolve.model.motion import ConstantAcceleration, Segments, TableMotion
+    from mechsolve.model.motion import ConstantAcceleration
 
     path: KeyPath = ("driver", "motion")
     m = r.mapping(value, path, keys.MOTION.allowed, "'motion'")
@@ -94,7 +93,6 @@ def read_motion(
         raise r.fail(("driver", "speed"), "a driver with a motion law has no constant speed")
     if isinstance(d.start, Limit):
         raise r.fail(("driver", "start"), "a motion law needs a numeric start")
-    unit = "length" if linear else "angle"
     speed_kind = "speed" if linear else "angular speed"
     acc_kind = "acceleration" if linear else "angular acceleration"
     for key, allowed in (("from", ("accelerate", "segments")), ("end", ("table",))):
@@ -114,61 +112,9 @@ def read_motion(
             raise r.fail(path, "the driver would not move: give a nonzero accelerate or from")
         law = ConstantAcceleration(start=float(d.start), speed0=w0, acceleration=acc)
     elif kind == "segments":
-        segs = m["segments"]
-        if not isinstance(segs, list) or not segs:
-            raise r.fail(path + ("segments",), "'segments' must be a list of segments")
-        if w0 < 0:
-            raise r.fail(
-                path + ("from",), "segment speeds are magnitudes; 'direction' sets the sense"
-            )
-        spec = []
-        for k, seg in enumerate(segs):
-            sp = path + ("segments", k)
-            sm = r.mapping(seg, sp, keys.SEGMENT.allowed, "a segment")
-            which = [x for x in ("accelerate", "run", "decelerate", "dwell") if x in sm]
-            if len(which) != 1:
-                raise r.fail(
-                    sp, "a segment is one of accelerate, run, decelerate, dwell: its duration"
-                )
-            sk = which[0]
-            length = r.positive(sm[sk], sp + (sk,), "time")
-            target = None
-            if "to" in sm:
-                if sk not in ("accelerate", "decelerate"):
-                    raise r.fail(sp + ("to",), f"'to' goes with accelerate or decelerate, not {sk}")
-                target = sign * r.positive(sm["to"], sp + ("to",), speed_kind, allow_zero=True)
-            elif sk == "accelerate":
-                raise r.fail(sp, "'accelerate' needs 'to': the speed to reach")
-            spec.append((sk, length, target))
-        try:
-            law = Segments.build(float(d.start), sign * w0, spec)
-        except ValueError as exc:
-            raise r.fail(path + ("segments",), str(exc)) from None
+        law = _read_segments(r, m["segments"], path, d, w0, sign, speed_kind)
     elif kind == "table":
-        rows = m["table"]
-        if not isinstance(rows, list) or len(rows) < 2:
-            raise r.fail(path + ("table",), "'table' must list at least 2 points [time, value]")
-        ts, us = [], []
-        for k, row in enumerate(rows):
-            rp = path + ("table", k)
-            if not isinstance(row, list) or len(row) != 2:
-                raise r.fail(rp, f"a table point is [time, {'position' if linear else 'angle'}]")
-            ts.append(r.quantity(row[0], rp + (0,), "time"))
-            us.append(r.quantity(row[1], rp + (1,), unit))
-        for k in range(1, len(ts)):
-            if not ts[k] > ts[k - 1]:
-                raise r.fail(
-                    path + ("table", k, 0),
-                    f"the times must increase: {ts[k]:.6g} s follows {ts[k - 1]:.6g} s",
-                )
-        if has_start:
-            raise r.fail(("driver", "start"), "the table gives the start (its first point)")
-        end = m.get("end", "not-a-knot")
-        if end not in ("not-a-knot", "natural", "clamped"):
-            raise r.fail(
-                path + ("end",), f"end must be not-a-knot, natural or clamped, got {end!r}"
-            )
-        law = TableMotion(times=np.array(ts), values=np.array(us), end=end)
+        law = _read_table(r, m, path, linear, has_start)
         d.start = law.start
     else:
         law = read_law(r, m["law"], path + ("law",), has_start, linear)
@@ -176,6 +122,70 @@ def read_motion(
     d.motion = law
     d.speed = law.nominal_speed()
     d.sense = 1 if d.speed > 0 else -1
+
+
+def _read_segments(
+    r: Reader, segs: Any, path: KeyPath, d: Driver, w0: float, sign: int, speed_kind: str
+):
+    """``segments``: accelerate, run, decelerate and dwell, each for a duration."""
+    from mechsolve.model.motion import Segments
+
+    if not isinstance(segs, list) or not segs:
+        raise r.fail(path + ("segments",), "'segments' must be a list of segments")
+    if w0 < 0:
+        raise r.fail(path + ("from",), "segment speeds are magnitudes; 'direction' sets the sense")
+    spec = []
+    for k, seg in enumerate(segs):
+        sp = path + ("segments", k)
+        sm = r.mapping(seg, sp, keys.SEGMENT.allowed, "a segment")
+        which = [x for x in ("accelerate", "run", "decelerate", "dwell") if x in sm]
+        if len(which) != 1:
+            raise r.fail(sp, "a segment is one of accelerate, run, decelerate, dwell: its duration")
+        sk = which[0]
+        length = r.positive(sm[sk], sp + (sk,), "time")
+        target = None
+        if "to" in sm:
+            if sk not in ("accelerate", "decelerate"):
+                raise r.fail(sp + ("to",), f"'to' goes with accelerate or decelerate, not {sk}")
+            target = sign * r.positive(sm["to"], sp + ("to",), speed_kind, allow_zero=True)
+        elif sk == "accelerate":
+            raise r.fail(sp, "'accelerate' needs 'to': the speed to reach")
+        spec.append((sk, length, target))
+    try:
+        return Segments.build(float(d.start), sign * w0, spec)
+    except ValueError as exc:
+        raise r.fail(path + ("segments",), str(exc)) from None
+
+
+def _read_table(r: Reader, m: dict, path: KeyPath, linear: bool, has_start) -> Any:
+    """``table``: points [time, value] through which a spline runs (``end``: its ends)."""
+    import numpy as np
+
+    from mechsolve.model.motion import TableMotion
+
+    unit = "length" if linear else "angle"
+    rows = m["table"]
+    if not isinstance(rows, list) or len(rows) < 2:
+        raise r.fail(path + ("table",), "'table' must list at least 2 points [time, value]")
+    ts, us = [], []
+    for k, row in enumerate(rows):
+        rp = path + ("table", k)
+        if not isinstance(row, list) or len(row) != 2:
+            raise r.fail(rp, f"a table point is [time, {'position' if linear else 'angle'}]")
+        ts.append(r.quantity(row[0], rp + (0,), "time"))
+        us.append(r.quantity(row[1], rp + (1,), unit))
+    for k in range(1, len(ts)):
+        if not ts[k] > ts[k - 1]:
+            raise r.fail(
+                path + ("table", k, 0),
+                f"the times must increase: {ts[k]:.6g} s follows {ts[k - 1]:.6g} s",
+            )
+    if has_start:
+        raise r.fail(("driver", "start"), "the table gives the start (its first point)")
+    end = m.get("end", "not-a-knot")
+    if end not in ("not-a-knot", "natural", "clamped"):
+        raise r.fail(path + ("end",), f"end must be not-a-knot, natural or clamped, got {end!r}")
+    return TableMotion(times=np.array(ts), values=np.array(us), end=end)
 
 
 def _law_kind(e: Expression, kind: str, what: str) -> None:

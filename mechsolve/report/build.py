@@ -236,19 +236,28 @@ def _unit_factor(unit: str) -> float:
 
 def model_tables(mech, check_report) -> list[Table]:
     """Ground points, links (points, lengths, angles, masses, inertias), joints, loads."""
-    from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
-
     lu = mech.length_unit
     f = _unit_factor(lu)
-    tables = []
-    tables.append(
-        Table(
-            "Fixed points (ground)",
-            ["point", f"x [{lu}]", f"y [{lu}]"],
-            [[p, num(x / f), num(y / f)] for p, (x, y) in mech.ground.items()],
-            [False, True, True],
-        )
+    tables = [_ground_table(mech, lu, f), _links_table(mech, lu, f), _joints_table(mech, lu, f)]
+    loads = _loads_table(mech, lu, f)
+    if loads is not None:
+        tables.append(loads)
+    tables.append(_driver_table(mech, check_report, lu, f))
+    return tables
+
+
+def _ground_table(mech, lu: str, f: float) -> Table:
+    """The fixed points."""
+    return Table(
+        "Fixed points (ground)",
+        ["point", f"x [{lu}]", f"y [{lu}]"],
+        [[p, num(x / f), num(y / f)] for p, (x, y) in mech.ground.items()],
+        [False, True, True],
     )
+
+
+def _links_table(mech, lu: str, f: float) -> Table:
+    """Each link's points in its frame, with its mass properties."""
     rows = []
     for lk in mech.links:
         names = list(lk.points)
@@ -278,36 +287,42 @@ def model_tables(mech, check_report) -> list[Table]:
                 ]
             )
             first = False
-    tables.append(
-        Table(
-            "Links: points in each link's frame (its x axis is the angle 0)",
-            [
-                "link",
-                "point",
-                f"x [{lu}]",
-                f"y [{lu}]",
-                f"distance from the frame origin [{lu}]",
-                "angle from the x axis [deg]",
-                "mass [kg]",
-                f"centre of mass [{lu}]",
-                "inertia about the centre of mass [kg m²]",
-            ],
-            rows,
-            [False, False, True, True, True, True, True, False, True],
-            "A link with a mass and no inertia is a point mass at its centre of mass.",
-        )
+    return Table(
+        "Links: points in each link's frame (its x axis is the angle 0)",
+        [
+            "link",
+            "point",
+            f"x [{lu}]",
+            f"y [{lu}]",
+            f"distance from the frame origin [{lu}]",
+            "angle from the x axis [deg]",
+            "mass [kg]",
+            f"centre of mass [{lu}]",
+            "inertia about the centre of mass [kg m²]",
+        ],
+        rows,
+        [False, False, True, True, True, True, True, False, True],
+        "A link with a mass and no inertia is a point mass at its centre of mass.",
     )
+
+
+def _joints_table(mech, lu: str, f: float) -> Table:
+    """Each joint as its kind describes it."""
     rows = []
     for j in mech.joints:
         links, point, own = j.describe(lambda x: num(x / f), lambda a: num(math.degrees(a), 4), lu)
         rows.append([j.name, j.kind, links, point, own])
-    tables.append(
-        Table(
-            "Joints (a reaction is the force on the second link by the first)",
-            ["joint", "kind", "links", "point", "guide"],
-            rows,
-        )
+    return Table(
+        "Joints (a reaction is the force on the second link by the first)",
+        ["joint", "kind", "links", "point", "guide"],
+        rows,
     )
+
+
+def _loads_table(mech, lu: str, f: float) -> Table | None:
+    """The loads and gravity (``None`` without any)."""
+    from mechsolve.model import Damper, PointForce, Spring, Torque
+
     rows = []
     for ld in mech.loads:
         if isinstance(ld, PointForce):
@@ -342,9 +357,13 @@ def model_tables(mech, check_report) -> list[Table]:
               for v in mech.gravity_vector())  # fmt: skip
     if g != (0.0, 0.0):
         rows.append(["gravity", "field", f"({num(g[0])}, {num(g[1])}) m/s²", "always"])
-    if rows:
-        tables.append(Table("Loads", ["load", "kind", "value", "acts when"], rows))
-    # the driver and the sweep
+    return Table("Loads", ["load", "kind", "value", "acts when"], rows) if rows else None
+
+
+def _driver_table(mech, check_report, lu: str, f: float) -> Table:
+    """The driver and the sweep."""
+    from mechsolve.model import Limit
+
     d = mech.driver
     an = check_report.analysis
     rows = [["joint", d.joint + (f" (line {d.line[0]} → {d.line[1]})" if d.line else "")]]
@@ -376,8 +395,7 @@ def model_tables(mech, check_report) -> list[Table]:
             if sw.step:
                 text += f" in steps of {num(math.degrees(sw.step))}°"
         rows.append(["sweep", text])
-    tables.append(Table("Driver", ["", ""], rows))
-    return tables
+    return Table("Driver", ["", ""], rows)
 
 
 # -- results ----------------------------------------------------------------------------
@@ -624,16 +642,7 @@ def mechanism_content(
     c.incomplete = res.incomplete()
     c.figures = figures_table(fine)
     c.tables = position_tables(res)
-    n = len(res.u)
-    if mech.driver.motion is not None or mech.sweep.duration is not None:
-        c.table_step = f"{n} positions in time"
-    elif len(res.u) > 1:
-        step = abs(float(res.u[1] - res.u[0]))
-        c.table_step = (
-            f"{n} positions, every {num(step)} m"
-            if res.linear
-            else f"{n} positions, every {num(math.degrees(step))}° of the driver"
-        )
+    c.table_step = _table_step(mech, res) or c.table_step
     with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
         d = Path(tmp)
         draw_start(
@@ -644,46 +653,9 @@ def mechanism_content(
         pdir.mkdir()
         c.plots = [embed(p) for p in write_plots(fine, pdir)]
         if mech.motor is not None and mech.simulation is not None and simulate:
-            from mechsolve.analyses.dynamics import simulate as run_simulation
-            from mechsolve.analyses.dynamics.plots import write_simulation_plots
-
-            sim = run_simulation(mech)
-            c.dynamics_text = sim.summary()
-            sdir = d / "simulation"
-            sdir.mkdir()
-            c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
-            c.incomplete = c.incomplete or sim.incomplete()
+            _simulation_section(c, mech, d)
         if mech.driver is not None and not res.linear:
-            # the graphical check at one position (default: position 2 of 12, 30 deg
-            # after the start, where a mechanism that starts at a limit already moves)
-            from mechsolve.analyses.polygons import draw_polygons
-            from mechsolve.base.errors import AssemblyError, InputError, SolverError
-
-            try:
-                pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
-            except InputError as exc:  # a group the graphical method here does not draw
-                if polygons_at is not None:
-                    raise
-                c.polygons_problem = f"No polygons: {_plain(exc)}"
-            except (
-                SolverError,
-                AssemblyError,
-            ) as exc:  # the position lies where the mechanism cannot close
-                c.polygons_problem = (
-                    f"No polygons: {_plain(exc)}. "
-                    + (
-                        "Position 2 (30° after the start) is only the default: "
-                        if polygons_at is None
-                        else ""
-                    )
-                    + "give a position the mechanism reaches with --polygons-at (a position "
-                    "number, 1 at the start, or a driver angle such as '100 deg')."
-                )
-                # asked for and not drawn: the report lacks it (warned); the default is not
-                c.incomplete = c.incomplete or polygons_at is not None
-            else:
-                c.polygons_text = pol.text()
-                c.polygons_images = [embed(p) for p in pol.images if p.suffix == ".png"]
+            _polygons_section(c, mech, d, polygons_at)
         if mech.requirements:
             c.verdicts = check_requirements(mech, res)
             c.requirements = verdict_rows(c.verdicts)
@@ -691,6 +663,66 @@ def mechanism_content(
     fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method)
     c.animation = fr.to_json()
     return c
+
+
+def _table_step(mech, res) -> str | None:
+    """How the position tables sample the motion."""
+    n = len(res.u)
+    if mech.driver.motion is not None or mech.sweep.duration is not None:
+        return f"{n} positions in time"
+    if n > 1:
+        step = abs(float(res.u[1] - res.u[0]))
+        if res.linear:
+            return f"{n} positions, every {num(step)} m"
+        return f"{n} positions, every {num(math.degrees(step))}° of the driver"
+    return None
+
+
+def _simulation_section(c: Content, mech, d: Path) -> None:
+    """The motor-driven start-up: its summary and plots."""
+    from mechsolve.analyses.dynamics import simulate as run_simulation
+    from mechsolve.analyses.dynamics.plots import write_simulation_plots
+
+    sim = run_simulation(mech)
+    c.dynamics_text = sim.summary()
+    sdir = d / "simulation"
+    sdir.mkdir()
+    c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
+    c.incomplete = c.incomplete or sim.incomplete()
+
+
+def _polygons_section(c: Content, mech, d: Path, polygons_at: str | int | None) -> None:
+    """The velocity and acceleration polygons at one position, or why there are none."""
+    # the graphical check at one position (default: position 2 of 12, 30 deg
+    # after the start, where a mechanism that starts at a limit already moves)
+    from mechsolve.analyses.polygons import draw_polygons
+    from mechsolve.base.errors import AssemblyError, InputError, SolverError
+
+    try:
+        pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
+    except InputError as exc:  # a group the graphical method here does not draw
+        if polygons_at is not None:
+            raise
+        c.polygons_problem = f"No polygons: {_plain(exc)}"
+    except (
+        SolverError,
+        AssemblyError,
+    ) as exc:  # the position lies where the mechanism cannot close
+        c.polygons_problem = (
+            f"No polygons: {_plain(exc)}. "
+            + (
+                "Position 2 (30° after the start) is only the default: "
+                if polygons_at is None
+                else ""
+            )
+            + "give a position the mechanism reaches with --polygons-at (a position "
+            "number, 1 at the start, or a driver angle such as '100 deg')."
+        )
+        # asked for and not drawn: the report lacks it (warned); the default is not
+        c.incomplete = c.incomplete or polygons_at is not None
+    else:
+        c.polygons_text = pol.text()
+        c.polygons_images = [embed(p) for p in pol.images if p.suffix == ".png"]
 
 
 def cam_content(path: Path, variant: str | None) -> Content:

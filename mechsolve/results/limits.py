@@ -155,27 +155,8 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
     """Limit positions of the rockers and sliders, with the time ratio over a full turn."""
     res = _Sweep(sol)
     mech, an = res.mechanism, res.analysis
-    sys_ = an.system
     driven = mech.joint(mech.driver.joint)
-    items = []
-    for j in mech.joints:
-        if j.coordinate == "angle" and GROUND in j.links and j is not driven:
-            link = j.b if j.a == GROUND else j.a
-            b = sys_.index[link]
-
-            def vr(st, b=b):
-                return st.th[b], st.w[b]
-
-            items.append((link, "rocker", vr, True))
-        elif j.coordinate == "length" and j is not driven:
-            sl = sys_.by_joint[j.name]
-
-            def vr(st, sl=sl):
-                return sl.displacement(st), sl.velocity(st)
-
-            # a ram on a ground guide has a working and a return stroke; a block on a
-            # moving guide (a slotted bar) does not: no time ratio for it
-            items.append((j.name, "slider", vr, GROUND in (j.guide, j.block)))
+    items = _outputs(mech, an.system, driven)
     out = []
     ok = res.ok
     full = res.is_full_cycle()
@@ -195,37 +176,8 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
         for i in np.flatnonzero(sgn == 0):
             if i > 0 and np.isfinite(sgn[i - 1]):
                 sgn[i] = sgn[i - 1]
-        extremes = []  # (u, value, is_max)
-        gaps = {e.after for e in res.events if e.kind == "dead zone"}
-        for k in np.flatnonzero(ok[:-1] & ok[1:] & (sgn[:-1] * sgn[1:] < 0)):
-            if int(k) in gaps:
-                continue  # not a continuous motion between these samples
-            root = _rate_root(res, int(k), vr)
-            if root is None:
-                continue
-            x, v = root
-            if kind == "rocker":  # bring the angle next to the unwrapped samples
-                v = v + 2 * math.pi * round((val[k] - v) / (2 * math.pi))
-            extremes.append((x, v, sgn[k] > 0))
-        # where the sweep meets an unassemblable range the motion stops at a toggle
-        # position: there (located exactly, see Analysis.locate_edges; else at the
-        # solved sample next to it) the swing is bounded too
-        edges = []
-        for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
-            if 0 < k < len(ok) - 1 or not ok.all():
-                if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
-                    edges.append(_edge_value(res, int(k), vr, float(val[k]), kind == "rocker"))
-        if edges and extremes:
-            vals = [e[1] for e in extremes] + [e[1] for e in edges]
-            top, bottom = max(vals), min(vals)
-            for x, v in edges:
-                if v == top:
-                    extremes.append((x, v, True))
-                if v == bottom:
-                    extremes.append((x, v, False))
-        elif edges and len(edges) >= 2:
-            (x1, v1), (x2, v2) = max(edges, key=lambda e: e[1]), min(edges, key=lambda e: e[1])
-            extremes += [(x1, v1, True), (x2, v2, False)]
+        extremes = _rate_roots(res, vr, val, sgn, kind == "rocker")
+        edges = _edges(res, vr, val, kind == "rocker", extremes)
         if not extremes:
             continue
         hi = max((e for e in extremes if e[2]), key=lambda e: e[1], default=None)
@@ -247,6 +199,74 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
             lp.time_ratio = max(fwd, back) / min(fwd, back)
         out.append(lp)
     return out
+
+
+def _outputs(mech, sys_, driven) -> list:
+    """The rockers (links pinned to the ground) and sliders whose limits are sought:
+    (name, kind, value and rate of a state, whether it moves against the ground)."""
+    items = []
+    for j in mech.joints:
+        if j.coordinate == "angle" and GROUND in j.links and j is not driven:
+            link = j.b if j.a == GROUND else j.a
+            b = sys_.index[link]
+
+            def vr(st, b=b):
+                return st.th[b], st.w[b]
+
+            items.append((link, "rocker", vr, True))
+        elif j.coordinate == "length" and j is not driven:
+            sl = sys_.by_joint[j.name]
+
+            def vr(st, sl=sl):
+                return sl.displacement(st), sl.velocity(st)
+
+            # a ram on a ground guide has a working and a return stroke; a block on a
+            # moving guide (a slotted bar) does not: no time ratio for it
+            items.append((j.name, "slider", vr, GROUND in (j.guide, j.block)))
+    return items
+
+
+def _rate_roots(res: _Sweep, vr, val: np.ndarray, sgn: np.ndarray, angle: bool) -> list:
+    """The extremes between samples where the rate changes sign, located exactly:
+    (driver value, value, is a maximum)."""
+    ok = res.ok
+    extremes = []  # (u, value, is_max)
+    gaps = {e.after for e in res.events if e.kind == "dead zone"}
+    for k in np.flatnonzero(ok[:-1] & ok[1:] & (sgn[:-1] * sgn[1:] < 0)):
+        if int(k) in gaps:
+            continue  # not a continuous motion between these samples
+        root = _rate_root(res, int(k), vr)
+        if root is None:
+            continue
+        x, v = root
+        if angle:  # bring the angle next to the unwrapped samples
+            v = v + 2 * math.pi * round((val[k] - v) / (2 * math.pi))
+        extremes.append((x, v, sgn[k] > 0))
+    return extremes
+
+
+def _edges(res: _Sweep, vr, val: np.ndarray, angle: bool, extremes: list) -> list:
+    """Where the sweep meets an unassemblable range the motion stops at a toggle position:
+    there (located exactly, see Analysis.locate_edges; else at the solved sample next to
+    it) the swing is bounded too. Adds the edges that bound it to ``extremes``."""
+    ok = res.ok
+    edges = []
+    for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
+        if 0 < k < len(ok) - 1 or not ok.all():
+            if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
+                edges.append(_edge_value(res, int(k), vr, float(val[k]), angle))
+    if edges and extremes:
+        vals = [e[1] for e in extremes] + [e[1] for e in edges]
+        top, bottom = max(vals), min(vals)
+        for x, v in edges:
+            if v == top:
+                extremes.append((x, v, True))
+            if v == bottom:
+                extremes.append((x, v, False))
+    elif edges and len(edges) >= 2:
+        (x1, v1), (x2, v2) = max(edges, key=lambda e: e[1]), min(edges, key=lambda e: e[1])
+        extremes += [(x1, v1, True), (x2, v2, False)]
+    return edges
 
 
 def _exact_minimum(res: _Sweep, gi: int, g, k: int):
