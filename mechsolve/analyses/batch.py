@@ -38,10 +38,14 @@ import numpy as np
 
 from mechsolve.base.errors import MechsolveError
 from mechsolve.base.state import State
+from mechsolve.core.branch_choice import _PendingConditions
 from mechsolve.core.kinetostatics import ForceResult, solve_forces
 from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
+from mechsolve.core.sweep import Analysis
 from mechsolve.groups import Drive, NewtonGroup, build_plan
 from mechsolve.model import Damper, Limit, Mechanism, PointForce, Spring, Torque
+from mechsolve.results.results import Results
+from mechsolve.results.run import solve as solve_sweep
 from mechsolve.system.constraints import ConstraintSystem
 
 __all__ = ["DesignBatch", "solve_designs"]
@@ -86,8 +90,6 @@ class DesignBatch:
     def results(self, k: int):
         """The :class:`~mechsolve.results.results.Results` of design ``k``: the same as
         ``mechsolve.solve`` gives; raises the design's error if it could not be solved."""
-        from mechsolve.core.sweep import Analysis
-        from mechsolve.results.results import Results
 
         if k in self._separate:
             out = self._separate[k]
@@ -343,7 +345,6 @@ def _assemble(ab, u0: float, nd: int):
     design, then branch -. Returns the modes (groups, nd), the reasons, the state at the
     start (nd columns, rates per unit driver coordinate) and the designs it could not
     decide (their own assembly says why)."""
-    from mechsolve.core.branch_choice import _PendingConditions
 
     n2 = 2 * nd
     st2 = State(ab.system.nb, n2)
@@ -415,8 +416,6 @@ def solve_designs(
         ``results(k)`` gives design ``k``'s Results, the same as ``mechsolve.solve``
         would; designs that cannot be solved raise their error there.
     """
-    from mechsolve.core.sweep import Analysis
-    from mechsolve.results.run import solve as solve_sweep
 
     mechs = list(mechs)
     for m in mechs:

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.core.kinetostatics import solve_forces
 from mechsolve.core.sweep import Analysis, Failure
 from mechsolve.model import Mechanism
 from mechsolve.results.csv import CsvStream
@@ -123,7 +124,6 @@ def stream(
     added (a progress bar's ``update``). Returns the summary and the Results of a coarse
     sweep of the same range (for plots and the design figures).
     """
-    from mechsolve.core.kinetostatics import solve_forces
 
     if not mech.__dict__.get("_validated"):  # built in code: check it first
         mech.validate()

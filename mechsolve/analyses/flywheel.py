@@ -29,10 +29,15 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.analyses.dynamics import MAX_STEPS, _with_flywheel, simulate, steady_fluctuation
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import _QUANTITY_RE, UnitError, parse_unit
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
+from mechsolve.model.expr import ExprError, Expression
+from mechsolve.model.machine import Flywheel
+from mechsolve.model.parse import Reader, read_units
 
 __all__ = ["CHECK_TOLERANCE", "FlywheelSizing", "parse_delta", "size_flywheel"]
 
@@ -198,7 +203,6 @@ def size_flywheel(
     """Size a flywheel on the driver's shaft for the coefficient of fluctuation ``delta``."""
     if not 0 < delta < 1:
         raise InputError(f"--delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
-    from mechsolve.analyses.dynamics import _with_flywheel
 
     an = Analysis(_with_flywheel(mech))  # with the file's own flywheel (or rotor), if any
     if an.linear:
@@ -306,8 +310,6 @@ def _energy_mass(out: FlywheelSizing, J: np.ndarray, Q: np.ndarray, x: np.ndarra
 def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> None:
     """Simulate the machine with the flywheel added, from the mean speed to steady state,
     and record the fluctuation it reaches (or why the check fell short)."""
-    from mechsolve.analyses.dynamics import MAX_STEPS, simulate, steady_fluctuation
-    from mechsolve.model.machine import Flywheel
 
     w = out.omega_mean
     crank = an.system.body_names[an.plan[0].bodies[0]]
@@ -494,7 +496,6 @@ def _kw(p: float) -> str:
 
 def _power(r, value: object, path: tuple) -> float:
     """A power in W from a number (W) or '3.5 kW', 'ft*lbf/s' ...; a located error."""
-    from mechsolve.base.units import _QUANTITY_RE, UnitError, parse_unit
 
     if isinstance(value, bool) or value is None or not isinstance(value, (int, float, str)):
         raise r.fail(path, f"expected a power such as '3.5 kW', got {value!r}")
@@ -533,7 +534,6 @@ def read_power_problem(src) -> dict:
     power holds from its angle to the next, the last to the end of the cycle), ``table``
     ([angle, power] points, piecewise linear, closed with its first point) or ``law`` (an
     expression of ``angle`` in rad, giving W)."""
-    from mechsolve.model.parse import Reader, read_units
 
     r = Reader(src)
     data = src.data
@@ -584,7 +584,6 @@ def _power_side(r, v, side: str, span: float) -> PowerCurve:
 def _power_law(r, law, q: tuple, span: float) -> PowerCurve:
     """A power given as an expression of ``angle`` (rad), in W, sampled at 36001 points
     of the cycle."""
-    from mechsolve.model.expr import ExprError, Expression
 
     if not isinstance(law, str):
         raise r.fail(q, "'law' is an expression of angle (rad), in W")

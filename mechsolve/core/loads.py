@@ -8,7 +8,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.base.state import State, scale_rates
 from mechsolve.core.force_result import ForceResult
+from mechsolve.core.solution import full_cycle
+from mechsolve.core.sweep import StateView
 from mechsolve.groups.generic import NewtonGroup
 from mechsolve.model import GROUND, Damper, PointForce, Spring, Torque
 
@@ -177,7 +180,6 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
     their states (``an.design_states``); a driver with a motion law of time keeps the
     samples' extremes.
     """
-    from mechsolve.core.solution import full_cycle
 
     blocks = getattr(an, "blocks", None)
     B = blocks or 1
@@ -273,7 +275,6 @@ def states_between(an: Analysis, sol: Solution, u: np.ndarray, ud, udd):
 
     Closed forms take the sweep's start and branch switches; Newton groups continue from
     the nearest sample, one run of values per sample."""
-    from mechsolve.base.state import State, scale_rates
 
     u = np.asarray(u, float)
     n = u.size
@@ -302,7 +303,6 @@ def states_between(an: Analysis, sol: Solution, u: np.ndarray, ud, udd):
 def _sweep_evaluator(an: Analysis, sol: Solution):
     """``stroke(q)``'s arguments at driver values ``u`` (1, L): the mechanism solved
     there on the sweep's branches, at the file's speed."""
-    from mechsolve.core.sweep import StateView
 
     def evaluate(u: np.ndarray):
         st, ok = states_between(an, sol, u.ravel(), an.speed, 0.0)
@@ -315,7 +315,6 @@ def _sweep_evaluator(an: Analysis, sol: Solution):
 def _design_evaluator(an: Analysis, sol: Solution):
     """As :func:`_sweep_evaluator` for designs solved as one batch: ``an.design_states``
     (given by :mod:`mechsolve.analyses.batch`) solves each design at its own driver values."""
-    from mechsolve.core.sweep import StateView
 
     solve = getattr(an, "design_states", None)
     if solve is None:
@@ -438,7 +437,6 @@ def _switch(an: Analysis, sol: Solution, fr: ForceResult, load, k: int, points: 
     """The driver coordinate between samples k and k+1 where ``load`` switches, to
     rounding: the interval is cut into ``points + 1`` parts per round, all solved at once
     (about 8 vectorised solves instead of some 50 single ones of a bisection)."""
-    from mechsolve.core.sweep import StateView
 
     lo, hi = float(sol.u[k]), float(sol.u[k + 1])
     on_lo = bool(fr.active[load.name][k])

@@ -9,6 +9,7 @@ import numpy as np
 
 from mechsolve.core.force_result import ForceResult
 from mechsolve.core.loads import _Q, _switch, apply_loads, states_between, stroke_function
+from mechsolve.core.sweep import StateView
 from mechsolve.model import PointForce, Spring, Torque
 
 if TYPE_CHECKING:
@@ -231,7 +232,6 @@ def _load_power(
     """The power of ``loads`` at the driver values ``uu`` with rates ``vv``, ``ww`` (on
     the sweep's branches; each conditional load where its condition holds there); NaN
     where the mechanism cannot be solved."""
-    from mechsolve.core.sweep import StateView
 
     st, ok = states_between(an, sol, uu, vv, ww)
     view = StateView(an, st)

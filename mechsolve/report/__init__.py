@@ -17,7 +17,11 @@ import datetime
 from dataclasses import dataclass
 from pathlib import Path
 
+from mechsolve import api
+from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
+from mechsolve.model.source import load_file
+from mechsolve.report.animate import check_frame_count
 from mechsolve.report.build import Content, cam_content, mechanism_content
 
 JINJA_HINT = (
@@ -109,7 +113,6 @@ def render(content: Content, paper: str = "a4") -> str:
 
 def is_cam_file(path: Path) -> bool:
     """Whether ``path`` is a cam design (a ``cam:`` section and no ``links:``)."""
-    from mechsolve.model.source import load_file
 
     data = load_file(path).data
     return isinstance(data, dict) and "cam" in data and "links" not in data
@@ -124,7 +127,6 @@ def build(
     polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``file`` every way the report shows it."""
-    from mechsolve import api
 
     file = Path(file)
     _environment()  # say that jinja2 is missing before solving anything
@@ -138,7 +140,6 @@ def build(
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    from mechsolve.base.atomic import replacing
 
     with replacing(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(text)
@@ -163,7 +164,6 @@ def write_report(
     Raises :class:`~mechsolve.base.errors.InputError` for a wrong file or option, or for
     ``pdf`` without a headless browser (the HTML is written first, so it is there
     either way)."""
-    from mechsolve.report.animate import check_frame_count
 
     check_frame_count(frames)  # a slip in the options costs nothing
     paper_size(paper)

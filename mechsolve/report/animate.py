@@ -19,8 +19,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mechsolve import api
 from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
+from mechsolve.writers.fonts import pyplot
 
 if TYPE_CHECKING:
     from mechsolve.model import Mechanism
@@ -323,7 +325,6 @@ def solve_frames(
 ) -> Frames:
     """Solve the fine sweep of ``mech`` for an animation of ``count`` frames (see
     :func:`fine_step`) and draw it."""
-    from mechsolve import api
 
     if forces and not mech.needs_forces:
         raise InputError(
@@ -356,7 +357,6 @@ def render(fr: Frames, size: tuple[int, int] = (800, 600), dpi: int = 100):
 
     The axes, grid, guides, pivots and faint full paths are drawn once; each frame
     redraws only what moves (blitting), which keeps a 361-frame animation to seconds."""
-    from mechsolve.writers.fonts import pyplot
 
     plt = pyplot(fr.names())
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)

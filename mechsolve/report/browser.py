@@ -10,6 +10,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
 
 NAMES = (
@@ -70,7 +71,6 @@ def print_pdf(html: Path, pdf: Path, browser: str | None = None) -> Path:
     if browser is None:
         raise InputError(f"--pdf: no headless browser found to print the PDF: {INSTALL_HINT}")
     html, pdf = Path(html).resolve(), Path(pdf)
-    from mechsolve.base.atomic import replacing
 
     with replacing(pdf, ".pdf") as tmp:
         with tempfile.TemporaryDirectory(prefix="mechsolve-browser-") as profile:

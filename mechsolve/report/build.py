@@ -16,7 +16,20 @@ from typing import Any
 
 import numpy as np
 
+from mechsolve import api
+from mechsolve.analyses.cam.analysis import analyse
+from mechsolve.analyses.cam.model import load as load_cam
+from mechsolve.analyses.cam.writers import write_plots as write_cam_plots
+from mechsolve.analyses.dynamics import simulate as run_simulation
+from mechsolve.analyses.dynamics.plots import write_simulation_plots
+from mechsolve.analyses.polygons import draw_polygons
+from mechsolve.base.errors import AssemblyError, InputError, SolverError
 from mechsolve.base.units import parse_quantity
+from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
+from mechsolve.model.source import load_file
+from mechsolve.report.animate import solve_frames
+from mechsolve.results.requirements import check_requirements
+from mechsolve.writers.plots import draw_start, write_plots
 
 PLOT_TITLES = {
     "trajectories": "The mechanism at the start and the paths of its points",
@@ -321,7 +334,6 @@ def _joints_table(mech, lu: str, f: float) -> Table:
 
 def _loads_table(mech, lu: str, f: float) -> Table | None:
     """The loads and gravity (``None`` without any)."""
-    from mechsolve.model import Damper, PointForce, Spring, Torque
 
     rows = []
     for ld in mech.loads:
@@ -362,7 +374,6 @@ def _loads_table(mech, lu: str, f: float) -> Table | None:
 
 def _driver_table(mech, check_report, lu: str, f: float) -> Table:
     """The driver and the sweep."""
-    from mechsolve.model import Limit
 
     d = mech.driver
     an = check_report.analysis
@@ -615,10 +626,6 @@ def mechanism_content(
     polygons_at: str | int | None = None,
 ) -> Content:
     """Solve ``mech`` every way the report shows it and gather the results."""
-    from mechsolve import api
-    from mechsolve.report.animate import solve_frames
-    from mechsolve.results.requirements import check_requirements
-    from mechsolve.writers.plots import draw_start, write_plots
 
     file = str(mech.source.file) if mech.source is not None and mech.source.file else ""
     c = Content(mech.name, _description(mech.source), file, None, "mechanism")
@@ -680,8 +687,6 @@ def _table_step(mech, res) -> str | None:
 
 def _simulation_section(c: Content, mech, d: Path) -> None:
     """The motor-driven start-up: its summary and plots."""
-    from mechsolve.analyses.dynamics import simulate as run_simulation
-    from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
     sim = run_simulation(mech)
     c.dynamics_text = sim.summary()
@@ -695,8 +700,6 @@ def _polygons_section(c: Content, mech, d: Path, polygons_at: str | int | None) 
     """The velocity and acceleration polygons at one position, or why there are none."""
     # the graphical check at one position (default: position 2 of 12, 30 deg
     # after the start, where a mechanism that starts at a limit already moves)
-    from mechsolve.analyses.polygons import draw_polygons
-    from mechsolve.base.errors import AssemblyError, InputError, SolverError
 
     try:
         pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
@@ -727,13 +730,8 @@ def _polygons_section(c: Content, mech, d: Path, polygons_at: str | int | None) 
 
 def cam_content(path: Path, variant: str | None) -> Content:
     """A cam file (a ``cam:`` section, no links): the cam's summary and plots."""
-    from mechsolve.analyses.cam.analysis import analyse
-    from mechsolve.analyses.cam.model import load
-    from mechsolve.analyses.cam.writers import write_plots
-    from mechsolve.base.errors import InputError
-    from mechsolve.model.source import load_file
 
-    model = load(path, variant)
+    model = load_cam(path, variant)
     try:
         res = analyse(model)
     except ValueError as exc:
@@ -743,5 +741,5 @@ def cam_content(path: Path, variant: str | None) -> Content:
     c.cam_problems = list(res.problems)
     with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
         d = Path(tmp)
-        c.cam_plots = [embed(p) for p in write_plots(res, d)]
+        c.cam_plots = [embed(p) for p in write_cam_plots(res, d)]
     return c

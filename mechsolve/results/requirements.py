@@ -51,6 +51,7 @@ import numpy as np
 
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_unit
+from mechsolve.core import evaluate as core
 from mechsolve.model.expr import (
     Binary,
     BoolOp,
@@ -76,6 +77,7 @@ from mechsolve.model.requirement import (
     figure_dim,
     parse_requirement,
 )
+from mechsolve.results.run import for_plots
 
 if TYPE_CHECKING:  # (what a requirement is belongs to the model: model/requirement.py)
     from mechsolve.model import Mechanism
@@ -302,7 +304,6 @@ class _Reducer:
 
     @staticmethod
     def _fine_sweep(res: Results) -> Results | None:
-        from mechsolve.results.run import for_plots
 
         if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
             return for_plots(res.mechanism, res)
@@ -421,7 +422,6 @@ class _Reducer:
 
     def _values(self, arg, x: np.ndarray, near: int) -> np.ndarray:
         """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
-        from mechsolve.core import evaluate as core
 
         fine = self.fine
         an, sol = fine.analysis, fine.solution

@@ -17,8 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
+from mechsolve.core.work import driver_work_why
 from mechsolve.model import GROUND, Mechanism
+from mechsolve.results.csv import write_csv
 from mechsolve.results.summary import Summary
 
 
@@ -387,7 +390,6 @@ class Results(Summary):
     def _work_why(self) -> tuple[float, str]:
         """The driver's work and why it is not defined (see
         :func:`mechsolve.core.work.driver_work_why`), computed once."""
-        from mechsolve.core.work import driver_work_why
 
         if not hasattr(self, "_work"):
             self._work = driver_work_why(self.analysis, self.solution, self.forces)
@@ -419,7 +421,6 @@ class Results(Summary):
         return float(np.nanmean(e)), "mean of the solved positions"
 
     def is_full_cycle(self) -> bool:
-        from mechsolve.core.solution import full_cycle
 
         return full_cycle(self.linear, self.u)
 
@@ -444,6 +445,5 @@ class Results(Summary):
 
     def to_csv(self, path) -> Path:
         """Write the table as CSV (see :mod:`mechsolve.results.csv`); return the path."""
-        from mechsolve.results.csv import write_csv
 
         return write_csv(self, path)

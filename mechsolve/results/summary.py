@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from mechsolve.core.sweep import angle_deg
+from mechsolve.model.motion import describe
 
 
 class Summary:
@@ -64,7 +65,6 @@ class Summary:
         law = self.mechanism.driver.motion
         if law is None:
             return []
-        from mechsolve.model.motion import describe
 
         unit = "m/s^2" if self.linear else "rad/s^2"
         lines = [f"  driver motion: {describe(law)}"]

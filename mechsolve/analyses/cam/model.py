@@ -33,6 +33,7 @@ from mechsolve.analyses.cam.design import Allowance
 from mechsolve.analyses.cam.laws import NAMES_HELP, find_law
 from mechsolve.analyses.cam.profile import Follower, base_radius_of, start_angle_of
 from mechsolve.analyses.cam.program import Program, build_program
+from mechsolve.base.units import _QUANTITY_RE, _UNITS, parse_unit
 from mechsolve.model.parse import Reader, read_units
 from mechsolve.model.source import Source, load_file
 
@@ -97,7 +98,6 @@ def file_length_unit(src: Source, r: Reader) -> LengthUnit:
     """The length unit the cam's file uses: its ``units: {length: ...}``; else the one
     unit its cam's lengths are written in (``2 in`` ...), plain numbers counting as
     metres; mm when they mix units."""
-    from mechsolve.base.units import _QUANTITY_RE, _UNITS, parse_unit
 
     data = src.data
     units = data.get("units") if isinstance(data, dict) else None

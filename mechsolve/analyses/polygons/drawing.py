@@ -10,6 +10,8 @@ import numpy as np
 
 from mechsolve.analyses.polygons.construction import Polygon, PolygonResult, build_polygons
 from mechsolve.model import Mechanism
+from mechsolve.writers.fonts import pyplot
+from mechsolve.writers.plots import draw_mechanism, names_of, save_figure
 
 COLOURS = {
     "absolute": "k",
@@ -152,7 +154,6 @@ def _legend(fig, *polys: Polygon) -> None:
 
 
 def _draw_mechanism(ax, res: PolygonResult) -> None:
-    from mechsolve.writers.plots import draw_mechanism
 
     draw_mechanism(ax, res.analysis, res.state, 0)
     ax.set_aspect("equal", adjustable="datalim")
@@ -179,8 +180,6 @@ def draw_polygons(
     the mechanism to scale beside both polygons); with ``svg`` also the SVGs (text kept as
     text). ``sheet``: write the sheet to this file only (``.png`` or ``.svg``) instead.
     The result's ``images`` lists the files written."""
-    from mechsolve.writers.fonts import pyplot
-    from mechsolve.writers.plots import names_of, save_figure
 
     res = build_polygons(
         mech, at, scale_v=scale_v, scale_a=scale_a, per_turn=per_turn, method=method

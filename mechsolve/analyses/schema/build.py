@@ -18,6 +18,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from mechsolve.analyses.cam.model import CAM_KEYS, FOLLOWER_KEYS
+from mechsolve.analyses.study.designs import DESIGNS, STUDY_KEYS
 from mechsolve.model import keys
 from mechsolve.model.keys import Key, Kind, Section
 
@@ -166,8 +168,6 @@ def _agree(what: str, declared: tuple[str, ...], read: tuple[str, ...]) -> None:
 
 def check_readers() -> None:
     """The sections other modules read agree with their own key constants."""
-    from mechsolve.analyses.cam.model import CAM_KEYS, FOLLOWER_KEYS
-    from mechsolve.analyses.study.designs import DESIGNS, STUDY_KEYS
 
     _agree("'cam'", keys.CAM.allowed, CAM_KEYS)
     _agree("'follower'", keys.FOLLOWER.allowed, FOLLOWER_KEYS)

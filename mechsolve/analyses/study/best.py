@@ -14,6 +14,7 @@ import yaml
 
 from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.figures import Row
+from mechsolve.base.atomic import write_text
 
 
 @dataclass
@@ -83,7 +84,6 @@ def write_best(study: Study, best: Best, path: Path) -> Path:
         + "\nwritten by mechsolve sweep; run it with: mechsolve run "
         + path.name
     )
-    from mechsolve.base.atomic import write_text
 
     return write_text(path, design_yaml(study, best.design, header))
 

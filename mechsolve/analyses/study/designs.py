@@ -29,6 +29,7 @@ import numpy as np
 
 from mechsolve.analyses.study.params import Parameter, make_parameter, parse_option
 from mechsolve.base.errors import InputError
+from mechsolve.model.parse import from_source
 from mechsolve.model.source import Source
 
 DESIGNS = {
@@ -106,7 +107,6 @@ class Study:
 
     def mechanism(self, k: int):
         """The validated mechanism of design ``k`` (raises InputError if invalid)."""
-        from mechsolve.model.parse import from_source
 
         return from_source(self.source_of(k))
 

@@ -18,9 +18,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from mechsolve.analyses.batch import solve_designs
 from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.figures import Row, design_row
 from mechsolve.base.errors import AssemblyError, InputError, MechsolveError
+from mechsolve.results.requirements import check_requirements, evaluate_figure
+from mechsolve.results.run import solve as solve_sweep
 
 SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
 
@@ -92,7 +95,6 @@ def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
     """One design's row: its parameters, a status, and its figures (see
     :mod:`mechsolve.analyses.study.figures`). An invalid design or one that cannot be solved is a
     row that says why; nothing is raised but KeyboardInterrupt."""
-    from mechsolve.results.run import solve as solve_sweep
 
     row = _head(study, k)
     try:
@@ -115,9 +117,6 @@ def precheck(study: Study, nominal) -> None:
     before the study starts, not a message in every row. Nothing is checked when the
     file's own design cannot be solved."""
     import numpy as np
-
-    from mechsolve.results.requirements import check_requirements, evaluate_figure
-    from mechsolve.results.run import solve as solve_sweep
 
     figures = list(study.figures)
     if study.best is not None:
@@ -148,8 +147,6 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     designs are solved as one batch (:func:`mechsolve.analyses.batch.solve_designs`, the same
     results as separate solves), then each row's figures come from its own results."""
     import numpy as np
-
-    from mechsolve.analyses.batch import solve_designs
 
     heads: dict[int, Row] = {}
     mechs: dict = {}

@@ -26,6 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from mechsolve.base.units import UnitError, parse_unit
+from mechsolve.results.requirements import evaluate_figure
+
 Row = dict[str, Any]
 
 
@@ -114,7 +117,6 @@ def extra_figures(res, mech, texts: list[str]) -> Row:
     row: Row = {}
     if not texts:
         return row
-    from mechsolve.results.requirements import evaluate_figure
 
     for text in texts:
         unit = expression_unit(text, res)
@@ -149,7 +151,6 @@ def _shown(value: float, unit: str) -> float:
     """A requirement's SI value in the unit it is shown in."""
     if not unit or unit == "-":
         return float(value)
-    from mechsolve.base.units import UnitError, parse_unit
 
     try:
         return float(value) / parse_unit(unit).factor

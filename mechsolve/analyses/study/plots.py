@@ -9,6 +9,7 @@ from pathlib import Path
 
 from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.figures import Row
+from mechsolve.analyses.study.table import columns
 from mechsolve.writers.plots import save_figure
 
 SKIP = {"design [-]", "positions [-]", "solved [-]"}
@@ -17,7 +18,6 @@ MAX_FIGURES = 12
 
 def figure_columns(study: Study, rows: list[Row]) -> list[str]:
     """Numeric figure columns (not the parameters, not the verdicts)."""
-    from mechsolve.analyses.study.table import columns
 
     params = {p.header for p in study.params}
     out = []
