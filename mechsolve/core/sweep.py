@@ -309,9 +309,9 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                 ctx, unit, conds if lazy else None, derivs, acceleration, analyse
             )
         if lazy:
-            self._finish_lazy_start(start, st, conds)
+            _finish_lazy_start(self, start, st, conds)
         ok = ok_all.copy()
-        res = self._check_residual(st, unit, ok, iters, methods)
+        res = _check_residual(self, st, unit, ok, iters, methods)
         if not per_unit_driver:  # per unit driver coordinate -> time derivatives
             _scale_rates(st, self.speed)
         events.sort(key=lambda e: e.after)
@@ -439,35 +439,6 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             raise self._cannot_close(g, st, start.u0, int(closes[0]) if closes.size else None)
         return ok, ind
 
-    def _finish_lazy_start(
-        self, start: StartAssembly, st: State, conds: _PendingConditions
-    ) -> None:
-        """Keep the start's state, and check the assembly conditions no group decided."""
-        start.state = st.take([0])
-        start.group_modes = list(start.modes)
-        view = StateView(self, start.state)
-        view.has_velocity = view.has_acceleration = False
-        for _, c in conds.remaining():  # conditions no group decided: they must hold
-            if not bool(np.all(c.evaluate(view))):
-                raise AssemblyError(
-                    f"{self._file()}the start position does not satisfy the assembly "
-                    f"condition {c.text!r}, and no loop's branch can change that"
-                )
-
-    def _check_residual(self, st: State, unit: Drive, ok: np.ndarray, iters, methods):
-        """With Newton groups, the full constraint residual at every position (nan where
-        not solved), polished where it exceeds the tolerance; ``None`` without them."""
-        if not any(isinstance(g, NewtonGroup) for g in self.plan):
-            return None
-        with np.errstate(invalid="ignore"):
-            res = self.system.max_residual(st, unit.u)
-        bad = ok & ~(res <= self.atol)
-        for i in np.flatnonzero(bad):
-            ok[i], res[i], it = self._polish(st, unit, i)
-            iters[i] += it
-            methods.append(i, "newton polish")
-        return np.where(ok, res, np.nan)
-
 
 _RATE = {"x": "vx", "y": "vy", "angle": "omega", "s": "v"}
 
@@ -549,6 +520,37 @@ def check_solution(sol: Solution) -> None:
         raise SolverError(
             "no position of the sweep could be solved" + (f": {f.reason}" if f else "")
         )
+
+
+def _finish_lazy_start(
+    an: Analysis, start: StartAssembly, st: State, conds: _PendingConditions
+) -> None:
+    """Keep the start's state, and check the assembly conditions no group decided."""
+    start.state = st.take([0])
+    start.group_modes = list(start.modes)
+    view = StateView(an, start.state)
+    view.has_velocity = view.has_acceleration = False
+    for _, c in conds.remaining():  # conditions no group decided: they must hold
+        if not bool(np.all(c.evaluate(view))):
+            raise AssemblyError(
+                f"{an._file()}the start position does not satisfy the assembly "
+                f"condition {c.text!r}, and no loop's branch can change that"
+            )
+
+
+def _check_residual(an: Analysis, st: State, unit: Drive, ok: np.ndarray, iters, methods):
+    """With Newton groups, the full constraint residual at every position (nan where
+    not solved), polished where it exceeds the tolerance; ``None`` without them."""
+    if not any(isinstance(g, NewtonGroup) for g in an.plan):
+        return None
+    with np.errstate(invalid="ignore"):
+        res = an.system.max_residual(st, unit.u)
+    bad = ok & ~(res <= an.atol)
+    for i in np.flatnonzero(bad):
+        ok[i], res[i], it = an._polish(st, unit, i)
+        iters[i] += it
+        methods.append(i, "newton polish")
+    return np.where(ok, res, np.nan)
 
 
 def _scale_rates(st: State, w: float) -> None:
