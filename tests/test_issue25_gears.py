@@ -23,6 +23,7 @@ import pytest
 import mechsolve
 from mechsolve.base.state import State
 from mechsolve.joints.gear import GearConstraint
+from mechsolve.joints.rack import RackConstraint
 
 ROOT = Path(__file__).resolve().parent.parent
 ALPHA = math.radians(20.0)
@@ -234,6 +235,85 @@ def test_power_balance_with_masses_on_a_moving_carrier():
     assert np.max(np.abs(res.forces.residual)) <= 1e-9 * scale
 
 
+RACK = """
+name: rack and pinion
+units: {length: mm, angle: deg}
+ground: {C: [0, 30]}
+links:
+  pinion: {points: {C: [0, 0], M: [30, 0]}, mass: 1 kg, com: C, inertia: 0.002 kg*m^2}
+  ram: {points: {R: [0, 0], T: [100, 0]}, mass: 5 kg, com: R}
+joints:
+  C: [ground, pinion]
+  guide: {slider: [ground, ram], point: R, line: {through: [0, 0], angle: 0 deg}}
+  mesh: {rack: [ram, pinion], pitch_line: {through: [0, 0], angle: 0 deg}, MESH}
+driver: {joint: C, start: 0 deg, motion: {accelerate: 10 rad/s^2, from: 5 rad/s}}
+sweep: {range: 180 deg, step: 10 deg}
+gravity: 9.81 m/s^2
+loads:
+  cut: {force: [-200 N, 0], at: T, on: ram}
+"""
+
+
+def test_rack_travel_is_r_theta_and_its_tooth_force_by_hand():
+    mech = mechsolve.loads(RACK.replace("MESH", "module: 3 mm, teeth: 20"))
+    assert mechsolve.check(mech).grubler == 1  # 3*2 - 2*2 - 1
+    res = mechsolve.solve(mech)
+    r, m_ram, j_pin = 0.030, 5.0, 0.002
+    pin = res.link("pinion")
+    ram = res.slider("guide")
+    # a pinion above the rack turning counter-clockwise drives the rack to the right
+    np.testing.assert_allclose(ram.s, r * pin.angle, atol=1e-15)
+    np.testing.assert_allclose(ram.v, r * pin.omega, atol=1e-15)
+    np.testing.assert_allclose(ram.a, r * pin.alpha, atol=1e-15)
+    # the ram: Ft (tooth force on the ram) - 200 N = m a; on the pinion -Ft along x
+    ft_ram = 200.0 + m_ram * ram.a
+    f = res.reaction("mesh")
+    np.testing.assert_allclose(f["Ft"], -ft_ram, rtol=1e-12)
+    np.testing.assert_allclose(f["Fr"], ft_ram * math.tan(ALPHA), rtol=1e-12)
+    np.testing.assert_allclose(f["Fy"], ft_ram * math.tan(ALPHA), rtol=1e-12)  # lifts the pinion
+    # the guide carries the ram's weight and the separating force
+    np.testing.assert_allclose(
+        res.reaction("guide")["N"], m_ram * 9.81 + ft_ram * math.tan(ALPHA), rtol=1e-12
+    )
+    # the pinion's pivot: its weight and the separating force; the driver: J alpha + Ft r
+    np.testing.assert_allclose(res.reaction("C")["Fy"], 9.81 - ft_ram * math.tan(ALPHA), rtol=1e-12)
+    np.testing.assert_allclose(res.driving_effort, j_pin * pin.alpha + ft_ram * r, rtol=1e-12)
+    assert np.max(np.abs(res.forces.residual)) <= 1e-9 * res.power_scale()
+
+
+def test_a_pinion_below_the_rack_turns_the_other_way():
+    text = RACK.replace("MESH", "radius: 30 mm").replace("C: [0, 30]}", "C: [0, -30]}")
+    res = mechsolve.solve(mechsolve.loads(text))
+    np.testing.assert_allclose(res.slider("guide").s, -0.030 * res.link("pinion").angle, atol=1e-15)
+
+
+def test_a_pinion_rolling_on_a_fixed_rack_draws_a_cycloid():
+    text = """
+name: pinion on a fixed rack
+units: {length: mm, angle: deg}
+ground: {R0: [0, 0], R1: [100, 0]}
+links:
+  carriage: {points: {C: [0, 0], D: [50, 0]}}
+  pinion: {points: {C: [0, 0], M: [25, 0]}}
+joints:
+  rail: {slider: [ground, carriage], point: C, line: {through: [0, 25], angle: 0}}
+  C: [carriage, pinion]
+  mesh: {rack: [ground, pinion], pitch_line: [R0, R1], radius: 25 mm}
+driver: {joint: C, speed: 4 rad/s, start: 0 deg}
+sweep: {range: 400 deg, step: 10 deg}
+"""
+    res = mechsolve.solve(mechsolve.loads(text))
+    r, th = 0.025, np.asarray(res.u)
+    np.testing.assert_allclose(res.slider("rail").s, -r * th, atol=1e-15)
+    m = res.point("M")  # a point of the pitch circle: x = -r th + r cos th, y = r + r sin th
+    np.testing.assert_allclose(m.x, -r * th + r * np.cos(th), atol=1e-15)
+    np.testing.assert_allclose(m.y, r + r * np.sin(th), atol=1e-15)
+    # the contact point is at rest: M's speed vanishes where it touches the rack
+    touch = np.isclose(m.y, 0.0, atol=1e-12)
+    assert touch.any()
+    np.testing.assert_allclose(np.hypot(m.vx, m.vy)[touch], 0.0, atol=1e-12)
+
+
 # -- the equations against finite differences -----------------------------------------
 
 
@@ -280,6 +360,23 @@ def test_the_gear_equation_terms_match_finite_differences(sigma):
             "g", 0, 2, rng.uniform(-1, 1, 2), rng.uniform(-1, 1, 2), 0.3, 0.8, sigma, ALPHA, 0
         )
         _check_terms(ground, rng)
+
+
+def test_the_rack_equation_terms_match_finite_differences():
+    rng = np.random.default_rng(52)
+    for _ in range(20):
+        c = RackConstraint(
+            "k",
+            0,
+            1,
+            rng.uniform(-1, 1, 2),
+            rng.uniform(-3, 3),
+            rng.uniform(-1, 1, 2),
+            0.4,
+            ALPHA,
+            0.1,
+        )
+        _check_terms(c, rng)
 
 
 def test_the_drawing_shows_the_pitch_circles():
@@ -338,6 +435,15 @@ def _bad_cases() -> dict[str, tuple[str, str]]:
             GOOD.replace("driver: {joint: O1", "driver: {joint: mesh"),
             r"driver\.joint: the driver names the joint 'mesh', a gear_pair, which has no "
             r"coordinate",
+        ),
+        "rack distance": (
+            RACK.replace("MESH", "radius: 25 mm"),
+            r"joints\.mesh\.radius: rack 'mesh': the pinion's centre C is 30 mm from the pitch "
+            r"line at the start position, but its pitch radius is 25 mm",
+        ),
+        "rack module and radius": (
+            RACK.replace("MESH", "radius: 30 mm, teeth: 20"),
+            r"joints\.mesh\.teeth: rack 'mesh': give either 'radius' or 'module'",
         ),
     }
 
