@@ -419,6 +419,13 @@ def _bad_cases() -> dict[str, tuple[str, str]]:
             GOOD.replace("internal: false", "internal: true"),
             r"joints\.mesh\.radii: .*need r2 - r1 = 40 - 20 = 20 mm",
         ),
+        "centres not held": (
+            GOOD.replace("M1: [20, 0]", "G1: [0, 0]").replace(
+                "radii: [20, 40]", "radii: [20, 40], centres: [G1, O2]"
+            ),
+            r"joints\.mesh\.centres: gear pair 'mesh': no link \(nor the ground\) carries both "
+            r"centres 'G1' and 'O2', so nothing holds the centre distance",
+        ),
         "both": (
             GOOD.replace("radii: [20, 40]", "radii: [20, 40], module: 2 mm, teeth: [20, 40]"),
             r"joints\.mesh\.module: gear pair 'mesh': give either 'radii' or 'module'",

@@ -266,7 +266,8 @@ class GearJoint(Joint):
                 self.where + ("centres",),
                 f"gear pair {self.name!r}: no link (nor the ground) carries both centres "
                 f"{self.centres[0]!r} and {self.centres[1]!r}, so nothing holds the centre "
-                "distance; put both centres on the ground or on a carrier link",
+                "distance; name each centre after its gear's pivot, with both pivots on the "
+                "ground or on one carrier link",
             )
         carrier, d = held
         if abs(d - self.distance) > CENTRE_TOLERANCE * (self.r1 + self.r2):
