@@ -463,9 +463,9 @@ class GearConstraint(Constraint):
         t = np.linspace(0.0, TWO_PI, 97)
         for body, s, r in ((self.a, self.s1, self.r1), (self.b, self.s2, self.r2)):
             x, y = st.point(body, s, [i])
-            th = float(st.th[body, i]) if body != st.nb else 0.0
             cx, cy = float(x[0]), float(y[0])
             out.append(np.stack([cx + r * np.cos(t), cy + r * np.sin(t)], axis=1))
-            # a mark on the gear: its frame's x axis, to see it turn
-            out.append(np.array([[cx, cy], [cx + r * math.cos(th), cy + r * math.sin(th)]]))
+            if body != st.nb:  # a mark on a moving gear: its frame's x axis, to see it turn
+                th = float(st.th[body, i])
+                out.append(np.array([[cx, cy], [cx + r * math.cos(th), cy + r * math.sin(th)]]))
         return out
