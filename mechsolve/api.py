@@ -72,13 +72,18 @@ class CheckReport:
         count = {kind: 0 for kind in KINDS}
         for j in mech.joints:
             count[j.kind] += 1
+        lower = sum(1 for j in mech.joints if j.pair == "lower")
+        higher = sum(1 for j in mech.joints if j.pair == "higher")
         kinds = ", ".join(f"{n} {k}" for k, n in count.items() if n or k in ("revolute", "slider"))
         lines = [
             f"{mech.name}: the file is valid",
             f"  {len(mech.links)} moving links, {len(mech.joints)} joints ({kinds})",
-            f"  degrees of freedom: {self.grubler} by Grübler (3*{len(mech.links)} - "
-            f"2*{len(mech.joints)}), {self.jacobian_dof} by the rank of the constraint Jacobian "
-            f"({self.jacobian_rank} of {self.n_coordinates} coordinates)",
+            f"  degrees of freedom: {self.grubler} by Grübler (3n - 2Pl - Ph = "
+            f"3*{len(mech.links)} - 2*{lower} - {higher}), {self.jacobian_dof} by the rank of "
+            f"the constraint Jacobian ({self.jacobian_rank} of {self.n_coordinates} "
+            "coordinates)",
+            f"  pairs: Pl = {lower} lower{_kinds_of(mech, 'lower')}, Ph = {higher} "
+            f"higher{_kinds_of(mech, 'higher')}",
         ]
         if self.grubler != self.jacobian_dof:
             lines.append(
@@ -109,6 +114,12 @@ class CheckReport:
         for n in self.notes:
             lines.append("  " + n)
         return "\n".join(lines)
+
+
+def _kinds_of(mech: Mechanism, pair: str) -> str:
+    """The kinds of the joints that are ``pair`` pairs, as `` (revolute, slider)``."""
+    kinds = dict.fromkeys(j.kind for j in mech.joints if j.pair == pair)
+    return f" ({', '.join(kinds)})" if kinds else ""
 
 
 def check(mech: Mechanism, method: str | None = None) -> CheckReport:

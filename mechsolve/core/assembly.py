@@ -124,6 +124,9 @@ class StartAssembler(BranchChoice):
                     f"{self._file()}the start position does not satisfy the assembly condition "
                     f"{c.text!r}, and no loop's branch can change that"
                 )
+        first = st.take([0])
+        for j in mech.joints:  # the kinds' own checks of the start (a rack's mesh)
+            j.check_start(mech, self.system.by_joint[j.name], first)
         if self.redundant:
             # the dependencies are those of the motion: at a singular start (a redundant
             # parallelogram started collinear) the Jacobian loses rank there only, so

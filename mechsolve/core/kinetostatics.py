@@ -117,6 +117,7 @@ def solve_forces(
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
+    lam = _with_separating_forces(an, st, lam, sol)
     reactions = _reactions(an, st, lam)
     ok = sol.ok & np.all(np.isfinite(lam), axis=1)
     return ForceResult(
@@ -134,6 +135,33 @@ def solve_forces(
         energy_terms=energy_terms,
         near_singular=near,
     )
+
+
+def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) -> np.ndarray:
+    """The multipliers with what the higher pairs' separating forces add (a second pass).
+
+    A gear tooth's force has a radial part that the rolling equation's multiplier does not
+    carry; it does no work while the centre distance is held, so the driver's effort does
+    not change, but it loads the pivots. Each pair that has one
+    (:meth:`~mechsolve.joints.base.Constraint.separating`) applies it as a known load on
+    its two links; ``Phi_q^T lambda_2 = Q_separating`` is solved like the first pass and
+    added: the pairs' own rows get nothing from it (the force is normal to their motion).
+    """
+    sys_ = an.system
+    extra = _Q(an, st)
+    found = False
+    for r in sys_.rows:
+        c = r.constraint
+        loads = c.separating(st, lam[:, r.start : r.start + c.m])
+        for b, px, py, fx, fy in loads or ():
+            if b == sys_.nb:
+                continue
+            found = True
+            extra.force(b, None, fx, fy, (px - st.x[b], py - st.y[b]))
+    if not found:
+        return lam
+    lam2 = _solve_groups(an, st, extra.Q, sol.indicator, sol.ok)[0]
+    return lam + lam2
 
 
 def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]:

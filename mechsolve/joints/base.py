@@ -88,6 +88,20 @@ class Constraint:
         a fraction of the mechanism's ``scale``), or ``None``."""
         return None
 
+    def drawing(self, st: State, i: int) -> list[np.ndarray]:
+        """What a drawing of position ``i`` adds for this constraint that moves with its
+        links (a gear's pitch circle, a rack's pitch line): polylines, each an array of
+        points ``(k, 2)``; none by default (see :meth:`guide` for fixed guides)."""
+        return []
+
+    def separating(self, st: State, lam: np.ndarray) -> list[tuple] | None:
+        """A higher pair's contact force that its multipliers ``lam`` (N, m) do not carry
+        and that does no work while the pair keeps contact (the radial, separating part of
+        a gear tooth's force): point forces ``(body, x, y, fx, fy)`` (global point and
+        components, arrays over the positions), which the force analysis applies as known
+        loads to find what they add to the other joints' reactions. ``None``: nothing."""
+        return None
+
     def indeterminate(self, free: np.ndarray) -> set[str]:
         """The reaction components that the multipliers flagged ``free`` (m,) leave
         undetermined (redundant constraints)."""
@@ -186,6 +200,11 @@ class Joint:
     def check(self, mech: Any, in_range: Callable[..., None]) -> None:
         """The kind's own checks on a mechanism (``mech.error(where, message)`` raises);
         ``in_range(mech, path, dimension, *values)`` refuses absurd magnitudes."""
+
+    def check_start(self, mech: Any, c: Constraint, st: State) -> None:
+        """The kind's checks of the assembled start position ``st`` (one position; ``c``
+        its constraint), for what the file alone does not settle (a rack's pinion at its
+        pitch radius from the pitch line); ``mech.error(where, message)`` raises."""
 
     # -- numbers that a batch of designs may vary -------------------------------------
     def geometry(self) -> list[float]:

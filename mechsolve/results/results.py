@@ -351,11 +351,8 @@ class Results(Summary):
         for j in self.mechanism.joints:
             lab = self.joint_label(j.name)
             r = f.reactions[j.name]
-            comps = (
-                [("Fx", "N"), ("Fy", "N"), ("F", "N")]
-                if "F" in r
-                else [("N", "N"), ("M", "N*m"), ("Fx", "N"), ("Fy", "N")]
-            )
+            # the joint's components in its own order (a moment is named M)
+            comps = [(c, "N*m" if c == "M" else "N") for c in r]
             cols += [Column(f"{lab}.{c}", un, m(r[c]), self._note(j.name, c)) for c, un in comps]
         for name, on in f.active.items():
             cols.append(Column(f"load.{name}.active", "-", on.astype(float)))

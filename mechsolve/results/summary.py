@@ -142,7 +142,7 @@ class Summary:
         peaks = []
         for j in self.mechanism.joints:
             r = g.reactions[j.name]
-            mag = np.abs(r["F"] if "F" in r else r["N"])
+            mag = np.abs(r[j.magnitude])  # the joint's magnitude: F, N, Fn...
             mag = np.where(g.ok, mag, np.nan)
             if np.any(np.isfinite(mag)):
                 i = int(np.nanargmax(mag))

@@ -124,6 +124,8 @@ def draw_mechanism(
         seg = c.guide(state, an.scale)
         if seg is not None:
             ax.plot(seg[:, 0], seg[:, 1], "--", color="0.4", lw=1)
+        for line in c.drawing(state, i):  # what moves with the links: pitch circles...
+            ax.plot(line[:, 0], line[:, 1], "-.", color="0.35", lw=0.9)
     # joints and ground pivots
     for p, ref in an.points.items():
         x, y = state.point(ref.body, ref.local, [i])
@@ -372,7 +374,7 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(f"{name}.Fx [{sym}N]")
         ax.set_ylabel(f"{name}.Fy [{sym}N]")
-        slider = "F" not in r
+        slider = res.mechanism.joint(name).magnitude == "N"  # a guide's normal force
         ax.set_title(
             f"{res.joint_label(name)}" + (" (guide normal force)" if slider else ""), fontsize=9
         )

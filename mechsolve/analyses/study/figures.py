@@ -76,9 +76,9 @@ def force_figures(res) -> Row:
     f = res.forces
     for j in res.mechanism.joints:
         r = f.reactions[j.name]
-        comp = "F" if "F" in r else "N"
+        comp = j.magnitude  # the joint's magnitude: F, N, Fn...
         mag = _finite(np.where(f.ok, np.abs(r[comp]), np.nan))
-        key = f"max({j.name}.F)" if comp == "F" else f"max(abs({j.name}.N))"
+        key = f"max({j.name}.F)" if comp == "F" else f"max(abs({j.name}.{comp}))"
         row[f"{key} [N]"] = float(np.max(mag)) if mag.size else math.nan
     row["cycle.work [J]"] = float(res.work())
     return row
