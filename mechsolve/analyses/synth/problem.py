@@ -32,7 +32,16 @@ from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.model.source import Source, load_file
 
-METHODS = ("crank-rocker", "slider-crank", "guide-bar", "three-positions", "window")
+METHODS = (
+    "crank-rocker",
+    "slider-crank",
+    "guide-bar",
+    "three-positions",
+    "window",
+    "function",
+    "path",
+)
+OPTIMISED = ("function", "path")
 TOP = ("name", "units", "round", "pick", *METHODS)
 
 
@@ -141,14 +150,46 @@ def read(path: str | Path) -> tuple[Source, str]:
 
 
 def solve_problem(
-    path: str | Path, rule: str | None = None, solution: int | None = None
+    path: str | Path,
+    rule: str | None = None,
+    solution: int | None = None,
+    *,
+    seed: int | None = 0,
+    max_time: float | None = None,
+    progress=None,
 ) -> Outcome:
     """Read a problem file, solve it, pick a design (by ``rule``, or the ``solution``-th
-    listed, from 1) and write its mechanism text."""
+    listed, from 1) and write its mechanism text. ``seed``, ``max_time`` (s) and
+    ``progress`` (called with the generation and the best objective) are for the
+    optimising methods (function, path)."""
     from mechsolve.analyses.synth.writer import mechanism_yaml
 
     src, method = read(path)
     name = str(src.data.get("name") or Path(path).stem)
+    if method in OPTIMISED:
+        from mechsolve.analyses.synth.optproblem import solve_optimised
+
+        if rule is not None:
+            raise InputError(
+                f"--pick: a {method} problem lists its designs by their error; "
+                "use --solution N to write another one"
+            )
+        for k in ("pick", "round"):
+            if src.data.get(k) is not None:
+                raise src.error(
+                    (k,),
+                    f"not for a {method} problem (its designs are listed "
+                    "by their error, at full precision)",
+                )
+        from mechsolve.analyses.synth.optproblem import describe_optimised
+
+        r = _Reader(src, method)
+        designs, chosen, text, check = solve_optimised(
+            r, method, name, solution, seed=seed, max_time=max_time, progress=progress
+        )
+        out = Outcome(name, method, designs, chosen, text, check)
+        out.text = describe_optimised(out)
+        return out
     rule = rule or src.data.get("pick") or "transmission"
     if rule not in RULES:
         raise src.error(("pick",), f"unknown rule {rule!r}: choose one of {', '.join(RULES)}")
@@ -386,6 +427,10 @@ def confirm(out: Outcome) -> str:
     from mechsolve.model.parse import loads
     from mechsolve.results.run import solve
 
+    if out.method in OPTIMISED:
+        from mechsolve.analyses.synth.optproblem import confirm_optimised
+
+        return confirm_optimised(out)
     d = out.chosen
     res = solve(loads(out.yaml))
     lims = res.limit_positions()
