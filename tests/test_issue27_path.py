@@ -136,3 +136,26 @@ def test_the_example_file_runs(tmp_path):
     r = run(ROOT / "mechanisms" / "synth" / "path-fourbar.yaml", "-o", tmp_path / "d.yaml")
     assert r.exit_code == 0, r.output
     assert "reached in order on one branch" in r.output
+
+
+def test_closed_path_the_crank_turns_fully_on_one_branch(tmp_path):
+    angles = [0, 60, 120, 180, 240, 300]
+    p = problem(
+        tmp_path,
+        angles=angles,
+        extra="  closed: true\n  grashof: crank-rocker\n  optimise: {max_iter: 200}\n",
+    )
+    out = tmp_path / "d.yaml"
+    r = run(p, "-o", out, "--seed", "2")
+    assert r.exit_code == 0, r.output
+    import mechsolve as ms
+
+    res = ms.run(out)
+    assert res.ok.all()
+    assert abs(res.u[-1] - res.u[0]) == pytest.approx(2 * math.pi)
+    pt = res.point("P")
+    # the full turn passes through every target (the sweep's 1 deg grid holds them)
+    for u in angles:
+        i = int(np.argmin(np.abs(np.degrees(res.u) - u)))
+        want = coupler_point(u)
+        assert math.hypot(pt.x[i] * 1000 - want[0], pt.y[i] * 1000 - want[1]) < 1e-6
