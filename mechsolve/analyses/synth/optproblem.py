@@ -296,11 +296,21 @@ def write_plot(out: Any, path: Path) -> Path:
     from mechsolve.base.atomic import replacing
     from mechsolve.writers.fonts import pyplot
 
+    plt = pyplot()
+    if out.method == "four-positions":
+        from mechsolve.analyses.synth.burmester import plot_curves
+
+        fig = plot_curves(plt, out)
+        try:
+            with replacing(path, suffix=".png") as tmp:
+                fig.savefig(tmp, format="png", dpi=110)
+        finally:
+            plt.close(fig)
+        return path
     ch = out.check.get("verified")
     if ch is None:
         confirm_optimised(out)
         ch = out.check["verified"]
-    plt = pyplot()
     if out.method == "function":
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
         phi = np.degrees(ch.phi)

@@ -37,6 +37,7 @@ METHODS = (
     "slider-crank",
     "guide-bar",
     "three-positions",
+    "four-positions",
     "window",
     "function",
     "path",
@@ -211,6 +212,8 @@ def solve_problem(
         designs = _slider_crank(r)
     elif method == "guide-bar":
         designs = _guide_bar(r)
+    elif method == "four-positions":
+        designs = _four_positions(r)
     else:
         designs = _three_positions(r)
     if solution is not None:
@@ -363,6 +366,38 @@ def _three_positions(r: _Reader):
     return r.wrap("positions", three_positions, positions, pa, pb)
 
 
+def _poses(r: _Reader, n: int) -> list:
+    pos = r.data.get("positions")
+    if not (isinstance(pos, list) and len(pos) == n):
+        got = len(pos) if isinstance(pos, list) else 0
+        raise r.err(
+            "positions", f"expected {n} positions [x, y, angle] of the coupler line, got {got}"
+        )
+    out = []
+    for i, p in enumerate(pos):
+        if not (isinstance(p, list) and len(p) == 3):
+            raise r.err(("positions", i), f"expected [x, y, angle], got {p!r}")
+        xy = (r.q(("positions", i, 0), "length", p[0]), r.q(("positions", i, 1), "length", p[1]))
+        out.append((xy, r.q(("positions", i, 2), "angle", p[2])))
+    return out
+
+
+def _four_positions(r: _Reader):
+    from mechsolve.analyses.synth.burmester import four_positions
+
+    r.allow(("positions", "pivots"))
+    poses = _poses(r, 4)
+    pv = r.data.get("pivots")
+    if not (isinstance(pv, dict) and set(pv) == {"A", "B"}):
+        raise r.err(
+            "pivots",
+            "expected {A: [x, y], B: [x, y]}: near where the fixed pivots should be "
+            "(each moves to the nearest point of the centre-point curve)",
+        )
+    near_a, near_b = r.point(("pivots", "A"), pv["A"]), r.point(("pivots", "B"), pv["B"])
+    return r.wrap("positions", four_positions, poses, near_a, near_b)
+
+
 def _window(r: _Reader, path: Path, name: str) -> Outcome:
     from mechsolve.analyses.synth.window import MEASURES, choose_window, report
     from mechsolve.model.parse import load
@@ -431,6 +466,10 @@ def confirm(out: Outcome) -> str:
         from mechsolve.analyses.synth.optproblem import confirm_optimised
 
         return confirm_optimised(out)
+    if out.method == "four-positions":
+        from mechsolve.analyses.synth.burmester import confirm_poses
+
+        return confirm_poses(out)
     d = out.chosen
     res = solve(loads(out.yaml))
     lims = res.limit_positions()

@@ -33,7 +33,8 @@ from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, Command, writing
     "--plot",
     type=click.Path(dir_okay=False, path_type=Path),
     help="function and path problems: a PNG of the target against what the written "
-    "design achieves in mechsolve's run.",
+    "design achieves in mechsolve's run; four-positions: the centre-point and circle-point "
+    "curves.",
 )
 @click.option(
     "--seed",
@@ -57,7 +58,8 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
     \b
     Methods (one section of FILE): crank-rocker (extreme distances, time ratio with both
     limits, or time ratio with one limit and the frame: two solutions), slider-crank,
-    guide-bar, three-positions (motion generation), window (the input window that makes a
+    guide-bar, three-positions (motion generation), four-positions (Burmester's
+    centre-point curve), window (the input window that makes a
     point's path straightest), function (psi = f(phi): Freudenstein's precision points,
     then differential evolution over the range) and path (a coupler point through target
     points, by differential evolution on design batches). See mechanisms/synth/.
@@ -83,10 +85,10 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
         if bar is not None:
             bar.close()
     found = out.check.get("search") if isinstance(out.check, dict) else None
-    if plot is not None and out.method not in ("function", "path"):
+    if plot is not None and out.method not in ("function", "path", "four-positions"):
         from mechsolve.base.errors import InputError
 
-        raise InputError("--plot: only function and path problems draw a plot")
+        raise InputError("--plot: only function, path and four-positions problems draw a plot")
     if not quiet:
         click.echo(out.text)
     if out.yaml is not None:
