@@ -221,6 +221,7 @@ def _design(prob: _Problem, family: str, a, b, c, phi_s, psi_s, sigma=None, at=N
     err = float(ep[0] if sigma > 0 else em[0])
     notes, valid = [], True
     if margin <= 0:
+        err = math.nan  # the loop does not close over the range: no error to speak of
         valid = False
         notes.append(
             "the dyad does not close, or changes branch, somewhere in the range"

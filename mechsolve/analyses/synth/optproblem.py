@@ -242,8 +242,9 @@ def describe_optimised(out: Any) -> str:
             lines.append(
                 f" {mark}{i:<2} {d.family:<22} {L['crank']:<10.6f} {L['coupler']:<10.6f} "
                 f"{L['rocker']:<10.6f} {L['frame']:<10.6f} "
-                f"{math.degrees(d.extra['max_error']):<16.6f} "
-                f"{math.degrees(d.min_transmission):<23.4f} {d.grashof}{bad}"
+                f"{_deg_or_dash(d.extra['max_error'], 6, 16)} "
+                f"{_deg_or_dash(d.min_transmission if d.valid else math.nan, 4, 23)} "
+                f"{d.grashof}{bad}"
             )
     else:
         from mechsolve.analyses.synth.path_gen import describe_rows
@@ -251,6 +252,12 @@ def describe_optimised(out: Any) -> str:
         lines += describe_rows(out)
     lines.append("  written (*): the valid design with the smallest error (or --solution N)")
     return "\n".join(lines)
+
+
+def _deg_or_dash(x: float, digits: int, width: int) -> str:
+    """An angle (rad) in deg, or '-' where it does not exist (the loop does not close)."""
+    text = f"{math.degrees(x):.{digits}f}" if math.isfinite(x) else "-"
+    return f"{text:<{width}}"
 
 
 def confirm_optimised(out: Any) -> str:
