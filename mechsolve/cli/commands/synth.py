@@ -72,7 +72,8 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
         raise InputError("--solution and --pick: give one of them")
     from mechsolve.cli.kit import progress_bar
 
-    bar = progress_bar(0, quiet, desc="synthesis", unit=" generations")
+    # the number of generations is not known before convergence: a counter, not a bar
+    bar = progress_bar(None, quiet, desc="synthesis", unit=" generations")  # type: ignore[arg-type]
 
     def progress(generation: int, best: float) -> None:
         if bar is not None:
