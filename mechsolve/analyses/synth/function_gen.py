@@ -220,14 +220,17 @@ def _design(prob: _Problem, family: str, a, b, c, phi_s, psi_s, sigma=None, at=N
         sigma = 1.0 if ep[0] <= em[0] else -1.0
     err = float(ep[0] if sigma > 0 else em[0])
     notes, valid = [], True
-    if margin <= 0:
+    shift = math.pi if a < 0 else 0.0
+    closes = transmission_margin(abs(a), b, abs(c), d, phi_s + shift, phi_s + shift + s.phi_range)
+    if closes <= 0:
         err = math.nan  # the loop does not close over the range: no error to speak of
         valid = False
+        notes.append("the dyad does not close, or changes branch, somewhere in the range")
+    elif margin <= 0:
+        valid = False
         notes.append(
-            "the dyad does not close, or changes branch, somewhere in the range"
-            if s.min_transmission == 0
-            else f"the transmission angle falls below {math.degrees(s.min_transmission):g} "
-            "deg (or the dyad does not close) somewhere in the range"
+            f"the transmission angle falls below {math.degrees(s.min_transmission):g} deg "
+            "somewhere in the range"
         )
     extra = {
         "signed": (float(a), float(c)),

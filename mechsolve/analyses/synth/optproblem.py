@@ -239,11 +239,12 @@ def describe_optimised(out: Any) -> str:
             L = d.lengths
             mark = "*" if d is out.chosen else " "
             bad = "" if d.valid else "  INVALID: " + "; ".join(d.notes)
+            ok = math.isfinite(d.extra["max_error"])  # the loop closes over the range
             lines.append(
                 f" {mark}{i:<2} {d.family:<22} {L['crank']:<10.6f} {L['coupler']:<10.6f} "
                 f"{L['rocker']:<10.6f} {L['frame']:<10.6f} "
                 f"{_deg_or_dash(d.extra['max_error'], 6, 16)} "
-                f"{_deg_or_dash(d.min_transmission if d.valid else math.nan, 4, 23)} "
+                f"{_deg_or_dash(d.min_transmission if ok else math.nan, 4, 23)} "
                 f"{d.grashof}{bad}"
             )
     else:
