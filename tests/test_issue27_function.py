@@ -189,3 +189,17 @@ def test_the_example_file_runs():
     p = Path(__file__).parent.parent / "mechanisms" / "synth" / "function-log10.yaml"
     r = run(p)
     assert r.exit_code == 0, r.output
+
+
+def test_a_design_whose_loop_does_not_close_shows_no_error_figure(tmp_path):
+    p = tmp_path / "f.yaml"
+    p.write_text(
+        "name: x squared\nunits: {length: mm, angle: deg}\nfunction:\n  y: x^2\n"
+        "  x: [0, 1]\n  input: {start: 30, range: 90}\n  output: {start: 60, range: 90}\n"
+        "  frame: 100\n  at: [0.1, 0.3, 0.5, 0.7, 0.9]\n  optimise: {max_iter: 20}\n"
+    )
+    r = run(p)
+    assert r.exit_code == 0, r.output
+    (row,) = [ln for ln in r.output.splitlines() if "least squares" in ln]
+    assert "does not close" in row
+    assert "180.000000" not in row and " - " in row
