@@ -32,7 +32,17 @@ from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.model.source import Source, load_file
 
-METHODS = ("crank-rocker", "slider-crank", "guide-bar", "three-positions", "window")
+METHODS = (
+    "crank-rocker",
+    "slider-crank",
+    "guide-bar",
+    "three-positions",
+    "four-positions",
+    "window",
+    "function",
+    "path",
+)
+OPTIMISED = ("function", "path")
 TOP = ("name", "units", "round", "pick", *METHODS)
 
 
@@ -141,14 +151,46 @@ def read(path: str | Path) -> tuple[Source, str]:
 
 
 def solve_problem(
-    path: str | Path, rule: str | None = None, solution: int | None = None
+    path: str | Path,
+    rule: str | None = None,
+    solution: int | None = None,
+    *,
+    seed: int | None = 0,
+    max_time: float | None = None,
+    progress=None,
 ) -> Outcome:
     """Read a problem file, solve it, pick a design (by ``rule``, or the ``solution``-th
-    listed, from 1) and write its mechanism text."""
+    listed, from 1) and write its mechanism text. ``seed``, ``max_time`` (s) and
+    ``progress`` (called with the generation and the best objective) are for the
+    optimising methods (function, path)."""
     from mechsolve.analyses.synth.writer import mechanism_yaml
 
     src, method = read(path)
     name = str(src.data.get("name") or Path(path).stem)
+    if method in OPTIMISED:
+        from mechsolve.analyses.synth.optproblem import solve_optimised
+
+        if rule is not None:
+            raise InputError(
+                f"--pick: a {method} problem lists its designs by their error; "
+                "use --solution N to write another one"
+            )
+        for k in ("pick", "round"):
+            if src.data.get(k) is not None:
+                raise src.error(
+                    (k,),
+                    f"not for a {method} problem (its designs are listed "
+                    "by their error, at full precision)",
+                )
+        from mechsolve.analyses.synth.optproblem import describe_optimised
+
+        r = _Reader(src, method)
+        designs, chosen, text, check = solve_optimised(
+            r, method, name, solution, seed=seed, max_time=max_time, progress=progress
+        )
+        out = Outcome(name, method, designs, chosen, text, check)
+        out.text = describe_optimised(out)
+        return out
     rule = rule or src.data.get("pick") or "transmission"
     if rule not in RULES:
         raise src.error(("pick",), f"unknown rule {rule!r}: choose one of {', '.join(RULES)}")
@@ -170,6 +212,8 @@ def solve_problem(
         designs = _slider_crank(r)
     elif method == "guide-bar":
         designs = _guide_bar(r)
+    elif method == "four-positions":
+        designs = _four_positions(r)
     else:
         designs = _three_positions(r)
     if solution is not None:
@@ -322,6 +366,38 @@ def _three_positions(r: _Reader):
     return r.wrap("positions", three_positions, positions, pa, pb)
 
 
+def _poses(r: _Reader, n: int) -> list:
+    pos = r.data.get("positions")
+    if not (isinstance(pos, list) and len(pos) == n):
+        got = len(pos) if isinstance(pos, list) else 0
+        raise r.err(
+            "positions", f"expected {n} positions [x, y, angle] of the coupler line, got {got}"
+        )
+    out = []
+    for i, p in enumerate(pos):
+        if not (isinstance(p, list) and len(p) == 3):
+            raise r.err(("positions", i), f"expected [x, y, angle], got {p!r}")
+        xy = (r.q(("positions", i, 0), "length", p[0]), r.q(("positions", i, 1), "length", p[1]))
+        out.append((xy, r.q(("positions", i, 2), "angle", p[2])))
+    return out
+
+
+def _four_positions(r: _Reader):
+    from mechsolve.analyses.synth.burmester import four_positions
+
+    r.allow(("positions", "pivots"))
+    poses = _poses(r, 4)
+    pv = r.data.get("pivots")
+    if not (isinstance(pv, dict) and set(pv) == {"A", "B"}):
+        raise r.err(
+            "pivots",
+            "expected {A: [x, y], B: [x, y]}: near where the fixed pivots should be "
+            "(each moves to the nearest point of the centre-point curve)",
+        )
+    near_a, near_b = r.point(("pivots", "A"), pv["A"]), r.point(("pivots", "B"), pv["B"])
+    return r.wrap("positions", four_positions, poses, near_a, near_b)
+
+
 def _window(r: _Reader, path: Path, name: str) -> Outcome:
     from mechsolve.analyses.synth.window import MEASURES, choose_window, report
     from mechsolve.model.parse import load
@@ -386,6 +462,14 @@ def confirm(out: Outcome) -> str:
     from mechsolve.model.parse import loads
     from mechsolve.results.run import solve
 
+    if out.method in OPTIMISED:
+        from mechsolve.analyses.synth.optproblem import confirm_optimised
+
+        return confirm_optimised(out)
+    if out.method == "four-positions":
+        from mechsolve.analyses.synth.burmester import confirm_poses
+
+        return confirm_poses(out)
     d = out.chosen
     res = solve(loads(out.yaml))
     lims = res.limit_positions()
