@@ -29,6 +29,7 @@ __all__ = [
     "run",
     "check",
     "CheckReport",
+    "compare",
     "parse_step",
     "positions",
 ]
@@ -47,6 +48,17 @@ def stream(mech: Mechanism, csv_path, **kwargs):
 def run(path: str | Path, variant: str | None = None, **kwargs) -> Results:
     """Load a mechanism file and solve it: ``run("crane.yaml").point("K").x``."""
     return solve(load(path, variant), **kwargs)
+
+
+def compare(schemes, **kwargs):
+    """Several schemes side by side: ``compare(["A.yaml", "B.yaml@variant"])`` solves each
+    over one turn of its crank and returns a
+    :class:`~mechsolve.analyses.compare.Comparison` (its ``text()``, ``to_csv()`` and
+    ``write_plots()``); the options are those of :func:`mechsolve.analyses.compare.compare`
+    (``outputs``, ``delta``, ``middle``, ``method``, ``all_variants``)."""
+    from mechsolve.analyses.compare import compare as _compare
+
+    return _compare(schemes, **kwargs)
 
 
 @dataclass
