@@ -43,7 +43,7 @@ def _plot(c: Comparison, schemes: list[SchemeFigures], path: Path, what: str) ->
         ylabel = f"driving torque along the crank's motion [{unit}]"
         title = "Driving torque"
     elif what == "velocity":
-        scale, unit = (math.pi / 180, "deg/s") if angular else (1.0, "m/s")
+        scale, unit = 1.0, ("rad/s" if angular else "m/s")  # the table's units
         ylabel = f"output velocity along the working stroke [{unit}]"
         title = "Output velocity"
     else:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -144,10 +145,14 @@ def comparison_text(c: Comparison) -> str:
     lines = [head, " " * label_w + "".join(f"{s.name:<{w}}" for s, w in zip(schemes, widths))]
     for (label, _), r in zip(rows, cells):
         lines.append(f"{label:<{label_w}}" + "".join(f"{v:<{w}}" for v, w in zip(r, widths)))
-    lines.append("  " + NOTE.format(mid=f"{c.middle * 100:g}"))
+    lines = [line.rstrip() for line in lines]
+    note = NOTE.format(mid=f"{c.middle * 100:g}")
+    lines += textwrap.wrap(note, 90, initial_indent="  ", subsequent_indent="  ")
     for s in schemes:
         for n in s.notes:
-            lines.append(f"  {s.name}: {n}")
+            lines += textwrap.wrap(
+                f"{s.name}: {n}", 90, initial_indent="  ", subsequent_indent="    "
+            )
     for s in schemes:
         if s.verdicts:
             from mechsolve.results.requirements import verdict_table
