@@ -440,22 +440,10 @@ def scheme_figures(
     sign = 1 if forward >= back else -1  # the working stroke is the slower
     work, ret = (forward, back) if sign > 0 else (back, forward)
     start = x_lo if sign > 0 else x_hi
-    # curves against the crank's travel from the working stroke's start
-    rel = (x_all - start) % TWO_PI
-    keep = x_all < TWO_PI - 1e-9
-    order = np.argsort(rel[keep], kind="stable")
-    xs = rel[keep][order]
-    disp = sign * (q[keep][order] - (q_lo if sign > 0 else q_hi))
-    vel = sign * rate[keep][order]
-    tq = None
-    if fine.forces is not None:
-        tq = (d * fine.driving_effort)[keep][order]
-    # close the turn: the first sample again at 2 pi
-    xs = np.append(xs, xs[0] + TWO_PI)
-    disp = np.append(disp, disp[0])
-    vel = np.append(vel, vel[0])
-    if tq is not None:
-        tq = np.append(tq, tq[0])
+    tq = d * fine.driving_effort if fine.forces is not None else None
+    xs, disp, vel, tq = _curves(
+        x_all, start, sign * (q - (q_lo if sign > 0 else q_hi)), sign * rate, tq
+    )
     in_work = xs <= work
     v_peak_work = float(np.nanmax(np.abs(vel[in_work])))
     v_peak_ret = float(np.nanmax(np.abs(vel[~in_work]))) if np.any(~in_work) else math.nan
@@ -482,22 +470,41 @@ def scheme_figures(
         velocity=vel,
         torque=tq,
     )
+    _more(fig, mech, fine, turn, ties, start, delta, method)
+    return fig
+
+
+def _more(fig, mech, fine, turn, ties, start, delta, method) -> None:
+    """The figures beyond the output's motion: transmission, forces, flywheel, the
+    requirements (on the file's own sweep, as ``run`` checks them)."""
     if ties:
         fig.notes.append(
             f"{', '.join(ties)} joined only to the ground (a redundant tie) cannot move: "
             "solved without it, which changes no motion, torque, energy or other reaction"
         )
-    _transmission(fig, fine, start, d)
+    _transmission(fig, fine, start, turn.driver.direction)
     if fine.forces is not None:
-        _forces(fig, fine, x_all, start)
-        _flywheel(fig, turn, delta, w)
+        _forces(fig, fine, turn.driver.direction * (fine.u - fine.u[0]), start)
+        _flywheel(fig, turn, delta, fig.speed)
     else:
         fig.notes.append("no masses or loads: no torque, reactions or flywheel")
     if mech.requirements:
         from mechsolve.results.requirements import check_requirements
 
         fig.verdicts = check_requirements(mech, solve(mech, method=method))
-    return fig
+
+
+def _curves(x_all, start, disp, vel, tq):
+    """The curves over one turn against the crank's travel from the working stroke's
+    start (0 .. 2 pi, the first sample again at 2 pi to close the turn)."""
+    rel = (x_all - start) % TWO_PI
+    keep = x_all < TWO_PI - 1e-9  # the sample at 2 pi repeats the first
+    order = np.argsort(rel[keep], kind="stable")
+    out = [rel[keep][order]] + [
+        None if a is None else np.asarray(a)[keep][order] for a in (disp, vel, tq)
+    ]
+    out[0] = np.append(out[0], out[0][0] + TWO_PI)
+    return [None if a is None else (a if k == 0 else np.append(a, a[0])) for k, a in enumerate(out)]
 
 
 def _uniformity(cyc: _Cycle, start, work, q_lo, q_hi, sign, middle, w):
