@@ -305,8 +305,32 @@ def test_exit_codes(tmp_path, slider_crank):
     assert p.returncode == 5, p.stderr
     assert "1 FAIL: torque" in p.stdout
     assert (tmp_path / "b" / "compare.csv").exists()  # everything was written
-    # bad input: a missing file, an unknown variant, an output the file lacks
+    # bad input: a missing file, an unknown variant, an output the file lacks, a driver
+    # that is no crank, a crank that cannot turn fully, outputs that do not match
+    linear = tmp_path / "linear.yaml"
+    linear.write_text(
+        SLIDER_CRANK.replace(
+            f"driver: {{joint: O, speed: {W} rad/s, start: 30 deg}}",
+            "driver: {joint: guide, speed: -0.1 m/s, start: 0.4}",
+        ).replace("sweep: {range: 360 deg, step: 5 deg}", "sweep: {range: 0.05, step: 0.01}")
+    )
+    partial = tmp_path / "partial.yaml"  # a + d > b + c: no closure around 180 deg
+    partial.write_text(
+        """
+ground: {O2: [0, 0], O4: [1.0, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.6, 0]}}
+  coupler: {points: {A: [0, 0], B: [0.6, 0]}}
+  rocker: {points: {O4: [0, 0], B: [0.5, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+driver: {joint: O2, speed: 1 rad/s, start: 0 deg}
+assembly: [B left of A -> O4]
+"""
+    )
     for args, said in (
+        ((linear,), "is a slider"),
+        ((partial, "--output", "rocker"), "cannot close over the whole turn"),
+        ((MECH / "shaper.yaml", MECH / "shaper-scheme3.yaml", *["--output", "C.x"] * 3), "3 times"),
         ((tmp_path / "nope.yaml",), "no such file"),
         ((f"{MECH / 'shaper.yaml'}@nope",), "no variant named 'nope'"),
         ((MECH / "shaper.yaml", "--output", "ram_gide"), "did you mean 'ram_guide'"),
