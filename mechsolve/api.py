@@ -9,8 +9,10 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +24,9 @@ from mechsolve.results.results import Results
 from mechsolve.results.run import PLOT_STEP, for_plots, parse_step, positions, solve  # noqa: F401
 from mechsolve.system.structure import grubler
 
+if TYPE_CHECKING:
+    from mechsolve.analyses.compare import Comparison
+
 __all__ = [
     "load",
     "loads",
@@ -30,6 +35,7 @@ __all__ = [
     "run",
     "check",
     "CheckReport",
+    "compare",
     "parse_step",
     "positions",
 ]
@@ -48,6 +54,31 @@ def stream(mech: Mechanism, csv_path, **kwargs):
 def run(path: str | Path, variant: str | None = None, **kwargs) -> Results:
     """Load a mechanism file and solve it: ``run("crane.yaml").point("K").x``."""
     return solve(load(path, variant), **kwargs)
+
+
+def compare(
+    schemes: Sequence[str | Path | tuple[str | Path, str | None]],
+    *,
+    outputs: Sequence[str] | None = None,
+    delta: float = 1 / 40,
+    middle: float = 0.8,
+    method: str | None = None,
+    all_variants: bool = False,
+) -> Comparison:
+    """Several schemes side by side: ``compare(["A.yaml", "B.yaml@variant"])`` solves each
+    over one turn of its crank and returns a
+    :class:`~mechsolve.analyses.compare.Comparison` (its ``text()``, ``to_csv()`` and
+    ``write_plots()``); see :func:`mechsolve.analyses.compare.compare` for the options."""
+    from mechsolve.analyses.compare import compare as _compare
+
+    return _compare(
+        schemes,
+        outputs=outputs,
+        delta=delta,
+        middle=middle,
+        method=method,
+        all_variants=all_variants,
+    )
 
 
 @dataclass

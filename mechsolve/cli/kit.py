@@ -40,9 +40,9 @@ Exit codes (the same for every command):
   2    bad input: the file, the command line, a mechanism that cannot be
        assembled where it must be, a full disk or a refused permission
   4    internal error (a bug in mechsolve; please report it)
-  5    a design check failed: a requirement (run, report; sweep when no
-       design meets them all), a cam's allowances, a flywheel whose
-       check misses its delta; everything was written
+  5    a design check failed: a requirement (run, report, compare;
+       sweep when no design meets them all), a cam's allowances, a
+       flywheel whose check misses its delta; everything was written
   130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
   141  the output's reader went away (`... | head`): stopped quietly
 """

@@ -12,6 +12,7 @@ from mechsolve.cli.commands.animate import animate
 from mechsolve.cli.commands.bench import bench
 from mechsolve.cli.commands.cam import cam
 from mechsolve.cli.commands.check import check
+from mechsolve.cli.commands.compare import compare
 from mechsolve.cli.commands.flywheel import flywheel
 from mechsolve.cli.commands.polygons import polygons
 from mechsolve.cli.commands.report import report
@@ -54,6 +55,8 @@ def main() -> None:
     mechsolve schema -o mechanism.schema.json
                                              the file format's JSON Schema (editors)
     mechsolve check mechanisms/crane.yaml    validate, count DOF, assemble the start
+    mechsolve compare A.yaml B.yaml C.yaml   schemes side by side: stroke, K, velocity,
+                                             torque, reactions, flywheel
     mechsolve bench --quick                  speed against error, in one run
     """
 
@@ -71,6 +74,7 @@ main.add_command(report)
 main.add_command(animate)
 main.add_command(polygons)
 main.add_command(schema)
+main.add_command(compare)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

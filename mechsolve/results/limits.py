@@ -170,6 +170,11 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
             val[ok] = np.unwrap(val[ok])
             if np.nanmax(val) - np.nanmin(val) >= 2 * math.pi - 1e-9:
                 continue  # it turns fully: not a rocker
+        scale = 1.0 if kind == "rocker" else an.scale
+        if not np.nanmax(val) - np.nanmin(val) > 1e-9 * scale:
+            # it does not move (a link pinned to the ground twice, a redundant tie): its
+            # rate is rounding, whose every change of sign is no limit position
+            continue
         sgn = np.sign(rate * res.mechanism.driver.direction * np.sign(an.speed or 1.0))
         # a sample exactly at an extreme (rate 0) takes the sign before it, so that the
         # change of sign is still seen between two samples
