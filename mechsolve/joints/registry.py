@@ -7,10 +7,12 @@ and its :class:`~mechsolve.joints.base.Constraint`) and one line here.
 from __future__ import annotations
 
 from mechsolve.joints.base import Joint
+from mechsolve.joints.cam_contact import CamContact
 from mechsolve.joints.revolute import PinJoint
 from mechsolve.joints.slider import SliderJoint
 
 KINDS: dict[str, type[Joint]] = {
     PinJoint.kind: PinJoint,
     SliderJoint.kind: SliderJoint,
+    CamContact.kind: CamContact,
 }

@@ -348,7 +348,7 @@ class Results(Summary):
         for j in self.mechanism.joints:
             lab = self.joint_label(j.name)
             r = f.reactions[j.name]
-            comps = (
+            comps = j.components or (
                 [("Fx", "N"), ("Fy", "N"), ("F", "N")]
                 if "F" in r
                 else [("N", "N"), ("M", "N*m"), ("Fx", "N"), ("Fy", "N")]

@@ -275,6 +275,10 @@ class Summary:
                 i = int(np.nanargmax(mag))
                 peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {src.describe_u(i)}")
         lines.append("  peak reactions: " + "; ".join(peaks))
+        for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
+            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.analysis.format_u)
+            lines += ["  " + t for t in more]
+            self.warnings += warn
         res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
         ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
