@@ -306,3 +306,60 @@ def test_bad_cam_input_exits_2_with_file_line_and_key(tmp_path, profile, where, 
     line = text.splitlines()[int(m.group(1)) - 1]
     assert m.group(2) == where and says in m.group(3)
     assert where.split(".")[-1] + ":" in line
+
+
+def test_a_flat_faced_cam_from_a_program_moves_its_follower_as_the_program_says():
+    from mechsolve.base.cam.laws import LAWS
+    from mechsolve.base.cam.program import build_program
+
+    src = """
+name: flat-faced program cam
+units: {length: mm, angle: deg}
+ground: {O: [0, 0]}
+links:
+  cam: {points: {O: [0, 0]}}
+  ram: {points: {P: [0, 40]}, mass: 1 kg, com: P}
+joints:
+  O: [ground, cam]
+  guide: {slider: [ground, ram], point: P, line: {through: [0, 0], angle: 90 deg}}
+  contact:
+    cam_contact: [cam, ram]
+    centre: O
+    face: {through: P, normal: 90 deg}
+    program:
+      follower: {type: translating flat-faced}
+      base_radius: 40 mm
+      rotation: ccw
+      law: cycloidal
+      motion: [{rise: 120 deg, lift: 20 mm}, {dwell: 30 deg}, {return: 120 deg},
+               {dwell: 90 deg}]
+driver: {joint: O, speed: 10 rad/s, start: 0 deg}
+sweep: {range: 360 deg, step: 5 deg}
+gravity: off
+"""
+    res = mechsolve.solve(mechsolve.loads(src))
+    d, law = math.radians, LAWS["cycloidal"]
+    prog = build_program(
+        [("rise", d(120), 0.02, law), ("dwell", d(30), None, None),
+         ("return", d(120), None, law), ("dwell", d(90), None, None)],
+        False,
+    )  # fmt: skip
+    s, s1, s2, _ = prog.eval(np.radians(np.asarray(res.driver_travel)))
+    ram = res.slider("guide")
+    np.testing.assert_allclose(ram.s - 0.04, s, atol=1e-15)
+    np.testing.assert_allclose(ram.v, 10 * s1, atol=1e-14)
+    np.testing.assert_allclose(ram.a, 100 * s2, atol=1e-12)
+    # a face square to its guide: the pressure angle is 0 throughout
+    np.testing.assert_allclose(res.reaction("contact")["pressure_angle"], 0.0, atol=1e-12)
+
+
+def test_the_example_counts_as_the_seed_and_loses_contact_when_fast():
+    path = ROOT / "mechanisms" / "cam-linkage.yaml"
+    text = mechsolve.check(mechsolve.load(path)).text()
+    # seed 001, scheme 1: Pl = 6, Ph = 1 and one local degree of freedom in the roller
+    assert "3*4 - 2*5 - 1" in text and "3*5 - 2*6 - 1 - 1 = 1" in text
+    res = mechsolve.solve(mechsolve.load(path))
+    assert np.all(res.reaction("contact")["N"] > 0) and "LOSS" not in res.summary()
+    fast = mechsolve.solve(mechsolve.load(path, "fast"))
+    assert np.any(fast.reaction("contact")["N"] < 0)
+    assert "LOSS OF CONTACT" in fast.summary()

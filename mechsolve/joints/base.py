@@ -88,6 +88,11 @@ class Constraint:
         a fraction of the mechanism's ``scale``), or ``None``."""
         return None
 
+    def outlines(self) -> list[tuple[int, np.ndarray]]:
+        """Curves this constraint draws fixed in its bodies (a cam's profile, its roller):
+        each a body and the curve's points (k, 2) in the body's frame."""
+        return []
+
     def indeterminate(self, free: np.ndarray) -> set[str]:
         """The reaction components that the multipliers flagged ``free`` (m,) leave
         undetermined (redundant constraints)."""

@@ -738,6 +738,25 @@ class CamConstraint(Constraint):
     def equation_names(self) -> list[str]:
         return [f"{self.name} (contact)"]
 
+    def outlines(self) -> list[tuple[int, np.ndarray]]:
+        """The cam's profile in the cam link's frame (720 points, closed), and the roller
+        in the follower's."""
+        x = np.linspace(0.0, TWO_PI, 721)
+        f, d1, _ = self.curve(x)
+        c, s = np.cos(x), np.sin(x)
+        if self.roller is not None:  # the pitch curve offset inward by the roller
+            pts = np.stack([f * c, f * s], axis=1)
+            tang = np.stack([d1 * c - f * s, d1 * s + f * c], axis=1)
+            pts = pts - self.roller * _outward(pts, tang)
+        else:  # the envelope of the tangents: h n + h' (J n)
+            pts = np.stack([f * c - d1 * s, f * s + d1 * c], axis=1)
+        cb, sb = math.cos(self.beta), math.sin(self.beta)
+        loc = np.stack([cb * pts[:, 0] - sb * pts[:, 1], sb * pts[:, 0] + cb * pts[:, 1]], 1)
+        out = [(self.a, loc + self.so)]
+        if self.roller:
+            out.append((self.b, self.sp + self.roller * np.stack([np.cos(x), np.sin(x)], 1)))
+        return out
+
     def indeterminate(self, free: np.ndarray) -> set[str]:
         return {"N", "Fx", "Fy"}
 
