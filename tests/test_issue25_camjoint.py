@@ -363,3 +363,57 @@ def test_the_example_counts_as_the_seed_and_loses_contact_when_fast():
     fast = mechsolve.solve(mechsolve.load(path, "fast"))
     assert np.any(fast.reaction("contact")["N"] < 0)
     assert "LOSS OF CONTACT" in fast.summary()
+
+
+def test_an_oscillating_flat_face_swings_as_its_program_says():
+    from mechsolve.base.cam.laws import LAWS
+    from mechsolve.base.cam.profile import Follower, solve
+    from mechsolve.base.cam.program import build_program
+
+    a, r0 = 100.0, 30.0
+    ph = math.asin(r0 / a)  # the face touches the base circle: a sin(phi0) = r0
+    px, py = a - 50 * math.cos(ph), 50 * math.sin(ph)  # a point of the face
+    src = f"""
+name: oscillating flat face
+units: {{length: mm, angle: deg}}
+ground: {{O: [0, 0], A: [{a}, 0]}}
+links:
+  cam: {{points: {{O: [0, 0]}}}}
+  rocker: {{points: {{A: [{a}, 0], P: [{px}, {py}]}}, mass: 1 kg, com: P,
+           inertia: 0.001 kg*m^2}}
+joints:
+  O: [ground, cam]
+  A: [ground, rocker]
+  contact:
+    cam_contact: [cam, rocker]
+    centre: O
+    face: {{through: P, normal: {90 - math.degrees(ph)} deg}}
+    program:
+      follower: {{type: oscillating flat-faced, arm: 150 mm}}
+      pivot_distance: {a} mm
+      base_radius: {r0} mm
+      rotation: ccw
+      law: cycloidal
+      motion: [{{rise: 120 deg, swing: 15 deg}}, {{dwell: 30 deg}}, {{return: 120 deg}},
+               {{dwell: 90 deg}}]
+driver: {{joint: O, speed: 10 rad/s, start: 0 deg}}
+sweep: {{range: 360 deg, step: 5 deg}}
+gravity: off
+"""
+    res = mechsolve.solve(mechsolve.loads(src))
+    d, law = math.radians, LAWS["cycloidal"]
+    prog = build_program(
+        [("rise", d(120), d(15), law), ("dwell", d(30), None, None),
+         ("return", d(120), None, law), ("dwell", d(90), None, None)],
+        True,
+    )  # fmt: skip
+    th = np.radians(np.asarray(res.driver_travel))
+    s, s1, s2, _ = prog.eval(th)
+    rocker = res.link("rocker")
+    swing = np.mod(-np.asarray(rocker.angle) + math.pi, 2 * math.pi) - math.pi
+    np.testing.assert_allclose(swing, s, atol=1e-14)
+    np.testing.assert_allclose(-rocker.omega, 10 * s1, atol=1e-13)
+    np.testing.assert_allclose(-rocker.alpha, 100 * s2, atol=1e-11)
+    f = Follower("oscillating", "flat-faced", r0 * 1e-3, pivot=a * 1e-3, start_angle=ph)
+    ref = np.degrees(solve(prog, f, 1, th).pressure)
+    np.testing.assert_allclose(res.reaction("contact")["pressure_angle"], ref, atol=1e-10)
