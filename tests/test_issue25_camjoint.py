@@ -417,3 +417,23 @@ gravity: off
     f = Follower("oscillating", "flat-faced", r0 * 1e-3, pivot=a * 1e-3, start_angle=ph)
     ref = np.degrees(solve(prog, f, 1, th).pressure)
     np.testing.assert_allclose(res.reaction("contact")["pressure_angle"], ref, atol=1e-10)
+
+
+def test_a_follower_that_cannot_touch_the_cam_at_the_start_exits_2(tmp_path):
+    # crank e = 12, rod 50 (circle 40 + roller 10), guide at x = 45: the roller centre
+    # reaches the pitch circle for most cam angles, but not at 180 deg, where the circle's
+    # centre is at x = -12, 57 mm from the guide: 7 mm beyond the rod. A start there is
+    # refused at the joint's key (not as a Newton group that fails to close)
+    text = roller_crank("eccentric: {radius: 40 mm, eccentricity: 12 mm}")
+    text = text.replace("through: [8, 0]", "through: [45, 0]").replace("[8, 50]", "[45, 20]")
+    f = tmp_path / "start.yaml"
+    f.write_text(text.replace("start: 20 deg", "start: 180 deg"))
+    p = _run(f)
+    assert p.returncode == 2, p.stdout + p.stderr
+    m = re.search(r"start\.yaml:(\d+): joints\.contact\.roller: (.*)", p.stderr)
+    assert m and "does not touch the cam at the start" in m.group(2), p.stderr
+    assert "roller:" in text.splitlines()[int(m.group(1)) - 1]
+    assert "7 mm" in m.group(2)  # 45 + 12 - 50
+    # from 20 deg it assembles and runs
+    f.write_text(text)
+    assert _run(f).returncode == 0

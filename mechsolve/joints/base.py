@@ -88,6 +88,11 @@ class Constraint:
         a fraction of the mechanism's ``scale``), or ``None``."""
         return None
 
+    def cannot_close(self, st: State) -> None:
+        """Where its group cannot close at the start (``st``: one position, the groups
+        before it solved), raise an input error saying why if the joint can tell (a
+        follower that cannot reach its cam), naming its key and line; else return."""
+
     def outlines(self) -> list[tuple[int, np.ndarray]]:
         """Curves this constraint draws fixed in its bodies (a cam's profile, its roller):
         each a body and the curve's points (k, 2) in the body's frame."""

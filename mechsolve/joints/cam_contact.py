@@ -354,6 +354,14 @@ class CamConstraint(Constraint):
         self.roller = j.roller
         self.nloc = j.normal
         self.direction = _motion_direction(j, mech)
+        self.joint = j
+        self.error = mech.error
+        # the follower's point of its ground joint (its pivot, or its block's point)
+        self.s_joint = None
+        if self.direction[0] == "pivot":
+            self.s_joint = np.asarray(mech.local_point(j.follower, self.direction[2]), float)
+        elif self.direction[0] == "guide":
+            self.s_joint = np.asarray(mech.local_point(j.follower, self.direction[3].point))
 
     # -- shared pieces
     def _D(self, st: State):
@@ -445,6 +453,54 @@ class CamConstraint(Constraint):
 
     def equation_names(self) -> list[str]:
         return [f"{self.name} (contact)"]
+
+    def cannot_close(self, st: State) -> None:
+        """At the start, with the cam placed: can the follower's point (a roller) or line
+        (a face) reach the cam anywhere along its own motion (about its ground pivot, along
+        its ground guide)? If not, say so at the joint's key."""
+        kind = self.direction[0]
+        if kind not in ("pivot", "guide") or not np.isfinite(st.th[self.a, 0]):
+            return
+        n = 7201
+        probe = State(st.nb, n)
+        probe.block[:] = st.block[:, :, :1]  # the cam where the driver starts
+        sj = self.s_joint
+        if kind == "pivot":  # the follower turned about its pivot, every 0.05 deg
+            px, py = self.direction[1]
+            th = np.linspace(-math.pi, math.pi, n)
+            c, s = np.cos(th), np.sin(th)
+            probe.set_angle(self.b, th)
+            probe.x[self.b] = px - (c * sj[0] - s * sj[1])
+            probe.y[self.b] = py - (s * sj[0] + c * sj[1])
+        else:  # the follower slid along its guide, over 4 times the cam's size each way
+            guide = self.direction[3]
+            ux, uy = self.direction[1]
+            rho = self.curve(np.linspace(0.0, TWO_PI, 720, endpoint=False))[0]
+            o = np.asarray(st.point(self.a, self.so), float).ravel()
+            ox, oy = guide.origin
+            along = (o[0] - ox) * ux + (o[1] - oy) * uy  # the foot of the cam's centre
+            span = 4.0 * float(np.max(rho) + abs(along) + math.hypot(ox - o[0], oy - o[1]))
+            d = along + np.linspace(-span, span, n)
+            th = guide.block_angle  # a ground guide: the block's angle is fixed
+            c, s = math.cos(th), math.sin(th)
+            probe.set_angle(self.b, np.full(n, th))
+            probe.x[self.b] = ox + d * ux - (c * sj[0] - s * sj[1])
+            probe.y[self.b] = oy + d * uy - (s * sj[0] + c * sj[1])
+        f = self.residual(probe)[0]
+        if np.any(f <= 0) and np.any(f >= 0):
+            return  # it can reach the cam: the group fails for another reason
+        j = self.joint
+        part = f"roller centre {j.point}" if self.roller is not None else "face"
+        how = "about its pivot" if kind == "pivot" else "along its guide"
+        raise self.error(
+            j.where + ("roller" if self.roller is not None else "face",),
+            f"the follower does not touch the cam at the start: with the cam where the "
+            f"driver starts, its {part} moved {how} never reaches the cam's "
+            + ("pitch curve" if self.roller is not None else "profile")
+            + f" ({'always outside' if np.all(f > 0) else 'always inside'}, by "
+            f"{float(np.min(np.abs(f))) * 1e3:.4g} mm at the nearest); check the cam's "
+            "size and angle (cam_angle) and where the follower is jointed",
+        )
 
     def outlines(self) -> list[tuple[int, np.ndarray]]:
         """The cam's profile in the cam link's frame (720 points, closed), and the roller
