@@ -552,7 +552,7 @@ class CamConstraint(Constraint):
         if kind == "pivot":
             wx, wy = -(py - data[1]), px - data[0]
         elif kind == "guide":
-            wx, wy = np.full(st.n, data[0]), np.full(st.n, data[1])
+            wx, wy = np.broadcast_to(data[0], (st.n,)), np.broadcast_to(data[1], (st.n,))
         else:
             bx, by = st.x[self.b], st.y[self.b]
             w = st.w[self.b]
@@ -571,10 +571,10 @@ def _motion_direction(j: CamContact, mech: Any) -> tuple:
         if other is j or GROUND not in other.links or j.follower not in other.links:
             continue
         if other.coordinate == "angle" and other.removes == 2:
-            x, y = mech.local_point(GROUND, other.point)
-            return "pivot", (float(x), float(y)), other.point
+            x, y = mech.local_point(GROUND, other.point)  # arrays for a batch of designs
+            return "pivot", (np.asarray(x, float), np.asarray(y, float)), other.point
         if other.coordinate == "length" and getattr(other, "guide", None) == GROUND:
-            return "guide", (math.cos(other.angle), math.sin(other.angle)), None, other
+            return "guide", (np.cos(other.angle), np.sin(other.angle)), None, other
     return "velocity", (0.0, 0.0)
 
 
