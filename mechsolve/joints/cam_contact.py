@@ -96,7 +96,7 @@ class CamContact(Joint):
     pair: ClassVar[str] = "higher"
     removes: ClassVar[int] = 1
     magnitude: ClassVar[str] = "N"
-    magnitude_note: ClassVar[str] = " contact normal"
+    magnitude_note: ClassVar[str] = " normal"
     components: ClassVar[tuple[tuple[str, str], ...]] = (
         ("N", "N"), ("Fx", "N"), ("Fy", "N"), ("pressure_angle", "deg"),
     )  # fmt: skip
@@ -303,7 +303,7 @@ class CamContact(Joint):
         lines, warn = [], []
         if np.any(np.isfinite(pa)):
             i = int(np.nanargmax(pa))
-            lines.append(f"cam contact {self.name}: largest pressure angle {pa[i]:.4g}° at "
+            lines.append(f"{self.name} (cam contact): largest pressure angle {pa[i]:.4g}° at "
                          f"{at(float(u[i]))}")  # fmt: skip
         if self.closure != "force" or not np.any(N < 0):
             return lines, warn
@@ -324,7 +324,7 @@ class CamContact(Joint):
             f"{at(b) if b is not None else 'the end'}"
             for a, b in spans
         )
-        lines.append(f"cam contact {self.name}: LOSS OF CONTACT (the contact force would be "
+        lines.append(f"{self.name} (cam contact): LOSS OF CONTACT (the contact force would be "
                      f"negative, least {np.nanmin(N):.4g} N): {text}")  # fmt: skip
         warn.append(f"the follower leaves the cam at {self.name} ({text}): the spring or "
                     "load is too weak for the speed; the forces there assume contact")  # fmt: skip
