@@ -39,10 +39,15 @@ follower, along the common normal from the cam to the follower), with its compon
 between the common normal and the direction in which the follower's point moves (the
 roller centre; the face's point at the contact): normal to the line from its pivot for a
 follower pinned to the ground, along its guide for one sliding on a ground guide, along its
-velocity otherwise. A force-closed cam (``closure: force``, the default: a spring or a load
-keeps the follower on the cam) loses contact where N would turn negative: the summary lists
-these positions and warns (the solver keeps the bilateral contact, so the forces there are
-what contact would need, not what happens).
+velocity otherwise (left empty where it is at rest). A force-closed cam (``closure:
+force``, the default: a spring or a load keeps the follower on the cam) loses contact where
+N would turn negative: the summary lists these positions and warns (the solver keeps the
+bilateral contact, so the forces there are what contact would need, not what happens).
+
+The curves and their reading are in :mod:`mechsolve.base.cam.curves`. Grübler's count takes
+the contact as a higher pair (Ph, one equation); the roller is a point of the follower, so
+its spin, the local degree of freedom of the textbooks' count, is not a coordinate here
+(:attr:`CamContact.local_dof` lets ``check`` print both counts).
 """
 
 from __future__ import annotations
