@@ -98,6 +98,17 @@ class CheckReport:
     assembly: StartAssembly
     notes: list[str] = field(default_factory=list)
 
+    def pair_counts(self) -> tuple[int, int, int]:
+        """Moving links n, lower pairs Pl and higher pairs Ph."""
+        joints = self.mechanism.joints
+        ph = sum(1 for j in joints if j.pair == "higher")
+        return len(self.mechanism.links), len(joints) - ph, ph
+
+    def grubler_terms(self) -> str:
+        """``3*n - 2*Pl`` (and ``- Ph`` when there are higher pairs)."""
+        n, pl, ph = self.pair_counts()
+        return f"3*{n} - 2*{pl}" + (f" - {ph}" if ph else "")
+
     def text(self) -> str:
         mech = self.mechanism
         count = {kind: 0 for kind in KINDS}
@@ -116,6 +127,15 @@ class CheckReport:
             f"  pairs: Pl = {lower} lower{_kinds_of(mech, 'lower')}, Ph = {higher} "
             f"higher{_kinds_of(mech, 'higher')}",
         ]
+        local = sum(j.local_dof for j in mech.joints)
+        if local:
+            n, pl, ph = self.pair_counts()
+            lines.append(
+                f"  as textbooks count it, each roller a link on its own pin whose spin is a "
+                f"local degree of freedom: 3*{n + local} - 2*{pl + local} - {ph} - {local} = "
+                f"{3 * (n + local) - 2 * (pl + local) - ph - local} (here the roller centre "
+                "is a point of the follower: no local freedom to solve)"
+            )
         if self.grubler != self.jacobian_dof:
             lines.append(
                 "  note: the two counts differ: some constraints are redundant (or the start "

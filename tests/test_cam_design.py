@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from mechsolve.analyses.cam.design import Allowance, extremes, min_base_translating, size
-from mechsolve.analyses.cam.laws import LAWS
-from mechsolve.analyses.cam.profile import Follower, base_radius_of, solve
-from mechsolve.analyses.cam.program import build_program
+from mechsolve.base.cam.laws import LAWS
+from mechsolve.base.cam.profile import Follower, base_radius_of, solve
+from mechsolve.base.cam.program import build_program
 
 d = math.radians
 

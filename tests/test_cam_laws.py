@@ -1,5 +1,5 @@
 """Cam motion laws against their textbook formulas (written here independently of
-mechsolve.analyses.cam.laws), at many points including the ends and the joins of their pieces."""
+mechsolve.base.cam.laws), at many points including the ends and the joins of their pieces."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from mechsolve.analyses.cam.laws import LAWS, find_law
-from mechsolve.analyses.cam.program import build_program
+from mechsolve.base.cam.laws import LAWS, find_law
+from mechsolve.base.cam.program import build_program
 
 PI = math.pi
 H = 0.02  # lift 20 mm

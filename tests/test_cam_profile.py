@@ -12,15 +12,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mechsolve.analyses.cam.laws import LAWS
-from mechsolve.analyses.cam.profile import (
+from mechsolve.base.cam.laws import LAWS
+from mechsolve.base.cam.profile import (
     Follower,
     base_radius_of,
     self_intersections,
     solve,
     start_angle_of,
 )
-from mechsolve.analyses.cam.program import build_program
+from mechsolve.base.cam.program import build_program
 
 DATA = Path(__file__).parent / "data"
 d = math.radians

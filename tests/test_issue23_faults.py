@@ -23,8 +23,8 @@ import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
-from mechsolve.analyses.cam.laws import LAWS
-from mechsolve.analyses.cam.program import build_program
+from mechsolve.base.cam.laws import LAWS
+from mechsolve.base.cam.program import build_program
 
 PI = math.pi
 ROOT = Path(__file__).parent.parent
@@ -554,7 +554,7 @@ def test_oscillating_flat_face_curvature_is_the_profiles():
     """cam/profile.py:219 (h'' of an oscillating flat face, ``ds**2`` as ``ds - 2``): the
     profile's radius of curvature against the curvature of the drawn profile itself,
     |r'|^3 / |r' x r''| by central differences in the cam angle, both senses."""
-    from mechsolve.analyses.cam.profile import Follower, solve
+    from mechsolve.base.cam.profile import Follower, solve
 
     law, deg = LAWS["cycloidal"], math.radians
     prog = build_program(

@@ -194,6 +194,8 @@ class StartAssembler(BranchChoice):
                 f"disagree by {worst:.3g} m (check the dimensions of the redundant links)"
             )
         if first is None:
+            for c in g.constraints:  # a joint that can tell why (a follower off its cam)
+                c.cannot_close(st)
             raise CannotCloseAtStart(
                 f"{self._file()}cannot assemble at {self.format_u(u0)}: Newton-Raphson "
                 f"and scipy found no closed position of the {g.label} (residual "

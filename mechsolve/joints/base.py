@@ -102,6 +102,16 @@ class Constraint:
         loads to find what they add to the other joints' reactions. ``None``: nothing."""
         return None
 
+    def cannot_close(self, st: State) -> None:
+        """Where its group cannot close at the start (``st``: one position, the groups
+        before it solved), raise an input error saying why if the joint can tell (a
+        follower that cannot reach its cam), naming its key and line; else return."""
+
+    def outlines(self) -> list[tuple[int, np.ndarray]]:
+        """Curves this constraint draws fixed in its bodies (a cam's profile, its roller):
+        each a body and the curve's points (k, 2) in the body's frame."""
+        return []
+
     def indeterminate(self, free: np.ndarray) -> set[str]:
         """The reaction components that the multipliers flagged ``free`` (m,) leave
         undetermined (redundant constraints)."""
@@ -155,6 +165,10 @@ class Joint:
     keys
         Its own keys in the file, beyond ``point`` and ``description``, in the order the
         messages list them.
+    components
+        Its reaction's CSV columns, ``(component, unit)`` in order; empty: a pin's
+        (``Fx``, ``Fy``, ``F``) or a slider's (``N``, ``M``, ``Fx``, ``Fy``), as its
+        reaction has them.
     """
 
     kind: ClassVar[str]
@@ -167,6 +181,7 @@ class Joint:
     magnitude: ClassVar[str] = "F"
     magnitude_note: ClassVar[str] = ""
     keys: ClassVar[dict[str, Key]] = {}
+    components: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     name: str
     point: str
@@ -187,6 +202,13 @@ class Joint:
     def joins(self, point: str) -> bool:
         """Does the joint make ``point`` one place on both its links?"""
         return False
+
+    @property
+    def local_dof(self) -> int:
+        """Local degrees of freedom textbooks count with this joint that the file leaves
+        out (a cam's roller spinning on its pin: 1); Grübler's count is the same either
+        way, ``check`` shows both."""
+        return 0
 
     # -- the file ---------------------------------------------------------------------
     @classmethod
@@ -223,6 +245,14 @@ class Joint:
         raise NotImplementedError
 
     # -- what is written ---------------------------------------------------------------
+    def findings(
+        self, r: Mapping[str, np.ndarray], ok: np.ndarray, u: np.ndarray, at: Callable
+    ) -> tuple[list[str], list[str]]:
+        """Lines for the force summary and warnings from its reaction ``r`` over the sweep
+        (``ok``: the positions solved, ``u``: the driver's values, ``at(u)``: a driver
+        value in words)."""
+        return [], []
+
     def describe(
         self, length: Callable[[float], str], angle: Callable[[float], str], unit: str
     ) -> tuple[str, str, str]:

@@ -7,6 +7,7 @@ and its :class:`~mechsolve.joints.base.Constraint`) and one line here.
 from __future__ import annotations
 
 from mechsolve.joints.base import Joint
+from mechsolve.joints.cam_contact import CamContact
 from mechsolve.joints.gear import GearJoint
 from mechsolve.joints.rack import RackJoint
 from mechsolve.joints.revolute import PinJoint
@@ -17,4 +18,5 @@ KINDS: dict[str, type[Joint]] = {
     SliderJoint.kind: SliderJoint,
     GearJoint.kind: GearJoint,
     RackJoint.kind: RackJoint,
+    CamContact.kind: CamContact,
 }

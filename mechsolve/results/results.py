@@ -351,8 +351,9 @@ class Results(Summary):
         for j in self.mechanism.joints:
             lab = self.joint_label(j.name)
             r = f.reactions[j.name]
-            # the joint's components in its own order (a moment is named M)
-            comps = [(c, "N*m" if c == "M" else "N") for c in r]
+            # the joint's own columns, or its reaction's components in their order (a
+            # moment is named M)
+            comps = j.components or [(c, "N*m" if c == "M" else "N") for c in r]
             cols += [Column(f"{lab}.{c}", un, m(r[c]), self._note(j.name, c)) for c, un in comps]
         for name, on in f.active.items():
             cols.append(Column(f"load.{name}.active", "-", on.astype(float)))

@@ -148,6 +148,10 @@ class Summary:
                 i = int(np.nanargmax(mag))
                 peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {src.describe_u(i)}")
         lines.append("  peak reactions: " + "; ".join(peaks))
+        for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
+            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.analysis.format_u)
+            lines += ["  " + t for t in more]
+            self.warnings += warn
         res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
         ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
@@ -159,38 +163,46 @@ class Summary:
                 f"the power balance residual reaches {rel:.2g} of the largest power term "
                 "(above 1e-6): check the results"
             )
-        if f.nonunique:
-            parts = [f"{j} ({', '.join(sorted(c))})" for j, c in f.nonunique.items()]
-            unique = "driver" not in f.nonunique
-            lines.append(
-                "  statically indeterminate (redundant constraints): the reactions "
-                + "; ".join(parts)
-                + " are not unique; the CSV gives the minimum-norm solution, labelled so"
-                + (f"; the driving {kind} is unique" if unique else "")
-            )
-        if f.singular:
-            at = sorted({i for i, _ in f.singular})
-            where = ", ".join(self.describe_u(i) for i in at[:5])
-            more = f" and {len(at) - 5} more" if len(at) > 5 else ""
-            groups = list(dict.fromkeys(label for _, label in f.singular))
-            lines.append(
-                f"  forces indeterminate at {len(at)} singular position(s): {where}{more} "
-                f"({'; '.join(groups)})"
-            )
-            if f.effort_by_limit:
-                kind = self.effort_name[0]
-                lines.append(
-                    f"  the driving {kind} at {len(f.effort_by_limit)} of them is its limit "
-                    "along the motion (smooth through the position); the reactions stay empty"
-                )
-        if f.effort_near_limit:
-            kind = self.effort_name[0]
-            lines.append(
-                f"  the driving {kind} at {len(f.effort_near_limit)} position(s) next to a "
-                "singular one is its limit along the motion (computed there, it would carry "
-                "the pose's rounding amplified by the near-singular loop)"
-            )
+        lines += _indeterminate_lines(self, f, kind)
         return lines
+
+
+def _indeterminate_lines(res, f, kind: str) -> list[str]:
+    """Where the reactions are not unique (redundant constraints) or not determined
+    (singular positions), and where the driving effort is its limit instead."""
+    lines = []
+    if f.nonunique:
+        parts = [f"{j} ({', '.join(sorted(c))})" for j, c in f.nonunique.items()]
+        unique = "driver" not in f.nonunique
+        lines.append(
+            "  statically indeterminate (redundant constraints): the reactions "
+            + "; ".join(parts)
+            + " are not unique; the CSV gives the minimum-norm solution, labelled so"
+            + (f"; the driving {kind} is unique" if unique else "")
+        )
+    if f.singular:
+        at = sorted({i for i, _ in f.singular})
+        where = ", ".join(res.describe_u(i) for i in at[:5])
+        more = f" and {len(at) - 5} more" if len(at) > 5 else ""
+        groups = list(dict.fromkeys(label for _, label in f.singular))
+        lines.append(
+            f"  forces indeterminate at {len(at)} singular position(s): {where}{more} "
+            f"({'; '.join(groups)})"
+        )
+        if f.effort_by_limit:
+            kind = res.effort_name[0]
+            lines.append(
+                f"  the driving {kind} at {len(f.effort_by_limit)} of them is its limit "
+                "along the motion (smooth through the position); the reactions stay empty"
+            )
+    if f.effort_near_limit:
+        kind = res.effort_name[0]
+        lines.append(
+            f"  the driving {kind} at {len(f.effort_near_limit)} position(s) next to a "
+            "singular one is its limit along the motion (computed there, it would carry "
+            "the pose's rounding amplified by the near-singular loop)"
+        )
+    return lines
 
 
 def _event_lines(res) -> list[str]:

@@ -126,6 +126,13 @@ def draw_mechanism(
             ax.plot(seg[:, 0], seg[:, 1], "--", color="0.4", lw=1)
         for line in c.drawing(state, i):  # what moves with the links: pitch circles...
             ax.plot(line[:, 0], line[:, 1], "-.", color="0.35", lw=0.9)
+        for b, loc in c.outlines():  # curves fixed in a body: a cam's profile, its roller
+            if not math.isfinite(float(state.th[b, i])):
+                continue
+            ct, st_ = math.cos(float(state.th[b, i])), math.sin(float(state.th[b, i]))
+            ox, oy = float(state.x[b, i]), float(state.y[b, i])
+            ax.plot(ox + ct * loc[:, 0] - st_ * loc[:, 1], oy + st_ * loc[:, 0] + ct * loc[:, 1],
+                    "-", color="0.2", lw=1.2)  # fmt: skip
     # joints and ground pivots
     for p, ref in an.points.items():
         x, y = state.point(ref.body, ref.local, [i])

@@ -10,8 +10,8 @@ import numpy as np
 
 from mechsolve.analyses.cam.design import Sizing, extremes, size
 from mechsolve.analyses.cam.model import CamModel
-from mechsolve.analyses.cam.profile import Profile, closed, self_intersections, solve
-from mechsolve.analyses.cam.program import Remark
+from mechsolve.base.cam.profile import Profile, closed, self_intersections, solve
+from mechsolve.base.cam.program import Remark
 
 DENSE = 3600  # points of the drawn profile per turn (0.1 deg)
 

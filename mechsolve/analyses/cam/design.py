@@ -13,7 +13,7 @@ no pressure angle to speak of (0 for a translating one); its base radius comes f
 curvature: r0 + s + s'' >= rho_min. A roller's base radius for curvature and every
 oscillating follower's base are found by bisection on r0 (for an oscillating follower,
 at each r0 the best pivot distance a by a scan and a bounded search), each trial solving
-the whole cam by :func:`mechsolve.analyses.cam.profile.solve`.
+the whole cam by :func:`mechsolve.base.cam.profile.solve`.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechsolve.analyses.cam.profile import Follower, Profile, base_radius_of, solve, start_angle_of
-from mechsolve.analyses.cam.program import Program
+from mechsolve.base.cam.profile import Follower, Profile, base_radius_of, solve, start_angle_of
+from mechsolve.base.cam.program import Program
 
 COARSE = 720  # cam angles per turn while searching (0.5 deg); results checked finely
 

@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.base.errors import InputError
-from mechsolve.model import GROUND, Mechanism, PinJoint, SliderJoint
+from mechsolve.model import GROUND, Mechanism
 from mechsolve.model.validate import suggest
 from mechsolve.results.results import Results
 from mechsolve.results.run import for_plots, solve
@@ -83,11 +83,11 @@ class Output:
             m = res.point(self.name)
             c = self.component
             return getattr(m, c), getattr(m, "v" + c), getattr(m, "a" + c)
-        if self.kind == "slider":
-            s = res.slider(self.name)
-            return s.s, s.v, s.a
-        lk = res.link(self.name)
-        return lk.angle, lk.omega, lk.alpha
+        if self.kind == "link":
+            lk = res.link(self.name)
+            return lk.angle, lk.omega, lk.alpha
+        s = res.slider(self.name)  # a slider's travel
+        return s.s, s.v, s.a
 
 
 @dataclass
@@ -165,7 +165,7 @@ def resolve_output(mech: Mechanism, spec: str | None, where: str = "--output") -
     Raises :class:`InputError` naming ``where`` for a name the file does not have (with a
     did-you-mean), or when there is no default."""
     points = [p for p in _moving_points(mech)]
-    sliders = [j.name for j in mech.joints if isinstance(j, SliderJoint)]
+    sliders = [j.name for j in mech.sliders]
     links = [lk.name for lk in mech.links]
     if spec is None:
         if mech.outputs.points:
@@ -220,7 +220,7 @@ def check_comparable(mech: Mechanism, label: str) -> float:
     drv = mech.driver
     if drv is None:
         raise InputError(f"{label}: the file has no driver")
-    if not isinstance(mech.joint(drv.joint), PinJoint):
+    if mech.joint(drv.joint).coordinate != "angle":
         raise InputError(
             f"{label}: its driver {drv.joint} is a slider; compare takes schemes driven by a "
             "crank (a revolute driver turning fully), whose stroke and time ratio compare"
@@ -255,7 +255,7 @@ def without_ties(mech: Mechanism) -> tuple[Mechanism, list[str]]:
     ties = []
     for lk in mech.links:
         joints = [j for j in mech.joints if lk.name in j.links]
-        pins = [j for j in joints if isinstance(j, PinJoint) and GROUND in j.links]
+        pins = [j for j in joints if j.coordinate == "angle" and GROUND in j.links]
         if len(pins) >= 2 and len(pins) == len(joints):
             if not any(lk.name in _load_links(ld) for ld in mech.loads):
                 ties.append(lk.name)

@@ -5,7 +5,7 @@ respect to u. A segment of lift h over a cam angle beta has s = h f(u),
 ds/dtheta = h f'/beta, d2s/dtheta2 = h f''/beta^2, d3s/dtheta3 = h f'''/beta^3; a return
 is s = h (1 - f(u)). Jumps of f' or f'' inside a law (the parabolic law's acceleration at
 u = 1/2) and at its ends are listed in :data:`INNER_JUMPS` and found at segment joins by
-:mod:`mechsolve.analyses.cam.program`.
+:mod:`mechsolve.base.cam.program`.
 
 The modified trapezoid and modified sine are built from their acceleration pulses
 (quarter and half sine waves joined to constants, Norton, *Design of Machinery*, ch. 8):

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mechsolve.analyses.cam.program import Program
+from mechsolve.base.cam.program import Program
 
 KINDS = ("translating", "oscillating")
 CONTACTS = ("knife-edge", "roller", "flat-faced")

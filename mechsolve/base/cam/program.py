@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechsolve.analyses.cam.laws import Law
+from mechsolve.base.cam.laws import Law
 
 TWO_PI = 2.0 * math.pi
 
