@@ -36,7 +36,7 @@ from mechsolve.core.conditioning import (
     SINGULAR_INDICATOR,
     SINGULAR_RCOND,
     group_block,
-    rcond,
+    rcond_above,
 )
 from mechsolve.core.force_result import ForceResult
 from mechsolve.core.loads import (
@@ -234,7 +234,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
             regular = good & (rc > SINGULAR_RCOND)
             x[~regular] = np.nan
         else:
-            rc = rcond(J)
+            rc = rcond_above(J, NEAR_SINGULAR_RCOND)  # exact where it is compared below
             regular = good & (rc > SINGULAR_RCOND)
             idx = np.flatnonzero(regular & np.all(np.isfinite(rhs), axis=1))
             if idx.size:
