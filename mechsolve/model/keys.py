@@ -331,6 +331,16 @@ SIMULATE = Section(
         "from": K(either(const("rest"), quantity("angular speed")), "The start: rest or a speed."),
         "revolutions": K(quantity("dimensionless"), "Stop after this many revolutions."),
         "steady": K(FRACTION, "Stop when a revolution's mean speed changes less (e.g. 0.01 %)."),
+        "formulation": K(
+            choice("reduced", "multibody"),
+            "reduced: the driver's one equation (one degree of freedom, one motor); "
+            "multibody: the bodies' coordinates with the constraints (free motion too).",
+        ),
+        "tolerance": K(LENGTH, "multibody: the largest constraint violation allowed."),
+        "rates": K(
+            map_of(either(quantity("angular speed"), quantity("speed")), "joint"),
+            "multibody: initial rates of joint coordinates, checked against the constraints.",
+        ),
     },
 )
 

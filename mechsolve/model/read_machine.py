@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from mechsolve.base.errors import InputError
 from mechsolve.model import Driver, keys
 from mechsolve.model.expr import ExprError, Expression
 from mechsolve.model.read_geometry import read_units
@@ -141,12 +142,34 @@ def read_simulation(r: Reader, value: Any, linear: bool):
                 raise r.fail(path + (key,), f"{key} must be a number between 0 and 1")
             setattr(sim, key, float(x))
     if "from" in m:
+        sim.speed0_given = True
         f = m["from"]
         sim.speed0 = (
             0.0
             if f == "rest"
             else r.quantity(f, path + ("from",), "speed" if linear else "angular speed")
         )
+    if "formulation" in m:
+        if m["formulation"] not in ("reduced", "multibody"):
+            raise r.fail(
+                path + ("formulation",),
+                f"unknown formulation {m['formulation']!r}: reduced or multibody",
+            )
+        sim.formulation = m["formulation"]
+    if "tolerance" in m:
+        sim.tolerance = r.positive(m["tolerance"], path + ("tolerance",), "length")
+    if "rates" in m:
+        rates = m["rates"]
+        if not isinstance(rates, dict) or not rates:
+            raise r.fail(
+                path + ("rates",), "'rates' maps joints to their initial rates, e.g. {O: 2 rad/s}"
+            )
+        for j, v in rates.items():
+            jp = path + ("rates", j)
+            try:  # a revolute's rate, or (m/s) a slider's: the joint decides which it needs
+                sim.rates[str(j)] = (r.quantity(v, jp, "angular speed"), "angular speed", jp)
+            except InputError:
+                sim.rates[str(j)] = (r.quantity(v, jp, "speed"), "speed", jp)
     if "revolutions" in m:
         sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
     if "steady" in m:

@@ -1,0 +1,230 @@
+"""Issue 26: forward dynamics of any planar mechanism in body coordinates (``mechsolve
+simulate``'s general path), against closed forms, conservation of energy, the IFToMM
+N-four-bar benchmark (its problem data; its motion in closed form) and the 1-DOF path."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
+
+import mechsolve as ms
+from mechsolve.analyses.dynamics import simulate
+from mechsolve.cli.main import main
+
+from conftest import MECH
+
+G = 9.81
+
+PENDULUM = """
+name: pendulum
+units: {length: m, angle: deg}
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], P: [1, 0]}, mass: 1 kg, com: P}   # a point mass on a pin
+joints:
+  O: [ground, bar]
+driver: {joint: O, start: 30 deg}      # 120 deg from the bottom
+gravity: 9.81 m/s^2
+simulate: {duration: 1.5 s, step: 0.005 s, method: DOP853, rtol: 1e-11, atol: 1e-13}
+"""
+
+# a parallelogram with a third parallel crank: one redundant constraint (the file of
+# tests/test_hard_cases.py), released from rest under gravity
+REDUNDANT = """
+ground: {O2: [0, 0], O4: [3, 0], O6: [1.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [1, 0]}, mass: 2, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [3, 0], C: [1.5, 0]}, mass: 6, uniform_bar: [A, B]}
+  crank2: {points: {O4: [0, 0], B: [1, 0]}, mass: 2, uniform_bar: [O4, B]}
+  crank3: {points: {O6: [0, 0], C: [1, 0]}, mass: 3, uniform_bar: [O6, C]}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, crank2]
+  O4: [ground, crank2]
+  C: [coupler, crank3]
+  O6: [ground, crank3]
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, start: 20 deg}
+gravity: 9.81 m/s^2
+simulate: {duration: 1.2 s, step: 0.01 s, method: DOP853, rtol: 1e-10, atol: 1e-12%s}
+"""
+
+# a crank-rocker four-bar on a spring, no damping: conservative
+SPRUNG = """
+units: {length: m, angle: deg}
+ground: {O2: [0, 0], O4: [0.8, 0], S: [0.4, 0.9]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.25, 0]}, mass: 1, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [0.9, 0], P: [0.45, 0.2]}, mass: 3, uniform_bar: [A, B]}
+  rocker: {points: {O4: [0, 0], B: [0.6, 0]}, mass: 2, uniform_bar: [O4, B]}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, start: 40 deg}
+gravity: 9.81 m/s^2
+loads:
+  lift: {spring: [S, P], stiffness: %s N/m, free_length: 0.3 m}
+simulate: {duration: %s s, step: 0.02 s, method: DOP853, rtol: 1e-10, atol: 1e-12,
+           from: 3 rad/s%s}
+"""
+
+
+def test_pendulum_period_against_the_elliptic_integral():
+    """A link on a pin released 120 deg from the bottom: it turns back after half the
+    period T = 4 sqrt(L/g) K(k), k = sin(120 deg / 2)."""
+    res = simulate(ms.loads(PENDULUM))
+    tr = res.trajectory
+    w = tr.ud
+    k = int(np.flatnonzero((w[1:] >= 0) & (w[:-1] < 0) & (tr.t[1:] > 0.1))[0])
+    # the rate is linear in time at a turning point to O(h^3): linear interpolation
+    t_half = tr.t[k] - w[k] * (tr.t[k + 1] - tr.t[k]) / (w[k + 1] - w[k])
+    period = 4 * math.sqrt(1.0 / G) * ellipk(math.sin(math.radians(60)) ** 2)
+    assert 2 * t_half == pytest.approx(period, abs=2e-7)
+    # the first integral at every output: omega^2 = 2 g / L (sin 30 deg - sin theta)
+    hand = 2 * G * (0.5 - np.sin(tr.u))
+    np.testing.assert_allclose(w**2, hand, rtol=0, atol=1e-9 * np.max(hand))
+    assert np.max(tr.violation) <= 1e-10
+
+
+def test_redundant_parallelogram_released_under_gravity_moves_as_one_pendulum():
+    """Every crank turns alike and the coupler translates, so the machine is one
+    pendulum: I theta''  = -M_g cos(theta) with I = sum m l^2 / 3 + m_coupler l^2 and
+    M_g = g (sum m l / 2 + m_coupler l); its first integral holds at every output."""
+    res = simulate(ms.loads(REDUNDANT % ""))
+    tr = res.trajectory
+    assert tr.redundant and not tr.early
+    I = (2 + 2 + 3) / 3 + 6 * 1.0
+    Mg = G * ((2 + 2 + 3) * 0.5 + 6 * 1.0)
+    th = tr.u
+    hand = 2 * Mg / I * (math.sin(math.radians(20)) - np.sin(th))
+    np.testing.assert_allclose(tr.ud**2, hand, rtol=0, atol=1e-7 * np.max(hand))
+    # and the motion itself against the scalar equation integrated on its own
+    ref = solve_ivp(
+        lambda t, y: [y[1], -Mg / I * math.cos(y[0])],
+        (0, tr.t[-1]),
+        [math.radians(20), 0.0],
+        t_eval=tr.t,
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(th, ref.y[0], atol=1e-7)
+    for crank in ("crank2", "crank3"):
+        np.testing.assert_allclose(res.link(crank).angle, th, atol=1e-9)
+    np.testing.assert_allclose(res.link("coupler").angle, 0.0, atol=1e-9)
+    headers = [c.header for c in res.columns()]
+    assert "O6(ground->crank3).Fx [N] (minimum-norm)" in headers
+    assert "minimum-norm" in res.summary()
+    # the force analysis of the motion needs no driving torque: it is free
+    assert np.max(np.abs(res.driving_effort)) < 1e-6 * Mg
+
+
+def test_rates_of_other_joints_are_checked_against_the_constraints():
+    res = simulate(ms.loads(REDUNDANT % ", rates: {O4: 2 rad/s}"))
+    assert res.trajectory.ud[0] == pytest.approx(2.0, abs=1e-12)  # crank = crank2's rate
+
+
+def test_conservative_machine_keeps_its_energy_for_10_s():
+    """No damping, no motor: T + V (gravity and the spring) stays constant to the
+    integrator's tolerance over 10 s; the constraints hold to their tolerance."""
+    res = simulate(ms.loads(SPRUNG % (400, 10, "")))
+    tr = res.trajectory
+    assert tr.t[-1] == pytest.approx(10.0) and not tr.early
+    E = tr.kinetic + tr.potential
+    assert np.max(np.abs(tr.work)) == 0.0  # nothing non-conservative acts
+    assert np.max(np.abs(E - E[0])) < 1e-6 * np.max(np.abs(tr.kinetic))
+    assert np.max(tr.violation) <= res.multibody.tol
+    assert np.max(tr.velocity_violation) < 1e-12
+
+
+def _pendulum_reference(n: int, t: np.ndarray) -> np.ndarray:
+    """The N-four-bar's crank angle in closed form: its windows are parallelograms, so
+    it is one pendulum with I = (N + 1) m l^2 / 3 + N m l^2 and M_g = g m l ((N + 1) / 2
+    + N), starting upright at -1 rad/s (B0 along +x at 1 m/s)."""
+    inertia = (n + 1) / 3 + n
+    mg = G * ((n + 1) / 2 + n)
+    sol = solve_ivp(
+        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
+        (0, t[-1]),
+        [math.pi / 2, -1.0],
+        t_eval=t,
+        rtol=1e-13,
+        atol=1e-13,
+        method="DOP853",
+    )
+    return sol.y[0]
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_iftomm_n_four_bar_through_its_singular_positions(n):
+    """The IFToMM benchmark A02 (2N + 1 bars of 1 m and 1 kg, g = 9.81, B0 at 1 m/s
+    along +x), 10 s: B0's path within the benchmark's high precision (1e-3 m) of the
+    closed form, through the horizontal positions where the equations lose rank."""
+    res = simulate(ms.load(MECH / f"nfourbar-{n}.yaml"))
+    tr = res.trajectory
+    assert tr.t[-1] == pytest.approx(10.0) and not tr.early
+    th = _pendulum_reference(n, tr.t)
+    b0 = res.point("B0")
+    assert np.max(np.abs(b0.x - np.cos(th))) < 1e-3
+    assert np.max(np.abs(b0.y - np.sin(th))) < 1e-3
+    assert np.max(np.abs(tr.energy_residual)) < 1e-3
+    assert np.max(tr.violation) <= res.multibody.tol
+    # it turns over: about 4.4 turns clockwise in 10 s
+    assert (th[-1] - th[0]) / (2 * math.pi) < -4
+
+
+def test_seed_004_multibody_and_reduced_paths_give_the_same_motion():
+    """The motor-driven six-link machine of seed 004 on both paths, each to rtol 1e-10."""
+    import copy
+
+    mech = ms.load(MECH / "motor-linkage.yaml")
+    sim = mech.simulation
+    sim.duration, sim.step, sim.method, sim.rtol, sim.atol = 0.3, 0.01, "DOP853", 1e-10, 1e-12
+    reduced = simulate(mech, exact=True).trajectory
+    mb_mech = copy.copy(mech)
+    mb_mech.simulation = copy.copy(sim)
+    mb_mech.simulation.formulation = "multibody"
+    general = simulate(mb_mech).trajectory
+    np.testing.assert_allclose(general.t, reduced.t, atol=1e-12)
+    np.testing.assert_allclose(general.u, reduced.phi, atol=1e-8)
+    np.testing.assert_allclose(general.ud, reduced.omega, atol=1e-6)
+
+
+def _invoke(tmp_path, text: str, name: str = "m.yaml"):
+    f = tmp_path / name
+    f.write_text(text)
+    return CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+
+
+def test_cli_free_motion_writes_the_energy_balance_and_the_violation(tmp_path):
+    r = _invoke(tmp_path, SPRUNG % (400, 0.4, ""))
+    assert r.exit_code == 0, r.output
+    assert "energy balance: T + V - W changed by at most" in r.output
+    assert "largest constraint violation" in r.output and "free motion" in r.output
+    header = (tmp_path / "o" / "simulation.csv").read_text().splitlines()[0]
+    for col in ("energy.residual [J]", "constraint.violation [m]", "omega [rad/s]"):
+        assert col in header
+
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        (SPRUNG % (400, 1, ", rates: {O4: 50 rad/s}"), "not consistent with the constraints"),
+        (SPRUNG % (400, 1, ", tolerance: 0 m"), "simulate.tolerance"),
+        ((SPRUNG % (400, 1, "")).replace("rtol: 1e-10", "rtol: 0"), "rtol must be a number"),
+        (SPRUNG % (-400, 1, ""), "loads.lift.stiffness: a spring's stiffness must be zero"),
+        (SPRUNG % (400, 1, ", rates: {X: 1 rad/s}"), "no joint 'X'"),
+    ],
+)
+def test_bad_input_is_refused_with_a_clear_message(tmp_path, text, words):
+    r = _invoke(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    assert words in r.output and "Traceback" not in r.output
