@@ -444,6 +444,20 @@ class Multibody:
         return qd + dq
 
 
+def free_context(mech) -> SimpleNamespace:
+    """What :class:`Multibody` reads of an analysis, for a mechanism of any number of
+    degrees of freedom (the sweep's :class:`~mechsolve.core.sweep.Analysis` needs one
+    driver per degree of freedom): the mechanism, its constraints without a driver and
+    its size. Conditional loads need the analysis's points and are not read here."""
+    from mechsolve.core.sweep import _scale
+
+    if any(ld.when is not None for ld in mech.loads):
+        raise ValueError("conditional loads need the mechanism's analysis")
+    return SimpleNamespace(
+        mech=mech, system=ConstraintSystem(mech, with_driver=False), scale=_scale(mech)
+    )
+
+
 def _rcond(A: np.ndarray) -> float:
     if A.size == 0:
         return 1.0
