@@ -360,3 +360,71 @@ def test_sprung_four_bar_against_exudyn():
     ours = tr.q[:, 3 * index["rocker"] + 2]
     assert np.ptp(ours) > 0.05  # it swings (0.093 rad)
     assert np.max(np.abs(ours - theirs)) < 1e-7  # 1.2e-8 met
+
+
+TWO = """
+name: two pendulums, two motors
+units: {length: m, angle: deg}
+ground: {O: [0, 0], Q: [3, 0]}
+links:
+  one: {points: {O: [0, 0], P: [1, 0]}, mass: 2 kg, com: P}
+  two: {points: {Q: [0, 0], R: [0.5, 0]}, mass: 1 kg, com: R}
+joints:
+  O: [ground, one]
+  Q: [ground, two]
+gravity: 9.81 m/s^2
+motors:
+  first: {joint: O, stall: 30 N m, slope: 4 N m s}
+  second: {joint: Q, torque: "-2 - 0.5 * omega"}
+simulate: {duration: 2 s, step: 0.02 s, method: DOP853, rtol: 1e-11, atol: 1e-13,
+           pose: {O: 10 deg, Q: -30 deg}%s}
+"""
+
+
+def test_two_uncoupled_pendulums_each_driven_by_its_motor():
+    """Two degrees of freedom placed by ``pose``, two motors with their own laws: each
+    pendulum follows its own scalar equation m L^2 theta'' = M(omega) - m g L cos theta."""
+    res = simulate(ms.loads(TWO % ", rates: {Q: 1 rad/s}"))
+    tr, mb = res.trajectory, res.multibody
+    assert not tr.early and np.max(tr.violation) <= mb.tol
+    for link, m, L, law, th0, w0 in (
+        ("one", 2.0, 1.0, lambda w: 30 - 4 * w, 10, 0.0),
+        ("two", 1.0, 0.5, lambda w: -2 - 0.5 * w, -30, 1.0),
+    ):
+        ref = solve_ivp(
+            lambda _, y, m=m, L=L, law=law: [
+                y[1],
+                (law(y[1]) - m * G * L * math.cos(y[0])) / (m * L * L),
+            ],
+            (0, 2),
+            [math.radians(th0), w0],
+            t_eval=tr.t,
+            rtol=1e-12,
+            atol=1e-12,
+        )
+        k = 3 * mb.system.index[link] + 2
+        np.testing.assert_allclose(tr.q[:, k], ref.y[0], atol=1e-7)
+    # the motors' work is in the balance
+    assert np.max(np.abs(tr.energy_residual)) < 1e-6 * np.max(np.abs(tr.work))
+
+
+def test_cli_pose_placed_machine_with_two_motors(tmp_path):
+    r = _invoke(tmp_path, TWO % "")
+    assert r.exit_code == 0, r.output
+    assert "2 degree(s) of freedom" in r.output and "first (M = 30 - 4 * omega on O)" in r.output
+    header = (tmp_path / "o" / "simulation.csv").read_text().splitlines()[0]
+    assert "first.effort [N*m]" in header and "O.Fx [N]" in header
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        ("pose: {O: 10 deg}", "2 degree(s) of freedom here: give one joint coordinate"),
+        ("pose: {O: 10 deg, Q: 3 m}", "the joint 'Q' needs an angle"),
+    ],
+)
+def test_a_pose_must_give_one_coordinate_per_degree_of_freedom(tmp_path, extra, words):
+    text = (TWO % "").replace("pose: {O: 10 deg, Q: -30 deg}", extra)
+    r = _invoke(tmp_path, text)
+    assert r.exit_code == 2, r.output
+    assert words in r.output

@@ -72,5 +72,6 @@ class Simulation:
     formulation: str | None = None  # "reduced", "multibody"; None: chosen by the file
     tolerance: float | None = None  # multibody: the largest constraint violation (m)
     rates: dict = field(default_factory=dict)  # multibody: joint -> initial rate
+    pose: dict = field(default_factory=dict)  # multibody: joint -> (value, kind, path)
     speed0_given: bool = False  # 'from' was in the file
     where: tuple = field(default_factory=tuple)

@@ -71,6 +71,7 @@ class Source:
     name: str
     coordinate: object
     law: Callable[[float, float], float]
+    text: str = ""  # the law and its joint, for the summary
 
 
 @dataclass
@@ -442,6 +443,19 @@ class Multibody:
         r = nu - Jq @ qd
         dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
         return qd + dq
+
+
+def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
+    """The trajectory's outputs as one :class:`State` over its N rows."""
+    n, nb = len(tr.t), mb.nb
+    st = State(nb, n)
+    st.x[:nb], st.y[:nb], st.th[:nb] = tr.q[:, 0::3].T, tr.q[:, 1::3].T, tr.q[:, 2::3].T
+    np.cos(st.th[:nb], out=st.c[:nb])
+    np.sin(st.th[:nb], out=st.s[:nb])
+    st.vx[:nb], st.vy[:nb], st.w[:nb] = tr.qd[:, 0::3].T, tr.qd[:, 1::3].T, tr.qd[:, 2::3].T
+    st.ax[:nb], st.ay[:nb], st.al[:nb] = tr.qdd[:, 0::3].T, tr.qdd[:, 1::3].T, tr.qdd[:, 2::3].T
+    st.token = State.new_token()
+    return st
 
 
 def free_context(mech) -> SimpleNamespace:

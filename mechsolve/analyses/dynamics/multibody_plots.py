@@ -22,17 +22,29 @@ def write_multibody_plots(res: MultibodyResults, outdir) -> list[Path]:
     plt = pyplot(names_of(res.mechanism))
     outdir = Path(outdir)
     tr = res.trajectory
-    lin = res.linear
+    lin = getattr(res, "linear", False)
     name = res.mechanism.name
     out = []
 
     fig, axes = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
-    axes[0].plot(tr.t, tr.u if lin else np.degrees(tr.u), lw=1.2)
-    axes[0].set_ylabel(f"{res.mechanism.driver.joint} [{'m' if lin else 'deg'}]")
-    axes[1].plot(tr.t, tr.ud, lw=1.2, color="C1")
-    axes[1].set_ylabel(f"its rate [{'m/s' if lin else 'rad/s'}]")
-    axes[2].plot(tr.t, tr.udd, lw=1.0, color="C2")
-    axes[2].set_ylabel(f"its acceleration [{'m/s^2' if lin else 'rad/s^2'}]")
+    if tr.u is None:  # placed by its pose: every link's angle and rates
+        mb = res.multibody
+        for lk in res.mechanism.links:
+            k = 3 * mb.system.index[lk.name] + 2
+            axes[0].plot(tr.t, np.degrees(tr.q[:, k]), lw=1.2, label=lk.name)
+            axes[1].plot(tr.t, tr.qd[:, k], lw=1.2)
+            axes[2].plot(tr.t, tr.qdd[:, k], lw=1.0)
+        axes[0].legend(fontsize=8)
+        axes[0].set_ylabel("link angle [deg]")
+        axes[1].set_ylabel("angular speed [rad/s]")
+        axes[2].set_ylabel("angular acceleration [rad/s^2]")
+    else:
+        axes[0].plot(tr.t, tr.u if lin else np.degrees(tr.u), lw=1.2)
+        axes[0].set_ylabel(f"{res.mechanism.driver.joint} [{'m' if lin else 'deg'}]")
+        axes[1].plot(tr.t, tr.ud, lw=1.2, color="C1")
+        axes[1].set_ylabel(f"its rate [{'m/s' if lin else 'rad/s'}]")
+        axes[2].plot(tr.t, tr.udd, lw=1.0, color="C2")
+        axes[2].set_ylabel(f"its acceleration [{'m/s^2' if lin else 'rad/s^2'}]")
     axes[2].set_xlabel("t [s]")
     axes[0].set_title(f"{name}: motion (multibody)")
     for ax in axes:

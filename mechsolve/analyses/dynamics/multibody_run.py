@@ -24,15 +24,12 @@ from mechsolve.analyses.dynamics.multibody import (
     Trajectory,
     coordinate,
     integrate,
+    trajectory_state,
 )
-from mechsolve.base.state import State
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 from mechsolve.results.results import Column, Results
-
-RATE_RTOL = 1e-6  # how far given rates may be from consistent before it is an error
-RATE_ATOL = 1e-9
 
 
 def uses_multibody(mech: Mechanism) -> bool:
@@ -49,6 +46,10 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     if sim is None:
         raise mech.error(("simulate",), "a simulation needs a 'simulate' section (duration, step)")
     machine = _with_flywheel(mech)
+    if sim.pose or machine.driver is None:
+        from mechsolve.analyses.dynamics.multibody_free import simulate_free
+
+        return simulate_free(mech, machine, max_steps=max_steps)
     if machine.driver is None:
         raise mech.error(
             ("driver",),
@@ -74,9 +75,12 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     if mech.motor is not None:
         motor, sense = mech.motor, d.direction
         sources.append(Source("motor", drv, lambda w, t: float(drive_torque(motor, sense, w, t))))
+    from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources
+
+    sources += motor_sources(machine, free.system)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
     if sim.rates:
-        qd0 = _initial_rates(mech, mb, q0, qd0, d)
+        qd0 = initial_rates(mech, mb, q0, qd0, d)
     tr = integrate(
         mb,
         q0,
@@ -93,71 +97,11 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     return MultibodyResults(an, sol, forces, tr, mb, drv)
 
 
-def _initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
-    """The rates nearest to ``simulate.from`` and ``simulate.rates`` that satisfy the
-    constraints; an input error where a given value must change by more than a
-    tolerance."""
-    sim = mech.simulation
-    rows, targets, where = [], [], []
-    st = mb.state(q0, qd0)
-    given = dict(sim.rates)
-    if d.joint not in given and sim.speed0_given:
-        given[d.joint] = (sim.speed0, None, ("simulate", "from"))
-    for j, (value, kind, path) in given.items():
-        try:
-            joint = mech.joint(j)
-        except (KeyError, ValueError):
-            joint = None
-        if joint is None or joint.coordinate is None:
-            names = [jj.name for jj in mech.joints if jj.coordinate is not None]
-            raise mech.error(
-                path,
-                f"no joint {j!r} with a coordinate to give a rate to (joints: {', '.join(names)})",
-            )
-        want = "speed" if joint.coordinate == "length" else "angular speed"
-        if kind is not None and kind != want:
-            raise mech.error(
-                path,
-                f"the joint {j!r} needs {want}, e.g. 2 {'m/s' if want == 'speed' else 'rad/s'}",
-            )
-        c = coordinate(mech, mb.system, j, d.line if j == d.joint else None)
-        row, _ = mb._coordinate_row(c, st)
-        rows.append(row)
-        targets.append(value)
-        where.append((j, path))
-    Jq = mb.jacobian(q0)
-    # the constraint's solutions qd = N a (N: its null space), fitted to the given rates
-    _, sv, Vt = np.linalg.svd(Jq) if Jq.size else (None, np.zeros(0), np.eye(mb.nq))
-    rank = int(np.sum(sv > 1e-10 * (sv[0] if sv.size else 1.0)))
-    N = Vt[rank:].T
-    C = np.array(rows)
-    a, *_ = np.linalg.lstsq(C @ N, np.array(targets), rcond=1e-12)
-    qd = N @ a
-    got = C @ qd
-    for (j, path), x, y in zip(where, targets, got):
-        if abs(y - x) > RATE_RTOL * max(abs(x), abs(y)) + RATE_ATOL:
-            consistent = ", ".join(f"{jj}: {v:.6g}" for (jj, _), v in zip(where, got))
-            raise mech.error(
-                path,
-                f"the initial rates are not consistent with the constraints: {j}'s rate "
-                f"{x:.6g} would have to be {y:.6g} (the nearest consistent rates: "
-                f"{consistent}, in rad/s or m/s); give rates that the mechanism allows",
-            )
-    return qd
-
-
 def _solution(an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
     """The trajectory as a :class:`Solution` of the analysis (for its columns and the
     force analysis), with the driver coordinate, its rate and acceleration."""
     n = len(tr.t)
-    st = State(mb.nb, n)
-    nb = mb.nb
-    st.x[:nb], st.y[:nb], st.th[:nb] = tr.q[:, 0::3].T, tr.q[:, 1::3].T, tr.q[:, 2::3].T
-    np.cos(st.th[:nb], out=st.c[:nb])
-    np.sin(st.th[:nb], out=st.s[:nb])
-    st.vx[:nb], st.vy[:nb], st.w[:nb] = tr.qd[:, 0::3].T, tr.qd[:, 1::3].T, tr.qd[:, 2::3].T
-    st.ax[:nb], st.ay[:nb], st.al[:nb] = tr.qdd[:, 0::3].T, tr.qdd[:, 1::3].T, tr.qdd[:, 2::3].T
-    st.token = State.new_token()
+    st = trajectory_state(mb, tr)
     u = drv.value(st)
     rows = np.zeros((n, mb.nq))
     for body, blk in drv.jacobian(st).items():
