@@ -401,6 +401,13 @@ class Multibody:
             raise NotClosing(
                 t, "the accelerations are not determined (a massless link that can move?)"
             )
+        if self.prescribed:  # the power the prescribed motions put in: -lambda u'
+            ud = np.atleast_1d(self._u(t)[1])
+            first = self.nc - len(self.prescribed)
+            for k in range(len(self.prescribed)):
+                at = np.flatnonzero(part.rows == first + k)
+                if at.size:
+                    P -= float(x[self.nq + at[0]]) * float(ud[k])
         return x[: self.nq], x[self.nq :], P, V
 
     def free_accelerations(self, q, qd, t: float):

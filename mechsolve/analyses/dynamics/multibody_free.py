@@ -14,6 +14,7 @@ from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
     NEWTON_ITERATIONS,
     Multibody,
+    Prescribed,
     Source,
     Trajectory,
     coordinate,
@@ -59,11 +60,10 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
     if mech.motor is not None:
         raise mech.error(("motor",), "with simulate.pose give the motors in 'motors:'")
     ctx = free_context(machine)
-    mb = Multibody(ctx, motor_sources(machine, ctx.system), tolerance=sim.tolerance)
+    prescribed = _prescribed(machine, ctx.system)
+    mb = Multibody(ctx, motor_sources(machine, ctx.system), prescribed, tolerance=sim.tolerance)
     q0 = assemble_pose(mech, mb)
-    qd0 = np.zeros(mb.nq)
-    if sim.rates:
-        qd0 = initial_rates(mech, mb, q0, qd0, None)
+    qd0 = initial_rates(mech, mb, q0, np.zeros(mb.nq), None)
     tr = integrate(
         mb,
         q0,
@@ -86,6 +86,8 @@ def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
     rows, targets, where = [], [], []
     st = mb.state(q0, qd0)
     given = dict(sim.rates)
+    for j, (_, kind, path) in sim.pose.items():  # a joint placed by the pose starts at rest
+        given.setdefault(j, (0.0, "speed" if kind == "length" else "angular speed", path))
     if d is not None and d.joint not in given and sim.speed0_given:
         given[d.joint] = (sim.speed0, None, ("simulate", "from"))
     for j, (value, kind, path) in given.items():
@@ -115,9 +117,15 @@ def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
     _, sv, Vt = np.linalg.svd(Jq) if Jq.size else (None, np.zeros(0), np.eye(mb.nq))
     rank = int(np.sum(sv > 1e-10 * (sv[0] if sv.size else 1.0)))
     N = Vt[rank:].T
+    nu = mb._nu_gamma(st, 0.0, gamma=False)
+    qd_p = np.linalg.lstsq(Jq, nu, rcond=1e-12)[0] if Jq.size else np.zeros(mb.nq)
+    if not rows:
+        return qd_p
     C = np.array(rows)
-    a, *_ = np.linalg.lstsq(C @ N, np.array(targets), rcond=1e-12)
-    qd = N @ a
+    # a particular solution of Phi_q q' = nu (the prescribed motions' rates), then the
+    # free part fitted to the given rates
+    a, *_ = np.linalg.lstsq(C @ N, np.array(targets) - C @ qd_p, rcond=1e-12)
+    qd = qd_p + N @ a
     got = C @ qd
     for (j, path), x, y in zip(where, targets, got):
         if abs(y - x) > RATE_RTOL * max(abs(x), abs(y)) + RATE_ATOL:
@@ -129,6 +137,30 @@ def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
                 f"{consistent}, in rad/s or m/s); give rates that the mechanism allows",
             )
     return qd
+
+
+def _prescribed(mech: Mechanism, system) -> list[Prescribed]:
+    """With ``simulate.pose``, a ``driver:`` prescribes its joint's motion: its constant
+    speed from its start, or its motion law (the other freedoms move freely)."""
+    d = mech.driver
+    if d is None:
+        return []
+    if not isinstance(d.start, (int, float)):
+        raise mech.error(d.where + ("start",), "a prescribed driver starts at a number")
+    u0, w = float(d.start), float(d.speed)
+    if d.motion is not None:
+        law = d.motion
+
+        def at(t):
+            u, ud, udd = law.at(np.array([t]))
+            return float(u[0]), float(ud[0]), float(udd[0])
+    else:
+
+        def at(t):
+            return u0 + w * t, w, 0.0
+
+    c = coordinate(mech, system, d.joint, d.line)
+    return [Prescribed(f"driver {d.joint}", c, at)]
 
 
 def _guess(mech: Mechanism, mb: Multibody) -> np.ndarray:
@@ -190,7 +222,7 @@ def assemble_pose(mech: Mechanism, mb: Multibody) -> np.ndarray:
             )
         coords.append(coordinate(mech, mb.system, j))
         values.append(value)
-    q = _guess(mech, mb)
+    q = _guess(mech, mb)  # the prescribed coordinates are in the residual, at t = 0
     path = ("simulate", "pose")
     for _ in range(4 * NEWTON_ITERATIONS):
         st = mb.state(q)
@@ -209,7 +241,9 @@ def assemble_pose(mech: Mechanism, mb: Multibody) -> np.ndarray:
     if rank < mb.nq or len(coords) != dof:
         raise mech.error(
             path,
-            f"the mechanism has {dof} degree(s) of freedom here: give one joint coordinate "
+            f"the mechanism has {dof} degree(s) of freedom here"
+            + (" besides its prescribed driver" if mb.prescribed else "")
+            + ": give one joint coordinate "
             f"for each (got {len(coords)}{', not independent' if rank < mb.nq else ''})",
         )
     return q
