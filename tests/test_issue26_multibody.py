@@ -198,6 +198,26 @@ def test_seed_004_multibody_and_reduced_paths_give_the_same_motion():
     np.testing.assert_allclose(general.ud, reduced.omega, atol=1e-6)
 
 
+def test_shaper_with_its_switching_cutting_force_on_both_paths():
+    """The shaper (sliders, a flywheel, a cutting force that acts between 5 % and 95 %
+    of the stroke while the ram moves forward): both paths to rtol 1e-10, 0.5 s."""
+    import copy
+
+    mech = ms.load(MECH / "shaper.yaml")
+    sim = mech.simulation
+    sim.duration, sim.step, sim.method, sim.rtol, sim.atol = 0.5, 0.01, "DOP853", 1e-10, 1e-12
+    reduced = simulate(mech, exact=True).trajectory
+    mb_mech = copy.copy(mech)
+    mb_mech.simulation = copy.copy(sim)
+    mb_mech.simulation.formulation = "multibody"
+    res = simulate(mb_mech)
+    general = res.trajectory
+    np.testing.assert_allclose(general.u, reduced.phi, atol=1e-9)
+    np.testing.assert_allclose(general.ud, reduced.omega, atol=1e-8)
+    assert res.forces.active["cutting"].any() and not res.forces.active["cutting"].all()
+    assert np.max(np.abs(general.energy_residual)) < 1e-6
+
+
 def _invoke(tmp_path, text: str, name: str = "m.yaml"):
     f = tmp_path / name
     f.write_text(text)

@@ -89,7 +89,7 @@ def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
     for j, (_, kind, path) in sim.pose.items():  # a joint placed by the pose starts at rest
         given.setdefault(j, (0.0, "speed" if kind == "length" else "angular speed", path))
     if d is not None and d.joint not in given and sim.speed0_given:
-        given[d.joint] = (sim.speed0, None, ("simulate", "from"))
+        given[d.joint] = (d.direction * abs(sim.speed0), None, ("simulate", "from"))
     for j, (value, kind, path) in given.items():
         try:
             joint = mech.joint(j)

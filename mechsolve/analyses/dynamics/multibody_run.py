@@ -62,7 +62,9 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         machine.driver = dataclasses.replace(machine.driver, motion=None)
     an = Analysis(machine)
     u0 = an.start_value()
-    start = core.states(an, np.array([u0]), np.array([sim.speed0]), np.array([0.0]))
+    # 'from' is a speed along the driver's direction, as on the reduced path
+    w0 = machine.driver.direction * abs(sim.speed0)
+    start = core.states(an, np.array([u0]), np.array([w0]), np.array([0.0]))
     if not start.ok[0]:
         raise mech.error(("driver", "start"), "the mechanism cannot close at the driver's start")
     st = start.state
@@ -79,6 +81,15 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
 
     sources += motor_sources(machine, free.system)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
+    if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
+        # stroke(q) means the extremes over the driver's sweep (a turn of a crank), as
+        # for the reduced path: found once, replayed at every state of the motion
+        if an.linear:
+            u, _ = an.sweep_values(u0)
+        else:
+            u = u0 + d.direction * np.radians(np.arange(0.0, 360.5, 1.0))
+        ref = core.states(an, u, 1.0, 0.0)
+        mb.extremes = list(core.forces(an, ref).stroke_extremes)
     if sim.rates:
         qd0 = initial_rates(mech, mb, q0, qd0, d)
     tr = integrate(
@@ -93,7 +104,7 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         max_steps=max_steps,
     )
     sol = _solution(an, start, mb, drv, tr)
-    forces = core.forces(an, sol)
+    forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
     return MultibodyResults(an, sol, forces, tr, mb, drv)
 
 
@@ -123,7 +134,7 @@ def _solution(an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
         residual_=tr.violation,
         warnings=[],
         events=[],
-        flips={},
+        flips=start.flips,  # the start's branches, for positions solved again
         rates_by_limit=[],
         rates_undetermined=[],
         ud=ud,
