@@ -487,3 +487,18 @@ def test_prescribed_crank_with_a_free_pendulum_on_it():
     ref = solve_ivp(pend, (0, 3), [phi0, w], t_eval=tr.t, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(tr.q[:, 5], ref.y[0], atol=1e-7)
     assert np.max(np.abs(tr.energy_residual)) < 1e-7 * np.max(np.abs(tr.work))
+
+
+def test_flywheel_check_keeps_the_reduced_path_under_formulation_multibody(tmp_path):
+    """`mechsolve flywheel` checks its flywheel by simulating the driver's motion: a file
+    that asks simulate for the multibody formulation still gets that check."""
+    text = (MECH / "shaper.yaml").read_text()
+    text = text.replace(
+        "method: rk4, from: 60 rpm}", "method: rk4, from: 60 rpm, formulation: multibody}"
+    )
+    assert "formulation: multibody" in text
+    f = tmp_path / "shaper.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert "checked by simulation with this flywheel: delta reached" in r.output
