@@ -200,12 +200,12 @@ def test_seed_004_multibody_and_reduced_paths_give_the_same_motion():
 
 def test_shaper_with_its_switching_cutting_force_on_both_paths():
     """The shaper (sliders, a flywheel, a cutting force that acts between 5 % and 95 %
-    of the stroke while the ram moves forward): both paths to rtol 1e-10, 0.5 s."""
+    of the stroke while the ram moves forward): both paths to rtol 1e-10, 0.3 s."""
     import copy
 
     mech = ms.load(MECH / "shaper.yaml")
     sim = mech.simulation
-    sim.duration, sim.step, sim.method, sim.rtol, sim.atol = 0.5, 0.01, "DOP853", 1e-10, 1e-12
+    sim.duration, sim.step, sim.method, sim.rtol, sim.atol = 0.3, 0.01, "DOP853", 1e-10, 1e-12
     reduced = simulate(mech, exact=True).trajectory
     mb_mech = copy.copy(mech)
     mb_mech.simulation = copy.copy(sim)

@@ -513,30 +513,49 @@ def integrate(
     h = step if step is not None else duration / 500
     n_out = int(math.floor(duration / h + 1e-9))
     times = np.r_[np.arange(n_out + 1) * h, [duration] if n_out * h < duration - 1e-12 else []]
-    nq = mb.nq
-    rec = {k: [] for k in ("t", "q", "qd", "qdd", "lam", "T", "V", "W", "viol", "vviol")}
-    q, qd, W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
-    part = mb.partition(q)
-    partitions = 1
-    stopped, early = "", False
+    run = _Run(mb, q0, qd0, times, method, rtol, atol)
+    run.go(max_steps)
+    return run.trajectory(q0)
 
-    def record(t, q, qd, W):
-        qdd, _, _, _ = mb.accelerations(part, q, qd, t)
+
+class _Run:
+    """One integration: the state at the last output, the partition, the records."""
+
+    KEYS = ("t", "q", "qd", "qdd", "lam", "T", "V", "W", "viol", "vviol")
+
+    def __init__(self, mb: Multibody, q0, qd0, times, method, rtol, atol) -> None:
+        self.mb, self.times, self.method, self.rtol, self.atol = mb, times, method, rtol, atol
+        self.rec: dict[str, list] = {k: [] for k in self.KEYS}
+        self.q, self.qd, self.W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
+        self.part = mb.partition(self.q)
+        self.partitions, self.bridges = 1, 0
+        self.stopped, self.early = "", False
+        self.record(0.0, self.q, self.qd, self.W)
+
+    def record(self, t, q, qd, W) -> None:
+        """Keep an output: its state, accelerations, multipliers, energies, violations."""
+        mb, rec = self.mb, self.rec
+        qdd, _, _, _ = mb.accelerations(self.part, q, qd, t)
         T, V = mb.energy(q, qd, t)
-        rec["t"].append(t)
-        rec["q"].append(q.copy())
-        rec["qd"].append(qd.copy())
-        rec["qdd"].append(qdd)
-        rec["lam"].append(mb.multipliers(q, qd, qdd, t))
-        rec["T"].append(T)
-        rec["V"].append(V)
-        rec["W"].append(W)
-        rec["viol"].append(float(np.max(np.abs(mb.residual(q, t)), initial=0.0)))
-        Jq = mb.jacobian(q)
         nu = mb._nu_gamma(mb.state(q), t, gamma=False)
-        rec["vviol"].append(float(np.max(np.abs(Jq @ qd - nu), initial=0.0)))
+        for key, value in (
+            ("t", t),
+            ("q", q.copy()),
+            ("qd", qd.copy()),
+            ("qdd", qdd),
+            ("lam", mb.multipliers(q, qd, qdd, t)),
+            ("T", T),
+            ("V", V),
+            ("W", W),
+            ("viol", float(np.max(np.abs(mb.residual(q, t)), initial=0.0))),
+            ("vviol", float(np.max(np.abs(mb.jacobian(q) @ qd - nu), initial=0.0))),
+        ):
+            rec[key].append(value)
+        mb._last = (t, q.copy(), qd.copy(), qdd)
 
-    def rhs(t, y):
+    def rhs(self, t, y):
+        """d/dt (z, z', W) on the current partition."""
+        mb, part = self.mb, self.part
         f = len(part.ind)
         z, zd = y[:f], y[f : 2 * f]
         qq = mb.close(part, z, t, mb.guess(t))
@@ -545,85 +564,90 @@ def integrate(
         mb._last = (t, qq, qqd, qdd)
         return np.concatenate([zd, qdd[part.ind], [P]])
 
-    record(0.0, q, qd, W)
-    mb._last = (0.0, q.copy(), qd.copy(), rec["qdd"][-1])
-    k = 1
-    retries = 0
-    bridges = 0
-    while k < len(times):
-        t0 = times[k - 1]
-        f = part.ind
-        fn = len(f)
-        y0 = np.concatenate([q[f], qd[f], [W]])
-        qdd_now = rec["qdd"][-1]
-        try:
-            if method == "rk4":
-                ts, ys = [times[k]], [_rk4(rhs, t0, y0, times[k] - t0)]
-            else:
-                ts, ys = _adaptive(mb, part, rhs, times[k - 1 : k + CHUNK], y0, method, rtol, atol)
-            out = []
-            mb._last = (t0, q, qd, qdd_now)
-            for t1, y1 in zip(ts, ys):
-                q1 = mb.close(part, y1[:fn], t1, mb.guess(t1))
-                qd1, _ = mb.rates(part, q1, y1[fn : 2 * fn], t1)
-                qdd1 = mb.accelerations(part, q1, qd1, t1)[0]
-                mb._last = (t1, q1, qd1, qdd1)
-                out.append((t1, q1, qd1, float(y1[-1])))
-        except Repartition:
-            # at or next to a singular position no partition describes the motion: the
-            # step is bridged on all the coordinates, then projected onto the constraints
-            retries += 1
-            bridged = retries <= BRIDGE_LIMIT and _bridge(mb, t0, times[k], q, qd, W)
-            if not bridged:
-                stopped = (
-                    f"the mechanism cannot close at t = {t0:.6g} s along the motion "
-                    "(a singular or limit position it cannot pass)"
+    def outputs(self, k: int) -> list:
+        """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
+        adaptive run until its conditioning event), each closed on the partition."""
+        mb, part, f = self.mb, self.part, self.part.ind
+        t0, fn = self.times[k - 1], len(f)
+        y0 = np.concatenate([self.q[f], self.qd[f], [self.W]])
+        if self.method == "rk4":
+            ts, ys = [self.times[k]], [_rk4(self.rhs, t0, y0, self.times[k] - t0)]
+        else:
+            window = self.times[k - 1 : k + CHUNK]
+            ts, ys = _adaptive(mb, part, self.rhs, window, y0, self.method, self.rtol, self.atol)
+        if not ts:  # the conditioning event at once: no partition will do here
+            raise Repartition
+        self.event = self.method != "rk4" and len(ts) < len(self.times[k - 1 : k + CHUNK]) - 1
+        mb._last = (t0, self.q, self.qd, self.rec["qdd"][-1])
+        out = []
+        for t1, y1 in zip(ts, ys):
+            q1 = mb.close(part, y1[:fn], t1, mb.guess(t1))
+            qd1, _ = mb.rates(part, q1, y1[fn : 2 * fn], t1)
+            mb._last = (t1, q1, qd1, mb.accelerations(part, q1, qd1, t1)[0])
+            out.append((t1, q1, qd1, float(y1[-1])))
+        return out
+
+    def go(self, max_steps: int | None) -> None:
+        mb, times = self.mb, self.times
+        k, retries = 1, 0
+        while k < len(times):
+            try:
+                out = self.outputs(k)
+            except Repartition:
+                # at or next to a singular position no partition describes the motion:
+                # the step is bridged on all the coordinates, then projected
+                retries += 1
+                t0 = times[k - 1]
+                bridged = retries <= BRIDGE_LIMIT and _bridge(
+                    mb, t0, times[k], self.q, self.qd, self.W
                 )
-                early = True
-                break
-            q, qd, W = bridged
-            record(times[k], q, qd, W)
-            bridges += 1
-            k += 1
-            part = mb.partition(q)
-            partitions += 1
-            mb._last = (times[k - 1], q.copy(), qd.copy(), rec["qdd"][-1])
-            continue
-        except NotClosing as exc:
-            stopped, early = str(exc), True
-            break
-        if out:
-            retries = 0
-        for t1, q, qd, W in out:
-            record(t1, q, qd, W)
-        k += len(out)
-        mb._last = (times[k - 1], q.copy(), qd.copy(), rec["qdd"][-1])
-        stopped_by_event = method != "rk4" and len(ts) < min(CHUNK, len(times) - k + len(out))
-        if stopped_by_event or mb._needs_repartition(part, q):
-            part = mb.partition(q)
-            partitions += 1
-        if max_steps is not None and k > max_steps:
-            stopped, early = f"stopped after {max_steps} steps (--max-steps)", True
-            break
-    arr = {k: np.array(v) for k, v in rec.items()}
-    return Trajectory(
-        t=arr["t"],
-        q=arr["q"].reshape(-1, nq),
-        qd=arr["qd"].reshape(-1, nq),
-        qdd=arr["qdd"].reshape(-1, nq),
-        lam=arr["lam"].reshape(len(arr["t"]), -1),
-        kinetic=arr["T"],
-        potential=arr["V"],
-        work=arr["W"],
-        violation=arr["viol"],
-        velocity_violation=arr["vviol"],
-        redundant=_redundant(mb, q0),
-        stopped=stopped,
-        early=early,
-        nfev=mb.nfev,
-        partitions=partitions,
-        bridges=bridges,
-    )
+                if not bridged:
+                    self.stopped = (
+                        f"the mechanism cannot close at t = {t0:.6g} s along the motion "
+                        "(a singular or limit position it cannot pass)"
+                    )
+                    self.early = True
+                    return
+                out, self.event = [(times[k], *bridged)], True
+                self.bridges += 1
+            except NotClosing as exc:
+                self.stopped, self.early = str(exc), True
+                return
+            else:
+                retries = 0 if out else retries
+            for t1, q, qd, W in out:
+                self.record(t1, q, qd, W)
+                self.q, self.qd, self.W = q, qd, W
+            k += len(out)
+            if self.event or mb._needs_repartition(self.part, self.q):
+                self.part = mb.partition(self.q)
+                self.partitions += 1
+            if max_steps is not None and k > max_steps:
+                self.stopped, self.early = f"stopped after {max_steps} steps (--max-steps)", True
+                return
+
+    def trajectory(self, q0) -> Trajectory:
+        mb = self.mb
+        arr = {k: np.array(v) for k, v in self.rec.items()}
+        n = len(arr["t"])
+        return Trajectory(
+            t=arr["t"],
+            q=arr["q"].reshape(-1, mb.nq),
+            qd=arr["qd"].reshape(-1, mb.nq),
+            qdd=arr["qdd"].reshape(-1, mb.nq),
+            lam=arr["lam"].reshape(n, -1),
+            kinetic=arr["T"],
+            potential=arr["V"],
+            work=arr["W"],
+            violation=arr["viol"],
+            velocity_violation=arr["vviol"],
+            redundant=_redundant(mb, q0),
+            stopped=self.stopped,
+            early=self.early,
+            nfev=mb.nfev,
+            partitions=self.partitions,
+            bridges=self.bridges,
+        )
 
 
 def _redundant(mb: Multibody, q: np.ndarray) -> bool:
