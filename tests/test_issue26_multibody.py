@@ -502,3 +502,16 @@ def test_flywheel_check_keeps_the_reduced_path_under_formulation_multibody(tmp_p
     r = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
     assert "checked by simulation with this flywheel: delta reached" in r.output
+
+
+def test_motors_or_a_pose_take_the_general_path_and_the_reduced_one_refuses_them(tmp_path):
+    text = (MECH / "motor-linkage.yaml").read_text()
+    extra = "motors:\n  second: {joint: O1, stall: 1 N m, slope: 0.1 N m s}\n"
+    mech = ms.loads(
+        text.replace("simulate: {duration: 2.2 s", "simulate: {duration: 0.02 s") + extra
+    )
+    res = simulate(mech)  # two motors: the general path, not the driver's one equation
+    assert res.multibody is not None and "second (M = 1 - 0.1 * omega on O1)" in res.summary()
+    bad = text.replace("from: rest}", "from: rest, formulation: reduced}") + extra
+    r = _invoke(tmp_path, bad)
+    assert r.exit_code == 2 and "motors: needs formulation: multibody" in r.output, r.output

@@ -35,9 +35,19 @@ from mechsolve.results.results import Column, Results
 def uses_multibody(mech: Mechanism) -> bool:
     """Whether ``simulate`` takes the general path: asked for, or no motor (free motion)."""
     sim = mech.simulation
-    if sim is not None and sim.formulation is not None:
+    if sim is None:
+        return False
+    general = mech.motor is None or bool(mech.motors) or bool(sim.pose) or bool(sim.rates)
+    if sim.formulation == "reduced" and general and mech.motor is not None:
+        what = "motors:" if mech.motors else "simulate.pose" if sim.pose else "simulate.rates"
+        raise mech.error(
+            ("simulate", "formulation"),
+            f"the reduced formulation integrates the driver's one equation under its one "
+            f"motor: {what} needs formulation: multibody",
+        )
+    if sim.formulation is not None:
         return sim.formulation == "multibody"
-    return mech.motor is None and sim is not None
+    return general
 
 
 def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> MultibodyResults:
@@ -76,7 +86,14 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     drv = coordinate(machine, free.system, d.joint, d.line)
     if mech.motor is not None:
         motor, sense = mech.motor, d.direction
-        sources.append(Source("motor", drv, lambda w, t: float(drive_torque(motor, sense, w, t))))
+        sources.append(
+            Source(
+                "motor",
+                drv,
+                lambda w, t: float(drive_torque(motor, sense, w, t)),
+                f"{motor.describe()} on {d.joint}",
+            )
+        )
     from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources
 
     sources += motor_sources(machine, free.system)
@@ -216,15 +233,8 @@ class MultibodyResults(Results):
             f"{how} to t = {tr.t[-1]:.6g} s, {tr.nfev} evaluations"
             + (f", {tr.partitions} partitions" if tr.partitions > 1 else "")
         )
-        motor = self.mechanism.motor
-        lines.append(
-            "  sources: "
-            + (
-                f"motor {motor.describe()} on joint {self.mechanism.driver.joint}"
-                if motor is not None
-                else "none (free motion)"
-            )
-        )
+        names = ", ".join(f"{src.name} ({src.text})" for src in mb.sources)
+        lines.append("  sources: " + (names or "none (free motion)"))
         E = np.abs(tr.kinetic) + np.abs(tr.potential - tr.potential[0]) + np.abs(tr.work)
         lines.append(
             f"  energy balance: T + V - W changed by at most "
