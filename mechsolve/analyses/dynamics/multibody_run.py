@@ -235,11 +235,15 @@ class MultibodyResults(Results):
         )
         names = ", ".join(f"{src.name} ({src.text})" for src in mb.sources)
         lines.append("  sources: " + (names or "none (free motion)"))
-        E = np.abs(tr.kinetic) + np.abs(tr.potential - tr.potential[0]) + np.abs(tr.work)
+        E = max(
+            np.max(np.abs(tr.kinetic)),
+            np.max(np.abs(tr.potential - tr.potential[0])),
+            np.max(np.abs(tr.work)),
+        )
         lines.append(
             f"  energy balance: T + V - W changed by at most "
             f"{np.max(np.abs(tr.energy_residual)):.3g} J (largest of T, |V - V0|, |W|: "
-            f"{np.max(E):.6g} J)"
+            f"{E:.6g} J)"
         )
         lines.append(
             f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
