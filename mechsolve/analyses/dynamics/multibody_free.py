@@ -340,6 +340,11 @@ class FreeResults:
             f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
             f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)",
         ]
+        if tr.bridges:
+            lines.append(
+                f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
+                "all coordinates, then projected onto the constraints)"
+            )
         if tr.early:
             lines.append(f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}")
         return "\n".join(lines)

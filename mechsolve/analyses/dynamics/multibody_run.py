@@ -254,6 +254,11 @@ class MultibodyResults(Results):
                 "  redundant constraints: the motion is unique, the reactions are the "
                 "minimum-norm solution (not unique)"
             )
+        if tr.bridges:
+            lines.append(
+                f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
+                "all coordinates, then projected onto the constraints)"
+            )
         if tr.early:
             lines.append(
                 f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}; the motion up to "
