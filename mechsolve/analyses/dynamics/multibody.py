@@ -182,7 +182,8 @@ class Multibody:
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.extremes: list = []
         self.nfev = 0
-        self._last = None  # (t, q, q'): the last closed state, Newton's guess
+        self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
+        self._chord = None  # (partition, Phi_d) of the last evaluation
 
     # -- states ---------------------------------------------------------------------
     def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
@@ -263,7 +264,8 @@ class Multibody:
         q = guess.copy()
         q[part.ind] = z
         rows, dep = part.rows, part.dep
-        Jd = None
+        # the chord: the Jacobian of the last evaluation on this partition, a step away
+        Jd = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
         for _ in range(NEWTON_ITERATIONS):
             phi = self.residual(q, t)[rows]
@@ -294,6 +296,7 @@ class Multibody:
         Jd = Jq[np.ix_(rows, dep)]
         if _rcond(Jd) < RECONDITION * part.rcond:
             raise Repartition
+        self._chord = (part, Jd)
         qd = np.zeros(self.nq)
         qd[ind] = zd
         nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
@@ -721,7 +724,9 @@ def _adaptive(mb: Multibody, part: Partition, rhs, times, y0, method, rtol, atol
     )
     if sol.status < 0:
         raise Repartition
-    return list(sol.t), list(sol.y.T)
+    if len(sol.t) == 0:  # the event before the first output
+        return [], []
+    return list(sol.t), list(np.asarray(sol.y).T)
 
 
 def _rk4(rhs, t0: float, y0: np.ndarray, h: float) -> np.ndarray:
