@@ -532,3 +532,15 @@ def test_the_bridge_across_a_singular_position_keeps_the_motion():
     assert np.max(np.abs(b0.x - np.cos(th))) < 1e-7
     assert np.max(np.abs(b0.y - np.sin(th))) < 1e-7
     assert "bridged across singular positions" in res.summary()
+
+
+def test_run_from_the_singular_horizontal_position_prints_no_nan(tmp_path):
+    """`run` of the N-four-bar from its singular horizontal position: the rates at the
+    start are not determined, so no speed is printed for a point that has none (it
+    printed '|v| max nan m/s' and warned on an all-NaN slice)."""
+    text = (MECH / "nfourbar-2.yaml").read_text().replace("start: 90 deg", "start: 0 deg")
+    f = tmp_path / "n2.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert "nan" not in r.output

@@ -164,7 +164,12 @@ def read_simulation(r: Reader, value: Any, linear: bool):
                 except ValueError:
                     pass
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
-                raise r.fail(path + (key,), f"{key} must be a number between 0 and 1")
+                big = isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) >= 1
+                raise r.fail(
+                    path + (key,),
+                    f"{key} must be a number between 0 and 1"
+                    + (f" ({x:g} is too large in size)" if big else ""),
+                )
             setattr(sim, key, float(x))
     if "from" in m:
         sim.speed0_given = True
