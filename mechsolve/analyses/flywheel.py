@@ -335,6 +335,7 @@ def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> 
     sim.speed0 = w
     sim.revolutions = None
     sim.steady = None
+    sim.formulation = "reduced"  # its revolutions and fluctuation: the reduced path's
     machine.simulation = sim
     res = simulate(machine)
     fl = steady_fluctuation(res.trajectory)

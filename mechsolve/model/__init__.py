@@ -255,6 +255,7 @@ class Mechanism:
     instants: list[tuple[float, float, float, str]] = field(default_factory=list)
     # forward dynamics (mechsolve.model.machine): the motor, a flywheel, the simulation
     motor: object | None = None
+    motors: dict = field(default_factory=dict)  # name -> (joint, Motor): simulate's general path
     flywheel: object | None = None
     simulation: object | None = None
     requirements: list = field(default_factory=list)  # mechsolve.results.requirements.Requirement

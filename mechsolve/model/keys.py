@@ -331,6 +331,20 @@ SIMULATE = Section(
         "from": K(either(const("rest"), quantity("angular speed")), "The start: rest or a speed."),
         "revolutions": K(quantity("dimensionless"), "Stop after this many revolutions."),
         "steady": K(FRACTION, "Stop when a revolution's mean speed changes less (e.g. 0.01 %)."),
+        "formulation": K(
+            choice("reduced", "multibody"),
+            "reduced: the driver's one equation (one degree of freedom, one motor); "
+            "multibody: the bodies' coordinates with the constraints (free motion too).",
+        ),
+        "tolerance": K(LENGTH, "multibody: the largest constraint violation allowed."),
+        "pose": K(
+            map_of(either(ANGLE, LENGTH), "joint"),
+            "multibody: joint coordinates at the start, one per degree of freedom.",
+        ),
+        "rates": K(
+            map_of(either(quantity("angular speed"), quantity("speed")), "joint"),
+            "multibody: initial rates of joint coordinates, checked against the constraints.",
+        ),
     },
 )
 
@@ -480,6 +494,10 @@ TOP = Section(
             "Driver states solved on their own: [{theta, omega, alpha}, ...].",
         ),
         "motor": K(section("motor"), "The motor (mechsolve simulate)."),
+        "motors": K(
+            map_of(section("motor")),
+            "Several motors, each on its joint (mechsolve simulate's multibody path).",
+        ),
         "flywheel": K(section("flywheel"), "A flywheel (mechsolve simulate, flywheel)."),
         "simulate": K(section("simulate"), "Forward dynamics (mechsolve simulate)."),
         "requirements": K(

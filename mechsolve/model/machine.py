@@ -69,4 +69,9 @@ class Simulation:
     speed0: float = 0.0  # the driver's speed at the start (rad/s or m/s)
     revolutions: float | None = None  # stop after this many turns of the driver
     steady: float | None = None  # stop when a revolution's mean speed changes by this fraction
+    formulation: str | None = None  # "reduced", "multibody"; None: chosen by the file
+    tolerance: float | None = None  # multibody: the largest constraint violation (m)
+    rates: dict = field(default_factory=dict)  # multibody: joint -> initial rate
+    pose: dict = field(default_factory=dict)  # multibody: joint -> (value, kind, path)
+    speed0_given: bool = False  # 'from' was in the file
     where: tuple = field(default_factory=tuple)

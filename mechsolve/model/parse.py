@@ -43,6 +43,7 @@ from mechsolve.model.read_machine import (
     read_flywheel,
     read_instants,
     read_motor,
+    read_motors,
     read_requirements,
     read_simulation,
     read_torque_problem,
@@ -94,6 +95,7 @@ __all__ = [
     "read_mass",
     "read_motion",
     "read_motor",
+    "read_motors",
     "read_outputs",
     "read_pin",
     "read_point",
@@ -176,6 +178,8 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         mech.instants = read_instants(r, data["instants"], linear)
     if "motor" in data:
         mech.motor = read_motor(r, data["motor"], driver, linear)
+    if "motors" in data:
+        mech.motors = read_motors(r, data["motors"], mech.joints)
     if "flywheel" in data:
         mech.flywheel = read_flywheel(r, data["flywheel"], links)
     if "simulate" in data:

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from mechsolve.base.errors import InputError
 from mechsolve.model import Driver, keys
 from mechsolve.model.expr import ExprError, Expression
 from mechsolve.model.read_geometry import read_units
@@ -39,14 +40,15 @@ def read_requirements(r: Reader, value: Any, linear: bool | None = None) -> list
     return out
 
 
-def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
+def read_motor(
+    r: Reader, value: Any, driver: Driver | None, linear: bool, path: KeyPath = ("motor",)
+):
     """``motor: {stall: 50 N m, slope: 1.25 N m s}``, ``{table: [[speed, torque], ...]}``
     or ``{torque: "50 - 1.25 * omega"}`` (an expression of omega (or v) and t)."""
     import numpy as np
 
     from mechsolve.model.machine import Motor
 
-    path: KeyPath = ("motor",)
     m = r.mapping(value, path, keys.MOTOR.allowed, "'motor'")
     if driver is None:
         raise r.fail(path, "a motor drives the driver joint: add a 'driver' section")
@@ -97,6 +99,30 @@ def read_motor(r: Reader, value: Any, driver: Driver | None, linear: bool):
     return Motor("law", expr=e, text=text)
 
 
+def read_motors(r: Reader, value: Any, joints) -> dict:
+    """``motors: {left: {joint: O, stall: 5 N m, slope: 0.1 N m s}, ...}``: several motors,
+    each on its joint (the general simulation path)."""
+    path: KeyPath = ("motors",)
+    if not isinstance(value, dict) or not value:
+        raise r.fail(path, "'motors' maps names to motors, e.g. {left: {joint: O, stall: ...}}")
+    by_name = {j.name: j for j in joints}
+    out = {}
+    for name, m in value.items():
+        mp = path + (name,)
+        if not isinstance(m, dict) or "joint" not in m:
+            raise r.fail(mp, f"motor {name!r} needs 'joint': the joint it drives")
+        j = r.name(m["joint"], mp + ("joint",), "joint")
+        joint = by_name.get(j)
+        if joint is None or joint.coordinate is None:
+            raise r.fail(
+                mp + ("joint",),
+                f"no joint {j!r} with a coordinate to drive" + suggest(j, list(by_name)),
+            )
+        linear = joint.coordinate == "length"
+        out[str(name)] = (j, read_motor(r, m, Driver(joint=j), linear, mp))
+    return out
+
+
 def read_flywheel(r: Reader, value: Any, links):
     from mechsolve.model.machine import Flywheel
 
@@ -138,15 +164,54 @@ def read_simulation(r: Reader, value: Any, linear: bool):
                 except ValueError:
                     pass
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
-                raise r.fail(path + (key,), f"{key} must be a number between 0 and 1")
+                big = isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) >= 1
+                raise r.fail(
+                    path + (key,),
+                    f"{key} must be a number between 0 and 1"
+                    + (f" ({x:g} is too large in size)" if big else ""),
+                )
             setattr(sim, key, float(x))
     if "from" in m:
+        sim.speed0_given = True
         f = m["from"]
         sim.speed0 = (
             0.0
             if f == "rest"
             else r.quantity(f, path + ("from",), "speed" if linear else "angular speed")
         )
+    if "formulation" in m:
+        if m["formulation"] not in ("reduced", "multibody"):
+            raise r.fail(
+                path + ("formulation",),
+                f"unknown formulation {m['formulation']!r}: reduced or multibody",
+            )
+        sim.formulation = m["formulation"]
+    if "tolerance" in m:
+        sim.tolerance = r.positive(m["tolerance"], path + ("tolerance",), "length")
+    if "pose" in m:
+        pose = m["pose"]
+        if not isinstance(pose, dict) or not pose:
+            raise r.fail(
+                path + ("pose",), "'pose' maps joints to their coordinates, e.g. {O: 30 deg}"
+            )
+        for j, v in pose.items():
+            jp = path + ("pose", j)
+            try:  # a revolute's angle, or (with a length unit) a slider's travel
+                sim.pose[str(j)] = (r.quantity(v, jp, "angle"), "angle", jp)
+            except InputError:
+                sim.pose[str(j)] = (r.quantity(v, jp, "length"), "length", jp)
+    if "rates" in m:
+        rates = m["rates"]
+        if not isinstance(rates, dict) or not rates:
+            raise r.fail(
+                path + ("rates",), "'rates' maps joints to their initial rates, e.g. {O: 2 rad/s}"
+            )
+        for j, v in rates.items():
+            jp = path + ("rates", j)
+            try:  # a revolute's rate, or (m/s) a slider's: the joint decides which it needs
+                sim.rates[str(j)] = (r.quantity(v, jp, "angular speed"), "angular speed", jp)
+            except InputError:
+                sim.rates[str(j)] = (r.quantity(v, jp, "speed"), "speed", jp)
     if "revolutions" in m:
         sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
     if "steady" in m:

@@ -333,14 +333,13 @@ def _point_lines(res) -> list[str]:
     for p in res.point_names()[:12]:
         m = res.point(p)
         if np.any(np.isfinite(m.x)):
+            speed = np.hypot(m.vx, m.vy) if res.view.has_velocity else None
+            # no speed where none was determined (a singular start: its rates are not)
+            known = speed is not None and bool(np.any(np.isfinite(speed)))
             lines.append(
                 f"  {p}: x {np.nanmin(m.x):.6g} .. {np.nanmax(m.x):.6g} m, "
                 f"y {np.nanmin(m.y):.6g} .. {np.nanmax(m.y):.6g} m"
-                + (
-                    f", |v| max {np.nanmax(np.hypot(m.vx, m.vy)):.4g} m/s"
-                    if res.view.has_velocity
-                    else ""
-                )
+                + (f", |v| max {np.nanmax(speed):.4g} m/s" if known else "")
             )
     if len(res.point_names()) > 12:
         lines.append(f"  ... and {len(res.point_names()) - 12} more points in the CSV")

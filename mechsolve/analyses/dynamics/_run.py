@@ -110,6 +110,11 @@ def simulate(
 
     ``max_steps``: refuse more steps than this (see :func:`check_size`; an adaptive
     integrator also stops after that many steps of its own)."""
+    from mechsolve.analyses.dynamics.multibody_run import simulate_multibody, uses_multibody
+
+    if uses_multibody(mech):
+        check_size(mech, max_steps)
+        return simulate_multibody(mech, max_steps=max_steps)
     if mech.motor is None:
         raise mech.error(
             ("motor",), "a simulation needs a 'motor' section (the driver's torque law)"

@@ -41,9 +41,9 @@ from mechsolve.cli.kit import progress_bar as _progress_bar
 )
 @QUIET
 def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> None:
-    """Simulate the motor-driven machine of FILE (its motor: and simulate: sections):
-    write simulation.csv (time, angle, speed, acceleration, J, motor torque, every
-    quantity and joint force) and plots."""
+    """Simulate the machine of FILE (its simulate: section, with its motor: or free):
+    write simulation.csv (time, angle, speed, acceleration, J or the energy balance and
+    the constraint violation, motor torque, every quantity and joint force) and plots."""
     import numpy as np
 
     from mechsolve import api
@@ -70,7 +70,11 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
         if bar is not None:
             bar.close()
     written = [res.to_csv(outdir / "simulation.csv")]
-    if not no_plots:
+    if not no_plots and getattr(res, "multibody", None) is not None:
+        from mechsolve.analyses.dynamics.multibody_plots import write_multibody_plots
+
+        written += write_multibody_plots(res, outdir)
+    elif not no_plots:
         from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
         written += write_simulation_plots(res, res.model, outdir)

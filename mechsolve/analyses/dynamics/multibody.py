@@ -1,0 +1,737 @@
+"""Forward dynamics of any planar mechanism in body coordinates (``mechsolve simulate``'s
+general path).
+
+The equations of motion of the bodies' coordinates ``q = (x_i, y_i, theta_i)`` with the
+constraints of every joint (asked of the joint contract through
+:class:`~mechsolve.system.constraints.ConstraintSystem`)::
+
+    M(q) q'' + Phi_q^T lambda = Q(q, q', t),     Phi(q, t) = 0
+
+Formulation: **coordinate partitioning** (Wehage and Haug). At a configuration the
+Jacobian is split, by QR with column pivoting, into r independent equations (r its rank:
+redundant equations, such as a parallelogram's extra link, are set aside) and r dependent
+coordinates ``d`` whose block ``Phi_d`` is the best conditioned; the other ``f = nq - r``
+coordinates ``z`` are independent. Only ``(z, z')`` are integrated (scipy's ``solve_ivp``
+with the user's rtol/atol, or RK4 with a fixed step). At every evaluation the dependent
+coordinates are solved by Newton's method on ``Phi = 0`` (to the constraint tolerance),
+their rates from ``Phi_q q' = nu`` and the accelerations with the multipliers from the
+augmented system ``[M Phi_r^T; Phi_r 0] [q''; lambda] = [Q; gamma]``. So the constraints
+hold at position level to the Newton tolerance at every output and at velocity and
+acceleration level to rounding: they do not drift however long the run. Where ``Phi_d``
+becomes ill-conditioned (the chosen coordinates stop describing the motion) the
+integration restarts with a new partition. The reactions at every output are the
+multipliers of all equations, by least squares with minimum norm: unique where the
+equations are independent, the minimum-norm solution (marked so) where they are not.
+
+The work of the non-conservative forces (motors, dampers, forces, torques, conditional
+springs) is integrated with the motion, so the energy balance ``T + V - W`` is a check of
+the integration's error (constant to the integrator's tolerance).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mechsolve.base.state import State
+from mechsolve.core.loads import _Q, apply_loads, stroke_function
+from mechsolve.system.constraints import ConstraintSystem, make_driver
+
+if TYPE_CHECKING:
+    from mechsolve.core.sweep import Analysis
+
+RECONDITION = 1e-3  # repartition when Phi_d's reciprocal condition falls below this
+NEWTON_ITERATIONS = 25
+
+
+class Repartition(Exception):
+    """The partition no longer describes the motion (Newton failed or Phi_d is singular)."""
+
+
+class NotClosing(Exception):
+    """The mechanism cannot close at a state reached by the motion."""
+
+    def __init__(self, t: float, why: str) -> None:
+        super().__init__(why)
+        self.t = t
+
+
+@dataclass
+class Source:
+    """A generalised force on a joint coordinate: a motor's torque-speed law.
+
+    ``coordinate``: the joint coordinate's constraint object (its Jacobian row ``c_q``);
+    ``law(rate, t)``: the effort (torque or force) along the coordinate."""
+
+    name: str
+    coordinate: object
+    law: Callable[[float, float], float]
+    text: str = ""  # the law and its joint, for the summary
+
+
+@dataclass
+class Prescribed:
+    """A joint coordinate moving by a law of time: ``u(t), u'(t), u''(t)``."""
+
+    name: str
+    coordinate: object
+    law: Callable[[float], tuple[float, float, float]]
+
+
+@dataclass
+class Partition:
+    rows: np.ndarray  # independent equations
+    dep: np.ndarray  # dependent coordinates
+    ind: np.ndarray  # independent coordinates
+    rcond: float  # Phi_d's reciprocal condition when chosen
+
+
+@dataclass
+class Trajectory:
+    """The motion at the output times: body coordinates and their rates, the
+    multipliers of all equations, the energies and the constraint violation."""
+
+    t: np.ndarray
+    q: np.ndarray  # (n, nq)
+    qd: np.ndarray
+    qdd: np.ndarray
+    lam: np.ndarray  # (n, nc) minimum-norm multipliers of every equation
+    kinetic: np.ndarray
+    potential: np.ndarray
+    work: np.ndarray  # of the non-conservative forces since the start
+    violation: np.ndarray  # max |Phi| at each output (m or rad)
+    velocity_violation: np.ndarray  # max |Phi_q q' - nu|
+    redundant: bool = False  # the multipliers are minimum-norm (redundant equations)
+    stopped: str = ""
+    early: bool = False
+    nfev: int = 0
+    partitions: int = 1
+    bridges: int = 0  # output steps bridged on all coordinates (at singular positions)
+    error: Exception | None = None  # an input error that stopped it (none on this path)
+    # the driver coordinate, its rate and acceleration (set from the results)
+    u: np.ndarray | None = None
+    ud: np.ndarray | None = None
+    udd: np.ndarray | None = None
+
+    @property
+    def energy_residual(self) -> np.ndarray:
+        """``T + V - W - (T0 + V0)``: zero for an exact integration (J)."""
+        e = self.kinetic + self.potential - self.work
+        return e - e[0]
+
+
+class Multibody:
+    """The equations of motion of a mechanism in body coordinates.
+
+    Parameters
+    ----------
+    an
+        The mechanism's analysis (its loads, points and conditions are read through it).
+    sources
+        Motors acting on joint coordinates.
+    prescribed
+        Joint coordinates moving by a law of time (rheonomic constraints).
+    tolerance
+        max |Phi| to which Newton's method closes the mechanism (m; rad for angles).
+    """
+
+    def __init__(
+        self,
+        an: Analysis,
+        sources: list[Source] | None = None,
+        prescribed: list[Prescribed] | None = None,
+        tolerance: float | None = None,
+    ) -> None:
+        self.an = an
+        mech = an.mech
+        self.mech = mech
+        self.system = ConstraintSystem(mech, with_driver=False)
+        self.prescribed = list(prescribed or [])
+        for p in self.prescribed:
+            self.system.constraints.append(p.coordinate)
+        self.system.rows = []
+        k = 0
+        from mechsolve.system.constraints import Row
+
+        for c in self.system.constraints:
+            self.system.rows.append(Row(c, k))
+            k += c.m
+        self.system.nc = k
+        self.sources = list(sources or [])
+        self.nb = self.system.nb
+        self.nq = 3 * self.nb
+        self.nc = self.system.nc
+        self.scale = an.scale
+        self.tol = tolerance if tolerance is not None else 1e-10 * self.scale
+        self.gx, self.gy = mech.gravity_vector()
+        idx = self.system.index
+        self.m = np.zeros(self.nb)
+        self.J = np.zeros(self.nb)
+        self.s = np.zeros((self.nb, 2))
+        for lk in mech.links:
+            b = idx[lk.name]
+            self.m[b] = lk.mass or 0.0
+            self.J[b] = lk.inertia or 0.0
+            if lk.com is not None:
+                self.s[b] = lk.com
+        self.conditional = [ld for ld in mech.loads if ld.when is not None]
+        self.extremes: list = []
+        self.nfev = 0
+        self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
+        self._chord = None  # (partition, Phi_d) of the last evaluation
+
+    # -- states ---------------------------------------------------------------------
+    def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
+        """A one-position :class:`State` with poses ``q`` (and rates)."""
+        st = State(self.nb, 1)
+        nb = self.nb
+        st.x[:nb, 0] = q[0::3]
+        st.y[:nb, 0] = q[1::3]
+        st.th[:nb, 0] = q[2::3]
+        st.c[:nb, 0] = np.cos(q[2::3])
+        st.s[:nb, 0] = np.sin(q[2::3])
+        if qd is not None:
+            st.vx[:nb, 0], st.vy[:nb, 0], st.w[:nb, 0] = qd[0::3], qd[1::3], qd[2::3]
+        if qdd is not None:
+            st.ax[:nb, 0], st.ay[:nb, 0], st.al[:nb, 0] = qdd[0::3], qdd[1::3], qdd[2::3]
+        return st
+
+    def _u(self, t: float) -> tuple[float, float, float]:
+        """The prescribed coordinates' values, rates and accelerations at ``t``."""
+        if not self.prescribed:
+            return 0.0, 0.0, 0.0
+        vals = np.array([p.law(t) for p in self.prescribed], float)
+        return vals[:, 0], vals[:, 1], vals[:, 2]
+
+    def residual(self, q: np.ndarray, t: float) -> np.ndarray:
+        st = self.state(q)
+        u = self._u(t)[0]
+        parts = [c.residual(st, 0.0)[:, 0] for c in self.system.constraints[: self._nj]]
+        parts += [
+            c.residual(st, np.atleast_1d(u)[k])[:, 0]
+            for k, c in enumerate(self.system.constraints[self._nj :])
+        ]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    @property
+    def _nj(self) -> int:
+        return len(self.system.constraints) - len(self.prescribed)
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        return self.system.jacobian(self.state(q))[0]
+
+    def _nu_gamma(self, st: State, t: float, gamma: bool):
+        u, ud, udd = self._u(t)
+        parts = []
+        for k, c in enumerate(self.system.constraints):
+            j = k - self._nj
+            if gamma:
+                parts.append(c.gamma(st, np.atleast_1d(udd)[j] if j >= 0 else 0.0)[:, 0])
+            else:
+                parts.append(c.nu(st, np.atleast_1d(ud)[j] if j >= 0 else 0.0)[:, 0])
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    # -- partition and closure ------------------------------------------------------
+    def partition(self, q: np.ndarray) -> Partition:
+        """Independent equations and dependent coordinates at ``q`` (QR with column
+        pivoting; angles weighted by the mechanism's size so that lengths and angles
+        compete fairly)."""
+        from scipy.linalg import qr
+
+        Jq = self.jacobian(q)
+        w = np.ones(self.nq)
+        w[2::3] = 1.0 / self.scale
+        Js = Jq * w
+        if Js.shape[0] == 0:
+            return Partition(np.zeros(0, int), np.zeros(0, int), np.arange(self.nq), 1.0)
+        _, R, p = qr(Js.T, pivoting=True, mode="economic")
+        d = np.abs(np.diag(R))
+        rank = int(np.sum(d > 1e-9 * max(d[0], 1e-300)))
+        rows = np.sort(p[:rank])
+        _, R2, p2 = qr(Js[rows], pivoting=True, mode="economic")
+        dep = np.sort(p2[:rank])
+        ind = np.setdiff1d(np.arange(self.nq), dep)
+        return Partition(rows, dep, ind, _rcond(Jq[np.ix_(rows, dep)]))
+
+    def close(self, part: Partition, z: np.ndarray, t: float, guess: np.ndarray) -> np.ndarray:
+        """The configuration with independent coordinates ``z``: Newton on the
+        partition's equations for the dependent coordinates, from ``guess``."""
+        q = guess.copy()
+        q[part.ind] = z
+        rows, dep = part.rows, part.dep
+        # the chord: the Jacobian of the last evaluation on this partition, a step away
+        Jd = self._chord[1] if self._chord is not None and self._chord[0] is part else None
+        last = np.inf
+        for _ in range(NEWTON_ITERATIONS):
+            phi = self.residual(q, t)[rows]
+            if not np.all(np.isfinite(phi)):
+                raise Repartition
+            size = np.max(np.abs(phi), initial=0.0)
+            if Jd is None or size > 0.1 * last:  # the chord's Jacobian while it converges
+                Jd = self.jacobian(q)[np.ix_(rows, dep)]
+            last = size
+            try:
+                q[dep] -= np.linalg.solve(Jd, phi)
+            except np.linalg.LinAlgError:
+                raise Repartition from None
+            if size <= self.tol:  # that last step takes it from the tolerance to rounding
+                return q
+        raise Repartition
+
+    def guess(self, t: float) -> np.ndarray:
+        """Newton's start at time ``t``: the last closed state carried on by its rates."""
+        t0, q, qd, qdd = self._last
+        dt = t - t0
+        return q + qd * dt + (0.5 * dt * dt) * qdd
+
+    def rates(self, part: Partition, q: np.ndarray, zd: np.ndarray, t: float):
+        """All coordinates' rates from the independent ones: ``Phi_q q' = nu``."""
+        Jq = self.jacobian(q)
+        rows, dep, ind = part.rows, part.dep, part.ind
+        Jd = Jq[np.ix_(rows, dep)]
+        if _rcond(Jd) < RECONDITION * part.rcond:
+            raise Repartition
+        self._chord = (part, Jd)
+        qd = np.zeros(self.nq)
+        qd[ind] = zd
+        nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
+        qd[dep] = np.linalg.solve(Jd, nu - Jq[np.ix_(rows, ind)] @ zd)
+        return qd, Jq
+
+    def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
+        """Phi_d has lost conditioning since the partition was chosen (by 10x): choose
+        again while it is still well posed."""
+        if len(part.dep) == 0:
+            return False
+        return _rcond(self.jacobian(q)[np.ix_(part.rows, part.dep)]) < 0.1 * part.rcond
+
+    # -- mass and forces ----------------------------------------------------------------
+    def mass_matrix(self, st: State) -> np.ndarray:
+        """M(q) about each body's frame origin: [[m, 0, -m ry], [0, m, m rx],
+        [-m ry, m rx, J + m |r|^2]] with r the centre of mass's arm."""
+        c, s = st.c[:-1, 0], st.s[:-1, 0]
+        rx = c * self.s[:, 0] - s * self.s[:, 1]
+        ry = s * self.s[:, 0] + c * self.s[:, 1]
+        m = self.m
+        M = np.zeros((self.nq, self.nq))
+        i = np.arange(self.nb) * 3
+        M[i, i] = m
+        M[i + 1, i + 1] = m
+        M[i + 2, i + 2] = self.J + m * (rx * rx + ry * ry)
+        M[i, i + 2] = M[i + 2, i] = -m * ry
+        M[i + 1, i + 2] = M[i + 2, i + 1] = m * rx
+        return M
+
+    def forces(self, st: State, t: float):
+        """``(Q, P_nc, V)``: the generalised forces (gravity, the centripetal terms of
+        off-origin centres of mass, the file's loads, the motors), the power of the
+        non-conservative ones and the potential energy (gravity, unconditional springs)."""
+        acc = _Q(self.an, st)
+        w2 = st.w[:-1, 0] ** 2
+        c, s = st.c[:-1, 0], st.s[:-1, 0]
+        rx = c * self.s[:, 0] - s * self.s[:, 1]
+        ry = s * self.s[:, 0] + c * self.s[:, 1]
+        m = self.m
+        Q = acc.Q[:, 0]
+        Q[0::3] += m * (self.gx + w2 * rx)
+        Q[1::3] += m * (self.gy + w2 * ry)
+        Q[2::3] += m * (rx * self.gy - ry * self.gx)
+        V = -float(np.sum(m * (self.gx * (st.x[:-1, 0] + rx) + self.gy * (st.y[:-1, 0] + ry))))
+        active = self._active(st)
+        P, _, springs = apply_loads(self.an, st, active, acc)
+        P = float(P[0])
+        V += float(np.sum(springs[0]))
+        for src in self.sources:
+            row, rate = self._coordinate_row(src.coordinate, st)
+            effort = float(src.law(rate, t))
+            if not math.isfinite(effort):
+                raise NotClosing(t, f"the motor {src.name}'s law gives {effort:g} at {rate:g}")
+            Q += row * effort
+            P += effort * rate
+        return Q, P, V
+
+    def _coordinate_row(self, coord, st: State):
+        """A joint coordinate's Jacobian row (nq,) and its rate."""
+        row = np.zeros(self.nq)
+        for body, blk in coord.jacobian(st).items():
+            row[3 * body : 3 * body + 3] = blk[0, :, 0]
+        qd = np.empty(self.nq)
+        qd[0::3], qd[1::3], qd[2::3] = st.vx[:-1, 0], st.vy[:-1, 0], st.w[:-1, 0]
+        return row, float(row @ qd)
+
+    def _active(self, st: State) -> dict:
+        if not self.conditional:
+            return {}
+        from mechsolve.core.solution import StateView
+
+        view = StateView(self.an, st)
+        funcs = {"stroke": stroke_function(list(self.extremes), True)}
+        out = {}
+        for ld in self.conditional:
+            with np.errstate(invalid="ignore"):
+                val = ld.when.evaluate(view, funcs)
+            out[ld.name] = np.broadcast_to(np.asarray(val, bool), (1,))
+        return out
+
+    # -- the equations of motion ----------------------------------------------------------
+    def accelerations(self, part: Partition, q, qd, t: float, Jq=None):
+        """``(q'', lambda_r, P_nc, V)`` from the augmented system on the partition's
+        independent equations."""
+        self.nfev += 1
+        st = self.state(q, qd)
+        if Jq is None:
+            Jq = self.jacobian(q)
+        M = self.mass_matrix(st)
+        Q, P, V = self.forces(st, t)
+        Jr = Jq[part.rows]
+        r = len(part.rows)
+        A = np.zeros((self.nq + r, self.nq + r))
+        A[: self.nq, : self.nq] = M
+        A[: self.nq, self.nq :] = Jr.T
+        A[self.nq :, : self.nq] = Jr
+        g = self._nu_gamma(st, t, gamma=True)[part.rows]
+        b = np.concatenate([Q, g])
+        try:
+            x = np.linalg.solve(A, b)
+        except np.linalg.LinAlgError:  # a singular position: the least-squares motion
+            x = np.linalg.lstsq(A, b, rcond=1e-12)[0]
+        if not np.all(np.isfinite(x)):
+            raise NotClosing(
+                t, "the accelerations are not determined (a massless link that can move?)"
+            )
+        if self.prescribed:  # the power the prescribed motions put in: -lambda u'
+            ud = np.atleast_1d(self._u(t)[1])
+            first = self.nc - len(self.prescribed)
+            for k in range(len(self.prescribed)):
+                at = np.flatnonzero(part.rows == first + k)
+                if at.size:
+                    P -= float(x[self.nq + at[0]]) * float(ud[k])
+        return x[: self.nq], x[self.nq :], P, V
+
+    def free_accelerations(self, q, qd, t: float):
+        """``(q'', P_nc)`` by least squares on the augmented system with every equation
+        (for the steps across a singular position)."""
+        self.nfev += 1
+        st = self.state(q, qd)
+        Jq = self.jacobian(q)
+        M = self.mass_matrix(st)
+        Q, P, _ = self.forces(st, t)
+        nc = Jq.shape[0]
+        A = np.zeros((self.nq + nc, self.nq + nc))
+        A[: self.nq, : self.nq] = M
+        A[: self.nq, self.nq :] = Jq.T
+        A[self.nq :, : self.nq] = Jq
+        g = self._nu_gamma(st, t, gamma=True)
+        x = np.linalg.lstsq(A, np.concatenate([Q, g]), rcond=1e-12)[0]
+        return x[: self.nq], P
+
+    def multipliers(self, q, qd, qdd, t: float) -> np.ndarray:
+        """The multipliers of every equation by least squares with minimum norm:
+        ``Phi_q^T lambda = Q - M q''``."""
+        st = self.state(q, qd, qdd)
+        Q, _, _ = self.forces(st, t)
+        rhs = Q - self.mass_matrix(st) @ qdd
+        lam, *_ = np.linalg.lstsq(self.jacobian(q).T, rhs, rcond=1e-10)
+        return lam
+
+    def energy(self, q, qd, t: float) -> tuple[float, float]:
+        st = self.state(q, qd)
+        T = 0.5 * float(qd @ self.mass_matrix(st) @ qd)
+        _, _, V = self.forces(st, t)
+        return T, V
+
+    def consistent_rates(self, q: np.ndarray, qd: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """The rates nearest ``qd`` (in the mass-weighted norm where there is mass) that
+        satisfy ``Phi_q q' = nu``."""
+        Jq = self.jacobian(q)
+        nu = self._nu_gamma(self.state(q), t, gamma=False)
+        r = nu - Jq @ qd
+        dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
+        return qd + dq
+
+
+def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
+    """The trajectory's outputs as one :class:`State` over its N rows."""
+    n, nb = len(tr.t), mb.nb
+    st = State(nb, n)
+    st.x[:nb], st.y[:nb], st.th[:nb] = tr.q[:, 0::3].T, tr.q[:, 1::3].T, tr.q[:, 2::3].T
+    np.cos(st.th[:nb], out=st.c[:nb])
+    np.sin(st.th[:nb], out=st.s[:nb])
+    st.vx[:nb], st.vy[:nb], st.w[:nb] = tr.qd[:, 0::3].T, tr.qd[:, 1::3].T, tr.qd[:, 2::3].T
+    st.ax[:nb], st.ay[:nb], st.al[:nb] = tr.qdd[:, 0::3].T, tr.qdd[:, 1::3].T, tr.qdd[:, 2::3].T
+    st.token = State.new_token()
+    return st
+
+
+def free_context(mech) -> SimpleNamespace:
+    """What :class:`Multibody` reads of an analysis, for a mechanism of any number of
+    degrees of freedom (the sweep's :class:`~mechsolve.core.sweep.Analysis` needs one
+    driver per degree of freedom): the mechanism, its constraints without a driver and
+    its size. Conditional loads need the analysis's points and are not read here."""
+    from mechsolve.core.sweep import _scale
+
+    if any(ld.when is not None for ld in mech.loads):
+        raise ValueError("conditional loads need the mechanism's analysis")
+    return SimpleNamespace(
+        mech=mech, system=ConstraintSystem(mech, with_driver=False), scale=_scale(mech)
+    )
+
+
+def _rcond(A: np.ndarray) -> float:
+    if A.size == 0:
+        return 1.0
+    sv = np.linalg.svd(A, compute_uv=False)
+    return float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
+
+
+def coordinate(mech, system: ConstraintSystem, joint: str, line=None):
+    """A joint's coordinate (its relative angle or travel) as a one-equation
+    constraint, the same measure a driver on it uses."""
+    return make_driver(mech, SimpleNamespace(joint=joint, line=line), system)
+
+
+# -- integration -----------------------------------------------------------------------
+def integrate(
+    mb: Multibody,
+    q0: np.ndarray,
+    qd0: np.ndarray,
+    duration: float,
+    *,
+    step: float | None = None,
+    method: str = "DOP853",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    max_steps: int | None = None,
+) -> Trajectory:
+    """Integrate the motion from ``(q0, qd0)`` (consistent) over ``duration``.
+
+    ``method`` ``"rk4"``: fixed steps of ``step``; otherwise scipy's ``solve_ivp`` with
+    ``rtol``/``atol`` on the independent coordinates, their rates and the work,
+    reporting every ``step`` (default: 500 outputs)."""
+    h = step if step is not None else duration / 500
+    n_out = int(math.floor(duration / h + 1e-9))
+    times = np.r_[np.arange(n_out + 1) * h, [duration] if n_out * h < duration - 1e-12 else []]
+    run = _Run(mb, q0, qd0, times, method, rtol, atol)
+    run.go(max_steps)
+    return run.trajectory(q0)
+
+
+class _Run:
+    """One integration: the state at the last output, the partition, the records."""
+
+    KEYS = ("t", "q", "qd", "qdd", "lam", "T", "V", "W", "viol", "vviol")
+
+    def __init__(self, mb: Multibody, q0, qd0, times, method, rtol, atol) -> None:
+        self.mb, self.times, self.method, self.rtol, self.atol = mb, times, method, rtol, atol
+        self.rec: dict[str, list] = {k: [] for k in self.KEYS}
+        self.q, self.qd, self.W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
+        self.part = mb.partition(self.q)
+        self.partitions, self.bridges = 1, 0
+        self.stopped, self.early = "", False
+        self.record(0.0, self.q, self.qd, self.W)
+
+    def record(self, t, q, qd, W) -> None:
+        """Keep an output: its state, accelerations, multipliers, energies, violations."""
+        mb, rec = self.mb, self.rec
+        qdd, _, _, _ = mb.accelerations(self.part, q, qd, t)
+        T, V = mb.energy(q, qd, t)
+        nu = mb._nu_gamma(mb.state(q), t, gamma=False)
+        for key, value in (
+            ("t", t),
+            ("q", q.copy()),
+            ("qd", qd.copy()),
+            ("qdd", qdd),
+            ("lam", mb.multipliers(q, qd, qdd, t)),
+            ("T", T),
+            ("V", V),
+            ("W", W),
+            ("viol", float(np.max(np.abs(mb.residual(q, t)), initial=0.0))),
+            ("vviol", float(np.max(np.abs(mb.jacobian(q) @ qd - nu), initial=0.0))),
+        ):
+            rec[key].append(value)
+        mb._last = (t, q.copy(), qd.copy(), qdd)
+
+    def rhs(self, t, y):
+        """d/dt (z, z', W) on the current partition."""
+        mb, part = self.mb, self.part
+        f = len(part.ind)
+        z, zd = y[:f], y[f : 2 * f]
+        qq = mb.close(part, z, t, mb.guess(t))
+        qqd, Jq = mb.rates(part, qq, zd, t)
+        qdd, _, P, _ = mb.accelerations(part, qq, qqd, t, Jq)
+        mb._last = (t, qq, qqd, qdd)
+        return np.concatenate([zd, qdd[part.ind], [P]])
+
+    def outputs(self, k: int) -> list:
+        """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
+        adaptive run until its conditioning event), each closed on the partition."""
+        mb, part, f = self.mb, self.part, self.part.ind
+        t0, fn = self.times[k - 1], len(f)
+        y0 = np.concatenate([self.q[f], self.qd[f], [self.W]])
+        if self.method == "rk4":
+            ts, ys = [self.times[k]], [_rk4(self.rhs, t0, y0, self.times[k] - t0)]
+        else:
+            window = self.times[k - 1 : k + CHUNK]
+            ts, ys = _adaptive(mb, part, self.rhs, window, y0, self.method, self.rtol, self.atol)
+        if not ts:  # the conditioning event at once: no partition will do here
+            raise Repartition
+        self.event = self.method != "rk4" and len(ts) < len(self.times[k - 1 : k + CHUNK]) - 1
+        mb._last = (t0, self.q, self.qd, self.rec["qdd"][-1])
+        out = []
+        for t1, y1 in zip(ts, ys):
+            q1 = mb.close(part, y1[:fn], t1, mb.guess(t1))
+            qd1, _ = mb.rates(part, q1, y1[fn : 2 * fn], t1)
+            mb._last = (t1, q1, qd1, mb.accelerations(part, q1, qd1, t1)[0])
+            out.append((t1, q1, qd1, float(y1[-1])))
+        return out
+
+    def go(self, max_steps: int | None) -> None:
+        mb, times = self.mb, self.times
+        k, retries = 1, 0
+        while k < len(times):
+            try:
+                out = self.outputs(k)
+            except Repartition:
+                # at or next to a singular position no partition describes the motion:
+                # the step is bridged on all the coordinates, then projected
+                retries += 1
+                t0 = times[k - 1]
+                bridged = retries <= BRIDGE_LIMIT and _bridge(
+                    mb, t0, times[k], self.q, self.qd, self.W
+                )
+                if not bridged:
+                    self.stopped = (
+                        f"the mechanism cannot close at t = {t0:.6g} s along the motion "
+                        "(a singular or limit position it cannot pass)"
+                    )
+                    self.early = True
+                    return
+                out, self.event = [(times[k], *bridged)], True
+                self.bridges += 1
+            except NotClosing as exc:
+                self.stopped, self.early = str(exc), True
+                return
+            else:
+                retries = 0 if out else retries
+            for t1, q, qd, W in out:
+                self.record(t1, q, qd, W)
+                self.q, self.qd, self.W = q, qd, W
+            k += len(out)
+            if self.event or mb._needs_repartition(self.part, self.q):
+                self.part = mb.partition(self.q)
+                self.partitions += 1
+            if max_steps is not None and k > max_steps:
+                self.stopped, self.early = f"stopped after {max_steps} steps (--max-steps)", True
+                return
+
+    def trajectory(self, q0) -> Trajectory:
+        mb = self.mb
+        arr = {k: np.array(v) for k, v in self.rec.items()}
+        n = len(arr["t"])
+        return Trajectory(
+            t=arr["t"],
+            q=arr["q"].reshape(-1, mb.nq),
+            qd=arr["qd"].reshape(-1, mb.nq),
+            qdd=arr["qdd"].reshape(-1, mb.nq),
+            lam=arr["lam"].reshape(n, -1),
+            kinetic=arr["T"],
+            potential=arr["V"],
+            work=arr["W"],
+            violation=arr["viol"],
+            velocity_violation=arr["vviol"],
+            redundant=_redundant(mb, q0),
+            stopped=self.stopped,
+            early=self.early,
+            nfev=mb.nfev,
+            partitions=self.partitions,
+            bridges=self.bridges,
+        )
+
+
+def _redundant(mb: Multibody, q: np.ndarray) -> bool:
+    return len(mb.partition(q).rows) < mb.nc
+
+
+BRIDGE_LIMIT = 40  # output steps in a row that may be bridged
+BRIDGE_SUBSTEPS = 32
+
+
+def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float):
+    """``(q, q', W)`` at ``t1`` from ``t0`` across a singular position: RK4 on all the
+    coordinates in :data:`BRIDGE_SUBSTEPS` steps (the accelerations by least squares on
+    every equation, which stays determined for the motion where the equations lose
+    rank), then projected onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``.
+    None if the projection does not converge."""
+    nq = mb.nq
+
+    def f(t, y):
+        qq, qqd = y[:nq], y[nq : 2 * nq]
+        qdd, P = mb.free_accelerations(qq, qqd, t)
+        return np.concatenate([qqd, qdd, [P]])
+
+    y = np.concatenate([q, qd, [W]])
+    h = (t1 - t0) / BRIDGE_SUBSTEPS
+    try:
+        for i in range(BRIDGE_SUBSTEPS):
+            y = _rk4(f, t0 + i * h, y, h)
+        q1 = y[:nq].copy()
+        for _ in range(NEWTON_ITERATIONS):
+            phi = mb.residual(q1, t1)
+            if np.max(np.abs(phi), initial=0.0) <= mb.tol:
+                break
+            q1 -= np.linalg.lstsq(mb.jacobian(q1), phi, rcond=1e-12)[0]
+        else:
+            return None
+        qd1 = mb.consistent_rates(q1, y[nq : 2 * nq], t1)
+    except (np.linalg.LinAlgError, NotClosing):
+        return None
+    if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(qd1))):
+        return None
+    return q1, qd1, float(y[-1])
+
+
+CHUNK = 50  # outputs per call of solve_ivp: what a failed stage can cost
+
+
+def _adaptive(mb: Multibody, part: Partition, rhs, times, y0, method, rtol, atol):
+    """solve_ivp from ``times[0]`` through ``times[1:]`` until ``Phi_d`` loses its
+    conditioning (an event: the partition is chosen again from the last output)."""
+    from scipy.integrate import solve_ivp
+
+    fn = len(part.ind)
+
+    def conditioning(t, y):
+        if fn == 0 or len(part.dep) == 0:
+            return 1.0
+        q = mb.close(part, y[:fn], t, mb.guess(t))
+        return _rcond(mb.jacobian(q)[np.ix_(part.rows, part.dep)]) - 0.1 * part.rcond
+
+    conditioning.terminal = True
+    sol = solve_ivp(
+        rhs,
+        (times[0], times[-1]),
+        y0,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        t_eval=times[1:],
+        events=conditioning,
+    )
+    if sol.status < 0:
+        raise Repartition
+    if len(sol.t) == 0:  # the event before the first output
+        return [], []
+    return list(sol.t), list(np.asarray(sol.y).T)
+
+
+def _rk4(rhs, t0: float, y0: np.ndarray, h: float) -> np.ndarray:
+    k1 = rhs(t0, y0)
+    k2 = rhs(t0 + h / 2, y0 + h / 2 * k1)
+    k3 = rhs(t0 + h / 2, y0 + h / 2 * k2)
+    k4 = rhs(t0 + h, y0 + h * k3)
+    return y0 + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)

@@ -1,0 +1,353 @@
+"""``mechsolve simulate`` on the general path for a mechanism of any number of degrees of
+freedom: its start pose from ``simulate.pose`` (one joint coordinate per degree of
+freedom), its motors from ``motors:``, its table and summary (see :mod:`.multibody`)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections import deque
+
+import numpy as np
+
+from mechsolve.analyses.dynamics.model import drive_torque
+from mechsolve.analyses.dynamics.multibody import (
+    NEWTON_ITERATIONS,
+    Multibody,
+    Prescribed,
+    Source,
+    Trajectory,
+    coordinate,
+    free_context,
+    integrate,
+    trajectory_state,
+)
+from mechsolve.base.atomic import replacing
+from mechsolve.model import GROUND, Mechanism
+
+RATE_RTOL = 1e-6  # how far given rates may be from consistent before it is an error
+RATE_ATOL = 1e-9
+
+
+def motor_sources(mech: Mechanism, system) -> list[Source]:
+    """The file's ``motors:``, each a torque (force) on its joint's coordinate."""
+    out = []
+    for name, (joint, motor) in mech.motors.items():
+        c = coordinate(mech, system, joint)
+        out.append(
+            Source(
+                name,
+                c,
+                lambda w, t, m=motor: float(drive_torque(m, 1, w, t)),
+                f"{motor.describe()} on {joint}",
+            )
+        )
+    return out
+
+
+def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None = None):
+    """Integrate a mechanism placed by ``simulate.pose`` (no sweep analysis: any number
+    of degrees of freedom)."""
+    sim = mech.simulation
+    for ld in mech.loads:
+        if ld.when is not None:
+            raise mech.error(
+                ld.where + ("when",),
+                "a conditional load needs the sweep's analysis, which places the mechanism "
+                "by its driver: give a 'driver' (one degree of freedom) instead of "
+                "simulate.pose",
+            )
+    if mech.motor is not None:
+        raise mech.error(("motor",), "with simulate.pose give the motors in 'motors:'")
+    ctx = free_context(machine)
+    prescribed = _prescribed(machine, ctx.system)
+    mb = Multibody(ctx, motor_sources(machine, ctx.system), prescribed, tolerance=sim.tolerance)
+    q0 = assemble_pose(mech, mb)
+    qd0 = initial_rates(mech, mb, q0, np.zeros(mb.nq), None)
+    tr = integrate(
+        mb,
+        q0,
+        qd0,
+        sim.duration,
+        step=sim.step,
+        method=sim.method if sim.method != "rk4" or sim.step else "DOP853",
+        rtol=sim.rtol,
+        atol=sim.atol,
+        max_steps=max_steps,
+    )
+    return FreeResults(mech, mb, tr)
+
+
+def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
+    """The rates nearest to ``simulate.from`` and ``simulate.rates`` that satisfy the
+    constraints; an input error where a given value must change by more than a
+    tolerance."""
+    sim = mech.simulation
+    rows, targets, where = [], [], []
+    st = mb.state(q0, qd0)
+    given = dict(sim.rates)
+    for j, (_, kind, path) in sim.pose.items():  # a joint placed by the pose starts at rest
+        given.setdefault(j, (0.0, "speed" if kind == "length" else "angular speed", path))
+    if d is not None and d.joint not in given and sim.speed0_given:
+        given[d.joint] = (d.direction * abs(sim.speed0), None, ("simulate", "from"))
+    for j, (value, kind, path) in given.items():
+        try:
+            joint = mech.joint(j)
+        except (KeyError, ValueError):
+            joint = None
+        if joint is None or joint.coordinate is None:
+            names = [jj.name for jj in mech.joints if jj.coordinate is not None]
+            raise mech.error(
+                path,
+                f"no joint {j!r} with a coordinate to give a rate to (joints: {', '.join(names)})",
+            )
+        want = "speed" if joint.coordinate == "length" else "angular speed"
+        if kind is not None and kind != want:
+            raise mech.error(
+                path,
+                f"the joint {j!r} needs {want}, e.g. 2 {'m/s' if want == 'speed' else 'rad/s'}",
+            )
+        c = coordinate(mech, mb.system, j, d.line if d is not None and j == d.joint else None)
+        row, _ = mb._coordinate_row(c, st)
+        rows.append(row)
+        targets.append(value)
+        where.append((j, path))
+    Jq = mb.jacobian(q0)
+    # the constraint's solutions qd = N a (N: its null space), fitted to the given rates
+    _, sv, Vt = np.linalg.svd(Jq) if Jq.size else (None, np.zeros(0), np.eye(mb.nq))
+    rank = int(np.sum(sv > 1e-10 * (sv[0] if sv.size else 1.0)))
+    N = Vt[rank:].T
+    nu = mb._nu_gamma(st, 0.0, gamma=False)
+    qd_p = np.linalg.lstsq(Jq, nu, rcond=1e-12)[0] if Jq.size else np.zeros(mb.nq)
+    if not rows:
+        return qd_p
+    C = np.array(rows)
+    # a particular solution of Phi_q q' = nu (the prescribed motions' rates), then the
+    # free part fitted to the given rates
+    a, *_ = np.linalg.lstsq(C @ N, np.array(targets) - C @ qd_p, rcond=1e-12)
+    qd = qd_p + N @ a
+    got = C @ qd
+    for (j, path), x, y in zip(where, targets, got):
+        if abs(y - x) > RATE_RTOL * max(abs(x), abs(y)) + RATE_ATOL:
+            consistent = ", ".join(f"{jj}: {v:.6g}" for (jj, _), v in zip(where, got))
+            raise mech.error(
+                path,
+                f"the initial rates are not consistent with the constraints: {j}'s rate "
+                f"{x:.6g} would have to be {y:.6g} (the nearest consistent rates: "
+                f"{consistent}, in rad/s or m/s); give rates that the mechanism allows",
+            )
+    return qd
+
+
+def _prescribed(mech: Mechanism, system) -> list[Prescribed]:
+    """With ``simulate.pose``, a ``driver:`` prescribes its joint's motion: its constant
+    speed from its start, or its motion law (the other freedoms move freely)."""
+    d = mech.driver
+    if d is None:
+        return []
+    if not isinstance(d.start, (int, float)):
+        raise mech.error(d.where + ("start",), "a prescribed driver starts at a number")
+    u0, w = float(d.start), float(d.speed)
+    if d.motion is not None:
+        law = d.motion
+
+        def at(t):
+            u, ud, udd = law.at(np.array([t]))
+            return float(u[0]), float(ud[0]), float(udd[0])
+    else:
+
+        def at(t):
+            return u0 + w * t, w, 0.0
+
+    c = coordinate(mech, system, d.joint, d.line)
+    return [Prescribed(f"driver {d.joint}", c, at)]
+
+
+def _guess(mech: Mechanism, mb: Multibody) -> np.ndarray:
+    """Every body placed along a spanning tree from the ground: a body's angle from the
+    pose where its joint has one (else 0), its frame so that the joint's point meets."""
+    sim = mech.simulation
+    index = mb.system.index
+    q = np.zeros(mb.nq)
+    placed = {GROUND}
+    todo = deque([GROUND])
+
+    def frame(link):
+        if link == GROUND:
+            return np.zeros(2), 0.0
+        b = index[link]
+        return q[3 * b : 3 * b + 2], q[3 * b + 2]
+
+    while todo:
+        here = todo.popleft()
+        for j in mech.joints:
+            if here not in (j.a, j.b):
+                continue
+            other = j.b if j.a == here else j.a
+            if other in placed:
+                continue
+            o, th = frame(here)
+            rel = sim.pose.get(j.name, (0.0, None, None))[0] if j.coordinate == "angle" else 0.0
+            th_o = th + rel if other == j.b else th - rel
+            s_here = np.asarray(mech.local_point(here, j.point), float)
+            s_other = np.asarray(mech.local_point(other, j.point), float)
+            p = o + _rot(th) @ s_here if here != GROUND else s_here
+            b = index[other]
+            q[3 * b : 3 * b + 2] = p - _rot(th_o) @ s_other
+            q[3 * b + 2] = th_o
+            placed.add(other)
+            todo.append(other)
+    return q
+
+
+def _rot(th: float) -> np.ndarray:
+    c, s = math.cos(th), math.sin(th)
+    return np.array([[c, -s], [s, c]])
+
+
+def assemble_pose(mech: Mechanism, mb: Multibody) -> np.ndarray:
+    """The configuration with the joint coordinates of ``simulate.pose``: Gauss-Newton on
+    the constraints and those coordinates from :func:`_guess`; an input error where the
+    pose does not give one coordinate per degree of freedom or cannot be reached."""
+    sim = mech.simulation
+    coords, values = [], []
+    for j, (value, kind, path) in sim.pose.items():
+        joint = next((jj for jj in mech.joints if jj.name == j), None)
+        if joint is None or joint.coordinate is None:
+            names = [jj.name for jj in mech.joints if jj.coordinate is not None]
+            raise mech.error(path, f"no joint {j!r} with a coordinate (joints: {', '.join(names)})")
+        if kind != joint.coordinate:
+            raise mech.error(
+                path, f"the joint {j!r} needs a{'n angle' if kind == 'length' else ' length'}"
+            )
+        coords.append(coordinate(mech, mb.system, j))
+        values.append(value)
+    q = _guess(mech, mb)  # the prescribed coordinates are in the residual, at t = 0
+    path = ("simulate", "pose")
+    for _ in range(4 * NEWTON_ITERATIONS):
+        st = mb.state(q)
+        F = np.concatenate(
+            [mb.residual(q, 0.0), [c.value(st)[0] - v for c, v in zip(coords, values)]]
+        )
+        J = np.vstack([mb.jacobian(q)] + [mb._coordinate_row(c, st)[0] for c in coords])
+        if np.max(np.abs(F)) <= mb.tol:
+            break
+        q -= np.linalg.lstsq(J, F, rcond=1e-12)[0]
+    else:
+        raise mech.error(path, "the mechanism cannot be assembled with these joint coordinates")
+    rank = np.linalg.matrix_rank(J, tol=1e-9 * np.max(np.abs(J)))
+    Jq = mb.jacobian(q)
+    dof = mb.nq - (np.linalg.matrix_rank(Jq, tol=1e-9 * np.max(np.abs(Jq))) if Jq.size else 0)
+    if rank < mb.nq or len(coords) != dof:
+        raise mech.error(
+            path,
+            f"the mechanism has {dof} degree(s) of freedom here"
+            + (" besides its prescribed driver" if mb.prescribed else "")
+            + ": give one joint coordinate "
+            f"for each (got {len(coords)}{', not independent' if rank < mb.nq else ''})",
+        )
+    return q
+
+
+class FreeResults:
+    """The motion of a mechanism placed by its pose: every body's pose and rates, every
+    point, the motors, the energies, the violation and the joints' reactions."""
+
+    def __init__(self, mech: Mechanism, mb: Multibody, tr: Trajectory) -> None:
+        self.mechanism = mech
+        self.multibody = mb
+        self.trajectory = tr
+        self.model = None
+
+    def columns(self) -> list[tuple[str, np.ndarray]]:
+        tr, mb, mech = self.trajectory, self.multibody, self.mechanism
+        cols = [("t [s]", tr.t)]
+        for lk in mech.links:
+            b = mb.system.index[lk.name]
+            cols += [
+                (f"{lk.name}.x [m]", tr.q[:, 3 * b]),
+                (f"{lk.name}.y [m]", tr.q[:, 3 * b + 1]),
+                (f"{lk.name}.angle [deg]", np.degrees(tr.q[:, 3 * b + 2])),
+                (f"{lk.name}.vx [m/s]", tr.qd[:, 3 * b]),
+                (f"{lk.name}.vy [m/s]", tr.qd[:, 3 * b + 1]),
+                (f"{lk.name}.omega [rad/s]", tr.qd[:, 3 * b + 2]),
+                (f"{lk.name}.alpha [rad/s^2]", tr.qdd[:, 3 * b + 2]),
+            ]
+            for p, s in lk.points.items():
+                c, sn = np.cos(tr.q[:, 3 * b + 2]), np.sin(tr.q[:, 3 * b + 2])
+                rx, ry = c * s[0] - sn * s[1], sn * s[0] + c * s[1]
+                w = tr.qd[:, 3 * b + 2]
+                cols += [
+                    (f"{lk.name}.{p}.x [m]", tr.q[:, 3 * b] + rx),
+                    (f"{lk.name}.{p}.y [m]", tr.q[:, 3 * b + 1] + ry),
+                    (f"{lk.name}.{p}.vx [m/s]", tr.qd[:, 3 * b] - w * ry),
+                    (f"{lk.name}.{p}.vy [m/s]", tr.qd[:, 3 * b + 1] + w * rx),
+                ]
+        st = trajectory_state(mb, tr)
+        for src in mb.sources:
+            row = np.zeros((len(tr.t), mb.nq))
+            for body, blk in src.coordinate.jacobian(st).items():
+                row[:, 3 * body : 3 * body + 3] = blk[0].T
+            rate = np.einsum("ij,ij->i", row, tr.qd)
+            effort = np.array([src.law(w, t) for w, t in zip(rate, tr.t)])
+            unit = (
+                "m/s"
+                if src.coordinate.kind == "driver" and hasattr(src.coordinate, "slider")
+                else "rad/s"
+            )
+            cols += [
+                (f"{src.name}.rate [{unit}]", rate),
+                (f"{src.name}.effort [{'N' if unit == 'm/s' else 'N*m'}]", effort),
+            ]
+        cols += [
+            ("energy.kinetic [J]", tr.kinetic),
+            ("energy.potential [J]", tr.potential),
+            ("energy.work [J]", tr.work),
+            ("energy.residual [J]", tr.energy_residual),
+            ("constraint.violation [m]", tr.violation),
+            ("constraint.velocity_violation [m/s]", tr.velocity_violation),
+        ]
+        mark = " (minimum-norm)" if tr.redundant else ""
+        for row in mb.system.rows:
+            c = row.constraint
+            r = c.reaction(st, tr.lam[:, row.start : row.start + c.m])
+            for k, v in (r or {}).items():
+                cols.append((f"{c.name}.{k} [N]{mark}", np.asarray(v, float)))
+        return cols
+
+    def to_csv(self, path):
+        cols = self.columns()
+        with replacing(path, ".csv") as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow([name for name, _ in cols])
+            for i in range(len(self.trajectory.t)):
+                w.writerow([f"{v[i]:.10g}" for _, v in cols])
+        return path
+
+    def summary(self) -> str:
+        tr, mb = self.trajectory, self.multibody
+        dof = mb.nq - len(mb.partition(tr.q[0]).rows)
+        red = mb.nc - len(mb.partition(tr.q[0]).rows)
+        lines = [
+            f"{self.mechanism.name or 'mechanism'}: multibody simulation, {mb.nb} bodies, "
+            f"{mb.nc} constraint equations{f' ({red} redundant)' if red else ''}, {dof} "
+            f"degree(s) of freedom, {len(tr.t)} output rows to t = {tr.t[-1]:.6g} s, "
+            f"{tr.nfev} evaluations",
+            "  sources: "
+            + (", ".join(f"{s.name} ({s.text})" for s in mb.sources) or "none (free motion)"),
+            f"  energy balance: T + V - W changed by at most "
+            f"{np.max(np.abs(tr.energy_residual)):.3g} J",
+            f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
+            f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)",
+        ]
+        if tr.bridges:
+            lines.append(
+                f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
+                "all coordinates, then projected onto the constraints)"
+            )
+        if tr.early:
+            lines.append(f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}")
+        return "\n".join(lines)
+
+    def incomplete(self) -> bool:
+        return False

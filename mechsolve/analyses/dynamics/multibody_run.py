@@ -1,0 +1,270 @@
+"""``mechsolve simulate`` on the general path: a file's mechanism integrated in body
+coordinates (:mod:`.multibody`), its initial conditions, its results and summary.
+
+The start: the pose the file assembles at the driver's start (with its branch, as every
+command does), at rest or with the driver coordinate's rate ``simulate.from``. Rates of
+other joint coordinates (``simulate.rates``) are checked against the constraints: the
+rates nearest to all that are given (least squares over the constraint's solutions) are
+used; values changed by more than 1e-6 of their size (or 1e-9 in absolute terms) are an
+input error that names the key and gives the consistent values.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+
+from mechsolve.analyses.dynamics.integrators import _with_flywheel
+from mechsolve.analyses.dynamics.model import drive_torque
+from mechsolve.analyses.dynamics.multibody import (
+    Multibody,
+    Source,
+    Trajectory,
+    coordinate,
+    integrate,
+    trajectory_state,
+)
+from mechsolve.core import evaluate as core
+from mechsolve.core.sweep import Analysis
+from mechsolve.model import Mechanism
+from mechsolve.results.results import Column, Results
+
+
+def uses_multibody(mech: Mechanism) -> bool:
+    """Whether ``simulate`` takes the general path: asked for, or no motor (free motion)."""
+    sim = mech.simulation
+    if sim is None:
+        return False
+    general = mech.motor is None or bool(mech.motors) or bool(sim.pose) or bool(sim.rates)
+    if sim.formulation == "reduced" and general and mech.motor is not None:
+        what = "motors:" if mech.motors else "simulate.pose" if sim.pose else "simulate.rates"
+        raise mech.error(
+            ("simulate", "formulation"),
+            f"the reduced formulation integrates the driver's one equation under its one "
+            f"motor: {what} needs formulation: multibody",
+        )
+    if sim.formulation is not None:
+        return sim.formulation == "multibody"
+    return general
+
+
+def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> MultibodyResults:
+    """Integrate the file's mechanism in body coordinates (see :mod:`.multibody`)."""
+    sim = mech.simulation
+    if sim is None:
+        raise mech.error(("simulate",), "a simulation needs a 'simulate' section (duration, step)")
+    machine = _with_flywheel(mech)
+    if sim.pose or machine.driver is None:
+        from mechsolve.analyses.dynamics.multibody_free import simulate_free
+
+        return simulate_free(mech, machine, max_steps=max_steps)
+    if machine.driver is None:
+        raise mech.error(
+            ("driver",),
+            "the multibody simulation starts from the pose assembled at the driver's start: "
+            "add a 'driver' section (joint and start; with no motor it only places the "
+            "mechanism)",
+        )
+    if machine.driver.motion is not None:
+        machine = copy.copy(machine)
+        machine.driver = dataclasses.replace(machine.driver, motion=None)
+    an = Analysis(machine)
+    u0 = an.start_value()
+    # 'from' is a speed along the driver's direction, as on the reduced path
+    w0 = machine.driver.direction * abs(sim.speed0)
+    start = core.states(an, np.array([u0]), np.array([w0]), np.array([0.0]))
+    if not start.ok[0]:
+        raise mech.error(("driver", "start"), "the mechanism cannot close at the driver's start")
+    st = start.state
+    q0 = st.q()[0]
+    qd0 = np.stack([st.vx[:-1, 0], st.vy[:-1, 0], st.w[:-1, 0]], axis=1).ravel()
+    d = machine.driver
+    sources = []
+    free = Multibody(an)
+    drv = coordinate(machine, free.system, d.joint, d.line)
+    if mech.motor is not None:
+        motor, sense = mech.motor, d.direction
+        sources.append(
+            Source(
+                "motor",
+                drv,
+                lambda w, t: float(drive_torque(motor, sense, w, t)),
+                f"{motor.describe()} on {d.joint}",
+            )
+        )
+    from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources
+
+    sources += motor_sources(machine, free.system)
+    mb = Multibody(an, sources, tolerance=sim.tolerance)
+    if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
+        # stroke(q) means the extremes over the driver's sweep (a turn of a crank), as
+        # for the reduced path: found once, replayed at every state of the motion
+        if an.linear:
+            u, _ = an.sweep_values(u0)
+        else:
+            u = u0 + d.direction * np.radians(np.arange(0.0, 360.5, 1.0))
+        ref = core.states(an, u, 1.0, 0.0)
+        mb.extremes = list(core.forces(an, ref).stroke_extremes)
+    if sim.rates:
+        qd0 = initial_rates(mech, mb, q0, qd0, d)
+    tr = integrate(
+        mb,
+        q0,
+        qd0,
+        sim.duration,
+        step=sim.step,
+        method=sim.method if sim.method != "rk4" or sim.step else "DOP853",
+        rtol=sim.rtol,
+        atol=sim.atol,
+        max_steps=max_steps,
+    )
+    sol = _solution(an, start, mb, drv, tr)
+    forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
+    return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def _solution(an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
+    """The trajectory as a :class:`Solution` of the analysis (for its columns and the
+    force analysis), with the driver coordinate, its rate and acceleration."""
+    n = len(tr.t)
+    st = trajectory_state(mb, tr)
+    u = drv.value(st)
+    rows = np.zeros((n, mb.nq))
+    for body, blk in drv.jacobian(st).items():
+        rows[:, 3 * body : 3 * body + 3] = blk[0].T
+    ud = np.einsum("ij,ij->i", rows, tr.qd)
+    # c_q q'' = u'' + g(q, q'), g from the coordinate's gamma at u'' = 0
+    udd = np.einsum("ij,ij->i", rows, tr.qdd) - drv.gamma(st, 0.0)[0]
+    tr.u, tr.ud, tr.udd = u, ud, udd
+    return dataclasses.replace(
+        start,
+        u=u,
+        t=tr.t,
+        state=st,
+        ok=np.ones(n, bool),
+        failures=[],
+        indicator=np.ones((len(an.plan), n)),
+        iterations=np.zeros(n, int),
+        methods=None,
+        residual_=tr.violation,
+        warnings=[],
+        events=[],
+        flips=start.flips,  # the start's branches, for positions solved again
+        rates_by_limit=[],
+        rates_undetermined=[],
+        ud=ud,
+        udd=udd,
+    )
+
+
+class MultibodyResults(Results):
+    """Results along a motion integrated in body coordinates: the sweep's columns, with
+    the driver coordinate's rates, the motor, the energy balance and the constraint
+    violation."""
+
+    def __init__(self, an, sol, forces, traj: Trajectory, mb: Multibody, drv) -> None:
+        super().__init__(an, sol, forces)
+        self.trajectory = traj
+        self.multibody = mb
+        self.coordinate = drv
+        self.model = None
+
+    def limit_positions(self):
+        """Not reported: a rocker's extremes over a sweep of the driver are not the
+        extremes of a motion in time (the CSV has every position)."""
+        return []
+
+    def transmission_angles(self):
+        return []
+
+    def motor_torque(self) -> np.ndarray | None:
+        mech = self.mechanism
+        if mech.motor is None:
+            return None
+        tr = self.trajectory
+        return drive_torque(mech.motor, mech.driver.direction, tr.ud, tr.t)
+
+    def columns(self) -> list[Column]:
+        tr = self.trajectory
+        lin = self.linear
+        cols = super().columns()
+        extra = [
+            Column("omega" if not lin else "v", "m/s" if lin else "rad/s", tr.ud),
+            Column("epsilon" if not lin else "a", "m/s^2" if lin else "rad/s^2", tr.udd),
+        ]
+        M = self.motor_torque()
+        if M is not None:
+            extra += [
+                Column("motor.torque" if not lin else "motor.force", "N" if lin else "N*m", M),
+                Column("motor.power", "W", M * tr.ud),
+            ]
+        extra += [
+            Column("energy.kinetic", "J", tr.kinetic),
+            Column("energy.potential", "J", tr.potential),
+            Column("energy.work", "J", tr.work),
+            Column("energy.residual", "J", tr.energy_residual),
+            Column("constraint.violation", "m", tr.violation),
+            Column("constraint.velocity_violation", "m/s", tr.velocity_violation),
+        ]
+        return cols[:3] + extra + cols[3:]
+
+    def energy_residual(self) -> np.ndarray:
+        """T + V - W - (T0 + V0) along the motion (J): the integrator's error."""
+        return self.trajectory.energy_residual
+
+    def summary(self) -> str:
+        tr = self.trajectory
+        mb = self.multibody
+        sim = self.mechanism.simulation
+        lines = [super().summary()]
+        how = (
+            f"rk4, {len(tr.t) - 1} fixed steps of {sim.step:.6g} s"
+            if sim.method == "rk4" and sim.step
+            else f"{sim.method if sim.method != 'rk4' else 'DOP853'} with rtol {sim.rtol:g}, "
+            f"atol {sim.atol:g}, {len(tr.t)} output rows"
+        )
+        dof = mb.nq - len(mb.partition(tr.q[0]).rows)
+        red = mb.nc - len(mb.partition(tr.q[0]).rows)
+        lines.append(
+            f"  simulation (multibody: {mb.nb} bodies, {mb.nq} coordinates, {mb.nc} constraint "
+            f"equations{f' ({red} redundant)' if red else ''}, {dof} degree(s) of freedom): "
+            f"{how} to t = {tr.t[-1]:.6g} s, {tr.nfev} evaluations"
+            + (f", {tr.partitions} partitions" if tr.partitions > 1 else "")
+        )
+        names = ", ".join(f"{src.name} ({src.text})" for src in mb.sources)
+        lines.append("  sources: " + (names or "none (free motion)"))
+        E = max(
+            np.max(np.abs(tr.kinetic)),
+            np.max(np.abs(tr.potential - tr.potential[0])),
+            np.max(np.abs(tr.work)),
+        )
+        lines.append(
+            f"  energy balance: T + V - W changed by at most "
+            f"{np.max(np.abs(tr.energy_residual)):.3g} J (largest of T, |V - V0|, |W|: "
+            f"{E:.6g} J)"
+        )
+        lines.append(
+            f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
+            f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)"
+        )
+        if tr.redundant:
+            lines.append(
+                "  redundant constraints: the motion is unique, the reactions are the "
+                "minimum-norm solution (not unique)"
+            )
+        if tr.bridges:
+            lines.append(
+                f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
+                "all coordinates, then projected onto the constraints)"
+            )
+        if tr.early:
+            lines.append(
+                f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}; the motion up to "
+                "there is kept"
+            )
+        return "\n".join(lines)
+
+    def incomplete(self) -> bool:
+        return not self.ok.all()
