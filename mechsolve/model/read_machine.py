@@ -155,22 +155,7 @@ def read_simulation(r: Reader, value: Any, linear: bool):
             raise r.fail(path + ("step",), "the step is longer than the duration")
     elif sim.method == "rk4":
         raise r.fail(path, "rk4 integrates with a fixed step: give 'step'")
-    for key in ("rtol", "atol"):
-        if key in m:
-            x = m[key]
-            if isinstance(x, str):  # YAML reads 1e-10 (no dot) as text
-                try:
-                    x = float(x)
-                except ValueError:
-                    pass
-            if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
-                big = isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) >= 1
-                raise r.fail(
-                    path + (key,),
-                    f"{key} must be a number between 0 and 1"
-                    + (f" ({x:g} is too large in size)" if big else ""),
-                )
-            setattr(sim, key, float(x))
+    _read_tolerances(r, m, path, sim)
     if "from" in m:
         sim.speed0_given = True
         f = m["from"]
@@ -188,6 +173,49 @@ def read_simulation(r: Reader, value: Any, linear: bool):
         sim.formulation = m["formulation"]
     if "tolerance" in m:
         sim.tolerance = r.positive(m["tolerance"], path + ("tolerance",), "length")
+    _read_pose_and_rates(r, m, path, sim)
+    if "revolutions" in m:
+        sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
+    if "steady" in m:
+        x = m["steady"]
+        if isinstance(x, str):
+            try:
+                x = float(x.strip().rstrip("%")) / (100 if x.strip().endswith("%") else 1)
+            except ValueError:
+                pass
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
+            raise r.fail(
+                path + ("steady",),
+                "steady: the largest change of a revolution's mean speed from the one "
+                "before, as a fraction between 0 and 1 (e.g. 1e-4 or 0.01 %)",
+            )
+        sim.steady = float(x)
+    return sim
+
+
+def _read_tolerances(r: Reader, m: dict, path: KeyPath, sim) -> None:
+    """``rtol`` and ``atol``: numbers between 0 and 1 (YAML reads 1e-10 as text)."""
+    for key in ("rtol", "atol"):
+        if key in m:
+            x = m[key]
+            if isinstance(x, str):  # YAML reads 1e-10 (no dot) as text
+                try:
+                    x = float(x)
+                except ValueError:
+                    pass
+            if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
+                big = isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) >= 1
+                raise r.fail(
+                    path + (key,),
+                    f"{key} must be a number between 0 and 1"
+                    + (f" ({x:g} is too large in size)" if big else ""),
+                )
+            setattr(sim, key, float(x))
+
+
+def _read_pose_and_rates(r: Reader, m: dict, path: KeyPath, sim) -> None:
+    """``pose`` and ``rates``: joint coordinates and their initial rates, each an angle or
+    a length (a revolute's or a slider's: the joint decides which it needs)."""
     if "pose" in m:
         pose = m["pose"]
         if not isinstance(pose, dict) or not pose:
@@ -212,23 +240,6 @@ def read_simulation(r: Reader, value: Any, linear: bool):
                 sim.rates[str(j)] = (r.quantity(v, jp, "angular speed"), "angular speed", jp)
             except InputError:
                 sim.rates[str(j)] = (r.quantity(v, jp, "speed"), "speed", jp)
-    if "revolutions" in m:
-        sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
-    if "steady" in m:
-        x = m["steady"]
-        if isinstance(x, str):
-            try:
-                x = float(x.strip().rstrip("%")) / (100 if x.strip().endswith("%") else 1)
-            except ValueError:
-                pass
-        if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
-            raise r.fail(
-                path + ("steady",),
-                "steady: the largest change of a revolution's mean speed from the one "
-                "before, as a fraction between 0 and 1 (e.g. 1e-4 or 0.01 %)",
-            )
-        sim.steady = float(x)
-    return sim
 
 
 def read_instants(r: Reader, value: Any, linear: bool) -> list[tuple[float, float, float, str]]:

@@ -100,6 +100,48 @@ def expand_schemes(
     return out
 
 
+def _checked_schemes(schemes, outputs, delta: float, middle: float, all_variants: bool):
+    """The (file, variant) pairs and each one's output, after the checks of the options:
+    at least one scheme, ``middle`` and ``delta`` in range, one output or one per scheme,
+    no scheme (and output) given twice."""
+    pairs = expand_schemes(schemes, all_variants)
+    if not pairs:
+        raise InputError("compare: give at least one scheme (a mechanism file)")
+    if not (0 < middle <= 1):
+        raise InputError(
+            f"--middle {middle * 100:g} %: the part of the working stroke is above 0 and at "
+            "most 100 %"
+        )
+    if not (0 < delta < 1):
+        raise InputError(f"--delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
+    outs = list(outputs or [])
+    if len(outs) not in (0, 1, len(pairs)):
+        raise InputError(
+            f"--output is given {len(outs)} times for {len(pairs)} schemes: give it once "
+            "(the same output for all) or once per scheme, in their order"
+        )
+    specs = [outs[k] if len(outs) > 1 else (outs[0] if outs else None) for k in range(len(pairs))]
+    seen = set()
+    for (file, variant), spec in zip(pairs, specs):
+        key = (str(file.resolve()), variant, spec)
+        if key in seen:
+            what = f"{file}@{variant}" if variant else str(file)
+            raise InputError(f"{what}: the same scheme (and output) is given twice")
+        seen.add(key)
+    return pairs, specs
+
+
+def _names(mechs, pairs, specs) -> list[str]:
+    """Each scheme's name, told apart by its file or its output where two would be one."""
+    names = [m.name + (f" ({v})" if v else "") for m, (_, v) in zip(mechs, pairs)]
+    if len(set(names)) < len(names):  # two files of one name: tell them apart
+        if len({f.resolve() for f, _ in pairs}) > 1:
+            names = [n + f" [{f.name}]" for n, (f, _) in zip(names, pairs)]
+    if len(set(names)) < len(names):  # one scheme, two outputs
+        names = [n + (f" [{spec}]" if spec else "") for n, spec in zip(names, specs)]
+    return names
+
+
 def compare(
     schemes: Sequence[str | Path | tuple[str | Path, str | None]],
     *,
@@ -134,37 +176,9 @@ def compare(
         A missing or wrong file, a scheme that is not a crank turning fully at a constant
         speed, schemes at different speeds, an output the file does not have.
     """
-    pairs = expand_schemes(schemes, all_variants)
-    if not pairs:
-        raise InputError("compare: give at least one scheme (a mechanism file)")
-    if not (0 < middle <= 1):
-        raise InputError(
-            f"--middle {middle * 100:g} %: the part of the working stroke is above 0 and at "
-            "most 100 %"
-        )
-    if not (0 < delta < 1):
-        raise InputError(f"--delta {delta!r}: the coefficient of fluctuation is between 0 and 1")
-    outs = list(outputs or [])
-    if len(outs) not in (0, 1, len(pairs)):
-        raise InputError(
-            f"--output is given {len(outs)} times for {len(pairs)} schemes: give it once "
-            "(the same output for all) or once per scheme, in their order"
-        )
-    specs = [outs[k] if len(outs) > 1 else (outs[0] if outs else None) for k in range(len(pairs))]
-    seen = set()
-    for (file, variant), spec in zip(pairs, specs):
-        key = (str(file.resolve()), variant, spec)
-        if key in seen:
-            what = f"{file}@{variant}" if variant else str(file)
-            raise InputError(f"{what}: the same scheme (and output) is given twice")
-        seen.add(key)
+    pairs, specs = _checked_schemes(schemes, outputs, delta, middle, all_variants)
     mechs = [load(f, v) for f, v in pairs]
-    names = [m.name + (f" ({v})" if v else "") for m, (_, v) in zip(mechs, pairs)]
-    if len(set(names)) < len(names):  # two files of one name: tell them apart
-        if len({f.resolve() for f, _ in pairs}) > 1:
-            names = [n + f" [{f.name}]" for n, (f, _) in zip(names, pairs)]
-    if len(set(names)) < len(names):  # one scheme, two outputs
-        names = [n + (f" [{spec}]" if spec else "") for n, spec in zip(names, specs)]
+    names = _names(mechs, pairs, specs)
     speeds = [check_comparable(m, n) for m, n in zip(mechs, names)]
     if any(abs(s - speeds[0]) > 1e-9 * speeds[0] for s in speeds):
         listed = ", ".join(f"{n} {s * 30 / math.pi:.6g} rpm" for n, s in zip(names, speeds))
