@@ -38,6 +38,7 @@ __all__ = [
     "compare",
     "parse_step",
     "positions",
+    "shaking",
 ]
 
 
@@ -217,3 +218,11 @@ def check(mech: Mechanism, method: str | None = None) -> CheckReport:
         asm,
         notes,
     )
+
+
+def shaking(mech: Mechanism, **kwargs):
+    """The shaking force and moment on the frame over the sweep (see
+    :func:`mechsolve.analyses.shaking.shaking`)."""
+    from mechsolve.analyses.shaking import shaking as _shaking
+
+    return _shaking(mech, **kwargs)
