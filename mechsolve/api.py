@@ -39,6 +39,7 @@ __all__ = [
     "parse_step",
     "positions",
     "shaking",
+    "balanced",
 ]
 
 
@@ -226,3 +227,11 @@ def shaking(mech: Mechanism, **kwargs):
     from mechsolve.analyses.shaking import shaking as _shaking
 
     return _shaking(mech, **kwargs)
+
+
+def balanced(mech: Mechanism, **kwargs):
+    """Counterweights for a four-bar or a slider-crank, the balanced file and the shaking
+    before and after (see :func:`mechsolve.analyses.shaking.balanced`)."""
+    from mechsolve.analyses.shaking import balanced as _balanced
+
+    return _balanced(mech, **kwargs)

@@ -1,11 +1,104 @@
-"""Shaking force and moment on the frame.
+"""Shaking force and moment on the frame, and balancing by counterweights.
 
 :func:`shaking` gives the load the moving links transmit to the frame over a sweep
-(:mod:`.frame`).
+(:mod:`.frame`); :func:`balanced` finds the counterweights of a four-bar or a
+slider-crank (:mod:`.balance`), writes them into a runnable file and gives the shaking
+before and after.
 """
 
 from __future__ import annotations
 
-from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
+import math
+from dataclasses import dataclass
 
-__all__ = ["Shaking", "frame_load", "inertia_only", "shaking"]
+from mechsolve.analyses.shaking.balance import (
+    Balance,
+    Counterweight,
+    balance,
+    balanced_data,
+    find_linkage,
+    inline,
+)
+from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
+from mechsolve.model import Mechanism
+
+__all__ = [
+    "Balance",
+    "Balanced",
+    "Counterweight",
+    "Shaking",
+    "balance",
+    "balanced",
+    "find_linkage",
+    "frame_load",
+    "inertia_only",
+    "shaking",
+]
+
+
+@dataclass
+class Balanced:
+    """A balancing: the counterweights, the balanced file's text, the shaking before and
+    after (inertia forces only: the counterweights cancel those)."""
+
+    balance: Balance
+    before: Shaking
+    after: Shaking
+    text: str
+
+    def lines(self) -> list[str]:
+        lines = self.balance.lines()
+        drv = self.before.results.mechanism.driver
+        lines += self.balance.textbook(drv.speed if drv.motion is None else None)
+        lines.append(
+            "residual shaking (inertia forces only: gravity and loads off), "
+            f"moment about {self.before.about_name}:"
+        )
+        fb, fa = self.before.figures(), self.after.figures()
+        r = self.before.results
+        unit = "m" if r.linear else "deg"
+        for key in fb:
+            un = "N" if key.endswith("force") else "N*m"
+            (vb, ab, how), (va, aa, _) = fb[key], fa.get(key, (float("nan"),) * 2 + ("",))
+            lines.append(
+                f"  {key:<13} before {vb:.6g} {un}{_at(ab, unit)}, after {va:.6g} {un}"
+                f"{_at(aa, unit)} ({how})"
+            )
+        return lines
+
+
+def _at(value: float, unit: str) -> str:
+    return f" at {value:.6g} {unit}" if math.isfinite(value) else ""
+
+
+def balanced(
+    mech: Mechanism,
+    *,
+    fraction: float | None = None,
+    radius: dict[str, float] | None = None,
+    about: tuple[float, float] = (0.0, 0.0),
+    about_name: str = "the frame's origin",
+    step: float | None = None,
+    variant: str | None = None,
+) -> Balanced:
+    """Balance ``mech`` (see :func:`~mechsolve.analyses.shaking.balance.balance`), write
+    the counterweights into the file's text and solve the balanced file again: the
+    shaking before and after are of the two runnable files."""
+    import yaml
+
+    from mechsolve.model.parse import loads
+
+    bal = balance(mech, fraction=fraction, radius=radius)
+    kw = dict(about=about, about_name=about_name, step=step, inertia=True)
+    before = shaking(mech, **kw)
+    if bal.fraction is not None:
+        bal.inline = bal.inline and inline(before.results, bal.linkage)
+    data = balanced_data(mech, bal)
+    names = ", ".join(f"{cw.point} on {cw.link}" for cw in bal.counterweights)
+    head = (
+        f"# {mech.name}, balanced by 'mechsolve shaking --balance': counterweights {names}\n"
+        "# (point masses, see links.*.point_masses)\n"
+    )
+    text = head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    after = shaking(loads(text, variant), **kw)
+    return Balanced(bal, before, after, text)

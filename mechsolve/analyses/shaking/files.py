@@ -1,4 +1,5 @@
-"""The shaking command's inputs and outputs: the moment's point and the files."""
+"""The shaking command's inputs and outputs: the moment's point, the counterweights'
+radii from the command line, and the files (CSV, plots, the balanced mechanism)."""
 
 from __future__ import annotations
 
@@ -31,6 +32,25 @@ def parse_about(mech: Mechanism, text: str | None) -> tuple[tuple[float, float],
         raise InputError(f"--about {text!r}: {exc}") from None
     unit = "" if any(c.isalpha() for c in name) else f" {mech.length_unit}"
     return (xy[0], xy[1]), f"the point ({parts[0]}, {parts[1]}){unit}"
+
+
+def parse_radii(mech: Mechanism, given: tuple[str, ...]) -> dict[str, float]:
+    """``--radius LINK=LENGTH`` (repeatable; a length in the file's unit unless given)."""
+    out: dict[str, float] = {}
+    for item in given:
+        link, sep, value = item.partition("=")
+        link = link.strip()
+        if not sep or not link:
+            raise InputError(f"--radius {item!r}: give LINK=LENGTH, e.g. crank=40")
+        if link != GROUND and link not in mech.link_names:
+            raise InputError(
+                f"--radius {item!r}: no link named {link!r} (links: {', '.join(mech.link_names)})"
+            )
+        try:
+            out[link] = parse_quantity(value.strip(), "length", mech.length_unit)
+        except UnitError as exc:
+            raise InputError(f"--radius {item!r}: {exc}") from None
+    return out
 
 
 def write_text(path: Path, text: str) -> Path:
