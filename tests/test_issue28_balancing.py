@@ -48,6 +48,8 @@ def test_fourbar_counterweights_by_hand_and_zero_shaking():
     sx, sy = centre_of_mass(bal.after.results)  # the balanced file's centre stays put
     assert np.ptp(sx) < 1e-12 and np.ptp(sy) < 1e-12
     assert np.ptp(centre_of_mass(bal.before.results)[0]) > 1e-4  # and it moved before
+    text = "\n".join(bal.lines())
+    assert "after 0 N to rounding" in text  # no figure printed for rounding noise
 
 
 def test_fourbar_with_the_coupler_centre_off_its_line():

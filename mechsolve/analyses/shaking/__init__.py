@@ -60,11 +60,19 @@ class Balanced:
         for key in fb:
             un = "N" if key.endswith("force") else "N*m"
             (vb, ab, how), (va, aa, _) = fb[key], fa.get(key, (float("nan"),) * 2 + ("",))
+            after = f"{va:.6g} {un}{_at(aa, unit)}"
+            if va <= ROUNDING * vb:  # what is left is rounding: no figure to print
+                after = f"0 {un} to rounding (below {ROUNDING:g} of before)"
+            lines.append(f"  {key:<13} before {vb:.6g} {un}{_at(ab, unit)}, after {after} ({how})")
+        if self.balance.fraction is None:
             lines.append(
-                f"  {key:<13} before {vb:.6g} {un}{_at(ab, unit)}, after {va:.6g} {un}"
-                f"{_at(aa, unit)} ({how})"
+                "  note: counterweights cancel the shaking force, not the moment (their "
+                "inertia may increase it)"
             )
         return lines
+
+
+ROUNDING = 1e-12  # a residual below this fraction of the unbalanced one is rounding
 
 
 def _at(value: float, unit: str) -> str:
