@@ -194,3 +194,68 @@ def test_the_command_writes_the_table_and_the_plot(tmp_path):
     first = rows[1].split(",")
     assert float(first[3]) == pytest.approx(sh.fx[0], rel=1e-11)
     assert (out / "shaking.png").stat().st_size > 0
+
+
+def minus_rate_of_momenta(res):
+    """-sum m a_G and -sum (J alpha + m r_G x a_G) about the origin, from the sweep's
+    kinematics (positions, velocities, accelerations: no force analysis)."""
+    mech, an, st = res.mechanism, res.analysis, res.solution.state
+    n = len(res.u)
+    fx, fy, m = np.zeros(n), np.zeros(n), np.zeros(n)
+    for lk in mech.links:
+        if not lk.mass and not lk.inertia:
+            continue
+        b = an.system.index[lk.name]
+        s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
+        ax, ay = st.point_acceleration(b, s)
+        x, y = st.point(b, s)
+        fx -= lk.mass * ax
+        fy -= lk.mass * ay
+        m -= lk.inertia * st.al[b] + lk.mass * (x * ay - y * ax)
+    return fx, fy, m
+
+
+@pytest.mark.parametrize(
+    "file",
+    [
+        "gear-train.yaml",  # a gear pair: the tooth forces' radial part
+        "cam-linkage.yaml",  # a cam contact
+        "shaper.yaml",  # a slider on a moving guide
+        "crane.yaml",
+        "motor-linkage.yaml",
+    ],
+)
+def test_every_joint_kind_answers_for_the_frame(file):
+    """Whatever the joints, the frame's load is -dp/dt and -dH/dt (inertia only)."""
+    sh = api.shaking(ms.load("mechanisms/" + file), inertia=True)
+    fx, fy, m = minus_rate_of_momenta(sh.results)
+    scale, mscale = np.max(np.hypot(fx, fy)), np.max(np.abs(m))
+    assert scale > 0 and mscale > 0
+    assert np.max(np.hypot(sh.fx - fx, sh.fy - fy)) < 1e-12 * scale
+    assert np.max(np.abs(sh.moment - m)) < 1e-12 * mscale
+
+
+RACK_ON_FRAME = """
+name: pinion on a fixed rack
+units: {length: mm, angle: deg}
+ground: {R0: [0, 0], R1: [100, 0]}
+links:
+  carriage: {points: {C: [0, 0], D: [50, 0]}, mass: 2 kg, com: D, inertia: 0.01 kg m^2}
+  pinion: {points: {C: [0, 0], M: [25, 0]}, mass: 0.5 kg, com: M, inertia: 0.002 kg m^2}
+joints:
+  rail: {slider: [ground, carriage], point: C, line: {through: [0, 25], angle: 0}}
+  C: [carriage, pinion]
+  mesh: {rack: [ground, pinion], pitch_line: [R0, R1], radius: 25 mm}
+driver: {joint: C, speed: 4 rad/s, start: 0 deg}
+sweep: {range: 400 deg, step: 10 deg}
+"""
+
+
+def test_a_rack_on_the_frame_and_a_motor_off_it():
+    """The rack's separating force acts on the frame directly; the motor between the
+    carriage and the pinion is not on the frame, its torque is internal."""
+    sh = api.shaking(ms.loads(RACK_ON_FRAME), inertia=True)
+    fx, fy, m = minus_rate_of_momenta(sh.results)
+    scale = np.max(np.hypot(fx, fy))
+    assert np.max(np.hypot(sh.fx - fx, sh.fy - fy)) < 1e-12 * scale
+    assert np.max(np.abs(sh.moment - m)) < 1e-12 * np.max(np.abs(m))
