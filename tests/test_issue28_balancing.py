@@ -163,3 +163,11 @@ def test_bad_input_is_exit_2_with_a_clear_message(tmp_path, file, args, words):
     assert words in r.output
     assert "Traceback" not in r.output
     assert not out.exists()  # nothing written
+
+
+def test_a_variant_is_balanced_as_applied():
+    text = open(FOURBAR).read() + "variants:\n  heavy:\n    links: {crank: {mass: 0.5 kg}}\n"
+    bal = api.balanced(ms.loads(text, "heavy", file="fb.yaml"), variant="heavy")
+    assert bal.balance.counterweights[0].mr == pytest.approx((0.5 / 2 + 0.1) * 0.0265)
+    assert "variants" not in bal.text and "variant 'heavy'" in bal.text
+    assert np.nanmax(bal.after.force) < 1e-12 * np.nanmax(bal.before.force)

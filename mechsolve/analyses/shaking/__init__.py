@@ -91,7 +91,8 @@ def balanced(
 ) -> Balanced:
     """Balance ``mech`` (see :func:`~mechsolve.analyses.shaking.balance.balance`), write
     the counterweights into the file's text and solve the balanced file again: the
-    shaking before and after are of the two runnable files."""
+    shaking before and after are of the two runnable files. ``variant``: the name of the
+    file's variant ``mech`` was loaded with (its data has it applied), for the header."""
     import yaml
 
     from mechsolve.model.parse import loads
@@ -106,7 +107,8 @@ def balanced(
     head = (
         f"# {mech.name}, balanced by 'mechsolve shaking --balance': counterweights {names}\n"
         "# (point masses, see links.*.point_masses)\n"
+        + (f"# from the variant {variant!r} of the file, applied\n" if variant else "")
     )
     text = head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
-    after = shaking(loads(text, variant), **kw)
+    after = shaking(loads(text, file=mech.source.file), **kw)  # the variant is in the data
     return Balanced(bal, before, after, text)
