@@ -168,6 +168,11 @@ def test_figures_and_columns_have_units():
     assert figs["peak force"][2] == "largest sample"
     # the RMS over the turn: the last sample repeats the first and is counted once
     assert figs["RMS force"][0] == pytest.approx(math.sqrt(np.mean(f[:-1] ** 2)), rel=1e-12)
+    # a step that does not divide the turn (a shorter last step): still the turn's mean
+    coarse = api.shaking(ms.load(FOURBAR), inertia=True, step=math.radians(7.0))
+    fine = api.shaking(ms.load(FOURBAR), inertia=True, step=math.radians(0.25))
+    rms = fine.figures()["RMS force"][0]
+    assert coarse.figures()["RMS force"][0] == pytest.approx(rms, rel=1e-3)
     heads = [c.header for c in sh.columns()]
     assert "shaking.Fx [N] (on the frame)" in heads
     assert any(h.startswith("shaking.M [N*m]") for h in heads)

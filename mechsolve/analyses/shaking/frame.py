@@ -102,9 +102,9 @@ class Shaking:
         driver value at the peak (report units) or NaN, how it was found)``.
 
         A peak is the largest sample (the sweep's step decides how close it is to the
-        true peak); an RMS over a full turn with no gaps is the mean over the turn by
-        the trapezoidal rule, exact to rounding for a smooth periodic motion sampled
-        uniformly, otherwise the RMS of the solved samples."""
+        true peak); an RMS over a full turn with no gaps is the mean square over the turn
+        by the trapezoidal rule in the driver's coordinate (exact to rounding for a smooth
+        periodic motion sampled uniformly), otherwise the RMS of the solved samples."""
         r = self.results
         ok = self.ok
         out: dict[str, tuple[float, float, str]] = {}
@@ -115,10 +115,10 @@ class Shaking:
             a = np.abs(np.where(ok, v, np.nan))
             i = int(np.nanargmax(a))
             out[f"peak {name}"] = (float(a[i]), float(r.driver_value[i]), "largest sample")
-            if whole:
-                vv = v[:-1] if _closes(r) else v  # the last sample repeats the first
-                rms = math.sqrt(float(np.mean(vv * vv)))
-                out[f"RMS {name}"] = (rms, math.nan, "over the turn")
+            if whole:  # the trapezoidal rule over the turn (a last step may be shorter)
+                du = np.diff(r.u)
+                mean = float(np.sum(du * (v[1:] ** 2 + v[:-1] ** 2) / 2) / (r.u[-1] - r.u[0]))
+                out[f"RMS {name}"] = (math.sqrt(mean), math.nan, "over the turn")
             else:
                 rms = math.sqrt(float(np.nanmean(np.where(ok, v * v, np.nan))))
                 out[f"RMS {name}"] = (rms, math.nan, "of the solved samples")
@@ -144,11 +144,6 @@ class Shaking:
         if bad:
             lines.append(f"  {bad} position(s) not determined (left blank)")
         return lines + [f"  note: {n}" for n in self.notes]
-
-
-def _closes(r: Results) -> bool:
-    """Whether the sweep's last sample is its first one a turn later."""
-    return abs(abs(r.u[-1] - r.u[0]) - 2 * math.pi) < 1e-9
 
 
 def _fmt(x: float) -> str:
