@@ -151,9 +151,14 @@ def test_balanced_file_is_written_in_the_files_units(tmp_path):
         ("SC", ["--radius", "crankshaft=10"], "no link named 'crankshaft'"),
         (FOURBAR, ["--about", "Q7"], "give a point of the frame (O2, O4)"),
         ("mechanisms/sixbar.yaml", ["--balance"], "four-bar or a slider-crank"),
+        ("MASSLESS", ["--balance"], "the links have no mass, nothing shakes"),
     ],
 )
 def test_bad_input_is_exit_2_with_a_clear_message(tmp_path, file, args, words):
+    if file == "MASSLESS":
+        file = tmp_path / "fb.yaml"
+        lines = open(FOURBAR).read().split("gravity:")[0].splitlines(keepends=True)
+        file.write_text("".join(ln for ln in lines if "mass:" not in ln and "uniform" not in ln))
     if file == "SC":
         file = tmp_path / "sc.yaml"
         file.write_text(SLIDER.format(w=100.0))

@@ -234,6 +234,10 @@ def balance(
     if fraction is not None and not 0.0 <= fraction <= 1.0:
         raise InputError(f"--fraction {fraction:g}: the fraction c must be in [0, 1]")
 
+    links = [lk.crank, lk.coupler, lk.rocker or lk.block]
+    if not any(_mass(mech, ln)[0] for ln in links):
+        raise mech.error(("links",), "balancing: the links have no mass, nothing shakes")
+
     def lp(link: str, point: str) -> complex:
         return _z(mech.local_point(link, point))
 
