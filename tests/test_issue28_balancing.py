@@ -176,3 +176,40 @@ def test_a_variant_is_balanced_as_applied():
     assert bal.balance.counterweights[0].mr == pytest.approx((0.5 / 2 + 0.1) * 0.0265)
     assert "variants" not in bal.text and "variant 'heavy'" in bal.text
     assert np.nanmax(bal.after.force) < 1e-12 * np.nanmax(bal.before.force)
+
+
+@pytest.mark.parametrize(
+    "target",
+    [
+        "shaking.csv",
+        "shaking.png",
+        "fourbar-balanced.yaml",
+        "shaking-balanced.csv",
+        "balance.png",
+    ],
+)
+def test_a_full_disk_is_exit_2_and_leaves_no_part(monkeypatch, tmp_path, target):
+    """Every file goes through the atomic writer: a full disk while one is written is
+    exit 2 naming it, with no temporary left and that file not there."""
+    import errno
+    import os
+
+    real = os.fsync
+
+    def fsync(fd):
+        try:
+            name = os.readlink(f"/proc/self/fd/{fd}")
+        except OSError:
+            name = ""
+        if target in os.path.basename(name):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["shaking", FOURBAR, "--balance", "-q", "-o", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "No space left on device" in r.output and target in r.output
+    assert "Traceback" not in r.output and "internal error" not in r.output
+    assert [p for p in tmp_path.rglob("*") if p.name.startswith(".")] == []
+    assert list(tmp_path.rglob(target)) == []
