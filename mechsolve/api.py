@@ -38,6 +38,8 @@ __all__ = [
     "compare",
     "parse_step",
     "positions",
+    "shaking",
+    "balanced",
 ]
 
 
@@ -217,3 +219,19 @@ def check(mech: Mechanism, method: str | None = None) -> CheckReport:
         asm,
         notes,
     )
+
+
+def shaking(mech: Mechanism, **kwargs):
+    """The shaking force and moment on the frame over the sweep (see
+    :func:`mechsolve.analyses.shaking.shaking`)."""
+    from mechsolve.analyses.shaking import shaking as _shaking
+
+    return _shaking(mech, **kwargs)
+
+
+def balanced(mech: Mechanism, **kwargs):
+    """Counterweights for a four-bar or a slider-crank, the balanced file and the shaking
+    before and after (see :func:`mechsolve.analyses.shaking.balanced`)."""
+    from mechsolve.analyses.shaking import balanced as _balanced
+
+    return _balanced(mech, **kwargs)

@@ -18,6 +18,7 @@ from mechsolve.cli.commands.polygons import polygons
 from mechsolve.cli.commands.report import report
 from mechsolve.cli.commands.run import run
 from mechsolve.cli.commands.schema import schema
+from mechsolve.cli.commands.shaking import shaking
 from mechsolve.cli.commands.simulate import simulate
 from mechsolve.cli.commands.sweep import sweep
 from mechsolve.cli.commands.synth import synth
@@ -65,6 +66,7 @@ def main() -> None:
 main.add_command(run)
 main.add_command(simulate)
 main.add_command(flywheel)
+main.add_command(shaking)
 main.add_command(check)
 main.add_command(bench)
 main.add_command(cam)
