@@ -57,3 +57,33 @@ def test_the_counter_counts(tmp_path):
 @pytest.mark.parametrize("module", SPLIT)
 def test_no_function_over_80_lines(module):
     assert long_functions(ROOT / module) == []
+
+
+# the long functions CONTRIBUTING.md names, each with its reason (issue 24, 6: at most 8)
+ALLOWED_LONG = {
+    ("groups/reduced.py", "__init__"),
+    ("analyses/batch.py", "_solve_pass"),
+    ("report/animate.py", "_render"),
+    ("analyses/polygons/dyads.py", "rrp"),
+    ("analyses/synth/optimise.py", "search"),
+    ("core/kinetostatics.py", "solve_forces"),
+    ("analyses/instants.py", "parse_instant"),
+    ("cli/commands/run.py", "_run_job"),
+}
+
+
+def test_no_other_function_over_80_lines_in_the_package():
+    import ast as _ast
+    from pathlib import Path as _Path
+
+    import mechsolve
+
+    pkg = _Path(mechsolve.__file__).parent
+    long = set()
+    for path in pkg.rglob("*.py"):
+        for node in _ast.walk(_ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (_ast.FunctionDef, _ast.AsyncFunctionDef)):
+                if node.end_lineno - node.lineno + 1 > 80:
+                    long.add((path.relative_to(pkg).as_posix(), node.name))
+    assert len(ALLOWED_LONG) <= 8
+    assert long <= ALLOWED_LONG, sorted(long - ALLOWED_LONG)

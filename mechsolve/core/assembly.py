@@ -116,17 +116,7 @@ class StartAssembler(BranchChoice):
             reasons.append(reason)
             conds.use(ready)
         st = st2  # both columns hold the chosen assembly; index 0 is the start
-        view = StateView(self, st)
-        view.has_velocity = view.has_acceleration = False
-        for _, c in conds.remaining():  # conditions that no group decided: they must hold
-            if not bool(np.all(c.evaluate(view))):
-                raise AssemblyError(
-                    f"{self._file()}the start position does not satisfy the assembly condition "
-                    f"{c.text!r}, and no loop's branch can change that"
-                )
-        first = st.take([0])
-        for j in mech.joints:  # the kinds' own checks of the start (a rack's mesh)
-            j.check_start(mech, self.system.by_joint[j.name], first)
+        self._check_start(st, conds)
         if self.redundant:
             # the dependencies are those of the motion: at a singular start (a redundant
             # parallelogram started collinear) the Jacobian loses rank there only, so
@@ -143,6 +133,22 @@ class StartAssembler(BranchChoice):
             }
             modes = [1.0] * len(self.plan)
         return StartAssembly(modes, q_start, reasons, st, u0, group_modes)
+
+    def _check_start(self, st: State, conds: _PendingConditions) -> None:
+        """The assembly conditions no group decided must hold at the start, and each joint
+        kind checks its own (a rack's mesh)."""
+        mech = self.mech
+        view = StateView(self, st)
+        view.has_velocity = view.has_acceleration = False
+        for _, c in conds.remaining():  # conditions that no group decided: they must hold
+            if not bool(np.all(c.evaluate(view))):
+                raise AssemblyError(
+                    f"{self._file()}the start position does not satisfy the assembly condition "
+                    f"{c.text!r}, and no loop's branch can change that"
+                )
+        first = st.take([0])
+        for j in mech.joints:  # the kinds' own checks of the start (a rack's mesh)
+            j.check_start(mech, self.system.by_joint[j.name], first)
 
     def _assemble_newton_group(self, g: NewtonGroup, st2: State, drive: Drive, ready, u0):
         """Close a Newton group at the start, on a configuration that satisfies the

@@ -168,29 +168,7 @@ def solve_problem(
     src, method = read(path)
     name = str(src.data.get("name") or Path(path).stem)
     if method in OPTIMISED:
-        from mechsolve.analyses.synth.optproblem import solve_optimised
-
-        if rule is not None:
-            raise InputError(
-                f"--pick: a {method} problem lists its designs by their error; "
-                "use --solution N to write another one"
-            )
-        for k in ("pick", "round"):
-            if src.data.get(k) is not None:
-                raise src.error(
-                    (k,),
-                    f"not for a {method} problem (its designs are listed "
-                    "by their error, at full precision)",
-                )
-        from mechsolve.analyses.synth.optproblem import describe_optimised
-
-        r = _Reader(src, method)
-        designs, chosen, text, check = solve_optimised(
-            r, method, name, solution, seed=seed, max_time=max_time, progress=progress
-        )
-        out = Outcome(name, method, designs, chosen, text, check)
-        out.text = describe_optimised(out)
-        return out
+        return _solve_optimised(src, method, name, rule, solution, seed, max_time, progress)
     rule = rule or src.data.get("pick") or "transmission"
     if rule not in RULES:
         raise src.error(("pick",), f"unknown rule {rule!r}: choose one of {', '.join(RULES)}")
@@ -234,6 +212,34 @@ def solve_problem(
     text = mechanism_yaml(chosen, name, round_to, **kw)
     out = Outcome(name, method, designs, chosen, text)
     out.text = describe(out, rule)
+    return out
+
+
+def _solve_optimised(src, method: str, name: str, rule, solution, seed, max_time, progress):
+    """A problem solved by optimisation (function, path generation): its designs are
+    listed by their error, at full precision (no ``pick`` rule, no rounding)."""
+    from mechsolve.analyses.synth.optproblem import solve_optimised
+
+    if rule is not None:
+        raise InputError(
+            f"--pick: a {method} problem lists its designs by their error; "
+            "use --solution N to write another one"
+        )
+    for k in ("pick", "round"):
+        if src.data.get(k) is not None:
+            raise src.error(
+                (k,),
+                f"not for a {method} problem (its designs are listed "
+                "by their error, at full precision)",
+            )
+    from mechsolve.analyses.synth.optproblem import describe_optimised
+
+    r = _Reader(src, method)
+    designs, chosen, text, check = solve_optimised(
+        r, method, name, solution, seed=seed, max_time=max_time, progress=progress
+    )
+    out = Outcome(name, method, designs, chosen, text, check)
+    out.text = describe_optimised(out)
     return out
 
 
