@@ -563,7 +563,7 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
     skipped = []
     for j in fine.mechanism.joints:
         r = f.reactions[j.name]
-        comp = "F" if "F" in r else "N"
+        comp = j.magnitude  # the joint's own: F (pin), N (slider, cam), Fn (gear, rack)
         if comp in f.nonunique.get(j.name, ()):
             skipped.append(j.name)
             continue
