@@ -134,3 +134,29 @@ def test_scheme1_stroke_time_ratio_and_count():
     assert s.time_ratio == pytest.approx(RISE / RET, rel=1e-7)
     assert s.time_ratio == pytest.approx(K, rel=1e-6)
     assert s.time_ratio == pytest.approx(1.4599, abs=1e-4)
+
+
+def test_scheme1_pressure_angle_at_the_cam_by_instant_centres():
+    """compare reports the cam's pressure angle (before, only the loops' transmission angle:
+    4.9 deg for scheme 1, at the rod). Independently: the cam and the rocker share their
+    relative instant centre P on the line of centres O4-O2, where w_cam (p - a) = w_rocker p;
+    the common normal at the roller runs through P and the roller centre B, which moves
+    square to O4-B: the pressure angle is the angle between B - P and that motion."""
+    th = np.radians(np.arange(0, 360, 0.01))
+    d, d1, _ = equal_acceleration(th)
+    w_cam, w_rocker = -OMEGA, -d1 * OMEGA  # counter-clockwise positive
+    a, arm = 0.380, 0.300
+    beta = np.radians(-14.0) - d
+    bx, by = arm * np.cos(beta), arm * np.sin(beta)
+    p = w_cam * a / (w_cam - w_rocker)
+    nx, ny = bx - p, by
+    cos_alpha = np.abs(nx * -by + ny * bx) / (np.hypot(nx, ny) * arm)
+    alpha = np.degrees(np.arccos(np.clip(cos_alpha, 0, 1)))
+    i = int(np.argmax(alpha))
+    assert alpha[i] == pytest.approx(43.06, abs=0.005)  # mechsolve cam's figure, in the file
+    (s,) = compare([MECH / "shaper-scheme1.yaml"]).schemes
+    assert math.degrees(s.contact_pressure) == pytest.approx(alpha[i], abs=1e-4)
+    assert s.contact_pressure_joint == "contact"
+    assert math.degrees(s.contact_pressure_at) == pytest.approx(math.degrees(th[i]), abs=0.1)
+    (g,) = compare([MECH / "shaper.yaml"]).schemes  # no cam: no figure
+    assert math.isnan(g.contact_pressure) and g.contact_pressure_joint == ""
