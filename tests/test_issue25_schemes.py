@@ -132,6 +132,10 @@ def test_scheme1_stroke_time_ratio_and_count():
     (s,) = compare([MECH / "shaper-scheme1.yaml"]).schemes
     assert s.stroke == pytest.approx(chord, abs=2e-9)
     assert s.time_ratio == pytest.approx(RISE / RET, rel=1e-7)
+    # the mean driving torque: the cutting force's work over 90 % of the stroke per turn
+    # (weights and kinetic energy come back each turn); before, the trapezoid over the
+    # 0.1 deg samples across the cam law's acceleration jumps gave 313.49 N m
+    assert s.torque_mean == pytest.approx(7000 * 0.9 * chord / (2 * math.pi), rel=2e-6)
     assert s.time_ratio == pytest.approx(K, rel=1e-6)
     assert s.time_ratio == pytest.approx(1.4599, abs=1e-4)
 

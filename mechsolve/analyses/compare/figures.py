@@ -565,6 +565,9 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
         if np.all(ok) and span > 0:
             fig.torque_rms = float(math.sqrt(np.trapezoid(T**2, x) / span))
             fig.torque_mean = float(np.trapezoid(T, x) / span)
+            mean, kind = fine.mean_effort()  # the work over the turn: exact between the
+            if kind == "mean" and math.isfinite(mean):  # samples (across a cam law's jumps)
+                fig.torque_mean = float(d * mean)
     _contact_pressure(fig, fine, x, start)
     best = None
     skipped = []
