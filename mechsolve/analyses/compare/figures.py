@@ -36,7 +36,9 @@ Definitions (the same for every scheme, so that the columns compare):
   and the follower's motion) has its largest over the turn, at the 0.1° samples, apart:
   a loop's transmission angle does not see the cam.
 * **Driving torque** along the crank's motion (positive: the motor drives): the largest
-  magnitude, and the RMS and the mean over the turn (integrals over the crank angle).
+  magnitude, and the RMS and the mean over the turn (integrals over the crank angle; the
+  mean is the driver's work over the turn, :meth:`Results.mean_effort`, exact between
+  the samples, where the trapezoid would cross a cam law's jumps in acceleration).
 * **Peak joint reaction**: the largest magnitude of any joint's reaction (a pin's force,
   a slider's normal force) over the turn, with the joint; joints whose reactions redundant
   constraints leave indeterminate are left out (said so).
