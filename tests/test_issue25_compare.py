@@ -271,6 +271,7 @@ def test_command_writes_csv_plots_and_report(tmp_path, slider_crank):
         "output",
         "output.kind",
         "transmission.loop",
+        "contact.joint",
         "reaction.joint",
         "requirements.failing",
     }

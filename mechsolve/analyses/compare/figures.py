@@ -32,8 +32,13 @@ Definitions (the same for every scheme, so that the columns compare):
   force in the first and last 5 %). 0 is a perfectly uniform cut.
 * **Transmission**: the smallest transmission angle of any loop over the turn (the exact
   minimum, :meth:`Results.transmission_angles`); the largest pressure angle is 90° minus it.
+  A joint that reports its own pressure angle (a cam contact: between the common normal
+  and the follower's motion) has its largest over the turn, at the 0.1° samples, apart:
+  a loop's transmission angle does not see the cam.
 * **Driving torque** along the crank's motion (positive: the motor drives): the largest
-  magnitude, and the RMS and the mean over the turn (integrals over the crank angle).
+  magnitude, and the RMS and the mean over the turn (integrals over the crank angle; the
+  mean is the driver's work over the turn, :meth:`Results.mean_effort`, exact between
+  the samples, where the trapezoid would cross a cam law's jumps in acceleration).
 * **Peak joint reaction**: the largest magnitude of any joint's reaction (a pin's force,
   a slider's normal force) over the turn, with the joint; joints whose reactions redundant
   constraints leave indeterminate are left out (said so).
@@ -113,6 +118,9 @@ class SchemeFigures:
     transmission: float = math.nan  # rad
     transmission_loop: str = ""
     transmission_at: float = math.nan  # crank travel from the working stroke's start (rad)
+    contact_pressure: float = math.nan  # rad, the largest at a cam contact
+    contact_pressure_joint: str = ""
+    contact_pressure_at: float = math.nan
     torque_peak: float = math.nan  # N m, the largest magnitude along the motion
     torque_peak_value: float = math.nan  # signed, along the motion
     torque_peak_at: float = math.nan
@@ -559,11 +567,15 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
         if np.all(ok) and span > 0:
             fig.torque_rms = float(math.sqrt(np.trapezoid(T**2, x) / span))
             fig.torque_mean = float(np.trapezoid(T, x) / span)
+            mean, kind = fine.mean_effort()  # the work over the turn: exact between the
+            if kind == "mean" and math.isfinite(mean):  # samples (across a cam law's jumps)
+                fig.torque_mean = float(d * mean)
+    _contact_pressure(fig, fine, x, start)
     best = None
     skipped = []
     for j in fine.mechanism.joints:
         r = f.reactions[j.name]
-        comp = "F" if "F" in r else "N"
+        comp = j.magnitude  # the joint's own: F (pin), N (slider, cam), Fn (gear, rack)
         if comp in f.nonunique.get(j.name, ()):
             skipped.append(j.name)
             continue
@@ -579,6 +591,23 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
             "reactions left out of the peak (indeterminate: redundant constraints): "
             + ", ".join(skipped)
         )
+
+
+def _contact_pressure(fig: SchemeFigures, fine: Results, x: np.ndarray, start: float) -> None:
+    """The largest pressure angle of the joints that report one (cam contacts)."""
+    f = fine.forces
+    best = None
+    for j in fine.mechanism.joints:
+        if "pressure_angle" not in dict(j.components):
+            continue
+        pa = np.where(f.ok, f.reactions[j.name]["pressure_angle"], np.nan)
+        if np.any(np.isfinite(pa)):
+            i = int(np.nanargmax(pa))
+            if best is None or pa[i] > best[0]:
+                best = (float(pa[i]), j.name, float((x[i] - start) % TWO_PI))
+    if best is not None:
+        fig.contact_pressure = math.radians(best[0])
+        fig.contact_pressure_joint, fig.contact_pressure_at = best[1], best[2]
 
 
 def _flywheel(fig: SchemeFigures, mech: Mechanism, delta: float, w: float) -> None:

@@ -88,6 +88,15 @@ def _rows(c: Comparison) -> list[tuple[str, Callable[[SchemeFigures], str]]]:
         ("min transmission angle", lambda s: _deg(s.transmission, 4)),
         ("  in loop", lambda s: s.transmission_loop.split(" (")[0] or "–"),
         ("max pressure angle", lambda s: _deg(s.pressure, 4)),
+        ("max pressure angle at a cam", lambda s: _deg(s.contact_pressure, 4)),
+        (
+            "  at joint, crank angle",
+            lambda s: (
+                f"{s.contact_pressure_joint}, {_deg(s.contact_pressure_at, 4)}"
+                if s.contact_pressure_joint
+                else "–"
+            ),
+        ),
         (
             "peak driving torque",
             lambda s: f"{_g(s.torque_peak_value, 5)} N*m" if math.isfinite(s.torque_peak) else "–",
@@ -205,6 +214,9 @@ def columns(c: Comparison) -> list[tuple[str, list[str]]]:
         ("transmission.loop", [s.transmission_loop for s in S]),
         ("transmission.at [deg]", [_num(math.degrees(s.transmission_at)) for s in S]),
         ("pressure_angle.max [deg]", [_num(math.degrees(s.pressure)) for s in S]),
+        ("contact.pressure_angle.max [deg]", [_num(math.degrees(s.contact_pressure)) for s in S]),
+        ("contact.joint", [s.contact_pressure_joint for s in S]),
+        ("contact.at [deg]", [_num(math.degrees(s.contact_pressure_at)) for s in S]),
         ("torque.peak [N*m]", [_num(s.torque_peak_value) for s in S]),
         ("torque.peak_at [deg]", [_num(math.degrees(s.torque_peak_at)) for s in S]),
         ("torque.rms [N*m]", [_num(s.torque_rms) for s in S]),

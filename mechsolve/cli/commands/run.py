@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from mechsolve.base.errors import InputError
+from mechsolve.base.errors import InputError, SolverError
 from mechsolve.cli.kit import (
     EPILOG,
     EXIT_CHECK_FAILED,
@@ -85,7 +85,10 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, wat
     writes_to(outdir)
     if watch:
         _watch(file, lambda: _run_job(*args), outdir=outdir)
-    code, _ = _run_job(*args)
+    try:
+        code, _ = _run_job(*args)
+    except SolverError as exc:  # raised deep in a solver, which does not know the file
+        raise SolverError(f"{file}: {exc}") from None
     sys.exit(code)
 
 
