@@ -414,7 +414,7 @@ def ratio_text(mm_per_unit: float, unit: str) -> str:
 
 
 def write_figure(sh: Sheet, path: Path) -> Path:
-    """The sheet as SVG or PDF (from the suffix) at a standard scale on A4, the scale
+    """The sheet as SVG or PDF (from the suffix) at a standard scale that fits A4, the scale
     and the unit in its title. Each bar is one group with id ``bar-<link>``."""
     from mechsolve.writers.fonts import pyplot
     from mechsolve.writers.plots import save_figure
@@ -427,7 +427,7 @@ def write_figure(sh: Sheet, path: Path) -> Path:
     s = min(paper_scale(span[0], sh.unit, PAPER[0]), paper_scale(span[1], sh.unit, PAPER[1]))
     w_mm, h_mm = span * s
     margin = 12.0
-    fig = plt.figure(figsize=((w_mm + 2 * margin) / 25.4, (h_mm + 2 * margin + 8) / 25.4))
+    fig = plt.figure(figsize=((w_mm + 2 * margin) / 25.4, (h_mm + 2 * margin + 12) / 25.4))
     W, H = fig.get_size_inches() * 25.4
     ax = fig.add_axes((margin / W, margin / H, w_mm / W, h_mm / H))
     ax.set_xlim(lo[0], hi[0])
@@ -458,8 +458,14 @@ def write_figure(sh: Sheet, path: Path) -> Path:
         ax.annotate(name, tuple(line[0]), fontsize=text_pt, color="#008000")
     for d in sh.dimensions:
         _dimension(ax, d, text_pt)
-    fig.text(0.5, 1 - 4 / H, f"{sh.title} · lengths in {sh.unit} · scale {ratio_text(s, sh.unit)} "
-             "(A4)", ha="center", va="top", fontsize=8)  # fmt: skip
+    import textwrap
+
+    chars = max(30, int((W - 2 * margin) / 1.9))  # about 1.9 mm a character at 8 pt
+    head = textwrap.fill(
+        f"{sh.title} · lengths in {sh.unit} · scale {ratio_text(s, sh.unit)} printed at 100 %",
+        chars,
+    )
+    fig.text(margin / W, 1 - 3 / H, head, ha="left", va="top", fontsize=8)
     save_figure(fig, path, 150)
     plt.close(fig)
     return path
