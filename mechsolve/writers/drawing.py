@@ -208,6 +208,40 @@ def _fmt(value: float) -> str:
     return f"{value:.6g}"
 
 
+def _link(
+    out: Sheet, lk: Any, an: Any, state: Any, i: int, k: float, joints: set[str], block: bool
+) -> None:
+    """Link ``lk`` at position ``i`` onto ``out``: a block (a one-point link that slides),
+    or a bar with a centre line and an aligned dimension between each pair of its joint
+    points ``joints``."""
+    size = out.size
+    b = an.system.index[lk.name]
+    names = list(lk.points)
+    loc = np.array([lk.points[n] for n in names], float)
+    pts = _place(state, b, i, loc) * k
+    if not np.all(np.isfinite(pts)):
+        return
+    if len(pts) == 1 and block:
+        out.blocks.append((lk.name, _block(pts[0], float(state.th[b, i]), BLOCK * size)))
+        return
+    jp = [n for n in names if n in joints]
+    centres = []
+    for a_ in range(len(jp)):
+        for b_ in range(a_ + 1, len(jp)):
+            p, q = pts[names.index(jp[a_])], pts[names.index(jp[b_])]
+            centres.append((jp[a_], jp[b_], p, q))
+            if (q[0] - p[0], q[1] - p[1]) < (0.0, 0.0):  # its text reads left to right
+                p, q = q, p
+            # the length in the file's unit from the link's own points, not the drawing
+            la = np.asarray(lk.points[jp[a_]], float)
+            lb = np.asarray(lk.points[jp[b_]], float)
+            length = math.dist(la, lb) * k
+            out.dimensions.append(
+                Dimension(p, q, DIM_OFFSET * size, length, f"{_fmt(length)} {out.unit}")
+            )
+    out.bars.append(Bar(lk.name, rounded_hull(pts, BAR * size), centres))
+
+
 def sheet(
     an: Any,
     state: Any,
@@ -253,31 +287,7 @@ def sheet(
         if j.joins(j.point):
             pinned.add(j.point)
     for lk in mech.links:
-        b = sys_.index[lk.name]
-        names = list(lk.points)
-        loc = np.array([lk.points[n] for n in names], float)
-        pts = _place(state, b, i, loc) * k
-        if not np.all(np.isfinite(pts)):
-            continue
-        if len(pts) == 1 and lk.name in sliding:
-            out.blocks.append((lk.name, _block(pts[0], float(state.th[b, i]), BLOCK * size)))
-            continue
-        jp = [n for n in names if n in joint_of_link[lk.name]]
-        centres = []
-        for a_ in range(len(jp)):
-            for b_ in range(a_ + 1, len(jp)):
-                p, q = pts[names.index(jp[a_])], pts[names.index(jp[b_])]
-                centres.append((jp[a_], jp[b_], p, q))
-                if (q[0] - p[0], q[1] - p[1]) < (0.0, 0.0):  # its text reads left to right
-                    p, q = q, p
-                # the length in the file's unit from the link's own points, not the drawing
-                la = np.asarray(lk.points[jp[a_]], float)
-                lb = np.asarray(lk.points[jp[b_]], float)
-                length = math.dist(la, lb) * k
-                out.dimensions.append(
-                    Dimension(p, q, DIM_OFFSET * size, length, f"{_fmt(length)} {unit}")
-                )
-        out.bars.append(Bar(lk.name, rounded_hull(pts, BAR * size), centres))
+        _link(out, lk, an, state, i, k, joint_of_link[lk.name], lk.name in sliding)
     for p, ref in an.points.items():
         if p not in pinned:
             continue
