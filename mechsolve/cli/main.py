@@ -13,6 +13,7 @@ from mechsolve.cli.commands.bench import bench
 from mechsolve.cli.commands.cam import cam
 from mechsolve.cli.commands.check import check
 from mechsolve.cli.commands.compare import compare
+from mechsolve.cli.commands.draw import draw
 from mechsolve.cli.commands.flywheel import flywheel
 from mechsolve.cli.commands.polygons import polygons
 from mechsolve.cli.commands.report import report
@@ -77,6 +78,7 @@ main.add_command(animate)
 main.add_command(polygons)
 main.add_command(schema)
 main.add_command(compare)
+main.add_command(draw)
 
 if __name__ == "__main__":  # pragma: no cover
     main()
