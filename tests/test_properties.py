@@ -151,6 +151,8 @@ solver: {{method: {method}}}
         # a change-point slider-crank (r + |e| = l): the two branches meet where the rod
         # stands perpendicular to the line, and the sweep continues smoothly on the
         # other branch there, so a fixed-branch closed form does not apply
+        if method == "newton":  # a known defect: see the strict xfail below
+            return
         assert any(ev.kind == "bifurcation" for ev in res.solution.events)
         return
     x, xd, xdd, phi, phid, phidd = slider_crank(r, l, e, res.u, w, ahead)
