@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
+from mechsolve.base.errors import suggest
 from mechsolve.base.keyspec import Key
 from mechsolve.base.state import State
 
@@ -259,3 +260,17 @@ class Joint:
         """The report's row: the links, the point, the kind's own geometry (``length``
         and ``angle`` format a length in ``unit`` and an angle in degrees)."""
         return (f"{self.a} – {self.b}", self.point, "")
+
+
+def read_meshing_links(
+    r: Reader, m: Mapping, key: str, what: str, name: str, path: tuple, points: Mapping
+) -> tuple[str, str]:
+    """The two links of a higher pair's ``key: [a, b]``: distinct and existing (``what``
+    names the pair in messages: "gear pair", "rack")."""
+    a, b = r.names(m[key], path + (key,), "link", 2)
+    if a == b:
+        raise r.fail(path + (key,), f"{what} {name!r} meshes link {a!r} with itself")
+    for i, ln in enumerate((a, b)):
+        if ln not in points:
+            raise r.fail(path + (key, i), f"no link named {ln!r}" + suggest(ln, list(points)))
+    return a, b

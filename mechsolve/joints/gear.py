@@ -40,7 +40,7 @@ from mechsolve.base.keyspec import (
     names,
 )
 from mechsolve.base.state import State
-from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
+from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader, read_meshing_links
 
 TWO_PI = 2.0 * math.pi
 DEFAULT_PRESSURE_ANGLE = math.radians(20.0)
@@ -172,14 +172,7 @@ class GearJoint(Joint):
     def read(
         cls, r: Reader, name: str, m: Mapping, path: tuple, points: Mapping[str, Mapping]
     ) -> GearJoint:
-        a, b = r.names(m["gear_pair"], path + ("gear_pair",), "link", 2)
-        if a == b:
-            raise r.fail(path + ("gear_pair",), f"gear pair {name!r} meshes link {a!r} with itself")
-        for i, ln in enumerate((a, b)):
-            if ln not in points:
-                raise r.fail(
-                    path + ("gear_pair", i), f"no link named {ln!r}" + suggest(ln, list(points))
-                )
+        a, b = read_meshing_links(r, m, "gear_pair", "gear pair", name, path, points)
         if "point" in m:
             raise r.fail(
                 path + ("point",),

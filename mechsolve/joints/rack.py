@@ -30,7 +30,7 @@ import numpy as np
 from mechsolve.base.errors import suggest
 from mechsolve.base.keyspec import LENGTH, K, Key, either, name, names, section
 from mechsolve.base.state import State
-from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
+from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader, read_meshing_links
 from mechsolve.joints.gear import (
     CENTRE_TOLERANCE,
     DEFAULT_PRESSURE_ANGLE,
@@ -121,14 +121,7 @@ class RackJoint(Joint):
     def read(
         cls, r: Reader, name: str, m: Mapping, path: tuple, points: Mapping[str, Mapping]
     ) -> RackJoint:
-        a, b = r.names(m["rack"], path + ("rack",), "link", 2)
-        if a == b:
-            raise r.fail(path + ("rack",), f"rack {name!r} meshes link {a!r} with itself")
-        for i, ln in enumerate((a, b)):
-            if ln not in points:
-                raise r.fail(
-                    path + ("rack", i), f"no link named {ln!r}" + suggest(ln, list(points))
-                )
+        a, b = read_meshing_links(r, m, "rack", "rack", name, path, points)
         if "point" in m:
             raise r.fail(
                 path + ("point",),
