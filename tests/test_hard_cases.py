@@ -231,9 +231,11 @@ solver: {{method: {method}}}
         assert len(res.failures) == 1  # one dead zone around 180 deg
 
 
-def test_dead_zone_narrower_than_the_step_is_reported():
+@pytest.mark.parametrize("method", ["auto", "newton"])
+def test_dead_zone_narrower_than_the_step_is_reported(method):
     """A four-bar whose coupler just fails to reach around 180 deg for about 1 deg: a
-    10 deg step jumps over it, and the summary says so."""
+    10 deg step jumps over it, and the summary says so (the whole-system Newton sweep
+    too: it starts again past it on the user's branch)."""
     # |A - O4| at 180 deg is a + d = 2.0; b + c = 1.99995 < 2.0
     text = """
 ground: {O2: [0, 0], O4: [1.2, 0]}
@@ -246,26 +248,45 @@ assembly: ["B left of A -> O4"]
 driver: {joint: O2, speed: 1 rad/s, start: 5 deg}
 sweep: {range: 350 deg, step: 10 deg}
 """
-    res = ms.solve(ms.loads(text))
+    res = ms.solve(ms.loads(text + f"solver: {{method: {method}}}\n"))
     assert res.ok.all()
     kinds = [e.kind for e in res.events]
     assert "dead zone" in kinds
     e = next(e for e in res.events if e.kind == "dead zone")
-    assert math.degrees(e.u) == pytest.approx(180.0, abs=1e-6)
-    assert "steps over this dead zone" in res.summary()
+    if method == "auto":  # the minimum of its discriminant, located
+        assert math.degrees(e.u) == pytest.approx(180.0, abs=1e-6)
+        assert "steps over this dead zone" in res.summary()
+    else:  # a point inside the range where it cannot close (about 179.4 to 180.6 deg)
+        assert math.degrees(e.u) == pytest.approx(180.0, abs=0.6)
+        assert "the motion between these positions is not continuous" in res.summary()
+    # on the user's branch on both sides: B left of A -> O4
+    th2 = res.u
+    A = 0.8 * np.exp(1j * th2)
+    B = res.point("B").x + 1j * res.point("B").y
+    assert np.all(np.imag((B - A) * np.conj(1.2 - A)) > 0)  # cross(A->O4, A->B) > 0
 
 
 def test_branch_that_cannot_be_followed_stops_with_a_message(monkeypatch, tmp_path):
-    """If even the finest substeps jump, the sweep stops and says where, suggesting a
-    smaller step (forced here by allowing no substeps at all)."""
+    """If even the finest substeps jump (forced here by allowing no substeps at all) at a
+    position where the group still closes, the branch past it is not known: the sweep
+    stops there, keeping what it solved (right), and says where, suggesting a smaller
+    step; it used to raise and lose everything."""
     import mechsolve.groups.generic as generic
 
     monkeypatch.setattr(generic, "MAX_DEPTH", 0)
     f = tmp_path / "p.yaml"
-    f.write_text(parallelogram("newton", 45, 10))
+    f.write_text(parallelogram("newton", 30, 10))
     r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
-    assert r.exit_code == 2, r.output  # the input's step: bad input (issue 24: no 3)
-    assert "cannot follow the branch" in r.output and "use a smaller step" in r.output
+    assert r.exit_code == 0, r.output
+    assert "cannot be followed continuously" in r.output and "use a smaller step" in r.output
+    assert "not solved at" in r.output and "unassemblable" not in r.output
+    res = ms.solve(ms.loads(parallelogram("newton", 30, 10)))
+    assert res.ok[0] and not res.ok[-1]
+    k = np.flatnonzero(res.ok)
+    assert np.array_equal(k, np.arange(len(k)))  # what it solved, up to where it stopped
+    # ... is the parallelogram: the rocker parallel to the crank
+    d = res.link("rocker").angle[k] - res.link("crank").angle[k]
+    assert np.allclose(np.angle(np.exp(1j * d)), 0.0, atol=1e-9)
 
 
 # --- redundant constraints ------------------------------------------------------------

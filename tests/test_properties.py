@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import mechsolve as ms
@@ -121,12 +121,13 @@ def test_random_fourbar(a, b, c, d, side, th0, method):
     th0=st.floats(0, 2 * math.pi),
     method=st.sampled_from(["auto", "newton"]),
 )
+# cases hypothesis found (a rod as long as the crank: a limit position that the Newton
+# sweep starts again on; a change point) kept so that they run whatever it draws
+@example(r=0.1, l=0.1, e=0.05, ahead=False, th0=0.0, method="newton")
+@example(r=0.05, l=0.1, e=0.05, ahead=False, th0=0.0, method="newton")
 def test_random_slider_crank(r, l, e, ahead, th0, method):
     s0 = (e - r * math.sin(th0)) / l
     assume(abs(s0) < 0.95)
-    # a rod exactly as long as the crank with the whole-system Newton method: two known
-    # defects, kept as strict xfails below (test_newton_slider_crank_rod_equal_to_crank_*)
-    assume(not (method == "newton" and r == l))
     w = 2.0
     cond = "C.x > A.x" if ahead else "C.x < A.x"
     res = ms.solve(
@@ -151,8 +152,6 @@ solver: {{method: {method}}}
         # a change-point slider-crank (r + |e| = l): the two branches meet where the rod
         # stands perpendicular to the line, and the sweep continues smoothly on the
         # other branch there, so a fixed-branch closed form does not apply
-        if method == "newton":  # a known defect: see the strict xfail below
-            return
         assert any(ev.kind == "bifurcation" for ev in res.solution.events)
         return
     x, xd, xdd, phi, phid, phidd = slider_crank(r, l, e, res.u, w, ahead)
@@ -178,6 +177,11 @@ solver: {{method: {method}}}
     th0=st.floats(0, 2 * math.pi),
     method=st.sampled_from(["auto", "newton"]),
 )
+# the crank's pin passing within 1.4e-5 and 0.016 of the bar's pivot: a range where the
+# slot cannot close, narrower than a step, that the whole-system Newton sweep stepped
+# over onto the other branch (or could not follow at all): it now starts again past it
+@example(r=0.5, d=0.5, e=-1.4454872126696869e-05, branch=-1, th0=5.435750517583468, method="newton")
+@example(r=0.5, d=0.5, e=0.015625, branch=1, th0=1.0, method="newton")
 def test_random_slotted_bar(r, d, e, branch, th0, method):
     x0, y0 = r * math.cos(th0), d + r * math.sin(th0)
     D0 = math.hypot(x0, y0)
@@ -209,7 +213,8 @@ sweep: {{range: 360 deg, step: 6 deg}}
 solver: {{method: {method}}}
 """)
     )
-    psi, psid, psidd, s, sd, sdd = slotted_bar_offset(r, d, e, res.u, w, branch)
+    with np.errstate(invalid="ignore"):  # NaN where it cannot close
+        psi, psid, psidd, s, sd, sdd = slotted_bar_offset(r, d, e, res.u, w, branch)
     X, Y = r * np.cos(res.u), d + r * np.sin(res.u)
     margin = (X * X + Y * Y - e * e) / (X * X + Y * Y)
     clear = np.abs(margin) > 1e-7
@@ -424,24 +429,32 @@ solver: {{method: newton}}
 """
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect (found by hypothesis, present before issue 24): the whole-system "
-    "Newton sweep of a slider-crank whose rod equals its crank raises 'cannot follow the "
-    "branch' at the edge of the range where it cannot close, instead of reporting the range "
-    "and keeping what it solved",
-)
 def test_newton_slider_crank_rod_equal_to_crank_reports_its_range():
+    # a rod as long as the crank, offset 0.05: sin(phi) = 0.5 - sin(theta), so the rod
+    # cannot close for 210 deg < theta < 330 deg; the edges are limit positions (the
+    # Newton sweep starts again exactly on one: its Jacobian is singular there)
     res = ms.solve(ms.loads(_slider_crank_file(0.1, 0.1, 0.05)))
-    assert res.ok.any() and not res.ok.all()
+    deg = np.degrees(res.u)
+    inside = (deg > 210 + 1e-9) & (deg < 330 - 1e-9)
+    assert np.array_equal(res.ok, ~inside)
+    x, *_ = slider_crank(0.1, 0.1, 0.05, res.u, 2.0, False)
+    both = res.ok & np.isfinite(x)  # (the closed form's sqrt at an edge: NaN by rounding)
+    assert both.sum() >= res.ok.sum() - 2
+    assert np.allclose(res.point("C").x[both], x[both], atol=1e-9)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect (found by hypothesis, present before issue 24): the whole-system "
-    "Newton sweep of a change-point slider-crank (rod = crank, no offset) passes the "
-    "point where its branches meet without reporting the bifurcation that 'auto' reports",
+@pytest.mark.parametrize(
+    "r, l, e, at",
+    [(1.0, 1.0, 0.0, [90.0, 270.0]), (0.05, 0.1, 0.05, [270.0]), (0.3, 0.5, -0.2, [90.0])],
 )
-def test_newton_slider_crank_rod_equal_to_crank_reports_its_bifurcation():
-    res = ms.solve(ms.loads(_slider_crank_file(1.0, 1.0, 0.0)))
-    assert any(ev.kind == "bifurcation" for ev in res.solution.events)
+def test_newton_change_point_slider_crank_reports_its_bifurcations(r, l, e, at):
+    # r + |e| = l: the rod stands perpendicular to the line where sin(theta) = e / |e|
+    # (both where e = 0), and the two branches meet and cross there; off the samples
+    # (the third case's 90 deg is no sample of a sweep from 1 deg) the crossing is
+    # located between them
+    text = _slider_crank_file(r, l, e)
+    if at == [90.0]:
+        text = text.replace("start: 0.0 rad", "start: 1 deg")
+    res = ms.solve(ms.loads(text))
+    evs = [ev for ev in res.solution.events if ev.kind == "bifurcation"]
+    assert np.allclose(sorted(np.degrees([ev.u for ev in evs]) % 360), at, atol=1e-7)

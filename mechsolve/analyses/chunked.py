@@ -56,8 +56,9 @@ class StreamSummary:
             f"{self.chunks} chunk(s)"
         ]
         for f in self.failures:
+            what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
             lines.append(
-                f"  unassemblable at {res.analysis.format_u(f.u_first)} to "
+                f"  {what} at {res.analysis.format_u(f.u_first)} to "
                 f"{res.analysis.format_u(f.u_last)} ({f.last - f.first + 1} position(s)): "
                 f"{f.reason}"
             )

@@ -110,8 +110,8 @@ def solve(
 ) -> tuple[np.ndarray, SolveStats]:
     """Newton-Raphson, then scipy when Newton fails. See the module docstring."""
     x, st = newton(fun, jac, x0, atol, max_iterations)
-    if st.converged:
-        return x, st
+    if st.converged or not np.all(np.isfinite(x0)):
+        return x, st  # (from a guess that is not a pose, scipy has nothing to start from)
     from scipy.optimize import least_squares, root  # imported only when needed
 
     nfev, njev, its = st.nfev, st.njev, st.iterations

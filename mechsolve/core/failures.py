@@ -171,11 +171,21 @@ class FailureReports:
             else:
                 g = self.plan[gi]
                 group = g.label
-                reason = (
-                    g.fail_reason(st, i)
-                    if not isinstance(g, NewtonGroup)
-                    else (f"{g.label}: Newton-Raphson and scipy found no closed position")
-                )
+                if not isinstance(g, NewtonGroup):
+                    reason = g.fail_reason(st, i)
+                elif g.stopped is not None and i >= g.stopped[0] and i > 0:
+                    reason = (
+                        f"{g.label}: cannot be followed continuously from "
+                        f"{self.format_u(st_u[g.stopped[0] - 1])}: the solution jumps near "
+                        f"{self.format_u(g.stopped[1])} even in the finest substeps (a "
+                        "singular position it turns through faster than a substep, or a "
+                        "range where it cannot close after a bifurcation has changed its "
+                        "branch), so its branch past there is not known; the sweep stops "
+                        "there: use a smaller step"
+                    )
+                else:
+                    reason = f"{g.label}: Newton-Raphson and scipy found no closed position"
+
             out.append(Failure(i, j, group, reason, float(st_u[i]), float(st_u[j])))
         return out
 

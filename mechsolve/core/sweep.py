@@ -27,6 +27,7 @@ from mechsolve.core.assembly import Redundancy, StartAssembler
 from mechsolve.core.branch_choice import _PendingConditions
 from mechsolve.core.branches import EVENT_STEP, BranchEvents, _coincident_at, _Context
 from mechsolve.core.failures import FailureReports
+from mechsolve.core.newton_events import newton_events
 from mechsolve.core.singular import SingularRates
 from mechsolve.core.solution import (
     Event,
@@ -364,6 +365,10 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                 )
                 iters = np.maximum(iters, it)
                 methods.merge(meth)
+                if analyse:
+                    evs, warn = newton_events(self, gi, g, ctx, ok & ok_all)
+                    events += evs
+                    warnings += warn
                 ind = np.ones(n)  # conditioning of Newton groups: see jacobian_rcond()
             else:
                 if g.n_modes == 2 and analyse:

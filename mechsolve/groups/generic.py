@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from mechsolve.base.errors import SolverError
 from mechsolve.base.newton import SolveStats, newton_lean, solve
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive, Group
@@ -44,6 +43,12 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         self._inv_cache: tuple | None = None
         self._bound: tuple[float, float, float] | None = None
         self._jump_w: tuple[float, np.ndarray] | None = None
+        # where the last sweep was not continuous: (the position before, a driver value
+        # in between where the group could not be solved next to its neighbours)
+        self.gaps: list[tuple[int, float]] = []
+        # where it stopped: (the first position not followed, where it broke)
+        self.stopped: tuple[int, float] | None = None
+        self._gap_u, self._gap_open = float("nan"), False
         super().__init__(bodies, constraints, names)
 
     def describe(self) -> str:
@@ -107,19 +112,12 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             return self.solve_at(st1, u1, q0)
         if K is None:
             K = red.known(st1)
-        Kr, thp = red.reduce(red.with_driver(K[0], u1))
+        Kr0, thp, fun_jac = self._reduced(K, u1)
         sub = red.sub
         th0 = np.asarray(q0, float)[2::3][red.free]
         if sub.nb == 0:  # every angle fixed by a driver: nothing to iterate
             thf, stats = th0, SolveStats(True, "newton", 0, 0, 0, 0.0)
         else:
-            Kr0 = Kr[0]
-            M1, M2, M3, MT = sub.M1, sub.M2, sub.M3 if sub.nd else 0.0, sub.MT
-
-            def fun_jac(th):
-                C, S = np.cos(th), np.sin(th)
-                return Kr0 + np.concatenate([C, S, th]) @ MT, M2 * C - M1 * S + M3
-
             if sub.nb <= 3:
                 thf, stats = sub.newton_floats(Kr0, th0, self.atol, self.max_iterations)
             else:
@@ -140,6 +138,34 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if st1 is not None:
             self.set_q(st1, 0, q)
         return q, stats
+
+    def _reduced(self, K, u1: np.ndarray):
+        """A revolute group's equations in its free angles at one position: the known
+        terms, the angles the drivers fix, and ``fun_jac(th) -> (residual, Jacobian)``."""
+        red = self.red
+        Kr, thp = red.reduce(red.with_driver(K[0], u1))
+        sub = red.sub
+        Kr0 = Kr[0]
+        M1, M2, M3, MT = sub.M1, sub.M2, sub.M3 if sub.nd else 0.0, sub.MT
+
+        def fun_jac(th):
+            C, S = np.cos(th), np.sin(th)
+            return Kr0 + np.concatenate([C, S, th]) @ MT, M2 * C - M1 * S + M3
+
+        return Kr0, thp, fun_jac
+
+    def _det(self, st1: State | None, u1: np.ndarray, q: np.ndarray, K=None) -> float:
+        """The determinant of the group's equations at the solved pose ``q`` (of its
+        reduced equations in the angles for a revolute group: the same sign changes)."""
+        if self.m != self.n:
+            return 1.0  # a redundant block: no sign to follow
+        if self.red is None:
+            self.set_q(st1, 0, q)
+            return float(np.linalg.det(self.jacobian(st1)[0]))
+        if self.red.sub.nb == 0:
+            return 1.0
+        _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
+        return float(np.linalg.det(fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]))
 
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
         """Place the group's links at all positions of ``st`` from their angles (N, n)."""
@@ -189,6 +215,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``
         (the text of each position, or one text when every position has it: an array of
         text costs ~0.1 ms to build and to compare on a sweep of thousands)."""
+        self.gaps, self.stopped = [], None
         if self.red is not None and self.red.sub.nb == 0:
             return self._sweep_fixed(st, drive, ok_in)
         if self.batched and st.n >= BATCH_MIN and self.m == self.n and ok_in.all():
@@ -230,21 +257,19 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         that a coarse step cannot jump to another branch. After a gap (a dead zone) the
         sweep resumes from ``restart(i)`` when it gives a guess (the closed-form groups on
         the user's branches; ``False`` when those cannot close there: the position is then
-        unassemblable), else from the last solution. Returns ``ok``, ``iterations``
-        and ``methods`` over the positions.
-
-        Raises
-        ------
-        SolverError
-            When even the finest substeps jump: the branch cannot be followed.
+        unassemblable), else from the last solution; likewise where position i is not
+        reached continuously from i - 1 (see :meth:`_start_again`). Returns ``ok``,
+        ``iterations`` and ``methods`` over the positions.
         """
         n = st.n
+        self.gaps, self.stopped, crossed = [], None, False
         ok = np.zeros(n, bool)
         iters = np.zeros(n, int)
         methods = np.array(["" for _ in range(n)], dtype=object)
         hu: list[float] = []
         hq: list[np.ndarray] = []
         last_good = np.asarray(q_start, float)
+        last_det = 0.0
         # a revolute group needs only the solved bodies' terms at each position
         Kall = self.red.known(st) if self.red is not None else None
         for i in range(n):
@@ -266,27 +291,104 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 good = stats.converged
             else:
                 q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki)
+                if good:
+                    det = self._det(st1, drive.u[i : i + 1], q, Ki)
+                    if det * last_det < 0:  # a range it cannot close, or a bifurcation
+                        ends = (hu[-1], hq[-1], last_det), (ui, q)
+                        gap = self._hidden_gap(st1, Ki, *ends, i - 1, prefix)
+                        good, crossed = (None, crossed) if gap else (True, True)
+                if not good:  # not reached continuously from i - 1: start again at i
+                    q, stats, good = self._start_again(st1, drive, i, Ki, good, restart, crossed)
+                    if good is None:  # the branch past here is not known: stop
+                        for j in range(i, n):
+                            self._nan(st, j)
+                        methods[i:] = "failed"
+                        break
+                    hu, hq = [], []
             iters[i] = stats.iterations
             methods[i] = stats.method
             if good:
                 ok[i] = True
+                if not hq:
+                    det = self._det(st1, drive.u[i : i + 1], q, Ki)
                 self.set_q(st, i, q)
-                last_good = q
+                last_good, last_det = q, det
                 hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
             else:
                 self._nan(st, i)
                 hu, hq = [], []
         return ok, iters, methods
 
+    def _start_again(self, st1, drive: Drive, i: int, Ki, good, restart, crossed: bool):
+        """Position ``i``, which the sweep did not reach continuously from ``i - 1``
+        (``good``: None if the group closes there, False if not from the prediction):
+        solved on the user's branches, which are the motion's past a range where it
+        cannot close while no bifurcation has been passed. Else (a jump at a singular
+        position, or after a bifurcation) the branch past here is not known: ``good`` is
+        None and ``self.stopped`` says where."""
+        across = good is False or self._gap_open  # a range it cannot close
+        trust = restart is not None and across and not crossed
+        guess = restart(i) if trust else None
+        q, stats = None, SolveStats(False, "failed", 0, 0, 0, float("nan"))
+        if guess is None and good is None:
+            self.stopped = (i, self._gap_u)
+            return q, stats, None
+        solved = False
+        if guess is not None and guess is not False:
+            q, stats = self._solve_one(st1, drive.u[i : i + 1], guess, Ki)
+            solved = stats.converged
+        if solved:
+            self.gaps.append((i - 1, self._gap_u))
+        return q, stats, solved
+
+    def _hidden_gap(self, st1, K1, before, after, k: int, prefix) -> bool:
+        """Between two positions reached continuously, ``before = (u0, q0, det0)`` and
+        ``after = (u1, q1)``, where the group's determinant changes sign: is there a point
+        where it cannot close (a range narrower than the substeps, stepped over onto the
+        other branch), or is it a bifurcation passed smoothly? Bisection on the sign of
+        the determinant, each probe reached by continuation (:meth:`_advance`) from one
+        end of the bracket or the other: a probe that neither reaches continuously is
+        in such a range (``self._gap_u`` there; ``self._gap_open`` when it cannot close
+        there at all)."""
+        a, qa, da = before
+        b, qb = after
+        # (to rounding of the driver value: a sign that rounding flips next to a singular
+        # position must not bisect for ever)
+        width = max(1e-9 * abs(b - a), 8 * np.finfo(float).eps * max(abs(a), abs(b), 1.0))
+        for _ in range(64):
+            if abs(b - a) <= width:
+                break
+            m = 0.5 * (a + b)
+            if prefix is not None and self.red is None:
+                stm, Km = prefix(np.array([m]), k), None
+            elif prefix is not None:
+                stm, Km = None, self.red.known(prefix(np.array([m]), k))
+            else:
+                stm, Km = st1, K1
+            for u0, q0 in ((a, qa), (b, qb)):
+                qm, _, good = self._advance(stm, m, [u0], [q0], k, prefix, Km)
+                if good:
+                    break
+            else:
+                self._gap_u = m
+                return True
+            if self._det(stm, np.array([m]), qm, Km) * da > 0:
+                a, qa = m, qm
+            else:
+                b, qb = m, qm
+        return False
+
     def _advance(self, st1: State | None, ui: float, hu, hq, k: int, prefix, K1=None):
         """One continuation step to ``ui``; substeps when the full step jumps. ``K1``:
         the solved bodies' terms at ``ui`` for a revolute group (``st1`` is then None)."""
         q_pred = _extrapolate(hu, hq, ui)
         q, stats = self._solve_one(st1, np.array([ui]), q_pred, K1)
+        q = _near_angles(q, q_pred)
         if stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
             return q, stats, True
-        converged_somewhere = stats.converged
         u0 = hu[-1]
+        uj = 0.5 * (u0 + ui)  # where the substeps last broke
+        self._gap_open = False  # ... and whether the group could not close there
         for depth in range(1, MAX_DEPTH + 1):
             m = 2**depth
             us = u0 + (ui - u0) * np.arange(1, m + 1) / m
@@ -304,10 +406,11 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                     Kj = None
                 qp = _extrapolate(lu, lq, uj)
                 qj, sj = self._solve_one(stj, np.array([uj]), qp, Kj)
+                qj = _near_angles(qj, qp)
                 total += sj.iterations
-                converged_somewhere |= sj.converged
                 if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP):
                     ok_all = False
+                    self._gap_open = not sj.converged
                     break
                 lu, lq = (lu + [uj])[-3:], (lq + [qj])[-3:]
             if ok_all:
@@ -315,12 +418,12 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 return qj, sj, True
             if not sj.converged and j == 0 and depth >= 4:
                 break  # no solution even right next to the last one: a dead zone starts here
-        if converged_somewhere and stats.converged:
-            raise SolverError(
-                f"cannot follow the branch of the {self.label} up to driver value {ui:.6g}: "
-                f"the solution jumps even in {2**MAX_DEPTH} substeps (a singular position?); "
-                "use a smaller step"
-            )
+        self._gap_u = uj
+        if stats.converged:
+            # the group closes at ui, but not continuously from the last position: a range
+            # where it cannot close, or a singular position, lies inside the interval,
+            # narrower than the finest substep; the caller starts again at ui
+            return q, stats, None
         return q, stats, False
 
     def _nan(self, st: State, i: int) -> None:
@@ -347,3 +450,17 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
 
 
 # -- revolute-only groups: the angles as the only unknowns ------------------------------
+
+
+def _near_angles(q: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
+    """``q`` with each link's angle moved by whole turns to the one nearest its predicted
+    value: the equations are periodic in the angles, and a Newton step from a singular
+    guess (a limit position a sweep starts from) can land whole turns away from a pose
+    next to the prediction; the pose is the same, the continuation is not broken."""
+    th, th_p = q[2::3], q_pred[2::3]
+    d = th - th_p
+    if not np.any(np.abs(d) > np.pi):
+        return q
+    q = q.copy()
+    q[2::3] = th_p + (d + np.pi) % (2 * np.pi) - np.pi
+    return q

@@ -46,7 +46,7 @@ class BatchedSweep:
             okc, itc, _ = self.sweep_sequential(
                 sub, dsub, q_start, np.ones(len(coarse), bool), prefix=sub_prefix
             )
-            if not okc.all():
+            if not okc.all() or self.gaps:
                 return None
         self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
         qc = self._q_rows(sub)

@@ -309,8 +309,10 @@ def _start_and_failure_lines(res) -> list[str]:
         if "the start is singular" in why:
             lines.append(f"  start: {g.label}: the branch {why}")
     for f in res.failures:
+        # (a sweep that stopped following a branch: not known to be unassemblable there)
+        what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
         lines.append(
-            f"  unassemblable at {res.describe_u(f.first)}"
+            f"  {what} at {res.describe_u(f.first)}"
             + (f" to {res.describe_u(f.last)}" if f.last != f.first else "")
             + f" ({f.last - f.first + 1} position(s)): {f.reason}"
             + (

@@ -1,0 +1,113 @@
+"""Where a Newton group's continuation passes a singular configuration.
+
+A group solved by Newton-Raphson has no discriminant to watch (see :mod:`.branches` for
+the two-branch groups), but its square block of Phi_q is singular exactly where the
+group's configuration is: the determinant changes sign where the followed motion passes
+through a singular configuration smoothly (a change point, where two branches meet and
+cross). Between two solved samples whose determinants differ in sign, the crossing is
+located by Brent's method on the determinant of the group solved in between (from the
+interpolated pose), and reported as a bifurcation, as the branch analysis reports one of
+a two-branch group. A sample that is itself singular (to rounding: its reciprocal
+condition below :data:`~.conditioning.SINGULAR_RCOND`) between two samples of opposite
+signs is the event's position. A limit position (the edge of a range where the group
+cannot close) is not crossed, so it is not an event here: the range is reported as such.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mechsolve.base.numerics import brent_root
+from mechsolve.core.conditioning import SINGULAR_RCOND, rcond
+from mechsolve.core.solution import Event
+from mechsolve.groups import NewtonGroup
+
+if TYPE_CHECKING:
+    from mechsolve.core.branches import _Context
+
+
+def newton_events(
+    an: Any, gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray
+) -> tuple[list[Event], list[str]]:
+    """The events of the Newton group ``gi`` of analysis ``an`` along the sweep
+    ``ctx.u`` (its poses are solved in ``ctx.st``; ``ok`` where it and the groups before
+    it closed), and their
+    warnings: the intervals its sweep could not follow continuously (``g.gaps``: a
+    range where it cannot close, or a singular position, narrower than the finest
+    substep; the sweep started again past them), then the bifurcations it passed."""
+    events: list[Event] = []
+    warnings: list[str] = []
+    u = ctx.u
+    for k, near in g.gaps:
+        a, b = an.format_u(u[k]), an.format_u(u[k + 1])
+        events.append(Event("dead zone", g.label, float(near), k, 0.0))
+        warnings.append(
+            f"between {a} and {b} the {g.label} cannot be followed continuously: it "
+            f"cannot close near {an.format_u(near)} (or passes a singular position there) "
+            f"in a range narrower than the steps can follow; the sweep starts again at {b} "
+            "on the assembly's branches, and the motion between these positions is not "
+            "continuous (use a smaller step to see it)"
+        )
+    return events + _bifurcations(gi, g, ctx, ok), warnings
+
+
+def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> list[Event]:
+    """The bifurcations the group passed: its determinant's sign changes."""
+    st, u = ctx.st, ctx.u
+    if g.m != g.n or st.n < 2:
+        return []  # a redundant block has no determinant: its rank tells, not its sign
+    J = g.jacobian(st)
+    good = ok & np.all(np.isfinite(J), axis=(1, 2))
+    det = np.full(st.n, np.nan)
+    if good.any():
+        det[good] = np.linalg.det(J[good])
+    sign = np.sign(det)
+    cross = np.flatnonzero(good[:-1] & good[1:] & (sign[:-1] * sign[1:] < 0))
+    # (not crossed continuously: not a bifurcation)
+    cross = cross[~np.isin(cross, [k for k, _ in g.gaps])]
+    if not cross.size:
+        return []
+    ends = np.unique(np.r_[cross, cross + 1])
+    singular = np.zeros(st.n, bool)
+    singular[ends] = rcond(J[ends]) <= SINGULAR_RCOND
+    events: list[Event] = []
+    seen: set[int] = set()
+    for a in cross.tolist():
+        b = a + 1
+        if singular[a] or singular[b]:
+            j = a if singular[a] else b
+            if j in seen or j == 0 or j == st.n - 1:
+                continue  # the sweep's ends: nothing is passed there
+            seen.add(j)
+            events.append(Event("bifurcation", g.label, float(u[j]), j - 1, 0.0))
+            continue
+        events.append(Event("bifurcation", g.label, _crossing(gi, g, ctx, a, det), a, 0.0))
+    return events
+
+
+def _crossing(gi: int, g: NewtonGroup, ctx: _Context, a: int, det: np.ndarray) -> float:
+    """The driver value between samples ``a`` and ``a + 1`` where the group's
+    determinant vanishes: Brent's method on the group solved there, else (when a solve
+    in between fails or lands on a pose whose determinant does not bracket) the linear
+    interpolation of the two samples' determinants."""
+    u0, u1 = float(ctx.u[a]), float(ctx.u[a + 1])
+    q0, q1 = g.get_q(ctx.st, a), g.get_q(ctx.st, a + 1)
+    linear = u0 - det[a] * (u1 - u0) / (det[a + 1] - det[a])
+
+    def f(x: float) -> float:
+        st1 = ctx.prefix(gi, [x], a)
+        t = (x - u0) / (u1 - u0)
+        q, stats = g._solve_one(st1, np.array([x]), q0 + t * (q1 - q0))
+        if not stats.converged:
+            raise ValueError("the group does not close there")
+        g.set_q(st1, 0, q)
+        return float(np.linalg.det(g.jacobian(st1)[0]))
+
+    try:
+        lo, hi = (u0, u1) if u0 < u1 else (u1, u0)
+        flo, fhi = (det[a], det[a + 1]) if u0 < u1 else (det[a + 1], det[a])
+        return brent_root(f, lo, hi, xtol=1e-12 * max(1.0, abs(u0)), fa=flo, fb=fhi)
+    except (ValueError, RuntimeError, FloatingPointError):
+        return float(linear)
