@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
@@ -79,3 +80,36 @@ def test_sample_spacing_is_the_median_step():
     fine.u = np.array([0.0, 0.01, 0.03, 0.06, 0.1])
     want = math.degrees(statistics.median([0.01, 0.02, 0.03, 0.04]))
     assert fine.sample_spacing() == f"{want:.4g}°"
+
+
+# -- the adaptive integrators' guard: the state is copied only when a step fails ----------
+
+
+def test_the_guard_records_no_state_on_successful_steps():
+    """y' = -y over 2 s with RK45: it runs through, and no state was copied (the guard
+    only keeps the last accepted one when a step fails)."""
+    from scipy.integrate import solve_ivp
+
+    from mechsolve.analyses.dynamics.integrators import _guarded
+
+    guard = _guarded("RK45", None, 10**6)
+    out = solve_ivp(lambda t, y: -y, (0.0, 2.0), [1.0], method=guard, rtol=1e-10, atol=1e-12)
+    assert out.status == 0 and guard.steps > 20
+    assert guard.last is None and guard.end is None
+    assert out.y[0, -1] == pytest.approx(math.exp(-2.0), rel=1e-8)  # the closed form
+
+
+@pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau", "BDF", "LSODA"])
+def test_the_guard_keeps_the_last_accepted_state_when_stopped(method):
+    """Stopped after 7 steps: the state it keeps is the last accepted one, on the closed
+    form exp(-t) of y' = -y."""
+    from scipy.integrate import solve_ivp
+
+    from mechsolve.analyses.dynamics.integrators import _guarded
+
+    guard = _guarded(method, None, 7)
+    out = solve_ivp(lambda t, y: -y, (0.0, 50.0), [1.0], method=guard, rtol=1e-9, atol=1e-12)
+    assert out.status == -1 and "took 7 steps" in guard.end.reason
+    t, y = guard.last
+    assert t == out.t[-1] and 0 < t < 50
+    assert y[0] == out.y[0, -1] == pytest.approx(math.exp(-t), rel=1e-6)
