@@ -76,7 +76,7 @@ def test_every_case_runs(quick):
         ("positions-growth", ["fitted exponent of time against the number of positions:"]),
         ("stream", ["peak resident memory:"]),
         ("startup", ["targets:"]),
-        ("newton-groups", ["ratio auto / by hand (triad):"]),
+        ("newton-groups", ["ratio auto / lean by hand (triad):"]),
         (
             "study",
             [

@@ -18,7 +18,7 @@ from mechsolve.groups.base import Drive, Group
 from mechsolve.groups.newton_batched import BatchedSweep
 from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extrapolate
 from mechsolve.groups.newton_rates import NewtonRates
-from mechsolve.groups.reduced import _Angles, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _rowmax_abs
 
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
@@ -118,7 +118,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if sub.nb == 0:  # every angle fixed by a driver: nothing to iterate
             thf, stats = th0, SolveStats(True, "newton", 0, 0, 0, 0.0)
         else:
-            if sub.nb <= 3:
+            if sub.nb <= FLOATS_UP_TO:
                 thf, stats = sub.newton_floats(Kr0, th0, self.atol, self.max_iterations)
             else:
                 thf, stats = newton_lean(fun_jac, th0, self.atol, self.max_iterations)

@@ -10,7 +10,7 @@ import numpy as np
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.reduced import _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, _rowmax_abs
 
 
 class BatchedSweep:
@@ -38,7 +38,7 @@ class BatchedSweep:
         dsub = drive.take(coarse)
         # the coarse pass counts its own positions; prefix() wants the sweep's sample
         sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
-        if self.red is not None and self.red.sub.nb <= 3:
+        if self.red is not None and self.red.sub.nb <= FLOATS_UP_TO:
             itc = self._coarse_floats(sub, dsub, q_start, sub_prefix)
             if itc is None:
                 return None

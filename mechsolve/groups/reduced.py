@@ -33,8 +33,9 @@ class _Eqs:
         self, K, th0, atol: float, max_iterations: int
     ) -> tuple[np.ndarray, SolveStats]:
         """:func:`~mechsolve.base.newton.newton_lean` on ``F = 0`` at one position,
-        with ``K`` (n,) the constant part, in Python floats (up to 3 angles: a stacked
-        NumPy call per operation costs more than the arithmetic there). Same
+        with ``K`` (n,) the constant part, in Python floats (up to :data:`FLOATS_UP_TO`
+        angles: a stacked NumPy call per operation costs more than the arithmetic
+        there). Same
         convergence test; no scipy fallback (the caller's)."""
         x, ok, it, r, nfev = self.newton_list(K, th0, atol, max_iterations)
         return np.array(x), SolveStats(ok, "newton", it, nfev, nfev, r)
@@ -441,10 +442,17 @@ def _rowmax_abs(a: np.ndarray) -> np.ndarray:
     return m
 
 
+FLOATS_UP_TO = 6  # groups of up to this many angles are solved position by position in floats
+
+
 def _solve_small(J: list, f: list) -> list | None:
-    """``J dx = -f`` for 1 to 3 unknowns by Cramer's rule in floats; None when ``J`` is
-    exactly singular."""
+    """``J dx = -f`` in floats: 1 to 3 unknowns by Cramer's rule, more (up to
+    :data:`FLOATS_UP_TO`) by Gaussian elimination with partial pivoting, as LAPACK's
+    ``gesv`` (a NumPy call costs ~10 us there, more than the arithmetic); None when
+    ``J`` is exactly singular."""
     n = len(f)
+    if n > 3:
+        return _gauss_small(J, f)
     if n == 1:
         return None if J[0][0] == 0 else [-f[0] / J[0][0]]
     if n == 2:
@@ -466,6 +474,39 @@ def _solve_small(J: list, f: list) -> list | None:
         -(B * f0 + E * f1 + I * f2) / det,
         -(C * f0 + G * f1 + L * f2) / det,
     ]
+
+
+def _gauss_small(J: list, f: list) -> list | None:
+    """:func:`_solve_small` for four or more unknowns: elimination with partial pivoting
+    (the largest entry of the column below the diagonal), then back substitution."""
+    n = len(f)
+    A = [list(row) + [-v] for row, v in zip(J, f)]
+    for j in range(n):
+        p, big = j, abs(A[j][j])
+        for i in range(j + 1, n):
+            v = abs(A[i][j])
+            if v > big:
+                p, big = i, v
+        if big == 0:
+            return None
+        piv = A[p][j]
+        if p != j:
+            A[j], A[p] = A[p], A[j]
+        rj = A[j]
+        for i in range(j + 1, n):
+            ri = A[i]
+            m = ri[j] / piv
+            if m:
+                for c in range(j + 1, n + 1):
+                    ri[c] -= m * rj[c]
+    x = [0.0] * n
+    for j in range(n - 1, -1, -1):
+        rj = A[j]
+        acc = rj[n]
+        for c in range(j + 1, n):
+            acc -= rj[c] * x[c]
+        x[j] = acc / rj[j]
+    return x
 
 
 def _batch_inverse(J: np.ndarray) -> np.ndarray:

@@ -371,7 +371,10 @@ def _guarded(method: str, model: ReducedModel, max_steps: int):
     """scipy's integrator class ``method`` whose step fails, instead of raising, where
     the motion cannot go on (:data:`_STOPS`) or after ``max_steps`` steps, so that
     ``solve_ivp`` returns the output computed so far. The class records why (``end``) and
-    the last accepted state (``last``)."""
+    the last accepted state (``last``), only when a step fails: scipy's solvers assign
+    ``t`` and ``y`` at the end of a successful step only, so that they still hold the
+    last accepted state when the step is refused or raises (a copy at every step cost
+    ~2 us a step)."""
     import scipy.integrate
 
     base = getattr(scipy.integrate, method)
@@ -381,22 +384,30 @@ def _guarded(method: str, model: ReducedModel, max_steps: int):
         last: tuple | None = None
         steps = 0
 
-        def _step_impl(self):
+        def _stop(self, end: _End) -> tuple[bool, str]:
             cls = type(self)
             cls.last = (float(self.t), np.array(self.y, float))
+            cls.end = end
+            return False, end.reason
+
+        def _step_impl(self):
+            cls = type(self)
             if cls.steps >= max_steps:
-                cls.end = _End(
-                    f"the integrator took {max_steps} steps, the limit (--max-steps raises "
-                    "it; max_steps in Python)",
-                    early=True,
+                return self._stop(
+                    _End(
+                        f"the integrator took {max_steps} steps, the limit (--max-steps "
+                        "raises it; max_steps in Python)",
+                        early=True,
+                    )
                 )
-                return False, cls.end.reason
             cls.steps += 1
             try:
-                return super()._step_impl()
+                done, message = super()._step_impl()
             except _STOPS as exc:
-                cls.end = _stop_for(model, exc)
-                return False, cls.end.reason
+                return self._stop(_stop_for(model, exc))
+            if not done:  # the solver's own failure (a step too small): its state as is
+                cls.last = (float(self.t), np.array(self.y, float))
+            return done, message
 
     return Guarded
 

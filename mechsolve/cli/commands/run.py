@@ -150,8 +150,10 @@ def _run_job(
         streamed = False
         res = api.solve(mech, step=st, method=method)
         # the figures (extremes, limit positions, work) from the sweep the plots are
-        # drawn from, so that the terminal, the plots and the requirements agree
-        text = res.summary(figures=api.for_plots(mech, res, method))
+        # drawn from, so that the terminal, the plots and the requirements agree; that
+        # finer sweep is made only when something reads it (quiet, no plots and no
+        # requirements: the CSV alone, at the file's step)
+        text = None if quiet else res.summary(figures=api.for_plots(mech, res, method))
         failed = res.incomplete()
         written = [res.to_csv(outdir / "results.csv")]
     if not no_plots:
