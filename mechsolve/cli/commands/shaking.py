@@ -47,7 +47,7 @@ from mechsolve.cli.kit import (
     type=float,
     metavar="C",
     help="Slider-crank: the fraction of the reciprocating mass balanced on the crank, in "
-    "[0, 1] [default: 0.5]; implies --balance.",
+    "[0, 1], default 0.5; implies --balance.",
 )
 @click.option(
     "--radius",
