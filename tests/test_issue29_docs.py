@@ -301,3 +301,59 @@ def test_examples_of_a_page_run(page, tmp_path):
             f"{page.relative_to(ROOT)}:{line}: exit {p.returncode}\n{text}\n{p.stderr[-3000:]}"
         )
         assert "Traceback" not in p.stderr, p.stderr
+
+
+# --- README, the front page -----------------------------------------------------------
+
+HISTORY = re.compile(r"\b[Ss]eed 00\d|\b[Ii]ssue \d+|\bthe issue\b")
+
+
+def test_readme_is_a_front_page():
+    """Under 150 lines: what it is, the two commands first, one picture, links that lead
+    somewhere; nothing of the project's history a user cannot see."""
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) < 150
+    first = text.split("```", 2)[1].splitlines()[1:]
+    assert first[0] == "pip install . && mechsolve run mechanisms/crane.yaml"
+    assert first[1].startswith("pip install ") and first[1].endswith("python -m pytest")
+    images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert len(images) == 1 and (ROOT / images[0]).is_file()
+    for target in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", text):
+        if not target.startswith(("http://", "https://")):
+            assert (ROOT / target).exists(), target
+    assert not HISTORY.search(text), HISTORY.search(text)
+
+
+def test_the_pages_say_nothing_of_the_projects_history():
+    for page in pages():
+        m = HISTORY.search(page.read_text(encoding="utf-8"))
+        assert not m, f"{page.relative_to(ROOT)}: {m and m.group(0)!r}"
+
+
+# --- exit codes in each command's help --------------------------------------------------
+
+
+def test_each_command_help_names_only_the_codes_it_can_give():
+    """The rule is listed once, in `mechsolve --help`; a command's help points at it in
+    one line, naming 5 (a design check failed) only where the command can end with it
+    (its module ends with finish(check_failed=...) or returns that code)."""
+    import inspect
+
+    from click.testing import CliRunner
+
+    from mechsolve.cli.main import main
+
+    full = CliRunner().invoke(main, ["--help"]).output
+    assert re.search(r"^\s+5\s+a design check failed", full, re.M)
+    for name, cmd in main.commands.items():
+        source = inspect.getsource(sys.modules[cmd.callback.__module__])
+        can_fail = "check_failed=" in source or "EXIT_CHECK_FAILED" in source
+        out = CliRunner().invoke(main, [name, "--help"]).output
+        tail = out[out.index("Exit codes") :]
+        assert len(tail.strip().splitlines()) <= 4, (name, tail)
+        assert ("5 a design check failed" in " ".join(tail.split())) == can_fail, name
+        assert not re.search(r"^\s+(0|2|4|5|130|141)\s{2,}", out, re.M), name  # no table
+    schema = CliRunner().invoke(main, ["schema", "--help"]).output
+    assert "Exit codes: 0 done, 2 bad input, 4 internal error, 130 interrupted" in " ".join(
+        schema.split()
+    )
