@@ -357,3 +357,64 @@ def test_each_command_help_names_only_the_codes_it_can_give():
     assert "Exit codes: 0 done, 2 bad input, 4 internal error, 130 interrupted" in " ".join(
         schema.split()
     )
+
+
+# --- CI prints the fast tier's time -------------------------------------------------------
+
+STUB = """#!/usr/bin/env bash
+# a stand-in for {name}: log the call; python's pytest exits with the codes the test sets
+echo "{name} $*" >> "$STUB_LOG"
+if [ "{name}" = python3 ] && [ "$1" = -m ] && [ "$2" = venv ]; then
+  mkdir -p "$3/bin"
+  printf 'PATH="%s:$PATH"\\n' "$STUB_VENV_BIN" > "$3/bin/activate"
+fi
+if [ "{name}" = python ] && [ "$1 $2" = "-m pytest" ]; then
+  case " $* " in
+    *" not slow "*) exit "$FAST_RC" ;;
+    *) exit "$FULL_RC" ;;
+  esac
+fi
+exit 0
+"""
+
+
+def _stubs(where: Path, *names: str) -> None:
+    where.mkdir()
+    for name in names:
+        (where / name).write_text(STUB.format(name=name))
+        (where / name).chmod(0o755)
+
+
+@pytest.mark.parametrize("fast_rc, full_rc", [(0, 0), (1, 0), (0, 1), (1, 3)])
+def test_ci_times_the_fast_tier_then_runs_readme_test_command(tmp_path, fast_rc, full_rc):
+    """.ci/run (with stand-ins for Python, pip and apt-get that log their calls): the fast
+    tier runs first under `time` and its time is printed, then exactly README's test
+    command; the exit status is that command's, whatever the fast tier gave."""
+    repo = tmp_path / "repo"
+    (repo / ".ci").mkdir(parents=True)
+    (repo / ".ci" / "run").write_text((ROOT / ".ci" / "run").read_text())
+    readme = '# x\n\n```sh\npip install .\npip install ".[test,docs]" && python -m pytest\n```\n'
+    (repo / "README.md").write_text(readme)
+    _stubs(tmp_path / "bin", "python3", "apt-get")
+    _stubs(tmp_path / "venv-bin", "python", "pip")
+    log = tmp_path / "log"
+    env = {
+        "PATH": os.pathsep.join([str(tmp_path / "bin"), os.environ["PATH"]]),
+        "STUB_LOG": str(log),
+        "STUB_VENV_BIN": str(tmp_path / "venv-bin"),
+        "FAST_RC": str(fast_rc),
+        "FULL_RC": str(full_rc),
+        "HOME": str(tmp_path),
+    }
+    p = subprocess.run(
+        ["bash", str(repo / ".ci" / "run")], capture_output=True, text=True, env=env, timeout=60
+    )
+    assert p.returncode == full_rc, p.stdout + p.stderr
+    assert re.search(r'fast tier \(pytest -m "not slow"\): \d+\.\d+ s wall', p.stderr), p.stderr
+    assert f"fast tier: exit code {fast_rc}" in p.stdout
+    calls = [c for c in log.read_text().splitlines() if c.startswith(("python ", "pip "))]
+    tests = [c for c in calls if c.startswith("python -m pytest")]
+    assert tests == ["python -m pytest -m not slow -q -p no:cacheprovider", "python -m pytest"]
+    # README's command ran whole, after the fast tier: its install, then its tests
+    assert calls[-2:] == ["pip install .[test,docs]", "python -m pytest"]
+    assert calls.index(tests[0]) < len(calls) - 2
