@@ -418,3 +418,16 @@ def test_ci_times_the_fast_tier_then_runs_readme_test_command(tmp_path, fast_rc,
     # README's command ran whole, after the fast tier: its install, then its tests
     assert calls[-2:] == ["pip install .[test,docs]", "python -m pytest"]
     assert calls.index(tests[0]) < len(calls) - 2
+
+
+@pytest.mark.slow
+def test_readme_python_example_runs(tmp_path):
+    (tmp_path / "mechanisms").symlink_to(ROOT / "mechanisms", target_is_directory=True)
+    found = [text for _, lang, text, _ in blocks(ROOT / "README.md") if lang == "python"]
+    assert found
+    for text in found:
+        p = subprocess.run(
+            [sys.executable, "-c", text], cwd=tmp_path, capture_output=True, text=True,
+            timeout=300, env=_env(),
+        )  # fmt: skip
+        assert p.returncode == 0, p.stderr[-3000:]
