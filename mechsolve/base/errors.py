@@ -3,8 +3,8 @@
 Every error a user can cause derives from :class:`MechsolveError`. The CLI turns
 them into one clear message and an exit code, never a traceback.
 
-Exit codes: one rule for every command (also in ``mechsolve --help`` and the README's
-"Exit codes"; :mod:`mechsolve.cli.kit` maps errors to them in one place):
+Exit codes: one rule for every command (also in ``mechsolve --help`` and
+docs/reference/exit-codes.md; :mod:`mechsolve.cli.kit` maps errors to them in one place):
 
 =====  ==============================================================
 code   meaning

@@ -46,10 +46,16 @@ Exit codes (the same for every command):
   130  interrupted (Ctrl-C or SIGTERM); no half-written file is left
   141  the output's reader went away (`... | head`): stopped quietly
 """
-# each command's --help points at the rule instead of repeating it
+# each command's --help points at the rule instead of repeating it, naming only the codes
+# the command can give: EPILOG for the commands that check a design (requirements, a cam's
+# allowances, a flywheel's check: 5), EPILOG_NO_CHECK for the others
 EPILOG = (
     "Exit codes: 0 done, 2 bad input, 4 internal error, 5 a design check failed, "
     "130 interrupted (mechsolve --help lists them)."
+)
+EPILOG_NO_CHECK = (
+    "Exit codes: 0 done, 2 bad input, 4 internal error, 130 interrupted "
+    "(mechsolve --help lists them)."
 )
 # where a command keeps what the error handler needs to know (click's shared ctx.meta)
 _OUTDIR = "mechsolve.outdir"
@@ -350,6 +356,7 @@ def outdir_option(what: str = "results"):
 
 __all__ = [
     "EPILOG",
+    "EPILOG_NO_CHECK",
     "EXIT_BROKEN_PIPE",
     "EXIT_CHECK_FAILED",
     "EXIT_CODES",

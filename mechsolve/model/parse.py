@@ -1,6 +1,7 @@
 """Turn the plain data of a mechanism file into a validated :class:`Mechanism`.
 
-The file format is documented in the README. Each section is read by one function;
+The file format is documented in docs/reference/file.md (its tables generated from
+:mod:`mechsolve.model.keys`). Each section is read by one function;
 every mistake raises :class:`~mechsolve.base.errors.InputError` with the file, the key path
 and the line. Unknown keys get a did-you-mean suggestion.
 

@@ -6,7 +6,16 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to, writing
+from mechsolve.cli.kit import (
+    EPILOG_NO_CHECK,
+    FILE_ARG,
+    QUIET,
+    VARIANT,
+    Command,
+    finish,
+    writes_to,
+    writing,
+)
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -22,7 +31,7 @@ def _size(text: str) -> tuple[int, int]:
     return size
 
 
-@click.command("animate", cls=Command, epilog=EPILOG)
+@click.command("animate", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @click.option(
     "-o",

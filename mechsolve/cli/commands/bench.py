@@ -9,7 +9,7 @@ from types import ModuleType
 import click
 
 from mechsolve.base.errors import InputError
-from mechsolve.cli.kit import Command
+from mechsolve.cli.kit import EPILOG_NO_CHECK, Command
 
 
 def _bench_tool() -> ModuleType:
@@ -33,7 +33,7 @@ def _bench_tool() -> ModuleType:
     return mechsolve_bench
 
 
-@click.command("bench", cls=Command)
+@click.command("bench", cls=Command, epilog=EPILOG_NO_CHECK)
 @click.option("--quick", is_flag=True, help="Few repetitions and small sizes (as CI runs it).")
 @click.option(
     "--case",

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, EXIT_OK, FILE_ARG, VARIANT, Command, writing
+from mechsolve.cli.kit import EPILOG_NO_CHECK, EXIT_OK, FILE_ARG, VARIANT, Command, writing
 
 
-@click.command("check", cls=Command, epilog=EPILOG)
+@click.command("check", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @VARIANT
 @click.option(

@@ -6,13 +6,13 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
 
 SUFFIXES = (".dxf", ".svg", ".pdf")
 ENVELOPE_POSITIONS = 36
 
 
-@click.command("draw", cls=Command, epilog=EPILOG)
+@click.command("draw", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @click.option(
     "-o",

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
 
 SHEET_SUFFIXES = (".png", ".svg")
 
 
-@click.command("polygons", cls=Command, epilog=EPILOG)
+@click.command("polygons", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @click.option(
     "--at",

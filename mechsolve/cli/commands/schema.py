@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, Command, writing
+from mechsolve.cli.kit import EPILOG_NO_CHECK, Command, writing
 
 SCHEMA_FILE = "mechanism.schema.json"
 
@@ -18,7 +18,7 @@ def shipped_path() -> Path:
     return Path(str(files("mechsolve.analyses.schema").joinpath(SCHEMA_FILE)))
 
 
-@click.command("schema", cls=Command, epilog=EPILOG)
+@click.command("schema", cls=Command, epilog=EPILOG_NO_CHECK)
 @click.option(
     "-o",
     "--output",

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from mechsolve.cli.kit import (
-    EPILOG,
+    EPILOG_NO_CHECK,
     FILE_ARG,
     NO_PLOTS,
     QUIET,
@@ -20,7 +20,7 @@ from mechsolve.cli.kit import (
 )
 
 
-@click.command("shaking", cls=Command, epilog=EPILOG)
+@click.command("shaking", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @click.option(
     "--about",
@@ -47,7 +47,7 @@ from mechsolve.cli.kit import (
     type=float,
     metavar="C",
     help="Slider-crank: the fraction of the reciprocating mass balanced on the crank, in "
-    "[0, 1] [default: 0.5]; implies --balance.",
+    "[0, 1], default 0.5; implies --balance.",
 )
 @click.option(
     "--radius",

@@ -8,7 +8,7 @@ import click
 
 from mechsolve.cli.commands.run import INCOMPLETE
 from mechsolve.cli.kit import (
-    EPILOG,
+    EPILOG_NO_CHECK,
     FILE_ARG,
     NO_PLOTS,
     QUIET,
@@ -21,7 +21,7 @@ from mechsolve.cli.kit import (
 from mechsolve.cli.kit import progress_bar as _progress_bar
 
 
-@click.command("simulate", cls=Command, epilog=EPILOG)
+@click.command("simulate", cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @outdir_option("simulation's files")
 @VARIANT

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, Command, writing
+from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
 
 
-@click.command(cls=Command, epilog=EPILOG)
+@click.command(cls=Command, epilog=EPILOG_NO_CHECK)
 @FILE_ARG
 @click.option(
     "-o",
