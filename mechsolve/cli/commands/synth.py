@@ -59,9 +59,10 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
     Methods (one section of FILE): crank-rocker (extreme distances, time ratio with both
     limits, or time ratio with one limit and the frame: two solutions), slider-crank,
     guide-bar, three-positions (motion generation), four-positions (Burmester's
-    centre-point curve), window (the input window that makes a
-    point's path straightest), function (psi = f(phi): Freudenstein's precision points,
-    then differential evolution over the range) and path (a coupler point through target
+    centre-point curve), five-positions (Burmester's points: every pair a four-bar),
+    window (the input window that makes a point's path straightest), function
+    (psi = f(phi): Freudenstein's precision points, then differential evolution over the
+    range) and path (a coupler point through target
     points, by differential evolution on design batches). See mechanisms/synth/.
     """
     from mechsolve.analyses.synth.problem import confirm, solve_problem
