@@ -129,6 +129,28 @@ def test_poses_no_fourbar_reaches_are_bad_input(tmp_path):
     assert "Traceback" not in r.output
 
 
+@pytest.mark.parametrize(
+    "rows, message",
+    [
+        (
+            "[0, 0, 0], [0, 0, 0], [1, 0, 10], [2, 1, 20], [3, 1, 30]",
+            "positions 1 and 2 are the same",
+        ),
+        (
+            "[1, 0, 0], [0, 1, 90], [-1, 0, 180], [0, -1, 270], [0.6, 0.8, 53.13010235415598]",
+            "the poses are turns about one point (0, 0)",
+        ),
+    ],
+)
+def test_degenerate_poses_are_named(tmp_path, rows, message):
+    prob = tmp_path / "p.yaml"
+    prob.write_text(f"units: {{length: m, angle: deg}}\nfive-positions:\n  positions: [{rows}]\n")
+    r = CliRunner().invoke(synth, [str(prob)])
+    assert r.exit_code == 2, r.output
+    assert "five-positions.positions" in r.output and message in r.output
+    assert "Traceback" not in r.output
+
+
 def test_the_example_file_runs():
     from pathlib import Path
 

@@ -192,6 +192,7 @@ def five_positions(poses) -> list[Design]:
     either pivot, each checked for branch and order defects over the five poses."""
     from mechsolve.analyses.synth.motion_gen import three_positions
 
+    _distinct_poses(poses)
     pts = burmester_points(poses)
     if len(pts) < 2:
         raise InputError(
@@ -204,6 +205,25 @@ def five_positions(poses) -> list[Design]:
             _check_five(d, poses, ma, mb, (ca, cb))
             designs.append(d)
     return designs
+
+
+def _distinct_poses(poses) -> None:
+    """Refuse poses that determine no Burmester points: two alike, or all of them turns
+    about one point (a body on a single crank there)."""
+    if len(poses) != 5:
+        raise InputError(f"five poses are needed, got {len(poses)}")
+    _, _, scale = _normalise(poses)
+    for i, j in itertools.combinations(range(len(poses)), 2):
+        (p, f), (q, g) = poses[i], poses[j]
+        if dist(p, q) <= 1e-12 * scale and abs(math.remainder(f - g, 2 * math.pi)) < 1e-12:
+            raise InputError(f"positions {i + 1} and {j + 1} are the same")
+    ps = poles(poses)
+    if len(ps) == 10 and all(dist(p, ps[0]) <= 1e-9 * scale for p in ps):
+        x, y = (0.0 if abs(v) <= 1e-9 * scale else v for v in ps[0])
+        raise InputError(
+            f"the poses are turns about one point ({x:.6g}, {y:.6g}): a single crank pivoted "
+            "there carries the body, and no four-bar is determined"
+        )
 
 
 def _check_five(d: Design, poses, ma, mb, centres) -> None:
