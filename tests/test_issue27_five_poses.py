@@ -88,10 +88,11 @@ def test_cli_writes_a_file_mechsolve_runs_through_the_five_poses(tmp_path):
         f"name: five poses\nunits: {{length: mm, angle: deg}}\nfive-positions:\n"
         f"  positions: [{rows}]\n"
     )
-    out = tmp_path / "d.yaml"
-    r = CliRunner().invoke(synth, [str(prob), "-o", str(out)])
+    out, png = tmp_path / "d.yaml", tmp_path / "b.png"
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--plot", str(png)])
     assert r.exit_code == 0, r.output
     assert "mechsolve run of the written file: pose errors" in r.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     from mechsolve.analyses.instants import Instant, solve_instants
     from mechsolve.analyses.synth.problem import solve_problem
     from mechsolve.model.parse import load

@@ -259,3 +259,43 @@ def _check_five(d: Design, poses, ma, mb, centres) -> None:
         d.min_transmission = 0.0
     else:
         d.min_transmission = float(np.min(mu))
+
+
+def plot_five(plt, out):
+    """The centre-point curves of poses 1-4 and of poses 1, 2, 3, 5, the Burmester points
+    where they meet, the five poses of the body's line and the chosen linkage in pose 1."""
+    from mechsolve.analyses.synth.burmester import curves
+
+    d = out.chosen
+    poses = d.extra["positions"]
+    pts = np.array([c for c, _ in burmester_points(poses)])
+    _, _, scale = _normalise(poses)
+
+    def extent(sub) -> float:  # the curve drawn out to every Burmester point
+        _, mid, span = _normalise(sub)
+        reach = np.max(np.abs(pts - mid)) / span
+        return max(2.0, 1.1 * float(reach))
+
+    fig, ax = plt.subplots(figsize=(7, 6))
+    for k, (sub, style, label) in enumerate(
+        ((poses[:4], "-", "centre-point curve, poses 1-4"),
+         (poses[:3] + poses[4:], "--", "centre-point curve, poses 1, 2, 3, 5"))
+    ):  # fmt: skip
+        for i, ln in enumerate(curves(sub, extent=extent(sub), n=601)[0]):
+            ax.plot(ln[:, 0], ln[:, 1], style, color=f"C{k}", label=label if i == 0 else None)
+    ax.plot(pts[:, 0], pts[:, 1], "s", color="C3", ms=8, label="Burmester points")
+    for j, ((px, py), f) in enumerate(poses):
+        ax.annotate("", (px + 0.15 * scale * math.cos(f), py + 0.15 * scale * math.sin(f)),
+                    (px, py), arrowprops={"arrowstyle": "->", "color": "k"})  # fmt: skip
+        ax.text(px, py, f" {j + 1}")
+    ip, op = d.extra["moving"]
+    g = list(d.ground.values())
+    ax.plot([g[0][0], ip[0][0], op[0][0], g[1][0]], [g[0][1], ip[0][1], op[0][1], g[1][1]],
+            "o-", color="C2", label=f"the design in pose 1 ({d.family})")  # fmt: skip
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"{out.name}: Burmester points of five poses")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig

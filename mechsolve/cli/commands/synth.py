@@ -34,7 +34,7 @@ from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, Command, writing
     type=click.Path(dir_okay=False, path_type=Path),
     help="function and path problems: a PNG of the target against what the written "
     "design achieves in mechsolve's run; four-positions: the centre-point and circle-point "
-    "curves.",
+    "curves; five-positions: the two centre-point curves and their Burmester points.",
 )
 @click.option(
     "--seed",
@@ -87,10 +87,13 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
         if bar is not None:
             bar.close()
     found = out.check.get("search") if isinstance(out.check, dict) else None
-    if plot is not None and out.method not in ("function", "path", "four-positions"):
+    if plot is not None and out.method not in ("function", "path", "four-positions",
+                                               "five-positions"):  # fmt: skip
         from mechsolve.base.errors import InputError
 
-        raise InputError("--plot: only function, path and four-positions problems draw a plot")
+        raise InputError(
+            "--plot: only function, path, four-positions and five-positions problems draw a plot"
+        )
     if not quiet:
         click.echo(out.text)
     if out.yaml is not None:
