@@ -99,6 +99,13 @@ def test_cli_writes_a_file_mechsolve_runs_through_the_five_poses(tmp_path):
 
     d = solve_problem(prob).chosen
     assert d.valid
+    # the file says which input angles put the line in which of the five poses
+    head = out.read_text().splitlines()[:6]
+    assert any("through five positions" in ln for ln in head)
+    (line,) = [ln for ln in head if "puts the coupler line" in ln]
+    assert "positions 1, 2, 3, 4, 5." in line
+    shown = [float(v) for v in line.split(" at ", 1)[1].split(" deg")[0].split(", ")]
+    assert np.allclose(shown, np.degrees(d.extra["input_angles"]), atol=1e-6)
     res = solve_instants(load(out), [Instant(a, 1.0, 0.0) for a in d.extra["input_angles"]])
     p, q = res.point("P"), res.point("Q")
     for i, ((px, py), f) in enumerate(POSES):
