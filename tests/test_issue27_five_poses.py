@@ -165,3 +165,17 @@ def test_the_example_file_runs():
     p = Path(__file__).parent.parent / "mechanisms" / "synth" / "five-positions.yaml"
     r = CliRunner().invoke(synth, [str(p)])
     assert r.exit_code == 0, r.output
+
+
+def test_a_loop_that_cannot_close_shows_no_transmission_figure():
+    from pathlib import Path
+
+    p = Path(__file__).parent.parent / "mechanisms" / "synth" / "five-positions.yaml"
+    r = CliRunner().invoke(synth, [str(p)])
+    assert r.exit_code == 0, r.output
+    rows = r.output.splitlines()
+    broken = [ln for ln in rows if "the loop cannot close" in ln]
+    assert broken  # this example has such designs
+    for ln in broken:
+        assert "minimum transmission angle - (the loop does not close)" in ln
+    assert "0.0000 deg" not in r.output

@@ -458,10 +458,12 @@ def describe(out: Outcome, rule: str) -> str:
         k = f", K = {d.time_ratio:.6f}" if d.time_ratio else ""
         g = ", ".join(f"{n} ({p[0]:.6f}, {p[1]:.6f})" for n, p in d.ground.items())
         lines.append(f" {mark}{i}. {d.family}: {lens}; pivots {g}")
-        lines.append(
-            f"     {d.grashof}; minimum transmission angle "
-            f"{math.degrees(d.min_transmission):.4f} deg{k}{status}"
+        mu = (
+            f"{math.degrees(d.min_transmission):.4f} deg"
+            if math.isfinite(d.min_transmission)
+            else "- (the loop does not close)"
         )
+        lines.append(f"     {d.grashof}; minimum transmission angle {mu}{k}{status}")
     rules = {
         "transmission": "the largest minimum transmission angle",
         "shortest-crank": "the shortest input link",
