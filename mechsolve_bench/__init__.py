@@ -1076,6 +1076,12 @@ def _case_study(quick: bool) -> Case:
     return case_study(quick)
 
 
+def _case_synthesis(quick: bool) -> Case:
+    from mechsolve_bench.synthesis import case_synthesis
+
+    return case_synthesis(quick)
+
+
 def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list[Case]:
     """Run the benchmark cases; ``quick`` uses few repetitions and small sizes (for CI)."""
     reps = 5 if quick else 25
@@ -1104,6 +1110,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         ("startup", lambda: case_startup(2 if quick else 7)),
         ("study", lambda: _case_study(quick)),
         ("peers", lambda: case_peers(n)),
+        ("synthesis", lambda: _case_synthesis(quick)),
     ]
     out = []
     for name, fn in plan:

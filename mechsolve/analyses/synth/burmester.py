@@ -164,7 +164,7 @@ def four_positions(poses, near_a, near_b) -> list[Design]:
         if np.isnan(mu).any():
             d.valid = False
             d.notes.append("order defect: the loop cannot close between the poses")
-            d.min_transmission = 0.0
+            d.min_transmission = math.nan  # not defined: the loop does not close
         else:
             d.min_transmission = float(np.min(mu))
     return designs

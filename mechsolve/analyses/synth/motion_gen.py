@@ -125,7 +125,7 @@ def _design(inp, i0, ip, o0, op, ri, ro, coupler, frame, positions) -> Design:
             f"order defect: the loop cannot close between the positions (input at "
             f"{math.degrees(th[k]) % 360:.4g} deg)"
         )
-        mu_min = 0.0
+        mu_min = math.nan  # not defined: the loop does not close
     else:
         mu_min = float(np.min(mu))
     return Design(

@@ -305,10 +305,11 @@ def write_plot(out: Any, path: Path) -> Path:
     from mechsolve.writers.fonts import pyplot
 
     plt = pyplot()
-    if out.method == "four-positions":
+    if out.method in ("four-positions", "five-positions"):
         from mechsolve.analyses.synth.burmester import plot_curves
+        from mechsolve.analyses.synth.burmester5 import plot_five
 
-        fig = plot_curves(plt, out)
+        fig = plot_curves(plt, out) if out.method == "four-positions" else plot_five(plt, out)
         try:
             with replacing(path, suffix=".png") as tmp:
                 fig.savefig(tmp, format="png", dpi=110)

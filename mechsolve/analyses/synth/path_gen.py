@@ -479,10 +479,11 @@ def solve_path(
                 cands.append((float(f), x))
     if not found.interrupted:
         # polish the distinct best ones (a local minimum of one is not the others')
-        for _, x in distinct(cands, bounds, 2 * spec.top):
-            pol = _polish(batch, x, bounds)
-            if pol is not None:
-                cands.append(pol)
+        for k, (_, x) in enumerate(distinct(cands, bounds, 2 * spec.top)):
+            pols = [_polish(batch, x, bounds)]
+            if k < 3:  # the slower constrained polish: the three best distinct starts
+                pols.append(_polish_constrained(batch, x, bounds))
+            cands += [p for p in pols if p is not None]
     designs = [_design(batch, names, x, f"optimised {i}")
                for i, (f, x) in enumerate(distinct(cands, bounds, spec.top), 1)]  # fmt: skip
     res = PathResult(designs, found, spec, names)
@@ -537,6 +538,56 @@ def _polish(batch: Batch, x0, bounds):
     if np.all(batch.constraints(X) > 0):
         f = float(batch.objective(X)[0])
         return (f, np.array(r.x))
+    return None
+
+
+def _fd_columns(x: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """Central-difference steps and the 2n perturbed designs as one batch's columns."""
+    h = 1e-7 * np.maximum(1.0, np.abs(x)) * (hi - lo > 0)
+    n = len(x)
+    return h, np.hstack([x[:, None] + np.diag(h), x[:, None] - np.diag(h)]), n
+
+
+def _polish_constrained(batch: Batch, x0, bounds):
+    """A local search that keeps the constraints (SLSQP, gradients by central differences,
+    every perturbed design of a step in one batch): where the unconstrained polish leaves
+    the feasible set (an order, branch or Grashof limit is active at the optimum), this
+    one follows the limit. The result is kept only if strictly feasible, stepping back
+    towards ``x0`` (feasible) if it ends on a limit."""
+    from scipy.optimize import minimize
+
+    lo, hi = np.array(bounds).T
+    x0 = np.clip(np.asarray(x0, float), lo, hi)
+
+    def f(x):
+        return float(batch.objective(np.asarray(x, float)[:, None])[0])
+
+    def fjac(x):
+        h, X, n = _fd_columns(np.asarray(x, float), lo, hi)
+        v = batch.objective(X)
+        return np.where(h > 0, (v[:n] - v[n:]) / np.where(h > 0, 2 * h, 1), 0.0)
+
+    def g(x):
+        return batch.constraints(np.asarray(x, float)[:, None])[:, 0]
+
+    def gjac(x):
+        h, X, n = _fd_columns(np.asarray(x, float), lo, hi)
+        c = batch.constraints(X)
+        return np.where(h > 0, (c[:, :n] - c[:, n:]) / np.where(h > 0, 2 * h, 1), 0.0)
+
+    if not np.all(g(x0) > 0):
+        return None
+    try:
+        r = minimize(f, x0, jac=fjac, method="SLSQP", bounds=list(zip(lo, hi)),
+                     constraints=[{"type": "ineq", "fun": g, "jac": gjac}],
+                     options={"maxiter": 500, "ftol": 1e-16})  # fmt: skip
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    for t in (1.0, 0.9999, 0.999, 0.99, 0.9):
+        x = x0 + t * (np.clip(r.x, lo, hi) - x0)
+        if np.all(g(x) > 0):
+            fx = f(x)
+            return (fx, x) if np.isfinite(fx) and fx < f(x0) else None
     return None
 
 

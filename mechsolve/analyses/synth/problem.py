@@ -38,6 +38,7 @@ METHODS = (
     "guide-bar",
     "three-positions",
     "four-positions",
+    "five-positions",
     "window",
     "function",
     "path",
@@ -192,6 +193,8 @@ def solve_problem(
         designs = _guide_bar(r)
     elif method == "four-positions":
         designs = _four_positions(r)
+    elif method == "five-positions":
+        designs = _five_positions(r)
     else:
         designs = _three_positions(r)
     if solution is not None:
@@ -404,6 +407,13 @@ def _four_positions(r: _Reader):
     return r.wrap("positions", four_positions, poses, near_a, near_b)
 
 
+def _five_positions(r: _Reader):
+    from mechsolve.analyses.synth.burmester5 import five_positions
+
+    r.allow(("positions",))
+    return r.wrap("positions", five_positions, _poses(r, 5))
+
+
 def _window(r: _Reader, path: Path, name: str) -> Outcome:
     from mechsolve.analyses.synth.window import MEASURES, choose_window, report
     from mechsolve.model.parse import load
@@ -448,10 +458,12 @@ def describe(out: Outcome, rule: str) -> str:
         k = f", K = {d.time_ratio:.6f}" if d.time_ratio else ""
         g = ", ".join(f"{n} ({p[0]:.6f}, {p[1]:.6f})" for n, p in d.ground.items())
         lines.append(f" {mark}{i}. {d.family}: {lens}; pivots {g}")
-        lines.append(
-            f"     {d.grashof}; minimum transmission angle "
-            f"{math.degrees(d.min_transmission):.4f} deg{k}{status}"
+        mu = (
+            f"{math.degrees(d.min_transmission):.4f} deg"
+            if math.isfinite(d.min_transmission)
+            else "- (the loop does not close)"
         )
+        lines.append(f"     {d.grashof}; minimum transmission angle {mu}{k}{status}")
     rules = {
         "transmission": "the largest minimum transmission angle",
         "shortest-crank": "the shortest input link",
@@ -472,7 +484,7 @@ def confirm(out: Outcome) -> str:
         from mechsolve.analyses.synth.optproblem import confirm_optimised
 
         return confirm_optimised(out)
-    if out.method == "four-positions":
+    if out.method in ("four-positions", "five-positions"):
         from mechsolve.analyses.synth.burmester import confirm_poses
 
         return confirm_poses(out)

@@ -194,10 +194,13 @@ def _three_positions(d: Design, name: str, round_to: float | None) -> str:
     ang = [math.degrees(a) for a in d.extra["input_angles"]]
     direction = "ccw" if d.extra["direction"] > 0 else "cw"
     side = "left" if d.extra["output_left"] else "right"
-    out = _header(d, f"{name}: four-bar through three positions of a coupler line", round_to)
+    n = len(d.extra["positions"])
+    words = {3: "three", 4: "four", 5: "five"}
+    out = _header(d, f"{name}: four-bar through {words.get(n, n)} positions of a coupler line",
+                  round_to)  # fmt: skip
     out += [
-        f"# The input {i0n}-{a_name} at {ang[0]:.6f}, {ang[1]:.6f}, {ang[2]:.6f} deg puts the "
-        "coupler line (P, Q) in positions 1, 2, 3.",
+        f"# The input {i0n}-{a_name} at {', '.join(f'{a:.6f}' for a in ang)} deg puts the "
+        f"coupler line (P, Q) in positions {', '.join(str(i) for i in range(1, n + 1))}.",
         f"name: {name}",
         "units: {length: m, angle: deg}",
         "",

@@ -54,6 +54,7 @@ def _bench_tool() -> ModuleType:
             "startup",
             "study",
             "peers",
+            "synthesis",
         ]
     ),
     help="Run only these cases (repeatable).",

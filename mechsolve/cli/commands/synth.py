@@ -34,7 +34,7 @@ from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
     type=click.Path(dir_okay=False, path_type=Path),
     help="function and path problems: a PNG of the target against what the written "
     "design achieves in mechsolve's run; four-positions: the centre-point and circle-point "
-    "curves.",
+    "curves; five-positions: the two centre-point curves and their Burmester points.",
 )
 @click.option(
     "--seed",
@@ -59,9 +59,10 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
     Methods (one section of FILE): crank-rocker (extreme distances, time ratio with both
     limits, or time ratio with one limit and the frame: two solutions), slider-crank,
     guide-bar, three-positions (motion generation), four-positions (Burmester's
-    centre-point curve), window (the input window that makes a
-    point's path straightest), function (psi = f(phi): Freudenstein's precision points,
-    then differential evolution over the range) and path (a coupler point through target
+    centre-point curve), five-positions (Burmester's points: every pair a four-bar),
+    window (the input window that makes a point's path straightest), function
+    (psi = f(phi): Freudenstein's precision points, then differential evolution over the
+    range) and path (a coupler point through target
     points, by differential evolution on design batches). See mechanisms/synth/.
     """
     from mechsolve.analyses.synth.problem import confirm, solve_problem
@@ -86,10 +87,13 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
         if bar is not None:
             bar.close()
     found = out.check.get("search") if isinstance(out.check, dict) else None
-    if plot is not None and out.method not in ("function", "path", "four-positions"):
+    if plot is not None and out.method not in ("function", "path", "four-positions",
+                                               "five-positions"):  # fmt: skip
         from mechsolve.base.errors import InputError
 
-        raise InputError("--plot: only function, path and four-positions problems draw a plot")
+        raise InputError(
+            "--plot: only function, path, four-positions and five-positions problems draw a plot"
+        )
     if not quiet:
         click.echo(out.text)
     if out.yaml is not None:
