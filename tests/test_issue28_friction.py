@@ -9,8 +9,10 @@ lambda + phi >= 90 deg, and the power balance (input = output + losses + dE/dt).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -114,3 +116,340 @@ def test_schema_knows_the_friction_keys():
     s = schema.text()
     for key in ("joint friction", "journal radius", "viscous"):
         assert key in s
+
+
+# -- a block on an incline, pushed by a force --------------------------------------------
+ALPHA = 25.0  # the incline's angle, degrees
+G = 9.81
+
+
+def incline(f: float, speed: float, push: tuple[float, float], viscous: float = 0.0) -> str:
+    return f"""
+name: incline
+units: {{length: m, angle: deg}}
+ground: {{O: [0, 0]}}
+links:
+  block: {{points: {{P: [0, 0]}}, mass: 3 kg, com: P}}
+joints:
+  slope: {{slider: [ground, block], point: P, line: {{through: [0, 0], angle: {ALPHA}}},
+          friction: {{coefficient: {f}, viscous: {viscous} N s/m}}}}
+driver: {{joint: slope, speed: {speed} m/s, start: 0.1 m}}
+sweep: {{range: 0.2 m, step: 0.05 m}}
+gravity: {G} m/s^2
+loads:
+  push: {{force: [{push[0]} N, {push[1]} N], at: P, on: block}}
+"""
+
+
+@pytest.mark.parametrize("speed", [0.3, -0.3])
+@pytest.mark.parametrize("push", [(5.0, -10.0), (0.0, 60.0), (-20.0, 45.0)])
+def test_block_on_an_incline_matches_its_free_body(speed, push):
+    """The block's free body: weight m g, the push P, the normal force N (either sign: the
+    guide holds the block on both sides), Coulomb's f |N| and the viscous c v against the
+    sliding, and the driving force T along the incline. Along the normal
+    N = -(W + P) . n; along the incline T = -(W + P) . u + (f |N| + c |v|) sign(v)."""
+    import mechsolve as ms
+
+    f, c = 0.3, 2.0
+    res = ms.solve(ms.loads(incline(f, speed, push, c)))
+    a = math.radians(ALPHA)
+    u = np.array([math.cos(a), math.sin(a)])
+    n = np.array([-math.sin(a), math.cos(a)])
+    load = np.array([push[0], push[1] - 3.0 * G])
+    N = -load @ n
+    T = -load @ u + (f * abs(N) + c * abs(speed)) * math.copysign(1.0, speed)
+    fr = res.forces
+    assert np.allclose(fr.effort, T, rtol=1e-12, atol=1e-12)
+    assert np.allclose(fr.reactions["slope"]["N"], N, rtol=1e-12)
+    assert np.allclose(fr.friction.friction["slope"], f * abs(N) + c * abs(speed), rtol=1e-12)
+    assert np.allclose(fr.friction.loss["slope"], (f * abs(N) + c * abs(speed)) * abs(speed))
+    assert np.allclose(fr.friction.ideal_effort, -load @ u, rtol=1e-12)
+
+
+# -- a wedge (a screw unrolled): efficiency and self-locking ---------------------------
+def wedge(lam: float, f: float, speed: float = 0.1, weight: float = 1000.0) -> str:
+    """A wedge driven along the bed lifts a block (on the wedge's face at ``lam`` to the
+    bed, with friction f) pinned to a ram guided vertically; the weight on the ram. The
+    bed and the column have no friction."""
+    return f"""
+name: wedge
+units: {{length: m, angle: deg}}
+ground: {{O: [0, 0]}}
+links:
+  wedge: {{points: {{W: [0, 0]}}}}
+  block: {{points: {{C: [0, 0]}}}}
+  ram: {{points: {{C: [0, 0]}}}}
+joints:
+  bed: {{slider: [ground, wedge], point: W, line: {{through: [0, 0], angle: 0}}}}
+  face: {{slider: [wedge, block], point: C, line: {{through: [0, 0], angle: {180 - lam}}},
+         friction: {{coefficient: {f}}}}}
+  C: [block, ram]
+  column: {{slider: [ground, ram], point: C, line: {{through: [0.5, 0], angle: 90}}}}
+assembly:
+  sketch: {{C: [0.5, 0.3]}}
+driver: {{joint: bed, speed: {speed} m/s, start: 0 m}}
+sweep: {{range: 0.1 m, step: 0.05 m}}
+loads:
+  weight: {{force: [0, -{weight} N], at: C, on: ram}}
+"""
+
+
+@pytest.mark.parametrize("lam, f", [(30.0, 0.2), (10.0, 0.2), (45.0, 0.05), (75.0, 0.2)])
+def test_wedge_efficiency_is_the_closed_form(lam, f):
+    """Raising: F = Q tan(lambda + phi), eta = tan(lambda) / tan(lambda + phi); lowering
+    (the drive reversed): F = Q tan(lambda - phi), negative (the driver pushes the load
+    down) when lambda < phi."""
+    import mechsolve as ms
+
+    L, phi, Q = math.radians(lam), math.atan(f), 1000.0
+    up = ms.solve(ms.loads(wedge(lam, f, 0.1)))
+    assert np.allclose(up.forces.effort, Q * math.tan(L + phi), rtol=1e-11)
+    assert np.allclose(up.forces.friction.ideal_effort, Q * math.tan(L), rtol=1e-11)
+    assert np.allclose(up.efficiency, math.tan(L) / math.tan(L + phi), rtol=1e-11)
+    down = ms.solve(ms.loads(wedge(lam, f, -0.1)))
+    assert np.allclose(down.forces.effort, Q * math.tan(L - phi), rtol=1e-11, atol=1e-9)
+    assert not up.forces.friction.locked.any() and not down.forces.friction.locked.any()
+
+
+@pytest.mark.parametrize("f", [0.2, 0.6])
+@pytest.mark.parametrize("side", [-1, 1])
+def test_wedge_self_locks_exactly_where_lambda_plus_phi_reaches_90_deg(f, side):
+    """The closed form: raising locks when lambda + phi >= 90 deg (no finite driving force);
+    a hundredth of a degree either side decides it."""
+    import mechsolve as ms
+
+    lam = 90.0 - math.degrees(math.atan(f)) + side * 0.01
+    res = ms.solve(ms.loads(wedge(lam, f, 0.1)))
+    fr = res.forces
+    if side > 0:
+        assert fr.friction.locked.all()
+        assert np.isnan(fr.effort).all()
+        assert all(s.startswith("self-locking") for s in res.status())
+        assert "self-locking at 3 position(s)" in res.summary()
+    else:
+        assert not fr.friction.locked.any()
+        L, phi = math.radians(lam), math.atan(f)
+        assert np.allclose(fr.effort, 1000.0 * math.tan(L + phi), rtol=1e-8)
+        # lowering never locks this way (lambda > phi here)
+    down = ms.solve(ms.loads(wedge(lam, f, -0.1)))
+    assert not down.forces.friction.locked.any()
+
+
+# -- a slider-crank at one position against its hand free bodies ------------------------
+R, L_ROD, E = 0.05, 0.2, 0.01  # crank, rod, offset (m)
+RHO = {"O": 0.1 * 0.012, "A": 0.08 * 0.01, "C": 0.12 * 0.008}  # f r of each pin (m)
+F_CYL = 0.15
+
+
+def slider_crank(theta_deg: float, omega: float, gas: tuple[float, float]) -> str:
+    return f"""
+name: slider-crank
+units: {{length: m, angle: deg}}
+ground: {{O: [0, 0]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [{R}, 0]}}}}
+  rod: {{points: {{A: [0, 0], C: [{L_ROD}, 0]}}}}
+  piston: {{points: {{C: [0, 0]}}}}
+joints:
+  O: {{revolute: [ground, crank], friction: {{coefficient: 0.1, journal radius: 12 mm}}}}
+  A: {{revolute: [crank, rod], friction: {{coefficient: 0.08, journal radius: 10 mm}}}}
+  C: {{revolute: [rod, piston], friction: {{coefficient: 0.12, journal radius: 8 mm}}}}
+  cylinder: {{slider: [ground, piston], point: C, line: {{through: [0, {E}], angle: 0}},
+             friction: {{coefficient: {F_CYL}}}}}
+assembly:
+  - C.x > A.x
+driver: {{joint: O, speed: {omega} rad/s, start: {theta_deg} deg}}
+sweep: {{range: 0 deg}}
+loads:
+  gas: {{force: [{gas[0]} N, {gas[1]} N], at: C, on: piston}}
+  brake: {{torque: 3 N m, on: rod}}
+"""
+
+
+def hand_kinematics(theta: float, omega: float):
+    """The offset slider-crank by hand: A, C, the rod's angular speed, the piston's speed."""
+    ax, ay = R * math.cos(theta), R * math.sin(theta)
+    cx = ax + math.sqrt(L_ROD**2 - (E - ay) ** 2)
+    phi = math.atan2(E - ay, cx - ax)
+    w_rod = -R * omega * math.cos(theta) / (L_ROD * math.cos(phi))
+    v_c = -R * omega * math.sin(theta) - L_ROD * math.sin(phi) * w_rod
+    return (ax, ay), (cx, E), w_rod, v_c
+
+
+def free_body_residuals(x, theta, omega, gas):
+    """Every free-body equation with friction, by hand. Unknowns: the force on the crank
+    by the ground at O, on the rod by the crank at A, on the piston by the rod at C
+    (each (x, y)), the normal force N on the piston (along +y), the guide's moment M on
+    it, the driving torque T. Each pin's friction moment rho |F| opposes its relative
+    rotation (on the second link by the first), the cylinder's f |N| the sliding."""
+    ox, oy, ax_, ay_, cx_, cy_, N, M, T = x
+    (pax, pay), (pcx, pcy), w_rod, v_c = hand_kinematics(theta, omega)
+    s_o = math.copysign(1.0, omega)  # crank on ground
+    s_a = math.copysign(1.0, w_rod - omega)  # rod on crank
+    s_c = math.copysign(1.0, 0.0 - w_rod)  # piston on rod
+    m_o = -RHO["O"] * math.hypot(ox, oy) * s_o  # on the crank
+    m_a = -RHO["A"] * math.hypot(ax_, ay_) * s_a  # on the rod (the crank gets -m_a)
+    m_c = -RHO["C"] * math.hypot(cx_, cy_) * s_c  # on the piston (the rod gets -m_c)
+    fric = -F_CYL * abs(N) * math.copysign(1.0, v_c)  # on the piston, along x
+    return np.array(
+        [
+            # crank: forces, moments about O
+            ox - ax_,
+            oy - ay_,
+            T + m_o - m_a + (pax * -ay_ - pay * -ax_),
+            # rod: forces, moments about A (the brake's 3 N m on it)
+            ax_ - cx_,
+            ay_ - cy_,
+            3.0 + m_a - m_c + ((pcx - pax) * -cy_ - (pcy - pay) * -cx_),
+            # piston: forces, moment
+            cx_ + gas[0] + fric,
+            cy_ + gas[1] + N,
+            M + m_c,
+        ]
+    )
+
+
+def hand_solve(theta, omega, gas):
+    """The free-body equations solved by Newton's method (a central-difference Jacobian)
+    from a small nonzero start, independent of the solver."""
+    x = np.ones(9)
+    for _ in range(100):
+        r = free_body_residuals(x, theta, omega, gas)
+        h = 1e-7 * max(1.0, np.max(np.abs(x)))
+        J = np.empty((9, 9))
+        for k in range(9):
+            d = np.zeros(9)
+            d[k] = h
+            J[:, k] = (
+                free_body_residuals(x + d, theta, omega, gas)
+                - free_body_residuals(x - d, theta, omega, gas)
+            ) / (2 * h)
+        dx = np.linalg.solve(J, -r)
+        x = x + dx
+        if np.max(np.abs(dx)) < 1e-13 * np.max(np.abs(x)):
+            return x
+    raise AssertionError("the hand solution did not converge")
+
+
+@pytest.mark.parametrize(
+    "theta_deg, omega, gas",
+    [
+        (40.0, 100.0, (-2000.0, 0.0)),
+        (130.0, 100.0, (1500.0, 300.0)),
+        (250.0, -80.0, (-900.0, -50.0)),
+    ],
+)
+def test_slider_crank_at_one_position_matches_its_hand_free_bodies(theta_deg, omega, gas):
+    """The solver's reactions satisfy every hand free-body equation and the friction law
+    to 1e-9 (relative to the largest force), and equal the hand solution (the same
+    equations solved by Newton's method from the frictionless solution, in the test)."""
+
+    import mechsolve as ms
+
+    theta = math.radians(theta_deg)
+    res = ms.solve(ms.loads(slider_crank(theta_deg, omega, gas)))
+    fr = res.forces
+    rx = {k: fr.reactions[k] for k in ("O", "A", "C")}
+    cyl = fr.reactions["cylinder"]
+    x = np.array(
+        [
+            rx["O"]["Fx"][0], rx["O"]["Fy"][0], rx["A"]["Fx"][0], rx["A"]["Fy"][0],
+            rx["C"]["Fx"][0], rx["C"]["Fy"][0], cyl["N"][0], cyl["M"][0], fr.effort[0],
+        ]
+    )  # fmt: skip
+    scale = np.max(np.abs(x))
+    assert np.max(np.abs(free_body_residuals(x, theta, omega, gas))) < 1e-9 * scale
+    hand = hand_solve(theta, omega, gas)
+    assert np.allclose(x, hand, rtol=1e-9, atol=1e-9 * scale)
+    # the friction the solver reports is the law's
+    assert fr.friction.friction["O"][0] == pytest.approx(RHO["O"] * math.hypot(*x[:2]), rel=1e-12)
+    assert fr.friction.friction["cylinder"][0] == pytest.approx(F_CYL * abs(x[6]), rel=1e-12)
+
+
+# -- the power balance, f = 0 ------------------------------------------------------------
+def engine(pin: str, cylinder: str, step: str = "2 deg") -> str:
+    text = SLIDER_CRANK.replace(PIN_O, f"  O: {{revolute: [ground, crank], friction: {pin}}}\n")
+    text = text.replace(
+        "  A: [crank, rod]\n", f"  A: {{revolute: [crank, rod], friction: {pin}}}\n"
+    )
+    text = text.replace(CYLINDER, f"line: {{through: [0, 10], angle: 0}}, friction: {cylinder}}}")
+    return text.replace("step: 5 deg", f"step: {step}")
+
+
+def test_power_balance_with_friction_at_every_position():
+    """input = output (the loads' power, absorbed) + the sum of the joints' friction
+    losses + dT/dt + dV/dt at every position; every loss >= 0."""
+    import mechsolve as ms
+
+    res = ms.solve(
+        ms.loads(
+            engine(
+                "{coefficient: 0.1, journal radius: 15 mm, viscous: 0.002 N m s/rad}",
+                "{coefficient: 0.15, viscous: 3 N s/m}",
+            )
+        )
+    )
+    f = res.forces
+    assert f.ok.all() and not f.friction.locked.any()
+    losses = sum(f.friction.loss.values())
+    assert all(np.all(p >= 0) for p in f.friction.loss.values())
+    assert np.all(losses > 0)
+    p_out = -f.power_loads
+    balance = f.power_input - (p_out + losses + f.kinetic_rate + f.potential_rate)
+    scale = np.max(np.abs(f.power_input))
+    assert np.max(np.abs(balance)) < 1e-9 * scale
+    assert np.max(np.abs(f.residual)) < 1e-9 * scale
+    # friction makes the driver pay: input with friction = input without + losses
+    ideal_input = f.friction.ideal_effort * f.speed
+    assert np.allclose(f.power_input, ideal_input + losses, rtol=0, atol=1e-9 * scale)
+
+
+def test_zero_friction_gives_exactly_todays_results(tmp_path):
+    """A coefficient of zero is no friction: the same numbers, bit for bit, and the
+    same table; a vanishing coefficient tends to the ideal joints' results."""
+    import mechsolve as ms
+
+    plain = ms.solve(ms.loads(SLIDER_CRANK))
+    zero = ms.solve(
+        ms.loads(engine("{coefficient: 0, journal radius: 15 mm}", "{coefficient: 0}", "5 deg"))
+    )
+    assert np.array_equal(plain.forces.effort, zero.forces.effort)
+    assert np.array_equal(plain.forces.lam, zero.forces.lam)
+    assert zero.forces.friction is None
+    plain.to_csv(tmp_path / "a.csv")
+    zero.to_csv(tmp_path / "b.csv")
+    assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()
+    tiny = ms.solve(
+        ms.loads(
+            engine("{coefficient: 1e-9, journal radius: 15 mm}", "{coefficient: 1e-9}", "5 deg")
+        )
+    )
+    scale = np.max(np.abs(plain.forces.effort))
+    assert np.allclose(tiny.forces.effort, plain.forces.effort, rtol=0, atol=1e-7 * scale)
+
+
+def test_cycle_efficiency_is_output_work_over_input_work():
+    """The summary's efficiency per cycle against the works integrated from the table:
+    the gas drives this engine, so the input is the loads' work and the output the
+    driver's; both by the trapezoidal rule over a fine sweep."""
+    import mechsolve as ms
+
+    res = ms.solve(
+        ms.loads(
+            engine("{coefficient: 0.1, journal radius: 15 mm}", "{coefficient: 0.2}", "0.25 deg")
+        )
+    )
+    f = res.forces
+    text = res.summary()
+    line = next(ln for ln in text.splitlines() if "efficiency per cycle" in ln)
+    eta = float(line.split(":")[1].split()[0])
+    t = res.t
+    w_loads = np.trapezoid(f.power_loads, t)
+    w_driver = np.trapezoid(f.power_input, t)
+    assert w_driver < 0 < w_loads
+    assert eta == pytest.approx(-w_driver / w_loads, rel=2e-3)
+    w_lost = np.trapezoid(sum(f.friction.loss.values()), t)
+    # over the cycle the energies return: what the loads put in is lost or taken out
+    assert w_lost == pytest.approx(w_loads + w_driver, rel=1e-3)
+    line = next(ln for ln in text.splitlines() if "friction losses per cycle" in ln)
+    assert float(line.split(":")[1].split()[0]) == pytest.approx(w_lost, rel=1e-5)
