@@ -453,3 +453,43 @@ def test_cycle_efficiency_is_output_work_over_input_work():
     assert w_lost == pytest.approx(w_loads + w_driver, rel=1e-3)
     line = next(ln for ln in text.splitlines() if "friction losses per cycle" in ln)
     assert float(line.split(":")[1].split()[0]) == pytest.approx(w_lost, rel=1e-5)
+
+
+MOTOR_LINKAGE = (ROOT / "mechanisms" / "motor-linkage.yaml").read_text()
+GUIDE = "guide: {slider: [ground, slider], point: D, line: {through: [0.5, 0], angle: 90}}"
+
+
+def six_bar() -> str:
+    text = MOTOR_LINKAGE.replace(
+        GUIDE, GUIDE[:-1] + ", friction: {coefficient: 0.2, viscous: 5 N s/m}}"
+    )
+    return text.replace(
+        "  K: [rocker, rod]\n",
+        "  K: {revolute: [rocker, rod], friction: {coefficient: 0.15, journal radius: 20 mm}}\n",
+    )
+
+
+def test_six_bar_with_friction_keeps_its_power_balance():
+    """A six-link machine (two groups, a slider at the end of the chain): friction at a
+    pin of the second group and at the slider; the balance holds at every position."""
+    import mechsolve as ms
+
+    res = ms.solve(ms.loads(six_bar()))
+    f = res.forces
+    assert f.ok.all()
+    losses = f.power_friction
+    assert np.all(losses >= 0) and np.max(losses) > 0
+    scale = np.max(np.abs(f.power_input))
+    assert np.max(np.abs(f.residual)) < 1e-9 * scale
+    # the pin K's friction moment is rho |F| of its own reaction
+    K = f.reactions["K"]["F"]
+    assert np.allclose(f.friction.friction["K"], 0.15 * 0.02 * K, rtol=1e-12)
+
+
+def test_simulate_refuses_friction_it_does_not_model(tmp_path):
+    f = tmp_path / "m.yaml"
+    f.write_text(six_bar())
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 2, r.output
+    assert "joints.K.friction" in r.output and "does not model" in r.output
+    assert "Traceback" not in r.output

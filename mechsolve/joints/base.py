@@ -208,6 +208,8 @@ class Joint:
     magnitude_note: ClassVar[str] = ""
     keys: ClassVar[dict[str, Key]] = {}
     components: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: its friction (a revolute's and a slider's ``friction:``); None: an ideal joint
+    friction: Friction | None = None
 
     name: str
     point: str
