@@ -64,6 +64,7 @@ def solve_friction(
     solve: Callable[[np.ndarray], np.ndarray],
     effort_row: int,
     where: Callable[[int], str],
+    smoothing: tuple[np.ndarray, float] | None = None,
 ) -> tuple[np.ndarray, FrictionResult]:
     """The multipliers with friction and what friction changes.
 
@@ -78,8 +79,12 @@ def solve_friction(
         The driver's row in the multipliers (its effort is ``-lambda[:, row]``).
     where
         A position in words, for the message when the iteration does not converge.
+    smoothing
+        ``(speed, s0)``: the Coulomb parts regularised by the driver's ``speed`` at each
+        position, ``tanh(|speed| / s0)`` times their value (for the equation of motion,
+        which needs friction continuous through a standstill); None: exact Coulomb.
     """
-    law = _Law(an, st, lam0, solve)
+    law = _Law(an, st, lam0, solve, smoothing)
     K, n = law.k.shape
     good = np.all(np.isfinite(law.lamv), axis=1) & np.all(np.isfinite(law.U), axis=(0, 2))
     s, done, steps = _newton(law, np.flatnonzero(good))
@@ -115,7 +120,7 @@ class _Law:
     Coulomb factors (zero where the slip is), ``v`` (K, N) their viscous frictions,
     ``lamv`` the multipliers with the viscous frictions, ``slips`` their |slip|."""
 
-    def __init__(self, an: Analysis, st, lam0: np.ndarray, solve: Callable) -> None:
+    def __init__(self, an: Analysis, st, lam0: np.ndarray, solve: Callable, smoothing=None) -> None:
         self.rows = frictional(an)
         n, K = st.n, len(self.rows)
         self.U = np.zeros((K, n, lam0.shape[1]))
@@ -127,13 +132,17 @@ class _Law:
             slip = c.slip(st)
             big = np.nanmax(np.abs(slip)) if np.any(np.isfinite(slip)) else 0.0
             on = np.where(np.abs(slip) > ZERO_SLIP * big, 1.0, 0.0)
+            soft = 1.0
+            if smoothing is not None:
+                speed, s0 = smoothing
+                soft = np.abs(np.tanh(np.asarray(speed, float) / s0))
             acc = _Q(an, st)
             for body, x, y, fx, fy, t in c.friction_pull(st):
                 if body != an.system.nb:
                     acc.force(body, None, fx * on, fy * on, (x - st.x[body], y - st.y[body]))
                     acc.torque(body, t * on)
             self.U[j] = solve(acc.Q)
-            self.k[j] = on * c.coulomb
+            self.k[j] = on * soft * c.coulomb
             self.v[j] = on * c.viscous * np.abs(slip)
             self.slips.append(np.abs(slip))
         self.lamv = lam0 + np.einsum("kn,knc->nc", self.v, self.U)

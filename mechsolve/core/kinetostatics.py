@@ -158,7 +158,12 @@ def _with_friction(an: Analysis, st, sol: Solution, lam: np.ndarray, row: int):
         lam1 = _solve_groups(an, st, Q, sol.indicator, sol.ok)[0]
         return _with_separating_forces(an, st, lam1, sol)
 
-    return solve_friction(an, st, lam, solve, row, lambda i: an.format_u(float(sol.u[i])))
+    # the equation of motion sets a regularisation (mechsolve.analyses.dynamics.model)
+    s0 = getattr(an, "friction_smoothing", None)
+    smoothing = None if s0 is None else (sol.driver_rates()[0], s0)
+    return solve_friction(
+        an, st, lam, solve, row, lambda i: an.format_u(float(sol.u[i])), smoothing
+    )
 
 
 def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) -> np.ndarray:
