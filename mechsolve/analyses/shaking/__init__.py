@@ -18,8 +18,10 @@ from mechsolve.analyses.shaking.balance import (
     balanced_data,
     find_linkage,
     inline,
+    least_squares,
 )
 from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
+from mechsolve.base.errors import InputError
 from mechsolve.model import Mechanism
 
 __all__ = [
@@ -32,6 +34,7 @@ __all__ = [
     "find_linkage",
     "frame_load",
     "inertia_only",
+    "least_squares",
     "shaking",
 ]
 
@@ -88,18 +91,25 @@ def balanced(
     about_name: str = "the frame's origin",
     step: float | None = None,
     variant: str | None = None,
+    rms: bool = False,
 ) -> Balanced:
     """Balance ``mech`` (see :func:`~mechsolve.analyses.shaking.balance.balance`), write
     the counterweights into the file's text and solve the balanced file again: the
     shaking before and after are of the two runnable files. ``variant``: the name of the
-    file's variant ``mech`` was loaded with (its data has it applied), for the header."""
+    file's variant ``mech`` was loaded with (its data has it applied), for the header.
+    ``rms``: the counterweights that minimise the RMS shaking force over the turn
+    (:func:`~mechsolve.analyses.shaking.balance.least_squares`) instead."""
     import yaml
 
     from mechsolve.model.parse import loads
 
+    if rms and fraction is not None:
+        raise InputError("--rms chooses the counterweight itself: give it or --fraction")
     bal = balance(mech, fraction=fraction, radius=radius)
     kw = dict(about=about, about_name=about_name, step=step, inertia=True)
     before = shaking(mech, **kw)
+    if rms:
+        bal = least_squares(mech, bal, before, radius)
     if bal.fraction is not None:
         bal.inline = bal.inline and inline(before.results, bal.linkage)
     data = balanced_data(mech, bal)
