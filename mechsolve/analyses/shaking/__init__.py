@@ -20,6 +20,7 @@ from mechsolve.analyses.shaking.balance import (
     inline,
     least_squares,
 )
+from mechsolve.analyses.shaking.edit import with_counterweights
 from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
 from mechsolve.base.errors import InputError
 from mechsolve.model import Mechanism
@@ -119,6 +120,28 @@ def balanced(
         "# (point masses, see links.*.point_masses)\n"
         + (f"# from the variant {variant!r} of the file, applied\n" if variant else "")
     )
-    text = head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    body = None
+    if mech.source.text is not None and not variant:  # the file's text, comments kept
+        body = with_counterweights(mech.source.text, _entries(mech, bal), data)
+    if body is None:  # a variant applied, or a layout the edit does not handle
+        body = yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    text = head + body
     after = shaking(loads(text, file=mech.source.file), **kw)  # the variant is in the data
     return Balanced(bal, before, after, text)
+
+
+def _entries(mech: Mechanism, bal: Balance) -> list[tuple[str, str, str, str]]:
+    """Each counterweight as the balanced file writes it: its link, its point's name,
+    its position ``[x, y]`` in the file's length unit and its mass (kg)."""
+    from mechsolve.base.units import parse_quantity
+
+    scale = parse_quantity(f"1 {mech.length_unit}", "length")
+    return [
+        (
+            cw.link,
+            cw.point,
+            f"[{float(cw.local[0] / scale)!r}, {float(cw.local[1] / scale)!r}]",
+            f"{float(cw.mass)!r} kg",
+        )
+        for cw in bal.counterweights
+    ]
