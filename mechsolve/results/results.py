@@ -388,7 +388,7 @@ class Results(Summary):
                 un = "N*m" if j.coordinate == "angle" else "N"
                 cols.append(Column(f"{lab}.friction", un, fr.friction[j.name]))
                 cols.append(Column(f"{lab}.friction_power", "W", fr.loss[j.name]))
-        cols.append(Column("efficiency", "-", self.efficiency))
+        cols.append(Column("efficiency.instant", "-", self.efficiency))
         return cols
 
     @property
