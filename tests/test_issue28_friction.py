@@ -225,7 +225,7 @@ def test_wedge_self_locks_exactly_where_lambda_plus_phi_reaches_90_deg(f, side):
         assert fr.friction.locked.all()
         assert np.isnan(fr.effort).all()
         assert all(s.startswith("self-locking") for s in res.status())
-        assert "self-locking at 3 position(s)" in res.summary()
+        assert "self-locking at 3 of 3 positions" in res.summary()
     else:
         assert not fr.friction.locked.any()
         L, phi = math.radians(lam), math.atan(f)
@@ -552,3 +552,26 @@ def test_start_up_with_pin_friction_matches_the_closed_form():
     fine = rotor_start(0.004, smoothing=5e-4).trajectory.omega
     coarse = rotor_start(0.004).trajectory.omega
     assert np.max(np.abs(fine - coarse)) < 1e-6 * w_inf
+
+
+def test_designs_solved_as_one_batch_keep_their_friction():
+    """A design batch (studies, synthesis) gives each design the friction a separate
+    solve gives it, and its power balance still closes."""
+    import mechsolve as ms
+    from mechsolve.analyses.batch import solve_designs
+
+    texts = [
+        engine(
+            "{coefficient: 0.1, journal radius: 15 mm}", "{coefficient: 0.15}", "10 deg"
+        ).replace("A: [50, 0]", f"A: [{a}, 0]")
+        for a in (45, 50, 55)
+    ]
+    mechs = [ms.loads(t) for t in texts]
+    batch = solve_designs(mechs)
+    for k, m in enumerate(mechs):
+        one, alone = batch.results(k).forces, ms.solve(m).forces
+        assert one.friction is not None
+        assert np.allclose(one.effort, alone.effort, rtol=1e-9, atol=1e-9)
+        for j in ("O", "A", "cylinder"):
+            assert np.allclose(one.friction.loss[j], alone.friction.loss[j], rtol=1e-9, atol=1e-9)
+        assert np.max(np.abs(one.residual)) < 1e-9 * np.max(np.abs(one.power_input))

@@ -83,8 +83,9 @@ class Summary:
             if locked.size > 1:
                 where += f" to {self.describe_u(int(locked[-1]))}"
             lines.append(
-                f"  self-locking at {locked.size} position(s), {where}: no finite driving "
-                "effort moves the mechanism in the drive direction there"
+                f"  self-locking at {locked.size} of {len(self.u)} positions "
+                f"({self.sample_spacing()} samples), {where}: no finite driving effort "
+                "moves the mechanism in the drive direction there"
             )
             self.warnings.append(
                 f"self-locking at {locked.size} position(s): the driving effort and the "
