@@ -575,3 +575,36 @@ def test_designs_solved_as_one_batch_keep_their_friction():
         for j in ("O", "A", "cylinder"):
             assert np.allclose(one.friction.loss[j], alone.friction.loss[j], rtol=1e-9, atol=1e-9)
         assert np.max(np.abs(one.residual)) < 1e-9 * np.max(np.abs(one.power_input))
+
+
+def test_a_joint_that_does_not_slip_has_no_coulomb_friction():
+    """An in-line slider-crank at crank angles 90 and 270 deg: the rod does not turn, so
+    the piston pin C does not slip and carries no Coulomb moment there (its direction is
+    undefined); elsewhere it does. There the results are those of an ideal pin C."""
+    import mechsolve as ms
+
+    def text(pin_c: str) -> str:
+        return (
+            slider_crank(0.0, 100.0, (-800.0, 0.0))
+            .replace(
+                "C: {revolute: [rod, piston], friction: {coefficient: 0.12, journal radius: 8 mm}}",
+                pin_c,
+            )
+            .replace("sweep: {range: 0 deg}", "sweep: {range: 360 deg, step: 90 deg}")
+        )
+
+    with_c = ms.solve(
+        ms.loads(
+            text(
+                "C: {revolute: [rod, piston], friction: {coefficient: 0.12, journal radius: 8 mm}}"
+            ).replace(f"through: [0, {E}]", "through: [0, 0]")
+        )
+    )
+    ideal_c = ms.solve(
+        ms.loads(text("C: [rod, piston]").replace(f"through: [0, {E}]", "through: [0, 0]"))
+    )
+    fc = with_c.forces.friction.friction["C"]
+    assert fc[1] == 0.0 and fc[3] == 0.0  # 90 and 270 deg: the rod at rest
+    assert fc[0] > 0 and fc[2] > 0
+    for i in (1, 3):
+        assert with_c.forces.effort[i] == pytest.approx(ideal_c.forces.effort[i], rel=1e-12)
