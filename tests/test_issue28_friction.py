@@ -608,3 +608,51 @@ def test_a_joint_that_does_not_slip_has_no_coulomb_friction():
     assert fc[0] > 0 and fc[2] > 0
     for i in (1, 3):
         assert with_c.forces.effort[i] == pytest.approx(ideal_c.forces.effort[i], rel=1e-12)
+
+
+def piston_driven(M0: float) -> str:
+    """A slider-crank driven by its piston towards the crank from next to the outer dead
+    centre, a torque M0 on the crank; friction only in the crank's pivot (rho = 4 mm)."""
+    return f"""
+name: piston-driven
+units: {{length: mm, angle: deg}}
+ground: {{O: [0, 0]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [50, 0]}}}}
+  rod: {{points: {{A: [0, 0], C: [200, 0]}}}}
+  piston: {{points: {{C: [0, 0]}}}}
+joints:
+  O: {{revolute: [ground, crank], friction: {{coefficient: 0.5, journal radius: 8 mm}}}}
+  A: [crank, rod]
+  C: [rod, piston]
+  cylinder: {{slider: [ground, piston], point: C, line: {{through: [0, 0], angle: 0}}}}
+assembly:
+  - C.x > A.x
+  - A.y > 0
+driver: {{joint: cylinder, speed: -0.1 m/s, start: 249.995 mm}}
+sweep: {{range: 0.5 mm, step: 0.01 mm}}
+loads:
+  work: {{torque: {M0} N m, on: crank}}
+"""
+
+
+def test_piston_driven_crank_locks_where_the_rod_passes_inside_the_friction_circle():
+    """The rod, with ideal pins at both ends, pushes along its own line; the crank turns
+    against the load only if that line passes outside the friction circle of its pivot
+    (radius rho): it locks where the line's distance h from O is below rho, and only
+    there (the closed form's boundary h = rho, the samples either side of it). With the
+    load turning the crank the same way, nothing locks (the driver holds back)."""
+    import mechsolve as ms
+
+    res = ms.solve(ms.loads(piston_driven(-20.0)))
+    A, C = res.point("A"), res.point("C")
+    ux, uy = C.x - A.x, C.y - A.y
+    h = np.abs(A.x * uy - A.y * ux) / np.hypot(ux, uy)
+    rho = 0.5 * 0.008
+    clear = np.abs(h - rho) > 1e-9 * rho
+    locked = res.forces.friction.locked
+    assert 5 < locked.sum() < len(h) - 5  # the boundary is inside the sweep
+    assert np.array_equal(locked[clear], (h < rho)[clear])
+    assert np.all(np.isfinite(res.forces.effort[~locked]))
+    helped = ms.solve(ms.loads(piston_driven(20.0)))
+    assert not helped.forces.friction.locked.any()

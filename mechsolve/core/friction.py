@@ -225,7 +225,7 @@ def _continue(
         kk = k[:, act] * t1
         trial = s[:, act].copy()
         conv = np.zeros(act.size, bool)
-        for _ in range(25):  # from a nearby solution: a few steps, or none exists
+        for _ in range(12):  # from a nearby solution: a few steps, or none exists
             L, G = loads(trial, idx[act], kk)
             F = trial - kk * L
             with np.errstate(all="ignore"):
