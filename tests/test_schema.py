@@ -186,6 +186,7 @@ PROBES = {
     "joint": [(("joints", "A"), {"revolute": ["crank", "rod"], "zzz": 1})],
     "pin": [(("joints", "A"), {"revolute": ["crank", "rod", "piston"], "zzz": 1})],
     "guide line": [(("joints", "cylinder", "line"), {"through": [0, 10], "zzz": 1})],
+    "joint friction": [(("joints", "cylinder", "friction"), {"coefficient": 0.1, "zzz": 1})],
     "driver": [(("driver", "zzz"), 1)],
     "limit start": [(("driver", "start"), {"limit": "C.x", "at": "max", "zzz": 1})],
     "motion": [(("driver", "speed"), None), (("driver", "motion"), {"law": "t", "zzz": 1})],

@@ -39,6 +39,7 @@ import numpy as np
 from mechsolve.base.errors import MechsolveError
 from mechsolve.base.state import State
 from mechsolve.core.branch_choice import _PendingConditions
+from mechsolve.core.force_result import FrictionResult
 from mechsolve.core.kinetostatics import ForceResult, solve_forces
 from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
 from mechsolve.core.sweep import Analysis
@@ -146,6 +147,18 @@ def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
         stroke_extremes=[(float(lo[j]), float(hi[j])) for lo, hi in f.stroke_extremes],
         speed=f.speed[sl] if np.ndim(f.speed) else f.speed,
         energy_terms=(lambda: tuple(a[sl] for a in terms())) if terms is not None else None,
+        friction=None if f.friction is None else _slice_friction(f.friction, sl),
+    )
+
+
+def _slice_friction(fr: FrictionResult, sl: slice) -> FrictionResult:
+    """One design's share of the joints' friction."""
+    return FrictionResult(
+        {k: v[sl] for k, v in fr.friction.items()},
+        {k: v[sl] for k, v in fr.loss.items()},
+        fr.ideal_effort[sl],
+        fr.locked[sl],
+        fr.iterations,
     )
 
 

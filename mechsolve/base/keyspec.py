@@ -162,3 +162,23 @@ def K(kind: Kind, doc: str, required: bool = False) -> Key:  # noqa: N802 (a sho
 ANGLE = quantity("angle")
 LENGTH = quantity("length")
 DESCRIPTION = K(TEXT, "Free text about this item (ignored by the solver).")
+
+# A joint's friction (a revolute's or a slider's ``friction:``): shared by the joint kinds
+# that can have it, so that the schema and the unknown-key suggestions know its keys.
+JOINT_FRICTION = Section(
+    "joint friction",
+    "Friction in a joint: Coulomb's law (a revolute's friction circle rho = f r, a slider's "
+    "friction angle atan f) and optionally a viscous part.",
+    {
+        "coefficient": K(number(0), "The Coulomb friction coefficient f (zero or positive)."),
+        "journal radius": K(
+            LENGTH, "A revolute's journal (pin) radius r: the friction circle is rho = f r."
+        ),
+        "viscous": K(
+            either(quantity("rotational damping"), quantity("damping")),
+            "A viscous part: a revolute's torque per relative angular speed (N m s/rad), "
+            "a slider's force per sliding speed (N s/m).",
+        ),
+        "description": DESCRIPTION,
+    },
+)

@@ -10,6 +10,37 @@ import numpy as np
 
 
 @dataclass
+class FrictionResult:
+    """What friction changes at every position.
+
+    Attributes
+    ----------
+    friction
+        Per joint: the friction's magnitude, a force (N, a slider) or a moment (N m, a
+        pin), Coulomb and viscous parts together.
+    loss
+        Per joint: the power friction dissipates, ``t_j |slip_j|`` (W, >= 0).
+    ideal_effort
+        The driving effort the same motion and loads need without friction.
+    locked
+        The self-locking positions (no finite driving effort).
+    iterations
+        The largest number of Newton steps a position took.
+    """
+
+    friction: dict[str, np.ndarray] = field(default_factory=dict)
+    loss: dict[str, np.ndarray] = field(default_factory=dict)
+    ideal_effort: np.ndarray | None = None
+    locked: np.ndarray | None = None
+    iterations: int = 0
+
+    @property
+    def power(self) -> np.ndarray:
+        """The power lost in all the joints (W)."""
+        return sum(self.loss.values())  # type: ignore[return-value]
+
+
+@dataclass
 class ForceResult:
     """Reactions, driver effort, energies and the power balance over the positions.
 
@@ -37,6 +68,8 @@ class ForceResult:
     effort_near_limit: list[int] = field(default_factory=list)
     # (kinetic, kinetic rate, potential, potential rate) on demand
     energy_terms: Callable[[], tuple] | None = field(default=None, repr=False)
+    # the joints' friction (None: ideal joints), see mechsolve.core.friction
+    friction: FrictionResult | None = None
     _energies: tuple | None = field(default=None, repr=False)
 
     def _terms(self) -> tuple:
@@ -70,6 +103,18 @@ class ForceResult:
         return self.effort * self.speed
 
     @property
+    def power_friction(self) -> np.ndarray | float:
+        """The power lost in the joints' friction (W); 0 with ideal joints."""
+        return 0.0 if self.friction is None else self.friction.power
+
+    @property
     def residual(self) -> np.ndarray:
-        """Power balance: P_driver - dT/dt - dV/dt + P_loads (W), zero to rounding."""
-        return self.power_input - self.kinetic_rate - self.potential_rate + self.power_loads
+        """Power balance: P_driver - dT/dt - dV/dt + P_loads - P_friction (W), zero to
+        rounding."""
+        return (
+            self.power_input
+            - self.kinetic_rate
+            - self.potential_rate
+            + self.power_loads
+            - self.power_friction
+        )

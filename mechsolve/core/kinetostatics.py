@@ -39,6 +39,7 @@ from mechsolve.core.conditioning import (
     rcond_above,
 )
 from mechsolve.core.force_result import ForceResult
+from mechsolve.core.friction import frictional, solve_friction
 from mechsolve.core.loads import (
     _Q,
     apply_loads,
@@ -63,7 +64,6 @@ def solve_forces(
 
     mech, sys_ = an.mech, an.system
     st = sol.state
-    n = st.n
     view = StateView(an, st)
     acc = _Q(an, st)
     gx, gy = mech.gravity_vector()
@@ -91,6 +91,45 @@ def solve_forces(
             acc.torque(b, -J * st.al[b])
         massive.append((b, m, J, s))
 
+    replay = stroke_extremes is not None
+    extremes: list[tuple[float, float]] = list(stroke_extremes) if replay else []
+    active = condition_masks(an, sol, view, extremes, replay)
+    power_loads, load_power, springs = apply_loads(an, st, active, acc)
+    energy_terms = _energy_terms(st, massive, springs, gx, gy)
+
+    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
+    drv = sys_.driver
+    row = next(r.start for r in sys_.rows if r.constraint is drv)
+    effort = -lam[:, row]
+    lam = _with_separating_forces(an, st, lam, sol)
+    fric = None
+    if frictional(an):  # the reactions are no longer linear in the loads: iterate
+        lam, fric = _with_friction(an, st, sol, lam, row)
+        effort = -lam[:, row]
+    reactions = _reactions(an, st, lam)
+    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
+    return ForceResult(
+        lam,
+        effort,
+        reactions,
+        active,
+        power_loads,
+        singular,
+        ok,
+        load_power=load_power,
+        stroke_extremes=extremes,
+        nonunique=_nonunique_components(an, nonunique),
+        speed=sol.driver_rates()[0],
+        energy_terms=energy_terms,
+        near_singular=near,
+        friction=fric,
+    )
+
+
+def _energy_terms(st, massive: list, springs: tuple, gx: float, gy: float):
+    """The kinetic and potential energies and their rates, computed when asked."""
+    n = st.n
+
     def energy_terms():
         kinetic = np.zeros(n)
         kinetic_rate = np.zeros(n)
@@ -108,32 +147,22 @@ def solve_forces(
                 potential_rate += -m * (gx * vx + gy * vy)
         return kinetic, kinetic_rate, potential, potential_rate
 
-    replay = stroke_extremes is not None
-    extremes: list[tuple[float, float]] = list(stroke_extremes) if replay else []
-    active = condition_masks(an, sol, view, extremes, replay)
-    power_loads, load_power, springs = apply_loads(an, st, active, acc)
+    return energy_terms
 
-    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
-    drv = sys_.driver
-    row = next(r.start for r in sys_.rows if r.constraint is drv)
-    effort = -lam[:, row]
-    lam = _with_separating_forces(an, st, lam, sol)
-    reactions = _reactions(an, st, lam)
-    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
-    return ForceResult(
-        lam,
-        effort,
-        reactions,
-        active,
-        power_loads,
-        singular,
-        ok,
-        load_power=load_power,
-        stroke_extremes=extremes,
-        nonunique=_nonunique_components(an, nonunique),
-        speed=sol.driver_rates()[0],
-        energy_terms=energy_terms,
-        near_singular=near,
+
+def _with_friction(an: Analysis, st, sol: Solution, lam: np.ndarray, row: int):
+    """The multipliers with the joints' friction (see :mod:`mechsolve.core.friction`),
+    each iteration's linear solve the ideal one (groups, then separating forces)."""
+
+    def solve(Q: np.ndarray) -> np.ndarray:
+        lam1 = _solve_groups(an, st, Q, sol.indicator, sol.ok)[0]
+        return _with_separating_forces(an, st, lam1, sol)
+
+    # the equation of motion sets a regularisation (mechsolve.analyses.dynamics.model)
+    s0 = getattr(an, "friction_smoothing", None)
+    smoothing = None if s0 is None else (sol.driver_rates()[0], s0)
+    return solve_friction(
+        an, st, lam, solve, row, lambda i: an.format_u(float(sol.u[i])), smoothing
     )
 
 

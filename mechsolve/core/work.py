@@ -35,6 +35,7 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
     their power over the motion, ``integral of P dt`` (a damper's ``-c v^2``), by adaptive
     quadrature on states solved between the samples (:func:`_power_integral`), to a
     relative 1e-11: not a rule on the samples, so it does not depend on the step either.
+    The joints' friction losses are added (:func:`friction_work`, a rule on the samples).
     The energies need only the motion, so positions where the forces are indeterminate
     (singular) do not matter; if the mechanism could not be solved at some position, the
     work is not defined (NaN).
@@ -92,7 +93,29 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
         if why:
             return float("nan"), why
         work -= w_loads
+    if fr.friction is not None:
+        w_friction, why = friction_work(sol, fr)
+        if why:
+            return float("nan"), why
+        work += w_friction
     return float(work), ""
+
+
+def friction_work(sol: Solution, fr: ForceResult) -> tuple[float, str]:
+    """The work the joints' friction dissipates over the sweep (J, >= 0) and why it is not
+    defined when it is NaN: ``integral of P_friction dt = integral of P_friction / u' du``
+    by the trapezoidal rule on the samples (second order in the step; a joint's slip
+    changing sign between two samples makes that interval first order)."""
+    if len(sol.u) < 2:
+        return float("nan"), "not enough positions"
+    if not np.all(fr.ok):
+        bad = int(np.sum(~fr.ok))
+        return float("nan"), f"the friction losses are not known at {bad} position(s)"
+    rate = np.broadcast_to(np.asarray(fr.speed, float), np.shape(sol.u))
+    if np.any(rate == 0):
+        return float("nan"), "the driver stands still at some position (friction losses)"
+    per_u = fr.power_friction / rate
+    return float(np.sum(0.5 * (per_u[1:] + per_u[:-1]) * np.diff(sol.u))), ""
 
 
 # Gauss-Kronrod 7-15 on [-1, 1] (QUADPACK's qk15): the 15 Kronrod nodes and weights, and

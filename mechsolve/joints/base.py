@@ -18,13 +18,15 @@ Velocities solve ``Phi_q qdot = nu`` and accelerations ``Phi_q qddot = gamma`` w
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from mechsolve.base.errors import suggest
-from mechsolve.base.keyspec import Key
+from mechsolve.base.keyspec import JOINT_FRICTION, Key
 from mechsolve.base.state import State
 
 if TYPE_CHECKING:
@@ -122,6 +124,29 @@ class Constraint:
     def bodies(self) -> tuple[int, int]:
         return (self.a, self.b)
 
+    # -- friction (see :mod:`mechsolve.core.friction`) ----------------------------------
+    #: Coulomb friction per unit of :meth:`load`: a pin's friction circle rho = f r (m),
+    #: a slider's coefficient f; zero: none.
+    coulomb: float = 0.0
+    #: The viscous part: friction per unit of :meth:`slip` (N m s/rad or N s/m).
+    viscous: float = 0.0
+
+    def slip(self, st: State) -> np.ndarray:
+        """The relative speed whose sign friction opposes (a pin's relative angular speed
+        of ``b`` on ``a``, a slider's sliding speed), (N,)."""
+        raise NotImplementedError
+
+    def load(self, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The load Coulomb's law multiplies from the multipliers ``lam`` (N, m) (a pin's
+        force magnitude, a slider's normal force magnitude), and its gradient (N, m)."""
+        raise NotImplementedError
+
+    def friction_pull(self, st: State) -> list[tuple]:
+        """A unit of friction opposing the slip (N,) at every position, as loads on the
+        two bodies ``(body, x, y, fx, fy, torque)`` (a point force at the global point
+        ``(x, y)`` and a torque, arrays over the positions); zero where the slip is."""
+        raise NotImplementedError
+
 
 class Reader(Protocol):
     """What a joint's reader uses of the model's file reader (:mod:`mechsolve.model.reader`)."""
@@ -183,6 +208,8 @@ class Joint:
     magnitude_note: ClassVar[str] = ""
     keys: ClassVar[dict[str, Key]] = {}
     components: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: its friction (a revolute's and a slider's ``friction:``); None: an ideal joint
+    friction: Friction | None = None
 
     name: str
     point: str
@@ -260,6 +287,68 @@ class Joint:
         """The report's row: the links, the point, the kind's own geometry (``length``
         and ``angle`` format a length in ``unit`` and an angle in degrees)."""
         return (f"{self.a} – {self.b}", self.point, "")
+
+
+@dataclass(frozen=True)
+class Friction:
+    """A joint's friction: Coulomb's coefficient ``coefficient``, a revolute's journal
+    radius ``radius`` (m; its friction circle is ``coefficient * radius``) and a viscous
+    part ``viscous`` (N m s/rad for a revolute, N s/m for a slider)."""
+
+    coefficient: float = 0.0
+    radius: float = 0.0
+    viscous: float = 0.0
+
+    @property
+    def any(self) -> bool:
+        return self.coefficient > 0 or self.viscous > 0
+
+
+def read_friction(r: Reader, value: Any, path: tuple, kind: str, name: str) -> Friction:
+    """A joint's ``friction: {coefficient, journal radius, viscous}`` at ``path``: a
+    revolute needs its journal radius for a Coulomb part, a slider has none."""
+    m = r.mapping(value, path, JOINT_FRICTION.allowed, f"the friction of joint {name!r}")
+    f = 0.0
+    if "coefficient" in m:
+        f = r.quantity(m["coefficient"], path + ("coefficient",), "dimensionless")
+        if not math.isfinite(f) or f < 0:
+            raise r.fail(
+                path + ("coefficient",),
+                f"a friction coefficient is zero or positive, got {m['coefficient']!r}",
+            )
+    rad = 0.0
+    if kind == "revolute":
+        if "journal radius" in m:
+            rad = r.quantity(m["journal radius"], path + ("journal radius",), "length")
+            if not math.isfinite(rad) or rad <= 0:
+                raise r.fail(
+                    path + ("journal radius",),
+                    f"a journal radius is positive, got {m['journal radius']!r}",
+                )
+        elif f > 0:
+            raise r.fail(
+                path,
+                f"revolute {name!r} has a friction coefficient but no 'journal radius': "
+                "its friction circle is rho = f r, e.g. friction: {coefficient: 0.1, "
+                "journal radius: 10 mm}",
+            )
+    elif "journal radius" in m:
+        raise r.fail(
+            path + ("journal radius",),
+            f"a {kind} has no journal: 'journal radius' applies to a revolute joint",
+        )
+    visc = 0.0
+    if "viscous" in m:
+        dim = "rotational damping" if kind == "revolute" else "damping"
+        visc = r.quantity(m["viscous"], path + ("viscous",), dim)
+        if not math.isfinite(visc) or visc < 0:
+            raise r.fail(
+                path + ("viscous",),
+                f"a viscous coefficient is zero or positive, got {m['viscous']!r}",
+            )
+    if "coefficient" not in m and "viscous" not in m:
+        raise r.fail(path, f"the friction of joint {name!r} needs 'coefficient' or 'viscous'")
+    return Friction(f, rad, visc)
 
 
 def read_meshing_links(

@@ -13,9 +13,17 @@ from typing import Any, ClassVar
 import numpy as np
 
 from mechsolve.base.errors import suggest
-from mechsolve.base.keyspec import K, Key, names
+from mechsolve.base.keyspec import K, Key, names, section
 from mechsolve.base.state import State
-from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
+from mechsolve.joints.base import (
+    GROUND,
+    Constraint,
+    Friction,
+    Joint,
+    KeyPath,
+    Reader,
+    read_friction,
+)
 
 
 @dataclass
@@ -30,6 +38,7 @@ class PinJoint(Joint):
     b: str
     point: str
     where: KeyPath = ()
+    friction: Friction | None = None
 
     kind: ClassVar[str] = "revolute"
     title: ClassVar[str] = "a pin"
@@ -39,6 +48,11 @@ class PinJoint(Joint):
         "revolute": K(
             names("link"),
             "The links pinned together: [link, link] (three or more: one pin through all).",
+        ),
+        "friction": K(
+            section("joint friction"),
+            "Friction in the joint: {coefficient: 0.1, journal radius: 10 mm} (a revolute "
+            "or a slider).",
         ),
     }
 
@@ -59,7 +73,10 @@ class PinJoint(Joint):
     ) -> PinJoint:
         a, b = r.names(m["revolute"], path + ("revolute",), "link", 2)
         point = r.name(m.get("point", name), path + ("point",), "point")
-        return cls(name, a, b, point, where=path)
+        fr = None
+        if "friction" in m:
+            fr = read_friction(r, m["friction"], path + ("friction",), cls.kind, name)
+        return cls(name, a, b, point, where=path, friction=fr)
 
     def check(self, mech: Any, in_range: Callable[..., None]) -> None:
         for ln in self.links:
@@ -74,13 +91,17 @@ class PinJoint(Joint):
                 )
 
     def equations(self, mech: Any, index: Mapping[str, int]) -> RevoluteConstraint:
-        return RevoluteConstraint(
+        c = RevoluteConstraint(
             self.name,
             index[self.a],
             index[self.b],
             mech.local_point(self.a, self.point),
             mech.local_point(self.b, self.point),
         )
+        if self.friction is not None:
+            c.coulomb = self.friction.coefficient * self.friction.radius
+            c.viscous = self.friction.viscous
+        return c
 
 
 class RevoluteConstraint(Constraint):
@@ -141,3 +162,19 @@ class RevoluteConstraint(Constraint):
 
     def indeterminate(self, free: np.ndarray) -> set[str]:
         return {k for k, on in zip(("Fx", "Fy"), free) if on} | {"F"}
+
+    # -- friction: the friction circle rho = f r, a moment rho |F| against the slip ------
+    def slip(self, st: State) -> np.ndarray:
+        return st.w[self.b] - st.w[self.a]
+
+    def load(self, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        f = np.hypot(lam[:, 0], lam[:, 1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            grad = np.where(f[:, None] > 0, lam / f[:, None], 0.0)
+        return f, grad
+
+    def friction_pull(self, st: State) -> list[tuple]:
+        sg = np.sign(self.slip(st))
+        x, y = st.point(self.b, self.sb)
+        zero = np.zeros(st.n)
+        return [(self.b, x, y, zero, zero, -sg), (self.a, x, y, zero, zero, sg)]

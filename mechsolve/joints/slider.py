@@ -21,7 +21,15 @@ import numpy as np
 from mechsolve.base.errors import suggest
 from mechsolve.base.keyspec import ANGLE, LENGTH, XY, K, Key, Section, either, name, names, section
 from mechsolve.base.state import State
-from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
+from mechsolve.joints.base import (
+    GROUND,
+    Constraint,
+    Friction,
+    Joint,
+    KeyPath,
+    Reader,
+    read_friction,
+)
 
 GUIDE_LINE = Section(
     "guide line",
@@ -88,6 +96,7 @@ class SliderJoint(Joint):
     angle: float
     block_angle: float = 0.0
     where: KeyPath = ()
+    friction: Friction | None = None
 
     kind: ClassVar[str] = "slider"
     title: ClassVar[str] = "a block on a guide line"
@@ -103,6 +112,11 @@ class SliderJoint(Joint):
             "A slider's guide line: [P, Q] (two points of the guide) or {through, angle}.",
         ),
         "block_angle": K(ANGLE, "The block's angle relative to the line (default 0)."),
+        "friction": K(
+            section("joint friction"),
+            "Friction in the joint: {coefficient: 0.15} (a slider) or {coefficient: 0.1, "
+            "journal radius: 10 mm} (a revolute).",
+        ),
     }
 
     @property
@@ -134,7 +148,10 @@ class SliderJoint(Joint):
             raise r.fail(path + ("slider",), f"no link named {a!r}" + suggest(a, list(points)))
         origin, angle = read_line(r, m["line"], path + ("line",), a, guide_points)
         block_angle = r.quantity(m.get("block_angle", 0.0), path + ("block_angle",), "angle")
-        return cls(name, a, b, point, origin, angle, block_angle, where=path)
+        fr = None
+        if "friction" in m:
+            fr = read_friction(r, m["friction"], path + ("friction",), cls.kind, name)
+        return cls(name, a, b, point, origin, angle, block_angle, where=path, friction=fr)
 
     def check(self, mech: Any, in_range: Callable[..., None]) -> None:
         if self.block == GROUND:
@@ -164,7 +181,7 @@ class SliderJoint(Joint):
         return dataclasses.replace(self, origin=origin, angle=cols.one(), block_angle=cols.one())
 
     def equations(self, mech: Any, index: Mapping[str, int]) -> SliderConstraint:
-        return SliderConstraint(
+        c = SliderConstraint(
             self.name,
             index[self.guide],
             index[self.block],
@@ -173,6 +190,10 @@ class SliderJoint(Joint):
             mech.local_point(self.block, self.point),
             self.block_angle,
         )
+        if self.friction is not None:
+            c.coulomb = self.friction.coefficient
+            c.viscous = self.friction.viscous
+        return c
 
     def describe(
         self, length: Callable[[float], str], angle: Callable[[float], str], unit: str
@@ -295,6 +316,24 @@ class SliderConstraint(Constraint):
 
     def indeterminate(self, free: np.ndarray) -> set[str]:
         return ({"N", "Fx", "Fy"} if free[0] else set()) | ({"M"} if free[1] else set())
+
+    # -- friction: f |N| along the line against the sliding ----------------------------
+    def slip(self, st: State) -> np.ndarray:
+        return self.velocity(st)
+
+    def load(self, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        grad = np.zeros_like(lam)
+        grad[:, 0] = np.sign(lam[:, 0])
+        return np.abs(lam[:, 0]), grad
+
+    def friction_pull(self, st: State) -> list[tuple]:
+        """The friction force acts along the line at the block's point (the moment ``M``
+        the guide carries adds none: a short block's edge forces are not modelled)."""
+        sg = np.sign(self.slip(st))
+        ux, uy = st.rotated(self.a, self.u_loc)
+        x, y = st.point(self.b, self.sb)
+        zero = np.zeros(st.n)
+        return [(self.b, x, y, -sg * ux, -sg * uy, zero), (self.a, x, y, sg * ux, sg * uy, zero)]
 
     def guide(self, st: State, scale: float) -> np.ndarray | None:
         if self.a != st.nb:  # a moving guide is drawn with its link

@@ -27,12 +27,15 @@ def read_joint(r: Reader, name: str, value: Any, mech_points) -> Joint:
             + " or ".join(f"'{k}: [{', '.join(c.roles)}]'" for k, c in KINDS.items()),
         )
     cls = KINDS[kinds[0]]
-    for other in KINDS.values():
-        for key in other.keys:
-            if key in m and key not in cls.keys and key not in KINDS:
-                raise r.fail(
-                    path + (key,), f"{key!r} applies to a {other.kind}, not a {cls.kind} joint"
-                )
+    for key in m:
+        if key in cls.keys or key in KINDS:
+            continue
+        owners = [c.kind for c in KINDS.values() if key in c.keys]
+        if owners:
+            raise r.fail(
+                path + (key,),
+                f"{key!r} applies to a {' or a '.join(owners)} joint, not a {cls.kind} joint",
+            )
     return cls.read(r, name, m, path, mech_points)
 
 

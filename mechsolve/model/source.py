@@ -64,6 +64,9 @@ class Source:
         The document as dicts, lists, str, int, float, bool and None.
     file
         The file name used in messages (``None`` for a model built in code).
+    text
+        The file's text as read (``None`` for a model built in code or a variant), for
+        tools that edit the file and keep its comments.
     """
 
     def __init__(
@@ -75,6 +78,7 @@ class Source:
     ) -> None:
         self.data = data
         self.file = file
+        self.text: str | None = None
         self._lines = lines or {}
         self._display = display or {}
         # mappings a variant merged into: the variant's key path there (an error about
@@ -415,7 +419,9 @@ def load_text(text: str, file: str | None = None) -> Source:
             file=file,
             line=1,
         )
-    return Source(data, conv.lines, file)
+    src = Source(data, conv.lines, file)
+    src.text = text
+    return src
 
 
 def _read_regular(p: Path) -> bytes:

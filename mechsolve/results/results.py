@@ -355,6 +355,7 @@ class Results(Summary):
             # moment is named M)
             comps = j.components or [(c, "N*m" if c == "M" else "N") for c in r]
             cols += [Column(f"{lab}.{c}", un, m(r[c]), self._note(j.name, c)) for c, un in comps]
+        cols += self._friction_columns()
         for name, on in f.active.items():
             cols.append(Column(f"load.{name}.active", "-", on.astype(float)))
         cols += [
@@ -366,7 +367,44 @@ class Results(Summary):
             Column("power.loads", "W", m(f.power_loads)),
             Column("power.residual", "W", m(f.residual)),
         ]
+        if f.friction is not None:
+            cols.insert(-1, Column("power.friction", "W", m(f.power_friction)))
         return cols
+
+    def _friction_columns(self) -> list[Column]:
+        """With friction in the joints: the driving effort without it, each joint's
+        friction (a slider's force, a pin's moment) and the power it loses, and the
+        instantaneous efficiency (see :meth:`efficiency`)."""
+        f = self.forces
+        fr = f.friction
+        if fr is None:
+            return []
+        kind, unit = self.effort_name
+        ideal = np.where(f.ok, fr.ideal_effort, np.nan)
+        cols = [Column(f"input.{kind}_without_friction", unit, ideal)]
+        for j in self.mechanism.joints:
+            if j.name in fr.friction:
+                lab = self.joint_label(j.name)
+                un = "N*m" if j.coordinate == "angle" else "N"
+                cols.append(Column(f"{lab}.friction", un, fr.friction[j.name]))
+                cols.append(Column(f"{lab}.friction_power", "W", fr.loss[j.name]))
+        cols.append(Column("efficiency.instant", "-", self.efficiency))
+        return cols
+
+    @property
+    def efficiency(self) -> np.ndarray:
+        """The instantaneous mechanical efficiency ``T_ideal / T = 1 - P_friction /
+        P_input``: the driving effort without friction over the effort with it, for the
+        same motion and loads. Given where the driver delivers power both with and without
+        friction (elsewhere the loads or the stored energy drive the mechanism and the
+        ratio is not an efficiency): empty there."""
+        f = self.forces
+        if f.friction is None:
+            return np.full(len(self.u), np.nan)
+        p_in = np.where(f.ok, f.power_input, np.nan)
+        p_ideal = f.friction.ideal_effort * f.speed
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where((p_in > 0) & (p_ideal > 0), p_ideal / p_in, np.nan)
 
     def _note(self, joint: str, component: str) -> str:
         """``minimum-norm`` for a reaction component that redundant constraints leave
@@ -432,6 +470,10 @@ class Results(Summary):
             for i, label in self.forces.singular:
                 if out[i] == "ok":
                     out[i] = f"singular: forces indeterminate in {label}"
+            fr = self.forces.friction
+            for i in np.flatnonzero(fr.locked) if fr is not None else ():
+                if out[i] == "ok":
+                    out[i] = "self-locking: no finite driving effort moves it"
         return out
 
     def methods(self) -> list[str]:

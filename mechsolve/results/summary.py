@@ -36,6 +36,63 @@ class Summary:
         wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
         return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
 
+    def friction_lines(self) -> list[str]:
+        """With friction in the joints: the losses per joint over the sweep, the
+        efficiency per cycle and its instantaneous minimum, and the self-locking
+        positions (a warning)."""
+        from mechsolve.core.work import friction_work
+
+        fr = self.forces.friction
+        if fr is None:
+            return []
+        lines = []
+        per = "per cycle" if self.is_full_cycle() else "over the sweep"
+        w_f, why = friction_work(self.solution, self.forces)
+        if math.isfinite(w_f):
+            parts = []
+            for name, p in fr.loss.items():
+                w = friction_work(self.solution, _Only(self.forces, p))[0]
+                parts.append(f"{name} {w:.4g} J")
+            lines.append(f"  friction losses {per}: {w_f:.6g} J ({', '.join(parts)})")
+            work = self.work()
+            if self.is_full_cycle() and math.isfinite(work) and work > 0:
+                lines.append(
+                    f"  efficiency per cycle: {(work - w_f) / work:.4g} (output: the work "
+                    f"done on the loads, {work - w_f:.6g} J, over the driver's {work:.6g} J; "
+                    "the kinetic and potential energy return over the cycle)"
+                )
+            elif self.is_full_cycle() and math.isfinite(work) and work < 0:
+                lines.append(
+                    f"  efficiency per cycle: {-work / (w_f - work):.4g} (the loads drive: "
+                    f"output the work the driver takes, {-work:.6g} J, over the loads' "
+                    f"{w_f - work:.6g} J)"
+                )
+        else:
+            lines.append(f"  friction losses {per}: not defined ({why})")
+        eta = self.efficiency
+        if np.any(np.isfinite(eta)):
+            i = int(np.nanargmin(eta))
+            lines.append(
+                f"  instantaneous efficiency (the driving {self.effort_name[0]} without "
+                f"friction over the {self.effort_name[0]} with it, where the driver delivers "
+                f"power): min {eta[i]:.4g} at {self.describe_u(i)}"
+            )
+        locked = np.flatnonzero(fr.locked)
+        if locked.size:
+            where = f"{self.describe_u(int(locked[0]))}"
+            if locked.size > 1:
+                where += f" to {self.describe_u(int(locked[-1]))}"
+            lines.append(
+                f"  self-locking at {locked.size} of {len(self.u)} positions "
+                f"({self.sample_spacing()} samples), {where}: no finite driving effort "
+                "moves the mechanism in the drive direction there"
+            )
+            self.warnings.append(
+                f"self-locking at {locked.size} position(s): the driving effort and the "
+                "reactions there are left empty"
+            )
+        return lines
+
     # -- summary ------------------------------------------------------------------------
     def describe_u(self, i: int) -> str:
         """The driver position of sample ``i`` in words, e.g. ``driver angle 246.8°``."""
@@ -124,7 +181,7 @@ class Summary:
         f = self.forces
         lines = []
         if not np.any(f.ok):
-            return ["  forces: no position could be solved"]
+            return ["  forces: no position could be solved"] + self.friction_lines()
         src = self if figures is None or figures.forces is None else figures
         g = src.forces
         kind, unit = self.effort_name
@@ -142,6 +199,7 @@ class Summary:
             f"RMS {rms / scale:.6g} {sym}{unit}, {what} {mean / scale:.6g} {sym}{unit}"
         )
         lines.append("  " + src.work_text())
+        lines += src.friction_lines()
         peaks = []
         for j in self.mechanism.joints:
             r = g.reactions[j.name]
@@ -379,3 +437,10 @@ def _solver_lines(res) -> list[str]:
         if red.removable:
             lines.append("  " + red.suggestion())
     return lines
+
+
+class _Only:
+    """A force result whose friction loss is one joint's (for its share of the work)."""
+
+    def __init__(self, forces, loss: np.ndarray) -> None:
+        self.ok, self.speed, self.power_friction = forces.ok, forces.speed, loss

@@ -207,8 +207,7 @@ def _acceleration(model: ReducedModel, motor, d: int):
         return M
 
     def general(t: float, p: float, w: float) -> float:
-        J, e0 = model.terms(p, w, t)
-        return (torque(w, t) - e0) / J
+        return model.accel(p, w, t, torque(w, t))[0]
 
     general.counted = True  # terms() counts
     return general
@@ -293,9 +292,8 @@ def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
     J = np.empty(len(ts))
     for i, (t, (p, w)) in enumerate(zip(ts, Y)):
         try:
-            Ji, e0 = model.terms(p, w, t)
-            J[i] = Ji
-            eps[i] = (float(drive_torque(motor, d, np.array([w]), t)[0]) - e0) / Ji
+            M = float(drive_torque(motor, d, np.array([w]), t)[0])
+            eps[i], J[i] = model.accel(p, w, t, M)
         except _LeftRange:
             J[i] = eps[i] = np.nan
     return eps, J

@@ -16,12 +16,18 @@ from mechsolve.analyses.dynamics.tables import (
     _spectral_samples,
     _Table,
 )
-from mechsolve.base.errors import InputError
+from mechsolve.base.errors import InputError, SolverError
 from mechsolve.base.numerics import limit_from_both_sides
 from mechsolve.base.state import State
 from mechsolve.core import evaluate as core
+from mechsolve.core.friction import frictional
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
+
+# Coulomb friction in a simulation is regularised: each joint's Coulomb part is scaled
+# by tanh(|w| / w_s), w the driver's speed and w_s this fraction of the file's driver
+# speed (1 rad/s or 1 m/s without one), so that it is continuous through a standstill
+FRICTION_SMOOTHING = 1e-3
 
 
 class ReducedModel:
@@ -48,6 +54,13 @@ class ReducedModel:
         conditions = any(ld.when is not None for ld in mech.loads)
         self.extremes = core.forces(an, self.ref).stroke_extremes if conditions else []
         self.nfev = 0  # evaluations of the equation of motion
+        # joint friction: Coulomb's law regularised through a standstill of the driver
+        # (see FRICTION_SMOOTHING), the equation solved at every stage (not tabulated)
+        self.friction = bool(frictional(an))
+        if self.friction:
+            drv = mech.driver
+            speed = abs(drv.speed) if drv.motion is None and drv.speed else 1.0
+            an.friction_smoothing = FRICTION_SMOOTHING * speed
 
     def _wrap(self, phi: float) -> float:
         if not self.full_turn:
@@ -137,7 +150,7 @@ class ReducedModel:
         the sign of a velocity); a condition that reads the size of a speed or an
         acceleration is solved at every integrator stage instead. Returns whether it
         tabulated."""
-        if not self.full_turn:
+        if not self.full_turn or self.friction:
             return False
         conditional = [ld for ld in self.mech.loads if ld.when is not None]
         d = self.mech.driver.direction
@@ -265,10 +278,16 @@ class ReducedModel:
                     if on:
                         e0 += v[4 + 3 * k] + v[5 + 3 * k] * omega + v[6 + 3 * k] * w2
             return v[0], e0
-        sol = self.states([phi, phi], [omega, omega], [0.0, 1.0])
-        sol.t = np.array([t, t])
+        if self.friction:  # J from the kinetic energy at unit speed: 2 T(phi, 1)
+            sol = self.states([phi, phi, phi], [omega, omega, 1.0], [0.0, 1.0, 0.0])
+            sol.t = np.array([t, t, t])
+        else:
+            sol = self.states([phi, phi], [omega, omega], [0.0, 1.0])
+            sol.t = np.array([t, t])
         f = core.forces(self.an, sol, self.extremes)
         e0, e1 = float(f.effort[0]), float(f.effort[1])
+        if self.friction:
+            e1 = e0 + 2.0 * float(f.kinetic[2])
         ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
         finite = np.isfinite(e0) and np.isfinite(e1)
         if not finite or ind <= NEAR_EXACT:
@@ -290,6 +309,32 @@ class ReducedModel:
                 return limit_from_both_sides(*J), limit_from_both_sides(*E0)
         _check_inertia(self, np.array([e1 - e0]), np.array([phi]))
         return e1 - e0, e0
+
+    def accel(self, phi: float, omega: float, t: float, M: float) -> tuple[float, float]:
+        """``(eps, J)``: the driver's acceleration under the motor's effort ``M`` and the
+        reduced inertia. Ideal joints: ``eps = (M - E0) / J``. With friction the effort is
+        not linear in the acceleration (each friction follows its reaction), so ``eps``
+        is corrected by the chord ``J`` until the effort balances ``M`` to a relative
+        1e-12."""
+        J, e0 = self.terms(phi, omega, t)
+        eps = (M - e0) / J
+        if not self.friction:
+            return eps, J
+        scale = max(abs(M), abs(e0), abs(J * eps), 1e-300)
+        for _ in range(60):
+            sol = self.states([phi], [omega], [eps])
+            sol.t = np.array([t])
+            r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
+            if not math.isfinite(r):
+                raise _LeftRange(phi)
+            if abs(r) <= 1e-12 * scale:
+                return eps, J
+            eps += r / J
+        raise SolverError(
+            f"the equation of motion with friction did not converge at "
+            f"{self.an.format_u(phi)} (speed {omega:.6g}): the joints' friction feeds back "
+            "on the acceleration too strongly"
+        )
 
     def states_by_turn(self, phi, omega, eps, t):
         """States at driver angles ``phi`` (any number of turns from the start) with rates

@@ -49,13 +49,14 @@ class SimulationResults(Results):
         return cols[:3] + extra + cols[3:]
 
     def energy_residual(self) -> np.ndarray:
-        """The energy balance along the motion: the work of the motor and the loads since
-        the start (the trapezoid rule over the time steps) minus the change of kinetic and
-        potential energy (J). It measures the integration: zero to the step's accuracy."""
+        """The energy balance along the motion: the work of the motor and the loads less
+        the joints' friction losses since the start (the trapezoid rule over the time
+        steps) minus the change of kinetic and potential energy (J). It measures the
+        integration: zero to the step's accuracy."""
         f = self.forces
         if f is None:
             return np.full(len(self.t), np.nan)
-        P = self.motor_torque() * self.trajectory.omega + f.power_loads
+        P = self.motor_torque() * self.trajectory.omega + f.power_loads - f.power_friction
         t = self.trajectory.t
         work = np.concatenate([[0.0], np.cumsum(0.5 * (P[1:] + P[:-1]) * np.diff(t))])
         E = f.kinetic + f.potential

@@ -18,8 +18,11 @@ from mechsolve.analyses.shaking.balance import (
     balanced_data,
     find_linkage,
     inline,
+    least_squares,
 )
+from mechsolve.analyses.shaking.edit import with_counterweights
 from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
+from mechsolve.base.errors import InputError
 from mechsolve.model import Mechanism
 
 __all__ = [
@@ -32,6 +35,7 @@ __all__ = [
     "find_linkage",
     "frame_load",
     "inertia_only",
+    "least_squares",
     "shaking",
 ]
 
@@ -88,18 +92,25 @@ def balanced(
     about_name: str = "the frame's origin",
     step: float | None = None,
     variant: str | None = None,
+    rms: bool = False,
 ) -> Balanced:
     """Balance ``mech`` (see :func:`~mechsolve.analyses.shaking.balance.balance`), write
     the counterweights into the file's text and solve the balanced file again: the
     shaking before and after are of the two runnable files. ``variant``: the name of the
-    file's variant ``mech`` was loaded with (its data has it applied), for the header."""
+    file's variant ``mech`` was loaded with (its data has it applied), for the header.
+    ``rms``: the counterweights that minimise the RMS shaking force over the turn
+    (:func:`~mechsolve.analyses.shaking.balance.least_squares`) instead."""
     import yaml
 
     from mechsolve.model.parse import loads
 
+    if rms and fraction is not None:
+        raise InputError("--rms chooses the counterweight itself: give it or --fraction")
     bal = balance(mech, fraction=fraction, radius=radius)
     kw = dict(about=about, about_name=about_name, step=step, inertia=True)
     before = shaking(mech, **kw)
+    if rms:
+        bal = least_squares(mech, bal, before, radius)
     if bal.fraction is not None:
         bal.inline = bal.inline and inline(before.results, bal.linkage)
     data = balanced_data(mech, bal)
@@ -109,6 +120,28 @@ def balanced(
         "# (point masses, see links.*.point_masses)\n"
         + (f"# from the variant {variant!r} of the file, applied\n" if variant else "")
     )
-    text = head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    body = None
+    if mech.source.text is not None and not variant:  # the file's text, comments kept
+        body = with_counterweights(mech.source.text, _entries(mech, bal), data)
+    if body is None:  # a variant applied, or a layout the edit does not handle
+        body = yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    text = head + body
     after = shaking(loads(text, file=mech.source.file), **kw)  # the variant is in the data
     return Balanced(bal, before, after, text)
+
+
+def _entries(mech: Mechanism, bal: Balance) -> list[tuple[str, str, str, str]]:
+    """Each counterweight as the balanced file writes it: its link, its point's name,
+    its position ``[x, y]`` in the file's length unit and its mass (kg)."""
+    from mechsolve.base.units import parse_quantity
+
+    scale = parse_quantity(f"1 {mech.length_unit}", "length")
+    return [
+        (
+            cw.link,
+            cw.point,
+            f"[{float(cw.local[0] / scale)!r}, {float(cw.local[1] / scale)!r}]",
+            f"{float(cw.mass)!r} kg",
+        )
+        for cw in bal.counterweights
+    ]

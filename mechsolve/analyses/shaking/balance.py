@@ -97,6 +97,8 @@ class Balance:
     rod_length: float = math.nan  # l (m)
     inline: bool = False  # an in-line slider-crank with the rod's centre on its line
     notes: list[str] = field(default_factory=list)
+    method: str = "exact"  # "rms": least squares over the turn (see least_squares)
+    rms_fraction: complex | None = None  # a slider-crank's equivalent c (rms)
 
     def lines(self) -> list[str]:
         """The counterweights and the mass distribution, with units."""
@@ -110,10 +112,21 @@ class Balance:
                 f"  {rod} {lk.coupler!r} mass at {pin}: {abs(m):.6g} kg"
                 + (f" at {ang:.6g} deg from {lk.A}->{lk.B}" if abs(ang) > 1e-9 else "")
             )
+        if self.method == "rms":
+            out.append(
+                "  counterweights that minimise the RMS shaking force over the turn "
+                "(least squares over the samples, trapezoidal weights)"
+            )
         if self.fraction is not None:
             out.append(
                 f"  reciprocating mass m_rec = {self.m_rec:.6g} kg, balanced fraction "
                 f"c = {self.fraction:.6g}"
+                + (" (the least-squares counterweight's share)" if self.method == "rms" else "")
+            )
+        if self.rms_fraction is not None and abs(self.rms_fraction.imag) > 1e-9:
+            out.append(
+                f"  the least-squares counterweight also leans {self.rms_fraction.imag:.6g} "
+                "m_rec d2 across the crank (an offset or an off-line centre of mass)"
             )
         for cw in self.counterweights:
             out.append(
@@ -279,6 +292,61 @@ def balance(
     return out
 
 
+def least_squares(mech: Mechanism, bal: Balance, before, radius: dict | None) -> Balance:
+    """The counterweights that minimise the RMS of the shaking force over the turn: on the
+    crank of a slider-crank (complete balancing is impossible there), on the crank and
+    the rocker of a four-bar (then the complete balance, to rounding).
+
+    A counterweight of mass-radius product ``U`` (complex, in its link's frame, from its
+    ground pivot) adds ``-(i alpha - w^2) e^{i theta} U`` to the force on the frame (its
+    link's angle, speed and acceleration at each sample), linear in ``U``; the ``U`` of
+    least ``sum_k w_k |F_k + sum_l A_kl U_l|^2`` (``F``: the shaking ``before``, inertia
+    forces only; ``w_k`` the trapezoidal weights in the driver's coordinate over the
+    turn) is a linear least-squares problem. For a slider-crank its share of the
+    reciprocating mass, ``c = (U_rot - U) / (m_rec d2)``, is reported (1/2 for an in-line
+    one at constant speed: the classic optimum)."""
+    res = before.results
+    if not (np.all(before.ok) and res.is_full_cycle() and len(res.u) > 2):
+        raise mech.error(
+            ("sweep",), "least-squares balancing needs the shaking over a full turn, solved"
+        )
+    lk = bal.linkage
+    links = [(lk.crank, lk.O2, lk.A)] + ([(lk.rocker, lk.O4, lk.B)] if lk.rocker else [])
+    st, index = res.solution.state, res.analysis.system.index
+    du = np.diff(res.u)
+    w = np.zeros(len(res.u))
+    w[:-1] += du / 2
+    w[1:] += du / 2
+    sw = np.sqrt(np.abs(w))
+    cols = []
+    for link, _, _ in links:
+        b = index[link]
+        a = -(1j * st.al[b] - st.w[b] ** 2) * np.exp(1j * st.th[b])  # per unit U
+        cols += [a, 1j * a]  # Re U and Im U
+    A = np.stack(cols, axis=1)  # (n, 2 links)
+    F = before.fx + 1j * before.fy
+    M = np.concatenate([(A * sw[:, None]).real, (A * sw[:, None]).imag])
+    rhs = -np.concatenate([(F * sw).real, (F * sw).imag])
+    x = np.linalg.lstsq(M, rhs, rcond=None)[0]
+    us = [complex(x[2 * k], x[2 * k + 1]) for k in range(len(links))]
+    radius = dict(radius or {})
+    out = copy.copy(bal)
+    out.method = "rms"
+    out.counterweights = []
+    for (link, pivot, towards), u in zip(links, us):
+        d = _z(mech.local_point(link, towards)) - _z(mech.local_point(link, pivot))
+        out.counterweights.append(_weight(mech, link, pivot, towards, u, d, radius))
+    if lk.rocker is None:
+        m2, c2 = _mass(mech, lk.crank)
+        d2 = _z(mech.local_point(lk.crank, lk.A)) - _z(mech.local_point(lk.crank, lk.O2))
+        g2 = c2 - _z(mech.local_point(lk.crank, lk.O2))
+        u_rot = -(m2 * g2 + bal.shares[lk.A] * d2)
+        c = (u_rot - us[0]) / (bal.m_rec * d2) if bal.m_rec > 0 else complex("nan")
+        out.rms_fraction = c
+        out.fraction = c.real
+    return out
+
+
 def inline(res, lk: Linkage) -> bool:
     """Whether the piston pin's path (from a solved sweep ``res``) is a line through the
     crank's pivot: an in-line slider-crank."""
@@ -320,5 +388,5 @@ def balanced_data(mech: Mechanism, bal: Balance) -> dict:
             raise InputError(f"link {cw.link!r} already has a point {cw.point!r}")
         pts[cw.point] = [float(cw.local[0] / scale), float(cw.local[1] / scale)]
         pm = link.setdefault("point_masses", {})
-        pm[cw.point] = f"{cw.mass!r} kg"
+        pm[cw.point] = f"{float(cw.mass)!r} kg"  # a numpy scalar's repr is not a number
     return data

@@ -50,6 +50,13 @@ from mechsolve.cli.kit import (
     "[0, 1], default 0.5; implies --balance.",
 )
 @click.option(
+    "--rms",
+    is_flag=True,
+    help="Counterweights that minimise the RMS shaking force over the turn (least "
+    "squares): on a slider-crank's crank, where complete balancing is impossible, or on a "
+    "four-bar's crank and rocker; implies --balance.",
+)
+@click.option(
     "--radius",
     multiple=True,
     metavar="LINK=LENGTH",
@@ -61,7 +68,7 @@ from mechsolve.cli.kit import (
 @NO_PLOTS
 @QUIET
 def shaking(
-    file: Path, about, step, inertia_only, balance, fraction, radius, outdir, variant,
+    file: Path, about, step, inertia_only, balance, fraction, rms, radius, outdir, variant,
     no_plots, quiet,
 ) -> None:  # fmt: skip
     """The shaking force and moment that the moving links of FILE transmit to the frame
@@ -77,12 +84,12 @@ def shaking(
     at, at_name = parse_about(mech, about)
     radii = parse_radii(mech, radius)
     u_step = api.parse_step(mech, step) if step is not None else None
-    do_balance = balance or fraction is not None or bool(radii)
+    do_balance = balance or fraction is not None or rms or bool(radii)
     bal = None
     if do_balance:  # the input is checked before anything is written
         bal = api.balanced(
             mech, fraction=fraction, radius=radii, about=at, about_name=at_name,
-            step=u_step, variant=variant,
+            step=u_step, variant=variant, rms=rms,
         )  # fmt: skip
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))

@@ -1,0 +1,248 @@
+"""Friction in the joints: the force analysis iterated at every position.
+
+A joint with friction (:attr:`~mechsolve.joints.base.Constraint.coulomb`,
+:attr:`~mechsolve.joints.base.Constraint.viscous`) resists its relative motion (its
+:meth:`~mechsolve.joints.base.Constraint.slip`: a pin's relative angular speed, a
+slider's sliding speed) with a friction of magnitude
+
+``t_j = k_j L_j(lambda) + c_j |slip_j|``
+
+where ``L_j`` is the load Coulomb's law multiplies (a pin's force magnitude ``|F|``, a
+slider's normal force ``|N|``), ``k_j`` its Coulomb factor (the friction circle
+``rho = f r`` of a pin, the coefficient ``f`` of a slider) and ``c_j`` its viscous
+coefficient. Where the slip is zero the Coulomb part has no direction and is left out
+(a joint at rest relative to itself carries no Coulomb moment or force).
+
+The reactions are linear in the known loads, ``lambda = A(Q)`` (the ideal force
+analysis), so with frictions ``t``::
+
+    lambda(t) = lambda_0 + sum_j t_j U_j,   U_j = A(g_j)
+
+with ``g_j`` the generalised force of a unit friction at joint ``j`` opposing its slip.
+The Coulomb magnitudes ``s_j = k_j L_j(lambda(s + v))`` (``v_j = c_j |slip_j|``) are
+found by Newton's method on ``F(s) = s - k * L(lambda)``, whose Jacobian is
+``I - G`` with ``G_ji = k_j (dL_j / dlambda) . U_i``, to a relative tolerance of
+:data:`TOLERANCE` on every magnitude.
+
+Self-locking: a solution is physical when ``det(I - G) > 0`` (it is connected to the
+frictionless one: the ideal problem has ``G = 0``). Where Newton's method finds none, the
+friction is raised from zero to its value step by step (a continuation in ``tau``, the
+fraction of every coefficient); if ``det(I - tau G)`` falls to zero on the way, the
+driving effort grows without bound there: the position is self-locking (no finite
+driving effort moves the mechanism in the drive direction).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mechsolve.base.errors import SolverError
+from mechsolve.core.force_result import FrictionResult
+from mechsolve.core.loads import _Q
+
+if TYPE_CHECKING:
+    from mechsolve.core.sweep import Analysis
+
+TOLERANCE = 1e-12  # the Newton iteration's relative tolerance on each friction magnitude
+MAX_ITERATIONS = 60
+ZERO_SLIP = 1e-12  # a slip below this fraction of its largest over the sweep is zero
+LOCK_DET = 1e-5  # det(I - G) below this on the continuation: the effort is unbounded
+
+
+def frictional(an: Analysis) -> list:
+    """The rows of the constraints with friction."""
+    return [r for r in an.system.rows if r.constraint.coulomb > 0 or r.constraint.viscous > 0]
+
+
+def solve_friction(
+    an: Analysis,
+    st,
+    lam0: np.ndarray,
+    solve: Callable[[np.ndarray], np.ndarray],
+    effort_row: int,
+    where: Callable[[int], str],
+    smoothing: tuple[np.ndarray, float] | None = None,
+) -> tuple[np.ndarray, FrictionResult]:
+    """The multipliers with friction and what friction changes.
+
+    Parameters
+    ----------
+    lam0
+        The multipliers without friction (N, nc).
+    solve
+        ``solve(Q)``: the multipliers (N, nc) that balance the generalised forces ``Q``
+        (3 nb, N) alone (linear).
+    effort_row
+        The driver's row in the multipliers (its effort is ``-lambda[:, row]``).
+    where
+        A position in words, for the message when the iteration does not converge.
+    smoothing
+        ``(speed, s0)``: the Coulomb parts regularised by the driver's ``speed`` at each
+        position, ``tanh(|speed| / s0)`` times their value (for the equation of motion,
+        which needs friction continuous through a standstill); None: exact Coulomb.
+    """
+    law = _Law(an, st, lam0, solve, smoothing)
+    K, n = law.k.shape
+    good = np.all(np.isfinite(law.lamv), axis=1) & np.all(np.isfinite(law.U), axis=(0, 2))
+    s, done, steps = _newton(law, np.flatnonzero(good))
+    locked = np.zeros(n, bool)
+    rest = np.flatnonzero(good & ~done)
+    if rest.size:
+        sr, status, det_last = _continue(rest, law.k[:, rest], law)
+        s[:, rest] = sr
+        locked[rest[status == 1]] = True
+        if np.any(status == 2):
+            i = int(np.flatnonzero(status == 2)[0])
+            raise SolverError(
+                f"the force analysis with friction did not converge at {where(int(rest[i]))}: "
+                f"the iteration stalled (det(I - G) = {det_last[i]:.3g}), more than "
+                f"{MAX_ITERATIONS} Newton steps to a relative {TOLERANCE:g}"
+            )
+    tot = s + law.v
+    lam = law.lamv + np.einsum("kn,knc->nc", s, law.U)
+    lam[locked] = np.nan
+    out = FrictionResult(iterations=steps)
+    out.locked = locked
+    out.ideal_effort = -lam0[:, effort_row]
+    for j, r in enumerate(law.rows):
+        t = np.where(good & ~locked, tot[j], np.nan)
+        out.friction[r.constraint.name] = t
+        out.loss[r.constraint.name] = t * law.slips[j]
+    return lam, out
+
+
+class _Law:
+    """The friction law of the joints with friction, linearised about the ideal solution:
+    ``U`` (K, N, nc) the multipliers of a unit friction at each, ``k`` (K, N) their
+    Coulomb factors (zero where the slip is), ``v`` (K, N) their viscous frictions,
+    ``lamv`` the multipliers with the viscous frictions, ``slips`` their |slip|."""
+
+    def __init__(self, an: Analysis, st, lam0: np.ndarray, solve: Callable, smoothing=None) -> None:
+        self.rows = frictional(an)
+        n, K = st.n, len(self.rows)
+        self.U = np.zeros((K, n, lam0.shape[1]))
+        self.k = np.zeros((K, n))
+        self.v = np.zeros((K, n))
+        self.slips = []
+        for j, r in enumerate(self.rows):
+            c = r.constraint
+            slip = c.slip(st)
+            big = np.nanmax(np.abs(slip)) if np.any(np.isfinite(slip)) else 0.0
+            on = np.where(np.abs(slip) > ZERO_SLIP * big, 1.0, 0.0)
+            soft = 1.0
+            if smoothing is not None:
+                speed, s0 = smoothing
+                soft = np.abs(np.tanh(np.asarray(speed, float) / s0))
+            acc = _Q(an, st)
+            for body, x, y, fx, fy, t in c.friction_pull(st):
+                if body != an.system.nb:
+                    acc.force(body, None, fx * on, fy * on, (x - st.x[body], y - st.y[body]))
+                    acc.torque(body, t * on)
+            self.U[j] = solve(acc.Q)
+            self.k[j] = on * soft * c.coulomb
+            self.v[j] = on * c.viscous * np.abs(slip)
+            self.slips.append(np.abs(slip))
+        self.lamv = lam0 + np.einsum("kn,knc->nc", self.v, self.U)
+
+    def __call__(self, s: np.ndarray, idx, kk=None) -> tuple[np.ndarray, np.ndarray]:
+        """L (K, n) and G (n, K, K) at the Coulomb magnitudes s (K, n) of positions idx
+        (``kk``: the Coulomb factors there, if not the joints' own)."""
+        kk = self.k[:, idx] if kk is None else kk
+        U = self.U[:, idx]
+        lam = self.lamv[idx] + np.einsum("kn,knc->nc", s, U)
+        L = np.empty_like(s)
+        G = np.empty((s.shape[1], len(self.rows), len(self.rows)))
+        for j, r in enumerate(self.rows):
+            c = r.constraint
+            L[j], grad = c.load(lam[:, r.start : r.start + c.m])
+            G[:, j, :] = kk[j][:, None] * np.einsum(
+                "nm,knm->nk", grad, U[..., r.start : r.start + c.m]
+            )
+        return L, G
+
+    def scale(self, idx: np.ndarray) -> np.ndarray:
+        """A magnitude's scale at positions idx, for the tolerance: the Coulomb factor
+        times the largest multiplier (so that a friction that vanishes still converges)."""
+        return self.k[:, idx] * np.max(np.abs(self.lamv[idx]), axis=1)[None] + 1e-300
+
+
+def _newton(law: _Law, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Newton's method on ``s - k L(lambda(s)) = 0`` at positions ``idx`` from the ideal
+    solution's friction: the magnitudes, where a physical solution was found (converged,
+    ``det(I - G) > 0``) and the number of steps."""
+    K, n = law.k.shape
+    s = np.zeros((K, n))
+    done = np.zeros(n, bool)
+    s[:, idx] = law.k[:, idx] * law(s[:, idx], idx)[0]
+    eye = np.eye(K)[None]
+    steps = 0
+    while idx.size and steps < MAX_ITERATIONS:
+        steps += 1
+        L, G = law(s[:, idx], idx)
+        F = s[:, idx] - law.k[:, idx] * L
+        with np.errstate(all="ignore"):
+            ds = np.linalg.solve(eye - G, -F.T[..., None])[..., 0].T
+        bad = ~np.all(np.isfinite(ds), axis=0)
+        ds[:, bad] = 0.0
+        s[:, idx] += ds
+        small = np.all(np.abs(ds) <= TOLERANCE * (np.abs(s[:, idx]) + law.scale(idx)), axis=0)
+        done[idx[small]] = True
+        idx = idx[~(small | bad)]
+    # a solution is kept where det(I - G) > 0 (connected to the frictionless one)
+    idx = np.flatnonzero(done)
+    if idx.size:
+        L, G = law(s[:, idx], idx)
+        det = np.linalg.det(eye - G)
+        resid = np.abs(s[:, idx] - law.k[:, idx] * L)
+        close = np.all(resid <= 1e-9 * (np.abs(s[:, idx]) + law.scale(idx)), axis=0)
+        done[idx[(det <= 0) | ~close]] = False
+    return s, done, steps
+
+
+def _continue(
+    idx: np.ndarray, k: np.ndarray, loads: Callable
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Raise the friction at positions ``idx`` from zero to its value (``tau`` from 0 to
+    1, ``k`` the Coulomb factors there), Newton's method at each step from the last.
+
+    Returns the magnitudes at ``tau = 1``, a status per position (0: solved, 1:
+    ``det(I - tau G)`` fell to zero on the way: self-locking, 2: the iteration stalled
+    elsewhere) and the last ``det(I - tau G)``.
+    """
+    K, m = k.shape
+    tau = np.zeros(m)
+    step = np.full(m, 1.0 / 16)
+    s = np.zeros((K, m))
+    det_last = np.ones(m)
+    status = np.full(m, -1)
+    eye = np.eye(K)[None]
+    while np.any(status < 0):
+        act = np.flatnonzero(status < 0)
+        t1 = np.minimum(1.0, tau[act] + step[act])
+        kk = k[:, act] * t1
+        trial = s[:, act].copy()
+        conv = np.zeros(act.size, bool)
+        for _ in range(12):  # from a nearby solution: a few steps, or none exists
+            L, G = loads(trial, idx[act], kk)
+            F = trial - kk * L
+            with np.errstate(all="ignore"):
+                ds = np.linalg.solve(eye - G, -F.T[..., None])[..., 0].T
+            ds[:, ~np.all(np.isfinite(ds), axis=0)] = np.nan
+            trial = np.where(conv, trial, trial + np.nan_to_num(ds))
+            conv |= np.all(np.abs(ds) <= TOLERANCE * (np.abs(trial) + 1e-300), axis=0)
+            if conv.all():
+                break
+        L, G = loads(trial, idx[act], kk)
+        det = np.linalg.det(eye - G)
+        ok = conv & (det > 0)
+        a_ok, a_no = act[ok], act[~ok]
+        tau[a_ok], s[:, a_ok], det_last[a_ok] = t1[ok], trial[:, ok], det[ok]
+        step[a_ok] = np.minimum(2 * step[a_ok], 1.0 / 16)
+        status[a_ok[tau[a_ok] >= 1.0]] = 0
+        step[a_no] /= 2
+        stuck = a_no[step[a_no] < 1e-8]
+        status[stuck] = np.where(det_last[stuck] < LOCK_DET, 1, 2)
+    return s, status, det_last
