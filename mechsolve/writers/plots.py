@@ -290,19 +290,52 @@ def _switches(res: Results) -> np.ndarray:
     return np.array(sorted(ks), dtype=int)
 
 
-def _broken(res: Results, *arrays: np.ndarray) -> list[np.ndarray]:
+def _broken(res: Results, *arrays: np.ndarray, at_switch: bool = False) -> list[np.ndarray]:
     """Copies of ``arrays`` with NaN inserted where a load switches between two samples,
     so that a plotted line does not join the two sides with a slope. Where the sweep has
     samples on both sides of the exact switch (:func:`mechsolve.api.for_plots`), the line
-    joins them: a vertical jump at its angle."""
+    joins them: a vertical jump at its angle. ``at_switch``: break there too (a curve
+    not drawn against the driver, such as a hodograph, would draw that jump as a chord)."""
     k = _switches(res)
     u = np.asarray(res.u, float)
-    if k.size:
+    if k.size and not at_switch:
         gap = np.abs(u[k + 1] - u[k])
         k = k[gap > 1e-6 * (res.analysis.scale if res.linear else 1.0)]
     if k.size == 0:
         return [np.asarray(a, float) for a in arrays]
     return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
+
+
+JUMP_FACTOR = 12.0  # a step this many times the curve's typical step ...
+JUMP_SHARE = 0.08  # ... and this share of the curve's size is a jump, not motion
+
+
+def jumps(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Indices k where the vector tip (x, y) jumps between samples k and k+1: a step
+    longer than :data:`JUMP_FACTOR` times the median step and :data:`JUMP_SHARE` of the
+    curve's extent. A force that switches between samples (a load acting only part of
+    the cycle, a reaction crossing a dead point) jumps; a smooth curve sampled at 1°
+    never steps so far beyond its neighbours."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    step = np.hypot(np.diff(x), np.diff(y))
+    good = np.isfinite(step)
+    if np.count_nonzero(good) < 3:
+        return np.array([], dtype=int)
+    size = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)))
+    typical = float(np.median(step[good]))
+    big = good & (step > JUMP_FACTOR * typical) & (step > JUMP_SHARE * size)
+    return np.flatnonzero(big)
+
+
+def break_jumps(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``x`` and ``y`` with NaN inserted at each jump (:func:`jumps`): a line drawn
+    through them stops at one side of the jump and starts again at the other."""
+    k = jumps(x, y)
+    if k.size == 0:
+        return np.asarray(x, float), np.asarray(y, float)
+    return np.insert(np.asarray(x, float), k + 1, np.nan), np.insert(
+        np.asarray(y, float), k + 1, np.nan
+    )
 
 
 def _scaled(values: np.ndarray, unit: str) -> tuple[float, str]:
@@ -367,7 +400,8 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         r = res.reaction(name)
         fx, fy = np.where(res.forces.ok, r["Fx"], np.nan), np.where(res.forces.ok, r["Fy"], np.nan)
         scale, sym = (1e3, "k") if np.nanmax(np.hypot(fx, fy)) >= 1e4 else (1.0, "")
-        bx, by = _broken(res, fx / scale, fy / scale)
+        # a force that jumps (a load switching on or off) is drawn as two ends, no chord
+        bx, by = break_jumps(*_broken(res, fx / scale, fy / scale, at_switch=True))
         ax.plot(bx, by, "-o", ms=2.5, lw=1.2)
         i0 = int(np.flatnonzero(np.isfinite(fx))[0])
         ax.annotate(
