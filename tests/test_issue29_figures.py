@@ -8,6 +8,8 @@ loads and labels its arrows."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -74,3 +76,92 @@ def test_the_crane_hodographs_break_where_the_load_switches(crane, monkeypatch):
         step = np.hypot(np.diff(x), np.diff(y))
         drawn = step[np.isfinite(step)]
         assert drawn.max() < 0.1 * max(np.nanmax(x) - np.nanmin(x), np.nanmax(y) - np.nanmin(y))
+
+
+# -- 2. round force scales -----------------------------------------------------------
+
+
+def _in_125(value: float) -> bool:
+    """Whether ``value`` is 1, 2 or 5 times a power of ten."""
+    mantissa = value / 10.0 ** math.floor(math.log10(value) + 1e-12)
+    return any(abs(mantissa - m) < 1e-9 * m for m in (1, 2, 5))
+
+
+def test_the_125_series_helper():
+    assert [plots.round_125(x) for x in (0.7, 1, 1.01, 3, 7.5, 420)] == [1, 1, 2, 5, 10, 500]
+    assert [plots.round_125(x, up=False) for x in (0.7, 1.9, 3, 9.99, 420)] == [
+        0.5,
+        1,
+        2,
+        5,
+        200,
+    ]
+
+
+@pytest.mark.parametrize("big", [0.37, 41.36e3 * 8.6, 2.0, 7.7e6, 123.0])
+@pytest.mark.parametrize("size", [0.021, 0.2, 1.0, 34.4, 900.0])
+def test_an_arrow_scale_reads_two_round_numbers(big, size):
+    from mechsolve.report.animate import ARROW_SHARE, arrow_scale
+
+    per_n, bar = arrow_scale(big, size)
+    force = bar / per_n  # what the bar stands for
+    assert _in_125(bar) and _in_125(force), (bar, force)
+    assert size / 20 * (1 - 1e-9) <= bar <= 0.15 * size
+    # the longest arrow fits the share of the drawing, and is not lost in it
+    assert 0.1 * size <= big * per_n <= ARROW_SHARE * size * (1 + 1e-9)
+
+
+# -- 7. animate: the loads, and labelled arrows ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def crane_frames():
+    from mechsolve.report.animate import solve_frames
+
+    return solve_frames(api.load(MECH / "crane.yaml"), 73, forces=True)
+
+
+@pytest.mark.slow
+def test_the_animation_carries_the_load_where_it_acts(crane_frames):
+    # the crane's load Q = 50 kN down at K while K moves left (K.vx < 0): the frames
+    # turn the crank counter-clockwise at constant speed, so K moves left where K.x
+    # falls from one frame to the next
+    fr = crane_frames
+    assert set(fr.loads) == {"Q"} and fr.load_points["Q"] == "K"
+    x, y, fx, fy = fr.loads["Q"]
+    kx = fr.points["K"][0]
+    assert np.allclose(x, kx) and np.allclose(fx, 0)
+    falling = np.diff(kx) < 0
+    checked = 0
+    for i in range(1, len(kx) - 1):
+        if falling[i - 1] != falling[i]:
+            continue  # K turns back between these frames: the switch itself
+        assert (fy[i] < 0) == falling[i], i
+        if falling[i]:
+            assert fy[i] == pytest.approx(-50e3, rel=1e-12)
+        checked += 1
+    assert checked >= 60 and 0 < np.count_nonzero(fy < 0) < len(fy)
+
+
+@pytest.mark.slow
+def test_the_animation_labels_every_arrow_and_draws_a_round_bar(crane_frames):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from mechsolve.report.animate import _render
+
+    fr = crane_frames
+    fig = Figure(figsize=(8, 6), dpi=100)
+    FigureCanvasAgg(fig)
+    next(_render(fr, fig))
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    for j in ("O1", "A", "B", "O3", "C", "D", "O4"):
+        assert f"R {j}" in texts
+    assert "Q 50 kN" in texts
+    (bar,) = [t for t in texts if " = " in t and t.endswith("N")]
+    length, force = bar.split(" = ")
+    metres = float(length.split()[0]) * (1e-3 if length.endswith("mm") else 1.0)
+    value, unit = force.split()
+    newtons = float(value) * {"N": 1, "kN": 1e3, "MN": 1e6}[unit]
+    assert _in_125(metres) and _in_125(newtons)
+    assert math.isclose(metres / newtons, fr.force_scale, rel_tol=1e-9)

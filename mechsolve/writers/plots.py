@@ -34,6 +34,27 @@ def save_figure(fig, path: Path, dpi: int) -> None:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
 
 
+def round_125(x: float, up: bool = True) -> float:
+    """The nearest number of the 1-2-5 series (1, 2 or 5 times a power of ten) at or
+    above ``x`` (``up``) or at or below it: the values a scale bar reads (1 cm = 50 kN)."""
+    if not (x > 0 and math.isfinite(x)):
+        return 1.0
+    k = math.floor(math.log10(x))
+    series = [b * 10.0**e for e in (k - 1, k, k + 1) for b in (1.0, 2.0, 5.0)]
+    if up:
+        value = min(v for v in series if v >= x * (1 - 1e-12))
+    else:
+        value = max(v for v in series if v <= x * (1 + 1e-12))
+    return float(f"{value:.12g}")
+
+
+def length_text(metres: float) -> str:
+    """``2 m``, ``50 mm``: a scale bar's length as a drawing reads it."""
+    if metres >= 1:
+        return f"{metres:g} m"
+    return f"{metres * 1000:.6g} mm"
+
+
 def _plt():
     from mechsolve.writers.fonts import pyplot
 
