@@ -9,6 +9,7 @@ loads and labels its arrows."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -165,3 +166,89 @@ def test_the_animation_labels_every_arrow_and_draws_a_round_bar(crane_frames):
     newtons = float(value) * {"N": 1, "kN": 1e3, "MN": 1e6}[unit]
     assert _in_125(metres) and _in_125(newtons)
     assert math.isclose(metres / newtons, fr.force_scale, rel_tol=1e-9)
+
+
+# -- 3. labels without overlap ---------------------------------------------------------
+
+
+def _saved(monkeypatch, module, tmp_path) -> list:
+    """Save for real (labels are placed on saving) and keep each figure."""
+    figs: list = []
+    real = module.save_figure
+
+    def keep(fig, path, dpi):
+        real(fig, tmp_path / Path(path).name, dpi)
+        figs.append(fig)
+
+    monkeypatch.setattr(module, "save_figure", keep)
+    return figs
+
+
+def _renderer(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not hasattr(fig.canvas, "get_renderer"):  # closed by pyplot: draw it again
+        FigureCanvasAgg(fig)
+    return fig.canvas.get_renderer()
+
+
+def _label_boxes(fig):
+    from matplotlib.text import Text
+
+    renderer = _renderer(fig)
+    fig.canvas.draw()  # an annotation's text is positioned when drawn
+    ax = fig.axes[0]
+    # the text's own box (an annotation's window extent takes in its leader line too)
+    return {t.get_text(): Text.get_window_extent(t, renderer) for t in ax.texts if t.get_text()}
+
+
+def _overlaps(boxes: dict) -> list[tuple[str, str]]:
+    names = list(boxes)
+    out = []
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            p, q = boxes[a], boxes[b]
+            if min(p.x1, q.x1) - max(p.x0, q.x0) > 0.5 and min(p.y1, q.y1) - max(p.y0, q.y0) > 0.5:
+                out.append((a, b))
+    return out
+
+
+@pytest.mark.slow
+def test_no_two_labels_overlap_in_the_crane_drawing(crane, monkeypatch, tmp_path):
+    # near O1 the crank (1.388 m) and the coupler sit among O1, A and B on a 30 m
+    # drawing: their names used to lie on each other
+    mech, res = crane
+    figs = _saved(monkeypatch, plots, tmp_path)
+    plots.plot_trajectories(res, tmp_path / "trajectories.png")
+    boxes = _label_boxes(figs[0])
+    every = {*(lk.name for lk in mech.links), *(p for lk in mech.links for p in lk.points)}
+    assert every <= set(boxes)
+    assert _overlaps(boxes) == []
+    # and no label covers a pin: the joints' markers stay readable
+    renderer = _renderer(figs[0])
+    ax = figs[0].axes[0]
+    for j in mech.joints:
+        x, y = res.point(j.point).x[0], res.point(j.point).y[0]
+        px, py = ax.transData.transform((x, y))
+        for name, box in boxes.items():
+            assert not box.contains(px, py), (name, j.point)
+    assert renderer is not None
+
+
+def test_the_placement_moves_a_label_off_another():
+    # two points 1 % of the drawing apart: their names, placed at the same offset,
+    # would overlap; the placement keeps them apart
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4, 4), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    for name, x in (("O1", 0.50), ("A", 0.51), ("crank", 0.505)):
+        plots._label(ax, name, x, 0.5, fontsize=8, color="k", pin=name != "crank")
+    plots.place_labels(fig)
+    boxes = _label_boxes(fig)
+    assert set(boxes) == {"O1", "A", "crank"}
+    assert _overlaps(boxes) == []

@@ -28,8 +28,11 @@ if TYPE_CHECKING:
 
 
 def save_figure(fig, path: Path, dpi: int) -> None:
-    """Save ``fig`` so that an interrupted run never leaves a half-written image."""
+    """Save ``fig`` so that an interrupted run never leaves a half-written image; the
+    labels of drawn mechanisms are placed first (:func:`place_labels`), now that the
+    figure's layout is final."""
     path = Path(path)
+    place_labels(fig)
     with replacing(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
 
@@ -139,7 +142,7 @@ def draw_mechanism(
             ax.plot(hull[:, 0], hull[:, 1], color=col, lw=2.5, solid_capstyle="round")
         if labels:
             cx, cy = pts.mean(axis=0)
-            ax.annotate(lk.name, (cx, cy), fontsize=7, color=col, ha="center", va="center")
+            _label(ax, lk.name, cx, cy, fontsize=7, color=col, pin=False)
     # what the joints draw beyond the links: the guides of sliders on the ground
     for c in sys_.constraints:
         seg = c.guide(state, an.scale)
@@ -169,7 +172,100 @@ def draw_mechanism(
         else:
             ax.plot([x], [y], ".", ms=5, color=color, zorder=4)
         if labels:
-            ax.annotate(p, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+            _label(ax, p, x, y, fontsize=8, color="k", pin=True)
+
+
+def _label(ax, text: str, x: float, y: float, *, fontsize: float, color: str, pin: bool) -> None:
+    """Ask for ``text`` beside (x, y): placed when the figure is saved (:func:`place_labels`),
+    when the axes' scale is known. ``pin``: a point's name (placed first; its marker is
+    kept clear of every label)."""
+    pending = ax.__dict__.setdefault("_mechsolve_labels", [])
+    pending.append((text, float(x), float(y), fontsize, color, pin))
+
+
+# where a label may go around its point: directions (unit steps) tried in this order, at
+# growing distances (pixels at the figure's dpi); beyond the first ring a leader line
+# joins the label to its point
+_DIRECTIONS = [(1, 1), (-1, 1), (1, -1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1)]
+_RINGS = (4.0, 10.0, 18.0, 28.0, 42.0)
+_PIN = 5.0  # half the size (pixels) of the box kept clear around a pin's marker
+
+
+def place_labels(fig) -> None:
+    """Place the names asked for by :func:`draw_mechanism` so that no two overlap and none
+    covers a pin: each in turn (the points' names first, then the links') takes the first
+    free spot around its point (greedy, against the boxes of the labels already placed),
+    nearest first; a label pushed beyond the first ring gets a thin leader line to its
+    point. A label with no free spot takes the one it overlaps least."""
+    from matplotlib.transforms import Bbox
+
+    pending = [(ax, ax.__dict__.pop("_mechsolve_labels", [])) for ax in fig.axes]
+    if not any(items for _, items in pending):
+        return
+    renderer = fig.canvas.get_renderer()
+    scale = fig.dpi / 72.0  # pixels per point
+    for ax, items in pending:
+        items = sorted(items, key=lambda it: not it[5])  # points' names first
+        at = [ax.transData.transform((x, y)) for _, x, y, *_ in items]
+        taken = [
+            Bbox.from_bounds(px - _PIN, py - _PIN, 2 * _PIN, 2 * _PIN)
+            for (px, py), it in zip(at, items)
+            if it[5] and np.all(np.isfinite((px, py)))
+        ]
+        frame = ax.get_window_extent(renderer)
+        for (text, x, y, size, color, pin), (px, py) in zip(items, at):
+            if not np.all(np.isfinite((px, py))):
+                continue
+            probe = ax.text(0, 0, text, fontsize=size)
+            w, h = probe.get_window_extent(renderer).size
+            probe.remove()
+            best, least = None, math.inf
+            rings = _RINGS if pin else (0.0, *_RINGS)
+            for r in rings:
+                for dx, dy in _DIRECTIONS if r else [(0, 0)]:
+                    # the box's corner nearest the point sits r pixels out along (dx, dy)
+                    n = math.hypot(dx, dy) or 1.0
+                    cx = px + r * dx / n + (dx * w / 2 if dx else 0)
+                    cy = py + r * dy / n + (dy * h / 2 if dy else 0)
+                    if pin and not dx:
+                        cy += dy * _PIN
+                    if pin and not dy:
+                        cx += dx * _PIN
+                    box = Bbox.from_bounds(cx - w / 2, cy - h / 2, w, h)
+                    cost = sum(_overlap(box, t) for t in taken)
+                    cost += w * h - _overlap(box, frame)  # outside the axes
+                    if cost < least:
+                        best, least = (cx, cy, r), cost
+                    if cost == 0:
+                        break
+                if least == 0:
+                    break
+            cx, cy, r = best
+            leader = r > _RINGS[0] + 1e-9
+            ax.annotate(
+                text,
+                (x, y),
+                xytext=((cx - px) / scale, (cy - py) / scale),
+                textcoords="offset points",
+                fontsize=size,
+                color=color,
+                ha="center",
+                va="center",
+                zorder=6,
+                arrowprops=(
+                    {"arrowstyle": "-", "color": "0.45", "lw": 0.6, "shrinkA": 0, "shrinkB": 2}
+                    if leader
+                    else None
+                ),
+            )
+            taken.append(Bbox.from_bounds(cx - w / 2, cy - h / 2, w, h))
+
+
+def _overlap(a, b) -> float:
+    """The area two boxes share (pixels²)."""
+    dx = min(a.x1, b.x1) - max(a.x0, b.x0)
+    dy = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return dx * dy if dx > 0 and dy > 0 else 0.0
 
 
 def _hull(pts: np.ndarray) -> np.ndarray:
