@@ -252,3 +252,30 @@ def test_the_placement_moves_a_label_off_another():
     boxes = _label_boxes(fig)
     assert set(boxes) == {"O1", "A", "crank"}
     assert _overlaps(boxes) == []
+
+
+# -- 4. the cam's sheet ------------------------------------------------------------------
+
+
+def _drawn_share(png) -> tuple[float, float]:
+    """The share of the image's width and height that the drawn (not white) pixels span."""
+    from PIL import Image
+
+    a = np.asarray(Image.open(png).convert("L"), float)
+    ink = a < 245
+    rows, cols = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    return (cols[-1] - cols[0] + 1) / a.shape[1], (rows[-1] - rows[0] + 1) / a.shape[0]
+
+
+@pytest.mark.parametrize("name", ["shaper-cam.yaml"])
+def test_the_cam_sheet_has_no_blank_band(name, tmp_path):
+    # the drawing (cam, followers, legend) spans the whole sheet: a margin of a few
+    # percent, never the blank third a square sheet around a wide drawing had
+    from mechsolve.analyses.cam.analysis import analyse
+    from mechsolve.analyses.cam.model import load as load_cam
+    from mechsolve.analyses.cam.writers import draw_cam
+
+    res = analyse(load_cam(MECH / name, None))
+    png = draw_cam(res, tmp_path / "cam.png")
+    width, height = _drawn_share(png)
+    assert width >= 0.9 and height >= 0.9, (width, height)
