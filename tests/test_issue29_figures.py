@@ -9,6 +9,7 @@ loads and labels its arrows."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -279,3 +280,72 @@ def test_the_cam_sheet_has_no_blank_band(name, tmp_path):
     png = draw_cam(res, tmp_path / "cam.png")
     width, height = _drawn_share(png)
     assert width >= 0.9 and height >= 0.9, (width, height)
+
+
+# -- 5. study plots ----------------------------------------------------------------------
+
+KEY_PATH = re.compile(r"[A-Za-z_]\w*\.[A-Za-z_]\w*|\[\d+\]")  # links.crank, A[0]
+
+
+@pytest.fixture(scope="module")
+def fourbar_study():
+    from mechsolve.analyses.study.designs import make_study
+    from mechsolve.analyses.study.execute import execute
+    from mechsolve.model.source import load_file
+
+    # the example study on a 3 x 3 grid (its file asks for 7 x 8): the same columns
+    options = ["links.crank.points.A[0]=20..32 mm:3", "links.coupler.points.B[0]=90..110 mm:3"]
+    study = make_study(load_file(MECH / "studies" / "fourbar-study.yaml"), options)
+    return study, execute(study, jobs=1).rows
+
+
+@pytest.mark.slow
+def test_study_plots_name_quantities_repeat_no_panel_and_draw_the_limits(
+    fourbar_study, monkeypatch, tmp_path
+):
+    from mechsolve.analyses.study import plots as study_plots
+
+    study, rows = fourbar_study
+    figs = _capture(monkeypatch, study_plots)
+    study_plots.write_plots(study, rows, tmp_path)
+    assert len(figs) == 3  # against each parameter, and the pass/fail map
+    for fig in figs:
+        title = fig._suptitle.get_text() if fig._suptitle else fig.axes[0].get_title()
+        assert "/" not in title.split(":")[0]  # the file by its name, no folder
+        for ax in fig.axes:
+            for label in (ax.get_xlabel(), ax.get_ylabel()):
+                if label:
+                    assert not KEY_PATH.search(label), label
+                    assert label.endswith("]"), label  # with its unit
+    against = figs[0]
+    panels = [ax for ax in against.axes if ax.lines]
+    # no panel repeats another: the curves of any two differ
+    data = [np.concatenate([ln.get_ydata() for ln in ax.lines if ln.get_linestyle() != "--"])
+            for ax in panels]  # fmt: skip
+    for i in range(len(data)):
+        for k in range(i + 1, len(data)):
+            same = data[i].shape == data[k].shape and np.allclose(data[i], data[k], equal_nan=True)
+            assert not same, (panels[i].get_ylabel(), panels[k].get_ylabel())
+    # the three requirements with a limit each draw it where the file puts it
+    drawn = {}
+    for ax in panels:
+        for ln in ax.lines:
+            y = np.asarray(ln.get_ydata(), float)
+            if ln.get_linestyle() == "--" and y.size == 2 and y[0] == y[1]:
+                drawn[ax.get_ylabel()] = float(y[0])
+    assert drawn == {
+        "min transmission angle B [deg]": pytest.approx(30),
+        "rocker swing [deg]": pytest.approx(55),
+        "max |input torque| [N*m]": pytest.approx(0.07),
+    }
+
+
+def test_the_words_of_a_figure():
+    from mechsolve.analyses.study.plots import figure_label
+
+    assert figure_label("min(transmission_angle.B) [deg]") == "min transmission angle B [deg]"
+    assert figure_label("max(abs(input.torque)) [N*m]") == "max |input torque| [N*m]"
+    assert figure_label("max(O2.F) [N]") == "max O2 reaction F [N]"
+    assert figure_label("rocker.time_ratio [-]") == "rocker time ratio [-]"
+    assert figure_label("range(K.y) [m]") == "range K y [m]"
+    assert figure_label("cycle.work [J]") == "work per cycle [J]"
