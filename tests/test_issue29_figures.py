@@ -349,3 +349,85 @@ def test_the_words_of_a_figure():
     assert figure_label("rocker.time_ratio [-]") == "rocker time ratio [-]"
     assert figure_label("range(K.y) [m]") == "range K y [m]"
     assert figure_label("cycle.work [J]") == "work per cycle [J]"
+
+
+# -- 6. the HTML report ------------------------------------------------------------------
+
+WIDTHS = """<script>
+window.addEventListener("load", function () {
+  var doc = document.documentElement, out = {page: doc.scrollWidth, window: doc.clientWidth,
+    scrolls: []};
+  document.querySelectorAll("*").forEach(function (e) {
+    var visible = e.offsetParent !== null || e === document.body;
+    var clipped = getComputedStyle(e).overflowX !== "visible";
+    if (visible && clipped && e.scrollWidth > e.clientWidth + 1) {
+      out.scrolls.push(e.tagName + "." + e.className + " " + e.scrollWidth + " > " + e.clientWidth);
+    }
+  });
+  var pre = document.createElement("pre");
+  pre.id = "widths";
+  pre.textContent = JSON.stringify(out);
+  document.body.appendChild(pre);
+});
+</script>"""
+
+
+@pytest.fixture(scope="module")
+def crane_html(tmp_path_factory):
+    from mechsolve.report import write_report
+
+    out = tmp_path_factory.mktemp("report") / "crane.html"
+    write_report(MECH / "crane.yaml", out=out, frames=24)  # the input by its absolute path
+    return out
+
+
+@pytest.mark.slow
+def test_the_report_embeds_no_absolute_path(crane_html):
+    text = crane_html.read_text(encoding="utf-8")
+    for folder in {str(MECH), str(MECH.parent), str(crane_html.parent), str(Path.home())}:
+        assert folder not in text
+    assert "File <code>crane.yaml</code>" in text
+
+
+def test_the_report_names_its_input_relative_to_itself(tmp_path):
+    from mechsolve.report import shown_name
+
+    (tmp_path / "mechanisms").mkdir()
+    inside = tmp_path / "mechanisms" / "crane.yaml"
+    assert shown_name(inside, tmp_path / "crane.html") == "mechanisms/crane.yaml"
+    assert shown_name(inside, tmp_path / "out" / "crane.html") == "crane.yaml"
+    assert shown_name(MECH / "crane.yaml", "/elsewhere/r.html") == "crane.yaml"
+
+
+@pytest.mark.slow
+def test_the_report_fits_a_1280_px_window(crane_html, tmp_path):
+    # in Chromium at 1280 px: the page is no wider than the window and no table, summary
+    # or other box scrolls sideways (the crane's tables have up to 22 columns)
+    import json
+    import subprocess
+    import tempfile
+
+    from mechsolve.report.browser import find_browser, headless_command
+
+    browser = find_browser()
+    if browser is None:
+        pytest.skip("no Chromium-based browser (apt-get install -y chromium)")
+    copy = tmp_path / "widths.html"
+    copy.write_text(
+        crane_html.read_text(encoding="utf-8").replace("</body>", WIDTHS + "</body>", 1),
+        encoding="utf-8",
+    )
+    with tempfile.TemporaryDirectory() as profile:
+        cmd = headless_command(
+            browser, profile, "--window-size=1280,900", "--virtual-time-budget=5000",
+            "--hide-scrollbars", "--dump-dom", copy.as_uri(),
+        )  # fmt: skip
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    m = re.search(r'<pre id="widths">(.*?)</pre>', p.stdout, re.S)
+    assert m, p.stderr[-2000:]
+    import html as _html
+
+    found = json.loads(_html.unescape(m.group(1)))
+    assert found["window"] >= 1260  # the window is the width asked for
+    assert found["page"] <= found["window"], found
+    assert found["scrolls"] == []
