@@ -268,6 +268,7 @@ def _drawn_share(png) -> tuple[float, float]:
     return (cols[-1] - cols[0] + 1) / a.shape[1], (rows[-1] - rows[0] + 1) / a.shape[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["shaper-cam.yaml"])
 def test_the_cam_sheet_has_no_blank_band(name, tmp_path):
     # the drawing (cam, followers, legend) spans the whole sheet: a margin of a few
