@@ -432,3 +432,32 @@ def test_the_report_fits_a_1280_px_window(crane_html, tmp_path):
     assert found["window"] >= 1260  # the window is the width asked for
     assert found["page"] <= found["window"], found
     assert found["scrolls"] == []
+
+
+def test_a_curve_along_the_motion_breaks_where_a_load_switches():
+    t = np.linspace(0, 1, 11)
+    on = t >= 0.45  # the load acts from the 6th sample on
+    bt, bf = plots.break_at_switches({"cut": on}, t, np.where(on, 100.0, 1.0))
+    assert np.flatnonzero(np.isnan(bt)).tolist() == [5] and np.isnan(bf[5])
+    assert np.array_equal(bt[~np.isnan(bt)], t)
+
+
+@pytest.mark.slow
+def test_the_simulation_reactions_break_where_the_cut_starts_and_ends(monkeypatch, tmp_path):
+    # the shaper's cutting force acts over part of the ram's stroke: the reactions jump
+    # where it starts and ends, and the start-up's plot leaves a gap there
+    from mechsolve.analyses.dynamics import plots as dyn_plots
+    from mechsolve.analyses.dynamics import simulate
+
+    mech = api.load(MECH / "shaper.yaml")
+    sim = simulate(mech)
+    figs: list = []
+    monkeypatch.setattr(dyn_plots, "_save", lambda fig, path: figs.append(fig) or path)
+    dyn_plots.write_simulation_plots(sim, sim.model, tmp_path)
+    (ax,) = [f.axes[0] for f in figs if "reactions" in f.axes[0].get_title()]
+    switches = sum(
+        int(np.count_nonzero(np.diff(np.asarray(on, int)))) for on in sim.forces.active.values()
+    )
+    assert switches >= 4  # twice a turn over the start-up's turns
+    for line in ax.lines:
+        assert np.count_nonzero(np.isnan(np.asarray(line.get_xdata(), float))) == switches

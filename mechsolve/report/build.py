@@ -98,9 +98,7 @@ def _split_header(text: str) -> tuple[str, str]:
     return head, q + sp + unit
 
 
-def _width(
-    texts: list[str], wrap: bool, char: float = PRINT_CHAR, pad: float = PRINT_PAD
-) -> float:
+def _width(texts: list[str], wrap: bool, char: float = PRINT_CHAR, pad: float = PRINT_PAD) -> float:
     """Estimated printed width (px) of a column holding ``texts``: its longest word when it
     may wrap, else its longest text (``char`` px a character, ``pad`` px a cell)."""
     if wrap:
@@ -130,9 +128,7 @@ class Table:
         text does at its spaces) and its header, which wraps at spaces."""
         cells = [r[k] for r in self.rows if k < len(r)]
         num = bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
-        return max(
-            _width(cells, not num, char, pad), _width([self.header[k]], True, char, pad)
-        )
+        return max(_width(cells, not num, char, pad), _width([self.header[k]], True, char, pad))
 
     def screen_parts(self) -> list[PrintPart]:
         """The table as shown on screen when it is wider than the page's column: parts as

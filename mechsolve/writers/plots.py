@@ -423,6 +423,20 @@ def _broken(res: Results, *arrays: np.ndarray, at_switch: bool = False) -> list[
     return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
 
 
+def break_at_switches(active: dict[str, np.ndarray], *arrays: np.ndarray) -> list[np.ndarray]:
+    """Copies of ``arrays`` (samples along a motion) with NaN inserted wherever one of
+    the conditional loads (``active``: where each acts) switches between two samples:
+    a curve drawn through them jumps there as a gap, never a sloped chord."""
+    ks: set[int] = set()
+    for on in active.values():
+        on = np.asarray(on, bool)
+        ks.update(np.flatnonzero(on[1:] != on[:-1]).tolist())
+    k = np.array(sorted(ks), dtype=int)
+    if k.size == 0:
+        return [np.asarray(a, float) for a in arrays]
+    return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
+
+
 JUMP_FACTOR = 12.0  # a step this many times the curve's typical step ...
 JUMP_SHARE = 0.08  # ... and this share of the curve's size is a jump, not motion
 
