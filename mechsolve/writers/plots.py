@@ -97,7 +97,9 @@ def driver_axis(res: Results) -> tuple[np.ndarray, str]:
 def draw_mechanism(
     ax, res_or_analysis, state, i: int, color: str = "k", labels: bool = True
 ) -> None:
-    """Draw links, joints, ground pivots and slider guides at position ``i``."""
+    """Draw links, joints, ground pivots and slider guides at position ``i``. The names
+    (``labels``) are placed when the figure is saved through :func:`save_figure`, or by
+    :func:`place_labels` (call it after the layout, before ``savefig``)."""
     an = getattr(res_or_analysis, "analysis", res_or_analysis)
     mech = an.mech
     sys_ = an.system
