@@ -28,6 +28,22 @@ from conftest import MECH, MECHANISMS, ref
 FRAMES = 12
 
 
+def _header(rows: list[list[tuple[str, tuple[int, int]]]]) -> list[str]:
+    """A table's column headers from its header rows: one row as it is; two, as the report
+    prints a wide table's part, a name over its columns (``K`` over ``vx [m/s]``) joined
+    back to ``K.vx [m/s]``."""
+    if len(rows) == 1:
+        return [text for text, _ in rows[0]]
+    subs = iter(text for text, _ in rows[1])
+    out = []
+    for text, (colspan, rowspan) in rows[0]:
+        if rowspan > 1:
+            out.append(text)
+        else:
+            out += [f"{text}.{next(subs)}" for _ in range(colspan)]
+    return out
+
+
 class Page(HTMLParser):
     """What a reader sees: headings, images, tables (with the caption before them), the
     animation's data, and every URL the page would fetch."""
@@ -44,6 +60,8 @@ class Page(HTMLParser):
         self._text: list[str] | None = None
         self._caption = ""
         self._row: list[str] | None = None
+        self._spans: list[tuple[int, int]] = []  # (colspan, rowspan) of the row's cells
+        self._head = False  # inside a thead
         self._script: str | None = None
         self.feed(text)
 
@@ -58,10 +76,15 @@ class Page(HTMLParser):
             self.images.append(a)
         elif tag in ("h1", "h2", "figcaption", "th", "td"):
             self._text = []
-        elif tag == "table":
-            self.tables.append({"caption": self._caption, "header": [], "rows": []})
+        if tag == "table":
+            self.tables.append({"caption": self._caption, "header": [], "rows": [], "head": []})
+        elif tag == "thead":
+            self._head = True
         elif tag == "tr":
             self._row = []
+            self._spans = []
+        if tag == "th":
+            self._spans.append((int(a.get("colspan", 1)), int(a.get("rowspan", 1))))
         elif tag == "script":
             self._script = a.get("type", "")
             self._text = []
@@ -76,9 +99,14 @@ class Page(HTMLParser):
             self._caption = text
         elif tag in ("th", "td") and self._row is not None:
             self._row.append(text)
+        elif tag == "thead":
+            self._head = False
         elif tag == "tr" and self._row is not None and self.tables:
             t = self.tables[-1]
-            if t["header"]:
+            if self._head:  # a table shown in parts has two header rows: a name over
+                t["head"].append(list(zip(self._row, self._spans)))  # its columns
+                t["header"] = _header(t["head"])
+            elif t["header"]:
                 t["rows"].append(self._row)
             else:
                 t["header"] = self._row
@@ -96,7 +124,22 @@ class Page(HTMLParser):
     def table(self, caption_start: str) -> dict:
         found = [t for t in self.tables if t["caption"].startswith(caption_start)]
         assert found, f"no table {caption_start!r} in {[t['caption'] for t in self.tables]}"
-        return found[0]
+        m = re.search(r" \(part 1 of (\d+)\)$", found[0]["caption"])
+        if not m:
+            return found[0]
+        # a wide table shown in parts, each led by the same columns: joined again
+        parts = found[: int(m.group(1))]
+        whole = {"caption": found[0]["caption"][: m.start()], **{k: [] for k in ("header", "rows")}}
+        lead = 0
+        while all(lead < len(p["header"]) and p["header"][lead] == parts[0]["header"][lead]
+                  for p in parts):  # fmt: skip
+            lead += 1
+        whole["header"] = parts[0]["header"][:lead] + [h for p in parts for h in p["header"][lead:]]
+        whole["rows"] = [
+            rows[0][:lead] + [c for r in rows for c in r[lead:]]
+            for rows in zip(*(p["rows"] for p in parts))
+        ]
+        return whole
 
     def column(self, caption_start: str, header: str) -> np.ndarray:
         t = self.table(caption_start)

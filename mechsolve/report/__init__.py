@@ -139,6 +139,18 @@ def build(
     return content
 
 
+def shown_name(file: str | Path, out: str | Path) -> str:
+    """How the report names its input: relative to the report's folder when the input
+    lies in it or below (``mechanisms/crane.yaml``), else by its name alone; never an
+    absolute path, which would tell the reader of a shared report the writer's folders
+    and mean nothing on another machine."""
+    file, folder = Path(file).resolve(), Path(out).resolve().parent
+    try:
+        return file.relative_to(folder).as_posix()
+    except ValueError:
+        return file.name
+
+
 def _write_atomic(path: Path, text: str) -> None:
 
     with replacing(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
@@ -179,6 +191,7 @@ def write_report(
     if pdf:
         pdf_path = Path(pdf) if not isinstance(pdf, bool) else out.with_suffix(".pdf")
     content = build(file, variant, frames=frames, method=method, polygons_at=polygons_at)
+    content.file = shown_name(file, out)
     html = render(content, paper)
     try:
         _write_atomic(out, html)
@@ -203,5 +216,6 @@ __all__ = [
     "is_cam_file",
     "paper_size",
     "render",
+    "shown_name",
     "write_report",
 ]

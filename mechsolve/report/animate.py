@@ -4,9 +4,11 @@ or handed to the report's HTML player as plain numbers.
 The frames come from their own sweep, 1 degree apart by default (a 360th of a linear
 driver's travel, or of a sweep in time), whatever step the file tabulates, so that the
 motion is smooth. Each frame draws the links to scale, the ground pivots and guides, the
-paths of the output points traced so far, the driver's value and the time; with
-``forces`` also the reaction at each joint as an arrow (the force on the joint's second
-link by its first, the convention of the CSV), all arrows on one scale.
+paths of the output points traced so far, the driver's value and the time, and the
+file's point loads as labelled arrows (where they act); with ``forces`` also the reaction
+at each joint as a labelled arrow (the force on the joint's second link by its first, the
+convention of the CSV). All arrows are on one scale, drawn as a scale bar that reads two round
+numbers (1, 2 or 5 times a power of ten): ``5 m = 200 kN``.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from mechsolve import api
 from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
 from mechsolve.writers.fonts import pyplot
+from mechsolve.writers.plots import length_text, round_125
 
 if TYPE_CHECKING:
     from mechsolve.model import Mechanism
@@ -38,6 +41,10 @@ PALETTE = [
     "#e377c2",
     "#17becf",
 ]
+REACTION_COLOR = "#d62728"
+LOAD_COLOR = "#1b3f8b"  # the applied loads: dark blue, apart from the red reactions
+ARROW_SHARE = 0.25  # the longest arrow, as a share of the drawing's size
+BAR_SHARE = 0.15  # the force scale bar, at most this share of the drawing's size
 DEFAULT_FRAME_STEP = math.radians(1.0)
 MAX_FRAMES = 20_000  # a longer animation is a mistake on the command line
 FFMPEG_HINT = (
@@ -79,21 +86,43 @@ class Frames:
     forces: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(
         default_factory=dict
     )  # joint -> (x, y, Fx, Fy) per frame
-    force_scale: float = 0.0  # m of arrow per N
+    force_scale: float = 0.0  # m of arrow per N: the bar's length over its force
     force_points: dict[str, str] = field(default_factory=dict)  # joint -> its point
+    loads: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(
+        default_factory=dict
+    )  # point load -> (x, y, Fx, Fy) per frame, zero where it does not act
+    load_points: dict[str, str] = field(default_factory=dict)  # load -> its point
+    bar: float = 0.0  # the scale bar's length (m), 1, 2 or 5 times a power of ten
+
+    @property
+    def bar_text(self) -> str:
+        """The scale bar's reading: ``1 m = 50 kN``."""
+        if not (self.force_scale > 0 and self.bar > 0):
+            return ""
+        return f"{length_text(self.bar)} = {force_text(self.bar / self.force_scale)}"
+
+    def arrows(self) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """Every force arrow: the reactions, then the loads."""
+        return {**self.forces, **self.loads}
 
     def __len__(self) -> int:
         return len(self.u)
 
     def names(self) -> list[str]:
         """Every name a frame shows (for the font check of :mod:`.writers.fonts`)."""
-        return [self.name, *(o.name for o in self.outlines), *self.points, *self.forces]
+        return [
+            self.name,
+            *(o.name for o in self.outlines),
+            *self.points,
+            *self.forces,
+            *self.loads,
+        ]
 
     def bounds(self, margin: float = 0.08) -> tuple[float, float, float, float]:
         """xmin, xmax, ymin, ymax over every frame (and the force arrows), with a margin."""
         xs = [o.x for o in self.outlines] + [p[0] for p in self.points.values()]
         ys = [o.y for o in self.outlines] + [p[1] for p in self.points.values()]
-        for x, y, fx, fy in self.forces.values():
+        for x, y, fx, fy in self.arrows().values():
             xs.append(x + fx * self.force_scale)
             ys.append(y + fy * self.force_scale)
         for g in self.guides:
@@ -160,9 +189,18 @@ class Frames:
                 }
                 for j, (x, y, fx, fy) in self.forces.items()
             }
-            out["force_unit"] = (
-                force_text(1 / self.force_scale) if self.force_scale > 0 else "no force"
-            )
+        if self.loads:
+            out["loads"] = {
+                name: {
+                    "at": self.load_points[name],
+                    "fx": arr(fx * self.force_scale),
+                    "fy": arr(fy * self.force_scale),
+                    "text": f"{name} {force_text(float(np.nanmax(np.hypot(fx, fy))))}",
+                }
+                for name, (x, y, fx, fy) in self.loads.items()
+            }
+        if self.forces or self.loads:
+            out["bar"] = {"length": self.bar, "text": self.bar_text}
         return out
 
 
@@ -298,26 +336,65 @@ def frames_of(res: Results, forces: bool = False) -> Frames:
         guides=guides,
         ok=np.asarray(res.ok, bool),
     )
-    if forces:
-        if res.forces is None:
-            raise InputError(
-                f"--forces: {mech.name} has no masses or loads, so no joint forces to draw"
-            )
-        ok = res.forces.ok
-        big = 0.0
-        for j in mech.joints:
-            r = res.reaction(j.name)
-            fx = np.where(ok, r["Fx"], np.nan)
-            fy = np.where(ok, r["Fy"], np.nan)
-            x, y = points[j.point]
-            fr.forces[j.name] = (x, y, fx, fy)
-            fr.force_points[j.name] = j.point
-            mag = np.hypot(fx, fy)
-            if np.any(np.isfinite(mag)):
-                big = max(big, float(np.nanmax(mag)))
-        x0, x1, y0, y1 = fr.bounds(0.0)
-        fr.force_scale = 0.25 * max(x1 - x0, y1 - y0) / big if big > 0 else 0.0
+    if forces and res.forces is None:
+        raise InputError(
+            f"--forces: {mech.name} has no masses or loads, so no joint forces to draw"
+        )
+    if res.forces is not None:
+        _add_forces(fr, res, points, reactions=forces)
     return fr
+
+
+def _add_forces(fr: Frames, res: Results, points: dict, reactions: bool) -> None:
+    """The point loads (where each acts) and, with ``reactions``, the joints' reactions as
+    arrows of ``fr``, and one round scale for all of them (:func:`arrow_scale`)."""
+    from mechsolve.model import PointForce
+
+    ok = res.forces.ok
+    if reactions:
+        for j in res.mechanism.joints:
+            r = res.reaction(j.name)
+            x, y = points[j.point]
+            fr.forces[j.name] = (x, y, np.where(ok, r["Fx"], np.nan), np.where(ok, r["Fy"], np.nan))
+            fr.force_points[j.name] = j.point
+    st, sys_ = res.solution.state, res.analysis.system
+    for load in res.mechanism.loads:
+        if not isinstance(load, PointForce) or load.point not in points:
+            continue
+        on = res.forces.active.get(load.name)
+        f = np.ones(len(fr)) if on is None else np.asarray(on, float)
+        fx, fy = (np.full(len(fr), float(v)) for v in load.force)
+        if load.frame == "link":
+            fx, fy = st.rotated(sys_.index[load.link], np.array(load.force, float))
+        x, y = points[load.point]
+        fr.loads[load.name] = (x, y, np.where(ok, fx * f, np.nan), np.where(ok, fy * f, np.nan))
+        fr.load_points[load.name] = load.point
+    big = 0.0
+    for _, _, fx, fy in fr.arrows().values():
+        mag = np.hypot(fx, fy)
+        if np.any(np.isfinite(mag)):
+            big = max(big, float(np.nanmax(mag)))
+    x0, x1, y0, y1 = fr.bounds(0.0)
+    fr.force_scale, fr.bar = arrow_scale(big, max(x1 - x0, y1 - y0))
+
+
+def arrow_scale(big: float, size: float) -> tuple[float, float]:
+    """The scale of force arrows on a drawing ``size`` m across whose largest force is
+    ``big`` N: (m of arrow per N, the scale bar's length in m). The bar is a 1-2-5 length
+    between a twentieth of ``size`` and :data:`BAR_SHARE` of it, and the force it stands
+    for a 1-2-5 force, so that the bar reads two round numbers (``5 m = 200 kN``); of
+    these the pair that draws ``big`` longest, at most :data:`ARROW_SHARE` of ``size``.
+    (0, 0) when there is no force to draw."""
+    if not (big > 0 and size > 0 and math.isfinite(big) and math.isfinite(size)):
+        return 0.0, 0.0
+    best = (0.0, 0.0, 0.0)  # (longest arrow, m per N, bar)
+    bar = round_125(BAR_SHARE * size, up=False)
+    while bar >= size / 20 * (1 - 1e-9):
+        force = round_125(big * bar / (ARROW_SHARE * size))
+        if big * bar / force > best[0] * (1 + 1e-9):
+            best = (big * bar / force, bar / force, bar)
+        bar = round_125(bar * 0.99, up=False)
+    return best[1], best[2]
 
 
 def solve_frames(
@@ -338,9 +415,15 @@ def solve_frames(
             method=method,
             velocity=False,
             acceleration=False,
-            forces=forces,
+            forces=forces or _has_point_loads(mech),
         )
         return frames_of(res, forces)
+
+
+def _has_point_loads(mech: Mechanism) -> bool:
+    from mechsolve.model import PointForce
+
+    return any(isinstance(ld, PointForce) for ld in mech.loads)
 
 
 def ffmpeg_available() -> bool:
@@ -384,16 +467,8 @@ def _render(fr: Frames, fig):
     for k, p in enumerate(fr.paths):
         x, y = fr.points[p]
         ax.plot(x, y, "-", lw=0.6, color=f"C{k % 10}", alpha=0.3)  # the whole path, faint
-    if fr.forces and fr.force_scale > 0:
-        ax.text(
-            0.01,
-            0.01,
-            "joint reactions (on the second link by the first): an arrow 1 m long is "
-            + force_text(1 / fr.force_scale),
-            transform=ax.transAxes,
-            fontsize=8,
-            color="C3",
-        )
+    if fr.force_scale > 0:
+        _scale_bar(ax, fr)
     moving = []
 
     def add(artist):
@@ -418,16 +493,17 @@ def _render(fr: Frames, fig):
     pins = add(ax.plot([], [], "o", ms=5, mfc="white", mec="k", zorder=4)[0])
     names = {p: add(ax.text(0, 0, p, fontsize=8, zorder=5)) for p in shown}
     arrows = {}
-    for j in fr.forces:
-        arrows[j] = add(
-            ax.annotate(
-                "",
-                xy=(0, 0),
-                xytext=(0, 0),
-                arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.5},
-                zorder=6,
-            )
+    for j, text in arrow_labels(fr).items():
+        col = LOAD_COLOR if j in fr.loads else REACTION_COLOR
+        arrow = ax.annotate(
+            "",
+            xy=(0, 0),
+            xytext=(0, 0),
+            arrowprops={"arrowstyle": "->", "color": col, "lw": 1.5},
+            zorder=6,
         )
+        tag = ax.text(0, 0, text, fontsize=7, color=col, ha="center", va="center", zorder=7)
+        arrows[j] = (add(arrow), add(tag))
     info = add(ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=9))
     canvas = fig.canvas
     canvas.draw()
@@ -460,19 +536,54 @@ def _render(fr: Frames, fig):
             t.set_visible(good)
             if good:
                 t.set_position((x + 0.008 * span, y + 0.008 * span))
-        for j, a in arrows.items():
-            x, y, fx, fy = (float(v[i]) for v in fr.forces[j])
+        all_arrows = fr.arrows()
+        for j, (a, tag) in arrows.items():
+            x, y, fx, fy = (float(v[i]) for v in all_arrows[j])
             good = all(math.isfinite(v) for v in (x, y, fx, fy)) and (fx, fy) != (0.0, 0.0)
             a.set_visible(good)
+            tag.set_visible(good)
             if good:
-                a.xy = (x + fx * fr.force_scale, y + fy * fr.force_scale)
+                hx, hy = x + fx * fr.force_scale, y + fy * fr.force_scale
+                a.xy = (hx, hy)
                 a.set_position((x, y))
+                k = 0.025 * span / max(math.hypot(hx - x, hy - y), 1e-12)
+                tag.set_position((hx + k * (hx - x), hy + k * (hy - y)))  # beyond the head
         info.set_text(fr.label(i) + ("" if fr.ok[i] else "  (cannot close here)"))
         canvas.restore_region(background)
         for a in moving:
             ax.draw_artist(a)
         canvas.blit(fig.bbox)
         yield np.array(canvas.buffer_rgba())[:, :, :3]
+
+
+def arrow_labels(fr: Frames) -> dict[str, str]:
+    """The text beside each arrow's head: ``R O3`` for the reaction at joint O3, the
+    load's name and size (``Q 50 kN``) for a load."""
+    out = {j: f"R {j}" for j in fr.forces}
+    for name, (_, _, fx, fy) in fr.loads.items():
+        mag = np.hypot(fx, fy)
+        size = float(np.nanmax(mag)) if np.any(np.isfinite(mag)) else 0.0
+        out[name] = f"{name} {force_text(size)}"
+    return out
+
+
+def _scale_bar(ax, fr: Frames) -> None:
+    """The force scale in the drawing's lower left corner: a bar ``fr.bar`` m long with
+    end ticks, reading ``1 m = 50 kN``, and what the colours are."""
+    x0, x1, y0, y1 = ax.get_xlim() + ax.get_ylim()
+    span = max(x1 - x0, y1 - y0)
+    bx, by = x0 + 0.03 * (x1 - x0), y0 + 0.05 * (y1 - y0)
+    tick = 0.008 * span
+    ax.plot([bx, bx + fr.bar], [by, by], "-", color="k", lw=2)
+    for x in (bx, bx + fr.bar):
+        ax.plot([x, x], [by - tick, by + tick], "-", color="k", lw=1.2)
+    ax.text(bx, by + 2 * tick, fr.bar_text, fontsize=8, va="bottom")
+    what = []
+    if fr.forces:
+        what.append("red: joint reactions (on the second link by the first)")
+    if fr.loads:
+        what.append("blue: loads")
+    ax.text(0.01, 0.005, "; ".join(what), transform=ax.transAxes, fontsize=7, va="bottom")
 
 
 def write_animation(

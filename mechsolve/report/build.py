@@ -59,6 +59,13 @@ class Image:
 PRINT_WIDTH = (210 - 2 * 12) / 25.4 * 96 - 16  # px, a little to spare
 PRINT_CHAR = 5.8  # px per character of a table at 8.5 px (a wide sans-serif: DejaVu Sans)
 PRINT_PAD = 8.0  # px of padding and borders per cell
+# and what a screen holds (report.css): the page's column (1100 px less its padding) at
+# the tables' .86rem (a digit of DejaVu Sans is 8.75 px), 0.5rem padding each side; a
+# table wider than this is shown in parts, so that no table scrolls sideways in a
+# window 1280 px wide (or any window wider than the column)
+SCREEN_WIDTH = 1100 - 2 * 19.2 - 24  # px, a little to spare
+SCREEN_CHAR = 8.9
+SCREEN_PAD = 18.0
 
 
 @dataclass
@@ -91,14 +98,14 @@ def _split_header(text: str) -> tuple[str, str]:
     return head, q + sp + unit
 
 
-def _width(texts: list[str], wrap: bool) -> float:
+def _width(texts: list[str], wrap: bool, char: float = PRINT_CHAR, pad: float = PRINT_PAD) -> float:
     """Estimated printed width (px) of a column holding ``texts``: its longest word when it
-    may wrap, else its longest text."""
+    may wrap, else its longest text (``char`` px a character, ``pad`` px a cell)."""
     if wrap:
         n = max((len(w) for t in texts for w in t.split()), default=1)
     else:
         n = max((len(t) for t in texts), default=1)
-    return n * PRINT_CHAR + PRINT_PAD
+    return n * char + pad
 
 
 @dataclass
@@ -116,19 +123,27 @@ class Table:
     note: str = ""
     lead: int = 0
 
-    def column_width(self, k: int) -> float:
+    def column_width(self, k: int, char: float = PRINT_CHAR, pad: float = PRINT_PAD) -> float:
         """The printed width (px) of column ``k``: its cells (a number does not wrap, a
         text does at its spaces) and its header, which wraps at spaces."""
         cells = [r[k] for r in self.rows if k < len(r)]
         num = bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
-        return max(_width(cells, wrap=not num), _width([self.header[k]], wrap=True))
+        return max(_width(cells, not num, char, pad), _width([self.header[k]], True, char, pad))
 
-    def print_parts(self) -> list[PrintPart]:
-        """The table as printed when it is wider than a page: parts of whole groups of
-        columns (a joint's Fx, Fy and F; a point's x and y) under a two-row header, each
-        part led by the ``lead`` columns. Empty when the table fits as it is."""
+    def screen_parts(self) -> list[PrintPart]:
+        """The table as shown on screen when it is wider than the page's column: parts as
+        :meth:`print_parts` makes them, at the screen's sizes. Empty when it fits."""
+        return self.print_parts(SCREEN_WIDTH, SCREEN_CHAR, SCREEN_PAD)
+
+    def print_parts(
+        self, page: float = PRINT_WIDTH, char: float = PRINT_CHAR, pad: float = PRINT_PAD
+    ) -> list[PrintPart]:
+        """The table as printed when it is wider than a page (``page`` px at ``char`` px
+        a character and ``pad`` px a cell): parts of whole groups of columns (a joint's
+        Fx, Fy and F; a point's x and y) under a two-row header, each part led by the
+        ``lead`` columns. Empty when the table fits as it is."""
         ncol = len(self.header)
-        if ncol == 0 or sum(self.column_width(k) for k in range(ncol)) <= PRINT_WIDTH:
+        if ncol == 0 or sum(self.column_width(k, char, pad) for k in range(ncol)) <= page:
             return []
         lead = list(range(min(self.lead, ncol)))
         # the groups of the other columns: consecutive columns with one name
@@ -145,18 +160,21 @@ class Table:
             head, sub = sub_of[k]
             cells = [r[k] for r in self.rows if k < len(r)]
             num = bool(self.numeric) and k < len(self.numeric) and self.numeric[k]
-            return max(_width(cells, wrap=not num), _width([sub if head else self.header[k]], True))
+            return max(
+                _width(cells, not num, char, pad),
+                _width([sub if head else self.header[k]], True, char, pad),
+            )
 
         def group_width(head: str, cols: list[int]) -> float:
             inner = sum(sub_width(k) for k in cols)
-            return max(inner, _width([head], wrap=False)) if head else inner
+            return max(inner, _width([head], False, char, pad)) if head else inner
 
         base = sum(sub_width(k) for k in lead)
         parts: list[list[tuple[str, list[int]]]] = [[]]
         used = base
         for head, cols in groups:
             w = group_width(head, cols)
-            if parts[-1] and used + w > PRINT_WIDTH:
+            if parts[-1] and used + w > page:
                 parts.append([])
                 used = base
             parts[-1].append((head, cols))

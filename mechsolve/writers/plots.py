@@ -28,10 +28,34 @@ if TYPE_CHECKING:
 
 
 def save_figure(fig, path: Path, dpi: int) -> None:
-    """Save ``fig`` so that an interrupted run never leaves a half-written image."""
+    """Save ``fig`` so that an interrupted run never leaves a half-written image; the
+    labels of drawn mechanisms are placed first (:func:`place_labels`), now that the
+    figure's layout is final."""
     path = Path(path)
+    place_labels(fig)
     with replacing(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
+
+
+def round_125(x: float, up: bool = True) -> float:
+    """The nearest number of the 1-2-5 series (1, 2 or 5 times a power of ten) at or
+    above ``x`` (``up``) or at or below it: the values a scale bar reads (1 cm = 50 kN)."""
+    if not (x > 0 and math.isfinite(x)):
+        return 1.0
+    k = math.floor(math.log10(x))
+    series = [b * 10.0**e for e in (k - 1, k, k + 1) for b in (1.0, 2.0, 5.0)]
+    if up:
+        value = min(v for v in series if v >= x * (1 - 1e-12))
+    else:
+        value = max(v for v in series if v <= x * (1 + 1e-12))
+    return float(f"{value:.12g}")
+
+
+def length_text(metres: float) -> str:
+    """``2 m``, ``50 mm``: a scale bar's length as a drawing reads it."""
+    if metres >= 1:
+        return f"{metres:g} m"
+    return f"{metres * 1000:.6g} mm"
 
 
 def _plt():
@@ -73,7 +97,9 @@ def driver_axis(res: Results) -> tuple[np.ndarray, str]:
 def draw_mechanism(
     ax, res_or_analysis, state, i: int, color: str = "k", labels: bool = True
 ) -> None:
-    """Draw links, joints, ground pivots and slider guides at position ``i``."""
+    """Draw links, joints, ground pivots and slider guides at position ``i``. The names
+    (``labels``) are placed when the figure is saved through :func:`save_figure`, or by
+    :func:`place_labels` (call it after the layout, before ``savefig``)."""
     an = getattr(res_or_analysis, "analysis", res_or_analysis)
     mech = an.mech
     sys_ = an.system
@@ -118,7 +144,7 @@ def draw_mechanism(
             ax.plot(hull[:, 0], hull[:, 1], color=col, lw=2.5, solid_capstyle="round")
         if labels:
             cx, cy = pts.mean(axis=0)
-            ax.annotate(lk.name, (cx, cy), fontsize=7, color=col, ha="center", va="center")
+            _label(ax, lk.name, cx, cy, fontsize=7, color=col, pin=False)
     # what the joints draw beyond the links: the guides of sliders on the ground
     for c in sys_.constraints:
         seg = c.guide(state, an.scale)
@@ -148,7 +174,100 @@ def draw_mechanism(
         else:
             ax.plot([x], [y], ".", ms=5, color=color, zorder=4)
         if labels:
-            ax.annotate(p, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+            _label(ax, p, x, y, fontsize=8, color="k", pin=True)
+
+
+def _label(ax, text: str, x: float, y: float, *, fontsize: float, color: str, pin: bool) -> None:
+    """Ask for ``text`` beside (x, y): placed when the figure is saved (:func:`place_labels`),
+    when the axes' scale is known. ``pin``: a point's name (placed first; its marker is
+    kept clear of every label)."""
+    pending = ax.__dict__.setdefault("_mechsolve_labels", [])
+    pending.append((text, float(x), float(y), fontsize, color, pin))
+
+
+# where a label may go around its point: directions (unit steps) tried in this order, at
+# growing distances (pixels at the figure's dpi); beyond the first ring a leader line
+# joins the label to its point
+_DIRECTIONS = [(1, 1), (-1, 1), (1, -1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1)]
+_RINGS = (4.0, 10.0, 18.0, 28.0, 42.0)
+_PIN = 5.0  # half the size (pixels) of the box kept clear around a pin's marker
+
+
+def place_labels(fig) -> None:
+    """Place the names asked for by :func:`draw_mechanism` so that no two overlap and none
+    covers a pin: each in turn (the points' names first, then the links') takes the first
+    free spot around its point (greedy, against the boxes of the labels already placed),
+    nearest first; a label pushed beyond the first ring gets a thin leader line to its
+    point. A label with no free spot takes the one it overlaps least."""
+    from matplotlib.transforms import Bbox
+
+    pending = [(ax, ax.__dict__.pop("_mechsolve_labels", [])) for ax in fig.axes]
+    if not any(items for _, items in pending):
+        return
+    renderer = fig.canvas.get_renderer()
+    scale = fig.dpi / 72.0  # pixels per point
+    for ax, items in pending:
+        items = sorted(items, key=lambda it: not it[5])  # points' names first
+        at = [ax.transData.transform((x, y)) for _, x, y, *_ in items]
+        taken = [
+            Bbox.from_bounds(px - _PIN, py - _PIN, 2 * _PIN, 2 * _PIN)
+            for (px, py), it in zip(at, items)
+            if it[5] and np.all(np.isfinite((px, py)))
+        ]
+        frame = ax.get_window_extent(renderer)
+        for (text, x, y, size, color, pin), (px, py) in zip(items, at):
+            if not np.all(np.isfinite((px, py))):
+                continue
+            probe = ax.text(0, 0, text, fontsize=size)
+            w, h = probe.get_window_extent(renderer).size
+            probe.remove()
+            best, least = None, math.inf
+            rings = _RINGS if pin else (0.0, *_RINGS)
+            for r in rings:
+                for dx, dy in _DIRECTIONS if r else [(0, 0)]:
+                    # the box's corner nearest the point sits r pixels out along (dx, dy)
+                    n = math.hypot(dx, dy) or 1.0
+                    cx = px + r * dx / n + (dx * w / 2 if dx else 0)
+                    cy = py + r * dy / n + (dy * h / 2 if dy else 0)
+                    if pin and not dx:
+                        cy += dy * _PIN
+                    if pin and not dy:
+                        cx += dx * _PIN
+                    box = Bbox.from_bounds(cx - w / 2, cy - h / 2, w, h)
+                    cost = sum(_overlap(box, t) for t in taken)
+                    cost += w * h - _overlap(box, frame)  # outside the axes
+                    if cost < least:
+                        best, least = (cx, cy, r), cost
+                    if cost == 0:
+                        break
+                if least == 0:
+                    break
+            cx, cy, r = best
+            leader = r > _RINGS[0] + 1e-9
+            ax.annotate(
+                text,
+                (x, y),
+                xytext=((cx - px) / scale, (cy - py) / scale),
+                textcoords="offset points",
+                fontsize=size,
+                color=color,
+                ha="center",
+                va="center",
+                zorder=6,
+                arrowprops=(
+                    {"arrowstyle": "-", "color": "0.45", "lw": 0.6, "shrinkA": 0, "shrinkB": 2}
+                    if leader
+                    else None
+                ),
+            )
+            taken.append(Bbox.from_bounds(cx - w / 2, cy - h / 2, w, h))
+
+
+def _overlap(a, b) -> float:
+    """The area two boxes share (pixels²)."""
+    dx = min(a.x1, b.x1) - max(a.x0, b.x0)
+    dy = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return dx * dy if dx > 0 and dy > 0 else 0.0
 
 
 def _hull(pts: np.ndarray) -> np.ndarray:
@@ -290,19 +409,66 @@ def _switches(res: Results) -> np.ndarray:
     return np.array(sorted(ks), dtype=int)
 
 
-def _broken(res: Results, *arrays: np.ndarray) -> list[np.ndarray]:
+def _broken(res: Results, *arrays: np.ndarray, at_switch: bool = False) -> list[np.ndarray]:
     """Copies of ``arrays`` with NaN inserted where a load switches between two samples,
     so that a plotted line does not join the two sides with a slope. Where the sweep has
     samples on both sides of the exact switch (:func:`mechsolve.api.for_plots`), the line
-    joins them: a vertical jump at its angle."""
+    joins them: a vertical jump at its angle. ``at_switch``: break there too (a curve
+    not drawn against the driver, such as a hodograph, would draw that jump as a chord)."""
     k = _switches(res)
     u = np.asarray(res.u, float)
-    if k.size:
+    if k.size and not at_switch:
         gap = np.abs(u[k + 1] - u[k])
         k = k[gap > 1e-6 * (res.analysis.scale if res.linear else 1.0)]
     if k.size == 0:
         return [np.asarray(a, float) for a in arrays]
     return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
+
+
+def break_at_switches(active: dict[str, np.ndarray], *arrays: np.ndarray) -> list[np.ndarray]:
+    """Copies of ``arrays`` (samples along a motion) with NaN inserted wherever one of
+    the conditional loads (``active``: where each acts) switches between two samples:
+    a curve drawn through them jumps there as a gap, never a sloped chord."""
+    ks: set[int] = set()
+    for on in active.values():
+        on = np.asarray(on, bool)
+        ks.update(np.flatnonzero(on[1:] != on[:-1]).tolist())
+    k = np.array(sorted(ks), dtype=int)
+    if k.size == 0:
+        return [np.asarray(a, float) for a in arrays]
+    return [np.insert(np.asarray(a, float), k + 1, np.nan) for a in arrays]
+
+
+JUMP_FACTOR = 12.0  # a step this many times the curve's typical step ...
+JUMP_SHARE = 0.08  # ... and this share of the curve's size is a jump, not motion
+
+
+def jumps(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Indices k where the vector tip (x, y) jumps between samples k and k+1: a step
+    longer than :data:`JUMP_FACTOR` times the median step and :data:`JUMP_SHARE` of the
+    curve's extent. A force that switches between samples (a load acting only part of
+    the cycle, a reaction crossing a dead point) jumps; a smooth curve sampled at 1°
+    never steps so far beyond its neighbours."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    step = np.hypot(np.diff(x), np.diff(y))
+    good = np.isfinite(step)
+    if np.count_nonzero(good) < 3:
+        return np.array([], dtype=int)
+    size = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)))
+    typical = float(np.median(step[good]))
+    big = good & (step > JUMP_FACTOR * typical) & (step > JUMP_SHARE * size)
+    return np.flatnonzero(big)
+
+
+def break_jumps(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``x`` and ``y`` with NaN inserted at each jump (:func:`jumps`): a line drawn
+    through them stops at one side of the jump and starts again at the other."""
+    k = jumps(x, y)
+    if k.size == 0:
+        return np.asarray(x, float), np.asarray(y, float)
+    return np.insert(np.asarray(x, float), k + 1, np.nan), np.insert(
+        np.asarray(y, float), k + 1, np.nan
+    )
 
 
 def _scaled(values: np.ndarray, unit: str) -> tuple[float, str]:
@@ -367,7 +533,8 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         r = res.reaction(name)
         fx, fy = np.where(res.forces.ok, r["Fx"], np.nan), np.where(res.forces.ok, r["Fy"], np.nan)
         scale, sym = (1e3, "k") if np.nanmax(np.hypot(fx, fy)) >= 1e4 else (1.0, "")
-        bx, by = _broken(res, fx / scale, fy / scale)
+        # a force that jumps (a load switching on or off) is drawn as two ends, no chord
+        bx, by = break_jumps(*_broken(res, fx / scale, fy / scale, at_switch=True))
         ax.plot(bx, by, "-o", ms=2.5, lw=1.2)
         i0 = int(np.flatnonzero(np.isfinite(fx))[0])
         ax.annotate(

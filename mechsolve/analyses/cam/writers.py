@@ -208,10 +208,12 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
     return out
 
 
-def _save(fig, path: Path, plt) -> Path:
+def _save(fig, path: Path, plt, tight: bool = False) -> Path:
+    """Write ``fig`` (``tight``: cropped to what is drawn, with a small margin)."""
+    extra = {"bbox_inches": "tight", "pad_inches": 0.12} if tight else {}
     try:
         with replacing(path) as tmp:
-            fig.savefig(tmp, dpi=120, format="png")
+            fig.savefig(tmp, dpi=120, format="png", **extra)
     finally:
         plt.close(fig)
     return path
@@ -276,6 +278,20 @@ def draw_cam(res: CamResult, path: Path, positions: int = 4) -> Path:
     ax.set_title(
         f"{res.model.name}: cam at 0 deg (turns {sense}),\nfollower by inversion", fontsize=10
     )
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    _fit(fig, ax)
+    return _save(fig, path, plt, tight=True)
+
+
+def _fit(fig, ax, width: float = 7.0) -> None:
+    """Size ``fig`` to the drawing: the axes as wide as ``width`` inches and as tall as
+    the drawing's aspect (equal scales) makes them, the legend in columns below, so that
+    the sheet has no blank band (a square sheet around a wide drawing was half empty)."""
+    ax.autoscale_view()
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    ratio = min(max((y1 - y0) / max(x1 - x0, 1e-12), 0.3), 2.0)
+    handles, _ = ax.get_legend_handles_labels()
+    rows = math.ceil(len(handles) / 3)
+    legend = 0.25 + 0.2 * rows  # inches below the axes for the legend
+    fig.set_size_inches(width + 1.0, width * ratio + 1.3 + legend)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3, frameon=False)
     fig.tight_layout()
-    return _save(fig, path, plt)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.writers.fonts import pyplot
+from mechsolve.writers.plots import break_at_switches
 
 if TYPE_CHECKING:
     from mechsolve.analyses.dynamics import ReducedModel, SimulationResults
@@ -90,8 +91,8 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
         fig, ax = plt.subplots(figsize=(10, 4.5))
         for j, comp in res.forces.reactions.items():
             F = comp.get("F")
-            if F is not None:
-                ax.plot(tr.t, F, lw=1.0, label=j)
+            if F is not None:  # a load switching on or off: a gap, not a slope
+                ax.plot(*break_at_switches(res.forces.active, tr.t, F), lw=1.0, label=j)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("reaction magnitude [N]")
         ax.set_title(f"{name}: joint reactions along the motion")

@@ -90,14 +90,32 @@
       ctx.fillStyle = "#fff"; ctx.fill(); ctx.strokeStyle = "#000"; ctx.lineWidth = 1.2; ctx.stroke();
       ctx.fillStyle = "#000"; ctx.font = "13px " + font; ctx.fillText(p, x + 6, y - 6);
     });
-    // joint forces
-    if (data.forces && forcesBox && forcesBox.checked) {
-      ctx.strokeStyle = "#d62728"; ctx.lineWidth = 2;
-      Object.keys(data.forces).forEach(function (j) {
-        var F = data.forces[j], xy = data.points[F.at];
+    // force arrows, each labelled beyond its head: the joint forces (when asked for)
+    // in red, the file's point loads in blue (where they act); one scale, shown by a bar
+    function forces(set, color, text) {
+      ctx.strokeStyle = color; ctx.fillStyle = color; ctx.lineWidth = 2;
+      ctx.font = "11px " + font; ctx.textAlign = "center";
+      Object.keys(set).forEach(function (j) {
+        var F = set[j], xy = data.points[F.at];
         var x = xy[0][f], y = xy[1][f], fx = F.fx[f], fy = F.fy[f];
-        if (ok(x) && ok(y) && ok(fx) && ok(fy)) { arrow(X(x), Y(y), X(x + fx), Y(y + fy)); }
+        if (!(ok(x) && ok(y) && ok(fx) && ok(fy)) || (fx === 0 && fy === 0)) { return; }
+        var x0 = X(x), y0 = Y(y), x1 = X(x + fx), y1 = Y(y + fy);
+        arrow(x0, y0, x1, y1);
+        var len = Math.sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0));
+        if (len >= 1) { ctx.fillText(text(j, F), x1 + 12 * (x1 - x0) / len, y1 + 12 * (y1 - y0) / len + 4); }
       });
+    }
+    var showForces = data.forces && forcesBox && forcesBox.checked;
+    if (showForces) { forces(data.forces, "#d62728", function (j) { return "R " + j; }); }
+    if (data.loads) { forces(data.loads, "#1b3f8b", function (j, F) { return F.text; }); }
+    if (data.bar && data.bar.length > 0 && (showForces || data.loads)) {
+      var bx = pad, by = H - pad, bl = k * data.bar.length;
+      ctx.strokeStyle = "#000"; ctx.lineWidth = 2; ctx.beginPath();
+      ctx.moveTo(bx, by); ctx.lineTo(bx + bl, by);
+      ctx.moveTo(bx, by - 5); ctx.lineTo(bx, by + 5); ctx.moveTo(bx + bl, by - 5); ctx.lineTo(bx + bl, by + 5);
+      ctx.stroke();
+      ctx.fillStyle = "#000"; ctx.font = "12px " + font; ctx.textAlign = "left";
+      ctx.fillText(data.bar.text, bx, by - 9);
     }
     label.textContent = data.labels[f];
     holder.setAttribute("data-frame", String(f));
