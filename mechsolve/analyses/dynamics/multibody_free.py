@@ -19,9 +19,9 @@ from mechsolve.analyses.dynamics.multibody import (
     Trajectory,
     coordinate,
     free_context,
-    integrate,
     trajectory_state,
 )
+from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
 from mechsolve.model import GROUND, Mechanism
 
@@ -59,6 +59,17 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
             )
     if mech.motor is not None:
         raise mech.error(("motor",), "with simulate.pose give the motors in 'motors:'")
+    for key, given in (
+        ("stop when", sim.stop is not None),
+        ("singular", sim.singular == "keep branch"),
+    ):
+        if given:
+            raise mech.error(
+                ("simulate", key),
+                f"'{key}{': keep branch' if key == 'singular' else ''}' reads the loops' "
+                "quantities through the sweep's analysis, which places the mechanism by its "
+                "driver: give a 'driver' (one degree of freedom) instead of simulate.pose",
+            )
     ctx = free_context(machine)
     prescribed = _prescribed(machine, ctx.system)
     mb = Multibody(ctx, motor_sources(machine, ctx.system), prescribed, tolerance=sim.tolerance)
@@ -74,6 +85,7 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
         rtol=sim.rtol,
         atol=sim.atol,
         max_steps=max_steps,
+        singular=sim.singular,
     )
     return FreeResults(mech, mb, tr)
 
@@ -346,7 +358,7 @@ class FreeResults:
                 "all coordinates, then projected onto the constraints)"
             )
         if tr.early:
-            lines.append(f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}")
+            lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
