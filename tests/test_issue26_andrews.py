@@ -1,0 +1,103 @@
+"""Issue 26: Andrews' squeezing mechanism (the seven body mechanism of the IFToMM and
+IVP test sets), posed as mechanisms/andrews.yaml with the published data, against the
+published reference solution at t = 0.03 s and the published consistent start.
+
+Reference: Test Set for IVP Solvers (F. Mazzia, F. Iavernaro, C. Magherini, University
+of Bari), problem 'andrews', computed by PSIDE with rtol = atol = 1e-14; the problem as
+in Hairer & Wanner, Solving Ordinary Differential Equations II, section VII.7."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mechsolve as ms
+from mechsolve.analyses.dynamics import simulate
+
+from conftest import MECH
+
+# beta, Theta, gamma, Phi, delta, Omega, epsilon at t = 0.03 s, and their rates
+ANGLES_003 = [
+    0.1581077119629904e2,
+    -0.1575637105984298e2,
+    0.4082224013073101e-1,
+    -0.5347301163226948,
+    0.5244099658805304,
+    0.5347301163226948,
+    0.1048080741042263e1,
+]
+RATES_003 = [
+    0.1139920302151208e4,
+    -0.1424379294994111e4,
+    0.1103291221937134e2,
+    0.1929337464421385e2,
+    0.5735699284790808,
+    -0.1929337464421385e2,
+    0.3231791658026955,
+]
+# the consistent start: beta'' and Theta'' (the other accelerations are zero)
+ACCELERATIONS_0 = [14222.4439199541138705911625887, -10666.8329399655854029433719415]
+
+
+def _published(values: np.ndarray, idx: dict) -> np.ndarray:
+    """The links' absolute angles (or rates) as the published coordinates: k1 beta,
+    k2 beta + Theta, k3 gamma, k4 Phi + delta, k5 delta, k6 Omega + epsilon, k7 epsilon."""
+    a = {k: values[..., 3 * idx[k] + 2] for k in idx if k.startswith("k")}
+    return np.stack(
+        [
+            a["k1"],
+            a["k2"] - a["k1"],
+            a["k3"],
+            a["k4"] - a["k5"],
+            a["k5"],
+            a["k6"] - a["k7"],
+            a["k7"],
+        ],
+        axis=-1,
+    )
+
+
+@pytest.fixture(scope="module")
+def andrews():
+    return simulate(ms.load(MECH / "andrews.yaml"))
+
+
+def test_andrews_against_the_published_solution_at_0_03_s(andrews):
+    """Every angle to 1e-8 rad (beta has turned 2.5 times: 15.8 rad) and every rate to
+    1e-6 of its size, at the file's rtol 1e-10."""
+    tr = andrews.trajectory
+    idx = andrews.multibody.system.index
+    assert tr.t[-1] == pytest.approx(0.03) and not tr.early
+    np.testing.assert_allclose(_published(tr.q[-1], idx), ANGLES_003, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(_published(tr.qd[-1], idx), RATES_003, rtol=1e-6)
+
+
+def test_andrews_starts_from_the_published_consistent_state(andrews):
+    """The file's start (its driver angle, the side each loop closes on) is the
+    published position at rest, and the first accelerations are the published ones."""
+    tr = andrews.trajectory
+    idx = andrews.multibody.system.index
+    start = [
+        -0.0617138900142764496358948458001,
+        0.0,
+        0.455279819163070380255912382449,
+        0.222668390165885884674473185609,
+        0.487364979543842550225598953530,
+        -0.222668390165885884674473185609,
+        1.23054744454982119249735015568,
+    ]
+    np.testing.assert_allclose(_published(tr.q[0], idx), start, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(_published(tr.qd[0], idx), 0.0, atol=1e-12)
+    acc = _published(tr.qdd[0], idx)
+    np.testing.assert_allclose(acc[:2], ACCELERATIONS_0, rtol=1e-9)
+    np.testing.assert_allclose(acc[2:], 0.0, atol=1e-6)
+
+
+def test_andrews_keeps_its_energy_and_its_constraints(andrews):
+    """The torque's work goes into kinetic energy and the spring: T + V - W stays
+    constant to the integrator's tolerance; the ten pins close to their tolerance."""
+    tr = andrews.trajectory
+    assert np.max(np.abs(tr.energy_residual)) < 1e-8 * np.max(np.abs(tr.work))
+    k1 = 3 * andrews.multibody.system.index["k1"] + 2
+    assert tr.work[-1] == pytest.approx(0.033 * (tr.q[-1, k1] - tr.q[0, k1]), rel=1e-9)
+    assert np.max(tr.violation) <= andrews.multibody.tol
