@@ -101,3 +101,48 @@ def test_andrews_keeps_its_energy_and_its_constraints(andrews):
     k1 = 3 * andrews.multibody.system.index["k1"] + 2
     assert tr.work[-1] == pytest.approx(0.033 * (tr.q[-1, k1] - tr.q[0, k1]), rel=1e-9)
     assert np.max(tr.violation) <= andrews.multibody.tol
+
+
+def test_the_pins_on_arrays_are_the_joints_equations():
+    """The all-pins kernel evaluates the same equations, in the same rows, as the
+    joints' constraints one by one, at an arbitrary configuration and rates."""
+
+    mech = ms.load(MECH / "andrews.yaml")
+    mech.simulation.duration = mech.simulation.step = 1e-4
+    mb = simulate(mech).multibody
+    assert mb.pins is not None
+    rng = np.random.default_rng(26)
+    q, qd = rng.normal(size=mb.nq), rng.normal(size=mb.nq)
+    st = mb.state(q, qd)
+    one_by_one = mb.system.constraints
+    phi = np.concatenate([c.residual(st, 0.0)[:, 0] for c in one_by_one])
+    gamma = np.concatenate([c.gamma(st, 0.0)[:, 0] for c in one_by_one])
+    np.testing.assert_allclose(mb.residual(q, 0.0), phi, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(mb.jacobian(q), mb.system.jacobian(st)[0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(mb._nu_gamma(st, 0.0, True), gamma, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", ["andrews.yaml", "nfourbar-2.yaml"])
+def test_bench_data_matches_the_examples(name):
+    """The bench's copies are the files of mechanisms/ (update both together)."""
+    import mechsolve_bench as bench
+
+    assert bench.case_file(name).read_text(encoding="utf-8") == (MECH / name).read_text(
+        encoding="utf-8"
+    ), f"mechsolve_bench/data/{name} differs from mechanisms/{name}: copy it over"
+
+
+def test_bench_multibody_case_runs_both_solvers_on_both_problems():
+    """`mechsolve bench --quick --case multibody`: both problems over a short time,
+    mechsolve and exudyn, each with its time, error column and the ratio."""
+    from click.testing import CliRunner
+
+    from mechsolve.cli.main import main
+
+    pytest.importorskip("exudyn")
+    r = CliRunner().invoke(main, ["bench", "--quick", "--case", "multibody"])
+    assert r.exit_code == 0, r.output
+    for name in ("nfourbar-2", "andrews"):
+        assert f"{name}: mechsolve DOP853" in r.output
+        assert f"{name}: exudyn generalized-alpha" in r.output
+        assert f"{name} (" in r.output and "time exudyn / mechsolve = " in r.output

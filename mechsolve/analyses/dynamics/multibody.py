@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.multibody_pins import Pins
 from mechsolve.base.state import State
 from mechsolve.core.loads import _Q, apply_loads, stroke_function
 from mechsolve.system.constraints import ConstraintSystem, make_driver
@@ -193,6 +194,12 @@ class Multibody:
             self.J[b] = lk.inertia or 0.0
             if lk.com is not None:
                 self.s[b] = lk.com
+        # all pins and nothing prescribed: the equations on arrays of all pins at once
+        self.pins = (
+            Pins(self.system.constraints, self.nb)
+            if not self.prescribed and Pins.applies(self.system.constraints)
+            else None
+        )
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.extremes: list = []
         self.nfev = 0
@@ -223,6 +230,8 @@ class Multibody:
         return vals[:, 0], vals[:, 1], vals[:, 2]
 
     def residual(self, q: np.ndarray, t: float) -> np.ndarray:
+        if self.pins is not None:
+            return self.pins.residual(q)
         st = self.state(q)
         u = self._u(t)[0]
         parts = [c.residual(st, 0.0)[:, 0] for c in self.system.constraints[: self._nj]]
@@ -237,9 +246,15 @@ class Multibody:
         return len(self.system.constraints) - len(self.prescribed)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
+        if self.pins is not None:
+            return self.pins.jacobian(q)
         return self.system.jacobian(self.state(q))[0]
 
     def _nu_gamma(self, st: State, t: float, gamma: bool):
+        if self.pins is not None:
+            if not gamma:
+                return np.zeros(self.nc)
+            return self.pins.gamma(st.th[:-1, 0], st.w[:-1, 0])
         u, ud, udd = self._u(t)
         parts = []
         for k, c in enumerate(self.system.constraints):
@@ -453,6 +468,17 @@ class Multibody:
         lam, *_ = np.linalg.lstsq(self.jacobian(q).T, rhs, rcond=1e-10)
         return lam
 
+    def output(self, part: Partition, q, qd, t: float):
+        """``(q'', lambda, T, V)`` at an output: what :meth:`accelerations`,
+        :meth:`multipliers` and :meth:`energy` give, with one mass matrix and one
+        evaluation of the forces each."""
+        qdd, _, _, V = self.accelerations(part, q, qd, t)
+        st = self.state(q, qd, qdd)
+        Q, _, _ = self.forces(st, t)
+        M = self.mass_matrix(st)
+        lam, *_ = np.linalg.lstsq(self.jacobian(q).T, Q - M @ qdd, rcond=1e-10)
+        return qdd, lam, 0.5 * float(qd @ M @ qd), V
+
     def energy(self, q, qd, t: float) -> tuple[float, float]:
         st = self.state(q, qd)
         T = 0.5 * float(qd @ self.mass_matrix(st) @ qd)
@@ -485,15 +511,21 @@ def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
 def free_context(mech) -> SimpleNamespace:
     """What :class:`Multibody` reads of an analysis, for a mechanism of any number of
     degrees of freedom (the sweep's :class:`~mechsolve.core.sweep.Analysis` needs one
-    driver per degree of freedom): the mechanism, its constraints without a driver and
-    its size. Conditional loads need the analysis's points and are not read here."""
+    driver per degree of freedom): the mechanism, its constraints without a driver, its
+    size and its named points (each on the body the sweep's analysis puts it on), so
+    that conditions (conditional loads, ``stop when``) read the state as on the driver's
+    path. ``stroke()`` needs the extremes over a turn of the driver and is refused."""
+    from mechsolve.core.solution import PointRef
     from mechsolve.core.sweep import _scale
 
-    if any(ld.when is not None for ld in mech.loads):
-        raise ValueError("conditional loads need the mechanism's analysis")
-    return SimpleNamespace(
-        mech=mech, system=ConstraintSystem(mech, with_driver=False), scale=_scale(mech)
-    )
+    if any(ld.when is not None and ld.when.uses("stroke") for ld in mech.loads):
+        raise ValueError("stroke() needs the extremes over a turn of the driver")
+    system = ConstraintSystem(mech, with_driver=False)
+    points = {p: PointRef(system.nb, np.asarray(xy, float)) for p, xy in mech.ground.items()}
+    for lk in mech.links:  # a point on the ground and a link is a ground point
+        for p, xy in lk.points.items():
+            points.setdefault(p, PointRef(system.index[lk.name], np.asarray(xy, float)))
+    return SimpleNamespace(mech=mech, system=system, scale=_scale(mech), points=points)
 
 
 def _rcond(A: np.ndarray) -> float:

@@ -107,15 +107,14 @@ class _Run:
     def record(self, t, q, qd, W) -> None:
         """Keep an output: its state, accelerations, multipliers, energies, violations."""
         mb, rec = self.mb, self.rec
-        qdd, _, _, _ = mb.accelerations(self.part, q, qd, t)
-        T, V = mb.energy(q, qd, t)
+        qdd, lam, T, V = mb.output(self.part, q, qd, t)
         nu = mb._nu_gamma(mb.state(q), t, gamma=False)
         for key, value in (
             ("t", t),
             ("q", q.copy()),
             ("qd", qd.copy()),
             ("qdd", qdd),
-            ("lam", mb.multipliers(q, qd, qdd, t)),
+            ("lam", lam),
             ("T", T),
             ("V", V),
             ("W", W),

@@ -54,6 +54,7 @@ def _bench_tool() -> ModuleType:
             "startup",
             "study",
             "peers",
+            "multibody",
         ]
     ),
     help="Run only these cases (repeatable).",
