@@ -168,14 +168,16 @@ def test_singular_pass_is_the_default_and_goes_through():
         (
             "driver: {joint: O, start: 0 deg}",
             "",
-            "'stop when' reads the loops' quantities through the sweep's analysis",
+            "'singular: keep branch' reads the loops' branches through the sweep's analysis",
         ),
     ],
 )
 def test_bad_events_are_refused_with_a_clear_message(tmp_path, old, new, words):
     text = PENDULUM % ("DOP853", "bar.angle <= -90 deg", "")
     if not new:  # placed by a pose instead of a driver
-        text = text.replace(old, "").replace("rtol: 1e-11", "rtol: 1e-11, pose: {O: 0 deg}")
+        text = text.replace(old, "").replace(
+            "rtol: 1e-11", "rtol: 1e-11, pose: {O: 0 deg}, singular: keep branch"
+        )
     else:
         text = text.replace(old, new)
     r, _ = _invoke(tmp_path, text)
@@ -188,3 +190,46 @@ def test_reduced_formulation_refuses_stop_when(tmp_path):
     text = text.replace("from: rest}", "from: rest, formulation: reduced, 'stop when': 'B.x < 0'}")
     r, _ = _invoke(tmp_path, text)
     assert r.exit_code == 2 and "'stop when' needs formulation: multibody" in r.output, r.output
+
+
+POSED = """
+name: pendulum placed by its pose
+units: {length: m, angle: deg}
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], P: [1, 0]}, mass: 1 kg, com: P}
+joints:
+  O: [ground, bar]
+gravity: 9.81 m/s^2
+loads:
+  brake: {torque: 2 N m, on: bar, when: P.y < -0.5 m}
+simulate: {duration: 2 s, step: 0.005 s, method: DOP853, rtol: 1e-11, atol: 1e-13,
+           pose: {O: 0 deg}, 'stop when': 'bar.angle <= -90 deg'}
+"""
+
+
+def test_pose_placed_mechanism_with_a_conditional_load_and_a_stop_condition():
+    """A mechanism placed by simulate.pose reads conditions as one placed by its
+    driver: a braking torque of 2 N m acts once P is 0.5 m below O (30 deg below the
+    horizontal), and the run stops at the bottom. Below 30 deg the first integral is
+    (1/2) m L^2 omega^2 = -m g L sin(theta) + T (theta - theta_1), theta_1 = -30 deg."""
+    res = simulate(ms.loads(POSED))
+    tr = res.trajectory
+    assert tr.event == "stop when" and "stopped at t = " in res.summary()
+    th, w = tr.q[:, 2], tr.qd[:, 2]
+    assert th[-1] == pytest.approx(-math.pi / 2, abs=1e-9)
+    th1 = -math.pi / 6
+    free = th > th1
+    np.testing.assert_allclose(w[free] ** 2, -2 * G * np.sin(th[free]), rtol=0, atol=1e-8)
+    braked = ~free
+    hand = -2 * G * np.sin(th[braked]) + 2 * 2.0 * (th[braked] - th1)
+    np.testing.assert_allclose(w[braked] ** 2, hand, rtol=0, atol=1e-6)
+    # the brake's work is in the energy balance
+    assert tr.work[-1] == pytest.approx(2.0 * (-math.pi / 2 - th1), rel=1e-6)
+    assert np.max(np.abs(tr.energy_residual)) < 1e-6
+
+
+def test_pose_placed_mechanism_refuses_stroke_in_a_condition(tmp_path):
+    text = POSED.replace("when: P.y < -0.5 m", "when: stroke(P.x) > 0.5")
+    r, _ = _invoke(tmp_path, text)
+    assert r.exit_code == 2 and "stroke() is a fraction of the stroke" in r.output, r.output

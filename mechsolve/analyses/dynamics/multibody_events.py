@@ -18,6 +18,9 @@ import math
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.multibody import Stop
+from mechsolve.core.loads import stroke_function
+
 S_NEAR = 1e-2  # below this relative singular value the run looks for a singular position
 S_SINGULAR = 1e-5  # a minimum of s below this is a singular position
 SUBSTEPS = 64  # RK4 steps per span when looking for it
@@ -118,3 +121,34 @@ def locate_singular(
     if got is None:
         return None
     return tau, got[0], got[1], float(y[-1]), s_min
+
+
+def stop_condition(an, mb, expr) -> Stop:
+    """``simulate``'s ``stop when`` as a function of the state: for one comparison
+    ``a < b`` (``<=``, ``>``, ``>=``) the difference of its sides, signed so that it is
+    positive while the condition does not hold (its root is the event); for any other
+    condition +1 while it does not hold, -1 once it does."""
+    from mechsolve.core.solution import StateView
+    from mechsolve.model.expr.evaluate import _eval, _leaf
+    from mechsolve.model.expr.tree import Compare
+
+    tree = expr.tree
+    funcs = {"stroke": stroke_function(list(mb.extremes), True)}
+
+    def value(node, view):
+        with np.errstate(all="ignore"):
+            return float(np.asarray(_eval(node, lambda n: _leaf(n, view), funcs)).ravel()[0])
+
+    smooth = (
+        isinstance(tree, Compare) and len(tree.ops) == 1 and tree.ops[0] in ("<", "<=", ">", ">=")
+    )
+    sign = 1.0 if smooth and tree.ops[0].startswith("<") else -1.0
+
+    def g(t, q, qd, qdd):
+        view = StateView(an, mb.state(q, qd, qdd))
+        if smooth:
+            a, b = tree.operands
+            return sign * (value(a, view) - value(b, view))
+        return -1.0 if value(tree, view) else 1.0
+
+    return Stop(g, expr.text)

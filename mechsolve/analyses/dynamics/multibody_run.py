@@ -21,14 +21,13 @@ from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
     Multibody,
     Source,
-    Stop,
     Trajectory,
     coordinate,
     trajectory_state,
 )
+from mechsolve.analyses.dynamics.multibody_events import stop_condition
 from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.core import evaluate as core
-from mechsolve.core.loads import stroke_function
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 from mechsolve.results.results import Column, Results
@@ -139,37 +138,6 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     sol = _solution(an, start, mb, drv, tr)
     forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
     return MultibodyResults(an, sol, forces, tr, mb, drv)
-
-
-def stop_condition(an: Analysis, mb: Multibody, expr) -> Stop:
-    """``simulate``'s ``stop when`` as a function of the state: for one comparison
-    ``a < b`` (``<=``, ``>``, ``>=``) the difference of its sides, signed so that it is
-    positive while the condition does not hold (its root is the event); for any other
-    condition +1 while it does not hold, -1 once it does."""
-    from mechsolve.core.solution import StateView
-    from mechsolve.model.expr.evaluate import _eval, _leaf
-    from mechsolve.model.expr.tree import Compare
-
-    tree = expr.tree
-    funcs = {"stroke": stroke_function(list(mb.extremes), True)}
-
-    def value(node, view):
-        with np.errstate(all="ignore"):
-            return float(np.asarray(_eval(node, lambda n: _leaf(n, view), funcs)).ravel()[0])
-
-    smooth = (
-        isinstance(tree, Compare) and len(tree.ops) == 1 and tree.ops[0] in ("<", "<=", ">", ">=")
-    )
-    sign = 1.0 if smooth and tree.ops[0].startswith("<") else -1.0
-
-    def g(t, q, qd, qdd):
-        view = StateView(an, mb.state(q, qd, qdd))
-        if smooth:
-            a, b = tree.operands
-            return sign * (value(a, view) - value(b, view))
-        return -1.0 if value(tree, view) else 1.0
-
-    return Stop(g, expr.text)
 
 
 def branches(an: Analysis, mb: Multibody):
