@@ -233,3 +233,34 @@ def test_pose_placed_mechanism_refuses_stroke_in_a_condition(tmp_path):
     text = POSED.replace("when: P.y < -0.5 m", "when: stroke(P.x) > 0.5")
     r, _ = _invoke(tmp_path, text)
     assert r.exit_code == 2 and "stroke() is a fraction of the stroke" in r.output, r.output
+
+
+def test_stop_condition_met_next_to_a_singular_position():
+    """Next to a singular position (``singular: stop``) the output steps are taken on all
+    coordinates; a stop condition met there is located within that step: B0 5 mm above
+    the cranks' horizontal position, at the closed form's instant."""
+    mech = ms.loads(
+        (MECH / "nfourbar-1.yaml")
+        .read_text()
+        .replace("atol: 1e-11,", "atol: 1e-11, singular: stop, 'stop when': 'B0.y <= 0.005 m',")
+    )
+    res = simulate(mech)
+    tr = res.trajectory
+    assert tr.event == "stop when", tr.stopped
+    inertia, mg = 2 / 3 + 1, G * (1 + 1)
+
+    def low(_, y):
+        return math.sin(y[0]) - 0.005
+
+    low.terminal = True
+    sol = solve_ivp(
+        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
+        (0, 3),
+        [math.pi / 2, -1.0],
+        events=low,
+        rtol=1e-13,
+        atol=1e-13,
+        method="DOP853",
+    )
+    assert tr.t[-1] == pytest.approx(sol.t_events[0][0], abs=1e-7)
+    assert res.point("B0").y[-1] == pytest.approx(0.005, abs=1e-8)

@@ -276,6 +276,14 @@ class _Run:
             mb, self.rank, t0, self.q, self.qd, self.W, t1 - t0, t1, NEWTON_ITERATIONS
         )
         bridged = _bridge(mb, t0, t1, self.q, self.qd, self.W)
+        # the stop condition met before the singular position (or the step's end)
+        end = found[:4] if found is not None else (t1, *bridged) if bridged else None
+        if self.stop is not None and end is not None:
+            out = self._stop_in_bridge([end], t0)
+            if self.event_fired == "stop":
+                self.record(*out[0])
+                self.halt("stop when", f"'{self.stop.text}' was met")
+                return k
         if found is not None:
             ts, qs, qds, Ws, s = found
             where = (
