@@ -31,6 +31,7 @@ the integration's error (constant to the integrator's tolerance).
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -103,6 +104,7 @@ class Partition:
     dep: np.ndarray  # dependent coordinates
     ind: np.ndarray  # independent coordinates
     rcond: float  # Phi_d's reciprocal condition when chosen
+    rcond1: float = 1.0  # its 1-norm estimate (LAPACK gecon), for the checks at each step
 
 
 @dataclass
@@ -285,7 +287,8 @@ class Multibody:
         _, R2, p2 = qr(Js[rows], pivoting=True, mode="economic")
         dep = np.sort(p2[:rank])
         ind = np.setdiff1d(np.arange(self.nq), dep)
-        return Partition(rows, dep, ind, _rcond(Jq[np.ix_(rows, dep)]))
+        Jd = Jq[np.ix_(rows, dep)]
+        return Partition(rows, dep, ind, _rcond(Jd), _lu(Jd)[1])
 
     def close(self, part: Partition, z: np.ndarray, t: float, guess: np.ndarray) -> np.ndarray:
         """The configuration with independent coordinates ``z``: Newton on the
@@ -293,21 +296,24 @@ class Multibody:
         q = guess.copy()
         q[part.ind] = z
         rows, dep = part.rows, part.dep
-        # the chord: the Jacobian of the last evaluation on this partition, a step away
-        Jd = self._chord[1] if self._chord is not None and self._chord[0] is part else None
+        if len(dep) == 0:  # no equations: every coordinate is independent
+            return q
+        from scipy.linalg import lu_solve
+
+        # the chord: the factors of the last evaluation's Phi_d on this partition, a step away
+        lu = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
         for _ in range(NEWTON_ITERATIONS):
             phi = self.residual(q, t)[rows]
             if not np.all(np.isfinite(phi)):
                 raise Repartition
             size = np.max(np.abs(phi), initial=0.0)
-            if Jd is None or size > 0.1 * last:  # the chord's Jacobian while it converges
-                Jd = self.jacobian(q)[np.ix_(rows, dep)]
+            if lu is None or size > 0.1 * last:  # the chord's Jacobian while it converges
+                lu = _lu(self.jacobian(q)[np.ix_(rows, dep)])[0]
+                if lu is None:
+                    raise Repartition
             last = size
-            try:
-                q[dep] -= np.linalg.solve(Jd, phi)
-            except np.linalg.LinAlgError:
-                raise Repartition from None
+            q[dep] -= lu_solve(lu, phi, check_finite=False)
             if size <= self.tol:  # that last step takes it from the tolerance to rounding
                 return q
         raise Repartition
@@ -322,14 +328,18 @@ class Multibody:
         """All coordinates' rates from the independent ones: ``Phi_q q' = nu``."""
         Jq = self.jacobian(q)
         rows, dep, ind = part.rows, part.dep, part.ind
-        Jd = Jq[np.ix_(rows, dep)]
-        if _rcond(Jd) < RECONDITION * part.rcond:
-            raise Repartition
-        self._chord = (part, Jd)
+        from scipy.linalg import lu_solve
+
         qd = np.zeros(self.nq)
         qd[ind] = zd
+        if len(dep) == 0:
+            return qd, Jq
+        lu, rc = _lu(Jq[np.ix_(rows, dep)])
+        if lu is None or rc < RECONDITION * part.rcond1:
+            raise Repartition
+        self._chord = (part, lu)
         nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
-        qd[dep] = np.linalg.solve(Jd, nu - Jq[np.ix_(rows, ind)] @ zd)
+        qd[dep] = lu_solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd, check_finite=False)
         return qd, Jq
 
     def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
@@ -526,6 +536,24 @@ def free_context(mech) -> SimpleNamespace:
         for p, xy in lk.points.items():
             points.setdefault(p, PointRef(system.index[lk.name], np.asarray(xy, float)))
     return SimpleNamespace(mech=mech, system=system, scale=_scale(mech), points=points)
+
+
+def _lu(A: np.ndarray):
+    """``(factors, rcond)``: the LU factors of a square ``A`` and LAPACK's estimate of its
+    reciprocal condition in the 1-norm (cheaper than the singular values); ``(None, 0)``
+    where ``A`` is singular or not finite."""
+    from scipy.linalg import LinAlgWarning, lu_factor
+    from scipy.linalg.lapack import dgecon
+
+    if A.size == 0:
+        return None, 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LinAlgWarning)
+        lu, piv = lu_factor(A, check_finite=False)
+    if not np.all(np.isfinite(lu)) or not np.all(np.diag(lu)):
+        return None, 0.0
+    rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
+    return (lu, piv), float(rc)
 
 
 def _rcond(A: np.ndarray) -> float:
