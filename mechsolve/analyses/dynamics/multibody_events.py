@@ -29,11 +29,15 @@ GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
 def singular_measure(mb, q: np.ndarray, rank: int) -> float:
-    """``sigma_r / sigma_1`` of ``Phi_q(q)``: 1 for well-posed equations, 0 where they
-    lose rank (``rank``: the number of independent equations at the start)."""
+    """``sigma_r / sigma_1`` of ``Phi_q(q)``, its angle columns times the mechanism's
+    size (as the partition weighs them: lengths and angles compete fairly): 1 for
+    well-posed equations, 0 where they lose rank (``rank``: the number of independent
+    equations at the start)."""
     if rank == 0:
         return 1.0
-    sv = np.linalg.svd(mb.jacobian(q), compute_uv=False)
+    J = mb.jacobian(q)
+    J[:, 2::3] /= mb.scale
+    sv = np.linalg.svd(J, compute_uv=False)
     return float(sv[rank - 1] / sv[0]) if sv[0] > 0 else 0.0
 
 
