@@ -145,6 +145,8 @@ def test_bench_multibody_case_runs_both_solvers_on_both_problems():
     for name in ("nfourbar-2", "andrews"):
         assert f"{name}: mechsolve DOP853" in r.output
         assert f"{name}: exudyn generalized-alpha" in r.output
+        assert f"{name}: mechsolve reduced (1 DOF)" in r.output
+        assert "time exudyn / mechsolve reduced = " in r.output
         assert f"{name} (" in r.output and "time exudyn / mechsolve = " in r.output
 
 
@@ -160,3 +162,30 @@ def test_andrews_meets_no_singular_position():
     assert not tr.early and tr.bridges == 0
     idx = res.multibody.system.index
     np.testing.assert_allclose(_published(tr.q[-1], idx), ANGLES_003, rtol=0, atol=1e-8)
+
+
+def test_andrews_on_the_reduced_path_against_the_published_solution():
+    """Andrews' mechanism has one degree of freedom: with its torque given as the motor
+    (as the bench poses it) the reduced path (the driver's one equation, the inertia
+    tabulated over the turn) reaches the published angles at 0.03 s too."""
+    from mechsolve_bench.multibody import _reduced
+
+    mech = _reduced("andrews", None)
+    mech.simulation.rtol, mech.simulation.atol = 1e-10, 1e-12
+    res = simulate(mech)
+    assert res.model is not None  # the reduced path's model of J(phi)
+    a = {lk.name: res.link(lk.name).angle[-1] for lk in mech.links}
+    got = np.array(
+        [
+            a["k1"],
+            a["k2"] - a["k1"],
+            a["k3"],
+            a["k4"] - a["k5"],
+            a["k5"],
+            a["k6"] - a["k7"],
+            a["k7"],
+        ]
+    )
+    d = np.angle(np.exp(1j * (got - np.array(ANGLES_003))))  # modulo a turn
+    np.testing.assert_allclose(d, 0.0, atol=1e-7)
+    assert res.trajectory.phi[-1] == pytest.approx(ANGLES_003[0], abs=1e-7)
