@@ -1111,6 +1111,7 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         ("study", lambda: _case_study(quick)),
         ("peers", lambda: case_peers(n)),
         ("synthesis", lambda: _case_synthesis(quick)),
+        ("multibody", lambda: _case_multibody(quick)),
     ]
     out = []
     for name, fn in plan:
@@ -1124,6 +1125,14 @@ def run(quick: bool = False, cases: list[str] | None = None, echo=print) -> list
         echo("")
         out.append(case)
     return out
+
+
+def _case_multibody(quick: bool) -> Case | None:
+    """The general forward-dynamics path on the IFToMM benchmarks against exudyn (see
+    :mod:`mechsolve_bench.multibody`)."""
+    from mechsolve_bench.multibody import case_multibody
+
+    return case_multibody(quick)
 
 
 def _family(setting: str) -> tuple[str, str]:

@@ -267,7 +267,8 @@ gravity: 9.81 m/s^2
 def test_two_degrees_of_freedom_double_pendulum_against_lagranges_equations():
     """The engine has no limit on the degrees of freedom: a double pendulum of point
     masses (2 DOF, chaotic at this energy) against its textbook equations of motion."""
-    from mechsolve.analyses.dynamics.multibody import Multibody, free_context, integrate
+    from mechsolve.analyses.dynamics.multibody import Multibody, free_context
+    from mechsolve.analyses.dynamics.multibody_integrate import integrate
 
     mech = ms.loads(DOUBLE)
     mb = Multibody(free_context(mech))

@@ -346,6 +346,16 @@ SIMULATE = Section(
             map_of(either(quantity("angular speed"), quantity("speed")), "joint"),
             "multibody: initial rates of joint coordinates, checked against the constraints.",
         ),
+        "stop when": K(
+            CONDITION,
+            "multibody: end the run when this becomes true, e.g. 'bar.angle <= 0' (located "
+            "to the integrator's tolerance).",
+        ),
+        "singular": K(
+            choice("pass", "stop", "keep branch"),
+            "multibody: at a singular position pass through it (default), stop there, or "
+            "stop only where the motion would change a branch.",
+        ),
     },
 )
 

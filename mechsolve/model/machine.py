@@ -12,6 +12,7 @@ ends), or an expression of ``omega`` and ``t``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -74,4 +75,6 @@ class Simulation:
     rates: dict = field(default_factory=dict)  # multibody: joint -> initial rate
     pose: dict = field(default_factory=dict)  # multibody: joint -> (value, kind, path)
     speed0_given: bool = False  # 'from' was in the file
+    stop: Any = None  # multibody: 'stop when', an Expression (a condition)
+    singular: str = "pass"  # multibody: at a singular position: pass, stop, keep branch
     where: tuple = field(default_factory=tuple)

@@ -174,6 +174,21 @@ def read_simulation(r: Reader, value: Any, linear: bool):
     if "tolerance" in m:
         sim.tolerance = r.positive(m["tolerance"], path + ("tolerance",), "length")
     _read_pose_and_rates(r, m, path, sim)
+    if "stop when" in m:
+        sim.stop = r.expression(m["stop when"], path + ("stop when",))
+        if not sim.stop.is_condition():
+            raise r.fail(
+                path + ("stop when",),
+                f"{m['stop when']!r} is not a condition (use <, >, and...), e.g. bar.angle <= 0",
+            )
+    if "singular" in m:
+        if m["singular"] not in ("pass", "stop", "keep branch"):
+            raise r.fail(
+                path + ("singular",),
+                f"unknown choice {m['singular']!r}: pass (go through a singular position), "
+                "stop (end the run there) or keep branch (end it where a branch would change)",
+            )
+        sim.singular = m["singular"]
     if "revolutions" in m:
         sim.revolutions = r.positive(m["revolutions"], path + ("revolutions",), "dimensionless")
     if "steady" in m:

@@ -281,6 +281,9 @@ def _check_loads(mech: Mechanism, links: dict[str, Link]) -> None:
         _check_load(mech, load, links)
         if load.when is not None:
             check_refs(mech, load.when, load.where + ("when",))
+    sim = mech.simulation
+    if sim is not None and sim.stop is not None:
+        check_refs(mech, sim.stop, sim.where + ("stop when",))
 
 
 def _check_references(

@@ -31,6 +31,7 @@ the integration's error (constant to the integrator's tolerance).
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -38,6 +39,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.multibody_pins import Pins
 from mechsolve.base.state import State
 from mechsolve.core.loads import _Q, apply_loads, stroke_function
 from mechsolve.system.constraints import ConstraintSystem, make_driver
@@ -84,11 +86,25 @@ class Prescribed:
 
 
 @dataclass
+class Stop:
+    """A condition that ends the run (``simulate``'s ``stop when``).
+
+    ``g(t, q, q', q'')`` is positive while the condition does not hold and zero or
+    negative once it does: the difference of the two sides where the condition is one
+    comparison (its root is located by the integrator's event finder to the
+    integrator's accuracy), else +1/-1 (the switch is located by bisection)."""
+
+    g: Callable[[float, np.ndarray, np.ndarray, np.ndarray], float]
+    text: str
+
+
+@dataclass
 class Partition:
     rows: np.ndarray  # independent equations
     dep: np.ndarray  # dependent coordinates
     ind: np.ndarray  # independent coordinates
     rcond: float  # Phi_d's reciprocal condition when chosen
+    rcond1: float = 1.0  # its 1-norm estimate (LAPACK gecon), for the checks at each step
 
 
 @dataclass
@@ -107,8 +123,9 @@ class Trajectory:
     violation: np.ndarray  # max |Phi| at each output (m or rad)
     velocity_violation: np.ndarray  # max |Phi_q q' - nu|
     redundant: bool = False  # the multipliers are minimum-norm (redundant equations)
-    stopped: str = ""
-    early: bool = False
+    stopped: str = ""  # why the run ended before its duration (a stop condition too)
+    early: bool = False  # it ended for a reason other than its stop condition
+    event: str = ""  # "stop when", "singular" or "branch": the event that ended it
     nfev: int = 0
     partitions: int = 1
     bridges: int = 0  # output steps bridged on all coordinates (at singular positions)
@@ -179,6 +196,12 @@ class Multibody:
             self.J[b] = lk.inertia or 0.0
             if lk.com is not None:
                 self.s[b] = lk.com
+        # all pins and nothing prescribed: the equations on arrays of all pins at once
+        self.pins = (
+            Pins(self.system.constraints, self.nb)
+            if not self.prescribed and Pins.applies(self.system.constraints)
+            else None
+        )
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.extremes: list = []
         self.nfev = 0
@@ -209,6 +232,8 @@ class Multibody:
         return vals[:, 0], vals[:, 1], vals[:, 2]
 
     def residual(self, q: np.ndarray, t: float) -> np.ndarray:
+        if self.pins is not None:
+            return self.pins.residual(q)
         st = self.state(q)
         u = self._u(t)[0]
         parts = [c.residual(st, 0.0)[:, 0] for c in self.system.constraints[: self._nj]]
@@ -223,9 +248,15 @@ class Multibody:
         return len(self.system.constraints) - len(self.prescribed)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
+        if self.pins is not None:
+            return self.pins.jacobian(q)
         return self.system.jacobian(self.state(q))[0]
 
     def _nu_gamma(self, st: State, t: float, gamma: bool):
+        if self.pins is not None:
+            if not gamma:
+                return np.zeros(self.nc)
+            return self.pins.gamma(st.th[:-1, 0], st.w[:-1, 0])
         u, ud, udd = self._u(t)
         parts = []
         for k, c in enumerate(self.system.constraints):
@@ -256,7 +287,8 @@ class Multibody:
         _, R2, p2 = qr(Js[rows], pivoting=True, mode="economic")
         dep = np.sort(p2[:rank])
         ind = np.setdiff1d(np.arange(self.nq), dep)
-        return Partition(rows, dep, ind, _rcond(Jq[np.ix_(rows, dep)]))
+        Jd = Jq[np.ix_(rows, dep)]
+        return Partition(rows, dep, ind, _rcond(Jd), _lu(Jd)[1])
 
     def close(self, part: Partition, z: np.ndarray, t: float, guess: np.ndarray) -> np.ndarray:
         """The configuration with independent coordinates ``z``: Newton on the
@@ -264,21 +296,24 @@ class Multibody:
         q = guess.copy()
         q[part.ind] = z
         rows, dep = part.rows, part.dep
-        # the chord: the Jacobian of the last evaluation on this partition, a step away
-        Jd = self._chord[1] if self._chord is not None and self._chord[0] is part else None
+        if len(dep) == 0:  # no equations: every coordinate is independent
+            return q
+        from scipy.linalg import lu_solve
+
+        # the chord: the factors of the last evaluation's Phi_d on this partition, a step away
+        lu = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
         for _ in range(NEWTON_ITERATIONS):
             phi = self.residual(q, t)[rows]
             if not np.all(np.isfinite(phi)):
                 raise Repartition
             size = np.max(np.abs(phi), initial=0.0)
-            if Jd is None or size > 0.1 * last:  # the chord's Jacobian while it converges
-                Jd = self.jacobian(q)[np.ix_(rows, dep)]
+            if lu is None or size > 0.1 * last:  # the chord's Jacobian while it converges
+                lu = _lu(self.jacobian(q)[np.ix_(rows, dep)])[0]
+                if lu is None:
+                    raise Repartition
             last = size
-            try:
-                q[dep] -= np.linalg.solve(Jd, phi)
-            except np.linalg.LinAlgError:
-                raise Repartition from None
+            q[dep] -= lu_solve(lu, phi, check_finite=False)
             if size <= self.tol:  # that last step takes it from the tolerance to rounding
                 return q
         raise Repartition
@@ -293,14 +328,18 @@ class Multibody:
         """All coordinates' rates from the independent ones: ``Phi_q q' = nu``."""
         Jq = self.jacobian(q)
         rows, dep, ind = part.rows, part.dep, part.ind
-        Jd = Jq[np.ix_(rows, dep)]
-        if _rcond(Jd) < RECONDITION * part.rcond:
-            raise Repartition
-        self._chord = (part, Jd)
+        from scipy.linalg import lu_solve
+
         qd = np.zeros(self.nq)
         qd[ind] = zd
+        if len(dep) == 0:
+            return qd, Jq
+        lu, rc = _lu(Jq[np.ix_(rows, dep)])
+        if lu is None or rc < RECONDITION * part.rcond1:
+            raise Repartition
+        self._chord = (part, lu)
         nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
-        qd[dep] = np.linalg.solve(Jd, nu - Jq[np.ix_(rows, ind)] @ zd)
+        qd[dep] = lu_solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd, check_finite=False)
         return qd, Jq
 
     def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
@@ -439,6 +478,17 @@ class Multibody:
         lam, *_ = np.linalg.lstsq(self.jacobian(q).T, rhs, rcond=1e-10)
         return lam
 
+    def output(self, part: Partition, q, qd, t: float):
+        """``(q'', lambda, T, V)`` at an output: what :meth:`accelerations`,
+        :meth:`multipliers` and :meth:`energy` give, with one mass matrix and one
+        evaluation of the forces each."""
+        qdd, _, _, V = self.accelerations(part, q, qd, t)
+        st = self.state(q, qd, qdd)
+        Q, _, _ = self.forces(st, t)
+        M = self.mass_matrix(st)
+        lam, *_ = np.linalg.lstsq(self.jacobian(q).T, Q - M @ qdd, rcond=1e-10)
+        return qdd, lam, 0.5 * float(qd @ M @ qd), V
+
     def energy(self, q, qd, t: float) -> tuple[float, float]:
         st = self.state(q, qd)
         T = 0.5 * float(qd @ self.mass_matrix(st) @ qd)
@@ -471,15 +521,39 @@ def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
 def free_context(mech) -> SimpleNamespace:
     """What :class:`Multibody` reads of an analysis, for a mechanism of any number of
     degrees of freedom (the sweep's :class:`~mechsolve.core.sweep.Analysis` needs one
-    driver per degree of freedom): the mechanism, its constraints without a driver and
-    its size. Conditional loads need the analysis's points and are not read here."""
+    driver per degree of freedom): the mechanism, its constraints without a driver, its
+    size and its named points (each on the body the sweep's analysis puts it on), so
+    that conditions (conditional loads, ``stop when``) read the state as on the driver's
+    path. ``stroke()`` needs the extremes over a turn of the driver and is refused."""
+    from mechsolve.core.solution import PointRef
     from mechsolve.core.sweep import _scale
 
-    if any(ld.when is not None for ld in mech.loads):
-        raise ValueError("conditional loads need the mechanism's analysis")
-    return SimpleNamespace(
-        mech=mech, system=ConstraintSystem(mech, with_driver=False), scale=_scale(mech)
-    )
+    if any(ld.when is not None and ld.when.uses("stroke") for ld in mech.loads):
+        raise ValueError("stroke() needs the extremes over a turn of the driver")
+    system = ConstraintSystem(mech, with_driver=False)
+    points = {p: PointRef(system.nb, np.asarray(xy, float)) for p, xy in mech.ground.items()}
+    for lk in mech.links:  # a point on the ground and a link is a ground point
+        for p, xy in lk.points.items():
+            points.setdefault(p, PointRef(system.index[lk.name], np.asarray(xy, float)))
+    return SimpleNamespace(mech=mech, system=system, scale=_scale(mech), points=points)
+
+
+def _lu(A: np.ndarray):
+    """``(factors, rcond)``: the LU factors of a square ``A`` and LAPACK's estimate of its
+    reciprocal condition in the 1-norm (cheaper than the singular values); ``(None, 0)``
+    where ``A`` is singular or not finite."""
+    from scipy.linalg import LinAlgWarning, lu_factor
+    from scipy.linalg.lapack import dgecon
+
+    if A.size == 0:
+        return None, 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LinAlgWarning)
+        lu, piv = lu_factor(A, check_finite=False)
+    if not np.all(np.isfinite(lu)) or not np.all(np.diag(lu)):
+        return None, 0.0
+    rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
+    return (lu, piv), float(rc)
 
 
 def _rcond(A: np.ndarray) -> float:
@@ -493,245 +567,3 @@ def coordinate(mech, system: ConstraintSystem, joint: str, line=None):
     """A joint's coordinate (its relative angle or travel) as a one-equation
     constraint, the same measure a driver on it uses."""
     return make_driver(mech, SimpleNamespace(joint=joint, line=line), system)
-
-
-# -- integration -----------------------------------------------------------------------
-def integrate(
-    mb: Multibody,
-    q0: np.ndarray,
-    qd0: np.ndarray,
-    duration: float,
-    *,
-    step: float | None = None,
-    method: str = "DOP853",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
-    max_steps: int | None = None,
-) -> Trajectory:
-    """Integrate the motion from ``(q0, qd0)`` (consistent) over ``duration``.
-
-    ``method`` ``"rk4"``: fixed steps of ``step``; otherwise scipy's ``solve_ivp`` with
-    ``rtol``/``atol`` on the independent coordinates, their rates and the work,
-    reporting every ``step`` (default: 500 outputs)."""
-    h = step if step is not None else duration / 500
-    n_out = int(math.floor(duration / h + 1e-9))
-    times = np.r_[np.arange(n_out + 1) * h, [duration] if n_out * h < duration - 1e-12 else []]
-    run = _Run(mb, q0, qd0, times, method, rtol, atol)
-    run.go(max_steps)
-    return run.trajectory(q0)
-
-
-class _Run:
-    """One integration: the state at the last output, the partition, the records."""
-
-    KEYS = ("t", "q", "qd", "qdd", "lam", "T", "V", "W", "viol", "vviol")
-
-    def __init__(self, mb: Multibody, q0, qd0, times, method, rtol, atol) -> None:
-        self.mb, self.times, self.method, self.rtol, self.atol = mb, times, method, rtol, atol
-        self.rec: dict[str, list] = {k: [] for k in self.KEYS}
-        self.q, self.qd, self.W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
-        self.part = mb.partition(self.q)
-        self.partitions, self.bridges = 1, 0
-        self.stopped, self.early = "", False
-        self.record(0.0, self.q, self.qd, self.W)
-
-    def record(self, t, q, qd, W) -> None:
-        """Keep an output: its state, accelerations, multipliers, energies, violations."""
-        mb, rec = self.mb, self.rec
-        qdd, _, _, _ = mb.accelerations(self.part, q, qd, t)
-        T, V = mb.energy(q, qd, t)
-        nu = mb._nu_gamma(mb.state(q), t, gamma=False)
-        for key, value in (
-            ("t", t),
-            ("q", q.copy()),
-            ("qd", qd.copy()),
-            ("qdd", qdd),
-            ("lam", mb.multipliers(q, qd, qdd, t)),
-            ("T", T),
-            ("V", V),
-            ("W", W),
-            ("viol", float(np.max(np.abs(mb.residual(q, t)), initial=0.0))),
-            ("vviol", float(np.max(np.abs(mb.jacobian(q) @ qd - nu), initial=0.0))),
-        ):
-            rec[key].append(value)
-        mb._last = (t, q.copy(), qd.copy(), qdd)
-
-    def rhs(self, t, y):
-        """d/dt (z, z', W) on the current partition."""
-        mb, part = self.mb, self.part
-        f = len(part.ind)
-        z, zd = y[:f], y[f : 2 * f]
-        qq = mb.close(part, z, t, mb.guess(t))
-        qqd, Jq = mb.rates(part, qq, zd, t)
-        qdd, _, P, _ = mb.accelerations(part, qq, qqd, t, Jq)
-        mb._last = (t, qq, qqd, qdd)
-        return np.concatenate([zd, qdd[part.ind], [P]])
-
-    def outputs(self, k: int) -> list:
-        """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
-        adaptive run until its conditioning event), each closed on the partition."""
-        mb, part, f = self.mb, self.part, self.part.ind
-        t0, fn = self.times[k - 1], len(f)
-        y0 = np.concatenate([self.q[f], self.qd[f], [self.W]])
-        if self.method == "rk4":
-            ts, ys = [self.times[k]], [_rk4(self.rhs, t0, y0, self.times[k] - t0)]
-        else:
-            window = self.times[k - 1 : k + CHUNK]
-            ts, ys = _adaptive(mb, part, self.rhs, window, y0, self.method, self.rtol, self.atol)
-        if not ts:  # the conditioning event at once: no partition will do here
-            raise Repartition
-        self.event = self.method != "rk4" and len(ts) < len(self.times[k - 1 : k + CHUNK]) - 1
-        mb._last = (t0, self.q, self.qd, self.rec["qdd"][-1])
-        out = []
-        for t1, y1 in zip(ts, ys):
-            q1 = mb.close(part, y1[:fn], t1, mb.guess(t1))
-            qd1, _ = mb.rates(part, q1, y1[fn : 2 * fn], t1)
-            mb._last = (t1, q1, qd1, mb.accelerations(part, q1, qd1, t1)[0])
-            out.append((t1, q1, qd1, float(y1[-1])))
-        return out
-
-    def go(self, max_steps: int | None) -> None:
-        mb, times = self.mb, self.times
-        k, retries = 1, 0
-        while k < len(times):
-            try:
-                out = self.outputs(k)
-            except Repartition:
-                # at or next to a singular position no partition describes the motion:
-                # the step is bridged on all the coordinates, then projected
-                retries += 1
-                t0 = times[k - 1]
-                bridged = retries <= BRIDGE_LIMIT and _bridge(
-                    mb, t0, times[k], self.q, self.qd, self.W
-                )
-                if not bridged:
-                    self.stopped = (
-                        f"the mechanism cannot close at t = {t0:.6g} s along the motion "
-                        "(a singular or limit position it cannot pass)"
-                    )
-                    self.early = True
-                    return
-                out, self.event = [(times[k], *bridged)], True
-                self.bridges += 1
-            except NotClosing as exc:
-                self.stopped, self.early = str(exc), True
-                return
-            else:
-                retries = 0 if out else retries
-            for t1, q, qd, W in out:
-                self.record(t1, q, qd, W)
-                self.q, self.qd, self.W = q, qd, W
-            k += len(out)
-            if self.event or mb._needs_repartition(self.part, self.q):
-                self.part = mb.partition(self.q)
-                self.partitions += 1
-            if max_steps is not None and k > max_steps:
-                self.stopped, self.early = f"stopped after {max_steps} steps (--max-steps)", True
-                return
-
-    def trajectory(self, q0) -> Trajectory:
-        mb = self.mb
-        arr = {k: np.array(v) for k, v in self.rec.items()}
-        n = len(arr["t"])
-        return Trajectory(
-            t=arr["t"],
-            q=arr["q"].reshape(-1, mb.nq),
-            qd=arr["qd"].reshape(-1, mb.nq),
-            qdd=arr["qdd"].reshape(-1, mb.nq),
-            lam=arr["lam"].reshape(n, -1),
-            kinetic=arr["T"],
-            potential=arr["V"],
-            work=arr["W"],
-            violation=arr["viol"],
-            velocity_violation=arr["vviol"],
-            redundant=_redundant(mb, q0),
-            stopped=self.stopped,
-            early=self.early,
-            nfev=mb.nfev,
-            partitions=self.partitions,
-            bridges=self.bridges,
-        )
-
-
-def _redundant(mb: Multibody, q: np.ndarray) -> bool:
-    return len(mb.partition(q).rows) < mb.nc
-
-
-BRIDGE_LIMIT = 40  # output steps in a row that may be bridged
-BRIDGE_SUBSTEPS = 32
-
-
-def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float):
-    """``(q, q', W)`` at ``t1`` from ``t0`` across a singular position: RK4 on all the
-    coordinates in :data:`BRIDGE_SUBSTEPS` steps (the accelerations by least squares on
-    every equation, which stays determined for the motion where the equations lose
-    rank), then projected onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``.
-    None if the projection does not converge."""
-    nq = mb.nq
-
-    def f(t, y):
-        qq, qqd = y[:nq], y[nq : 2 * nq]
-        qdd, P = mb.free_accelerations(qq, qqd, t)
-        return np.concatenate([qqd, qdd, [P]])
-
-    y = np.concatenate([q, qd, [W]])
-    h = (t1 - t0) / BRIDGE_SUBSTEPS
-    try:
-        for i in range(BRIDGE_SUBSTEPS):
-            y = _rk4(f, t0 + i * h, y, h)
-        q1 = y[:nq].copy()
-        for _ in range(NEWTON_ITERATIONS):
-            phi = mb.residual(q1, t1)
-            if np.max(np.abs(phi), initial=0.0) <= mb.tol:
-                break
-            q1 -= np.linalg.lstsq(mb.jacobian(q1), phi, rcond=1e-12)[0]
-        else:
-            return None
-        qd1 = mb.consistent_rates(q1, y[nq : 2 * nq], t1)
-    except (np.linalg.LinAlgError, NotClosing):
-        return None
-    if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(qd1))):
-        return None
-    return q1, qd1, float(y[-1])
-
-
-CHUNK = 50  # outputs per call of solve_ivp: what a failed stage can cost
-
-
-def _adaptive(mb: Multibody, part: Partition, rhs, times, y0, method, rtol, atol):
-    """solve_ivp from ``times[0]`` through ``times[1:]`` until ``Phi_d`` loses its
-    conditioning (an event: the partition is chosen again from the last output)."""
-    from scipy.integrate import solve_ivp
-
-    fn = len(part.ind)
-
-    def conditioning(t, y):
-        if fn == 0 or len(part.dep) == 0:
-            return 1.0
-        q = mb.close(part, y[:fn], t, mb.guess(t))
-        return _rcond(mb.jacobian(q)[np.ix_(part.rows, part.dep)]) - 0.1 * part.rcond
-
-    conditioning.terminal = True
-    sol = solve_ivp(
-        rhs,
-        (times[0], times[-1]),
-        y0,
-        method=method,
-        rtol=rtol,
-        atol=atol,
-        t_eval=times[1:],
-        events=conditioning,
-    )
-    if sol.status < 0:
-        raise Repartition
-    if len(sol.t) == 0:  # the event before the first output
-        return [], []
-    return list(sol.t), list(np.asarray(sol.y).T)
-
-
-def _rk4(rhs, t0: float, y0: np.ndarray, h: float) -> np.ndarray:
-    k1 = rhs(t0, y0)
-    k2 = rhs(t0 + h / 2, y0 + h / 2 * k1)
-    k3 = rhs(t0 + h / 2, y0 + h / 2 * k2)
-    k4 = rhs(t0 + h, y0 + h * k3)
-    return y0 + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)

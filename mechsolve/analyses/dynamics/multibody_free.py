@@ -19,9 +19,10 @@ from mechsolve.analyses.dynamics.multibody import (
     Trajectory,
     coordinate,
     free_context,
-    integrate,
     trajectory_state,
 )
+from mechsolve.analyses.dynamics.multibody_events import stop_condition
+from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
 from mechsolve.model import GROUND, Mechanism
 
@@ -50,15 +51,28 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
     of degrees of freedom)."""
     sim = mech.simulation
     for ld in mech.loads:
-        if ld.when is not None:
+        if ld.when is not None and ld.when.uses("stroke"):
             raise mech.error(
                 ld.where + ("when",),
-                "a conditional load needs the sweep's analysis, which places the mechanism "
-                "by its driver: give a 'driver' (one degree of freedom) instead of "
-                "simulate.pose",
+                "stroke() is a fraction of the stroke over a turn of the driver, which a "
+                "mechanism placed by simulate.pose has not: give a 'driver' (one degree "
+                "of freedom) instead of simulate.pose, or a condition without stroke()",
             )
     if mech.motor is not None:
         raise mech.error(("motor",), "with simulate.pose give the motors in 'motors:'")
+    if sim.singular == "keep branch":
+        raise mech.error(
+            ("simulate", "singular"),
+            "'singular: keep branch' reads the loops' branches through the sweep's "
+            "analysis, which places the mechanism by its driver: give a 'driver' (one "
+            "degree of freedom) instead of simulate.pose",
+        )
+    if sim.stop is not None and sim.stop.uses("stroke"):
+        raise mech.error(
+            ("simulate", "stop when"),
+            "stroke() is a fraction of the stroke over a turn of the driver, which a "
+            "mechanism placed by simulate.pose has not",
+        )
     ctx = free_context(machine)
     prescribed = _prescribed(machine, ctx.system)
     mb = Multibody(ctx, motor_sources(machine, ctx.system), prescribed, tolerance=sim.tolerance)
@@ -74,6 +88,8 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
         rtol=sim.rtol,
         atol=sim.atol,
         max_steps=max_steps,
+        singular=sim.singular,
+        stop=stop_condition(ctx, mb, sim.stop) if sim.stop is not None else None,
     )
     return FreeResults(mech, mb, tr)
 
@@ -346,7 +362,9 @@ class FreeResults:
                 "all coordinates, then projected onto the constraints)"
             )
         if tr.early:
-            lines.append(f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}")
+            lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")
+        elif tr.stopped:
+            lines.append(f"  stopped at t = {tr.t[-1]:.9g} s (stop when): {tr.stopped}")
         return "\n".join(lines)
 
     def incomplete(self) -> bool:

@@ -23,9 +23,10 @@ from mechsolve.analyses.dynamics.multibody import (
     Source,
     Trajectory,
     coordinate,
-    integrate,
     trajectory_state,
 )
+from mechsolve.analyses.dynamics.multibody_events import stop_condition
+from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
@@ -37,9 +38,20 @@ def uses_multibody(mech: Mechanism) -> bool:
     sim = mech.simulation
     if sim is None:
         return False
-    general = mech.motor is None or bool(mech.motors) or bool(sim.pose) or bool(sim.rates)
+    events = sim.stop is not None or sim.singular != "pass"
+    general = mech.motor is None or bool(mech.motors) or bool(sim.pose) or bool(sim.rates) or events
     if sim.formulation == "reduced" and general and mech.motor is not None:
-        what = "motors:" if mech.motors else "simulate.pose" if sim.pose else "simulate.rates"
+        what = (
+            "motors:"
+            if mech.motors
+            else "simulate.pose"
+            if sim.pose
+            else "simulate.rates"
+            if sim.rates
+            else "'stop when'"
+            if sim.stop is not None
+            else "'singular'"
+        )
         raise mech.error(
             ("simulate", "formulation"),
             f"the reduced formulation integrates the driver's one equation under its one "
@@ -119,10 +131,44 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         rtol=sim.rtol,
         atol=sim.atol,
         max_steps=max_steps,
+        stop=stop_condition(an, mb, sim.stop) if sim.stop is not None else None,
+        singular=sim.singular,
+        branch=branches(an, mb) if sim.singular == "keep branch" else None,
     )
     sol = _solution(an, start, mb, drv, tr)
     forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
     return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def branches(an: Analysis, mb: Multibody):
+    """The branch (+1 or -1) of every loop with two assembly modes at a configuration:
+    the mode whose closed-form position reproduces the configuration's poses."""
+    from mechsolve.base.state import State
+    from mechsolve.groups import Drive
+
+    two = [g for g in an.plan if g.n_modes == 2]
+    unit = Drive(np.zeros(1), np.ones(1), np.zeros(1))
+
+    def signs(q: np.ndarray) -> tuple:
+        out = []
+        for g in two:
+            errs = []
+            for mode in (1.0, -1.0):
+                st = mb.state(q)
+                st.token = State.new_token()
+                g.position(st, unit, mode)
+                errs.append(
+                    sum(
+                        abs(st.x[b, 0] - q[3 * b])
+                        + abs(st.y[b, 0] - q[3 * b + 1])
+                        + abs(np.angle(np.exp(1j * (st.th[b, 0] - q[3 * b + 2]))))
+                        for b in g.bodies
+                    )
+                )
+            out.append(1 if errs[0] <= errs[1] else -1)
+        return tuple(out)
+
+    return signs
 
 
 def _solution(an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
@@ -261,9 +307,11 @@ class MultibodyResults(Results):
             )
         if tr.early:
             lines.append(
-                f"  stopped early at t = {tr.t[-1]:.6g} s: {tr.stopped}; the motion up to "
+                f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}; the motion up to "
                 "there is kept"
             )
+        elif tr.stopped:
+            lines.append(f"  stopped at t = {tr.t[-1]:.9g} s (stop when): {tr.stopped}")
         return "\n".join(lines)
 
     def incomplete(self) -> bool:

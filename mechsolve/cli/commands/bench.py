@@ -55,6 +55,7 @@ def _bench_tool() -> ModuleType:
             "study",
             "peers",
             "synthesis",
+            "multibody",
         ]
     ),
     help="Run only these cases (repeatable).",

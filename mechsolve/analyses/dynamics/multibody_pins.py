@@ -1,0 +1,80 @@
+"""The equations of a mechanism whose joints are all pins, evaluated on arrays of all
+the pins at once (the multibody integration evaluates them a few times per step at one
+configuration, where the joint-by-joint path spends its time building states).
+
+For pin ``k`` between bodies ``a`` and ``b`` at local points ``s_a``, ``s_b`` (the ground
+is the body at rest at the origin)::
+
+    Phi_k = r_a + R(theta_a) s_a - r_b - R(theta_b) s_b
+    gamma_k = R(theta_a) s_a omega_a^2 - R(theta_b) s_b omega_b^2      (nu_k = 0)
+
+the same equations, in the same rows, as :class:`~mechsolve.joints.revolute.
+RevoluteConstraint` (tests/test_issue26_andrews.py compares them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Pins:
+    """All pins' residual, Jacobian and ``gamma`` at one configuration."""
+
+    def __init__(self, constraints: list, nb: int) -> None:
+        self.nb, self.nq = nb, 3 * nb
+        self.a = np.array([c.a for c in constraints])
+        self.b = np.array([c.b for c in constraints])
+        self.sa = np.array([c.sa for c in constraints], float)
+        self.sb = np.array([c.sb for c in constraints], float)
+        k = np.arange(len(constraints))
+        self.rows_x, self.rows_y = 2 * k, 2 * k + 1
+        self.moving_a, self.moving_b = self.a != nb, self.b != nb
+
+    @staticmethod
+    def applies(constraints: list) -> bool:
+        return bool(constraints) and all(c.kind == "revolute" for c in constraints)
+
+    def _arms(self, th: np.ndarray):
+        """The rotated local points ``R(theta) s`` of both ends (``th``: the bodies'
+        angles; the ground's is appended)."""
+        th = np.concatenate([th, [0.0]])
+        c, s = np.cos(th), np.sin(th)
+        ca, sa_, cb, sb_ = c[self.a], s[self.a], c[self.b], s[self.b]
+        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
+        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
+        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
+        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
+        return rax, ray, rbx, rby
+
+    def residual(self, q: np.ndarray) -> np.ndarray:
+        qe = np.concatenate([q, np.zeros(3)])  # the ground at the origin, at rest
+        rax, ray, rbx, rby = self._arms(q[2::3])
+        out = np.empty(2 * len(self.a))
+        out[0::2] = qe[3 * self.a] + rax - qe[3 * self.b] - rbx
+        out[1::2] = qe[3 * self.a + 1] + ray - qe[3 * self.b + 1] - rby
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        rax, ray, rbx, rby = self._arms(q[2::3])
+        J = np.zeros((2 * len(self.a), self.nq))
+        for moving, body, rx, ry, sign in (
+            (self.moving_a, self.a, rax, ray, 1.0),
+            (self.moving_b, self.b, rbx, rby, -1.0),
+        ):
+            rx_, ry_ = self.rows_x[moving], self.rows_y[moving]
+            col = 3 * body[moving]
+            J[rx_, col] = sign
+            J[ry_, col + 1] = sign
+            J[rx_, col + 2] = -sign * ry[moving]
+            J[ry_, col + 2] = sign * rx[moving]
+        return J
+
+    def gamma(self, th: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """``gamma`` from the bodies' angles ``th`` and angular velocities ``w``."""
+        rax, ray, rbx, rby = self._arms(th)
+        w = np.concatenate([w, [0.0]])
+        wa2, wb2 = w[self.a] ** 2, w[self.b] ** 2
+        out = np.empty(2 * len(self.a))
+        out[0::2] = rax * wa2 - rbx * wb2
+        out[1::2] = ray * wa2 - rby * wb2
+        return out
