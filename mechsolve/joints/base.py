@@ -47,6 +47,10 @@ class Constraint:
     ``letter`` is the kind's letter in the names of structural groups (``R``: revolute,
     ``P``: prismatic, ``D``: a driver; ``RRP`` is a dyad of two revolutes and a slider);
     the closed-form groups are recognised by these letters.
+
+    ``joins_points`` is True for a constraint whose equations are exactly
+    ``r_a + R(theta_a) sa - r_b - R(theta_b) sb = 0`` (a pin at local points ``sa``,
+    ``sb``): code that evaluates many such equations at once as arrays may rely on it.
     """
 
     m: int = 0
@@ -55,6 +59,7 @@ class Constraint:
     b: int
     kind: str = ""
     letter: str = ""
+    joins_points: bool = False
 
     def residual(self, st: State, u) -> np.ndarray:
         raise NotImplementedError

@@ -110,6 +110,7 @@ class RevoluteConstraint(Constraint):
     kind = "revolute"
     letter = "R"
     m = 2
+    joins_points = True
 
     def __init__(self, name: str, a: int, b: int, sa, sb) -> None:
         self.name, self.a, self.b = name, a, b

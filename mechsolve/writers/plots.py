@@ -145,20 +145,7 @@ def draw_mechanism(
         if labels:
             cx, cy = pts.mean(axis=0)
             _label(ax, lk.name, cx, cy, fontsize=7, color=col, pin=False)
-    # what the joints draw beyond the links: the guides of sliders on the ground
-    for c in sys_.constraints:
-        seg = c.guide(state, an.scale)
-        if seg is not None:
-            ax.plot(seg[:, 0], seg[:, 1], "--", color="0.4", lw=1)
-        for line in c.drawing(state, i):  # what moves with the links: pitch circles...
-            ax.plot(line[:, 0], line[:, 1], "-.", color="0.35", lw=0.9)
-        for b, loc in c.outlines():  # curves fixed in a body: a cam's profile, its roller
-            if not math.isfinite(float(state.th[b, i])):
-                continue
-            ct, st_ = math.cos(float(state.th[b, i])), math.sin(float(state.th[b, i]))
-            ox, oy = float(state.x[b, i]), float(state.y[b, i])
-            ax.plot(ox + ct * loc[:, 0] - st_ * loc[:, 1], oy + st_ * loc[:, 0] + ct * loc[:, 1],
-                    "-", color="0.2", lw=1.2)  # fmt: skip
+    _draw_joint_extras(ax, an, state, i)
     # joints and ground pivots
     for p, ref in an.points.items():
         x, y = state.point(ref.body, ref.local, [i])
@@ -175,6 +162,25 @@ def draw_mechanism(
             ax.plot([x], [y], ".", ms=5, color=color, zorder=4)
         if labels:
             _label(ax, p, x, y, fontsize=8, color="k", pin=True)
+
+
+def _draw_joint_extras(ax, an, state, i: int) -> None:
+    """What the joints draw beyond the links at position ``i``: the guides of sliders on
+    the ground, what moves with the links (pitch circles...), the curves fixed in a body
+    (a cam's profile, its roller)."""
+    for c in an.system.constraints:
+        seg = c.guide(state, an.scale)
+        if seg is not None:
+            ax.plot(seg[:, 0], seg[:, 1], "--", color="0.4", lw=1)
+        for line in c.drawing(state, i):
+            ax.plot(line[:, 0], line[:, 1], "-.", color="0.35", lw=0.9)
+        for b, loc in c.outlines():
+            if not math.isfinite(float(state.th[b, i])):
+                continue
+            ct, st_ = math.cos(float(state.th[b, i])), math.sin(float(state.th[b, i]))
+            ox, oy = float(state.x[b, i]), float(state.y[b, i])
+            ax.plot(ox + ct * loc[:, 0] - st_ * loc[:, 1], oy + st_ * loc[:, 0] + ct * loc[:, 1],
+                    "-", color="0.2", lw=1.2)  # fmt: skip
 
 
 def _label(ax, text: str, x: float, y: float, *, fontsize: float, color: str, pin: bool) -> None:

@@ -32,7 +32,7 @@ class Pins:
 
     @staticmethod
     def applies(constraints: list) -> bool:
-        return bool(constraints) and all(c.kind == "revolute" for c in constraints)
+        return bool(constraints) and all(c.joins_points for c in constraints)
 
     def _arms(self, th: np.ndarray):
         """The rotated local points ``R(theta) s`` of both ends (``th``: the bodies'
