@@ -23,6 +23,7 @@ ORDER = (
     "link",
     "point",
     "joint",
+    "joint friction",
     "guide line",
     "driver",
     "limit start",
