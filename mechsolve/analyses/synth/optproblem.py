@@ -50,7 +50,7 @@ def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
     designs = res.designs
     if not designs:
         why = res.why or "no design met the constraints"
-        raise r.err((), f"no four-bar found: {why}")
+        raise r.err((), f"no linkage found: {why}")
     chosen = _choose(designs, solution, key=lambda d: d.extra["objective"])
     text = path_yaml(chosen, name, spec)
     return designs, chosen, text, {"result": res, "spec": spec, "search": res.search}

@@ -26,6 +26,9 @@ angle above the minimum asked, and the Grashof type asked. Each generation of
 differential evolution is one batch of the closed form over all designs x points; a
 least-squares polish (trust region, within the bounds) follows and is kept only when it
 stays feasible.
+
+A template that is not a four-bar (a Watt or Stephenson six-bar: a crank and revolute
+dyads) is evaluated through the design batch instead, by :mod:`.chain_gen`.
 """
 
 from __future__ import annotations
@@ -80,6 +83,7 @@ class PathSpec:
     popsize: int = 20
     top: int = 5
     direction: float = 1.0
+    chain: Any = None  # a ChainBatch when the template is not a four-bar (a six-bar ...)
 
 
 # -- the template ---------------------------------------------------------------------------
@@ -318,15 +322,24 @@ def read_path(r: Any) -> PathSpec:
     mpath = Path(file) if Path(file).is_absolute() else base / file
     mech = load(mpath)
     tsrc = load_file(mpath)
+    from mechsolve.analyses.synth.chain_gen import ChainBatch
+
     try:
         names = _roles(mech)
-    except InputError as exc:
-        raise r.err("mechanism", f"{file}: {exc.message}") from None
+        fourbar = True
+    except InputError:
+        names, fourbar = {}, False
     point = r.data.get("point")
     links = {lk.name: lk for lk in mech.links} if isinstance(mech.links, list) else mech.links
-    if not isinstance(point, str) or point not in links[names["coupler"]].points:
-        raise r.err("point", f"expected a point of the coupler {names['coupler']!r}: "
-                    f"{', '.join(links[names['coupler']].points)}")  # fmt: skip
+    if fourbar:
+        if not isinstance(point, str) or point not in links[names["coupler"]].points:
+            raise r.err("point", f"expected a point of the coupler {names['coupler']!r}: "
+                        f"{', '.join(links[names['coupler']].points)}")  # fmt: skip
+    else:
+        owners = [lk for lk in links.values() if isinstance(point, str) and point in lk.points]
+        if not owners:
+            raise r.err("point", "expected the name of a point of one of the template's "
+                        "moving links")  # fmt: skip
     names["P"] = point
     units = dict(tsrc.data.get("units") or {})
     tg = r.data.get("targets")
@@ -343,7 +356,17 @@ def read_path(r: Any) -> PathSpec:
     _vary(r, spec, units)
     _timing(r, spec, units)
     _options(r, spec)
-    _check_reader(spec, mech)
+    if fourbar:
+        _check_reader(spec, mech)
+        return spec
+    spec.direction = -1.0 if (mech.driver.sense or 1) == -1 else 1.0
+    if spec.grashof != "any":
+        raise r.err("grashof", "the Grashof type applies to a four-bar template; for this "
+                    "template the closure of every dyad over the motion is checked")  # fmt: skip
+    try:
+        spec.chain = ChainBatch(spec, mech, Geometry(spec))
+    except InputError as exc:
+        raise r.err("mechanism", f"{file}: {exc.message}") from None
     return spec
 
 
@@ -461,6 +484,8 @@ def solve_path(
     progress: Callable[[int, float], None] | None = None,
 ) -> PathResult:
     """Differential evolution on design batches, then a least-squares polish."""
+    if spec.chain is not None:
+        return _solve_chain(spec, seed=seed, max_time=max_time, progress=progress)
     batch = Batch(spec)
     names, bounds = _bounds(spec)
     why = _feasible_somewhere(batch, bounds, seed)
@@ -489,6 +514,40 @@ def solve_path(
     res = PathResult(designs, found, spec, names)
     if not designs:
         res.why = "no design within the bounds met the constraints " + _violated(batch, found)
+    return res
+
+
+def _solve_chain(spec: PathSpec, *, seed, max_time, progress) -> PathResult:
+    """As :func:`solve_path`, the template solved by its group plan over the batch."""
+    from mechsolve.analyses.synth.chain_gen import design, polish
+
+    batch = spec.chain
+    names, bounds = _bounds(spec)
+    found = search(batch.objective, batch.constraints, bounds, seed=seed, max_time=max_time,
+                   max_iter=spec.max_iter, popsize=spec.popsize, progress=progress,
+                   tol=1e-14)  # fmt: skip
+    cands: list[tuple[float, np.ndarray]] = []
+    if found.x is not None:
+        cands.append((found.fun, found.x))
+    if len(found.population):
+        ok = np.all(batch.constraints(found.population.T) > 0, axis=0)
+        for f, x, good in zip(found.energies, found.population, ok):
+            if good and np.isfinite(f):
+                cands.append((float(f), x))
+    if not found.interrupted:
+        for _, x in distinct(cands, bounds, 2 * spec.top):
+            p = polish(batch, x, bounds)
+            if p is not None:
+                cands.append(p)
+    designs = [design(batch, names, x, f"optimised {i}")
+               for i, (f, x) in enumerate(distinct(cands, bounds, spec.top), 1)]  # fmt: skip
+    res = PathResult(designs, found, spec, names)
+    if not designs and len(found.population):
+        c = batch.constraints(found.population.T)
+        worst = int(np.argmax(np.sum(c <= 0, axis=1)))
+        res.why = "no design within the bounds met the constraints " + batch.labels()[worst]
+    elif not designs:
+        res.why = "no design within the bounds met the constraints"
     return res
 
 
@@ -644,23 +703,30 @@ def path_yaml(d: Design, name: str, spec: PathSpec) -> str:
         node[v.path[-1]] = f"{shown!r} {v.unit}"
     u = d.extra["u"]
     n = spec.names
-    side = "left" if d.extra["sigma"] > 0 else "right"
     data["name"] = name
-    data["assembly"] = [f"{n['B']} {side} of {n['A']} -> {n['O4']}"]
+    if spec.chain is not None:
+        from mechsolve.analyses.synth.chain_gen import assembly_lines
+
+        data["assembly"] = assembly_lines(spec.chain, d.extra["combo"])
+    else:
+        side = "left" if d.extra["sigma"] > 0 else "right"
+        data["assembly"] = [f"{n['B']} {side} of {n['A']} -> {n['O4']}"]
     drv = dict(data.get("driver") or {})
     drv["start"] = f"{math.degrees(float(u[0]))!r} deg"
     data["driver"] = drv
     travel = TWO_PI if spec.closed else abs(float(u[-1] - u[0]))
     data["sweep"] = {"range": f"{math.degrees(max(travel, 1e-9)):.12g} deg", "step": "1 deg"}
+    kind = "four-bar" if spec.chain is None else "linkage"
     head = [
-        f"# {name}: four-bar path generator (mechsolve synth, {d.family})",
-        f"# Template {spec.template.name}; coupler point {n['P']} through "
+        f"# {name}: {kind} path generator (mechsolve synth, {d.family})",
+        f"# Template {spec.template.name}; point {n['P']} through "
         f"{len(spec.targets)} targets: sum of squared distances "
         f"{d.extra['objective']:.6e} m^2 (the synthesis' model).",
         "# Crank angles at the targets (deg): "
         + ", ".join(f"{math.degrees(float(x)):.6f}" for x in u),
-        f"# Grashof: {d.grashof}.",
     ]
+    if spec.chain is None:
+        head.append(f"# Grashof: {d.grashof}.")
     return "\n".join(head) + "\n" + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -699,6 +765,17 @@ def verify_path(text: str, d: Design, result: PathResult) -> PathCheck:
 
 
 def describe_rows(out: Any) -> list[str]:
+    if out.check["spec"].chain is not None:
+        rows = ["  #  design        sum of squares (m^2)  largest distance (m)  "
+                "min transmission (deg)"]  # fmt: skip
+        for i, d in enumerate(out.designs, 1):
+            mark = "*" if d is out.chosen else " "
+            rows.append(
+                f" {mark}{i:<2} {d.family:<13} {d.extra['objective']:<21.6e} "
+                f"{float(np.max(d.extra['distances'])):<21.6e} "
+                f"{math.degrees(d.min_transmission):.4f}"
+            )
+        return rows
     rows = ["  #  design        sum of squares (m^2)  largest distance (m)  crank      coupler"
             "    rocker     frame (m)  Grashof"]  # fmt: skip
     for i, d in enumerate(out.designs, 1):
