@@ -174,14 +174,20 @@ class FailureReports:
                 if not isinstance(g, NewtonGroup):
                     reason = g.fail_reason(st, i)
                 elif g.stopped is not None and i >= g.stopped[0] and i > 0:
+                    k, near, before = g.stopped
                     reason = (
                         f"{g.label}: cannot be followed continuously from "
-                        f"{self.format_u(st_u[g.stopped[0] - 1])}: the solution jumps near "
-                        f"{self.format_u(g.stopped[1])} even in the finest substeps (a "
-                        "singular position it turns through faster than a substep, or a "
-                        "range where it cannot close after a bifurcation has changed its "
-                        "branch), so its branch past there is not known; the sweep stops "
-                        "there: use a smaller step"
+                        f"{self.format_u(st_u[k - 1])}: the solution jumps near "
+                        f"{self.format_u(near)} even in the finest substeps "
+                        + (
+                            f"(and it broke off {before} times before), "
+                            if before
+                            else "(a singular position it turns through faster than a "
+                            "substep, or a range where it cannot close after a bifurcation "
+                            "has changed its branch), "
+                        )
+                        + "so its branch past there is not known; the sweep stops there: "
+                        "use a smaller step"
                     )
                 else:
                     reason = f"{g.label}: Newton-Raphson and scipy found no closed position"

@@ -20,6 +20,9 @@ from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extr
 from mechsolve.groups.newton_rates import NewtonRates
 from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _rowmax_abs
 
+MAX_GAPS = 8  # a sweep starts again past at most this many breaks, then stops
+DET_ROUNDING = 1e-12  # a Hadamard ratio below this is a singular group's rounding
+
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
     """A group solved numerically. Keeps per-position solver statistics."""
@@ -46,8 +49,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         # where the last sweep was not continuous: (the position before, a driver value
         # in between where the group could not be solved next to its neighbours)
         self.gaps: list[tuple[int, float]] = []
-        # where it stopped: (the first position not followed, where it broke)
-        self.stopped: tuple[int, float] | None = None
+        # where it stopped: (the first position not followed, where it broke, how many
+        # times it had started again before)
+        self.stopped: tuple[int, float, int] | None = None
         self._gap_u, self._gap_open = float("nan"), False
         super().__init__(bodies, constraints, names)
 
@@ -156,16 +160,22 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
 
     def _det(self, st1: State | None, u1: np.ndarray, q: np.ndarray, K=None) -> float:
         """The determinant of the group's equations at the solved pose ``q`` (of its
-        reduced equations in the angles for a revolute group: the same sign changes)."""
+        reduced equations in the angles for a revolute group: the same sign changes),
+        over the product of its rows' lengths: between -1 and 1 whatever the units
+        (Hadamard's ratio), 0 where the group is singular."""
         if self.m != self.n:
             return 1.0  # a redundant block: no sign to follow
         if self.red is None:
             self.set_q(st1, 0, q)
-            return float(np.linalg.det(self.jacobian(st1)[0]))
-        if self.red.sub.nb == 0:
+            J = self.jacobian(st1)[0]
+        elif self.red.sub.nb == 0:
             return 1.0
-        _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
-        return float(np.linalg.det(fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]))
+        else:
+            _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
+            J = fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]
+        with np.errstate(all="ignore"):
+            d = float(np.linalg.det(J) / np.prod(np.linalg.norm(J, axis=1)))
+        return d if np.isfinite(d) else 0.0
 
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
         """Place the group's links at all positions of ``st`` from their angles (N, n)."""
@@ -292,11 +302,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             else:
                 q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki)
                 if good:
-                    det = self._det(st1, drive.u[i : i + 1], q, Ki)
-                    if det * last_det < 0:  # a range it cannot close, or a bifurcation
-                        ends = (hu[-1], hq[-1], last_det), (ui, q)
-                        gap = self._hidden_gap(st1, Ki, *ends, i - 1, prefix)
-                        good, crossed = (None, crossed) if gap else (True, True)
+                    det, passed = self._passed(st1, drive, i, Ki, q, hu, hq, last_det, prefix)
+                    good = None if passed == "gap" else True
+                    crossed = crossed or passed is True
                 if not good:  # not reached continuously from i - 1: start again at i
                     q, stats, good = self._start_again(st1, drive, i, Ki, good, restart, crossed)
                     if good is None:  # the branch past here is not known: stop
@@ -319,6 +327,17 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 hu, hq = [], []
         return ok, iters, methods
 
+    def _passed(self, st1, drive: Drive, i: int, Ki, q, hu, hq, last_det: float, prefix):
+        """The group's determinant at position ``i`` (solved as ``q``, continuously from
+        the history ``hu``, ``hq``) and what the step passed where it changed sign: a
+        range where the group cannot close (``"gap"``), a bifurcation (True), or nothing
+        (False; nor where rounding gives the sign of a group singular on both sides)."""
+        det = self._det(st1, drive.u[i : i + 1], q, Ki)
+        if not (det * last_det < 0 and max(abs(det), abs(last_det)) > DET_ROUNDING):
+            return det, False
+        ends = (hu[-1], hq[-1], last_det), (float(drive.u[i]), q)
+        return det, "gap" if self._hidden_gap(st1, Ki, *ends, i - 1, prefix) else True
+
     def _start_again(self, st1, drive: Drive, i: int, Ki, good, restart, crossed: bool):
         """Position ``i``, which the sweep did not reach continuously from ``i - 1``
         (``good``: None if the group closes there, False if not from the prediction):
@@ -330,8 +349,10 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         trust = restart is not None and across and not crossed
         guess = restart(i) if trust else None
         q, stats = None, SolveStats(False, "failed", 0, 0, 0, float("nan"))
-        if guess is None and good is None:
-            self.stopped = (i, self._gap_u)
+        if (guess is None and good is None) or len(self.gaps) >= MAX_GAPS:
+            # (nor does it start again more than MAX_GAPS times: a sweep whose every
+            # step breaks off would march 2**MAX_DEPTH substeps at every position)
+            self.stopped = (i, self._gap_u, len(self.gaps))
             return q, stats, None
         solved = False
         if guess is not None and guess is not False:
