@@ -167,6 +167,26 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
         return float(np.linalg.det(fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]))
 
+    def red_dets(self, st: State, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A revolute group's :meth:`_det` at every position of ``st`` (NaN where not
+        ``ok`` or not finite), and where it is finite: the determinant of its free angles'
+        Jacobian, which differs from that of its block of Phi_q by a constant factor (the
+        Schur complement of a constant unimodular block, bordered by the drivers' rows
+        of +-1: see :class:`~mechsolve.groups.reduced._Angles`), so that it changes sign
+        where that one does, at a fraction of its cost."""
+        red = self.red
+        sub = red.sub
+        bodies = [self.bodies[k] for k in red.free.tolist()]
+        C, S = st.c[bodies].T, st.s[bodies].T
+        det = np.full(st.n, np.nan)
+        good = ok & np.isfinite(_rowmax_abs(C)) & np.isfinite(_rowmax_abs(S))
+        if good.all():
+            det = sub.dets(C, S)
+        elif good.any():
+            det[good] = sub.dets(C[good], S[good])
+        good &= np.isfinite(det)
+        return det, good
+
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
         """Place the group's links at all positions of ``st`` from their angles (N, n)."""
         C, S = np.cos(th), np.sin(th)

@@ -10,7 +10,7 @@ import numpy as np
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.reduced import FLOATS_UP_TO, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, _rowmax_abs, _stacked_solve
 
 
 class BatchedSweep:
@@ -218,8 +218,11 @@ class BatchedSweep:
                 dq = sub.step_small(C, S, f)
             else:
                 Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
-                try:
-                    dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
+                try:  # by elimination over the positions (LAPACK where it must)
+                    if sub.nb <= FLOATS_UP_TO:
+                        dq = _stacked_solve(Jk, -f, sub.nzm)
+                    else:
+                        dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
                 except np.linalg.LinAlgError:
                     return None
             step = _rowmax_abs(dq)

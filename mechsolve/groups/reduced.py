@@ -23,6 +23,8 @@ class _Eqs:
         self.M1, self.M2 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy()
         self.M3 = M[:, 2 * nb :].copy()
         self.nd = bool(np.any(self.M3))
+        # which entries of F_theta can be nonzero (the stacked elimination skips others)
+        self.nzm = (self.M1 != 0) | (self.M2 != 0) | (self.M3 != 0)
         # rows of (M1, M2, M3) as Python floats, for one small position at a time
         self._rows = [
             tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
@@ -113,6 +115,17 @@ class _Eqs:
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
 
+    def dets(self, C, S) -> np.ndarray:
+        """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
+        if self.nb == 1:
+            return self.M2[0, 0] * C[:, 0] - self.M1[0, 0] * S[:, 0] + self.M3[0, 0]
+        if self.nb == 2:
+            J = self.jacobian(C, S)
+            return J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+        if self.nb <= FLOATS_UP_TO:
+            return _stacked_det(self.jacobian(C, S), self.nzm)
+        return np.linalg.det(self.jacobian(C, S))
+
     def step_small(self, C, S, f) -> np.ndarray:
         """The Newton step ``-F_theta^-1 F`` (N, n) for one or two angles, elementwise
         (NaN where ``F_theta`` is exactly singular)."""
@@ -144,6 +157,8 @@ class _Eqs:
     def inverse(self, C, S) -> np.ndarray:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
+        if 2 < self.nb <= FLOATS_UP_TO:
+            return _stacked_inverse(self.jacobian(C, S), self.nzm)
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
         (a1, b1), (c1, d1) = self.M1.tolist()
@@ -541,3 +556,162 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
         if idx.size:
             out[idx] = np.linalg.inv(J[idx])
     return out
+
+
+# -- small matrices stacked over positions: elimination on 1-D arrays -------------------
+#
+# np.linalg.solve / inv on (N, n, n) with n = 3..6 spend most of their time per matrix
+# (LAPACK is called once per position: ~0.4 us a 4 x 4 solve, ~0.8 us an inverse);
+# Gaussian elimination written over the positions, one 1-D array per entry, costs about
+# n^3 / 3 array operations in all: 5-10x less at thousands of positions. The row order
+# is chosen once per call by partial pivoting on a few sample positions; a position
+# whose pivot is not within THRESHOLD of the largest entry below it (threshold pivoting,
+# as sparse LU codes use), or is zero, or not finite, is solved by LAPACK instead.
+
+THRESHOLD = 0.1  # a pivot at least this fraction of its column's largest entry below it
+
+
+class _StackedLU:
+    """LU factors of the matrices ``J`` (N, n, n), one 1-D array per entry (None where
+    ``nz`` says an entry is zero at every position). ``bad``: the positions LAPACK must
+    take (see above); ``ok``: False when the row order has a structural zero pivot (then
+    every position is bad)."""
+
+    def __init__(self, J: np.ndarray, nz: np.ndarray | None = None) -> None:
+        N, n, _ = J.shape
+        self.n, self.N = n, N
+        if nz is None:
+            nz = np.ones((n, n), bool)
+        # the row order: partial pivoting on |J| summed over three sample positions
+        s = np.abs(J[[0, N // 2, N - 1]]).sum(axis=0)
+        s[~np.isfinite(s)] = 0.0
+        s[~nz] = 0.0
+        s = s.tolist()
+        rows = list(range(n))
+        for k in range(n):
+            p = max(range(k, n), key=lambda i: abs(s[rows[i]][k]))
+            rows[k], rows[p] = rows[p], rows[k]
+            pr = s[rows[k]]
+            if pr[k] == 0:
+                continue
+            for i in range(k + 1, n):
+                r = s[rows[i]]
+                m = r[k] / pr[k]
+                if m:
+                    s[rows[i]] = [a - m * b if c > k else a for c, (a, b) in enumerate(zip(r, pr))]
+        self.rows = rows
+        A = [[J[:, r, j] if nz[r, j] else None for j in range(n)] for r in rows]
+        L: list[list] = [[None] * n for _ in range(n)]
+        bad = np.zeros(N, bool)
+        inv_piv = []
+        self.ok = True
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for k in range(n):
+                piv = A[k][k]
+                if piv is None:
+                    self.ok = False
+                    bad[:] = True
+                    return
+                apiv = np.abs(piv)
+                bad |= ~(apiv > 0)
+                ip = 1.0 / piv
+                inv_piv.append(ip)
+                rk = A[k]
+                for i in range(k + 1, n):
+                    ri = A[i]
+                    a = ri[k]
+                    if a is None:
+                        continue
+                    bad |= ~(apiv >= THRESHOLD * np.abs(a))
+                    m = a * ip
+                    L[i][k] = m
+                    for j in range(k + 1, n):
+                        b = rk[j]
+                        if b is None:
+                            continue
+                        ri[j] = -(m * b) if ri[j] is None else ri[j] - m * b
+        self.U, self.L, self.inv_piv, self.bad = A, L, inv_piv, bad
+
+    def solve_cols(self, b: list) -> list:
+        """The solution's columns (n 1-D arrays) of ``J x = b`` for ``b`` given as its n
+        columns (1-D arrays, or None for zero); not valid at :attr:`bad` positions."""
+        n, rows, L, U = self.n, self.rows, self.L, self.U
+        y = [b[r] for r in rows]
+        for i in range(1, n):
+            acc = y[i]
+            for k in range(i):
+                m, yk = L[i][k], y[k]
+                if m is None or yk is None:
+                    continue
+                acc = -(m * yk) if acc is None else acc - m * yk
+            y[i] = acc
+        x: list = [None] * n
+        for i in range(n - 1, -1, -1):
+            acc = y[i]
+            for j in range(i + 1, n):
+                u, xj = U[i][j], x[j]
+                if u is None or xj is None:
+                    continue
+                acc = -(u * xj) if acc is None else acc - u * xj
+            x[i] = None if acc is None else acc * self.inv_piv[i]
+        return [np.zeros(self.N) if v is None else v for v in x]
+
+    def det(self) -> np.ndarray:
+        """The determinants (not valid at :attr:`bad` positions)."""
+        d = np.prod(np.array([self.U[k][k] for k in range(self.n)]), axis=0)
+        # the row permutation's sign: the parity of its inversions
+        r = self.rows
+        inv = sum(1 for i in range(self.n) for j in range(i + 1, self.n) if r[i] > r[j])
+        return -d if inv % 2 else d
+
+
+def _stacked_solve(J: np.ndarray, b: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.solve(J, b[..., None])[..., 0]`` for J (N, n, n), b (N, n), by
+    :class:`_StackedLU` (LAPACK at the positions it cannot take; its LinAlgError for an
+    exactly singular one as np.linalg.solve raises it)."""
+    lu = _StackedLU(J, nz)
+    out = np.empty(b.shape)
+    if lu.ok:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            x = lu.solve_cols([b[:, j] for j in range(b.shape[1])])
+        for j, v in enumerate(x):
+            out[:, j] = v
+    bad = lu.bad
+    if bad.any():
+        out[bad] = np.linalg.solve(J[bad], b[bad][..., None])[..., 0]
+    return out
+
+
+def _stacked_inverse(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """:func:`_batch_inverse` for 3 x 3 to 6 x 6 matrices by :class:`_StackedLU`
+    (:func:`_batch_inverse` itself at the positions it cannot take)."""
+    N, n, _ = J.shape
+    lu = _StackedLU(J, nz)
+    out = np.empty(J.shape)
+    if lu.ok:
+        one = np.ones(N)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for c in range(n):
+                x = lu.solve_cols([one if j == c else None for j in range(n)])
+                for i, v in enumerate(x):
+                    out[:, i, c] = v
+    bad = lu.bad
+    if bad.any():
+        out[bad] = _batch_inverse(J[bad])
+    if not np.isfinite(out).all():  # NaN in an entry: the whole inverse, as LAPACK's
+        out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
+    return out
+
+
+def _stacked_det(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.det(J)`` by :class:`_StackedLU` (LAPACK where it cannot take a
+    position)."""
+    lu = _StackedLU(J, nz)
+    if not lu.ok:
+        return np.linalg.det(J)
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = lu.det()
+    bad = lu.bad
+    if bad.any():
+        d[bad] = np.linalg.det(J[bad])
+    return d

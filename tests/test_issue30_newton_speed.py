@@ -1,0 +1,107 @@
+"""Speed of the Newton groups (issue 30, targets 1 and 4): what is computed faster gives
+the same numbers, checked against independent computations (LAPACK through NumPy on the
+same matrices; the determinant of the group's block of Phi_q in body coordinates)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mechsolve.base.state import State
+from mechsolve.groups.reduced import (
+    _stacked_det,
+    _stacked_inverse,
+    _stacked_solve,
+    _StackedLU,
+)
+
+
+def _cases(n: int, seed: int):
+    """Matrices (N, n, n) of three kinds: well conditioned, random (some positions need
+    a row exchange the static order does not make), and with a structural zero pattern
+    of a loop (each equation touches some of the angles only)."""
+    rng = np.random.default_rng(seed)
+    N = 400
+    well = rng.normal(size=(N, n, n)) + 4 * np.eye(n)
+    rand = rng.normal(size=(N, n, n))
+    nz = rng.random((n, n)) > 0.3
+    nz[np.arange(n), rng.permutation(n)] = True  # structurally nonsingular
+    sparse = rng.normal(size=(N, n, n)) * nz
+    return [(well, None), (rand, None), (sparse, nz)]
+
+
+@pytest.mark.parametrize("n", [3, 4, 5, 6])
+def test_stacked_elimination_is_lapacks_solve_inverse_and_determinant(n):
+    rng = np.random.default_rng(n)
+    for J, nz in _cases(n, n):
+        b = rng.normal(size=(J.shape[0], n))
+        x0 = np.linalg.solve(J, b[..., None])[..., 0]
+        inv0 = np.linalg.inv(J)
+        det0 = np.linalg.det(J)
+        cond = np.linalg.cond(J)[:, None]
+        tol = 1e-14 * cond * (1 + np.abs(x0))
+        assert np.all(np.abs(_stacked_solve(J, b, nz) - x0) <= 10 * tol)
+        tol_inv = 1e-14 * cond[:, :, None] * (1 + np.abs(inv0))
+        assert np.all(np.abs(_stacked_inverse(J, nz) - inv0) <= 10 * tol_inv)
+        assert np.allclose(_stacked_det(J, nz), det0, rtol=1e-12 * cond.max(), atol=0)
+
+
+def test_positions_the_static_row_order_cannot_take_go_to_lapack():
+    """A position whose pivot is far below the entry under it (here: the first column
+    (1e-9, 1) against the sample positions' (1, 1e-9)) is flagged and solved by LAPACK:
+    without a row exchange its elimination would lose nine digits."""
+    N = 5
+    J = np.tile(np.array([[1.0, 2.0, 0.5], [1e-9, 1.0, 3.0], [0.3, 0.2, 1.0]]), (N, 1, 1))
+    J[1] = [[1e-9, 2.0, 0.5], [1.0, 1.0, 3.0], [0.3, 0.2, 1.0]]
+    lu = _StackedLU(J)
+    assert lu.bad.tolist() == [False, True, False, False, False]
+    b = np.arange(3.0 * N).reshape(N, 3)
+    want = np.linalg.solve(J, b[..., None])[..., 0]
+    assert np.allclose(_stacked_solve(J, b), want, rtol=1e-14, atol=0)
+    assert np.allclose(_stacked_inverse(J), np.linalg.inv(J), rtol=1e-13, atol=0)
+
+
+def test_singular_and_non_finite_positions_as_lapack_gives_them():
+    N, n = 4, 4
+    rng = np.random.default_rng(3)
+    J = rng.normal(size=(N, n, n)) + 4 * np.eye(n)
+    J[1, 2] = J[1, 0]  # exactly singular (two equal rows)
+    J[2, 3, 1] = np.nan
+    inv = _stacked_inverse(J)
+    assert np.all(np.isnan(inv[1])) and np.all(np.isnan(inv[2]))
+    assert np.allclose(inv[[0, 3]], np.linalg.inv(J[[0, 3]]), rtol=1e-13)
+    with pytest.raises(np.linalg.LinAlgError):  # as np.linalg.solve
+        _stacked_solve(J[:2], np.ones((2, n)))
+    assert _stacked_det(J[1:2])[0] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("which", ["four-bar", "triad"])
+def test_a_revolute_groups_determinant_changes_sign_with_its_block_of_phi_q(which):
+    """The cheap determinant :meth:`red_dets` (the free angles' Jacobian, which the
+    bifurcation search follows) is the body coordinates' block determinant times one
+    constant, at random angles of the group's links (both signs, near-singular ones)."""
+    import mechsolve as ms
+    from mechsolve.core.sweep import Analysis
+    from mechsolve_bench import _triad_mech, fourbar_yaml
+
+    if which == "four-bar":
+        an = Analysis(ms.loads(fourbar_yaml(12)), "split-newton")
+    else:
+        an = Analysis(_triad_mech(12), "auto")
+    g = an.plan[-1]
+    assert g.kind == "Newton" and g.red is not None
+    N = 2000
+    rng = np.random.default_rng(5)
+    st = State(an.system.nb, N)
+    for b in range(an.system.nb):
+        st.set_angle(b, np.full(N, 0.4))
+    for b in g.col:
+        st.set_angle(b, rng.uniform(-np.pi, np.pi, N))
+    ok = np.ones(N, bool)
+    ok[7] = False
+    det, good = g.red_dets(st, ok)
+    assert np.isnan(det[7]) and not good[7] and good[ok].all()
+    full = np.linalg.det(g.jacobian(st))
+    ratio = full[good] / det[good]
+    assert np.allclose(ratio, ratio[0], rtol=1e-8)
+    assert (det < 0).any() and (det > 0).any()
