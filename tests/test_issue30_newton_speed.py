@@ -9,6 +9,7 @@ import pytest
 
 from mechsolve.base.state import State
 from mechsolve.groups.reduced import (
+    _entries_of,
     _stacked_det,
     _stacked_inverse,
     _stacked_solve,
@@ -53,7 +54,7 @@ def test_positions_the_static_row_order_cannot_take_go_to_lapack():
     N = 5
     J = np.tile(np.array([[1.0, 2.0, 0.5], [1e-9, 1.0, 3.0], [0.3, 0.2, 1.0]]), (N, 1, 1))
     J[1] = [[1e-9, 2.0, 0.5], [1.0, 1.0, 3.0], [0.3, 0.2, 1.0]]
-    lu = _StackedLU(J)
+    lu = _StackedLU(_entries_of(J), N)
     assert lu.bad.tolist() == [False, True, False, False, False]
     b = np.arange(3.0 * N).reshape(N, 3)
     want = np.linalg.solve(J, b[..., None])[..., 0]

@@ -10,7 +10,7 @@ import numpy as np
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.reduced import FLOATS_UP_TO, _rowmax_abs, _stacked_solve
+from mechsolve.groups.reduced import FLOATS_UP_TO, _lu_solve, _rowmax_abs
 
 
 class BatchedSweep:
@@ -217,11 +217,11 @@ class BatchedSweep:
             if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
                 dq = sub.step_small(C, S, f)
             else:
-                Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
                 try:  # by elimination over the positions (LAPACK where it must)
                     if sub.nb <= FLOATS_UP_TO:
-                        dq = _stacked_solve(Jk, -f, sub.nzm)
+                        dq = _lu_solve(sub.lu(C, S), -f)
                     else:
+                        Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
                         dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
                 except np.linalg.LinAlgError:
                     return None

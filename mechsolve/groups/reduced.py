@@ -115,6 +115,39 @@ class _Eqs:
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
 
+    def entries(self, C, S) -> list:
+        """``F_theta``'s entries as :class:`_StackedLU` takes them: 1-D arrays over the
+        positions (None where always zero), from the angles' cosines and sines ``C``,
+        ``S`` (N, n): no (N, n, n) array, whose broadcast products over a last axis of
+        n cost several times more than the n^2 entries' arithmetic."""
+        out = []
+        for row in self._rows:
+            r = []
+            for k, (m1, m2, m3) in enumerate(row):
+                if not (m1 or m2 or m3):
+                    r.append(None)
+                    continue
+                c, s = C[:, k], S[:, k]
+                if m1 and m2:
+                    a = m2 * c
+                    a -= m1 * s
+                elif m2:
+                    a = m2 * c
+                elif m1:
+                    a = -m1 * s
+                else:
+                    a = np.zeros(C.shape[0])
+                if m3:
+                    a += m3
+                r.append(a)
+            out.append(r)
+        return out
+
+    def lu(self, C, S) -> _StackedLU:
+        """:class:`_StackedLU` of ``F_theta`` at the angles whose cosines and sines are
+        ``C``, ``S`` (N, n)."""
+        return _StackedLU(self.entries(C, S), C.shape[0])
+
     def dets(self, C, S) -> np.ndarray:
         """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
         if self.nb == 1:
@@ -123,7 +156,7 @@ class _Eqs:
             J = self.jacobian(C, S)
             return J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
         if self.nb <= FLOATS_UP_TO:
-            return _stacked_det(self.jacobian(C, S), self.nzm)
+            return _lu_det(self.lu(C, S))
         return np.linalg.det(self.jacobian(C, S))
 
     def step_small(self, C, S, f) -> np.ndarray:
@@ -158,7 +191,7 @@ class _Eqs:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
         if 2 < self.nb <= FLOATS_UP_TO:
-            return _stacked_inverse(self.jacobian(C, S), self.nzm)
+            return _lu_inverse(self.lu(C, S))
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
         (a1, b1), (c1, d1) = self.M1.tolist()
@@ -572,21 +605,20 @@ THRESHOLD = 0.1  # a pivot at least this fraction of its column's largest entry 
 
 
 class _StackedLU:
-    """LU factors of the matrices ``J`` (N, n, n), one 1-D array per entry (None where
-    ``nz`` says an entry is zero at every position). ``bad``: the positions LAPACK must
-    take (see above); ``ok``: False when the row order has a structural zero pivot (then
-    every position is bad)."""
+    """LU factors of N small matrices (n x n), given by their entries ``A[i][j]``: 1-D
+    arrays over the positions, or None where an entry is zero at every position (see
+    :func:`_entries_of`). ``bad``: the positions LAPACK must take (see above); ``ok``:
+    False when the row order has a structural zero pivot (then every position is bad).
+    :meth:`matrices` gives the stacked matrices back at some positions (for LAPACK)."""
 
-    def __init__(self, J: np.ndarray, nz: np.ndarray | None = None) -> None:
-        N, n, _ = J.shape
+    def __init__(self, A: list, N: int) -> None:
+        n = len(A)
         self.n, self.N = n, N
-        if nz is None:
-            nz = np.ones((n, n), bool)
-        # the row order: partial pivoting on |J| summed over three sample positions
-        s = np.abs(J[[0, N // 2, N - 1]]).sum(axis=0)
-        s[~np.isfinite(s)] = 0.0
-        s[~nz] = 0.0
-        s = s.tolist()
+        self.entries = A
+        # the row order: partial pivoting on |A| summed over three sample positions
+        pick = np.array([0, N // 2, N - 1])
+        s = [[0.0 if a is None else float(np.abs(a[pick]).sum()) for a in row] for row in A]
+        s = [[v if math.isfinite(v) else 0.0 for v in row] for row in s]
         rows = list(range(n))
         for k in range(n):
             p = max(range(k, n), key=lambda i: abs(s[rows[i]][k]))
@@ -600,7 +632,7 @@ class _StackedLU:
                 if m:
                     s[rows[i]] = [a - m * b if c > k else a for c, (a, b) in enumerate(zip(r, pr))]
         self.rows = rows
-        A = [[J[:, r, j] if nz[r, j] else None for j in range(n)] for r in rows]
+        A = [list(A[r]) for r in rows]
         L: list[list] = [[None] * n for _ in range(n)]
         bad = np.zeros(N, bool)
         inv_piv = []
@@ -631,6 +663,16 @@ class _StackedLU:
                             continue
                         ri[j] = -(m * b) if ri[j] is None else ri[j] - m * b
         self.U, self.L, self.inv_piv, self.bad = A, L, inv_piv, bad
+
+    def matrices(self, idx) -> np.ndarray:
+        """The matrices (k, n, n) at the positions ``idx``."""
+        n = self.n
+        J = np.zeros((np.count_nonzero(idx) if idx.dtype == bool else len(idx), n, n))
+        for i, row in enumerate(self.entries):
+            for j, a in enumerate(row):
+                if a is not None:
+                    J[:, i, j] = a[idx]
+        return J
 
     def solve_cols(self, b: list) -> list:
         """The solution's columns (n 1-D arrays) of ``J x = b`` for ``b`` given as its n
@@ -665,11 +707,19 @@ class _StackedLU:
         return -d if inv % 2 else d
 
 
-def _stacked_solve(J: np.ndarray, b: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
-    """``np.linalg.solve(J, b[..., None])[..., 0]`` for J (N, n, n), b (N, n), by
-    :class:`_StackedLU` (LAPACK at the positions it cannot take; its LinAlgError for an
-    exactly singular one as np.linalg.solve raises it)."""
-    lu = _StackedLU(J, nz)
+def _entries_of(J: np.ndarray, nz: np.ndarray | None = None) -> list:
+    """The entries of the stacked matrices ``J`` (N, n, n) as :class:`_StackedLU` takes
+    them (None where ``nz`` says an entry is always zero)."""
+    n = J.shape[1]
+    return [
+        [np.ascontiguousarray(J[:, i, j]) if nz is None or nz[i, j] else None for j in range(n)]
+        for i in range(n)
+    ]
+
+
+def _lu_solve(lu: _StackedLU, b: np.ndarray) -> np.ndarray:
+    """``J x = b`` (N, n) from the factors (LAPACK at the positions they cannot take; its
+    LinAlgError for an exactly singular one, as np.linalg.solve raises it)."""
     out = np.empty(b.shape)
     if lu.ok:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -678,16 +728,15 @@ def _stacked_solve(J: np.ndarray, b: np.ndarray, nz: np.ndarray | None = None) -
             out[:, j] = v
     bad = lu.bad
     if bad.any():
-        out[bad] = np.linalg.solve(J[bad], b[bad][..., None])[..., 0]
+        out[bad] = np.linalg.solve(lu.matrices(bad), b[bad][..., None])[..., 0]
     return out
 
 
-def _stacked_inverse(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
-    """:func:`_batch_inverse` for 3 x 3 to 6 x 6 matrices by :class:`_StackedLU`
-    (:func:`_batch_inverse` itself at the positions it cannot take)."""
-    N, n, _ = J.shape
-    lu = _StackedLU(J, nz)
-    out = np.empty(J.shape)
+def _lu_inverse(lu: _StackedLU) -> np.ndarray:
+    """The inverses (N, n, n) from the factors, as :func:`_batch_inverse` gives them
+    (which takes the positions the factors cannot)."""
+    N, n = lu.N, lu.n
+    out = np.empty((N, n, n))
     if lu.ok:
         one = np.ones(N)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -697,21 +746,35 @@ def _stacked_inverse(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
                     out[:, i, c] = v
     bad = lu.bad
     if bad.any():
-        out[bad] = _batch_inverse(J[bad])
+        out[bad] = _batch_inverse(lu.matrices(bad))
     if not np.isfinite(out).all():  # NaN in an entry: the whole inverse, as LAPACK's
         out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
     return out
 
 
-def _stacked_det(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
-    """``np.linalg.det(J)`` by :class:`_StackedLU` (LAPACK where it cannot take a
-    position)."""
-    lu = _StackedLU(J, nz)
+def _lu_det(lu: _StackedLU) -> np.ndarray:
+    """The determinants from the factors (LAPACK at the positions they cannot take)."""
     if not lu.ok:
-        return np.linalg.det(J)
+        return np.linalg.det(lu.matrices(np.arange(lu.N)))
     with np.errstate(invalid="ignore", over="ignore"):
         d = lu.det()
     bad = lu.bad
     if bad.any():
-        d[bad] = np.linalg.det(J[bad])
+        d[bad] = np.linalg.det(lu.matrices(bad))
     return d
+
+
+def _stacked_solve(J: np.ndarray, b: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.solve(J, b[..., None])[..., 0]`` for J (N, n, n), b (N, n), by
+    :class:`_StackedLU`."""
+    return _lu_solve(_StackedLU(_entries_of(J, nz), J.shape[0]), b)
+
+
+def _stacked_inverse(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """:func:`_batch_inverse` for 3 x 3 to 6 x 6 matrices by :class:`_StackedLU`."""
+    return _lu_inverse(_StackedLU(_entries_of(J, nz), J.shape[0]))
+
+
+def _stacked_det(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.det(J)`` by :class:`_StackedLU`."""
+    return _lu_det(_StackedLU(_entries_of(J, nz), J.shape[0]))
