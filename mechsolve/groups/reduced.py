@@ -30,6 +30,10 @@ class _Eqs:
             tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
             for e in range(nb)
         ]
+        self._terms = [
+            [(k, m1, m2, m3) for k, (m1, m2, m3) in enumerate(row) if m1 or m2 or m3]
+            for row in self._rows
+        ]
 
     def newton_floats(
         self, K, th0, atol: float, max_iterations: int
@@ -82,6 +86,7 @@ class _Eqs:
                 x0, x1 = x0 + dx0, x1 + dx1
                 last = step
             return [x0, x1], r <= atol, max_iterations, r, max_iterations
+        terms = self._terms
         for it in range(max_iterations + 1):
             c = [cos(v) for v in x]
             s = [sin(v) for v in x]
@@ -89,10 +94,11 @@ class _Eqs:
             J = []
             for e in range(nb):
                 fe = K[e]
-                Je = []
-                for k, (m1, m2, m3) in enumerate(rows[e]):
-                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
-                    Je.append(m2 * c[k] - m1 * s[k] + m3)
+                Je = [0.0] * nb
+                for k, m1, m2, m3 in terms[e]:  # the nonzero ones only
+                    ck, sk = c[k], s[k]
+                    fe += m1 * ck + m2 * sk + m3 * x[k]
+                    Je[k] = m2 * ck - m1 * sk + m3
                 f.append(fe)
                 J.append(Je)
             r = max(abs(v) for v in f)
@@ -494,11 +500,13 @@ FLOATS_UP_TO = 6  # groups of up to this many angles are solved position by posi
 
 
 def _solve_small(J: list, f: list) -> list | None:
-    """``J dx = -f`` in floats: 1 to 3 unknowns by Cramer's rule, more (up to
-    :data:`FLOATS_UP_TO`) by Gaussian elimination with partial pivoting, as LAPACK's
+    """``J dx = -f`` in floats: 1 to 4 unknowns by Cramer's rule (:func:`_solve4`), more
+    (up to :data:`FLOATS_UP_TO`) by Gaussian elimination with partial pivoting, as LAPACK's
     ``gesv`` (a NumPy call costs ~10 us there, more than the arithmetic); None when
     ``J`` is exactly singular."""
     n = len(f)
+    if n == 4:
+        return _solve4(J, f)
     if n > 3:
         return _gauss_small(J, f)
     if n == 1:
@@ -521,6 +529,55 @@ def _solve_small(J: list, f: list) -> list | None:
         -(A * f0 + D * f1 + H * f2) / det,
         -(B * f0 + E * f1 + I * f2) / det,
         -(C * f0 + G * f1 + L * f2) / det,
+    ]
+
+
+def _solve4(J: list, f: list) -> list | None:
+    """:func:`_solve_small` for four unknowns by the adjugate, from the 2 x 2 minors of
+    the first two rows and of the last two (Laplace's expansion): straight-line
+    arithmetic, a third of the elimination's time in Python. A Newton step's accuracy
+    only decides how fast it converges (the residual decides when), so Cramer's rule,
+    less stable than pivoting near a singular matrix, is enough here. None when the
+    determinant is exactly zero."""
+    (a00, a01, a02, a03), (a10, a11, a12, a13), (a20, a21, a22, a23), (a30, a31, a32, a33) = J
+    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
+    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
+    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
+    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    if det == 0:
+        return None
+    f0, f1, f2, f3 = f
+    r = -1.0 / det
+    return [
+        r
+        * (
+            (a11 * c5 - a12 * c4 + a13 * c3) * f0
+            + (-a01 * c5 + a02 * c4 - a03 * c3) * f1
+            + (a31 * s5 - a32 * s4 + a33 * s3) * f2
+            + (-a21 * s5 + a22 * s4 - a23 * s3) * f3
+        ),
+        r
+        * (
+            (-a10 * c5 + a12 * c2 - a13 * c1) * f0
+            + (a00 * c5 - a02 * c2 + a03 * c1) * f1
+            + (-a30 * s5 + a32 * s2 - a33 * s1) * f2
+            + (a20 * s5 - a22 * s2 + a23 * s1) * f3
+        ),
+        r
+        * (
+            (a10 * c4 - a11 * c2 + a13 * c0) * f0
+            + (-a00 * c4 + a01 * c2 - a03 * c0) * f1
+            + (a30 * s4 - a31 * s2 + a33 * s0) * f2
+            + (-a20 * s4 + a21 * s2 - a23 * s0) * f3
+        ),
+        r
+        * (
+            (-a10 * c3 + a11 * c1 - a12 * c0) * f0
+            + (a00 * c3 - a01 * c1 + a02 * c0) * f1
+            + (-a30 * s3 + a31 * s1 - a32 * s0) * f2
+            + (a20 * s3 - a21 * s1 + a22 * s0) * f3
+        ),
     ]
 
 
