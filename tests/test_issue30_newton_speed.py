@@ -147,3 +147,14 @@ def test_cosines_turned_by_small_steps_are_those_of_the_new_angles():
     assert np.all(np.abs(C[ok] - np.cos(th2[ok])) <= tol)
     assert np.all(np.abs(S[ok] - np.sin(th2[ok])) <= tol)
     assert np.isnan(C[1, 1]) and np.isnan(S[1, 1])
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5])
+def test_one_small_determinant_in_floats_is_lapacks(n):
+    from mechsolve.groups.reduced import _det_small
+
+    rng = np.random.default_rng(n + 10)
+    for _ in range(100):
+        J = rng.standard_normal((n, n))
+        assert _det_small(J) == pytest.approx(float(np.linalg.det(J)), rel=1e-12, abs=1e-14)
+    assert _det_small(np.ones((n, n))) == pytest.approx(0.0, abs=1e-15) or n == 1

@@ -18,7 +18,7 @@ from mechsolve.groups.base import Drive, Group
 from mechsolve.groups.newton_batched import BatchedSweep
 from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extrapolate
 from mechsolve.groups.newton_rates import NewtonRates
-from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _det_small, _rowmax_abs
 
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
@@ -165,7 +165,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if self.red.sub.nb == 0:
             return 1.0
         _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
-        return float(np.linalg.det(fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]))
+        return _det_small(fun_jac(np.asarray(q, float)[2::3][self.red.free])[1])
 
     def red_dets(self, st: State, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """A revolute group's :meth:`_det` at every position of ``st`` (NaN where not
@@ -329,8 +329,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             methods[i] = stats.method
             if good:
                 ok[i] = True
-                if not hq:
-                    det = self._det(st1, drive.u[i : i + 1], q, Ki)
+                if not hq:  # (the next position compares its sign: none after the last)
+                    det = self._det(st1, drive.u[i : i + 1], q, Ki) if i + 1 < n else 0.0
                 self.set_q(st, i, q)
                 last_good, last_det = q, det
                 hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]

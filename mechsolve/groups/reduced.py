@@ -532,6 +532,32 @@ def _solve_small(J: list, f: list) -> list | None:
     ]
 
 
+def _det_small(J: np.ndarray) -> float:
+    """``det J`` of one small matrix, in floats up to 4 x 4 (Laplace's expansion, as
+    :func:`_solve4`; a LAPACK call costs ~20 us there), by LAPACK beyond."""
+    n = J.shape[0]
+    if n > 4:
+        return float(np.linalg.det(J))
+    a = J.tolist()
+    if n == 1:
+        return a[0][0]
+    if n == 2:
+        return a[0][0] * a[1][1] - a[0][1] * a[1][0]
+    if n == 3:
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+        return (
+            a00 * (a11 * a22 - a12 * a21)
+            - a01 * (a10 * a22 - a12 * a20)
+            + a02 * (a10 * a21 - a11 * a20)
+        )
+    (a00, a01, a02, a03), (a10, a11, a12, a13), (a20, a21, a22, a23), (a30, a31, a32, a33) = a
+    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
+    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
+    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
+    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
+    return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+
+
 def _solve4(J: list, f: list) -> list | None:
     """:func:`_solve_small` for four unknowns by the adjugate, from the 2 x 2 minors of
     the first two rows and of the last two (Laplace's expansion): straight-line
@@ -673,9 +699,9 @@ class _StackedLU:
         self.n, self.N = n, N
         self.entries = A
         # the row order: partial pivoting on |A| summed over three sample positions
-        pick = np.array([0, N // 2, N - 1])
-        s = [[0.0 if a is None else float(np.abs(a[pick]).sum()) for a in row] for row in A]
-        s = [[v if math.isfinite(v) else 0.0 for v in row] for row in s]
+        m = N // 2  # (scalars: a NumPy call per entry would cost more than the order)
+        s = [[0.0 if a is None else abs(a[0]) + abs(a[m]) + abs(a[-1]) for a in row] for row in A]
+        s = [[float(v) if math.isfinite(v) else 0.0 for v in row] for row in s]
         rows = list(range(n))
         for k in range(n):
             p = max(range(k, n), key=lambda i: abs(s[rows[i]][k]))
