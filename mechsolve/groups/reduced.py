@@ -158,9 +158,14 @@ class _Eqs:
         """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
         if self.nb == 1:
             return self.M2[0, 0] * C[:, 0] - self.M1[0, 0] * S[:, 0] + self.M3[0, 0]
-        if self.nb == 2:
-            J = self.jacobian(C, S)
-            return J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+        if self.nb == 2:  # from the entries: no (N, 2, 2) array
+            (a, b), (c, d) = self.entries(C, S)
+            if a is None or d is None:
+                return -(b * c) if b is not None and c is not None else np.zeros(C.shape[0])
+            det = a * d
+            if b is not None and c is not None:
+                det -= b * c
+            return det
         if self.nb <= FLOATS_UP_TO:
             return _lu_det(self.lu(C, S))
         return np.linalg.det(self.jacobian(C, S))
