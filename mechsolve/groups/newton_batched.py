@@ -10,7 +10,7 @@ import numpy as np
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.reduced import FLOATS_UP_TO, _lu_solve, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
 
 class BatchedSweep:
@@ -224,7 +224,7 @@ class BatchedSweep:
                 dq = sub.step_small(C, S, f)
             else:
                 try:  # by elimination over the positions (LAPACK where it must)
-                    if sub.nb <= FLOATS_UP_TO:
+                    if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
                         dq = _lu_solve(sub.lu(C, S), -f)
                     else:
                         Jk = sub.jacobian(C, S, out=J[: t.shape[0]])

@@ -166,7 +166,7 @@ class _Eqs:
             if b is not None and c is not None:
                 det -= b * c
             return det
-        if self.nb <= FLOATS_UP_TO:
+        if self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
             return _lu_det(self.lu(C, S))
         return np.linalg.det(self.jacobian(C, S))
 
@@ -201,7 +201,7 @@ class _Eqs:
     def inverse(self, C, S) -> np.ndarray:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
-        if 2 < self.nb <= FLOATS_UP_TO:
+        if 2 < self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
             return _lu_inverse(self.lu(C, S))
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
@@ -690,6 +690,7 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
 # as sparse LU codes use), or is zero, or not finite, is solved by LAPACK instead.
 
 THRESHOLD = 0.1  # a pivot at least this fraction of its column's largest entry below it
+STACKED_MIN = 32  # fewer positions: LAPACK (its per-matrix cost is then below n^3 / 3 calls)
 
 
 class _StackedLU:
