@@ -158,3 +158,38 @@ def test_one_small_determinant_in_floats_is_lapacks(n):
         J = rng.standard_normal((n, n))
         assert _det_small(J) == pytest.approx(float(np.linalg.det(J)), rel=1e-12, abs=1e-14)
     assert _det_small(np.ones((n, n))) == pytest.approx(0.0, abs=1e-15) or n == 1
+
+
+@pytest.mark.parametrize("method", ["split-newton", "newton"])
+def test_one_position_rates_in_floats_are_nortons(method, monkeypatch):
+    """One position next to a solved sweep (its rates in plain floats, with a driver
+    inside the group for ``newton``) against Norton's closed form of the same four-bar:
+    angles, angular velocities and accelerations of the coupler and the rocker."""
+    import mechsolve as ms
+    from mechsolve.core.sweep import Analysis
+    from mechsolve.groups.newton_rates import NewtonRates
+    from mechsolve_bench import _sol_fourbar, fourbar_yaml
+    from mechsolve_bench import references as R
+
+    n = 360
+    an = Analysis(ms.loads(fourbar_yaml(n)), method)
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0)
+    start = an.assemble(u0)
+    sol = an.solve(u, start=start)
+    taken = []
+    one = NewtonRates._angle_rates_one
+    monkeypatch.setattr(
+        NewtonRates, "_angle_rates_one", lambda g, *a: taken.append(one(g, *a)) or taken[-1]
+    )
+    th2 = np.arange(n) * 2 * np.pi / n
+    for i in (3, 91, 200, 331):
+        s1 = an.solve(u[i : i + 1], start=start, near=(sol, i - 1))
+        got = _sol_fourbar(s1)
+        want = R.fourbar_textbook(th2[i : i + 1])
+        for k in range(6):
+            d = got[k] - want[k]
+            if k < 2:
+                d = (d + np.pi) % (2 * np.pi) - np.pi
+            assert abs(float(d[0])) <= 1e-10 * max(1.0, abs(float(want[k][0])))
+    assert taken and all(taken)

@@ -486,6 +486,13 @@ class _Angles(_Eqs):
             ys.append(py)
         return xs, ys
 
+    def wr_list(self) -> list:
+        """:attr:`Wr` as lists of floats (the frames' rates at one position)."""
+        wr = getattr(self, "_wr_list", None)
+        if wr is None:
+            wr = self._wr_list = self.Wr.tolist()
+        return wr
+
     def accel_terms(self, C, S, wd2) -> np.ndarray:
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
