@@ -58,11 +58,17 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
     st, u = ctx.st, ctx.u
     if g.m != g.n or st.n < 2:
         return []  # a redundant block has no determinant: its rank tells, not its sign
-    J = g.jacobian(st)
-    good = ok & np.all(np.isfinite(J), axis=(1, 2))
-    det = np.full(st.n, np.nan)
-    if good.any():
-        det[good] = np.linalg.det(J[good])
+    J = None
+    if g.red is not None:  # the free angles' Jacobian: the same sign changes (g._det)
+        if g.red.sub.nb == 0:
+            return []  # every angle fixed by a driver: a constant block
+        det, good = g.red_dets(st, ok)
+    else:
+        J = g.jacobian(st)
+        good = ok & np.all(np.isfinite(J), axis=(1, 2))
+        det = np.full(st.n, np.nan)
+        if good.any():
+            det[good] = np.linalg.det(J[good])
     sign = np.sign(det)
     cross = np.flatnonzero(good[:-1] & good[1:] & (sign[:-1] * sign[1:] < 0))
     # (not crossed continuously: not a bifurcation)
@@ -71,7 +77,7 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
         return []
     ends = np.unique(np.r_[cross, cross + 1])
     singular = np.zeros(st.n, bool)
-    singular[ends] = rcond(J[ends]) <= SINGULAR_RCOND
+    singular[ends] = rcond(g.jacobian(st.take(ends)) if J is None else J[ends]) <= SINGULAR_RCOND
     events: list[Event] = []
     seen: set[int] = set()
     for a in cross.tolist():
@@ -102,8 +108,7 @@ def _crossing(gi: int, g: NewtonGroup, ctx: _Context, a: int, det: np.ndarray) -
         q, stats = g._solve_one(st1, np.array([x]), q0 + t * (q1 - q0))
         if not stats.converged:
             raise ValueError("the group does not close there")
-        g.set_q(st1, 0, q)
-        return float(np.linalg.det(g.jacobian(st1)[0]))
+        return g._det(st1, np.array([x]), q)  # as the samples' (see _bifurcations)
 
     try:
         lo, hi = (u0, u1) if u0 < u1 else (u1, u0)

@@ -18,7 +18,7 @@ from mechsolve.groups.base import Drive, Group
 from mechsolve.groups.newton_batched import BatchedSweep
 from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extrapolate
 from mechsolve.groups.newton_rates import NewtonRates
-from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _det_small, _rowmax_abs
 
 MAX_GAPS = 8  # a sweep starts again past at most this many breaks, then stops
 DET_ROUNDING = 1e-12  # a Hadamard ratio below this is a singular group's rounding
@@ -174,8 +174,29 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
             J = fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]
         with np.errstate(all="ignore"):
-            d = float(np.linalg.det(J) / np.prod(np.linalg.norm(J, axis=1)))
+            det = _det_small(J) if self.red is not None else np.linalg.det(J)
+            d = float(det / np.prod(np.linalg.norm(J, axis=1)))
         return d if np.isfinite(d) else 0.0
+
+    def red_dets(self, st: State, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A revolute group's :meth:`_det` at every position of ``st`` (NaN where not
+        ``ok`` or not finite), and where it is finite: the determinant of its free angles'
+        Jacobian, which differs from that of its block of Phi_q by a constant factor (the
+        Schur complement of a constant unimodular block, bordered by the drivers' rows
+        of +-1: see :class:`~mechsolve.groups.reduced._Angles`), so that it changes sign
+        where that one does, at a fraction of its cost."""
+        red = self.red
+        sub = red.sub
+        bodies = [self.bodies[k] for k in red.free.tolist()]
+        C, S = st.c[bodies].T, st.s[bodies].T
+        det = np.full(st.n, np.nan)
+        good = ok & np.isfinite(_rowmax_abs(C)) & np.isfinite(_rowmax_abs(S))
+        if good.all():
+            det = sub.dets(C, S)
+        elif good.any():
+            det[good] = sub.dets(C[good], S[good])
+        good &= np.isfinite(det)
+        return det, good
 
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
         """Place the group's links at all positions of ``st`` from their angles (N, n)."""
@@ -317,8 +338,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             methods[i] = stats.method
             if good:
                 ok[i] = True
-                if not hq:
-                    det = self._det(st1, drive.u[i : i + 1], q, Ki)
+                if not hq:  # (the next position compares its sign: none after the last)
+                    det = self._det(st1, drive.u[i : i + 1], q, Ki) if i + 1 < n else 0.0
                 self.set_q(st, i, q)
                 last_good, last_det = q, det
                 hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]

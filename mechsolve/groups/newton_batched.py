@@ -10,7 +10,7 @@ import numpy as np
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.reduced import FLOATS_UP_TO, _rowmax_abs
+from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
 
 class BatchedSweep:
@@ -202,6 +202,7 @@ class BatchedSweep:
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
+        Cf = Sf = None  # cos and sin of th at every position, turned with its small steps
         for _ in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
@@ -211,15 +212,23 @@ class BatchedSweep:
             else:
                 idx = np.flatnonzero(todo)
                 t, Kk, lastk = th[idx], Kr[idx], last[idx]
-            C, S = np.cos(t), np.sin(t)
+            if Cf is not None:
+                C, S = (Cf, Sf) if idx is None else (Cf[idx], Sf[idx])
+            else:
+                C, S = np.cos(t), np.sin(t)
+                if idx is None:
+                    Cf, Sf = C, S
             f = sub.residual(t, C, S, Kk)
             r = _rowmax_abs(f)
             if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
                 dq = sub.step_small(C, S, f)
             else:
-                Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
-                try:
-                    dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
+                try:  # by elimination over the positions (LAPACK where it must)
+                    if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
+                        dq = _lu_solve(sub.lu(C, S), -f)
+                    else:
+                        Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
+                        dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
                 except np.linalg.LinAlgError:
                     return None
             step = _rowmax_abs(dq)
@@ -229,12 +238,20 @@ class BatchedSweep:
             take = ~done | (step <= tol)
             if idx is None:
                 take &= todo
-                th += np.where(take[:, None], dq, 0.0)
+                D = np.where(take[:, None], dq, 0.0)
+                th += D
+                if Cf is not None:
+                    _rotate(Cf, Sf, D, th)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
             else:
-                th[idx[take]] += dq[take]
+                it, D = idx[take], dq[take]
+                th[it] += D
+                if Cf is not None:
+                    Ci, Si = Cf[it], Sf[it]
+                    _rotate(Ci, Si, D, th[it])
+                    Cf[it], Sf[it] = Ci, Si
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
@@ -256,16 +273,21 @@ class BatchedSweep:
         K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
+        cs = None  # cos and sin of x0 and x1 everywhere, turned with their small steps
         for _ in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
             if 2 * count >= n:  # most positions still iterate: whole arrays, masked
                 idx, t0, t1, k0, k1, lastk = None, x0, x1, K0, K1, last
+                if cs is None:
+                    cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
+                csk = cs
             else:
                 idx = np.flatnonzero(todo)
                 t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
-            r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1)
+                csk = None if cs is None else [a[idx] for a in cs]
+            r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1, csk)
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken
             small = step <= tol
@@ -273,15 +295,24 @@ class BatchedSweep:
             take = ~done | small
             if idx is None:
                 take &= todo
-                x0 += np.where(take, dq0, 0.0)
-                x1 += np.where(take, dq1, 0.0)
+                D0, D1 = np.where(take, dq0, 0.0), np.where(take, dq1, 0.0)
+                x0 += D0
+                x1 += D1
+                _rotate(cs[0], cs[1], D0, x0)
+                _rotate(cs[2], cs[3], D1, x1)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
             else:
-                it = idx[take]
-                x0[it] += dq0[take]
-                x1[it] += dq1[take]
+                it, D0, D1 = idx[take], dq0[take], dq1[take]
+                x0[it] += D0
+                x1[it] += D1
+                if cs is not None:
+                    c = [a[take] for a in csk]
+                    _rotate(c[0], c[1], D0, x0[it])
+                    _rotate(c[2], c[3], D1, x1[it])
+                    for a, b in zip(cs, c):
+                        a[it] = b
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
@@ -334,15 +365,37 @@ class BatchedSweep:
         self._set_q_rows(st, q)
 
 
-def _newton_step2(rows, nd, t0, t1, k0, k1):
+def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None:
+    """Turn the cosines ``C`` and sines ``S`` of angles by the steps ``D`` in place, to
+    those of ``th`` (the angles after the steps), by the addition formulas with cos D
+    and sin D from their Taylor series to the 5th order (exact to rounding while |D| <
+    1e-3: the rest is below D^6 / 720), instead of evaluating cos and sin again
+    (several times the cost of the arithmetic); where a step is larger (or not finite),
+    cos and sin of ``th`` there."""
+    d2 = D * D
+    cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
+    sd = D * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
+    c = C * cd
+    c -= S * sd
+    S *= cd
+    S += C * sd
+    C[...] = c
+    big = ~(np.abs(D) < 1e-3)
+    if big.any():
+        C[big] = np.cos(th[big])
+        S[big] = np.sin(th[big])
+
+
+def _newton_step2(rows, nd, t0, t1, k0, k1, cs=None):
     """One Newton step of the two-angle loop at the angles ``t0``, ``t1`` (1-D arrays):
     the residual's size, the step (by the adjugate of the 2 x 2 Jacobian) and its size
     (NaN where the Jacobian is exactly singular). ``rows``: the loop's coefficients
     ((a, b), (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the
-    constant terms. In-place arithmetic: no (N, 2) products or reductions."""
+    constant terms; ``cs``: the angles' cosines and sines when known. In-place
+    arithmetic: no (N, 2) products or reductions."""
     ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
     cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
-    C0, S0, C1, S1 = cos(t0), sin(t0), cos(t1), sin(t1)
+    C0, S0, C1, S1 = (cos(t0), sin(t0), cos(t1), sin(t1)) if cs is None else cs
     f0 = k0 + a1 * C0
     f0 += a2 * S0
     f0 += b1 * C1

@@ -9,6 +9,7 @@ import numpy as np
 
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
+from mechsolve.groups.reduced import FLOATS_UP_TO, _solve_small
 
 
 class NewtonRates:
@@ -92,6 +93,9 @@ class NewtonRates:
     def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
         red = self.red
         nb = red.nb
+        if st.n == 1 and 0 < red.sub.nb and nb <= FLOATS_UP_TO:
+            if self._angle_rates_one(st, drive, order):
+                return
         K, Px, Py = red.known(st, order)  # fresh arrays: the right-hand side in place
         if red.nd:  # the driver values' rates off the drivers' equations
             K[:, 2 * red.ne :] -= (drive.ud if order == 1 else drive.udd)[:, None]
@@ -120,6 +124,53 @@ class NewtonRates:
         vx, vy = Px + v[:, :nb], Py + v[:, nb:]
         for b, k in self.col.items():
             out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
+
+    def _angle_rates_one(self, st: State, drive: Drive, order: int) -> bool:
+        """:meth:`_angle_rates` at one position in Python floats (a NumPy call on
+        one-element arrays costs more than its arithmetic): ``F_theta w = rhs`` by
+        :func:`~mechsolve.groups.reduced._solve_small`, the frames' rates as there. False
+        (nothing written) where ``F_theta`` is exactly singular or a rate is not finite:
+        the batched code then takes the position (its least squares)."""
+        red = self.red
+        nb, ne = red.nb, red.ne
+        K, Px, Py = red.known(st, order)
+        rhs = [-v for v in K[0].tolist()]
+        if red.nd:  # the driver values' rates off the drivers' equations
+            dv = float((drive.ud if order == 1 else drive.udd)[0])
+            for e in range(2 * ne, nb):
+                rhs[e] += dv
+        bodies = self.bodies
+        c = st.c[bodies, 0].tolist()
+        s = st.s[bodies, 0].tolist()
+        J = [
+            [m2 * c[k] - m1 * s[k] + m3 for k, (m1, m2, m3) in enumerate(row)] for row in red._rows
+        ]
+        if order == 2:
+            wd = st.w[bodies, 0].tolist()
+            w2 = [v * v for v in wd]
+            for e in range(2 * ne):  # the closing joints' centripetal terms
+                rhs[e] += sum(
+                    (m1 * c[k] + m2 * s[k]) * w2[k] for k, (m1, m2, _) in enumerate(red._rows[e])
+                )
+        w = _solve_small(J, [-v for v in rhs])
+        if w is None or not all(math.isfinite(v) for v in w):
+            return False
+        P = [sk * wk for sk, wk in zip(s, w)]
+        Q = [ck * wk for ck, wk in zip(c, w)]
+        if order == 2:
+            P = [p + ck * v for p, ck, v in zip(P, c, w2)]
+            Q = [q - sk * v for q, sk, v in zip(Q, s, w2)]
+        out = (st.vx, st.vy, st.w) if order == 1 else (st.ax, st.ay, st.al)
+        Wr = red.wr_list()
+        px, py = Px[0].tolist(), Py[0].tolist()
+        for b, k in self.col.items():
+            vx, vy = px[k], py[k]
+            for j in range(nb):
+                pj, qj = P[j], Q[j]
+                vx += pj * Wr[j][k] + qj * Wr[nb + j][k]
+                vy += pj * Wr[j][nb + k] + qj * Wr[nb + j][nb + k]
+            out[0][b, 0], out[1][b, 0], out[2][b, 0] = vx, vy, w[k]
+        return True
 
     def rcond_bound(self, st: State) -> np.ndarray | None:
         """A lower bound of :func:`mechsolve.core.conditioning.rcond` of the group's block of

@@ -23,10 +23,16 @@ class _Eqs:
         self.M1, self.M2 = M[:, :nb].copy(), M[:, nb : 2 * nb].copy()
         self.M3 = M[:, 2 * nb :].copy()
         self.nd = bool(np.any(self.M3))
+        # which entries of F_theta can be nonzero (the stacked elimination skips others)
+        self.nzm = (self.M1 != 0) | (self.M2 != 0) | (self.M3 != 0)
         # rows of (M1, M2, M3) as Python floats, for one small position at a time
         self._rows = [
             tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
             for e in range(nb)
+        ]
+        self._terms = [
+            [(k, m1, m2, m3) for k, (m1, m2, m3) in enumerate(row) if m1 or m2 or m3]
+            for row in self._rows
         ]
 
     def newton_floats(
@@ -80,6 +86,7 @@ class _Eqs:
                 x0, x1 = x0 + dx0, x1 + dx1
                 last = step
             return [x0, x1], r <= atol, max_iterations, r, max_iterations
+        terms = self._terms
         for it in range(max_iterations + 1):
             c = [cos(v) for v in x]
             s = [sin(v) for v in x]
@@ -87,10 +94,11 @@ class _Eqs:
             J = []
             for e in range(nb):
                 fe = K[e]
-                Je = []
-                for k, (m1, m2, m3) in enumerate(rows[e]):
-                    fe += m1 * c[k] + m2 * s[k] + m3 * x[k]
-                    Je.append(m2 * c[k] - m1 * s[k] + m3)
+                Je = [0.0] * nb
+                for k, m1, m2, m3 in terms[e]:  # the nonzero ones only
+                    ck, sk = c[k], s[k]
+                    fe += m1 * ck + m2 * sk + m3 * x[k]
+                    Je[k] = m2 * ck - m1 * sk + m3
                 f.append(fe)
                 J.append(Je)
             r = max(abs(v) for v in f)
@@ -112,6 +120,55 @@ class _Eqs:
             x = [a + b for a, b in zip(x, dx)]
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
+
+    def entries(self, C, S) -> list:
+        """``F_theta``'s entries as :class:`_StackedLU` takes them: 1-D arrays over the
+        positions (None where always zero), from the angles' cosines and sines ``C``,
+        ``S`` (N, n): no (N, n, n) array, whose broadcast products over a last axis of
+        n cost several times more than the n^2 entries' arithmetic."""
+        out = []
+        for row in self._rows:
+            r = []
+            for k, (m1, m2, m3) in enumerate(row):
+                if not (m1 or m2 or m3):
+                    r.append(None)
+                    continue
+                c, s = C[:, k], S[:, k]
+                if m1 and m2:
+                    a = m2 * c
+                    a -= m1 * s
+                elif m2:
+                    a = m2 * c
+                elif m1:
+                    a = -m1 * s
+                else:
+                    a = np.zeros(C.shape[0])
+                if m3:
+                    a += m3
+                r.append(a)
+            out.append(r)
+        return out
+
+    def lu(self, C, S) -> _StackedLU:
+        """:class:`_StackedLU` of ``F_theta`` at the angles whose cosines and sines are
+        ``C``, ``S`` (N, n)."""
+        return _StackedLU(self.entries(C, S), C.shape[0])
+
+    def dets(self, C, S) -> np.ndarray:
+        """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
+        if self.nb == 1:
+            return self.M2[0, 0] * C[:, 0] - self.M1[0, 0] * S[:, 0] + self.M3[0, 0]
+        if self.nb == 2:  # from the entries: no (N, 2, 2) array
+            (a, b), (c, d) = self.entries(C, S)
+            if a is None or d is None:
+                return -(b * c) if b is not None and c is not None else np.zeros(C.shape[0])
+            det = a * d
+            if b is not None and c is not None:
+                det -= b * c
+            return det
+        if self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
+            return _lu_det(self.lu(C, S))
+        return np.linalg.det(self.jacobian(C, S))
 
     def step_small(self, C, S, f) -> np.ndarray:
         """The Newton step ``-F_theta^-1 F`` (N, n) for one or two angles, elementwise
@@ -144,6 +201,8 @@ class _Eqs:
     def inverse(self, C, S) -> np.ndarray:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
+        if 2 < self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
+            return _lu_inverse(self.lu(C, S))
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
         (a1, b1), (c1, d1) = self.M1.tolist()
@@ -427,6 +486,13 @@ class _Angles(_Eqs):
             ys.append(py)
         return xs, ys
 
+    def wr_list(self) -> list:
+        """:attr:`Wr` as lists of floats (the frames' rates at one position)."""
+        wr = getattr(self, "_wr_list", None)
+        if wr is None:
+            wr = self._wr_list = self.Wr.tolist()
+        return wr
+
     def accel_terms(self, C, S, wd2) -> np.ndarray:
         """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
         closing joints' second derivative (zero for drivers)."""
@@ -446,11 +512,13 @@ FLOATS_UP_TO = 6  # groups of up to this many angles are solved position by posi
 
 
 def _solve_small(J: list, f: list) -> list | None:
-    """``J dx = -f`` in floats: 1 to 3 unknowns by Cramer's rule, more (up to
-    :data:`FLOATS_UP_TO`) by Gaussian elimination with partial pivoting, as LAPACK's
+    """``J dx = -f`` in floats: 1 to 4 unknowns by Cramer's rule (:func:`_solve4`), more
+    (up to :data:`FLOATS_UP_TO`) by Gaussian elimination with partial pivoting, as LAPACK's
     ``gesv`` (a NumPy call costs ~10 us there, more than the arithmetic); None when
     ``J`` is exactly singular."""
     n = len(f)
+    if n == 4:
+        return _solve4(J, f)
     if n > 3:
         return _gauss_small(J, f)
     if n == 1:
@@ -473,6 +541,81 @@ def _solve_small(J: list, f: list) -> list | None:
         -(A * f0 + D * f1 + H * f2) / det,
         -(B * f0 + E * f1 + I * f2) / det,
         -(C * f0 + G * f1 + L * f2) / det,
+    ]
+
+
+def _det_small(J: np.ndarray) -> float:
+    """``det J`` of one small matrix, in floats up to 4 x 4 (Laplace's expansion, as
+    :func:`_solve4`; a LAPACK call costs ~20 us there), by LAPACK beyond."""
+    n = J.shape[0]
+    if n > 4:
+        return float(np.linalg.det(J))
+    a = J.tolist()
+    if n == 1:
+        return a[0][0]
+    if n == 2:
+        return a[0][0] * a[1][1] - a[0][1] * a[1][0]
+    if n == 3:
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+        return (
+            a00 * (a11 * a22 - a12 * a21)
+            - a01 * (a10 * a22 - a12 * a20)
+            + a02 * (a10 * a21 - a11 * a20)
+        )
+    (a00, a01, a02, a03), (a10, a11, a12, a13), (a20, a21, a22, a23), (a30, a31, a32, a33) = a
+    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
+    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
+    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
+    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
+    return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+
+
+def _solve4(J: list, f: list) -> list | None:
+    """:func:`_solve_small` for four unknowns by the adjugate, from the 2 x 2 minors of
+    the first two rows and of the last two (Laplace's expansion): straight-line
+    arithmetic, a third of the elimination's time in Python. A Newton step's accuracy
+    only decides how fast it converges (the residual decides when), so Cramer's rule,
+    less stable than pivoting near a singular matrix, is enough here. None when the
+    determinant is exactly zero."""
+    (a00, a01, a02, a03), (a10, a11, a12, a13), (a20, a21, a22, a23), (a30, a31, a32, a33) = J
+    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
+    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
+    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
+    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    if det == 0:
+        return None
+    f0, f1, f2, f3 = f
+    r = -1.0 / det
+    return [
+        r
+        * (
+            (a11 * c5 - a12 * c4 + a13 * c3) * f0
+            + (-a01 * c5 + a02 * c4 - a03 * c3) * f1
+            + (a31 * s5 - a32 * s4 + a33 * s3) * f2
+            + (-a21 * s5 + a22 * s4 - a23 * s3) * f3
+        ),
+        r
+        * (
+            (-a10 * c5 + a12 * c2 - a13 * c1) * f0
+            + (a00 * c5 - a02 * c2 + a03 * c1) * f1
+            + (-a30 * s5 + a32 * s2 - a33 * s1) * f2
+            + (a20 * s5 - a22 * s2 + a23 * s1) * f3
+        ),
+        r
+        * (
+            (a10 * c4 - a11 * c2 + a13 * c0) * f0
+            + (-a00 * c4 + a01 * c2 - a03 * c0) * f1
+            + (a30 * s4 - a31 * s2 + a33 * s0) * f2
+            + (-a20 * s4 + a21 * s2 - a23 * s0) * f3
+        ),
+        r
+        * (
+            (-a10 * c3 + a11 * c1 - a12 * c0) * f0
+            + (a00 * c3 - a01 * c1 + a02 * c0) * f1
+            + (-a30 * s3 + a31 * s1 - a32 * s0) * f2
+            + (a20 * s3 - a21 * s1 + a22 * s0) * f3
+        ),
     ]
 
 
@@ -541,3 +684,193 @@ def _batch_inverse(J: np.ndarray) -> np.ndarray:
         if idx.size:
             out[idx] = np.linalg.inv(J[idx])
     return out
+
+
+# -- small matrices stacked over positions: elimination on 1-D arrays -------------------
+#
+# np.linalg.solve / inv on (N, n, n) with n = 3..6 spend most of their time per matrix
+# (LAPACK is called once per position: ~0.4 us a 4 x 4 solve, ~0.8 us an inverse);
+# Gaussian elimination written over the positions, one 1-D array per entry, costs about
+# n^3 / 3 array operations in all: 5-10x less at thousands of positions. The row order
+# is chosen once per call by partial pivoting on a few sample positions; a position
+# whose pivot is not within THRESHOLD of the largest entry below it (threshold pivoting,
+# as sparse LU codes use), or is zero, or not finite, is solved by LAPACK instead.
+
+THRESHOLD = 0.1  # a pivot at least this fraction of its column's largest entry below it
+STACKED_MIN = 32  # fewer positions: LAPACK (its per-matrix cost is then below n^3 / 3 calls)
+
+
+class _StackedLU:
+    """LU factors of N small matrices (n x n), given by their entries ``A[i][j]``: 1-D
+    arrays over the positions, or None where an entry is zero at every position (see
+    :func:`_entries_of`). ``bad``: the positions LAPACK must take (see above); ``ok``:
+    False when the row order has a structural zero pivot (then every position is bad).
+    :meth:`matrices` gives the stacked matrices back at some positions (for LAPACK)."""
+
+    def __init__(self, A: list, N: int) -> None:
+        n = len(A)
+        self.n, self.N = n, N
+        self.entries = A
+        # the row order: partial pivoting on |A| summed over three sample positions
+        m = N // 2  # (scalars: a NumPy call per entry would cost more than the order)
+        s = [[0.0 if a is None else abs(a[0]) + abs(a[m]) + abs(a[-1]) for a in row] for row in A]
+        s = [[float(v) if math.isfinite(v) else 0.0 for v in row] for row in s]
+        rows = list(range(n))
+        for k in range(n):
+            p = max(range(k, n), key=lambda i: abs(s[rows[i]][k]))
+            rows[k], rows[p] = rows[p], rows[k]
+            pr = s[rows[k]]
+            if pr[k] == 0:
+                continue
+            for i in range(k + 1, n):
+                r = s[rows[i]]
+                m = r[k] / pr[k]
+                if m:
+                    s[rows[i]] = [a - m * b if c > k else a for c, (a, b) in enumerate(zip(r, pr))]
+        self.rows = rows
+        A = [list(A[r]) for r in rows]
+        L: list[list] = [[None] * n for _ in range(n)]
+        bad = np.zeros(N, bool)
+        inv_piv = []
+        self.ok = True
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for k in range(n):
+                piv = A[k][k]
+                if piv is None:
+                    self.ok = False
+                    bad[:] = True
+                    return
+                apiv = np.abs(piv)
+                bad |= ~(apiv > 0)
+                ip = 1.0 / piv
+                inv_piv.append(ip)
+                rk = A[k]
+                for i in range(k + 1, n):
+                    ri = A[i]
+                    a = ri[k]
+                    if a is None:
+                        continue
+                    bad |= ~(apiv >= THRESHOLD * np.abs(a))
+                    m = a * ip
+                    L[i][k] = m
+                    for j in range(k + 1, n):
+                        b = rk[j]
+                        if b is None:
+                            continue
+                        ri[j] = -(m * b) if ri[j] is None else ri[j] - m * b
+        self.U, self.L, self.inv_piv, self.bad = A, L, inv_piv, bad
+
+    def matrices(self, idx) -> np.ndarray:
+        """The matrices (k, n, n) at the positions ``idx``."""
+        n = self.n
+        J = np.zeros((np.count_nonzero(idx) if idx.dtype == bool else len(idx), n, n))
+        for i, row in enumerate(self.entries):
+            for j, a in enumerate(row):
+                if a is not None:
+                    J[:, i, j] = a[idx]
+        return J
+
+    def solve_cols(self, b: list) -> list:
+        """The solution's columns (n 1-D arrays) of ``J x = b`` for ``b`` given as its n
+        columns (1-D arrays, or None for zero); not valid at :attr:`bad` positions."""
+        n, rows, L, U = self.n, self.rows, self.L, self.U
+        y = [b[r] for r in rows]
+        for i in range(1, n):
+            acc = y[i]
+            for k in range(i):
+                m, yk = L[i][k], y[k]
+                if m is None or yk is None:
+                    continue
+                acc = -(m * yk) if acc is None else acc - m * yk
+            y[i] = acc
+        x: list = [None] * n
+        for i in range(n - 1, -1, -1):
+            acc = y[i]
+            for j in range(i + 1, n):
+                u, xj = U[i][j], x[j]
+                if u is None or xj is None:
+                    continue
+                acc = -(u * xj) if acc is None else acc - u * xj
+            x[i] = None if acc is None else acc * self.inv_piv[i]
+        return [np.zeros(self.N) if v is None else v for v in x]
+
+    def det(self) -> np.ndarray:
+        """The determinants (not valid at :attr:`bad` positions)."""
+        d = np.prod(np.array([self.U[k][k] for k in range(self.n)]), axis=0)
+        # the row permutation's sign: the parity of its inversions
+        r = self.rows
+        inv = sum(1 for i in range(self.n) for j in range(i + 1, self.n) if r[i] > r[j])
+        return -d if inv % 2 else d
+
+
+def _entries_of(J: np.ndarray, nz: np.ndarray | None = None) -> list:
+    """The entries of the stacked matrices ``J`` (N, n, n) as :class:`_StackedLU` takes
+    them (None where ``nz`` says an entry is always zero)."""
+    n = J.shape[1]
+    return [
+        [np.ascontiguousarray(J[:, i, j]) if nz is None or nz[i, j] else None for j in range(n)]
+        for i in range(n)
+    ]
+
+
+def _lu_solve(lu: _StackedLU, b: np.ndarray) -> np.ndarray:
+    """``J x = b`` (N, n) from the factors (LAPACK at the positions they cannot take; its
+    LinAlgError for an exactly singular one, as np.linalg.solve raises it)."""
+    out = np.empty(b.shape)
+    if lu.ok:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            x = lu.solve_cols([b[:, j] for j in range(b.shape[1])])
+        for j, v in enumerate(x):
+            out[:, j] = v
+    bad = lu.bad
+    if bad.any():
+        out[bad] = np.linalg.solve(lu.matrices(bad), b[bad][..., None])[..., 0]
+    return out
+
+
+def _lu_inverse(lu: _StackedLU) -> np.ndarray:
+    """The inverses (N, n, n) from the factors, as :func:`_batch_inverse` gives them
+    (which takes the positions the factors cannot)."""
+    N, n = lu.N, lu.n
+    out = np.empty((N, n, n))
+    if lu.ok:
+        one = np.ones(N)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for c in range(n):
+                x = lu.solve_cols([one if j == c else None for j in range(n)])
+                for i, v in enumerate(x):
+                    out[:, i, c] = v
+    bad = lu.bad
+    if bad.any():
+        out[bad] = _batch_inverse(lu.matrices(bad))
+    if not np.isfinite(out).all():  # NaN in an entry: the whole inverse, as LAPACK's
+        out[~np.all(np.isfinite(out), axis=(1, 2))] = np.nan
+    return out
+
+
+def _lu_det(lu: _StackedLU) -> np.ndarray:
+    """The determinants from the factors (LAPACK at the positions they cannot take)."""
+    if not lu.ok:
+        return np.linalg.det(lu.matrices(np.arange(lu.N)))
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = lu.det()
+    bad = lu.bad
+    if bad.any():
+        d[bad] = np.linalg.det(lu.matrices(bad))
+    return d
+
+
+def _stacked_solve(J: np.ndarray, b: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.solve(J, b[..., None])[..., 0]`` for J (N, n, n), b (N, n), by
+    :class:`_StackedLU`."""
+    return _lu_solve(_StackedLU(_entries_of(J, nz), J.shape[0]), b)
+
+
+def _stacked_inverse(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """:func:`_batch_inverse` for 3 x 3 to 6 x 6 matrices by :class:`_StackedLU`."""
+    return _lu_inverse(_StackedLU(_entries_of(J, nz), J.shape[0]))
+
+
+def _stacked_det(J: np.ndarray, nz: np.ndarray | None = None) -> np.ndarray:
+    """``np.linalg.det(J)`` by :class:`_StackedLU`."""
+    return _lu_det(_StackedLU(_entries_of(J, nz), J.shape[0]))
