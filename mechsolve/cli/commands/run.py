@@ -16,10 +16,12 @@ from mechsolve.cli.kit import (
     FILE_ARG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     outdir_option,
     output_folder,
+    output_units,
     warn,
     writes_to,
     writing,
@@ -76,12 +78,15 @@ INCOMPLETE_INSTANTS = "some instants are not solved: the table says why"
     help="Run again whenever FILE is saved, printing what changed; Ctrl-C stops "
     '(needs watchfiles: pip install "mechsolve[watch]").',
 )
+@UNITS
 @QUIET
-def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, quiet) -> None:
+def run(
+    file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, units, quiet
+) -> None:
     """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt)
+    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt, units)
     writes_to(outdir)
     if watch:
         _watch(file, lambda: _run_job(*args), outdir=outdir)
@@ -93,7 +98,17 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, wat
 
 
 def _run_job(
-    file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet, fmt="png"
+    file: Path,
+    outdir: Path,
+    step,
+    variant,
+    no_plots,
+    method,
+    at,
+    junit,
+    quiet,
+    fmt="png",
+    units: str | None = None,
 ):
     """One run: solve, write, print; ``(exit code, results or None)``: 5 when a
     requirement failed, else 0 (with a warning on stderr when the results lack
@@ -105,6 +120,7 @@ def _run_job(
     # singular positions give inf and NaN on purpose; the summary reports them
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     st = api.parse_step(mech, step) if step is not None else None
     output_folder(outdir)
     n = api.positions(mech, st)
@@ -139,6 +155,7 @@ def _run_job(
                 step=st,
                 method=method,
                 progress=None if bar is None else bar.update,
+                units=shown,
             )
         finally:
             if bar is not None:
@@ -151,15 +168,15 @@ def _run_job(
         res = api.solve(mech, step=st, method=method)
         # the figures (extremes, limit positions, work) from the sweep the plots are
         # drawn from, so that the terminal, the plots and the requirements agree
-        text = res.summary(figures=api.for_plots(mech, res, method))
+        text = res.summary(figures=api.for_plots(mech, res, method), units=shown)
         failed = res.incomplete()
-        written = [res.to_csv(outdir / "results.csv")]
+        written = [res.to_csv(outdir / "results.csv", shown)]
     if not no_plots:
         from mechsolve.writers.plots import write_plots
 
         # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
         # the file's step
-        written += write_plots(api.for_plots(mech, res, method), outdir, fmt)
+        written += write_plots(api.for_plots(mech, res, method), outdir, fmt, shown)
     verdicts = _requirements(mech, res, junit, streamed=streamed)
     if not quiet:
         click.echo(text)

@@ -1,0 +1,192 @@
+"""Results in the file's units: a file written in mm and deg gets its CSV, summary and plots
+in mm and deg (mm/s, deg/s, N*mm...), ``--units SI`` the SI output, a units map its own.
+
+The conversions checked here are written out by hand (1 m = 1000 mm, 1 rad = 180/pi deg),
+independently of mechsolve's unit table; the geometry from the files' own numbers.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mechsolve import api
+from mechsolve.cli.main import main
+
+MECH = Path(__file__).resolve().parent.parent / "mechanisms"
+
+# (SI unit, unit in a file of mm and deg) -> factor, written out by hand
+BY_HAND = {
+    ("s", "s"): 1.0,
+    ("m", "mm"): 1000.0,
+    ("m/s", "mm/s"): 1000.0,
+    ("m/s^2", "mm/s^2"): 1000.0,
+    ("deg", "deg"): 1.0,
+    ("rad/s", "deg/s"): 180.0 / math.pi,
+    ("rad/s^2", "deg/s^2"): 180.0 / math.pi,
+    ("N", "N"): 1.0,
+    ("N*m", "N*mm"): 1000.0,
+    ("J", "J"): 1.0,
+    ("W", "W"): 1.0,
+    ("-", "-"): 1.0,
+}
+HEADER = re.compile(r"^(?P<name>[^\[]+?) \[(?P<unit>[^\]]+)\](?P<note>.*)$")
+
+
+def _run(tmp_path: Path, file: str, *extra: str, name: str = "out") -> tuple[int, str, Path]:
+    out = tmp_path / name
+    r = CliRunner().invoke(main, ["run", str(MECH / file), "-o", str(out), "--no-plots", *extra])
+    return r.exit_code, r.output, out / "results.csv"
+
+
+def _table(path: Path) -> tuple[list[str], list[list[str]]]:
+    with open(path, newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    return rows[0], rows[1:]
+
+
+def _split(header: str) -> tuple[str, str, str]:
+    m = HEADER.match(header)
+    assert m, f"column {header!r} names no unit"
+    return m["name"], m["unit"], m["note"]
+
+
+def _values(rows: list[list[str]], k: int) -> np.ndarray:
+    return np.array([float(r[k]) if r[k] != "" else np.nan for r in rows])
+
+
+@pytest.mark.parametrize("file", ["slider-crank.yaml", "fourbar.yaml"])
+def test_a_mm_deg_file_writes_every_column_in_mm_and_deg(tmp_path, file):
+    code, _, shown = _run(tmp_path, file, name="file")
+    assert code == 0
+    code, _, si = _run(tmp_path, file, "--units", "SI", name="si")
+    assert code == 0
+    h_file, rows_file = _table(shown)
+    h_si, rows_si = _table(si)
+    assert len(h_file) == len(h_si) and len(rows_file) == len(rows_si)
+    seen = set()
+    for k, (a, b) in enumerate(zip(h_file, h_si)):
+        if a in ("step", "status", "solver.method"):
+            assert a == b
+            assert [r[k] for r in rows_file] == [r[k] for r in rows_si]
+            continue
+        name_a, unit_a, note_a = _split(a)
+        name_b, unit_b, note_b = _split(b)
+        assert (name_a, note_a) == (name_b, note_b)
+        assert (unit_b, unit_a) in BY_HAND, f"{b} -> {a}: no conversion expected"
+        seen.add(unit_a)
+        x, y = _values(rows_file, k), _values(rows_si, k) * BY_HAND[(unit_b, unit_a)]
+        assert np.array_equal(np.isnan(x), np.isnan(y)), a
+        ok = ~np.isnan(x)
+        # both printed with 12 significant digits: up to 5e-12 apart each
+        assert np.allclose(x[ok], y[ok], rtol=1e-11, atol=0), a
+    # the file's units are there, not SI
+    assert {"mm", "mm/s", "mm/s^2", "deg", "deg/s", "deg/s^2"} <= seen
+    assert "m" not in seen and "rad/s" not in seen
+    if file == "slider-crank.yaml":
+        assert "N*mm" in seen
+
+
+def test_mm_columns_are_the_file_geometry(tmp_path):
+    """The crank pin A of the slider-crank (crank 50 mm) runs -50 .. 50 mm in its CSV; the
+    stroke of its piston is the offset slider-crank's closed form."""
+    code, _, path = _run(tmp_path, "slider-crank.yaml")
+    assert code == 0
+    h, rows = _table(path)
+    ax = _values(rows, h.index("A.x [mm]"))
+    assert np.nanmax(ax) == pytest.approx(50.0, rel=1e-12)
+    assert np.nanmin(ax) == pytest.approx(-50.0, rel=1e-12)
+    w = _values(rows, h.index("crank.omega [deg/s]"))
+    assert np.allclose(w, 1500 * 360 / 60, rtol=1e-12)  # 1500 rpm in deg/s
+
+
+def test_the_summary_is_in_the_file_units(tmp_path):
+    code, out, _ = _run(tmp_path, "slider-crank.yaml")
+    assert code == 0
+    assert "A: x -50 .. 50 mm, y -50 .. 50 mm" in out
+    # the stroke of an offset slider-crank: sqrt((l+r)^2 - e^2) - sqrt((l-r)^2 - e^2)
+    r, ln, e = 50.0, 200.0, 10.0
+    stroke = math.sqrt((ln + r) ** 2 - e**2) - math.sqrt((ln - r) ** 2 - e**2)
+    m = re.search(r"\(stroke ([0-9.]+) mm\)", out)
+    assert m and float(m.group(1)) == pytest.approx(stroke, abs=0.5e-3)
+    assert re.search(r"driving torque .* N·mm", out)
+    assert " m," not in out and "m/s^2" not in out
+
+
+def test_units_si_is_the_si_table(tmp_path):
+    """``--units SI`` writes what the Python API writes (SI, unconverted) byte for byte;
+    a file without ``units:`` writes it by default."""
+    code, _, si = _run(tmp_path, "slider-crank.yaml", "--units", "SI")
+    assert code == 0
+    ref = api.run(MECH / "slider-crank.yaml").to_csv(tmp_path / "api.csv")
+    assert si.read_bytes() == ref.read_bytes()
+    h, rows = _table(si)
+    assert "A.x [m]" in h and "crank.omega [rad/s]" in h and "input.torque [N*m]" in h
+    assert np.nanmax(_values(rows, h.index("A.x [m]"))) == pytest.approx(0.05, rel=1e-12)
+    # a file without units: the same with or without --units SI
+    src = MECH / "slider-crank.yaml"
+    bare = tmp_path / "bare.yaml"
+    text = src.read_text().replace("units: {length: mm, angle: deg}", "")
+    text = re.sub(r"\[(-?\d+), (-?\d+)\]", lambda m: f"[{m[1]} mm, {m[2]} mm]", text)
+    bare.write_text(text)
+    assert api.load(bare).output_units().is_si
+    a = CliRunner().invoke(main, ["run", str(bare), "-o", str(tmp_path / "a"), "--no-plots"])
+    b = CliRunner().invoke(
+        main, ["run", str(bare), "-o", str(tmp_path / "b"), "--no-plots", "--units", "SI"]
+    )
+    assert a.exit_code == 0 and b.exit_code == 0, a.output + b.output
+    assert (tmp_path / "a/results.csv").read_bytes() == (tmp_path / "b/results.csv").read_bytes()
+
+
+def test_a_units_map(tmp_path):
+    code, out, path = _run(
+        tmp_path, "slider-crank.yaml", "--units", "length=cm, force=kN, torque=kN*m"
+    )
+    assert code == 0, out
+    h, rows = _table(path)
+    _, _, si = _run(tmp_path, "slider-crank.yaml", "--units", "SI", name="si")
+    hs, rs = _table(si)
+    x = _values(rows, h.index("A.x [cm]"))
+    assert np.allclose(x, _values(rs, hs.index("A.x [m]")) * 100, rtol=1e-11)
+    t = _values(rows, h.index("input.torque [kN*m]"))
+    assert np.allclose(t, _values(rs, hs.index("input.torque [N*m]")) / 1000, rtol=1e-11)
+    assert "crank.omega [deg/s]" in h  # the file's angle unit stays
+    f = _values(rows, h.index("O(ground->crank).F [kN]"))
+    assert np.allclose(f, _values(rs, hs.index("O(ground->crank).F [N]")) / 1000, rtol=1e-11)
+
+
+@pytest.mark.parametrize(
+    "units, words",
+    [
+        ("length=kg", "not a unit of length"),
+        ("speed=mm/s", "unknown key 'speed'"),
+        ("length", "KEY=UNIT"),
+        ("length=furlong", "unknown unit"),
+        ("length=mm,length=cm", "given twice"),
+    ],
+)
+def test_a_bad_units_map_is_bad_input(tmp_path, units, words):
+    code, out, _ = _run(tmp_path, "fourbar.yaml", "--units", units)
+    assert code == 2
+    assert "--units" in out and words in out
+    assert "Traceback" not in out
+
+
+def test_plots_name_the_file_units(tmp_path):
+    out = tmp_path / "svg"
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "slider-crank.yaml"), "-o", str(out), "--format", "svg"]
+    )
+    assert r.exit_code == 0, r.output
+    point = (out / "point_C.svg").read_text(encoding="utf-8")
+    assert "C.ax [mm/s²]" in point and "C.vx [mm/s]" in point
+    torque = (out / "torque.svg").read_text(encoding="utf-8")
+    assert "[N·mm]" in torque and "N*m" not in torque
+    links = (out / "links.svg").read_text(encoding="utf-8")
+    assert "[°/s²]" in links and "[°]" in links
