@@ -36,7 +36,7 @@ BY_HAND = {
     ("W", "W"): 1.0,
     ("-", "-"): 1.0,
 }
-HEADER = re.compile(r"^(?P<name>[^\[]+?) \[(?P<unit>[^\]]+)\](?P<note>.*)$")
+HEADER = re.compile(r"^(?P<name>.+?) \[(?P<unit>[^\]]+)\](?P<note>.*)$")
 
 
 def _run(tmp_path: Path, file: str, *extra: str, name: str = "out") -> tuple[int, str, Path]:
@@ -190,3 +190,44 @@ def test_plots_name_the_file_units(tmp_path):
     assert "[N·mm]" in torque and "N*m" not in torque
     links = (out / "links.svg").read_text(encoding="utf-8")
     assert "[°/s²]" in links and "[°]" in links
+
+
+def _sweep(tmp_path: Path, name: str, *extra: str) -> tuple[list[str], list[list[str]]]:
+    study = Path(__file__).resolve().parent / "data" / "study_fourbar.yaml"
+    out = tmp_path / name
+    r = CliRunner().invoke(
+        main,
+        ["sweep", str(study), "-o", str(out), "--no-plots", "-j", "1", "--figure",
+         "range(B.y)", "-q", *extra],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    return _table(out / "study.csv")
+
+
+def test_sweep_writes_the_file_units(tmp_path):
+    """The study of a mm file: its figures in mm and N*mm, equal to the SI table
+    converted; the parameters and the requirements' values keep their own units; the
+    designs' CSVs (--keep-results) are in mm too."""
+    h, rows = _sweep(tmp_path, "file", "--keep-results")
+    hs, rs = _sweep(tmp_path, "si", "--units", "SI")
+    assert len(h) == len(hs)
+    for k, (a, b) in enumerate(zip(h, hs)):
+        if a == "status":
+            continue
+        name_a, unit_a, _ = _split(a)
+        name_b, unit_b, _ = _split(b)
+        assert name_a == name_b
+        assert (unit_b, unit_a) in BY_HAND or unit_a == unit_b == "mm", (a, b)
+        if unit_a == unit_b == "mm":  # a parameter, in its own unit
+            assert [r[k] for r in rows] == [r[k] for r in rs]
+            continue
+        f = BY_HAND.get((unit_b, unit_a), 1.0)
+        for r, s in zip(rows, rs):
+            if r[k] in ("true", "false", "") or unit_a == "-":
+                assert r[k] == s[k]
+            else:  # 10 significant digits each
+                assert float(r[k]) == pytest.approx(float(s[k]) * f, rel=1e-9)
+    assert "range(B.y) [mm]" in h and "max(abs(input.torque)) [N*mm]" in h
+    assert "req.swing [deg]" in h  # the requirement's own unit
+    head = (tmp_path / "file" / "designs" / "design-00000.csv").read_text().splitlines()[0]
+    assert "B.y [mm]" in head and "rocker.omega [deg/s]" in head
