@@ -519,7 +519,8 @@ def test_synth_crank_rocker_from_one_limit_gives_both_solutions(tmp_path, pivot)
         others.add(round(other, 6))
         assert f"other limit at {other:.6f} deg" in r.output
         written = tmp_path / f"design-{n}.yaml"
-        r2 = _run("synth", f, "--solution", n, "-o", written)
+        # every digit written (--digits 17): the design's limits to 1e-6 deg
+        r2 = _run("synth", f, "--solution", n, "-o", written, "--digits", 17)
         assert r2.exit_code == 0, r2.output
         res = api.solve(api.load(written))
         (lp,) = [x for x in res.limit_positions() if x.name == "rocker"]

@@ -231,3 +231,56 @@ def test_sweep_writes_the_file_units(tmp_path):
     assert "req.swing [deg]" in h  # the requirement's own unit
     head = (tmp_path / "file" / "designs" / "design-00000.csv").read_text().splitlines()[0]
     assert "B.y [mm]" in head and "rocker.omega [deg/s]" in head
+
+
+# --- synth writes the problem's units -------------------------------------------------
+
+
+def _numbers(text: str) -> list[str]:
+    """The numbers of a written file's geometry (its ground and links lines)."""
+    body = [
+        ln for ln in text.splitlines() if ln.startswith("  ") and not ln.lstrip().startswith("-")
+    ]
+    return re.findall(r"(?<![\w.])-?\d+\.?\d*(?:e-?\d+)?", "\n".join(body))
+
+
+def test_synth_writes_a_mm_problem_in_mm_with_six_digits(tmp_path):
+    """The slider-crank problem (stroke 100 mm, K = 1.4, offset 20 mm, in mm): the file
+    is in mm, its numbers have at most 6 significant digits, and solved by mechsolve it
+    gives the stroke (to the rounding of its lengths) and the offset slider-crank's
+    closed form of its own written lengths."""
+    from mechsolve.cli.commands.synth import synth
+
+    out = tmp_path / "sc.yaml"
+    r = CliRunner().invoke(synth, [str(MECH / "synth" / "slider-crank.yaml"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    text = out.read_text()
+    assert "units: {length: mm, angle: deg}" in text
+    nums = _numbers(text)
+    assert nums and all(len(re.sub(r"[-.]|e-?\d+", "", n).lstrip("0")) <= 6 for n in nums)
+    crank = float(re.search(r"crank: .*A: \[([\d.]+), 0\]", text)[1])
+    rod = float(re.search(r"C: \[([\d.]+), 0\]", text)[1])
+    e = 20.0
+    assert 40 < crank < 60 and 60 < rod < 100  # mm, not m
+    stroke = math.sqrt((crank + rod) ** 2 - e**2) - math.sqrt((rod - crank) ** 2 - e**2)
+    res = api.run(out)
+    (lp,) = res.limit_positions()
+    assert lp.swing * 1000 == pytest.approx(stroke, abs=1e-9)
+    # 6 digits of lengths near 50 and 80 mm: each within 5e-5 mm
+    assert stroke == pytest.approx(100.0, abs=1e-3)
+    assert lp.time_ratio == pytest.approx(1.4, abs=1e-4)
+    assert "(stroke 100 mm)" in r.output and "crank 47.2446 mm" in r.output
+
+
+def test_synth_digits_17_keeps_every_digit(tmp_path):
+    from mechsolve.cli.commands.synth import synth
+
+    out = tmp_path / "sc.yaml"
+    r = CliRunner().invoke(
+        synth, [str(MECH / "synth" / "slider-crank.yaml"), "-o", str(out), "--digits", "17"]
+    )
+    assert r.exit_code == 0, r.output
+    assert "units: {length: mm, angle: deg}" in out.read_text()
+    (lp,) = api.run(out).limit_positions()
+    assert lp.swing == pytest.approx(0.1, rel=1e-12)
+    assert lp.time_ratio == pytest.approx(1.4, rel=1e-9)

@@ -31,9 +31,12 @@ from mechsolve.base.errors import InputError
 __all__ = ["solve_optimised", "confirm_optimised", "describe_optimised", "write_plot"]
 
 
-def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
+def solve_optimised(
+    r: Any, method: str, name: str, solution: int | None, digits: int | None = None, **kw
+):
     """(designs, chosen, mechanism text, check) of a function or path problem read by
-    ``r`` (the problem file's section reader)."""
+    ``r`` (the problem file's section reader); the text's numbers to ``digits``
+    significant digits (every digit for ``None``), its lengths in the problem's unit."""
     if method == "function":
         spec = _function_spec(r)
         from mechsolve.analyses.synth.function_gen import function_yaml, solve_function
@@ -41,7 +44,7 @@ def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
         res = solve_function(spec, **kw)
         designs = res.designs
         chosen = _choose(designs, solution, key=lambda d: d.extra["max_error"])
-        text = function_yaml(chosen, name, spec)
+        text = function_yaml(chosen, name, spec, unit=r.length, digits=digits)
         return designs, chosen, text, {"result": res, "spec": spec, "search": res.search}
     from mechsolve.analyses.synth.path_gen import path_yaml, read_path, solve_path
 
@@ -52,7 +55,7 @@ def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
         why = res.why or "no design met the constraints"
         raise r.err((), f"no four-bar found: {why}")
     chosen = _choose(designs, solution, key=lambda d: d.extra["objective"])
-    text = path_yaml(chosen, name, spec)
+    text = path_yaml(chosen, name, spec, digits=digits)
     return designs, chosen, text, {"result": res, "spec": spec, "search": res.search}
 
 

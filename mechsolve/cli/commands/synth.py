@@ -50,8 +50,16 @@ from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, Command, writing
     help="function and path problems: stop the search after this long and keep the best "
     "design found (Ctrl-C does the same, then exits with 130).",
 )
+@click.option(
+    "--digits",
+    type=click.IntRange(3, 17),
+    default=6,
+    show_default=True,
+    help="Significant digits of the written file's lengths and angles (in the problem's "
+    "units; 17 keeps every digit); a 'round' in FILE rounds the lengths instead.",
+)
 @QUIET
-def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> None:
+def synth(file: Path, output, pick, solution, plot, seed, max_time, digits, quiet) -> None:
     """Solve the synthesis problem in FILE: list every solution, pick one, and with -o
     write it as a mechanism file, checked by solving it (its limit positions).
 
@@ -81,7 +89,15 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
             bar.set_postfix_str(f"best {best:.3e}")
 
     try:
-        out = solve_problem(file, pick, solution, seed=seed, max_time=max_time, progress=progress)
+        out = solve_problem(
+            file,
+            pick,
+            solution,
+            seed=seed,
+            max_time=max_time,
+            progress=progress,
+            digits=None if digits == 17 else digits,
+        )
     finally:
         if bar is not None:
             bar.close()
