@@ -202,7 +202,7 @@ def test_cli_speed_defaults_to_the_files(tmp_path):
         ref["torque"], rel=1e-8
     )
     assert [v for k, v in row.items() if k.startswith("load.cutting.active")][0] == 1
-    assert "omega = -6.28319 rad/s (60 rpm clockwise), alpha = 0 rad/s^2: the file's driver" in (
+    assert "omega = -6.28319 rad/s (60 rpm clockwise), alpha = 0 rad/s²: the file's driver" in (
         r.output
     )
 

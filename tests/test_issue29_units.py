@@ -269,7 +269,8 @@ def test_synth_writes_a_mm_problem_in_mm_with_six_digits(tmp_path):
     # 6 digits of lengths near 50 and 80 mm: each within 5e-5 mm
     assert stroke == pytest.approx(100.0, abs=1e-3)
     assert lp.time_ratio == pytest.approx(1.4, abs=1e-4)
-    assert "(stroke 100 mm)" in r.output and "crank 47.2446 mm" in r.output
+    # printed to the micrometre, in mm
+    assert "(stroke 100.000 mm)" in r.output and "crank 47.245 mm" in r.output
 
 
 def test_synth_digits_17_keeps_every_digit(tmp_path):
@@ -284,3 +285,60 @@ def test_synth_digits_17_keeps_every_digit(tmp_path):
     (lp,) = api.run(out).limit_positions()
     assert lp.swing == pytest.approx(0.1, rel=1e-12)
     assert lp.time_ratio == pytest.approx(1.4, rel=1e-9)
+
+
+# --- Unicode units in figures and printed summaries ----------------------------------
+
+
+@pytest.mark.parametrize(
+    "ascii_, shown",
+    [
+        ("torque [N*m]", "torque [N·m]"),
+        ("J [kg*m^2], J' [kg*m^2/rad]", "J [kg·m²], J' [kg·m²/rad]"),
+        ("slope omega_max^2 / 2", "slope ωₘₐₓ² / 2"),
+        ("dE_max / (omega_m^2 delta) = 5 kg*m^2", "ΔEₘₐₓ / (ωₘ² delta) = 5 kg·m²"),
+        ("900 dE_max / (pi^2 n^2 delta)", "900 ΔEₘₐₓ / (π² n² delta)"),
+        ("W(phi) against J(phi)", "W(φ) against J(φ)"),
+        ("angle [deg], rate [deg/s^2]", "angle [°], rate [°/s²]"),
+        ("max 12 kN*m, a 3 rad/s^2", "max 12 kN·m, a 3 rad/s²"),
+        # names and words that are not units stay as written
+        ("links.crank.points.A[0] [mm]", "links.crank.points.A[0] [mm]"),
+        ("crank/ground.angle, a*b, omega [rad/s]", "crank/ground.angle, a*b, omega [rad/s]"),
+        ("[-]", "[-]"),
+    ],
+)
+def test_pretty_text(ascii_, shown):
+    from mechsolve.base.units import pretty_text
+
+    assert pretty_text(ascii_) == shown
+
+
+def test_every_saved_figure_writes_report_units(tmp_path):
+    """save_figure, which every plot of mechsolve goes through, writes its texts with
+    Unicode units: an SVG keeps its text as text, so it can be read back."""
+    from mechsolve.writers.fonts import pyplot
+    from mechsolve.writers.plots import save_figure
+
+    plt = pyplot()
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1], label="slope omega_max^2 / 2")
+    ax.set_ylabel("reduced moment of inertia J [kg*m^2]")
+    ax.set_xlabel("torque [N*m]")
+    ax.set_title("J_F = 3 kg*m^2")
+    ax.legend()
+    path = save_figure(fig, tmp_path / "f.svg", 100) or tmp_path / "f.svg"
+    plt.close(fig)
+    svg = path.read_text(encoding="utf-8")
+    for want in ("[kg·m²]", "[N·m]", "ωₘₐₓ²", "J_F = 3 kg·m²"):
+        assert want in svg, want
+    assert "N*m" not in svg and "^2" not in svg
+
+
+def test_printed_summaries_write_report_units(tmp_path):
+    """The flywheel's printed summary: ΔEₘₐₓ, ωₘ², kg·m², N·m instead of ASCII."""
+    r = CliRunner().invoke(
+        main, ["flywheel", str(MECH / "shaper.yaml"), "-o", str(tmp_path / "fw")]
+    )
+    assert r.exit_code == 0, r.output
+    assert "ΔEₘₐₓ = " in r.output and "kg·m²" in r.output and "N·m" in r.output
+    assert "kg*m^2" not in r.output and "N*m" not in r.output and "omega_m^2" not in r.output

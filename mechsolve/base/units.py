@@ -534,3 +534,53 @@ def spaced(unit: str) -> str:
     if not unit or unit == "-":
         return ""
     return unit if unit.startswith("°") and "/" not in unit else " " + unit
+
+
+_SUBSCRIPT = str.maketrans("aeimnox0123456789", "ₐₑᵢₘₙₒₓ₀₁₂₃₄₅₆₇₈₉")
+_GREEK_SUB = re.compile(r"(?<![A-Za-z])(omega|alpha|delta|theta|phi|psi)_(max|min|mean|m|0|1|2)\b")
+_GREEK = {"omega": "ω", "alpha": "α", "delta": "δ", "theta": "θ", "phi": "φ", "psi": "ψ"}
+_BRACKET = re.compile(r"\[([^\[\]]+)\]")
+_UNIT_TOKEN = re.compile(
+    r"(?<![\w.])([A-Za-zµ°]+(?:\^-?\d+)?(?:[*/][A-Za-zµ°]+(?:\^-?\d+)?)+|[A-Za-zµ]+\^-?\d+)"
+    r"(?![\w(])"
+)
+
+
+def _is_unit(text: str) -> bool:
+    try:
+        parse_unit(text)
+    except UnitError:
+        return False
+    return True
+
+
+def pretty_text(text: str) -> str:
+    """A figure's or a printed summary's text as a report prints it: units in brackets
+    and unit products (``[kg*m^2]``, ``12 N*m``) with ``·`` and superscripts (``kg·m²``,
+    ``N·m``), ``omega_max^2`` as ``ωₘₐₓ²``, ``dE_max`` as ``ΔEₘₐₓ``, ``pi^2`` as ``π²``.
+    Words that are not units are left as they are; mathtext (``$...$``) is not touched."""
+    if "$" in text:
+        return text
+
+    def bracket(m: re.Match) -> str:
+        inner = m.group(1)
+        return f"[{pretty_unit(inner)}]" if _is_unit(inner) else m.group(0)
+
+    def token(m: re.Match) -> str:
+        t = m.group(1)
+        return pretty_unit(t) if _is_unit(t) else t
+
+    out = _BRACKET.sub(bracket, text)
+    out = re.sub(  # "psi (deg)": a unit in parentheses after a word
+        r"(?<= )\(([^()]+)\)",
+        lambda m: f"({pretty_unit(m[1])})" if _is_unit(m[1]) else m.group(0),
+        out,
+    )
+    out = _UNIT_TOKEN.sub(token, out)
+    out = _GREEK_SUB.sub(lambda m: _GREEK[m[1]] + m[2].translate(_SUBSCRIPT), out)
+    out = re.sub(r"(?<![A-Za-z_])(omega|alpha)(?=\^)", lambda m: _GREEK[m[1]], out)
+    out = re.sub(r"(?<=[A-Z])\((phi|theta|psi)\)", lambda m: f"({_GREEK[m[1]]})", out)
+    out = re.sub(r"(?<![A-Za-z])dE_max\b", "ΔEₘₐₓ", out)
+    out = re.sub(r"(?<![A-Za-z])pi(?=\^)", "π", out)
+    out = re.sub(r"(?<=[\w)ₐₑᵢₘₙₒₓ])\^(-?\d+)\b", lambda m: m[1].translate(_PRETTY_EXP), out)
+    return out

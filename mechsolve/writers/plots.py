@@ -25,14 +25,29 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.base.atomic import replacing
-from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_text, pretty_unit
 
 if TYPE_CHECKING:
     from mechsolve.results.results import Results
 
 
+def pretty_figure(fig) -> None:
+    """Write every text of ``fig`` as a report prints it (see
+    :func:`~mechsolve.base.units.pretty_text`): ``[kg·m²]``, ``N·m``, ``ωₘₐₓ²``."""
+    from matplotlib.text import Text
+
+    for t in fig.findobj(Text):
+        s = t.get_text()
+        if s and isinstance(s, str):
+            new = pretty_text(s)
+            if new != s:
+                t.set_text(new)
+
+
 def save_figure(fig, path: Path, dpi: int) -> None:
-    """Save ``fig`` so that an interrupted run never leaves a half-written image."""
+    """Save ``fig`` so that an interrupted run never leaves a half-written image; its
+    texts with report units (:func:`pretty_figure`)."""
+    pretty_figure(fig)
     path = Path(path)
     with replacing(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")

@@ -209,6 +209,9 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
 
 
 def _save(fig, path: Path, plt) -> Path:
+    from mechsolve.writers.plots import pretty_figure
+
+    pretty_figure(fig)
     try:
         with replacing(path) as tmp:
             fig.savefig(tmp, dpi=120, format="png")

@@ -306,12 +306,14 @@ def write_plot(out: Any, path: Path) -> Path:
     """Target against achieved (by mechsolve's run of the written file), as a PNG."""
     from mechsolve.base.atomic import replacing
     from mechsolve.writers.fonts import pyplot
+    from mechsolve.writers.plots import pretty_figure
 
     plt = pyplot()
     if out.method == "four-positions":
         from mechsolve.analyses.synth.burmester import plot_curves
 
         fig = plot_curves(plt, out)
+        pretty_figure(fig)
         try:
             with replacing(path, suffix=".png") as tmp:
                 fig.savefig(tmp, format="png", dpi=110)
@@ -349,6 +351,7 @@ def write_plot(out: Any, path: Path) -> Path:
         ax1.legend()
     ax1.set_title(f"{out.name}: {out.chosen.family}")
     fig.tight_layout()
+    pretty_figure(fig)
     try:
         with replacing(path, suffix=".png") as tmp:
             fig.savefig(tmp, format="png", dpi=110)

@@ -54,8 +54,11 @@ class Numbers:
         return f"[{x}, {y}]"
 
     def text(self, x: float) -> str:
-        """A length for a comment: ``47.2446 mm``."""
-        return f"{x / parse_unit(self.unit).factor:.6g} {self.unit}"
+        """A length for a comment or the printed text, to the micrometre: ``47.245 mm``,
+        ``1.387798 m``."""
+        scale = parse_unit(self.unit).factor
+        places = max(0, 6 + round(math.log10(scale)))
+        return f"{x / scale:.{places}f} {self.unit}"
 
     @property
     def units_line(self) -> str:

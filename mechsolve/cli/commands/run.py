@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from mechsolve.base.errors import InputError, SolverError
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     EXIT_CHECK_FAILED,
@@ -138,7 +139,7 @@ def _run_job(
         path = ires.to_csv(outdir / "instants.csv")
         instants_failed = ires.incomplete()
         if not quiet:
-            click.echo(instants_table(ires))
+            click.echo(pretty_text(instants_table(ires)))
             click.echo(f"  wrote {path}")
         if at:  # only the instants asked for
             if instants_failed:
@@ -179,14 +180,14 @@ def _run_job(
         written += write_plots(api.for_plots(mech, res, method), outdir, fmt, shown)
     verdicts = _requirements(mech, res, junit, streamed=streamed)
     if not quiet:
-        click.echo(text)
+        click.echo(pretty_text(text))
         click.echo(
             f"  wrote {len(written)} file(s) to {outdir}/: " + ", ".join(p.name for p in written)
         )
     if verdicts:
         from mechsolve.results.requirements import verdict_table
 
-        click.echo(verdict_table(verdicts))
+        click.echo(pretty_text(verdict_table(verdicts)))
     if any(not v.passed for v in verdicts):
         return EXIT_CHECK_FAILED, res
     if failed or instants_failed:

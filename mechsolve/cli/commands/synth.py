@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import EPILOG, FILE_ARG, QUIET, Command, writing
 
 
@@ -107,12 +108,12 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, digits, quie
 
         raise InputError("--plot: only function, path and four-positions problems draw a plot")
     if not quiet:
-        click.echo(out.text)
+        click.echo(pretty_text(out.text))
     if out.yaml is not None:
         if not quiet or plot is not None:
             text = confirm(out)
             if not quiet:
-                click.echo(text)
+                click.echo(pretty_text(text))
         if plot is not None:
             from mechsolve.analyses.synth.optproblem import write_plot
 
