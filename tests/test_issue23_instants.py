@@ -157,7 +157,8 @@ def test_shaper_instant_with_an_angular_acceleration():
 
 
 def _cli(args: list[str], tmp_path: Path):
-    return CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out")])
+    # in SI (--units SI), as the references are; the shaper is written in mm
+    return CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out"), "--units", "SI"])
 
 
 def _instants_csv(tmp_path: Path) -> dict[str, float]:

@@ -342,3 +342,18 @@ def test_printed_summaries_write_report_units(tmp_path):
     assert r.exit_code == 0, r.output
     assert "ΔEₘₐₓ = " in r.output and "kg·m²" in r.output and "N·m" in r.output
     assert "kg*m^2" not in r.output and "N*m" not in r.output and "omega_m^2" not in r.output
+
+
+def test_instants_are_in_the_file_units(tmp_path):
+    """``run --at``: the instants table and instants.csv of a mm file in mm (A at 30 deg
+    of a 50 mm crank: 50 cos 30 deg, 50 sin 30 deg)."""
+    out = tmp_path / "i"
+    r = CliRunner().invoke(
+        main, ["run", str(MECH / "slider-crank.yaml"), "--at", "theta=30 deg", "-o", str(out)]
+    )
+    assert r.exit_code == 0, r.output
+    h, rows = _table(out / "instants.csv")
+    x = float(rows[0][h.index("A.x [mm]")])
+    y = float(rows[0][h.index("A.y [mm]")])
+    assert (x, y) == (pytest.approx(50 * math.cos(math.pi / 6)), pytest.approx(25.0))
+    assert re.search(r"A\.x \[mm\] +43\.3013", r.output)

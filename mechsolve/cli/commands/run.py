@@ -136,10 +136,10 @@ def _run_job(
 
         todo = [parse_instant(mech, a) for a in at] or [Instant(*i) for i in mech.instants]
         ires = solve_instants(mech, todo, method=method)
-        path = ires.to_csv(outdir / "instants.csv")
+        path = ires.to_csv(outdir / "instants.csv", shown)
         instants_failed = ires.incomplete()
         if not quiet:
-            click.echo(pretty_text(instants_table(ires)))
+            click.echo(pretty_text(instants_table(ires, shown)))
             click.echo(f"  wrote {path}")
         if at:  # only the instants asked for
             if instants_failed:
