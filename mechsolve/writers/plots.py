@@ -36,6 +36,8 @@ def pretty_figure(fig) -> None:
     :func:`~mechsolve.base.units.pretty_text`): ``[kg·m²]``, ``N·m``, ``ωₘₐₓ²``."""
     from matplotlib.text import Text
 
+    if not hasattr(fig, "findobj"):  # not a matplotlib figure: nothing to write
+        return
     for t in fig.findobj(Text):
         s = t.get_text()
         if s and isinstance(s, str):
