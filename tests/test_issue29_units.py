@@ -178,6 +178,7 @@ def test_a_bad_units_map_is_bad_input(tmp_path, units, words):
     assert "Traceback" not in out
 
 
+@pytest.mark.slow  # seconds on the 2-core machine: plots or a study
 def test_plots_name_the_file_units(tmp_path):
     out = tmp_path / "svg"
     r = CliRunner().invoke(
@@ -204,6 +205,7 @@ def _sweep(tmp_path: Path, name: str, *extra: str) -> tuple[list[str], list[list
     return _table(out / "study.csv")
 
 
+@pytest.mark.slow  # seconds on the 2-core machine: plots or a study
 def test_sweep_writes_the_file_units(tmp_path):
     """The study of a mm file: its figures in mm and N*mm, equal to the SI table
     converted; the parameters and the requirements' values keep their own units; the
@@ -313,6 +315,7 @@ def test_pretty_text(ascii_, shown):
     assert pretty_text(ascii_) == shown
 
 
+@pytest.mark.slow  # seconds on the 2-core machine: plots or a study
 def test_every_saved_figure_writes_report_units(tmp_path):
     """save_figure, which every plot of mechsolve goes through, writes its texts with
     Unicode units: an SVG keeps its text as text, so it can be read back."""
@@ -334,6 +337,7 @@ def test_every_saved_figure_writes_report_units(tmp_path):
     assert "N*m" not in svg and "^2" not in svg
 
 
+@pytest.mark.slow  # seconds on the 2-core machine: plots or a study
 def test_printed_summaries_write_report_units(tmp_path):
     """The flywheel's printed summary: ΔEₘₐₓ, ωₘ², kg·m², N·m instead of ASCII."""
     r = CliRunner().invoke(
