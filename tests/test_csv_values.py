@@ -144,8 +144,9 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 
 
 def run_cli(path: Path, out: Path, how: str = "inprocess") -> str:
-    """``mechsolve run path -o out --no-plots``; returns the printed summary."""
-    args = ["run", str(path), "-o", str(out), "--no-plots"]
+    """``mechsolve run path -o out --no-plots --units SI``; returns the printed summary.
+    (The closed forms here are in SI; without ``--units SI`` a file in mm writes mm.)"""
+    args = ["run", str(path), "-o", str(out), "--no-plots", "--units", "SI"]
     if how == "subprocess":
         p = subprocess.run(
             [sys.executable, "-m", "mechsolve", *args],

@@ -210,7 +210,7 @@ def test_cli_at_prints_a_table_and_writes_csv(tmp_path):
         ],
     )
     assert r.exit_code == 0, r.output
-    assert "instant 1: theta=30 deg" in r.output and "input.torque [N*m]" in r.output
+    assert "instant 1: theta=30 deg" in r.output and "input.torque [N·m]" in r.output
     rows = (tmp_path / "o" / "instants.csv").read_text().splitlines()
     assert len(rows) == 2 and "crank.alpha [rad/s^2]" in rows[0]
 

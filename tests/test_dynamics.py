@@ -348,7 +348,7 @@ def test_flywheel_for_a_pure_sine_torque_against_the_hand_formula(tmp_path):
     f.write_text(CRANK)
     r = CliRunner().invoke(main, ["flywheel", str(f), "--delta", "1/40", "-o", str(tmp_path)])
     assert r.exit_code == 0, r.output
-    assert "dE_max = 23.544 J" in r.output and (tmp_path / "flywheel.png").exists()
+    assert "ΔEₘₐₓ = 23.544 J" in r.output and (tmp_path / "flywheel.png").exists()
 
 
 def test_flywheel_checked_by_simulation_on_seed_004():
@@ -548,7 +548,7 @@ def test_flywheel_from_a_torque_curve_as_textbooks_state_it(tmp_path):
     assert r.exit_code == 0, r.output
     w = 1500 * math.pi / 30
     want = 150 / (w * w / 80)
-    assert f"flywheel J_F = {want:.6g} kg*m^2" in r.output
+    assert f"flywheel J_F = {want:.6g} kg·m²" in r.output
     # a four-stroke cycle: 2000 N m over the power stroke, nothing else
     rows = [[0, 0], [45, 2000], [135, 2000], [180, 0], [720, 0]]
     table = ", ".join(f"[{a} deg, {t} N m]" for a, t in rows)
@@ -572,7 +572,7 @@ def test_flywheel_from_a_torque_curve_as_textbooks_state_it(tmp_path):
     )
     dE = run.max() - run.min()
     wm = 3000 * math.pi / 30
-    assert f"dE_max = {dE:.6g} J" in r.output
+    assert f"ΔEₘₐₓ = {dE:.6g} J" in r.output
     assert f"flywheel J_F = {dE / (wm * wm * 0.02):.6g}" in r.output
 
 

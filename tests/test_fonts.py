@@ -62,7 +62,8 @@ def test_the_chinese_crane_runs_without_a_warning_and_keeps_its_names(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "Glyph" not in p.stderr and "missing" not in p.stderr and "note:" not in p.stderr
     head = (tmp_path / "results.csv").read_text(encoding="utf-8").splitlines()[0]
-    assert "曲柄.angle [deg]" in head and "拉杆.omega [rad/s]" in head
+    # the file's units (m, deg): angular speeds in deg/s
+    assert "曲柄.angle [deg]" in head and "拉杆.omega [deg/s]" in head
     assert (tmp_path / "links.png").stat().st_size > 20_000
 
 

@@ -57,8 +57,8 @@ def test_flywheel_without_masses_but_with_a_load_sizes_the_whole_inertia(tmp_pat
     r = _run("flywheel", f, "--delta", "1/40", "-o", tmp_path / "o")
     assert r.exit_code == 0, r.output
     F, l, w, d = 29.43, 0.8, 10.0, 1 / 40
-    assert f"dE_max = {2 * F * l:.6g} J" in r.output
-    assert f"flywheel J_F = {2 * F * l / (w * w * d):.6g} kg*m^2" in r.output
+    assert f"ΔEₘₐₓ = {2 * F * l:.6g} J" in r.output
+    assert f"flywheel J_F = {2 * F * l / (w * w * d):.6g} kg·m²" in r.output
     assert "no masses" in r.output
 
 
@@ -419,10 +419,8 @@ def test_flywheel_from_a_piecewise_constant_power_diagram(tmp_path, start, alpha
     w = rpm * math.pi / 30
     fr = alpha / 360
     dE = (p_work - p_idle) * 1e3 * fr * (1 - fr) * 2 * math.pi / w
-    assert f"dE_max = {dE:.6g} J" in r.output
-    assert f"flywheel J_F = dE_max / (omega_m^2 delta) = {dE / (w * w / 40):.6g} kg*m^2" in (
-        r.output
-    )
+    assert f"ΔEₘₐₓ = {dE:.6g} J" in r.output
+    assert f"flywheel J_F = ΔEₘₐₓ / (ωₘ² delta) = {dE / (w * w / 40):.6g} kg·m²" in (r.output)
     pm = fr * p_work + (1 - fr) * p_idle
     assert f"mean power over the cycle {pm:.6g} kW" in r.output
     assert (tmp_path / "o" / "flywheel.png").exists()
@@ -439,14 +437,14 @@ def test_flywheel_from_a_power_law_and_a_power_table(tmp_path):
                     "  driving: mean\nspeed: 100 rpm\n", "law.yaml")  # fmt: skip
     r = _run("flywheel", f, "--delta", "0.02", "-o", tmp_path / "a")
     assert r.exit_code == 0, r.output
-    got = float(r.output.split("dE_max = ")[1].split()[0])
+    got = float(r.output.split("ΔEₘₐₓ = ")[1].split()[0])
     assert got == pytest.approx(1000 / w, rel=1e-6)  # the law sampled at 36001 points
     f = _power_file(tmp_path, "power:\n  driving: {table: [[0 deg, 0 W], [180 deg, 2 kW]]}\n"
                     "  resisting: 1 kW\nspeed: 100 rpm\ndelta: 0.02\n", "table.yaml")  # fmt: skip
     r = _run("flywheel", f, "-o", tmp_path / "b")
     assert r.exit_code == 0, r.output
-    assert f"dE_max = {1000 * math.pi / 2 / w:.6g} J" in r.output
-    assert f"= {1000 * math.pi / 2 / w / (w * w * 0.02):.6g} kg*m^2" in r.output
+    assert f"ΔEₘₐₓ = {1000 * math.pi / 2 / w:.6g} J" in r.output
+    assert f"= {1000 * math.pi / 2 / w / (w * w * 0.02):.6g} kg·m²" in r.output
 
 
 def test_flywheel_power_diagram_that_is_not_steady_or_flat(tmp_path):
@@ -519,7 +517,8 @@ def test_synth_crank_rocker_from_one_limit_gives_both_solutions(tmp_path, pivot)
         others.add(round(other, 6))
         assert f"other limit at {other:.6f} deg" in r.output
         written = tmp_path / f"design-{n}.yaml"
-        r2 = _run("synth", f, "--solution", n, "-o", written)
+        # every digit written (--digits 17): the design's limits to 1e-6 deg
+        r2 = _run("synth", f, "--solution", n, "-o", written, "--digits", 17)
         assert r2.exit_code == 0, r2.output
         res = api.solve(api.load(written))
         (lp,) = [x for x in res.limit_positions() if x.name == "rocker"]

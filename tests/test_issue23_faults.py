@@ -326,7 +326,8 @@ def test_guide_bar_stroke_through_synth_and_the_solver(tmp_path):
         "guide-bar: {frame: 300, time_ratio: 1.5, stroke: 300}\n"
     )
     out = tmp_path / "design.yaml"
-    r = CliRunner().invoke(synth, [str(prob), "-o", str(out)])
+    # every digit written (--digits 17): the swing to 1e-9 rad
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--digits", "17"])
     assert r.exit_code == 0, r.output
     res = ms.run(out)
     assert res.ok.all()

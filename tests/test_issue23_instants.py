@@ -157,7 +157,8 @@ def test_shaper_instant_with_an_angular_acceleration():
 
 
 def _cli(args: list[str], tmp_path: Path):
-    return CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out")])
+    # in SI (--units SI), as the references are; the shaper is written in mm
+    return CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out"), "--units", "SI"])
 
 
 def _instants_csv(tmp_path: Path) -> dict[str, float]:
@@ -202,7 +203,7 @@ def test_cli_speed_defaults_to_the_files(tmp_path):
         ref["torque"], rel=1e-8
     )
     assert [v for k, v in row.items() if k.startswith("load.cutting.active")][0] == 1
-    assert "omega = -6.28319 rad/s (60 rpm clockwise), alpha = 0 rad/s^2: the file's driver" in (
+    assert "omega = -6.28319 rad/s (60 rpm clockwise), alpha = 0 rad/s²: the file's driver" in (
         r.output
     )
 

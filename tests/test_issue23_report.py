@@ -432,8 +432,8 @@ def test_report_gives_one_value_per_figure(crane_page):
     assert summary in terminal  # the terminal prints the same summary
     # the driving torque's extremes: the same numbers in the summary and the figures
     m = re.search(
-        r"driving torque \(.*? samples\): max (-?[\d.]+) kN\*m at (.*?), "
-        r"min (-?[\d.]+) kN\*m at (.*?),",
+        r"driving torque \(.*? samples\): max (-?[\d.]+) kN·m at (.*?), "
+        r"min (-?[\d.]+) kN·m at (.*?),",
         summary,
     )
     assert m, summary

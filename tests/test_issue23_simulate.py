@@ -264,7 +264,7 @@ def test_a_motor_too_weak_to_lift_the_bar_is_reported_stalled_where_torques_bala
     assert not np.all(np.abs(np.degrees(tr.phi[tr.t >= t_rest - 0.1]) + rest) < 0.01 - 1e-3)
     assert "the motor's torque at standstill, 5 N*m, balances the static load" in text
     mean = 5 + 3 * math.radians(rest) / 6.0
-    assert number(r"time mean (-?[\d.]+) N\*m", text) == pytest.approx(mean, abs=2e-4)
+    assert number(r"time mean (-?[\d.]+) N·m", text) == pytest.approx(mean, abs=2e-4)
     assert not re.search(r"(?<!time) mean -?\d", text), text  # no unlabelled mean left
     # the plot's mean is the same figure, the same words
     from matplotlib.axes import Axes
@@ -280,7 +280,7 @@ def test_a_motor_too_weak_to_lift_the_bar_is_reported_stalled_where_torques_bala
     from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
     write_simulation_plots(res, res.model, tmp_path)
-    shown = number(r"time mean (-?[\d.]+) N\*m", text)
+    shown = number(r"time mean (-?[\d.]+) N·m", text)
     assert f"time mean {shown:.6g} N*m" in labels, labels
 
 

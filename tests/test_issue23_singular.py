@@ -60,7 +60,8 @@ def test_rates_at_a_collinear_position_reached_to_rounding(tmp_path):
     f.write_text(ISSUE_PARALLELOGRAM)
     r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
     assert r.exit_code == 0, r.output
-    assert "B: x 0.06 .. 0.14 m, y -0.04 .. 0.04 m, |v| max 0.04 m/s" in r.output
+    # the summary in the file's units (mm)
+    assert "B: x 60 .. 140 mm, y -40 .. 40 mm, |v| max 40 mm/s" in r.output
     assert "e+1" not in r.output  # no huge number anywhere in the summary
 
 
@@ -185,7 +186,7 @@ def test_chain_started_collinear_runs_from_the_command_line(tmp_path):
     assert "start: loop B (crank2 O2-B, bar1 B-A): the branch nearest to the drawn pose" in r.output
     assert "the start is singular" in r.output
     # the torque's extremes are at the collinear positions, where it is its limit
-    assert "driving torque (1° samples): max 34.335 N*m at driver angle" in r.output
+    assert "driving torque (1° samples): max 34.335 N·m at driver angle" in r.output
 
 
 @pytest.mark.parametrize("start", [30, 0])

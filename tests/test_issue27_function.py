@@ -87,7 +87,8 @@ def test_precision_points_are_exact_in_mechsolves_run(tmp_path):
     from mechsolve.analyses.synth.problem import solve_problem
 
     text = LOG10 + "  optimise: false\n"
-    r, out, p, _ = _verified(tmp_path, text)
+    # every digit written (--digits 17): exact to 1e-12 at the precision points
+    r, out, p, _ = _verified(tmp_path, text, "--digits", "17")
     assert r.exit_code == 0, r.output
     assert "3 precision points" in r.output
     o = solve_problem(p)

@@ -73,7 +73,8 @@ def test_cli_writes_a_file_mechsolve_runs_through_the_four_poses(tmp_path):
         f"  positions: [{rows}]\n  pivots: {{A: [2, 3], B: [85, -2]}}\n"
     )
     out, png = tmp_path / "d.yaml", tmp_path / "c.png"
-    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--plot", str(png)])
+    # every digit written (--digits 17): the poses are checked to 1e-9 mm
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--plot", str(png), "--digits", "17"])
     assert r.exit_code == 0, r.output
     from mechsolve.analyses.instants import Instant, solve_instants
     from mechsolve.analyses.synth.problem import solve_problem

@@ -72,7 +72,8 @@ def _check_written(tmp_path, p, *opts):
     from mechsolve.analyses.synth.problem import solve_problem
 
     out = tmp_path / "d.yaml"
-    r = run(p, "-o", out, "--seed", "1", *opts)
+    # every digit written (--digits 17): the synthesis itself is checked to 1e-6 mm
+    r = run(p, "-o", out, "--seed", "1", "--digits", "17", *opts)
     assert r.exit_code == 0, r.output
     o = solve_problem(p, seed=1)
     d = o.chosen

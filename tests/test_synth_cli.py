@@ -44,7 +44,8 @@ def test_crane_design_file_is_accepted_and_confirms_the_swing(tmp_path):
 )
 def test_example_problems_write_files_mechsolve_runs(tmp_path, name):
     out = tmp_path / "d.yaml"
-    r = run(PROBLEMS / f"{name}.yaml", "-o", out)
+    # every digit written (--digits 17): the limits and K to 1e-7
+    r = run(PROBLEMS / f"{name}.yaml", "-o", out, "--digits", 17)
     assert r.exit_code == 0, r.output
     res = ms.run(out)
     assert res.ok.all()

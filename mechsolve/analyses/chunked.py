@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.kinetostatics import solve_forces
 from mechsolve.core.sweep import Analysis, Failure
 from mechsolve.model import Mechanism
-from mechsolve.results.csv import CsvStream
+from mechsolve.results.csv import CsvStream, in_units
 from mechsolve.results.results import Results
 
 CHUNK = 50_000
@@ -49,8 +50,12 @@ class StreamSummary:
     design: list[str] = field(default_factory=list)
     chunks: int = 0
     path: Path | None = None
+    units: OutputUnits = SI_OUTPUT  # the units the CSV and this summary show
 
     def text(self, res: Results) -> str:
+        U = self.units
+        k, lu = U.convert("m")
+        lu = pretty_unit(lu)
         lines = [
             f"{self.name}: {self.solved} of {self.positions} positions solved, streamed in "
             f"{self.chunks} chunk(s)"
@@ -58,20 +63,23 @@ class StreamSummary:
         for f in self.failures:
             what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
             lines.append(
-                f"  {what} at {res.analysis.format_u(f.u_first)} to "
-                f"{res.analysis.format_u(f.u_last)} ({f.last - f.first + 1} position(s)): "
+                f"  {what} at {res.format_u(f.u_first)} to "
+                f"{res.format_u(f.u_last)} ({f.last - f.first + 1} position(s)): "
                 f"{f.reason}"
             )
         for p, (x0, x1, y0, y1) in list(self.ranges.items())[:12]:
-            lines.append(f"  {p}: x {x0:.6g} .. {x1:.6g} m, y {y0:.6g} .. {y1:.6g} m")
-        lines.append(f"  max constraint residual {self.max_residual:.2g} m")
+            lines.append(
+                f"  {p}: x {x0 * k:.6g} .. {x1 * k:.6g} {lu}, y {y0 * k:.6g} .. {y1 * k:.6g} {lu}"
+            )
+        lines.append(f"  max constraint residual {U.text(self.max_residual, 'm', '.2g')}")
         if self.effort_count:
             kind, unit = res.effort_name
             rms = math.sqrt(self.effort_sq / self.effort_count)
+            lo, hi = self.effort_peak
             lines.append(
-                f"  driving {kind}: min {self.effort_peak[0]:.6g} {unit}, max "
-                f"{self.effort_peak[1]:.6g} {unit}, RMS {rms:.6g} {unit}; work of the driver "
-                f"{self.work:.6g} J; power balance residual up to {self.power_residual:.3g} W"
+                f"  driving {kind}: min {U.text(lo, unit)}, max {U.text(hi, unit)}, "
+                f"RMS {U.text(rms, unit)}; work of the driver {U.text(self.work, 'J')}; "
+                f"power balance residual up to {U.text(self.power_residual, 'W', '.3g')}"
             )
         lines += self.design
         if self.undetermined:
@@ -118,11 +126,13 @@ def stream(
     chunk: int = CHUNK,
     forces: bool | None = None,
     progress: Callable[[int], object] | None = None,
+    units: OutputUnits | None = None,
 ) -> tuple[StreamSummary, Results]:
     """Solve a long sweep chunk by chunk, streaming the CSV to ``csv_path``.
 
     ``progress``, if given, is called after each chunk with the number of positions it
-    added (a progress bar's ``update``). Returns the summary and the Results of a coarse
+    added (a progress bar's ``update``). ``units``: the units of the CSV and the summary
+    (SI when not given). Returns the summary and the Results of a coarse
     sweep of the same range (for plots and the design figures).
     """
 
@@ -144,7 +154,8 @@ def stream(
     coarse = Results(an, coarse_sol, coarse_forces)
     extremes = coarse_forces.stroke_extremes if coarse_forces is not None else None
 
-    summary = StreamSummary(mech.name, positions=len(u_all))
+    summary = StreamSummary(mech.name, positions=len(u_all), units=units or SI_OUTPUT)
+    coarse._shown = summary.units
     summary.design = coarse.design_summary()
     out = CsvStream(csv_path)
     prev = None
@@ -166,7 +177,7 @@ def stream(
                 for a, b in mech.outputs.relative:
                     res.angle_origin[f"{a}/{b}"] = float(prev_res.relative(a, b).angle[-1])
             skip = 0 if prev is None else 1
-            out.write(res, skip=skip)
+            out.write(in_units(res, units), skip=skip)
             _accumulate(summary, res, first, skip)
             prev, prev_res = sol, res
             offset = first + len(u)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import UnitError, parse_quantity
+from mechsolve.base.units import OutputUnits, UnitError, parse_quantity
 from mechsolve.core import evaluate as core
 from mechsolve.core.loads import stroke_function
 from mechsolve.core.sweep import Analysis, StateView
@@ -339,9 +339,13 @@ def _conditions(an: Analysis, sol, stroke, context: str) -> None:
             ) from None
 
 
-def instants_table(res: Results) -> str:
-    """Every quantity at each instant, as a readable table (one column per instant)."""
-    cols = [c for c in res.columns() if c.name not in ("t", "input.travel")]
+def instants_table(res: Results, units: OutputUnits | None = None) -> str:
+    """Every quantity at each instant, as a readable table (one column per instant), in
+    ``units`` (SI when not given)."""
+    from mechsolve.results.csv import in_units
+
+    shown = in_units(res, units).columns()
+    cols = [c for c in shown if c.name not in ("t", "input.travel")]
     labels = getattr(res, "instant_labels", None) or [f"#{k + 1}" for k in range(len(res))]
     notes = getattr(res, "instant_notes", None) or [""] * len(labels)
     width = max(len(c.header) for c in cols)

@@ -366,3 +366,221 @@ def format_unit(kind: str) -> str:
         "mass": "kg",
         "dimensionless": "-",
     }[kind]
+
+
+# --- the units results are shown in ------------------------------------------------------
+
+# the units the results' columns are computed in (SI, angles in degrees), and their kind
+_COLUMN_KINDS: dict[str, str] = {
+    "m": "length",
+    "m/s": "speed",
+    "m/s^2": "acceleration",
+    "deg": "angle",
+    "rad/s": "angular speed",
+    "rad/s^2": "angular acceleration",
+    "s": "time",
+    "N": "force",
+    "N*m": "torque",
+    "J": "energy",
+    "W": "power",
+}
+
+# the keys of a units map and the dimension each must have
+_OUTPUT_KEYS: dict[str, Dim] = {
+    "length": (1, 0, 0, 0),
+    "angle": (0, 0, 0, 1),
+    "force": (1, 1, -2, 0),
+    "time": (0, 0, 1, 0),
+    "torque": (2, 1, -2, 0),
+    "energy": (2, 1, -2, 0),
+    "power": (2, 1, -3, 0),
+}
+
+
+@dataclass(frozen=True)
+class OutputUnits:
+    """The units the results are written and printed in; computed values stay SI.
+
+    ``angle`` is the unit of angles; ``rate_angle`` the angle unit of angular speeds and
+    accelerations (``rad`` gives rad/s, ``deg`` deg/s). ``torque`` ``None`` means the
+    force unit times the length unit (N*mm for a file in mm). The default is the SI
+    output: m, m/s, m/s^2, deg, rad/s, rad/s^2, s, N, N*m, J, W.
+    """
+
+    length: str = "m"
+    angle: str = "deg"
+    rate_angle: str = "rad"
+    force: str = "N"
+    time: str = "s"
+    torque: str | None = None
+    energy: str = "J"
+    power: str = "W"
+
+    def unit_of(self, kind: str) -> str:
+        """The unit (ASCII, as in the CSV headers) of a kind of quantity."""
+        L, T, R = self.length, self.time, self.rate_angle
+        return {
+            "length": L,
+            "speed": f"{L}/{T}",
+            "acceleration": f"{L}/{T}^2",
+            "angle": self.angle,
+            "angular speed": f"{R}/{T}",
+            "angular acceleration": f"{R}/{T}^2",
+            "time": T,
+            "force": self.force,
+            "torque": self.torque or f"{self.force}*{L}",
+            "energy": self.energy,
+            "power": self.power,
+        }[kind]
+
+    def convert(self, unit: str) -> tuple[float, str]:
+        """``(factor, shown unit)`` for values in a column's ``unit`` (one of the SI units
+        the results are computed in, ``deg`` for angles): shown value = factor * value.
+        A unit of no known kind (``-``) is kept, with factor 1."""
+        kind = _COLUMN_KINDS.get(unit)
+        if kind is None:
+            return 1.0, unit
+        target = self.unit_of(kind)
+        if target == unit:
+            return 1.0, unit
+        return parse_unit(unit).factor / parse_unit(target).factor, target
+
+    def show(self, value, unit: str):
+        """``(value, shown unit)``: ``value`` (a number or an array, in ``unit``) converted."""
+        k, target = self.convert(unit)
+        return (value if k == 1.0 else value * k), target
+
+    def text(self, value: float, unit: str, fmt: str = ".6g") -> str:
+        """A value in ``unit`` as printed text in the shown unit: ``'110 mm'``, ``'25°'``."""
+        v, target = self.show(float(value), unit)
+        return f"{format(v, fmt)}{spaced(pretty_unit(target))}"
+
+    @property
+    def is_si(self) -> bool:
+        return self == SI_OUTPUT
+
+
+SI_OUTPUT = OutputUnits()
+
+
+def file_output_units(length_unit: str = "m", angle_unit: str | None = None) -> OutputUnits:
+    """The output units of a file whose ``units:`` give ``length_unit`` and ``angle_unit``
+    (``None`` when the file does not name one: angles in degrees, their rates in rad/s)."""
+    return OutputUnits(
+        length=length_unit,
+        angle=angle_unit or "deg",
+        rate_angle=angle_unit or "rad",
+    )
+
+
+def parse_output_units(text: str, base: OutputUnits = SI_OUTPUT) -> OutputUnits:
+    """Read ``--units``: ``SI`` (the SI output), ``file`` (``base``, the file's own units)
+    or a map ``length=mm,angle=deg,force=kN`` whose keys replace those of ``base`` (keys:
+    length, angle, force, time, torque, energy, power). Raises :class:`UnitError` with
+    the reason."""
+    t = text.strip()
+    if t.upper() == "SI":
+        return SI_OUTPUT
+    if t.lower() == "file":
+        return base
+    fields: dict[str, str] = {}
+    for part in t.split(","):
+        if not part.strip():
+            continue
+        key, eq, unit = part.partition("=")
+        key, unit = key.strip().lower(), unit.strip()
+        if not eq or not key or not unit:
+            raise UnitError(
+                f"cannot read {part.strip()!r}: write SI, file, or KEY=UNIT pairs separated "
+                "by commas, e.g. 'length=mm,angle=deg,force=kN'"
+            )
+        if key not in _OUTPUT_KEYS:
+            raise UnitError(f"unknown key {key!r} (keys: {', '.join(_OUTPUT_KEYS)})")
+        if key in fields:
+            raise UnitError(f"{key!r} is given twice")
+        try:
+            u = parse_unit(unit)
+        except UnitError as exc:
+            raise UnitError(f"{key}={unit}: {exc}") from None
+        if u.dim != _OUTPUT_KEYS[key]:
+            raise UnitError(f"{key}={unit}: {unit!r} is not a unit of {key}")
+        fields[key] = unit
+    if not fields:
+        raise UnitError("no units given: write SI, file, or e.g. 'length=mm,angle=deg'")
+    if "angle" in fields:
+        fields["rate_angle"] = fields["angle"]
+    from dataclasses import replace
+
+    return replace(base, **fields)
+
+
+_PRETTY_EXP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def pretty_unit(unit: str) -> str:
+    """A unit as a figure or a printed summary shows it: ``N*m`` → ``N·m``, ``m/s^2`` →
+    ``m/s²``, ``deg`` → ``°``, ``deg/s`` → ``°/s``, ``um`` → ``µm``; ``-`` stays."""
+    if unit in ("", "-"):
+        return unit
+    u = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(_PRETTY_EXP), unit)
+    u = re.sub(r"\s*\*\s*", "·", u)
+    u = re.sub(r"(?<![A-Za-z])deg(?![A-Za-z])", "°", u)
+    u = re.sub(r"(?<![A-Za-z])um(?![A-Za-z])", "µm", u)
+    return u
+
+
+def spaced(unit: str) -> str:
+    """The text after a number for ``unit``: ``' mm'``, but ``'°'`` (no space) for degrees."""
+    if not unit or unit == "-":
+        return ""
+    return unit if unit.startswith("°") and "/" not in unit else " " + unit
+
+
+_SUBSCRIPT = str.maketrans("aeimnox0123456789", "ₐₑᵢₘₙₒₓ₀₁₂₃₄₅₆₇₈₉")
+_GREEK_SUB = re.compile(r"(?<![A-Za-z])(omega|alpha|delta|theta|phi|psi)_(max|min|mean|m|0|1|2)\b")
+_GREEK = {"omega": "ω", "alpha": "α", "delta": "δ", "theta": "θ", "phi": "φ", "psi": "ψ"}
+_BRACKET = re.compile(r"\[([^\[\]]+)\]")
+_UNIT_TOKEN = re.compile(
+    r"(?<![\w.])([A-Za-zµ°]+(?:\^-?\d+)?(?:[*/][A-Za-zµ°]+(?:\^-?\d+)?)+|[A-Za-zµ]+\^-?\d+)"
+    r"(?![\w(])"
+)
+
+
+def _is_unit(text: str) -> bool:
+    try:
+        parse_unit(text)
+    except UnitError:
+        return False
+    return True
+
+
+def pretty_text(text: str) -> str:
+    """A figure's or a printed summary's text as a report prints it: units in brackets
+    and unit products (``[kg*m^2]``, ``12 N*m``) with ``·`` and superscripts (``kg·m²``,
+    ``N·m``), ``omega_max^2`` as ``ωₘₐₓ²``, ``dE_max`` as ``ΔEₘₐₓ``, ``pi^2`` as ``π²``.
+    Words that are not units are left as they are; mathtext (``$...$``) is not touched."""
+    if "$" in text:
+        return text
+
+    def bracket(m: re.Match) -> str:
+        inner = m.group(1)
+        return f"[{pretty_unit(inner)}]" if _is_unit(inner) else m.group(0)
+
+    def token(m: re.Match) -> str:
+        t = m.group(1)
+        return pretty_unit(t) if _is_unit(t) else t
+
+    out = _BRACKET.sub(bracket, text)
+    out = re.sub(  # "psi (deg)": a unit in parentheses after a word
+        r"(?<= )\(([^()]+)\)",
+        lambda m: f"({pretty_unit(m[1])})" if _is_unit(m[1]) else m.group(0),
+        out,
+    )
+    out = _UNIT_TOKEN.sub(token, out)
+    out = _GREEK_SUB.sub(lambda m: _GREEK[m[1]] + m[2].translate(_SUBSCRIPT), out)
+    out = re.sub(r"(?<![A-Za-z_])(omega|alpha)(?=\^)", lambda m: _GREEK[m[1]], out)
+    out = re.sub(r"(?<=[A-Z])\((phi|theta|psi)\)", lambda m: f"({_GREEK[m[1]]})", out)
+    out = re.sub(r"(?<![A-Za-z])dE_max\b", "ΔEₘₐₓ", out)
+    out = re.sub(r"(?<![A-Za-z])pi(?=\^)", "π", out)
+    out = re.sub(r"(?<=[\w)ₐₑᵢₘₙₒₓ])\^(-?\d+)\b", lambda m: m[1].translate(_PRETTY_EXP), out)
+    return out

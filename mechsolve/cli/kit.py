@@ -342,6 +342,29 @@ FILE_ARG = click.argument("file", type=click.Path(dir_okay=False, path_type=Path
 VARIANT = click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
 NO_PLOTS = click.option("--no-plots", is_flag=True, help="Write the CSV only.")
 QUIET = click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+UNITS = click.option(
+    "--units",
+    "units",
+    metavar="SI|file|MAP",
+    help="Units of the CSV, the plots and the summary: 'file' (the default: the file's "
+    "'units:', e.g. mm and deg, with mm/s, deg/s, N*mm), 'SI' (m, m/s, deg, rad/s, N, "
+    "N*m, J, W) or a map such as 'length=mm,angle=deg,force=kN' (keys length, angle, "
+    "force, time, torque, energy, power) over the file's.",
+)
+
+
+def output_units(mech, text: str | None):
+    """The :class:`~mechsolve.base.units.OutputUnits` of ``--units text`` for ``mech``
+    (its file's units when not given); a bad map is an :class:`InputError`."""
+    from mechsolve.base.units import UnitError, parse_output_units
+
+    base = mech.output_units()
+    if text is None:
+        return base
+    try:
+        return parse_output_units(text, base)
+    except UnitError as exc:
+        raise InputError(f"--units {text!r}: {exc}") from None
 
 
 def outdir_option(what: str = "results"):

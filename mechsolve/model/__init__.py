@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits, file_output_units
 from mechsolve.joints.base import GROUND, Joint  # noqa: F401 (the model holds joints)
 from mechsolve.joints.revolute import PinJoint  # noqa: F401
 from mechsolve.joints.slider import SliderJoint  # noqa: F401
@@ -250,6 +251,7 @@ class Mechanism:
     gravity: tuple[float, float] | None = None  # None: (0, -9.81) if any link has mass
     loads: list[Load] = field(default_factory=list)
     length_unit: str = "m"
+    angle_unit: str | None = None  # the file's units.angle, None when it names none
     source: Source | None = field(default=None, repr=False)
     # instants to solve besides the sweep: (u, u', u'', label), see mechsolve.analyses.instants
     instants: list[tuple[float, float, float, str]] = field(default_factory=list)
@@ -285,6 +287,12 @@ class Mechanism:
     @property
     def link_names(self) -> list[str]:
         return [lk.name for lk in self.links]
+
+    def output_units(self) -> OutputUnits:
+        """The units results are shown in by default: the file's ``units:`` (lengths in
+        its length unit, angles and, when it names one, angular rates in its angle unit;
+        torques in N times its length unit), SI for a file without them."""
+        return file_output_units(self.length_unit, self.angle_unit)
 
     def point_owners(self) -> dict[str, list[str]]:
         """For every point name, the links (``ground`` included) that carry it."""

@@ -173,6 +173,7 @@ def from_source(src: Source, variant: str | None = None) -> Mechanism:
         gravity=gravity,
         loads=loads,
         length_unit=r.length_unit,
+        angle_unit=r.angle_unit if _names_angle(data.get("units")) else None,
         source=src,
     )
     if "instants" in data:
@@ -213,3 +214,8 @@ def variants(path: str | Path) -> list[str]:
     src = load_file(path)
     v = src.data.get("variants")
     return list(v) if isinstance(v, dict) else []
+
+
+def _names_angle(units: object) -> bool:
+    """Whether the file's ``units:`` names the angle unit."""
+    return isinstance(units, dict) and "angle" in units

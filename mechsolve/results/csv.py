@@ -10,6 +10,7 @@ positions never holds more than one chunk in memory.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import os
 from pathlib import Path
@@ -18,6 +19,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from mechsolve.base.atomic import WriteFailed, commit, new_temporary
+from mechsolve.base.units import OutputUnits
 
 if TYPE_CHECKING:  # what the writer reads of a table (mechsolve.results.results.Results has it)
     from collections.abc import Sequence
@@ -35,6 +37,42 @@ def format_values(values: np.ndarray) -> list[str]:
 
 
 BATCH = 4096
+
+
+class InUnits:
+    """A table's columns shown in other units (see
+    :class:`~mechsolve.base.units.OutputUnits`): each column whose unit is one of the SI
+    units the results are computed in is scaled and relabelled; the rest (``-``) is kept.
+    The table itself stays SI; this view is what the writer reads."""
+
+    def __init__(self, table: Results, units: OutputUnits) -> None:
+        self.table = table
+        self.units = units
+
+    def columns(self) -> list:
+        out = []
+        for c in self.table.columns():
+            k, unit = self.units.convert(c.unit)
+            if k != 1.0 or unit != c.unit:
+                c = dataclasses.replace(c, unit=unit, values=np.asarray(c.values, float) * k)
+            out.append(c)
+        return out
+
+    def status(self) -> list[str]:
+        return self.table.status()
+
+    def methods(self) -> list[str]:
+        return self.table.methods()
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+
+def in_units(table: Results, units: OutputUnits | None) -> Results:
+    """``table`` as written in ``units`` (itself for ``None`` or the SI output)."""
+    if units is None or units.is_si:
+        return table
+    return InUnits(table, units)  # type: ignore[return-value]
 
 
 class CsvStream:
@@ -115,11 +153,12 @@ class CsvStream:
                 pass
 
 
-def write_csv(results: Results, path: str | os.PathLike) -> Path:
-    """Write ``results`` as CSV at ``path`` (atomically) and return the path."""
+def write_csv(results: Results, path: str | os.PathLike, units: OutputUnits | None = None) -> Path:
+    """Write ``results`` as CSV at ``path`` (atomically) in ``units`` (default SI) and
+    return the path."""
     stream = CsvStream(path)
     try:
-        stream.write(results)
+        stream.write(in_units(results, units))
     except BaseException:
         stream.abort()
         raise

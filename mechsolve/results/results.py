@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.base.units import OutputUnits
 from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
 from mechsolve.core.work import driver_work_why
@@ -483,7 +484,9 @@ class Results(Summary):
             return ["closed form" if ok else "" for ok in self.ok]
         return [str(x) if ok else "" for x, ok in zip(m, self.ok)]
 
-    def to_csv(self, path) -> Path:
-        """Write the table as CSV (see :mod:`mechsolve.results.csv`); return the path."""
+    def to_csv(self, path, units: OutputUnits | None = None) -> Path:
+        """Write the table as CSV (see :mod:`mechsolve.results.csv`) in ``units`` (SI
+        when not given; ``self.mechanism.output_units()`` for the file's); return the
+        path."""
 
-        return write_csv(self, path)
+        return write_csv(self, path, units)

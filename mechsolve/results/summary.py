@@ -7,8 +7,24 @@ import math
 
 import numpy as np
 
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.sweep import angle_deg
 from mechsolve.model.motion import describe
+
+
+def shown(res) -> OutputUnits:
+    """The units ``res``'s summary shows its figures in (set by :meth:`Summary.summary`)."""
+    return getattr(res, "_shown", SI_OUTPUT)
+
+
+def _kilo(values, unit: str, U: OutputUnits) -> tuple[float, str]:
+    """``(divisor, unit)`` that ``values`` (SI, in ``unit``) are printed with: the shown
+    unit's factor, and kN or kN*m for SI forces and torques of 1e4 and more."""
+    k, target = U.convert(unit)
+    big = np.nanmax(np.abs(values)) * k if np.any(np.isfinite(values)) else 0.0
+    if target in ("N", "N*m") and big >= 1e4:
+        return 1e3 / k, "k" + target
+    return 1.0 / k, target
 
 
 class Summary:
@@ -27,14 +43,25 @@ class Summary:
         lines += _transmission_lines(self, src)
         return lines
 
-    def work_text(self) -> str:
-        """``work of the driver per cycle: 31.74 kJ``, or why it is not defined."""
+    def work_text(self, units: OutputUnits | None = None) -> str:
+        """``work of the driver per cycle: 31.74 kJ``, or why it is not defined; in
+        ``units`` (default: the summary's)."""
         per = "per cycle" if self.is_full_cycle() else "over the sweep"
         work, why = self._work_why()
         if not math.isfinite(work):
             return f"work of the driver {per}: not defined ({why or 'not enough positions'})"
-        wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
-        return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
+        U = units or shown(self)
+        if U.energy == "J":
+            wscale, wsym = (1e3, "k") if abs(work) >= 1e4 else (1.0, "")
+            return f"work of the driver {per}: {work / wscale:.6g} {wsym}J"
+        return f"work of the driver {per}: {U.text(work, 'J')}"
+
+    def format_u(self, u: float) -> str:
+        """A driver value in words in the shown units: ``driver angle 246.8°``."""
+        U = shown(self)
+        if self.linear:
+            return f"driver position {U.text(u, 'm')}"
+        return f"driver angle {U.text(angle_deg(u), 'deg')}"
 
     def friction_lines(self) -> list[str]:
         """With friction in the joints: the losses per joint over the sweep, the
@@ -98,13 +125,14 @@ class Summary:
         """The driver position of sample ``i`` in words, e.g. ``driver angle 246.8°``."""
         u = float(self.u[i])
         if self.linear:
-            return self.analysis.format_u(u)
+            return self.format_u(u)
+        U = shown(self)
         deg = angle_deg(u)
         if i != 0 and deg == 0 and u != self.u[0] and i == len(self.u) - 1:
             deg = 360.0  # the end of a full turn, not its start again
-        text = f"driver angle {deg:.6g}°"
+        text = f"driver angle {U.text(deg, 'deg')}"
         if self.u[0] != 0 or self.mechanism.driver.direction < 0:
-            text += f" ({float(self.driver_travel[i]):.6g}° from the start)"
+            text += f" ({U.text(float(self.driver_travel[i]), 'deg')} from the start)"
         return text
 
     def motion_events(self) -> list[tuple[float, float, float]]:
@@ -123,32 +151,45 @@ class Summary:
         if law is None:
             return []
 
-        unit = "m/s^2" if self.linear else "rad/s^2"
+        U = shown(self)
+        k, unit = U.convert("m/s^2" if self.linear else "rad/s^2")
+        unit = pretty_unit(unit)
         lines = [f"  driver motion: {describe(law)}"]
         jumps = self.motion_events()
         if jumps:
             lines.append(
                 "  driver acceleration jumps (position and speed continuous) at "
-                + ", ".join(f"t = {t:.6g} s ({a:.6g} -> {b:.6g} {unit})" for t, a, b in jumps)
+                + ", ".join(
+                    f"t = {t:.6g} s ({a * k:.6g} -> {b * k:.6g} {unit})" for t, a, b in jumps
+                )
             )
         return lines
 
-    def summary(self, figures: Summary | None = None) -> str:
+    def summary(self, figures: Summary | None = None, units: OutputUnits | None = None) -> str:
         """A short text summary: positions solved, ranges of the outputs, anything unusual.
 
         ``figures``: a finer sweep of the same motion (:func:`mechsolve.api.for_plots`) to
         take the figures from (limit positions, transmission angles, the driving effort's
         extremes, mean and work, peak reactions, power balance), so that they are the
-        numbers the plots and the report's figures show, from one computation."""
+        numbers the plots and the report's figures show, from one computation.
+
+        ``units``: the units the figures are printed in (SI when not given; see
+        :class:`~mechsolve.base.units.OutputUnits`)."""
+        self._shown = units or SI_OUTPUT
+        if figures is not None:
+            figures._shown = self._shown
         n = len(self.u)
         lines = []
         mech = self.mechanism
+        U = self._shown
         unit = "m" if self.linear else "deg"
         dv = self.driver_value
+        span = f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}"
+        if not U.is_si and n:
+            span = f"from {U.text(dv[0], unit)} to {U.text(dv[-1], unit)}"
         lines.append(
             f"{mech.name}: {int(np.sum(self.ok))} of {n} positions solved, "
-            f"driver {mech.driver.joint} "
-            f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}" + (f" over {self.t[-1]:.6g} s" if n else "")
+            f"driver {mech.driver.joint} " + span + (f" over {self.t[-1]:.6g} s" if n else "")
         )
         lines += self.motion_summary()
         lines += _start_and_failure_lines(self)
@@ -170,9 +211,12 @@ class Summary:
         du.sort()
         m = du.size // 2
         step = float(du[m]) if du.size % 2 else float(0.5 * (du[m - 1] + du[m]))
+        U = shown(self)
         if self.linear:
-            return f"{step * 1e3:.4g} mm" if step < 1 else f"{step:.4g} m"
-        return f"{math.degrees(step):.4g}°"
+            if U.is_si:
+                return f"{step * 1e3:.4g} mm" if step < 1 else f"{step:.4g} m"
+            return U.text(step, "m", ".4g")
+        return U.text(math.degrees(step), "deg", ".4g")
 
     def force_summary(self, figures: Summary | None = None) -> list[str]:
         """The summary's lines about the forces; ``figures``: a finer sweep of the same
@@ -186,7 +230,13 @@ class Summary:
         g = src.forces
         kind, unit = self.effort_name
         e = src.driving_effort  # at a singular position its limit along the motion
-        scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")
+        U = shown(self)
+        scale, unit = _kilo(e, unit, U)
+        # the reactions in kN when the effort is printed in kN or kN*m (SI forces)
+        kf = U.convert("N")[0]
+        kilo = unit in ("kN", "kN*m") and U.force == "N"
+        fscale, funit = (1e3 / kf, "kN") if kilo else (1.0 / kf, U.force)
+        unit, funit = pretty_unit(unit), pretty_unit(funit)
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
         rms = float(np.sqrt(np.nanmean(e**2)))
         mean, what = src.mean_effort()
@@ -194,9 +244,9 @@ class Summary:
         # them between the samples: max(input.torque) in requirements:)
         lines.append(
             f"  driving {kind} ({src.sample_spacing()} samples): "
-            f"max {e[imax] / scale:.6g} {sym}{unit} at {src.describe_u(imax)}, "
-            f"min {e[imin] / scale:.6g} {sym}{unit} at {src.describe_u(imin)}, "
-            f"RMS {rms / scale:.6g} {sym}{unit}, {what} {mean / scale:.6g} {sym}{unit}"
+            f"max {e[imax] / scale:.6g} {unit} at {src.describe_u(imax)}, "
+            f"min {e[imin] / scale:.6g} {unit} at {src.describe_u(imin)}, "
+            f"RMS {rms / scale:.6g} {unit}, {what} {mean / scale:.6g} {unit}"
         )
         lines.append("  " + src.work_text())
         lines += src.friction_lines()
@@ -207,17 +257,18 @@ class Summary:
             mag = np.where(g.ok, mag, np.nan)
             if np.any(np.isfinite(mag)):
                 i = int(np.nanargmax(mag))
-                peaks.append(f"{j.name} {mag[i] / scale:.4g} {sym}N at {src.describe_u(i)}")
+                peaks.append(f"{j.name} {mag[i] / fscale:.4g} {funit} at {src.describe_u(i)}")
         lines.append("  peak reactions: " + "; ".join(peaks))
         for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
-            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.analysis.format_u)
+            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u)
             lines += ["  " + t for t in more]
             self.warnings += warn
         res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
         ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
         lines.append(
-            f"  power balance: max residual {res:.3g} W ({rel:.2g} of the largest power term)"
+            f"  power balance: max residual {U.text(res, 'W', '.3g')} "
+            f"({rel:.2g} of the largest power term)"
         )
         if rel > 1e-6:
             self.warnings.append(
@@ -273,7 +324,7 @@ def _event_lines(res) -> list[str]:
         return []
     parts = []
     for e in ev[:8]:
-        where = res.analysis.format_u(e.u)
+        where = res.format_u(e.u)
         if e.kind == "bifurcation":
             parts.append(
                 f"{e.group} passes a bifurcation at {where}: followed the smooth motion "
@@ -284,7 +335,7 @@ def _event_lines(res) -> list[str]:
         else:
             parts.append(
                 f"{e.group} near-singular at {where} (transmission angle "
-                f"{math.degrees(e.transmission):.3g}°)"
+                f"{shown(res).text(math.degrees(e.transmission), 'deg', '.3g')})"
             )
     more = f"; and {len(ev) - 8} more" if len(ev) > 8 else ""
     return ["  singular positions: " + "; ".join(parts) + more]
@@ -323,25 +374,30 @@ def _limit_lines(res, src) -> list[str]:
         return []
     parts = []
     ratios = []
+    U = shown(res)
+
+    def deg(x: float, fmt: str = ".6g") -> str:
+        return U.text(math.degrees(x), "deg", fmt)
+
     for lp in lim:
-        fmt = res.analysis.format_u
+        fmt = res.format_u
         a = " and at ".join(fmt(u) for u in lp.u_lows)  # an extreme reached twice
         b = " and at ".join(fmt(u) for u in lp.u_highs)
         if lp.kind == "rocker":
             parts.append(
-                f"rocker {lp.name} {math.degrees(lp.low):.6g}° at {a} to "
-                f"{math.degrees(lp.high):.6g}° at {b} (swing {math.degrees(lp.swing):.6g}°)"
+                f"rocker {lp.name} {deg(lp.low)} at {a} to "
+                f"{deg(lp.high)} at {b} (swing {deg(lp.swing)})"
             )
         else:
             parts.append(
-                f"slider {lp.name} {lp.low:.6g} m at {a} to {lp.high:.6g} m at {b} "
-                f"(stroke {lp.swing:.6g} m)"
+                f"slider {lp.name} {U.text(lp.low, 'm')} at {a} to {U.text(lp.high, 'm')} "
+                f"at {b} (stroke {U.text(lp.swing, 'm')})"
             )
         if lp.time_ratio is not None:
             ratios.append(
                 f"{lp.name} K = {lp.time_ratio:.4g} "
-                f"({math.degrees(max(lp.forward, lp.back)):.5g}° "
-                f"/ {math.degrees(min(lp.forward, lp.back)):.5g}° of the driver)"
+                f"({deg(max(lp.forward, lp.back), '.5g')} "
+                f"/ {deg(min(lp.forward, lp.back), '.5g')} of the driver)"
             )
     lines = ["  limit positions: " + "; ".join(parts)]
     if ratios:
@@ -357,7 +413,9 @@ def _transmission_lines(res, src) -> list[str]:
     return [
         "  minimum transmission angle: "
         + "; ".join(
-            f"{t.group} {math.degrees(t.angle):.4g}° at {res.analysis.format_u(t.u)}" for t in tr
+            f"{t.group} {shown(res).text(math.degrees(t.angle), 'deg', '.4g')} at "
+            f"{res.format_u(t.u)}"
+            for t in tr
         )
     ]
 
@@ -376,13 +434,9 @@ def _start_and_failure_lines(res) -> list[str]:
             f"  {what} at {res.describe_u(f.first)}"
             + (f" to {res.describe_u(f.last)}" if f.last != f.first else "")
             + f" ({f.last - f.first + 1} position(s)): {f.reason}"
+            + (f"; it stops closing at {res.format_u(f.edge_in)}" if np.isfinite(f.edge_in) else "")
             + (
-                f"; it stops closing at {res.analysis.format_u(f.edge_in)}"
-                if np.isfinite(f.edge_in)
-                else ""
-            )
-            + (
-                f"; it closes again from {res.analysis.format_u(f.edge_out)}"
+                f"; it closes again from {res.format_u(f.edge_out)}"
                 if np.isfinite(f.edge_out)
                 else ""
             )
@@ -393,6 +447,9 @@ def _start_and_failure_lines(res) -> list[str]:
 def _point_lines(res) -> list[str]:
     """The ranges of the first twelve points (and their largest speed)."""
     lines = []
+    U = shown(res)
+    k, unit = U.convert("m")
+    unit = pretty_unit(unit)
     for p in res.point_names()[:12]:
         m = res.point(p)
         if np.any(np.isfinite(m.x)):
@@ -400,9 +457,9 @@ def _point_lines(res) -> list[str]:
             # no speed where none was determined (a singular start: its rates are not)
             known = speed is not None and bool(np.any(np.isfinite(speed)))
             lines.append(
-                f"  {p}: x {np.nanmin(m.x):.6g} .. {np.nanmax(m.x):.6g} m, "
-                f"y {np.nanmin(m.y):.6g} .. {np.nanmax(m.y):.6g} m"
-                + (f", |v| max {np.nanmax(speed):.4g} m/s" if known else "")
+                f"  {p}: x {np.nanmin(m.x) * k:.6g} .. {np.nanmax(m.x) * k:.6g} {unit}, "
+                f"y {np.nanmin(m.y) * k:.6g} .. {np.nanmax(m.y) * k:.6g} {unit}"
+                + (f", |v| max {U.text(np.nanmax(speed), 'm/s', '.4g')}" if known else "")
             )
     if len(res.point_names()) > 12:
         lines.append(f"  ... and {len(res.point_names()) - 12} more points in the CSV")
@@ -421,7 +478,8 @@ def _solver_lines(res) -> list[str]:
         + (f"; Newton iterations max {int(its.max())}" if its.size and its.max() > 0 else "")
         + (f"; scipy fallback at {fallback} position(s)" if fallback else "")
         + (
-            f"; max constraint residual {np.nanmax(res.solution.residual):.2g} m"
+            "; max constraint residual "
+            + shown(res).text(np.nanmax(res.solution.residual), "m", ".2g")
             if np.any(res.ok)
             else ""
         )

@@ -10,7 +10,10 @@
   cycle), ``reactions.png`` (magnitudes of all joint reactions) and ``hodographs.png``
   (vector-tip diagrams of the reactions at the fixed hinges).
 
-Every axis names its quantity and unit. matplotlib is imported only here.
+Every axis names its quantity and unit, in the units asked for (an
+:class:`~mechsolve.base.units.OutputUnits`: SI by default, the command line gives the
+file's), written as a report prints them (``mm/s²``, ``kN·m``, ``°``). The results stay
+SI; the values are converted here, where they are drawn. matplotlib is imported only here.
 """
 
 from __future__ import annotations
@@ -22,17 +25,34 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.base.atomic import replacing
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_text, pretty_unit
 
 if TYPE_CHECKING:
     from mechsolve.results.results import Results
 
 
+def pretty_figure(fig) -> None:
+    """Write every text of ``fig`` as a report prints it (see
+    :func:`~mechsolve.base.units.pretty_text`): ``[kg·m²]``, ``N·m``, ``ωₘₐₓ²``."""
+    from matplotlib.text import Text
+
+    if not hasattr(fig, "findobj"):  # not a matplotlib figure: nothing to write
+        return
+    for t in fig.findobj(Text):
+        s = t.get_text()
+        if s and isinstance(s, str):
+            new = pretty_text(s)
+            if new != s:
+                t.set_text(new)
+
+
 def save_figure(fig, path: Path, dpi: int) -> None:
     """Save ``fig`` so that an interrupted run never leaves a half-written image; the
     labels of drawn mechanisms are placed first (:func:`place_labels`), now that the
-    figure's layout is final."""
+    figure's layout is final, and its texts take report units (:func:`pretty_figure`)."""
     path = Path(path)
     place_labels(fig)
+    pretty_figure(fig)
     with replacing(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
 
@@ -73,25 +93,54 @@ def names_of(mech) -> list[str]:
     return out
 
 
-def driver_axis(res: Results) -> tuple[np.ndarray, str]:
+def shown(U: OutputUnits, values, unit: str) -> tuple[np.ndarray, str]:
+    """``values`` (SI, in ``unit``) in the shown units, and that unit as a label prints it."""
+    k, target = U.convert(unit)
+    return np.asarray(values, float) * k, pretty_unit(target)
+
+
+def driver_axis(res: Results, U: OutputUnits = SI_OUTPUT) -> tuple[np.ndarray, str]:
     """The x axis of the curves: it follows the motion. Time for a driver with a motion
     law; else the driver's travel from the start (so that a clockwise crank's curves run
     left to right, as time does), labelled with the start."""
     name = res.mechanism.driver.joint
     if res.mechanism.driver.motion is not None:
-        return res.t, "time [s]"
+        t, unit = shown(U, res.t, "s")
+        return t, f"time [{unit}]"
     start = float(res.u[0]) if len(res.u) else 0.0
     if res.linear:
         if res.mechanism.driver.direction > 0:
-            return res.u, f"driver position ({name}) [m]"
-        return res.driver_travel, f"driver travel ({name}) from {start:.6g} m [m]"
+            x, unit = shown(U, res.u, "m")
+            return x, f"driver position ({name}) [{unit}]"
+        x, unit = shown(U, res.driver_travel, "m")
+        return x, f"driver travel ({name}) from {U.text(start, 'm')} [{unit}]"
     if res.mechanism.driver.direction > 0 and 0 <= start < 2 * np.pi:
-        return np.degrees(res.u), f"driver angle ({name}) [deg]"
+        x, unit = shown(U, np.degrees(res.u), "deg")
+        return x, f"driver angle ({name}) [{unit}]"
     sense = "clockwise" if res.mechanism.driver.direction < 0 else "counter-clockwise"
+    x, unit = shown(U, res.driver_travel, "deg")
     return (
-        res.driver_travel,
-        f"driver angle ({name}) travelled {sense} from {np.degrees(start) % 360:.6g}° [deg]",
+        x,
+        f"driver angle ({name}) travelled {sense} from "
+        f"{U.text(np.degrees(start) % 360, 'deg')} [{unit}]",
     )
+
+
+def length_axes(ax, U: OutputUnits) -> str:
+    """Label an axes' ticks in the shown length unit while its artists stay in metres
+    (round numbers in that unit); return the unit as a label prints it."""
+    k, target = U.convert("m")
+    if k != 1.0:
+        from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+        class _Scaled(MaxNLocator):
+            def tick_values(self, vmin, vmax):
+                return super().tick_values(vmin * k, vmax * k) / k
+
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_locator(_Scaled(nbins="auto", steps=[1, 2, 2.5, 5, 10]))
+            axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v * k:.6g}"))
+    return pretty_unit(target)
 
 
 def draw_mechanism(
@@ -300,7 +349,7 @@ def _hull(pts: np.ndarray) -> np.ndarray:
     return np.array(hull)
 
 
-def plot_trajectories(res: Results, path: Path) -> Path:
+def plot_trajectories(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path:
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 6.5))
     i0 = int(np.flatnonzero(res.ok)[0]) if np.any(res.ok) else 0
@@ -309,8 +358,9 @@ def plot_trajectories(res: Results, path: Path) -> Path:
         m = res.point(p)
         ax.plot(m.x, m.y, "-", lw=1.2, label=f"path of {p}")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    lu = length_axes(ax, U)
+    ax.set_xlabel(f"x [{lu}]")
+    ax.set_ylabel(f"y [{lu}]")
     ax.set_title(f"{res.mechanism.name}: mechanism at the start and point paths")
     ax.grid(True, alpha=0.3)
     if res.point_names():
@@ -321,15 +371,16 @@ def plot_trajectories(res: Results, path: Path) -> Path:
     return path
 
 
-def plot_point(res: Results, name: str, path: Path) -> Path:
+def plot_point(res: Results, name: str, path: Path, U: OutputUnits = SI_OUTPUT) -> Path:
     plt = _plt()
     m = res.point(name)
-    xs, xlabel = driver_axis(res)
+    xs, xlabel = driver_axis(res, U)
     rows = [("position", "m", m.x, m.y)]
     if res.view.has_velocity:
         rows.append(("velocity", "m/s", m.vx, m.vy))
     if res.view.has_acceleration:
         rows.append(("acceleration", "m/s^2", m.ax, m.ay))
+    rows = [(w, *_pair(U, a, b, unit)) for w, unit, a, b in rows]
     fig, axes = plt.subplots(
         len(rows), 2, figsize=(10, 2.8 * len(rows)), sharex=True, squeeze=False
     )
@@ -349,12 +400,18 @@ def plot_point(res: Results, name: str, path: Path) -> Path:
     return path
 
 
-def plot_links(res: Results, path: Path) -> Path | None:
+def _pair(U: OutputUnits, a, b, unit: str) -> tuple[str, np.ndarray, np.ndarray]:
+    """(shown unit, a, b): two arrays in ``unit`` in the shown units."""
+    a, shown_unit = shown(U, a, unit)
+    return shown_unit, a, shown(U, b, unit)[0]
+
+
+def plot_links(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path | None:
     names = res.link_names()
     if not names:
         return None
     plt = _plt()
-    xs, xlabel = driver_axis(res)
+    xs, xlabel = driver_axis(res, U)
     rows = [("angle", "deg")]
     if res.view.has_velocity:
         rows.append(("omega", "rad/s"))
@@ -364,11 +421,11 @@ def plot_links(res: Results, path: Path) -> Path | None:
     for ln in names:
         m = res.link(ln)
         vals = {"angle": np.degrees(m.angle), "omega": m.omega, "alpha": m.alpha}
-        for r, (q, _) in enumerate(rows):
-            axes[r][0].plot(xs, vals[q], lw=1.3, label=ln)
+        for r, (q, unit) in enumerate(rows):
+            axes[r][0].plot(xs, shown(U, vals[q], unit)[0], lw=1.3, label=ln)
     labels = {"angle": "link angle", "omega": "angular velocity", "alpha": "angular acceleration"}
     for r, (q, unit) in enumerate(rows):
-        axes[r][0].set_ylabel(f"{labels[q]} [{unit}]")
+        axes[r][0].set_ylabel(f"{labels[q]} [{pretty_unit(U.convert(unit)[1])}]")
         axes[r][0].grid(True, alpha=0.3)
     axes[0][0].legend(fontsize=7, ncol=3)
     axes[-1][0].set_xlabel(xlabel)
@@ -379,12 +436,12 @@ def plot_links(res: Results, path: Path) -> Path | None:
     return path
 
 
-def plot_sliders(res: Results, path: Path) -> Path | None:
+def plot_sliders(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path | None:
     names = res.slider_names()
     if not names:
         return None
     plt = _plt()
-    xs, xlabel = driver_axis(res)
+    xs, xlabel = driver_axis(res, U)
     rows = [("s", "displacement", "m")]
     if res.view.has_velocity:
         rows.append(("v", "velocity", "m/s"))
@@ -393,10 +450,10 @@ def plot_sliders(res: Results, path: Path) -> Path | None:
     fig, axes = plt.subplots(len(rows), 1, figsize=(9, 2.8 * len(rows)), sharex=True, squeeze=False)
     for sn in names:
         m = res.slider(sn)
-        for r, (q, _, _) in enumerate(rows):
-            axes[r][0].plot(xs, getattr(m, q), lw=1.3, label=sn)
+        for r, (q, _, unit) in enumerate(rows):
+            axes[r][0].plot(xs, shown(U, getattr(m, q), unit)[0], lw=1.3, label=sn)
     for r, (_, label, unit) in enumerate(rows):
-        axes[r][0].set_ylabel(f"slider {label} [{unit}]")
+        axes[r][0].set_ylabel(f"slider {label} [{pretty_unit(U.convert(unit)[1])}]")
         axes[r][0].grid(True, alpha=0.3)
     axes[0][0].legend(fontsize=7)
     axes[-1][0].set_xlabel(xlabel)
@@ -477,19 +534,24 @@ def break_jumps(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
-def _scaled(values: np.ndarray, unit: str) -> tuple[float, str]:
-    big = np.nanmax(np.abs(values)) if np.any(np.isfinite(values)) else 0.0
-    return (1e3, "k" + unit) if big >= 1e4 else (1.0, unit)
+def _scaled(values: np.ndarray, unit: str, U: OutputUnits = SI_OUTPUT) -> tuple[float, str]:
+    """``(divisor, label unit)`` to draw ``values`` (SI, in ``unit``) with: the shown
+    unit, in kN or kN·m for SI forces and torques of 1e4 and more."""
+    k, target = U.convert(unit)
+    big = np.nanmax(np.abs(values)) * k if np.any(np.isfinite(values)) else 0.0
+    if target in ("N", "N*m") and big >= 1e4:
+        return 1e3 / k, pretty_unit("k" + target)
+    return 1.0 / k, pretty_unit(target)
 
 
-def plot_effort(res: Results, path: Path) -> Path:
+def plot_effort(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path:
     """The driving torque (force) against the driver, with its mean and the work."""
     plt = _plt()
-    xs, xlabel = driver_axis(res)
+    xs, xlabel = driver_axis(res, U)
     e = res.driving_effort
     kind, unit = res.effort_name
     mean, what = res.mean_effort()
-    sc, su = _scaled(e, unit)
+    sc, su = _scaled(e, unit, U)
     fig, ax = plt.subplots(figsize=(9, 4.5))
     bx, be = _broken(res, xs, e / sc)
     ax.plot(bx, be, lw=1.6, label=f"driving {kind}")
@@ -498,7 +560,7 @@ def plot_effort(res: Results, path: Path) -> Path:
         ls="--",
         color="C3",
         lw=1.2,
-        label=f"{what} {mean / sc:.6g} {su}; {res.work_text().replace('of the driver ', '')}",
+        label=f"{what} {mean / sc:.6g} {su}; {res.work_text(U).replace('of the driver ', '')}",
     )
     ax.axhline(0, color="0.5", lw=0.8)
     ax.set_xlabel(xlabel)
@@ -523,7 +585,7 @@ def ground_joints(res: Results) -> list[str]:
     return hinges + [j.name for j in on_ground if j.coordinate != "angle"]
 
 
-def plot_hodographs(res: Results, path: Path) -> Path | None:
+def plot_hodographs(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path | None:
     """Vector-tip diagrams (hodographs) of the reactions on the ground: at the fixed
     hinges, and at the sliders on fixed guides (the guide's normal force with its
     components; its tip moves along the guide's normal)."""
@@ -538,7 +600,7 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
     for ax, name in zip(axes.flat, names):
         r = res.reaction(name)
         fx, fy = np.where(res.forces.ok, r["Fx"], np.nan), np.where(res.forces.ok, r["Fy"], np.nan)
-        scale, sym = (1e3, "k") if np.nanmax(np.hypot(fx, fy)) >= 1e4 else (1.0, "")
+        scale, fu = _scaled(np.hypot(fx, fy), "N", U)
         # a force that jumps (a load switching on or off) is drawn as two ends, no chord
         bx, by = break_jumps(*_broken(res, fx / scale, fy / scale, at_switch=True))
         ax.plot(bx, by, "-o", ms=2.5, lw=1.2)
@@ -552,8 +614,8 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
         ax.annotate("start", (fx[i0] / scale, fy[i0] / scale), fontsize=7, color="C3")
         ax.plot([0], [0], "k+", ms=10)
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel(f"{name}.Fx [{sym}N]")
-        ax.set_ylabel(f"{name}.Fy [{sym}N]")
+        ax.set_xlabel(f"{name}.Fx [{fu}]")
+        ax.set_ylabel(f"{name}.Fy [{fu}]")
         slider = res.mechanism.joint(name).magnitude == "N"  # a guide's normal force
         ax.set_title(
             f"{res.joint_label(name)}" + (" (guide normal force)" if slider else ""), fontsize=9
@@ -568,17 +630,17 @@ def plot_hodographs(res: Results, path: Path) -> Path | None:
     return path
 
 
-def plot_reactions(res: Results, path: Path) -> Path:
+def plot_reactions(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path:
     """Magnitudes of all joint reactions against the driver."""
     plt = _plt()
-    xs, xlabel = driver_axis(res)
+    xs, xlabel = driver_axis(res, U)
     fig, ax = plt.subplots(figsize=(9, 4.8))
     mags = {}
     for j in res.mechanism.joints:
         r = res.reaction(j.name)
         mag = np.abs(r[j.magnitude])
         mags[j.name] = np.where(res.forces.ok, mag, np.nan)
-    sc, su = _scaled(np.concatenate(list(mags.values())), "N")
+    sc, su = _scaled(np.concatenate(list(mags.values())), "N", U)
     for j in res.mechanism.joints:
         label = res.joint_label(j.name) + j.magnitude_note
         bx, bm = _broken(res, xs, mags[j.name] / sc)
@@ -597,28 +659,31 @@ def plot_reactions(res: Results, path: Path) -> Path:
 PLOT_FORMATS = ("png", "svg")
 
 
-def write_plots(res: Results, outdir: Path, fmt: str = "png") -> list[Path]:
-    """Write all plots into ``outdir`` as ``fmt`` (png, or svg with its text kept as text);
-    return the files written."""
+def write_plots(
+    res: Results, outdir: Path, fmt: str = "png", units: OutputUnits | None = None
+) -> list[Path]:
+    """Write all plots into ``outdir`` as ``fmt`` (png, or svg with its text kept as text)
+    in ``units`` (SI when not given); return the files written."""
+    U = units or SI_OUTPUT
     from mechsolve.writers.fonts import pyplot
 
     if fmt not in PLOT_FORMATS:
         raise ValueError(f"plot format {fmt!r}: one of {', '.join(PLOT_FORMATS)}")
     pyplot(names_of(res.mechanism))  # fonts for the names; one note if some cannot be drawn
     outdir.mkdir(parents=True, exist_ok=True)
-    written = [plot_trajectories(res, outdir / f"trajectories.{fmt}")]
+    written = [plot_trajectories(res, outdir / f"trajectories.{fmt}", U)]
     for p in res.point_names():
-        written.append(plot_point(res, p, outdir / f"point_{p}.{fmt}"))
+        written.append(plot_point(res, p, outdir / f"point_{p}.{fmt}", U))
     for f in (
-        plot_links(res, outdir / f"links.{fmt}"),
-        plot_sliders(res, outdir / f"sliders.{fmt}"),
+        plot_links(res, outdir / f"links.{fmt}", U),
+        plot_sliders(res, outdir / f"sliders.{fmt}", U),
     ):
         if f is not None:
             written.append(f)
     if res.forces is not None and np.any(res.forces.ok):
-        written.append(plot_effort(res, outdir / f"torque.{fmt}"))
-        written.append(plot_reactions(res, outdir / f"reactions.{fmt}"))
-        h = plot_hodographs(res, outdir / f"hodographs.{fmt}")
+        written.append(plot_effort(res, outdir / f"torque.{fmt}", U))
+        written.append(plot_reactions(res, outdir / f"reactions.{fmt}", U))
+        h = plot_hodographs(res, outdir / f"hodographs.{fmt}", U)
         if h is not None:
             written.append(h)
     return written
@@ -632,8 +697,9 @@ def draw_start(analysis, state, path: Path, title: str) -> Path:
     fig, ax = plt.subplots(figsize=(7, 6))
     draw_mechanism(ax, analysis, state, 0)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    lu = length_axes(ax, analysis.mech.output_units())
+    ax.set_xlabel(f"x [{lu}]")
+    ax.set_ylabel(f"y [{lu}]")
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()

@@ -210,6 +210,9 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
 
 def _save(fig, path: Path, plt, tight: bool = False) -> Path:
     """Write ``fig`` (``tight``: cropped to what is drawn, with a small margin)."""
+    from mechsolve.writers.plots import pretty_figure
+
+    pretty_figure(fig)
     extra = {"bbox_inches": "tight", "pad_inches": 0.12} if tight else {}
     try:
         with replacing(path) as tmp:

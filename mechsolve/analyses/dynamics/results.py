@@ -11,6 +11,7 @@ import numpy as np
 from mechsolve.analyses.dynamics.constants import REST_BAND, REST_BAND_LINEAR, REST_SPAN
 from mechsolve.analyses.dynamics.integrators import _STOPS, Trajectory
 from mechsolve.analyses.dynamics.model import drive_torque
+from mechsolve.base.units import pretty_unit
 from mechsolve.core.solution import angle_deg
 from mechsolve.results.results import Column, Results
 
@@ -172,7 +173,7 @@ class SimulationResults(Results):
             scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")  # as super's
             lines[0] = re.sub(
                 r", RMS [^,]*, time mean",
-                f", RMS over time {rms / scale:.6g} {sym}{unit}, time mean",
+                f", RMS over time {rms / scale:.6g} {pretty_unit(sym + unit)}, time mean",
                 lines[0],
             )
         return lines

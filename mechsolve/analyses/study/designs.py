@@ -29,6 +29,7 @@ import numpy as np
 
 from mechsolve.analyses.study.params import Parameter, make_parameter, parse_option
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits
 from mechsolve.model.parse import from_source
 from mechsolve.model.source import Source
 
@@ -79,6 +80,7 @@ class Study:
     step: float | None = None
     method: str | None = None
     variant: str | None = None
+    units: OutputUnits | None = None  # the units of the table and the designs' CSVs
 
     @property
     def file(self) -> str:

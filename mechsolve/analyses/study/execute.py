@@ -75,7 +75,7 @@ def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
             res = solved()
             fig = design_row(res, mech, figures)
             if results_dir is not None:
-                res.to_csv(Path(results_dir) / f"design-{k:05d}.csv")
+                res.to_csv(Path(results_dir) / f"design-{k:05d}.csv", study.units)
     except AssemblyError as exc:
         row["status"] = f"not assemblable: {exc}"
         row["assembles [-]"] = False

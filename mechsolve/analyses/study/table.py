@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,38 @@ from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.figures import Row
 from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits
+
+UNIT_KEY = re.compile(r"^(?P<name>.*) \[(?P<unit>[^\]]+)\]$")
+
+
+def rows_in_units(study: Study, rows: list[Row], units: OutputUnits | None) -> list[Row]:
+    """The rows with their figures in ``units`` (see
+    :class:`~mechsolve.base.units.OutputUnits`): each figure whose header names one of the
+    SI units the results are computed in is scaled and renamed (``NAME.stroke [m]`` to
+    ``NAME.stroke [mm]``). The parameters keep the unit they were given in, a
+    requirement's value the unit of its limit; ``rows`` is not changed."""
+    if units is None or units.is_si:
+        return rows
+    keep = {"design [-]", "status", *(p.header for p in study.params)}
+    rename: dict[str, tuple[str, float]] = {}
+    out = []
+    for r in rows:
+        new: Row = {}
+        for key, value in r.items():
+            if key not in rename:
+                m = UNIT_KEY.match(key)
+                if key in keep or key.startswith("req.") or not m:
+                    rename[key] = (key, 1.0)
+                else:
+                    k, unit = units.convert(m["unit"])
+                    rename[key] = (f"{m['name']} [{unit}]", k)
+            name, k = rename[key]
+            if k != 1.0 and isinstance(value, float):
+                value = value * k
+            new[name] = value
+        out.append(new)
+    return out
 
 
 def columns(study: Study, rows: list[Row]) -> list[str]:

@@ -373,11 +373,21 @@ def _optimise(prob: _Problem, first: Design, seed, max_time, progress):
     return found, out
 
 
-def function_yaml(d: Design, name: str, spec: FunctionSpec, step_deg: float = 1.0) -> str:
+def function_yaml(
+    d: Design,
+    name: str,
+    spec: FunctionSpec,
+    step_deg: float = 1.0,
+    unit: str = "m",
+    digits: int | None = None,
+) -> str:
     """The mechanism file of a function generator: the crank O2-A (driven from the
     range's start), the coupler A-B, the rocker O4-B; ``mechsolve run`` gives psi as the
-    rocker's angle (``rocker`` link) against the crank's."""
-    from mechsolve.analyses.synth.writer import num
+    rocker's angle (``rocker`` link) against the crank's. Lengths in ``unit``, numbers
+    to ``digits`` significant digits (every digit for ``None``)."""
+    from mechsolve.analyses.synth.writer import Numbers
+
+    f = Numbers(unit, None, digits)
 
     a, c = d.extra["signed"]
     b, fr = d.lengths["coupler"], d.lengths["frame"]
@@ -396,16 +406,16 @@ def function_yaml(d: Design, name: str, spec: FunctionSpec, step_deg: float = 1.
         f"{math.degrees(spec.psi_range):.6f} deg; angles from the frame line O2 -> O4.",
         f"# Largest structural error over the range: {err:.6f} deg (the synthesis' model).",
         f"name: {name}",
-        "units: {length: m, angle: deg}",
+        f.units_line,
         "",
         "ground:",
         "  O2: [0, 0]",
-        f"  O4: [{num(fr)}, 0]",
+        f"  O4: [{f.len(fr)}, 0]",
         "",
         "links:",
-        f"  crank: {{points: {{O2: [0, 0], A: [{num(a)}, 0]}}}}",
-        f"  coupler: {{points: {{A: [0, 0], B: [{num(b)}, 0]}}}}",
-        f"  rocker: {{points: {{O4: [0, 0], B: [{num(c)}, 0]}}}}",
+        f"  crank: {{points: {{O2: [0, 0], A: [{f.len(a)}, 0]}}}}",
+        f"  coupler: {{points: {{A: [0, 0], B: [{f.len(b)}, 0]}}}}",
+        f"  rocker: {{points: {{O4: [0, 0], B: [{f.len(c)}, 0]}}}}",
         "",
         "joints:",
         "  O2: [ground, crank]",
@@ -417,8 +427,8 @@ def function_yaml(d: Design, name: str, spec: FunctionSpec, step_deg: float = 1.
         f"  - B {side} of O4 -> A",
         "",
         f"driver: {{joint: O2, speed: 1 rad/s, direction: {direction}, "
-        f"start: {num(math.degrees(d.extra['phi_start']))} deg}}",
-        f"sweep: {{range: {_deg(abs(spec.phi_range))} deg, step: {num(step_deg)} deg}}",
+        f"start: {f.ang(math.degrees(d.extra['phi_start']))} deg}}",
+        f"sweep: {{range: {_deg(abs(spec.phi_range))} deg, step: {f.ang(step_deg)} deg}}",
         "",
     ]
     return "\n".join(lines)

@@ -31,9 +31,12 @@ from mechsolve.base.errors import InputError
 __all__ = ["solve_optimised", "confirm_optimised", "describe_optimised", "write_plot"]
 
 
-def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
+def solve_optimised(
+    r: Any, method: str, name: str, solution: int | None, digits: int | None = None, **kw
+):
     """(designs, chosen, mechanism text, check) of a function or path problem read by
-    ``r`` (the problem file's section reader)."""
+    ``r`` (the problem file's section reader); the text's numbers to ``digits``
+    significant digits (every digit for ``None``), its lengths in the problem's unit."""
     if method == "function":
         spec = _function_spec(r)
         from mechsolve.analyses.synth.function_gen import function_yaml, solve_function
@@ -41,7 +44,7 @@ def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
         res = solve_function(spec, **kw)
         designs = res.designs
         chosen = _choose(designs, solution, key=lambda d: d.extra["max_error"])
-        text = function_yaml(chosen, name, spec)
+        text = function_yaml(chosen, name, spec, unit=r.length, digits=digits)
         return designs, chosen, text, {"result": res, "spec": spec, "search": res.search}
     from mechsolve.analyses.synth.path_gen import path_yaml, read_path, solve_path
 
@@ -52,7 +55,7 @@ def solve_optimised(r: Any, method: str, name: str, solution: int | None, **kw):
         why = res.why or "no design met the constraints"
         raise r.err((), f"no linkage found: {why}")
     chosen = _choose(designs, solution, key=lambda d: d.extra["objective"])
-    text = path_yaml(chosen, name, spec)
+    text = path_yaml(chosen, name, spec, digits=digits)
     return designs, chosen, text, {"result": res, "spec": spec, "search": res.search}
 
 
@@ -303,6 +306,7 @@ def write_plot(out: Any, path: Path) -> Path:
     """Target against achieved (by mechsolve's run of the written file), as a PNG."""
     from mechsolve.base.atomic import replacing
     from mechsolve.writers.fonts import pyplot
+    from mechsolve.writers.plots import pretty_figure
 
     plt = pyplot()
     if out.method in ("four-positions", "five-positions"):
@@ -310,6 +314,7 @@ def write_plot(out: Any, path: Path) -> Path:
         from mechsolve.analyses.synth.burmester5 import plot_five
 
         fig = plot_curves(plt, out) if out.method == "four-positions" else plot_five(plt, out)
+        pretty_figure(fig)
         try:
             with replacing(path, suffix=".png") as tmp:
                 fig.savefig(tmp, format="png", dpi=110)
@@ -347,6 +352,7 @@ def write_plot(out: Any, path: Path) -> Path:
         ax1.legend()
     ax1.set_title(f"{out.name}: {out.chosen.family}")
     fig.tight_layout()
+    pretty_figure(fig)
     try:
         with replacing(path, suffix=".png") as tmp:
             fig.savefig(tmp, format="png", dpi=110)

@@ -682,10 +682,14 @@ def _design(batch: Batch, names: list[str], x: np.ndarray, family: str) -> Desig
 # -- the written file and its check -----------------------------------------------------------
 
 
-def path_yaml(d: Design, name: str, spec: PathSpec) -> str:
-    """The template with the design's numbers, started at the first target's crank angle,
-    swept to the last (a full turn for a closed path), on the design's branch."""
+def path_yaml(d: Design, name: str, spec: PathSpec, digits: int | None = None) -> str:
+    """The template with the design's numbers (in the template's units, to ``digits``
+    significant digits, every digit for ``None``), started at the first target's crank
+    angle, swept to the last (a full turn for a closed path), on the design's branch."""
     import yaml
+
+    def g(x: float) -> str:
+        return repr(float(x)) if digits is None else format(float(x), f".{digits}g")
 
     data = copy.deepcopy(spec.data)
     data.pop("study", None)
@@ -700,7 +704,7 @@ def path_yaml(d: Design, name: str, spec: PathSpec) -> str:
             from mechsolve.base.units import parse_unit
 
             shown = val / parse_unit(v.unit).factor
-        node[v.path[-1]] = f"{shown!r} {v.unit}"
+        node[v.path[-1]] = f"{g(shown)} {v.unit}"
     u = d.extra["u"]
     n = spec.names
     data["name"] = name
@@ -712,7 +716,7 @@ def path_yaml(d: Design, name: str, spec: PathSpec) -> str:
         side = "left" if d.extra["sigma"] > 0 else "right"
         data["assembly"] = [f"{n['B']} {side} of {n['A']} -> {n['O4']}"]
     drv = dict(data.get("driver") or {})
-    drv["start"] = f"{math.degrees(float(u[0]))!r} deg"
+    drv["start"] = f"{g(math.degrees(float(u[0])))} deg"
     data["driver"] = drv
     travel = TWO_PI if spec.closed else abs(float(u[-1] - u[0]))
     data["sweep"] = {"range": f"{math.degrees(max(travel, 1e-9)):.12g} deg", "step": "1 deg"}

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from mechsolve.analyses.synth.common import RULES, Design, pick
+from mechsolve.analyses.synth.writer import SIGNIFICANT, Numbers
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.model.source import Source, load_file
@@ -59,6 +60,7 @@ class Outcome:
     yaml: str | None = None
     check: dict[str, Any] = field(default_factory=dict)
     text: str = ""
+    unit: str = "m"  # the problem's length unit: the written file's and the printed text's
 
 
 class _Reader:
@@ -159,17 +161,20 @@ def solve_problem(
     seed: int | None = 0,
     max_time: float | None = None,
     progress=None,
+    digits: int | None = SIGNIFICANT,
 ) -> Outcome:
     """Read a problem file, solve it, pick a design (by ``rule``, or the ``solution``-th
-    listed, from 1) and write its mechanism text. ``seed``, ``max_time`` (s) and
-    ``progress`` (called with the generation and the best objective) are for the
-    optimising methods (function, path)."""
+    listed, from 1) and write its mechanism text: lengths in the problem's unit, to
+    ``digits`` significant digits (every digit for ``None``; the file's ``round``
+    rounds the lengths instead). ``seed``, ``max_time`` (s) and ``progress`` (called
+    with the generation and the best objective) are for the optimising methods
+    (function, path)."""
     from mechsolve.analyses.synth.writer import mechanism_yaml
 
     src, method = read(path)
     name = str(src.data.get("name") or Path(path).stem)
     if method in OPTIMISED:
-        return _solve_optimised(src, method, name, rule, solution, seed, max_time, progress)
+        return _solve_optimised(src, method, name, rule, solution, seed, max_time, progress, digits)
     rule = rule or src.data.get("pick") or "transmission"
     if rule not in RULES:
         raise src.error(("pick",), f"unknown rule {rule!r}: choose one of {', '.join(RULES)}")
@@ -212,13 +217,15 @@ def solve_problem(
             chosen = pick(designs, rule)
         except InputError as exc:
             raise r.err((), exc.message) from None
-    text = mechanism_yaml(chosen, name, round_to, **kw)
-    out = Outcome(name, method, designs, chosen, text)
+    text = mechanism_yaml(chosen, name, round_to, unit=r.length, digits=digits, **kw)
+    out = Outcome(name, method, designs, chosen, text, unit=r.length)
     out.text = describe(out, rule)
     return out
 
 
-def _solve_optimised(src, method: str, name: str, rule, solution, seed, max_time, progress):
+def _solve_optimised(
+    src, method: str, name: str, rule, solution, seed, max_time, progress, digits=None
+):
     """A problem solved by optimisation (function, path generation): its designs are
     listed by their error, at full precision (no ``pick`` rule, no rounding)."""
     from mechsolve.analyses.synth.optproblem import solve_optimised
@@ -239,7 +246,7 @@ def _solve_optimised(src, method: str, name: str, rule, solution, seed, max_time
 
     r = _Reader(src, method)
     designs, chosen, text, check = solve_optimised(
-        r, method, name, solution, seed=seed, max_time=max_time, progress=progress
+        r, method, name, solution, digits, seed=seed, max_time=max_time, progress=progress
     )
     out = Outcome(name, method, designs, chosen, text, check)
     out.text = describe_optimised(out)
@@ -451,12 +458,13 @@ def _window(r: _Reader, path: Path, name: str) -> Outcome:
 def describe(out: Outcome, rule: str) -> str:
     """The designs as a table, the rule and the choice."""
     lines = [f"{out.name}: {out.method}, {len(out.designs)} solution(s)"]
+    f = Numbers(out.unit)
     for i, d in enumerate(out.designs, 1):
-        lens = ", ".join(f"{k} {v:.6f} m" for k, v in d.lengths.items())
+        lens = ", ".join(f"{k} {f.text(v)}" for k, v in d.lengths.items())
         mark = "*" if d is out.chosen else " "
         status = "" if d.valid else " INVALID: " + "; ".join(d.notes)
         k = f", K = {d.time_ratio:.6f}" if d.time_ratio else ""
-        g = ", ".join(f"{n} ({p[0]:.6f}, {p[1]:.6f})" for n, p in d.ground.items())
+        g = ", ".join(f"{n} ({f.text(p[0])}, {f.text(p[1])})" for n, p in d.ground.items())
         lines.append(f" {mark}{i}. {d.family}: {lens}; pivots {g}")
         mu = (
             f"{math.degrees(d.min_transmission):.4f} deg"
@@ -499,7 +507,10 @@ def confirm(out: Outcome) -> str:
             what = "the line" if off else lp.name
             parts.append(f"{what} {lo:.6f} .. {hi:.6f} deg (swing {hi - lo:.6f} deg)")
         else:
-            parts.append(f"{lp.name} {lp.low:.6f} .. {lp.high:.6f} m (stroke {lp.swing:.6f} m)")
+            f = Numbers(out.unit)
+            parts.append(
+                f"{lp.name} {f.text(lp.low)} .. {f.text(lp.high)} (stroke {f.text(lp.swing)})"
+            )
         if lp.time_ratio is not None:
             parts[-1] += f", K = {lp.time_ratio:.6f}"
     tr = res.transmission_angles()

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     FILE_ARG,
@@ -70,7 +71,7 @@ def cam(file: Path, outdir, variant, no_plots, no_dxf, quiet) -> None:
     if not no_plots:
         written += write_plots(res, outdir)
     if not quiet:
-        click.echo(res.summary())
+        click.echo(pretty_text(res.summary()))
         click.echo(
             f"  wrote {len(written)} file(s) to {outdir}/: " + ", ".join(p.name for p in written)
         )

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     NO_PLOTS,
@@ -121,6 +122,6 @@ def compare(
         with writing(report, "--report"):
             written.append(write_compare_report(result, report))
     if not quiet:
-        click.echo(result.text())
+        click.echo(pretty_text(result.text()))
         click.echo("  wrote " + ", ".join(str(p) for p in written))
     finish(check_failed=result.check_failed)

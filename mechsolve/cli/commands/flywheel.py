@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     FILE_ARG,
@@ -98,6 +99,6 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     from mechsolve.analyses.dynamics.plots import write_energy_mass_plot, write_energy_plot
 
     paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
-    click.echo(res.text())
+    click.echo(pretty_text(res.text()))
     click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
     finish(check_failed=res.check_missed())

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
 
 SHEET_SUFFIXES = (".png", ".svg")
@@ -94,7 +95,7 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
         write_text(txt, text + "\n")
         written.append(txt)
     if not quiet:
-        click.echo(text)
+        click.echo(pretty_text(text))
         where = f"{outdir}/: " if sheet is None else ""
         click.echo(f"  wrote {where}" + ", ".join(str(p.name) for p in written))
     finish()

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     EXIT_CHECK_FAILED,
@@ -83,7 +84,7 @@ def report(file: Path, output, variant, pdf, paper, frames, polygons_at, watch, 
             file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper
         )
         if not quiet:
-            click.echo(done.text())
+            click.echo(pretty_text(done.text()))
             click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))
         if done.incomplete:
             warn("the report is incomplete: its summary says what is missing")

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from mechsolve.base.errors import InputError, SolverError
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     EXIT_CHECK_FAILED,
@@ -16,10 +17,12 @@ from mechsolve.cli.kit import (
     FILE_ARG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     outdir_option,
     output_folder,
+    output_units,
     warn,
     writes_to,
     writing,
@@ -76,12 +79,15 @@ INCOMPLETE_INSTANTS = "some instants are not solved: the table says why"
     help="Run again whenever FILE is saved, printing what changed; Ctrl-C stops "
     '(needs watchfiles: pip install "mechsolve[watch]").',
 )
+@UNITS
 @QUIET
-def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, quiet) -> None:
+def run(
+    file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, watch, units, quiet
+) -> None:
     """Solve the sweep of FILE and write results.csv and plots; check its requirements."""
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
-    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt)
+    args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt, units)
     writes_to(outdir)
     if watch:
         _watch(file, lambda: _run_job(*args), outdir=outdir)
@@ -93,7 +99,17 @@ def run(file: Path, outdir, step, variant, no_plots, method, at, junit, fmt, wat
 
 
 def _run_job(
-    file: Path, outdir: Path, step, variant, no_plots, method, at, junit, quiet, fmt="png"
+    file: Path,
+    outdir: Path,
+    step,
+    variant,
+    no_plots,
+    method,
+    at,
+    junit,
+    quiet,
+    fmt="png",
+    units: str | None = None,
 ):
     """One run: solve, write, print; ``(exit code, results or None)``: 5 when a
     requirement failed, else 0 (with a warning on stderr when the results lack
@@ -105,6 +121,7 @@ def _run_job(
     # singular positions give inf and NaN on purpose; the summary reports them
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     st = api.parse_step(mech, step) if step is not None else None
     output_folder(outdir)
     n = api.positions(mech, st)
@@ -119,10 +136,10 @@ def _run_job(
 
         todo = [parse_instant(mech, a) for a in at] or [Instant(*i) for i in mech.instants]
         ires = solve_instants(mech, todo, method=method)
-        path = ires.to_csv(outdir / "instants.csv")
+        path = ires.to_csv(outdir / "instants.csv", shown)
         instants_failed = ires.incomplete()
         if not quiet:
-            click.echo(instants_table(ires))
+            click.echo(pretty_text(instants_table(ires, shown)))
             click.echo(f"  wrote {path}")
         if at:  # only the instants asked for
             if instants_failed:
@@ -139,6 +156,7 @@ def _run_job(
                 step=st,
                 method=method,
                 progress=None if bar is None else bar.update,
+                units=shown,
             )
         finally:
             if bar is not None:
@@ -153,25 +171,25 @@ def _run_job(
         # drawn from, so that the terminal, the plots and the requirements agree; that
         # finer sweep is made only when something reads it (quiet, no plots and no
         # requirements: the CSV alone, at the file's step)
-        text = None if quiet else res.summary(figures=api.for_plots(mech, res, method))
+        text = None if quiet else res.summary(figures=api.for_plots(mech, res, method), units=shown)
         failed = res.incomplete()
-        written = [res.to_csv(outdir / "results.csv")]
+        written = [res.to_csv(outdir / "results.csv", shown)]
     if not no_plots:
         from mechsolve.writers.plots import write_plots
 
         # drawn from a sweep at 1 deg or finer with the exact events; the CSV keeps
         # the file's step
-        written += write_plots(api.for_plots(mech, res, method), outdir, fmt)
+        written += write_plots(api.for_plots(mech, res, method), outdir, fmt, shown)
     verdicts = _requirements(mech, res, junit, streamed=streamed)
     if not quiet:
-        click.echo(text)
+        click.echo(pretty_text(text))
         click.echo(
             f"  wrote {len(written)} file(s) to {outdir}/: " + ", ".join(p.name for p in written)
         )
     if verdicts:
         from mechsolve.results.requirements import verdict_table
 
-        click.echo(verdict_table(verdicts))
+        click.echo(pretty_text(verdict_table(verdicts)))
     if any(not v.passed for v in verdicts):
         return EXIT_CHECK_FAILED, res
     if failed or instants_failed:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG_NO_CHECK,
     FILE_ARG,
@@ -114,7 +115,7 @@ def shaking(
             )
         lines += bal.lines()
     if not quiet:
-        click.echo("\n".join(lines))
+        click.echo(pretty_text("\n".join(lines)))
         click.echo("  wrote " + ", ".join(str(p) for p in paths))
     bad = int((~sh.ok).sum())
     finish(warning=f"the shaking is not determined at {bad} position(s)" if bad else None)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.commands.run import INCOMPLETE
 from mechsolve.cli.kit import (
     EPILOG_NO_CHECK,
@@ -80,7 +81,7 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
         written += write_simulation_plots(res, res.model, outdir)
     tr = res.trajectory
     if not quiet:
-        click.echo(res.summary())
+        click.echo(pretty_text(res.summary()))
         upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
         click.echo(
             f"  wrote {len(written)} file(s){upto} to {outdir}/: "

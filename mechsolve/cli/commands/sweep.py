@@ -13,10 +13,12 @@ from mechsolve.cli.kit import (
     FILE_ARG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     outdir_option,
     output_folder,
+    output_units,
 )
 
 MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
@@ -119,6 +121,7 @@ def _bar(total: int, quiet: bool):
 )
 @outdir_option("study's table and plots")
 @NO_PLOTS
+@UNITS
 @QUIET
 def sweep(
     file: Path,
@@ -139,6 +142,7 @@ def sweep(
     max_time,
     outdir,
     no_plots,
+    units,
     quiet,
 ) -> None:
     """Solve every design of a study of FILE and write one row per design to
@@ -165,6 +169,7 @@ def sweep(
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     limit_s = _check_options(jobs, use_dask, scheduler, max_designs, max_time)
     study, nominal = _load_study(file, params, variant, design, samples, seed, best, figures)
+    study.units = output_units(nominal, units)
     if step is not None:
         study.step = api.parse_step(nominal, step)
     precheck(study, nominal)
@@ -305,9 +310,9 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
     """Write the table (then exit 130 if the study was interrupted), the best design and
     the plots; return the files written and the best design's pick (or None)."""
     from mechsolve.analyses.study.best import pick_best, write_best
-    from mechsolve.analyses.study.table import write_table
+    from mechsolve.analyses.study.table import rows_in_units, write_table
 
-    rows = outcome.rows
+    rows = rows_in_units(study, outcome.rows, study.units)
     written = [write_table(study, rows, outdir, fmt)]
     if outcome.interrupted:
         click.echo(

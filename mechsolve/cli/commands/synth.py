@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
 
 
@@ -50,8 +51,16 @@ from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
     help="function and path problems: stop the search after this long and keep the best "
     "design found (Ctrl-C does the same, then exits with 130).",
 )
+@click.option(
+    "--digits",
+    type=click.IntRange(3, 17),
+    default=6,
+    show_default=True,
+    help="Significant digits of the written file's lengths and angles (in the problem's "
+    "units; 17 keeps every digit); a 'round' in FILE rounds the lengths instead.",
+)
 @QUIET
-def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> None:
+def synth(file: Path, output, pick, solution, plot, seed, max_time, digits, quiet) -> None:
     """Solve the synthesis problem in FILE: list every solution, pick one, and with -o
     write it as a mechanism file, checked by solving it (its limit positions).
 
@@ -82,7 +91,15 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
             bar.set_postfix_str(f"best {best:.3e}")
 
     try:
-        out = solve_problem(file, pick, solution, seed=seed, max_time=max_time, progress=progress)
+        out = solve_problem(
+            file,
+            pick,
+            solution,
+            seed=seed,
+            max_time=max_time,
+            progress=progress,
+            digits=None if digits == 17 else digits,
+        )
     finally:
         if bar is not None:
             bar.close()
@@ -95,12 +112,12 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, quiet) -> No
             "--plot: only function, path, four-positions and five-positions problems draw a plot"
         )
     if not quiet:
-        click.echo(out.text)
+        click.echo(pretty_text(out.text))
     if out.yaml is not None:
         if not quiet or plot is not None:
             text = confirm(out)
             if not quiet:
-                click.echo(text)
+                click.echo(pretty_text(text))
         if plot is not None:
             from mechsolve.analyses.synth.optproblem import write_plot
 
