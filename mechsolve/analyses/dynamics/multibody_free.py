@@ -329,6 +329,8 @@ class FreeResults:
             r = c.reaction(st, tr.lam[:, row.start : row.start + c.m])
             for k, v in (r or {}).items():
                 cols.append((f"{c.name}.{k} [N]{mark}", np.asarray(v, float)))
+        if mb.friction is not None:  # each joint's friction and the power it loses
+            cols += [(f"{n} [{u}]", v) for n, u, v in mb.friction.columns(st, tr.lam)]
         return cols
 
     def to_csv(self, path):
