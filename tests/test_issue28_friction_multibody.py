@@ -93,6 +93,10 @@ def test_block_thrown_up_an_incline_follows_coulomb():
     )
     assert np.max(np.abs(tr.ud - ref.y[1])) < 1e-7
     assert np.max(np.abs(tr.u - ref.y[0])) < 1e-8
+    # the reversal's offset is the regularisation's: it halves with v_s
+    offset = tr.ud[-1] - v[-1]
+    half = run(incline(f, v0, 1.0), smoothing=vs / 2).trajectory
+    assert (half.ud[-1] - v[-1]) / offset == pytest.approx(0.5, rel=0.05)
     # the friction column (the free path lists it too): f |N| while it slides
     fr = res.forces.friction.friction["slope"]
     assert np.allclose(fr[t < t1 - 0.01], f * m * G * math.cos(ALPHA), rtol=1e-9)
@@ -293,6 +297,7 @@ simulate: {duration: 1 s, step: 0.002 s, method: DOP853, rtol: 1e-10, atol: 1e-1
            pose: {O: 0 deg, A: 30 deg}}
 """
     res = run(text)
+    assert "v_s = 0.001 rad/s in the pins" in res.summary()
     cols = dict(res.columns())
     t = cols["t [s]"]
     lost = cols["power.friction [W]"]
@@ -308,3 +313,31 @@ simulate: {duration: 1 s, step: 0.002 s, method: DOP853, rtol: 1e-10, atol: 1e-1
     fo = cols["O.friction [N*m]"]
     turning = np.abs(cols["upper.omega [rad/s]"]) > 0.05
     assert np.allclose(fo[turning], 0.2 * 0.02 * F[turning], rtol=1e-9)
+
+
+def test_a_friction_with_no_solution_stops_the_motion_with_a_warning(tmp_path):
+    """A pin whose friction circle (rho = 0.8 m) exceeds J_O / (m l) = 0.54 m: the
+    friction the pendulum's acceleration causes grows faster than the acceleration
+    (det(I - G) < 0, no solution connected to the frictionless one) as soon as the bar
+    turns faster than a few v_s. The run stops there (exit 0, a warning, the rows up to
+    there kept), naming the instant; it does not integrate a non-physical motion."""
+    from click.testing import CliRunner
+
+    from mechsolve.cli.main import main
+
+    f = tmp_path / "p.yaml"
+    f.write_text(
+        PENDULUM.replace("journal radius: 25 mm", "journal radius: 4000 mm").replace(
+            "duration: 3 s", "duration: 1 s"
+        )
+    )
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    assert "Traceback" not in r.output
+    assert "stopped early" in r.output and "the joints' friction has no solution" in r.output
+    lines = (tmp_path / "out" / "simulation.csv").read_text().splitlines()
+    assert 2 <= len(lines) < 202  # the rows up to there (the start), not the whole second
+    # a sensible friction (rho = 5 mm) runs to the end
+    f.write_text(PENDULUM.replace("duration: 3 s", "duration: 0.2 s"))
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "ok")])
+    assert r.exit_code == 0 and "stopped early" not in r.output

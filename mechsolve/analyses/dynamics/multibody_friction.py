@@ -75,6 +75,20 @@ class JointFriction:
         out = cls(mb, fail)
         return out if out.rows else None
 
+    def describe(self) -> str:
+        """The regularisation, in words, for the summary."""
+        kinds = {isinstance(r.constraint, SliderConstraint) for r in self.rows}
+        parts = []
+        if False in kinds:
+            parts.append(f"{self.smoothing:.3g} rad/s in the pins")
+        if True in kinds:
+            parts.append(f"{self.smoothing * self.mb.scale:.3g} m/s in the sliders")
+        return (
+            "joint friction: Coulomb's part times tanh(|slip| / v_s), v_s = "
+            + " and ".join(parts)
+            + " (a joint slipping slower than a few v_s has less friction than Coulomb's)"
+        )
+
     def speed(self, c) -> float:
         """The smoothing speed of constraint ``c``'s slip (rad/s, or m/s for a slider)."""
         return self.smoothing * (self.mb.scale if isinstance(c, SliderConstraint) else 1.0)
@@ -201,12 +215,16 @@ class JointFriction:
                 break
             s = s + ds
             if np.all(np.abs(ds) <= TOLERANCE * (np.abs(s) + k * big + v + 1e-300)):
-                return s
+                # physical where connected to the frictionless solution (as in the force
+                # analysis, mechsolve.core.friction): det(I - G) > 0
+                if np.linalg.det(eye - G) > 0:
+                    return s
+                break
         raise self.fail(
             t,
-            "the joints' friction has no solution with the reactions here (the friction "
-            "feeds back on the reactions more than it can: too large a friction "
-            "coefficient or journal radius for this motion)",
+            f"the joints' friction has no solution with the reactions at t = {t:.6g} s "
+            "(the friction feeds back on the reactions more than it can: too large a "
+            "friction coefficient or journal radius for this motion)",
         )
 
     def columns(self, st: State, lam: np.ndarray) -> list[tuple[str, str, np.ndarray]]:
