@@ -222,9 +222,11 @@ class JointFriction:
                 break
         raise self.fail(
             t,
-            f"the joints' friction has no solution with the reactions at t = {t:.6g} s "
-            "(the friction feeds back on the reactions more than it can: too large a "
-            "friction coefficient or journal radius for this motion)",
+            f"the joints' friction has no solution with the reactions at t = {t:.6g} s: "
+            "the friction feeds back on the reactions more than it can (too large a "
+            "friction coefficient or journal radius for this motion, or a position next "
+            "to a singular one, where the reactions to a friction grow without bound: "
+            "the joints jam)",
         )
 
     def columns(self, st: State, lam: np.ndarray) -> list[tuple[str, str, np.ndarray]]:
