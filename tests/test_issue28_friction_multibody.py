@@ -102,6 +102,7 @@ def test_block_thrown_up_an_incline_follows_coulomb():
     assert np.allclose(fr[t < t1 - 0.01], f * m * G * math.cos(ALPHA), rtol=1e-9)
 
 
+@pytest.mark.slow  # 5-11 s on the shared machine
 def test_a_block_coulomb_would_hold_creeps_at_the_stated_speed():
     """f > tan(alpha): thrown up, the block stops and Coulomb's law holds it there. The
     regularised law cannot hold it: it creeps down at the speed where the regularised
@@ -171,6 +172,7 @@ def pendulum_by_hand(t_eval: np.ndarray, ws: float = 1e-3):
     return sol.y[0], sol.y[1]
 
 
+@pytest.mark.slow  # 5-11 s on the shared machine
 def test_pendulum_with_pin_friction_matches_its_equation_by_hand():
     """The general path (free motion: the driver only places the bar) against the
     pendulum's equation with the friction circle written and integrated by hand."""
@@ -187,6 +189,7 @@ def test_pendulum_with_pin_friction_matches_its_equation_by_hand():
     assert np.max(tr.u[tr.t > 0.5]) < -0.05
 
 
+@pytest.mark.slow  # 5-11 s on the shared machine
 def test_pendulum_loses_the_work_of_its_pin_friction_from_the_reaction():
     """The energy lost, (T + V)(0) - (T + V)(t), equals the friction's work computed
     from the pin's reaction: the integral of rho |F| |w| over time (Simpson's rule on
@@ -213,6 +216,7 @@ def test_pendulum_loses_the_work_of_its_pin_friction_from_the_reaction():
     assert np.allclose(np.hypot(lam[:, 0], lam[:, 1]), F, rtol=1e-6, atol=1e-9)
 
 
+@pytest.mark.slow  # 5-11 s on the shared machine
 def test_halving_the_smoothing_speed_leaves_the_pendulum_alone():
     """The pin's slip leaves zero at the release and at each turning point at a finite
     rate, so the regularisation acts over a few v_s / |w'| seconds: halving v_s changes
@@ -276,6 +280,7 @@ def test_slider_crank_moves_alike_on_the_reduced_and_the_general_path():
     assert np.max(np.abs(general.forces.power_friction)) > 0
 
 
+@pytest.mark.slow  # 5-11 s on the shared machine
 def test_two_degrees_of_freedom_with_friction_keep_their_energy_balance():
     """A double pendulum (two degrees of freedom, only the general path) with friction at
     both pins, placed by simulate.pose: the energy lost equals the friction work of the
