@@ -113,14 +113,6 @@ def simulate(
     from mechsolve.analyses.dynamics.multibody_run import simulate_multibody, uses_multibody
 
     if uses_multibody(mech):
-        for j in mech.joints:
-            if j.friction is not None and j.friction.any:
-                raise mech.error(
-                    j.where + ("friction",),
-                    f"joint {j.name!r} has friction, which the general multibody "
-                    "simulation does not model yet ('mechsolve run' and the one-degree-of-"
-                    "freedom simulation do); remove 'friction' to simulate with ideal joints",
-                )
         check_size(mech, max_steps)
         return simulate_multibody(mech, max_steps=max_steps)
     if mech.motor is None:

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.multibody_friction import JointFriction
 from mechsolve.analyses.dynamics.multibody_pins import Pins
 from mechsolve.base.state import State
 from mechsolve.core.loads import _Q, apply_loads, stroke_function
@@ -207,6 +208,8 @@ class Multibody:
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
         self._chord = None  # (partition, Phi_d) of the last evaluation
+        # the joints' friction (None: ideal joints), solved with the multipliers
+        self.friction = JointFriction.of(self, NotClosing)
 
     # -- states ---------------------------------------------------------------------
     def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
@@ -435,10 +438,11 @@ class Multibody:
         A[self.nq :, : self.nq] = Jr
         g = self._nu_gamma(st, t, gamma=True)[part.rows]
         b = np.concatenate([Q, g])
-        try:
-            x = np.linalg.solve(A, b)
-        except np.linalg.LinAlgError:  # a singular position: the least-squares motion
-            x = np.linalg.lstsq(A, b, rcond=1e-12)[0]
+        if self.friction is not None:  # the multipliers and the friction together
+            x, Pf = self.friction.solve(st, A, b, part.rows, Jq, M, _linear, qd, t)
+            P += Pf
+        else:
+            x = _linear(A, b)
         if not np.all(np.isfinite(x)):
             raise NotClosing(
                 t, "the accelerations are not determined (a massless link that can move?)"
@@ -466,7 +470,12 @@ class Multibody:
         A[: self.nq, self.nq :] = Jq.T
         A[self.nq :, : self.nq] = Jq
         g = self._nu_gamma(st, t, gamma=True)
-        x = np.linalg.lstsq(A, np.concatenate([Q, g]), rcond=1e-12)[0]
+        b = np.concatenate([Q, g])
+        if self.friction is not None:
+            x, Pf = self.friction.solve(st, A, b, np.arange(nc), Jq, M, _least_squares, qd, t)
+            P += Pf
+        else:
+            x = _least_squares(A, b)
         return x[: self.nq], P
 
     def multipliers(self, q, qd, qdd, t: float) -> np.ndarray:
@@ -485,6 +494,8 @@ class Multibody:
         qdd, _, _, V = self.accelerations(part, q, qd, t)
         st = self.state(q, qd, qdd)
         Q, _, _ = self.forces(st, t)
+        if self.friction is not None:  # the friction of that evaluation
+            Q = Q + self.friction.last_Q
         M = self.mass_matrix(st)
         lam, *_ = np.linalg.lstsq(self.jacobian(q).T, Q - M @ qdd, rcond=1e-10)
         return qdd, lam, 0.5 * float(qd @ M @ qd), V
@@ -536,6 +547,18 @@ def free_context(mech) -> SimpleNamespace:
         for p, xy in lk.points.items():
             points.setdefault(p, PointRef(system.index[lk.name], np.asarray(xy, float)))
     return SimpleNamespace(mech=mech, system=system, scale=_scale(mech), points=points)
+
+
+def _linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The augmented system's solution; at a singular position the least-squares one."""
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:  # a singular position: the least-squares motion
+        return _least_squares(A, b)
+
+
+def _least_squares(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.lstsq(A, b, rcond=1e-12)[0]
 
 
 def _lu(A: np.ndarray):

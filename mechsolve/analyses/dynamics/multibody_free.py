@@ -329,6 +329,8 @@ class FreeResults:
             r = c.reaction(st, tr.lam[:, row.start : row.start + c.m])
             for k, v in (r or {}).items():
                 cols.append((f"{c.name}.{k} [N]{mark}", np.asarray(v, float)))
+        if mb.friction is not None:  # each joint's friction and the power it loses
+            cols += [(f"{n} [{u}]", v) for n, u, v in mb.friction.columns(st, tr.lam)]
         return cols
 
     def to_csv(self, path):
@@ -356,6 +358,15 @@ class FreeResults:
             f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
             f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)",
         ]
+        if mb.friction is not None:
+            lost = dict((n, v) for n, _, v in mb.friction.columns(trajectory_state(mb, tr), tr.lam))
+            W = {n: float(np.trapezoid(v, tr.t)) for n, v in lost.items() if n.endswith("_power")}
+            each = ", ".join(f"{n[: -len('.friction_power')]} {w:.4g} J" for n, w in W.items())
+            lines.append(
+                f"  friction losses: {float(np.trapezoid(lost['power.friction'], tr.t)):.4g} J "
+                f"({each}; the trapezoidal rule on the output rows)"
+            )
+            lines.append("  " + mb.friction.describe())
         if tr.bridges:
             lines.append(
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "

@@ -295,6 +295,8 @@ class MultibodyResults(Results):
             f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
             f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)"
         )
+        if mb.friction is not None:
+            lines.append("  " + mb.friction.describe())
         if tr.redundant:
             lines.append(
                 "  redundant constraints: the motion is unique, the reactions are the "
