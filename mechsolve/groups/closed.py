@@ -63,7 +63,12 @@ class DriverLink(Group):
 
     def position(self, st: State, drive: Drive, mode=1.0):
         other, sign, off = self._angle_terms(st, drive.u, "pos")
-        st.set_angle(self.b, st.th[other] + sign * drive.u + off)
+        th = np.multiply(drive.u, sign)
+        if other != st.nb:  # (the ground's angle is zero: nothing to add)
+            th += st.th[other]
+        if off:
+            th += off
+        st.set_angle(self.b, th)
         px, py = st.point(self.k, self.sk)
         rx, ry = st.rotated(self.b, self.sp)
         st.x[self.b] = px - rx
@@ -266,17 +271,22 @@ class RRR(Group):
             g1y = a * dy + h * dx
             if coincident is not None:
                 g1x, g1y = self._coincident_pose(st, coincident, mode, g1x, g1y)
-        if not ok.all():
+        closes = bool(ok.all())
+        if not closes:
             g1x = np.where(ok, g1x, np.nan)
             g1y = np.where(ok, g1y, np.nan)
         g2x, g2y = g1x - dx, g1y - dy  # M - Q
         self.cache(st)["g"] = (g1x, g1y, g2x, g2y)
         set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, g1x, g1y)
         set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, g2x, g2y)
-        # sin of the angle between the two links at M
+        # sin of the angle between the two links at M (np.clip costs twice this)
         with np.errstate(invalid="ignore"):
-            ind = np.sqrt(np.clip(H, 0.0, 1.0))
-        return ok, ind if ok.all() else np.where(ok, ind, 0.0)
+            ind = np.maximum(H, 0.0)
+            np.minimum(ind, 1.0, out=ind)
+            np.sqrt(ind, out=ind)
+        if not closes:
+            ind[~ok] = 0.0
+        return ok, ind
 
     def _coincident_pose(self, st: State, where, mode, g1x, g1y):
         """M - P where P and Q coincide: the limit along the motion.
