@@ -84,9 +84,17 @@ def solve_forces(
             r = st.rotated(b, s)  # the centre's arm: for its acceleration and moment
             rx, ry = r
             w2 = st.w[b] * st.w[b]
-            ax = st.ax[b] - st.al[b] * ry - w2 * rx
-            ay = st.ay[b] + st.al[b] * rx - w2 * ry
-            acc.force(b, s, m * (gx - ax), m * (gy - ay), r)
+            # m (g - a_G), in place where the arrays are this function's own (the same
+            # operations in the same order: fewer temporaries, the same rounding)
+            ax = st.ax[b] - st.al[b] * ry
+            ax -= w2 * rx
+            ay = st.ay[b] + st.al[b] * rx
+            ay -= w2 * ry
+            np.subtract(gx, ax, out=ax)
+            np.subtract(gy, ay, out=ay)
+            ax *= m
+            ay *= m
+            acc.force(b, s, ax, ay, r)
         if _any(J):
             acc.torque(b, -J * st.al[b])
         massive.append((b, m, J, s))
