@@ -174,6 +174,22 @@ def _carried_acceleration(st: State, g: int, px, py):
     return st.ax[g] - al * ry - w2 * rx, st.ay[g] + al * rx - w2 * ry
 
 
+def _cross(ax, ay, bx, by):
+    """``ax by - ay bx`` as a new array (one temporary)."""
+    out = ax * by
+    out -= ay * bx
+    return out
+
+
+def _combine(alpha, g2, g1, beta, inv):
+    """``(-alpha g2 + g1 beta) inv`` as a new array, the same rounding."""
+    out = alpha * g2
+    np.negative(out, out=out)  # -(alpha g2) is (-alpha) g2 exactly
+    out += g1 * beta
+    out *= inv
+    return out
+
+
 class RRR(Group):
     """Two links joined at M, each pinned to a solved body (P on link 1, Q on link 2).
 
@@ -375,14 +391,23 @@ class RRR(Group):
         mx, my = px + g1x, py + g1y
         f1x, f1y, t1 = resultant_about(st, R, self.b1, mx, my)
         f2x, f2y, t2 = resultant_about(st, R, self.b2, mx, my)
-        # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta
-        alpha = -t1 - (g1x * f1y - g1y * f1x)
-        beta = t2 + (g2x * f2y - g2y * f2x)
-        inv = 1.0 / (g1x * g2y - g1y * g2x)
-        fmx = (-alpha * g2x + g1x * beta) * inv
-        fmy = (-alpha * g2y + g1y * beta) * inv
+        # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta.
+        # Written in place (t1, t2 are resultant_about's own arrays), the same operations
+        # in the same order as alpha = -t1 - (g1 x f1), beta = t2 + (g2 x f2),
+        # F_M = (-alpha g2 + beta g1) / (g1 x g2): the same rounding, fewer temporaries
+        alpha = np.negative(t1, out=t1)
+        alpha -= _cross(g1x, g1y, f1x, f1y)
+        beta = t2
+        beta += _cross(g2x, g2y, f2x, f2y)
+        inv = _cross(g1x, g1y, g2x, g2y)
+        np.divide(1.0, inv, out=inv)
+        fmx = _combine(alpha, g2x, g1x, beta, inv)
+        fmy = _combine(alpha, g2y, g1y, beta, inv)
         fpx, fpy = fmx - f1x, fmy - f1y  # on link 1 at P
-        fqx, fqy = -fmx - f2x, -fmy - f2y  # on link 2 at Q
+        fqx = np.negative(fmx)  # on link 2 at Q: -F_M - f2
+        fqx -= f2x
+        fqy = np.negative(fmy)
+        fqy -= f2y
         out[self.j1] = pin_multiplier(self.j1, self.b1, fpx, fpy)
         out[self.j2] = pin_multiplier(self.j2, self.b2, fmx, fmy)
         out[self.j3] = pin_multiplier(self.j3, self.b2, fqx, fqy)
