@@ -169,23 +169,25 @@ _LOAD_KEYS = ("link", "point", "frame", "ends", "slider", "drag")  # a load's st
 def _structure(m: Mechanism) -> tuple:
     """Everything of a design but the numbers the batch stacks, as far as it is not
     compared by :func:`_same_structure` directly."""
+    # plain loops and list comprehensions: a design study checks thousands of designs
+    loads = []
+    for ld in m.loads:
+        when = ld.when
+        loads.append(
+            (type(ld), ld.name, None if when is None else when.text)
+            + tuple([getattr(ld, k, None) for k in _LOAD_KEYS])
+        )
     return (
         tuple(m.ground),
         tuple(
-            (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
-            for lk in m.links
+            [
+                (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
+                for lk in m.links
+            ]
         ),
-        tuple((j.kind, j.name, j.a, j.b, j.point) for j in m.joints),
-        tuple(
-            (
-                type(ld),
-                ld.name,
-                None if ld.when is None else ld.when.text,
-                *(getattr(ld, k, None) for k in _LOAD_KEYS),
-            )
-            for ld in m.loads
-        ),
-        tuple(c.text for c in m.assembly.conditions),
+        tuple([(j.kind, j.name, j.a, j.b, j.point) for j in m.joints]),
+        tuple(loads),
+        tuple([c.text for c in m.assembly.conditions]),
     )
 
 
