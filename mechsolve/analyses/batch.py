@@ -169,23 +169,25 @@ _LOAD_KEYS = ("link", "point", "frame", "ends", "slider", "drag")  # a load's st
 def _structure(m: Mechanism) -> tuple:
     """Everything of a design but the numbers the batch stacks, as far as it is not
     compared by :func:`_same_structure` directly."""
+    # plain loops and list comprehensions: a design study checks thousands of designs
+    loads = []
+    for ld in m.loads:
+        when = ld.when
+        loads.append(
+            (type(ld), ld.name, None if when is None else when.text)
+            + tuple([getattr(ld, k, None) for k in _LOAD_KEYS])
+        )
     return (
         tuple(m.ground),
         tuple(
-            (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
-            for lk in m.links
+            [
+                (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
+                for lk in m.links
+            ]
         ),
-        tuple((j.kind, j.name, j.a, j.b, j.point) for j in m.joints),
-        tuple(
-            (
-                type(ld),
-                ld.name,
-                None if ld.when is None else ld.when.text,
-                *(getattr(ld, k, None) for k in _LOAD_KEYS),
-            )
-            for ld in m.loads
-        ),
-        tuple(c.text for c in m.assembly.conditions),
+        tuple([(j.kind, j.name, j.a, j.b, j.point) for j in m.joints]),
+        tuple(loads),
+        tuple([c.text for c in m.assembly.conditions]),
     )
 
 
@@ -205,16 +207,20 @@ def _same_structure(m: Mechanism, ref: Mechanism, ref_structure: tuple) -> bool:
 def _numbers(m: Mechanism) -> list[float]:
     """The numbers the batch stacks, in a fixed order (see :func:`_with_numbers`)."""
     out: list[float] = []
+    add, one = out.extend, out.append  # (a design study has thousands of designs)
     for xy in m.ground.values():
-        out += xy
+        add(xy)
     for lk in m.links:
         for xy in lk.points.values():
-            out += xy
-        out += [x for x in (lk.mass, lk.inertia) if x is not None]
+            add(xy)
+        if lk.mass is not None:
+            one(lk.mass)
+        if lk.inertia is not None:
+            one(lk.inertia)
         if lk.com is not None:
-            out += lk.com
+            add(lk.com)
     for j in m.joints:
-        out += j.geometry()
+        add(j.geometry())
     for ld in m.loads:
         if isinstance(ld, PointForce):
             out += ld.force
@@ -224,7 +230,7 @@ def _numbers(m: Mechanism) -> list[float]:
             out += [ld.stiffness, ld.free_length]
         elif isinstance(ld, Damper):
             out.append(ld.coefficient)
-    return [float(x) for x in out]
+    return out  # numbers: np.array(..., float) makes them floats
 
 
 class _Columns:
@@ -458,7 +464,7 @@ def solve_designs(
         u0 = an0.start_value()
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
-        X = np.array([_numbers(mechs[k]) for k in inside])
+        X = np.array([_numbers(mechs[k]) for k in inside], dtype=float)
         per = max(1, CHUNK_COLUMNS // max(len(u), 1))
         for i in range(0, len(inside), per):
             _solve_pass(out, an0, inside[i : i + per], X[i : i + per], u, t, alone, want_forces)

@@ -74,7 +74,7 @@ def solve_forces(
         # numbers, or arrays over the positions of designs solved as one batch
         m = 0.0 if lk.mass is None else lk.mass
         J = 0.0 if lk.inertia is None else lk.inertia
-        if not np.any(m) and not np.any(J):
+        if not _any(m) and not _any(J):
             continue
         b = sys_.index[lk.name]
         s = np.asarray(lk.com if lk.com is not None else (0.0, 0.0), float)
@@ -84,10 +84,18 @@ def solve_forces(
             r = st.rotated(b, s)  # the centre's arm: for its acceleration and moment
             rx, ry = r
             w2 = st.w[b] * st.w[b]
-            ax = st.ax[b] - st.al[b] * ry - w2 * rx
-            ay = st.ay[b] + st.al[b] * rx - w2 * ry
-            acc.force(b, s, m * (gx - ax), m * (gy - ay), r)
-        if np.any(J):
+            # m (g - a_G), in place where the arrays are this function's own (the same
+            # operations in the same order: fewer temporaries, the same rounding)
+            ax = st.ax[b] - st.al[b] * ry
+            ax -= w2 * rx
+            ay = st.ay[b] + st.al[b] * rx
+            ay -= w2 * ry
+            np.subtract(gx, ax, out=ax)
+            np.subtract(gy, ay, out=ay)
+            ax *= m
+            ay *= m
+            acc.force(b, s, ax, ay, r)
+        if _any(J):
             acc.torque(b, -J * st.al[b])
         massive.append((b, m, J, s))
 
@@ -97,7 +105,8 @@ def solve_forces(
     power_loads, load_power, springs = apply_loads(an, st, active, acc)
     energy_terms = _energy_terms(st, massive, springs, gx, gy)
 
-    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok)
+    # (acc.Q is not read again: the groups accumulate their reactions in it)
+    lam, singular, nonunique, near = _solve_groups(an, st, acc.Q, sol.indicator, sol.ok, own=True)
     drv = sys_.driver
     row = next(r.start for r in sys_.rows if r.constraint is drv)
     effort = -lam[:, row]
@@ -107,7 +116,7 @@ def solve_forces(
         lam, fric = _with_friction(an, st, sol, lam, row)
         effort = -lam[:, row]
     reactions = _reactions(an, st, lam)
-    ok = sol.ok & np.all(np.isfinite(lam), axis=1)
+    ok = sol.ok & np.isfinite(lam.T).all(axis=0)  # lam.T: the rows stored whole
     return ForceResult(
         lam,
         effort,
@@ -124,6 +133,11 @@ def solve_forces(
         near_singular=near,
         friction=fric,
     )
+
+
+def _any(x) -> bool:
+    """``np.any(x)`` without its overhead for the usual plain number."""
+    return x != 0.0 if isinstance(x, float) else bool(np.any(x))
 
 
 def _energy_terms(st, massive: list, springs: tuple, gx: float, gy: float):
@@ -189,13 +203,15 @@ def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) ->
             extra.force(b, None, fx, fy, (px - st.x[b], py - st.y[b]))
     if not found:
         return lam
-    lam2 = _solve_groups(an, st, extra.Q, sol.indicator, sol.ok)[0]
+    lam2 = _solve_groups(an, st, extra.Q, sol.indicator, sol.ok, own=True)[0]
     return lam + lam2
 
 
 def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]:
     """Reaction components that redundant constraints leave indeterminate."""
     out: dict[str, set[str]] = {}
+    if not free.any():  # the usual case: no redundant constraints
+        return out
     for row in an.system.rows:
         c = row.constraint
         f = free[row.start : row.start + c.m]
@@ -206,8 +222,11 @@ def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]
     return out
 
 
-def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved: np.ndarray):
-    """Solve Phi_q^T lambda = Q group by group, last group first.
+def _solve_groups(
+    an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved: np.ndarray, own: bool = False
+):
+    """Solve Phi_q^T lambda = Q group by group, last group first (``own``: ``Q`` may be
+    overwritten, no copy is made).
 
     Groups with a closed form solve their own equilibrium explicitly (the dyad-by-dyad
     kinetostatics of the textbooks); a group is singular where its indicator vanishes.
@@ -220,7 +239,7 @@ def _solve_groups(an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved
     # stored equation-major: each joint's multipliers are rows of N values (a group
     # writes and the reactions read them whole); lam itself is the (N, nc) view
     lam = np.full((sys_.nc, n), np.nan).T
-    R = Q.copy()  # applied + inertia + reactions of the groups solved so far
+    R = Q if own else Q.copy()  # applied + inertia + reactions of the groups solved so far
     row_of = {id(r.constraint): r.start for r in sys_.rows}
     singular: list[tuple[int, str]] = []
     near = np.full(n, np.inf)  # how near a singular position: smallest indicator/rcond

@@ -35,7 +35,9 @@ class _Q:
         rx, ry = self.st.rotated(b, np.asarray(s, float)) if r is None else r
         self.Q[3 * b] += fx
         self.Q[3 * b + 1] += fy
-        self.Q[3 * b + 2] += rx * fy - ry * fx
+        t = rx * fy  # the moment rx fy - ry fx, with one temporary fewer
+        t -= ry * fx
+        self.Q[3 * b + 2] += t
 
     def torque(self, b: int, t) -> None:
         if b != self.nb:

@@ -182,7 +182,13 @@ def body_acceleration_from_point(st: State, b: int, s0, apx, apy, al) -> None:
 def resultant_about(st: State, R: np.ndarray, b: int, X, Y):
     """Body ``b``'s known force (Fx, Fy) and its moment about the global point (X, Y)."""
     fx, fy, t = R[3 * b], R[3 * b + 1], R[3 * b + 2]
-    return fx, fy, t + (st.x[b] - X) * fy - (st.y[b] - Y) * fx
+    m = st.x[b] - X  # t + (x - X) fy - (y - Y) fx, in place (the same rounding)
+    m *= fy
+    m += t
+    k = st.y[b] - Y
+    k *= fx
+    m -= k
+    return fx, fy, m
 
 
 def add_force(st: State, R: np.ndarray, b: int, X, Y, fx, fy) -> None:
@@ -191,7 +197,12 @@ def add_force(st: State, R: np.ndarray, b: int, X, Y, fx, fy) -> None:
         return
     R[3 * b] += fx
     R[3 * b + 1] += fy
-    R[3 * b + 2] += (X - st.x[b]) * fy - (Y - st.y[b]) * fx
+    m = X - st.x[b]  # the moment (X - x) fy - (Y - y) fx, in place
+    m *= fy
+    k = Y - st.y[b]
+    k *= fx
+    m -= k
+    R[3 * b + 2] += m
 
 
 def pin_multiplier(joint, on: int, fx, fy):

@@ -63,7 +63,12 @@ class DriverLink(Group):
 
     def position(self, st: State, drive: Drive, mode=1.0):
         other, sign, off = self._angle_terms(st, drive.u, "pos")
-        st.set_angle(self.b, st.th[other] + sign * drive.u + off)
+        th = np.multiply(drive.u, sign)
+        if other != st.nb:  # (the ground's angle is zero: nothing to add)
+            th += st.th[other]
+        if off:
+            th += off
+        st.set_angle(self.b, th)
         px, py = st.point(self.k, self.sk)
         rx, ry = st.rotated(self.b, self.sp)
         st.x[self.b] = px - rx
@@ -169,6 +174,22 @@ def _carried_acceleration(st: State, g: int, px, py):
     return st.ax[g] - al * ry - w2 * rx, st.ay[g] + al * rx - w2 * ry
 
 
+def _cross(ax, ay, bx, by):
+    """``ax by - ay bx`` as a new array (one temporary)."""
+    out = ax * by
+    out -= ay * bx
+    return out
+
+
+def _combine(alpha, g2, g1, beta, inv):
+    """``(-alpha g2 + g1 beta) inv`` as a new array, the same rounding."""
+    out = alpha * g2
+    np.negative(out, out=out)  # -(alpha g2) is (-alpha) g2 exactly
+    out += g1 * beta
+    out *= inv
+    return out
+
+
 class RRR(Group):
     """Two links joined at M, each pinned to a solved body (P on link 1, Q on link 2).
 
@@ -266,17 +287,22 @@ class RRR(Group):
             g1y = a * dy + h * dx
             if coincident is not None:
                 g1x, g1y = self._coincident_pose(st, coincident, mode, g1x, g1y)
-        if not ok.all():
+        closes = bool(ok.all())
+        if not closes:
             g1x = np.where(ok, g1x, np.nan)
             g1y = np.where(ok, g1y, np.nan)
         g2x, g2y = g1x - dx, g1y - dy  # M - Q
         self.cache(st)["g"] = (g1x, g1y, g2x, g2y)
         set_pose_from_vectors(st, self.b1, self.sP1, self.sM1, px, py, g1x, g1y)
         set_pose_from_vectors(st, self.b2, self.sQ2, self.sM2, qx, qy, g2x, g2y)
-        # sin of the angle between the two links at M
+        # sin of the angle between the two links at M (np.clip costs twice this)
         with np.errstate(invalid="ignore"):
-            ind = np.sqrt(np.clip(H, 0.0, 1.0))
-        return ok, ind if ok.all() else np.where(ok, ind, 0.0)
+            ind = np.maximum(H, 0.0)
+            np.minimum(ind, 1.0, out=ind)
+            np.sqrt(ind, out=ind)
+        if not closes:
+            ind[~ok] = 0.0
+        return ok, ind
 
     def _coincident_pose(self, st: State, where, mode, g1x, g1y):
         """M - P where P and Q coincide: the limit along the motion.
@@ -365,14 +391,23 @@ class RRR(Group):
         mx, my = px + g1x, py + g1y
         f1x, f1y, t1 = resultant_about(st, R, self.b1, mx, my)
         f2x, f2y, t2 = resultant_about(st, R, self.b2, mx, my)
-        # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta
-        alpha = -t1 - (g1x * f1y - g1y * f1x)
-        beta = t2 + (g2x * f2y - g2y * f2x)
-        inv = 1.0 / (g1x * g2y - g1y * g2x)
-        fmx = (-alpha * g2x + g1x * beta) * inv
-        fmy = (-alpha * g2y + g1y * beta) * inv
+        # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta.
+        # Written in place (t1, t2 are resultant_about's own arrays), the same operations
+        # in the same order as alpha = -t1 - (g1 x f1), beta = t2 + (g2 x f2),
+        # F_M = (-alpha g2 + beta g1) / (g1 x g2): the same rounding, fewer temporaries
+        alpha = np.negative(t1, out=t1)
+        alpha -= _cross(g1x, g1y, f1x, f1y)
+        beta = t2
+        beta += _cross(g2x, g2y, f2x, f2y)
+        inv = _cross(g1x, g1y, g2x, g2y)
+        np.divide(1.0, inv, out=inv)
+        fmx = _combine(alpha, g2x, g1x, beta, inv)
+        fmy = _combine(alpha, g2y, g1y, beta, inv)
         fpx, fpy = fmx - f1x, fmy - f1y  # on link 1 at P
-        fqx, fqy = -fmx - f2x, -fmy - f2y  # on link 2 at Q
+        fqx = np.negative(fmx)  # on link 2 at Q: -F_M - f2
+        fqx -= f2x
+        fqy = np.negative(fmy)
+        fqy -= f2y
         out[self.j1] = pin_multiplier(self.j1, self.b1, fpx, fpy)
         out[self.j2] = pin_multiplier(self.j2, self.b2, fmx, fmy)
         out[self.j3] = pin_multiplier(self.j3, self.b2, fqx, fqy)

@@ -154,6 +154,13 @@ def _tarjan(n: int, succ: list[list[int]]) -> list[list[int]]:
     return comps
 
 
+# the split of a structure already seen: it depends only on the bodies, the constraints'
+# kinds and which coordinates each equation involves (every solve of a model, every
+# design of a study, builds the same system again)
+_SPLITS: dict[tuple, list[tuple[list[int], list[int], set[int]]]] = {}
+_SPLITS_MAX = 256
+
+
 def decompose(system: ConstraintSystem) -> list[GroupSpec]:
     """Split the constraint system into groups solvable one after another.
 
@@ -164,13 +171,31 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
         drivers) or some equations determine nothing new (redundant constraints).
     """
     nb = system.nb
-    nvar = 3 * nb
     rows: list[list[int]] = []
     row_con: list[int] = []
+    kinds = []
     for ci, c in enumerate(system.constraints):
+        kinds.append(c.kind)
         for r in c.incidence(nb):
             rows.append(r)
             row_con.append(ci)
+    key = (nb, tuple(kinds), tuple(row_con), tuple(tuple(r) for r in rows))
+    split = _SPLITS.get(key)
+    if split is None:
+        split = _split(system, rows, row_con)  # raises on a structural error: not kept
+        if len(_SPLITS) >= _SPLITS_MAX:
+            _SPLITS.clear()
+        _SPLITS[key] = split
+    cons = system.constraints
+    return [GroupSpec(list(b), [cons[ci] for ci in cs], set(d)) for b, cs, d in split]
+
+
+def _split(
+    system: ConstraintSystem, rows: list[list[int]], row_con: list[int]
+) -> list[tuple[list[int], list[int], set[int]]]:
+    """:func:`decompose`'s groups as (bodies, constraint indices, earlier groups)."""
+    nb = system.nb
+    nvar = 3 * nb
     first = [r for r, ci in enumerate(row_con) if system.constraints[ci].kind == "driver"]
     var_of, row_of = _matching(rows, nvar, first)
     free = [v for v in range(nvar) if row_of[v] < 0]
@@ -216,12 +241,12 @@ def decompose(system: ConstraintSystem) -> list[GroupSpec]:
     members: list[list[int]] = [[] for _ in comps]
     for r in range(nr):
         members[comp_of[row_cls[r]]].append(r)
-    specs: list[GroupSpec] = []
+    specs: list[tuple[list[int], list[int], set[int]]] = []
     for k, rs in enumerate(members):
         cons = sorted({row_con[r] for r in rs})
         bodies = sorted({var_of[r] // 3 for r in rs})
         deps = {comp_of[b] for r in rs for b in succ[row_cls[r]] if comp_of[b] != k}
-        specs.append(GroupSpec(bodies, [system.constraints[ci] for ci in cons], deps))
+        specs.append((bodies, cons, deps))
     return specs
 
 
