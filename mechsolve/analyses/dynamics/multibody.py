@@ -11,8 +11,13 @@ Formulation: **coordinate partitioning** (Wehage and Haug). At a configuration t
 Jacobian is split, by QR with column pivoting, into r independent equations (r its rank:
 redundant equations, such as a parallelogram's extra link, are set aside) and r dependent
 coordinates ``d`` whose block ``Phi_d`` is the best conditioned; the other ``f = nq - r``
-coordinates ``z`` are independent. Only ``(z, z')`` are integrated (scipy's ``solve_ivp``
-with the user's rtol/atol, or RK4 with a fixed step). At every evaluation the dependent
+coordinates ``z`` are independent. The motion is ``(z, z')``: at every evaluation the
+dependent coordinates are closed from ``z``. The integrator (scipy's ``solve_ivp`` with
+the user's rtol/atol, or RK4 with a fixed step) carries all the coordinates and rates
+``(q, q')`` all the same, so that its error control sees the dependent ones too: near a
+singular passage, where ``z`` maps to them ill-conditioned, it shortens its step instead
+of stepping across (the integrated dependent values are Newton's start, never the
+motion). At every evaluation the dependent
 coordinates are solved by Newton's method on ``Phi = 0`` (to the constraint tolerance),
 their rates from ``Phi_q q' = nu`` and the accelerations with the multipliers from the
 augmented system ``[M Phi_r^T; Phi_r 0] [q''; lambda] = [Q; gamma]``. So the constraints
@@ -31,7 +36,6 @@ the integration's error (constant to the integrator's tolerance).
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -202,11 +206,22 @@ class Multibody:
             if not self.prescribed and Pins.applies(self.system.constraints)
             else None
         )
+        # the mass matrix's entries by flat index: its diagonal is constant, the
+        # couplings of the centre of mass's arm are written at each configuration
+        i, nq = np.arange(self.nb) * 3, self.nq
+        self._m_diag = np.concatenate([i * (nq + 1), (i + 1) * (nq + 1), (i + 2) * (nq + 1)])
+        self._m_const = np.concatenate(
+            [self.m, self.m, self.J + self.m * np.sum(self.s * self.s, axis=1)]
+        )
+        self._m_x, self._m_xt = i * nq + i + 2, (i + 2) * nq + i
+        self._m_y, self._m_yt = (i + 1) * nq + i + 2, (i + 2) * nq + i + 1
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.extremes: list = []
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
         self._chord = None  # (partition, Phi_d) of the last evaluation
+        self._ev = None  # the last evaluation of accelerations(), for output()
+        self.rc = 1.0  # Phi_d's reciprocal condition (1-norm) at the last rates()
 
     # -- states ---------------------------------------------------------------------
     def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
@@ -298,8 +313,6 @@ class Multibody:
         rows, dep = part.rows, part.dep
         if len(dep) == 0:  # no equations: every coordinate is independent
             return q
-        from scipy.linalg import lu_solve
-
         # the chord: the factors of the last evaluation's Phi_d on this partition, a step away
         lu = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
@@ -308,14 +321,16 @@ class Multibody:
             if not np.all(np.isfinite(phi)):
                 raise Repartition
             size = np.max(np.abs(phi), initial=0.0)
+            if size <= self.tol:
+                # closed (a further chord step, with factors of a nearby configuration,
+                # can move it away where Phi_d is ill-conditioned)
+                return q
             if lu is None or size > 0.1 * last:  # the chord's Jacobian while it converges
                 lu = _lu(self.jacobian(q)[np.ix_(rows, dep)])[0]
                 if lu is None:
                     raise Repartition
             last = size
-            q[dep] -= lu_solve(lu, phi, check_finite=False)
-            if size <= self.tol:  # that last step takes it from the tolerance to rounding
-                return q
+            q[dep] -= _solve(lu, phi)
         raise Repartition
 
     def guess(self, t: float) -> np.ndarray:
@@ -328,18 +343,17 @@ class Multibody:
         """All coordinates' rates from the independent ones: ``Phi_q q' = nu``."""
         Jq = self.jacobian(q)
         rows, dep, ind = part.rows, part.dep, part.ind
-        from scipy.linalg import lu_solve
-
         qd = np.zeros(self.nq)
         qd[ind] = zd
         if len(dep) == 0:
             return qd, Jq
         lu, rc = _lu(Jq[np.ix_(rows, dep)])
+        self.rc = rc
         if lu is None or rc < RECONDITION * part.rcond1:
             raise Repartition
         self._chord = (part, lu)
         nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
-        qd[dep] = lu_solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd, check_finite=False)
+        qd[dep] = _solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd)
         return qd, Jq
 
     def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
@@ -358,33 +372,32 @@ class Multibody:
         ry = s * self.s[:, 0] + c * self.s[:, 1]
         m = self.m
         M = np.zeros((self.nq, self.nq))
-        i = np.arange(self.nb) * 3
-        M[i, i] = m
-        M[i + 1, i + 1] = m
-        M[i + 2, i + 2] = self.J + m * (rx * rx + ry * ry)
-        M[i, i + 2] = M[i + 2, i] = -m * ry
-        M[i + 1, i + 2] = M[i + 2, i + 1] = m * rx
+        flat = M.reshape(-1)
+        flat[self._m_diag] = self._m_const  # m, m, J + m |s|^2 (|r| = |s|)
+        flat[self._m_x] = flat[self._m_xt] = -m * ry  # (x, theta) and (theta, x)
+        flat[self._m_y] = flat[self._m_yt] = m * rx
         return M
 
     def forces(self, st: State, t: float):
         """``(Q, P_nc, V)``: the generalised forces (gravity, the centripetal terms of
         off-origin centres of mass, the file's loads, the motors), the power of the
         non-conservative ones and the potential energy (gravity, unconditional springs)."""
-        acc = _Q(self.an, st)
+        acc = _Q(self.an, st) if self.mech.loads else None
         w2 = st.w[:-1, 0] ** 2
         c, s = st.c[:-1, 0], st.s[:-1, 0]
         rx = c * self.s[:, 0] - s * self.s[:, 1]
         ry = s * self.s[:, 0] + c * self.s[:, 1]
         m = self.m
-        Q = acc.Q[:, 0]
+        Q = acc.Q[:, 0] if acc is not None else np.zeros(self.nq)
         Q[0::3] += m * (self.gx + w2 * rx)
         Q[1::3] += m * (self.gy + w2 * ry)
         Q[2::3] += m * (rx * self.gy - ry * self.gx)
         V = -float(np.sum(m * (self.gx * (st.x[:-1, 0] + rx) + self.gy * (st.y[:-1, 0] + ry))))
-        active = self._active(st)
-        P, _, springs = apply_loads(self.an, st, active, acc)
-        P = float(P[0])
-        V += float(np.sum(springs[0]))
+        P = 0.0
+        if acc is not None:  # the file's loads
+            P, _, springs = apply_loads(self.an, st, self._active(st), acc)
+            P = float(P[0])
+            V += float(np.sum(springs[0]))
         for src in self.sources:
             row, rate = self._coordinate_row(src.coordinate, st)
             effort = float(src.law(rate, t))
@@ -436,7 +449,7 @@ class Multibody:
         g = self._nu_gamma(st, t, gamma=True)[part.rows]
         b = np.concatenate([Q, g])
         try:
-            x = np.linalg.solve(A, b)
+            x = np.linalg.solve(A, b)  # (scipy's solve checks more, at 10x the cost here)
         except np.linalg.LinAlgError:  # a singular position: the least-squares motion
             x = np.linalg.lstsq(A, b, rcond=1e-12)[0]
         if not np.all(np.isfinite(x)):
@@ -450,6 +463,7 @@ class Multibody:
                 at = np.flatnonzero(part.rows == first + k)
                 if at.size:
                     P -= float(x[self.nq + at[0]]) * float(ud[k])
+        self._ev = (q, qd, t, part, x, M, V, Jq)  # for output() at the same state
         return x[: self.nq], x[self.nq :], P, V
 
     def free_accelerations(self, q, qd, t: float):
@@ -466,7 +480,12 @@ class Multibody:
         A[: self.nq, self.nq :] = Jq.T
         A[self.nq :, : self.nq] = Jq
         g = self._nu_gamma(st, t, gamma=True)
-        x = np.linalg.lstsq(A, np.concatenate([Q, g]), rcond=1e-12)[0]
+        # singular values below sqrt(eps) of the largest count as zero: at the singular
+        # position they are those of the direction the equations lose, along which the
+        # stage states' departure from the constraints (not the motion) would be
+        # amplified by their inverse (1e-12 here lost 6e-4 J of the N-four-bar's 36 J in
+        # one RK4 substep)
+        x = np.linalg.lstsq(A, np.concatenate([Q, g]), rcond=1e-8)[0]
         return x[: self.nq], P
 
     def multipliers(self, q, qd, qdd, t: float) -> np.ndarray:
@@ -482,6 +501,20 @@ class Multibody:
         """``(q'', lambda, T, V)`` at an output: what :meth:`accelerations`,
         :meth:`multipliers` and :meth:`energy` give, with one mass matrix and one
         evaluation of the forces each."""
+        ev = self._ev
+        if (
+            ev is not None
+            and ev[0] is q
+            and ev[1] is qd
+            and ev[2] == t
+            and ev[3] is part
+            and not self.conditional
+            and len(part.rows) == self.nc
+        ):
+            # the evaluation that closed this state: its multipliers are those of every
+            # equation (all independent, so unique) and no condition reads q''
+            _, _, _, _, x, M, V, Jq = ev
+            return x[: self.nq], x[self.nq :].copy(), 0.5 * float(qd @ M @ qd), V
         qdd, _, _, V = self.accelerations(part, q, qd, t)
         st = self.state(q, qd, qdd)
         Q, _, _ = self.forces(st, t)
@@ -541,19 +574,25 @@ def free_context(mech) -> SimpleNamespace:
 def _lu(A: np.ndarray):
     """``(factors, rcond)``: the LU factors of a square ``A`` and LAPACK's estimate of its
     reciprocal condition in the 1-norm (cheaper than the singular values); ``(None, 0)``
-    where ``A`` is singular or not finite."""
-    from scipy.linalg import LinAlgWarning, lu_factor
-    from scipy.linalg.lapack import dgecon
+    where ``A`` is singular or not finite. LAPACK is called directly: at the sizes of a
+    mechanism (tens of equations) scipy's wrappers cost more than the factorisation."""
+    from scipy.linalg.lapack import dgecon, dgetrf
 
     if A.size == 0:
         return None, 1.0
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", LinAlgWarning)
-        lu, piv = lu_factor(A, check_finite=False)
-    if not np.all(np.isfinite(lu)) or not np.all(np.diag(lu)):
+    lu, piv, info = dgetrf(A)
+    if info != 0 or not np.all(np.isfinite(lu)):
         return None, 0.0
     rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
     return (lu, piv), float(rc)
+
+
+def _solve(lu, b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` from :func:`_lu`'s factors."""
+    from scipy.linalg.lapack import dgetrs
+
+    x, _ = dgetrs(lu[0], lu[1], b)
+    return x
 
 
 def _rcond(A: np.ndarray) -> float:
