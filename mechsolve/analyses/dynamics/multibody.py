@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.multibody_loads import ArrayLoads
 from mechsolve.analyses.dynamics.multibody_pins import Pins
 from mechsolve.base.state import State
 from mechsolve.core.loads import _Q, apply_loads, stroke_function
@@ -109,6 +110,11 @@ class Partition:
     ind: np.ndarray  # independent coordinates
     rcond: float  # Phi_d's reciprocal condition when chosen
     rcond1: float = 1.0  # its 1-norm estimate (LAPACK gecon), for the checks at each step
+
+    def __post_init__(self) -> None:
+        # the blocks Phi_d and Phi_z as index tuples, built once per partition
+        self.dd = np.ix_(self.rows, self.dep)
+        self.di = np.ix_(self.rows, self.ind)
 
 
 @dataclass
@@ -216,6 +222,7 @@ class Multibody:
         self._m_x, self._m_xt = i * nq + i + 2, (i + 2) * nq + i
         self._m_y, self._m_yt = (i + 1) * nq + i + 2, (i + 2) * nq + i + 1
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
+        self.array_loads = ArrayLoads(mech, idx, self.nb) if ArrayLoads.applies(mech) else None
         self.extremes: list = []
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
@@ -326,7 +333,7 @@ class Multibody:
                 # can move it away where Phi_d is ill-conditioned)
                 return q
             if lu is None or size > 0.1 * last:  # the chord's Jacobian while it converges
-                lu = _lu(self.jacobian(q)[np.ix_(rows, dep)])[0]
+                lu = _lu(self.jacobian(q)[part.dd])[0]
                 if lu is None:
                     raise Repartition
             last = size
@@ -347,13 +354,15 @@ class Multibody:
         qd[ind] = zd
         if len(dep) == 0:
             return qd, Jq
-        lu, rc = _lu(Jq[np.ix_(rows, dep)])
+        lu, rc = _lu(Jq[part.dd])
         self.rc = rc
         if lu is None or rc < RECONDITION * part.rcond1:
             raise Repartition
         self._chord = (part, lu)
-        nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
-        qd[dep] = _solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd)
+        rhs = -(Jq[part.di] @ zd)
+        if self.pins is None:  # (pins: nu = 0)
+            rhs += self._nu_gamma(self.state(q), t, gamma=False)[rows]
+        qd[dep] = _solve(lu, rhs)
         return qd, Jq
 
     def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
@@ -361,7 +370,7 @@ class Multibody:
         again while it is still well posed."""
         if len(part.dep) == 0:
             return False
-        return _rcond(self.jacobian(q)[np.ix_(part.rows, part.dep)]) < 0.1 * part.rcond
+        return _rcond(self.jacobian(q)[part.dd]) < 0.1 * part.rcond
 
     # -- mass and forces ----------------------------------------------------------------
     def mass_matrix(self, st: State) -> np.ndarray:
@@ -382,7 +391,8 @@ class Multibody:
         """``(Q, P_nc, V)``: the generalised forces (gravity, the centripetal terms of
         off-origin centres of mass, the file's loads, the motors), the power of the
         non-conservative ones and the potential energy (gravity, unconditional springs)."""
-        acc = _Q(self.an, st) if self.mech.loads else None
+        arrays = self.array_loads is not None
+        acc = _Q(self.an, st) if self.mech.loads and not arrays else None
         w2 = st.w[:-1, 0] ** 2
         c, s = st.c[:-1, 0], st.s[:-1, 0]
         rx = c * self.s[:, 0] - s * self.s[:, 1]
@@ -394,7 +404,15 @@ class Multibody:
         Q[2::3] += m * (rx * self.gy - ry * self.gx)
         V = -float(np.sum(m * (self.gx * (st.x[:-1, 0] + rx) + self.gy * (st.y[:-1, 0] + ry))))
         P = 0.0
-        if acc is not None:  # the file's loads
+        if arrays:  # torques and springs that always act, on arrays
+            nb = self.nb
+            q = np.empty(self.nq)
+            qd = np.empty(self.nq)
+            q[0::3], q[1::3], q[2::3] = st.x[:nb, 0], st.y[:nb, 0], st.th[:nb, 0]
+            qd[0::3], qd[1::3], qd[2::3] = st.vx[:nb, 0], st.vy[:nb, 0], st.w[:nb, 0]
+            P, Vs = self.array_loads.apply(q, qd, Q)
+            V += Vs
+        elif acc is not None:  # the file's loads
             P, _, springs = apply_loads(self.an, st, self._active(st), acc)
             P = float(P[0])
             V += float(np.sum(springs[0]))
@@ -534,8 +552,18 @@ class Multibody:
         Jq = self.jacobian(q)
         nu = self._nu_gamma(self.state(q), t, gamma=False)
         r = nu - Jq @ qd
-        dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
-        return qd + dq
+        try:  # M = L L^T: the correction of least kinetic energy, L^-T (J L^-T)^+ r
+            L = np.linalg.cholesky(self.mass_matrix(self.state(q)))
+        except np.linalg.LinAlgError:  # a massless coordinate: the least correction
+            dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
+            return qd + dq
+        from scipy.linalg import solve_triangular
+
+        Jh = solve_triangular(L, Jq.T, lower=True).T  # J L^-T
+        dh, *_ = np.linalg.lstsq(Jh, r, rcond=1e-10)
+        # (in this metric the kinetic energy changes only to second order in r, however
+        # ill-conditioned J is next to a singular position)
+        return qd + solve_triangular(L, dh, lower=True, trans="T")
 
 
 def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
