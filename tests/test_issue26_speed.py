@@ -66,3 +66,23 @@ def test_pins_jacobian_and_mass_matrix(andrews, seed):
     for b in range(mb.nb):
         off[3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = 0
     assert not off.any()
+
+
+@pytest.mark.parametrize("name", ["andrews", "nfourbar-2"])
+def test_evaluation_on_arrays_matches_the_states(name):
+    """The accelerations' evaluation without states (pins, loads on arrays, gravity)
+    against the one through the general state and load machinery."""
+    mb = Multibody(Analysis(ms.load(MECH / f"{name}.yaml")))
+    assert mb.lite
+    q, qd = _random(mb, 3)
+    th = q[2::3]
+    Q, P, V = mb._forces_lite(q, qd, np.cos(th), np.sin(th))
+    fast, mb.array_loads = mb.array_loads, None
+    try:
+        Q0, P0, V0 = mb.forces(mb.state(q, qd), 0.0)
+    finally:
+        mb.array_loads = fast
+    np.testing.assert_allclose(Q, Q0, rtol=1e-12, atol=1e-12 * np.max(np.abs(Q0)))
+    assert P == pytest.approx(P0, rel=1e-12, abs=1e-15)
+    assert V == pytest.approx(V0, rel=1e-12, abs=1e-12)
+    np.testing.assert_allclose(mb._mass(np.cos(th), np.sin(th)), mb.mass_matrix(mb.state(q)))

@@ -223,6 +223,13 @@ class Multibody:
         self._m_y, self._m_yt = (i + 1) * nq + i + 2, (i + 2) * nq + i + 1
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.array_loads = ArrayLoads(mech, idx, self.nb) if ArrayLoads.applies(mech) else None
+        # the evaluation on arrays alone: pins, loads on arrays (or none), no motor
+        self.lite = (
+            self.pins is not None
+            and not self.sources
+            and (not mech.loads or self.array_loads is not None)
+        )
+        self._mg, self._mgy = self.m * self.gx, self.m * self.gy
         self.extremes: list = []
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
@@ -323,11 +330,14 @@ class Multibody:
         # the chord: the factors of the last evaluation's Phi_d on this partition, a step away
         lu = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
+        every = len(rows) == self.nc
         for _ in range(NEWTON_ITERATIONS):
-            phi = self.residual(q, t)[rows]
-            if not np.all(np.isfinite(phi)):
+            phi = self.residual(q, t)
+            if not every:
+                phi = phi[rows]
+            size = float(np.max(np.abs(phi)))
+            if not math.isfinite(size):
                 raise Repartition
-            size = np.max(np.abs(phi), initial=0.0)
             if size <= self.tol:
                 # closed (a further chord step, with factors of a nearby configuration,
                 # can move it away where Phi_d is ill-conditioned)
@@ -376,7 +386,10 @@ class Multibody:
     def mass_matrix(self, st: State) -> np.ndarray:
         """M(q) about each body's frame origin: [[m, 0, -m ry], [0, m, m rx],
         [-m ry, m rx, J + m |r|^2]] with r the centre of mass's arm."""
-        c, s = st.c[:-1, 0], st.s[:-1, 0]
+        return self._mass(st.c[:-1, 0], st.s[:-1, 0])
+
+    def _mass(self, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """:meth:`mass_matrix` from the bodies' cos and sin."""
         rx = c * self.s[:, 0] - s * self.s[:, 1]
         ry = s * self.s[:, 0] + c * self.s[:, 1]
         m = self.m
@@ -425,6 +438,24 @@ class Multibody:
             P += effort * rate
         return Q, P, V
 
+    def _forces_lite(self, q, qd, c, s):
+        """:meth:`forces` from arrays, where every load is on arrays (no motor, no
+        condition): gravity, the centripetal terms, torques and springs."""
+        w2 = qd[2::3] ** 2
+        rx = c * self.s[:, 0] - s * self.s[:, 1]
+        ry = s * self.s[:, 0] + c * self.s[:, 1]
+        m = self.m
+        Q = np.empty(self.nq)
+        Q[0::3] = m * (self.gx + w2 * rx)
+        Q[1::3] = m * (self.gy + w2 * ry)
+        Q[2::3] = m * (rx * self.gy - ry * self.gx)
+        V = -float(self._mg @ (q[0::3] + rx) + self._mgy @ (q[1::3] + ry))
+        P = 0.0
+        if self.array_loads is not None:
+            P, Vs = self.array_loads.apply(q, qd, Q)
+            V += Vs
+        return Q, P, V
+
     def _coordinate_row(self, coord, st: State):
         """A joint coordinate's Jacobian row (nq,) and its rate."""
         row = np.zeros(self.nq)
@@ -453,18 +484,25 @@ class Multibody:
         """``(q'', lambda_r, P_nc, V)`` from the augmented system on the partition's
         independent equations."""
         self.nfev += 1
-        st = self.state(q, qd)
         if Jq is None:
             Jq = self.jacobian(q)
-        M = self.mass_matrix(st)
-        Q, P, V = self.forces(st, t)
+        if self.lite:  # pins and loads on arrays: no State to build
+            th, w = q[2::3], qd[2::3]
+            c, s = np.cos(th), np.sin(th)
+            M = self._mass(c, s)
+            Q, P, V = self._forces_lite(q, qd, c, s)
+            g = self.pins.gamma(th, w)[part.rows]
+        else:
+            st = self.state(q, qd)
+            M = self.mass_matrix(st)
+            Q, P, V = self.forces(st, t)
+            g = self._nu_gamma(st, t, gamma=True)[part.rows]
         Jr = Jq[part.rows]
         r = len(part.rows)
         A = np.zeros((self.nq + r, self.nq + r))
         A[: self.nq, : self.nq] = M
         A[: self.nq, self.nq :] = Jr.T
         A[self.nq :, : self.nq] = Jr
-        g = self._nu_gamma(st, t, gamma=True)[part.rows]
         b = np.concatenate([Q, g])
         try:
             x = np.linalg.solve(A, b)  # (scipy's solve checks more, at 10x the cost here)
@@ -488,16 +526,23 @@ class Multibody:
         """``(q'', P_nc)`` by least squares on the augmented system with every equation
         (for the steps across a singular position)."""
         self.nfev += 1
-        st = self.state(q, qd)
         Jq = self.jacobian(q)
-        M = self.mass_matrix(st)
-        Q, P, _ = self.forces(st, t)
+        if self.lite:
+            th = q[2::3]
+            c, s = np.cos(th), np.sin(th)
+            M = self._mass(c, s)
+            Q, P, _ = self._forces_lite(q, qd, c, s)
+            g = self.pins.gamma(th, qd[2::3])
+        else:
+            st = self.state(q, qd)
+            M = self.mass_matrix(st)
+            Q, P, _ = self.forces(st, t)
+            g = self._nu_gamma(st, t, gamma=True)
         nc = Jq.shape[0]
         A = np.zeros((self.nq + nc, self.nq + nc))
         A[: self.nq, : self.nq] = M
         A[: self.nq, self.nq :] = Jq.T
         A[self.nq :, : self.nq] = Jq
-        g = self._nu_gamma(st, t, gamma=True)
         # singular values below sqrt(eps) of the largest count as zero: at the singular
         # position they are those of the direction the equations lose, along which the
         # stage states' departure from the constraints (not the motion) would be
