@@ -11,8 +11,13 @@ Formulation: **coordinate partitioning** (Wehage and Haug). At a configuration t
 Jacobian is split, by QR with column pivoting, into r independent equations (r its rank:
 redundant equations, such as a parallelogram's extra link, are set aside) and r dependent
 coordinates ``d`` whose block ``Phi_d`` is the best conditioned; the other ``f = nq - r``
-coordinates ``z`` are independent. Only ``(z, z')`` are integrated (scipy's ``solve_ivp``
-with the user's rtol/atol, or RK4 with a fixed step). At every evaluation the dependent
+coordinates ``z`` are independent. The motion is ``(z, z')``: at every evaluation the
+dependent coordinates are closed from ``z``. The integrator (scipy's ``solve_ivp`` with
+the user's rtol/atol, or RK4 with a fixed step) carries all the coordinates and rates
+``(q, q')`` all the same, so that its error control sees the dependent ones too: near a
+singular passage, where ``z`` maps to them ill-conditioned, it shortens its step instead
+of stepping across (the integrated dependent values are Newton's start, never the
+motion). At every evaluation the dependent
 coordinates are solved by Newton's method on ``Phi = 0`` (to the constraint tolerance),
 their rates from ``Phi_q q' = nu`` and the accelerations with the multipliers from the
 augmented system ``[M Phi_r^T; Phi_r 0] [q''; lambda] = [Q; gamma]``. So the constraints
@@ -31,7 +36,6 @@ the integration's error (constant to the integrator's tolerance).
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -40,6 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.analyses.dynamics.multibody_friction import JointFriction
+from mechsolve.analyses.dynamics.multibody_loads import ArrayLoads
 from mechsolve.analyses.dynamics.multibody_pins import Pins
 from mechsolve.base.state import State
 from mechsolve.core.loads import _Q, apply_loads, stroke_function
@@ -106,6 +111,11 @@ class Partition:
     ind: np.ndarray  # independent coordinates
     rcond: float  # Phi_d's reciprocal condition when chosen
     rcond1: float = 1.0  # its 1-norm estimate (LAPACK gecon), for the checks at each step
+
+    def __post_init__(self) -> None:
+        # the blocks Phi_d and Phi_z as index tuples, built once per partition
+        self.dd = np.ix_(self.rows, self.dep)
+        self.di = np.ix_(self.rows, self.ind)
 
 
 @dataclass
@@ -203,13 +213,34 @@ class Multibody:
             if not self.prescribed and Pins.applies(self.system.constraints)
             else None
         )
+        # the mass matrix's entries by flat index: its diagonal is constant, the
+        # couplings of the centre of mass's arm are written at each configuration
+        i, nq = np.arange(self.nb) * 3, self.nq
+        self._m_diag = np.concatenate([i * (nq + 1), (i + 1) * (nq + 1), (i + 2) * (nq + 1)])
+        self._m_const = np.concatenate(
+            [self.m, self.m, self.J + self.m * np.sum(self.s * self.s, axis=1)]
+        )
+        self._m_x, self._m_xt = i * nq + i + 2, (i + 2) * nq + i
+        self._m_y, self._m_yt = (i + 1) * nq + i + 2, (i + 2) * nq + i + 1
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
+        self.array_loads = ArrayLoads(mech, idx, self.nb) if ArrayLoads.applies(mech) else None
+        self._mg, self._mgy = self.m * self.gx, self.m * self.gy
         self.extremes: list = []
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
         self._chord = None  # (partition, Phi_d) of the last evaluation
         # the joints' friction (None: ideal joints), solved with the multipliers
         self.friction = JointFriction.of(self, NotClosing)
+        # the evaluation on arrays alone: pins, loads on arrays (or none), no motor, ideal
+        # joints
+        self.lite = (
+            self.pins is not None
+            and not self.sources
+            and self.friction is None
+            and (not mech.loads or self.array_loads is not None)
+        )
+        self._ev = None  # the last evaluation of accelerations(), for output()
+        self.rc = 1.0  # Phi_d's reciprocal condition (1-norm) at the last rates()
 
     # -- states ---------------------------------------------------------------------
     def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
@@ -301,24 +332,27 @@ class Multibody:
         rows, dep = part.rows, part.dep
         if len(dep) == 0:  # no equations: every coordinate is independent
             return q
-        from scipy.linalg import lu_solve
-
         # the chord: the factors of the last evaluation's Phi_d on this partition, a step away
         lu = self._chord[1] if self._chord is not None and self._chord[0] is part else None
         last = np.inf
+        every = len(rows) == self.nc
         for _ in range(NEWTON_ITERATIONS):
-            phi = self.residual(q, t)[rows]
-            if not np.all(np.isfinite(phi)):
+            phi = self.residual(q, t)
+            if not every:
+                phi = phi[rows]
+            size = float(np.max(np.abs(phi)))
+            if not math.isfinite(size):
                 raise Repartition
-            size = np.max(np.abs(phi), initial=0.0)
+            if size <= self.tol:
+                # closed (a further chord step, with factors of a nearby configuration,
+                # can move it away where Phi_d is ill-conditioned)
+                return q
             if lu is None or size > 0.1 * last:  # the chord's Jacobian while it converges
-                lu = _lu(self.jacobian(q)[np.ix_(rows, dep)])[0]
+                lu = _lu(self.jacobian(q)[part.dd])[0]
                 if lu is None:
                     raise Repartition
             last = size
-            q[dep] -= lu_solve(lu, phi, check_finite=False)
-            if size <= self.tol:  # that last step takes it from the tolerance to rounding
-                return q
+            q[dep] -= _solve(lu, phi)
         raise Repartition
 
     def guess(self, t: float) -> np.ndarray:
@@ -331,18 +365,19 @@ class Multibody:
         """All coordinates' rates from the independent ones: ``Phi_q q' = nu``."""
         Jq = self.jacobian(q)
         rows, dep, ind = part.rows, part.dep, part.ind
-        from scipy.linalg import lu_solve
-
         qd = np.zeros(self.nq)
         qd[ind] = zd
         if len(dep) == 0:
             return qd, Jq
-        lu, rc = _lu(Jq[np.ix_(rows, dep)])
+        lu, rc = _lu(Jq[part.dd])
+        self.rc = rc
         if lu is None or rc < RECONDITION * part.rcond1:
             raise Repartition
         self._chord = (part, lu)
-        nu = self._nu_gamma(self.state(q), t, gamma=False)[rows]
-        qd[dep] = lu_solve(lu, nu - Jq[np.ix_(rows, ind)] @ zd, check_finite=False)
+        rhs = -(Jq[part.di] @ zd)
+        if self.pins is None:  # (pins: nu = 0)
+            rhs += self._nu_gamma(self.state(q), t, gamma=False)[rows]
+        qd[dep] = _solve(lu, rhs)
         return qd, Jq
 
     def _needs_repartition(self, part: Partition, q: np.ndarray) -> bool:
@@ -350,44 +385,55 @@ class Multibody:
         again while it is still well posed."""
         if len(part.dep) == 0:
             return False
-        return _rcond(self.jacobian(q)[np.ix_(part.rows, part.dep)]) < 0.1 * part.rcond
+        return _rcond(self.jacobian(q)[part.dd]) < 0.1 * part.rcond
 
     # -- mass and forces ----------------------------------------------------------------
     def mass_matrix(self, st: State) -> np.ndarray:
         """M(q) about each body's frame origin: [[m, 0, -m ry], [0, m, m rx],
         [-m ry, m rx, J + m |r|^2]] with r the centre of mass's arm."""
-        c, s = st.c[:-1, 0], st.s[:-1, 0]
+        return self._mass(st.c[:-1, 0], st.s[:-1, 0])
+
+    def _mass(self, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """:meth:`mass_matrix` from the bodies' cos and sin."""
         rx = c * self.s[:, 0] - s * self.s[:, 1]
         ry = s * self.s[:, 0] + c * self.s[:, 1]
         m = self.m
         M = np.zeros((self.nq, self.nq))
-        i = np.arange(self.nb) * 3
-        M[i, i] = m
-        M[i + 1, i + 1] = m
-        M[i + 2, i + 2] = self.J + m * (rx * rx + ry * ry)
-        M[i, i + 2] = M[i + 2, i] = -m * ry
-        M[i + 1, i + 2] = M[i + 2, i + 1] = m * rx
+        flat = M.reshape(-1)
+        flat[self._m_diag] = self._m_const  # m, m, J + m |s|^2 (|r| = |s|)
+        flat[self._m_x] = flat[self._m_xt] = -m * ry  # (x, theta) and (theta, x)
+        flat[self._m_y] = flat[self._m_yt] = m * rx
         return M
 
     def forces(self, st: State, t: float):
         """``(Q, P_nc, V)``: the generalised forces (gravity, the centripetal terms of
         off-origin centres of mass, the file's loads, the motors), the power of the
         non-conservative ones and the potential energy (gravity, unconditional springs)."""
-        acc = _Q(self.an, st)
+        arrays = self.array_loads is not None
+        acc = _Q(self.an, st) if self.mech.loads and not arrays else None
         w2 = st.w[:-1, 0] ** 2
         c, s = st.c[:-1, 0], st.s[:-1, 0]
         rx = c * self.s[:, 0] - s * self.s[:, 1]
         ry = s * self.s[:, 0] + c * self.s[:, 1]
         m = self.m
-        Q = acc.Q[:, 0]
+        Q = acc.Q[:, 0] if acc is not None else np.zeros(self.nq)
         Q[0::3] += m * (self.gx + w2 * rx)
         Q[1::3] += m * (self.gy + w2 * ry)
         Q[2::3] += m * (rx * self.gy - ry * self.gx)
         V = -float(np.sum(m * (self.gx * (st.x[:-1, 0] + rx) + self.gy * (st.y[:-1, 0] + ry))))
-        active = self._active(st)
-        P, _, springs = apply_loads(self.an, st, active, acc)
-        P = float(P[0])
-        V += float(np.sum(springs[0]))
+        P = 0.0
+        if arrays:  # torques and springs that always act, on arrays
+            nb = self.nb
+            q = np.empty(self.nq)
+            qd = np.empty(self.nq)
+            q[0::3], q[1::3], q[2::3] = st.x[:nb, 0], st.y[:nb, 0], st.th[:nb, 0]
+            qd[0::3], qd[1::3], qd[2::3] = st.vx[:nb, 0], st.vy[:nb, 0], st.w[:nb, 0]
+            P, Vs = self.array_loads.apply(q, qd, Q)
+            V += Vs
+        elif acc is not None:  # the file's loads
+            P, _, springs = apply_loads(self.an, st, self._active(st), acc)
+            P = float(P[0])
+            V += float(np.sum(springs[0]))
         for src in self.sources:
             row, rate = self._coordinate_row(src.coordinate, st)
             effort = float(src.law(rate, t))
@@ -395,6 +441,24 @@ class Multibody:
                 raise NotClosing(t, f"the motor {src.name}'s law gives {effort:g} at {rate:g}")
             Q += row * effort
             P += effort * rate
+        return Q, P, V
+
+    def _forces_lite(self, q, qd, c, s):
+        """:meth:`forces` from arrays, where every load is on arrays (no motor, no
+        condition): gravity, the centripetal terms, torques and springs."""
+        w2 = qd[2::3] ** 2
+        rx = c * self.s[:, 0] - s * self.s[:, 1]
+        ry = s * self.s[:, 0] + c * self.s[:, 1]
+        m = self.m
+        Q = np.empty(self.nq)
+        Q[0::3] = m * (self.gx + w2 * rx)
+        Q[1::3] = m * (self.gy + w2 * ry)
+        Q[2::3] = m * (rx * self.gy - ry * self.gx)
+        V = -float(self._mg @ (q[0::3] + rx) + self._mgy @ (q[1::3] + ry))
+        P = 0.0
+        if self.array_loads is not None:
+            P, Vs = self.array_loads.apply(q, qd, Q)
+            V += Vs
         return Q, P, V
 
     def _coordinate_row(self, coord, st: State):
@@ -425,18 +489,25 @@ class Multibody:
         """``(q'', lambda_r, P_nc, V)`` from the augmented system on the partition's
         independent equations."""
         self.nfev += 1
-        st = self.state(q, qd)
         if Jq is None:
             Jq = self.jacobian(q)
-        M = self.mass_matrix(st)
-        Q, P, V = self.forces(st, t)
+        if self.lite:  # pins and loads on arrays: no State to build
+            th, w = q[2::3], qd[2::3]
+            c, s = np.cos(th), np.sin(th)
+            M = self._mass(c, s)
+            Q, P, V = self._forces_lite(q, qd, c, s)
+            g = self.pins.gamma(th, w)[part.rows]
+        else:
+            st = self.state(q, qd)
+            M = self.mass_matrix(st)
+            Q, P, V = self.forces(st, t)
+            g = self._nu_gamma(st, t, gamma=True)[part.rows]
         Jr = Jq[part.rows]
         r = len(part.rows)
         A = np.zeros((self.nq + r, self.nq + r))
         A[: self.nq, : self.nq] = M
         A[: self.nq, self.nq :] = Jr.T
         A[self.nq :, : self.nq] = Jr
-        g = self._nu_gamma(st, t, gamma=True)[part.rows]
         b = np.concatenate([Q, g])
         if self.friction is not None:  # the multipliers and the friction together
             x, Pf = self.friction.solve(st, A, b, part.rows, Jq, M, _linear, qd, t)
@@ -454,28 +525,36 @@ class Multibody:
                 at = np.flatnonzero(part.rows == first + k)
                 if at.size:
                     P -= float(x[self.nq + at[0]]) * float(ud[k])
+        self._ev = (q, qd, t, part, x, M, V, Jq)  # for output() at the same state
         return x[: self.nq], x[self.nq :], P, V
 
     def free_accelerations(self, q, qd, t: float):
         """``(q'', P_nc)`` by least squares on the augmented system with every equation
         (for the steps across a singular position)."""
         self.nfev += 1
-        st = self.state(q, qd)
         Jq = self.jacobian(q)
-        M = self.mass_matrix(st)
-        Q, P, _ = self.forces(st, t)
+        if self.lite:
+            th = q[2::3]
+            c, s = np.cos(th), np.sin(th)
+            M = self._mass(c, s)
+            Q, P, _ = self._forces_lite(q, qd, c, s)
+            g = self.pins.gamma(th, qd[2::3])
+        else:
+            st = self.state(q, qd)
+            M = self.mass_matrix(st)
+            Q, P, _ = self.forces(st, t)
+            g = self._nu_gamma(st, t, gamma=True)
         nc = Jq.shape[0]
         A = np.zeros((self.nq + nc, self.nq + nc))
         A[: self.nq, : self.nq] = M
         A[: self.nq, self.nq :] = Jq.T
         A[self.nq :, : self.nq] = Jq
-        g = self._nu_gamma(st, t, gamma=True)
         b = np.concatenate([Q, g])
         if self.friction is not None:
-            x, Pf = self.friction.solve(st, A, b, np.arange(nc), Jq, M, _least_squares, qd, t)
+            x, Pf = self.friction.solve(st, A, b, np.arange(nc), Jq, M, _free_least_squares, qd, t)
             P += Pf
         else:
-            x = _least_squares(A, b)
+            x = _free_least_squares(A, b)
         return x[: self.nq], P
 
     def multipliers(self, q, qd, qdd, t: float) -> np.ndarray:
@@ -491,6 +570,20 @@ class Multibody:
         """``(q'', lambda, T, V)`` at an output: what :meth:`accelerations`,
         :meth:`multipliers` and :meth:`energy` give, with one mass matrix and one
         evaluation of the forces each."""
+        ev = self._ev
+        if (
+            ev is not None
+            and ev[0] is q
+            and ev[1] is qd
+            and ev[2] == t
+            and ev[3] is part
+            and not self.conditional
+            and len(part.rows) == self.nc
+        ):
+            # the evaluation that closed this state: its multipliers are those of every
+            # equation (all independent, so unique) and no condition reads q''
+            _, _, _, _, x, M, V, Jq = ev
+            return x[: self.nq], x[self.nq :].copy(), 0.5 * float(qd @ M @ qd), V
         qdd, _, _, V = self.accelerations(part, q, qd, t)
         st = self.state(q, qd, qdd)
         Q, _, _ = self.forces(st, t)
@@ -512,8 +605,18 @@ class Multibody:
         Jq = self.jacobian(q)
         nu = self._nu_gamma(self.state(q), t, gamma=False)
         r = nu - Jq @ qd
-        dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
-        return qd + dq
+        try:  # M = L L^T: the correction of least kinetic energy, L^-T (J L^-T)^+ r
+            L = np.linalg.cholesky(self.mass_matrix(self.state(q)))
+        except np.linalg.LinAlgError:  # a massless coordinate: the least correction
+            dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
+            return qd + dq
+        from scipy.linalg import solve_triangular
+
+        Jh = solve_triangular(L, Jq.T, lower=True).T  # J L^-T
+        dh, *_ = np.linalg.lstsq(Jh, r, rcond=1e-10)
+        # (in this metric the kinetic energy changes only to second order in r, however
+        # ill-conditioned J is next to a singular position)
+        return qd + solve_triangular(L, dh, lower=True, trans="T")
 
 
 def trajectory_state(mb: Multibody, tr: Trajectory) -> State:
@@ -561,22 +664,37 @@ def _least_squares(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(A, b, rcond=1e-12)[0]
 
 
+def _free_least_squares(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The augmented system with every equation across a singular position: singular
+    values below sqrt(eps) of the largest count as zero. At the singular position they
+    are those of the direction the equations lose, along which the stage states'
+    departure from the constraints (not the motion) would be amplified by their inverse
+    (1e-12 here lost 6e-4 J of the N-four-bar's 36 J in one RK4 substep)."""
+    return np.linalg.lstsq(A, b, rcond=1e-8)[0]
+
+
 def _lu(A: np.ndarray):
     """``(factors, rcond)``: the LU factors of a square ``A`` and LAPACK's estimate of its
     reciprocal condition in the 1-norm (cheaper than the singular values); ``(None, 0)``
-    where ``A`` is singular or not finite."""
-    from scipy.linalg import LinAlgWarning, lu_factor
-    from scipy.linalg.lapack import dgecon
+    where ``A`` is singular or not finite. LAPACK is called directly: at the sizes of a
+    mechanism (tens of equations) scipy's wrappers cost more than the factorisation."""
+    from scipy.linalg.lapack import dgecon, dgetrf
 
     if A.size == 0:
         return None, 1.0
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", LinAlgWarning)
-        lu, piv = lu_factor(A, check_finite=False)
-    if not np.all(np.isfinite(lu)) or not np.all(np.diag(lu)):
+    lu, piv, info = dgetrf(A)
+    if info != 0 or not np.all(np.isfinite(lu)):
         return None, 0.0
     rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
     return (lu, piv), float(rc)
+
+
+def _solve(lu, b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` from :func:`_lu`'s factors."""
+    from scipy.linalg.lapack import dgetrs
+
+    x, _ = dgetrs(lu[0], lu[1], b)
+    return x
 
 
 def _rcond(A: np.ndarray) -> float:

@@ -32,7 +32,7 @@ from mechsolve.analyses.dynamics.multibody import (
     Repartition,
     Stop,
     Trajectory,
-    _rcond,
+    _lu,
 )
 from mechsolve.analyses.dynamics.multibody_events import (
     S_NEAR,
@@ -94,6 +94,8 @@ class _Run:
         self.stopped, self.early, self.event = "", False, ""
         self.stop: Stop | None = None
         self.singular, self.branch, self.branch0 = "pass", None, None
+        self.last_rc = None  # (t, y, rcond of Phi_d) of the last evaluation
+        self.evaluated: dict = {}  # the evaluations of the closed outputs, by id(q)
         self.record(0.0, self.q, self.qd, self.W)
 
     def halt(self, kind: str, why: str) -> None:
@@ -107,6 +109,7 @@ class _Run:
     def record(self, t, q, qd, W) -> None:
         """Keep an output: its state, accelerations, multipliers, energies, violations."""
         mb, rec = self.mb, self.rec
+        mb._ev = self.evaluated.pop(id(q), None)
         qdd, lam, T, V = mb.output(self.part, q, qd, t)
         nu = mb._nu_gamma(mb.state(q), t, gamma=False)
         for key, value in (
@@ -127,29 +130,33 @@ class _Run:
     def rhs(self, t, y):
         """d/dt (z, z', W) on the current partition."""
         mb, part = self.mb, self.part
-        f = len(part.ind)
-        z, zd = y[:f], y[f : 2 * f]
-        qq = mb.close(part, z, t, mb.guess(t))
-        qqd, Jq = mb.rates(part, qq, zd, t)
+        nq = mb.nq
+        # Newton starts from the integrated dependent coordinates (the state carries
+        # them all, a predictor to the integrator's accuracy)
+        qq = mb.close(part, y[part.ind], t, y[:nq])
+        qqd, Jq = mb.rates(part, qq, y[nq + part.ind], t)
         qdd, _, P, _ = mb.accelerations(part, qq, qqd, t, Jq)
         mb._last = (t, qq, qqd, qdd)
-        return np.concatenate([zd, qdd[part.ind], [P]])
+        self.last_rc = (t, y, mb.rc)
+        return np.concatenate([qqd, qdd, [P]])
 
     def _closed(self, t1, y1):
         """``(t, q, q', W)`` from the partition's state ``y1`` at ``t1``."""
         mb, part = self.mb, self.part
-        fn = len(part.ind)
-        q1 = mb.close(part, y1[:fn], t1, mb.guess(t1))
-        qd1, _ = mb.rates(part, q1, y1[fn : 2 * fn], t1)
+        nq = mb.nq
+        q1 = mb.close(part, y1[part.ind], t1, y1[:nq])
+        qd1, _ = mb.rates(part, q1, y1[nq + part.ind], t1)
         mb._last = (t1, q1, qd1, mb.accelerations(part, q1, qd1, t1)[0])
+        self.evaluated[id(q1)] = mb._ev  # record() takes its accelerations, multipliers
         return (t1, q1, qd1, float(y1[-1]))
 
     def outputs(self, k: int) -> list:
         """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
         adaptive run until an event), each closed on the partition."""
-        mb, f = self.mb, self.part.ind
+        mb = self.mb
         t0 = self.times[k - 1]
-        y0 = np.concatenate([self.q[f], self.qd[f], [self.W]])
+        self.evaluated = {}
+        y0 = np.concatenate([self.q, self.qd, [self.W]])
         fired = None
         if self.method == "rk4":
             ts, ys = [self.times[k]], [rk4(self.rhs, t0, y0, self.times[k] - t0)]
@@ -202,6 +209,10 @@ class _Run:
                     return
                 continue
             try:
+                if self.event_fired and singular_measure(mb, self.q, self.rank) < S_NEAR:
+                    # a new partition next to a singular position is ill-conditioned
+                    # itself (integrating on it loses energy): bridged until clear
+                    raise Repartition
                 out = self.outputs(k)
             except Repartition:
                 # at or next to a singular position no partition describes the motion:
@@ -382,12 +393,20 @@ def _adaptive(run: _Run, times, y0):
     fn = len(part.ind)
 
     def closed(t, y):
-        return mb.close(part, y[:fn], t, mb.guess(t))
+        return mb.close(part, y[part.ind], t, y[: mb.nq])
 
     def conditioning(t, y):
+        """Phi_d's reciprocal condition (1-norm estimate) falls below 0.1 of its value
+        when the partition was chosen: at a step's end that of the step's last
+        evaluation (the same state), elsewhere (the event's root) from a closure."""
         if fn == 0 or len(part.dep) == 0:
             return 1.0
-        return _rcond(mb.jacobian(closed(t, y))[np.ix_(part.rows, part.dep)]) - 0.1 * part.rcond
+        last = run.last_rc
+        if last is not None and last[0] == t and np.array_equal(last[1], y):
+            rc = last[2]
+        else:
+            rc = _lu(mb.jacobian(closed(t, y))[part.dd])[1]
+        return rc - 0.1 * part.rcond1
 
     events: list = [conditioning]
     kinds = ["conditioning"]
@@ -395,7 +414,7 @@ def _adaptive(run: _Run, times, y0):
 
         def stop(t, y):
             q = closed(t, y)
-            qd, _ = mb.rates(part, q, y[fn : 2 * fn], t)
+            qd, _ = mb.rates(part, q, y[mb.nq + part.ind], t)
             return run.g(t, q, qd)
 
         stop.direction = -1

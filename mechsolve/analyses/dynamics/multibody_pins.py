@@ -18,7 +18,11 @@ import numpy as np
 
 
 class Pins:
-    """All pins' residual, Jacobian and ``gamma`` at one configuration."""
+    """All pins' residual, Jacobian and ``gamma`` at one configuration.
+
+    The index arrays are built once: the Jacobian's constant entries (the unit blocks of
+    the bodies' positions) are kept in a template and only its angle columns are
+    written at each configuration, by flat index."""
 
     def __init__(self, constraints: list, nb: int) -> None:
         self.nb, self.nq = nb, 3 * nb
@@ -26,9 +30,24 @@ class Pins:
         self.b = np.array([c.b for c in constraints])
         self.sa = np.array([c.sa for c in constraints], float)
         self.sb = np.array([c.sb for c in constraints], float)
-        k = np.arange(len(constraints))
+        n = len(constraints)
+        k = np.arange(n)
         self.rows_x, self.rows_y = 2 * k, 2 * k + 1
         self.moving_a, self.moving_b = self.a != nb, self.b != nb
+        nq = self.nq
+        # the body coordinates of each end, the ground's pointing at a zero appended to q
+        self.ia = np.where(self.moving_a, 3 * self.a, nq)
+        self.ib = np.where(self.moving_b, 3 * self.b, nq)
+        self.template = np.zeros((2 * n, nq))
+        flat = []
+        for moving, body, sign in ((self.moving_a, self.a, 1.0), (self.moving_b, self.b, -1.0)):
+            rx_, ry_, col = self.rows_x[moving], self.rows_y[moving], 3 * body[moving]
+            self.template[rx_, col] = sign
+            self.template[ry_, col + 1] = sign
+            flat.append((rx_ * nq + col + 2, ry_ * nq + col + 2))
+        (self.fa_x, self.fa_y), (self.fb_x, self.fb_y) = flat
+        self._qe = np.zeros(nq + 3)
+        self._th = np.zeros(nb + 1)
 
     @staticmethod
     def applies(constraints: list) -> bool:
@@ -37,8 +56,9 @@ class Pins:
     def _arms(self, th: np.ndarray):
         """The rotated local points ``R(theta) s`` of both ends (``th``: the bodies'
         angles; the ground's is appended)."""
-        th = np.concatenate([th, [0.0]])
-        c, s = np.cos(th), np.sin(th)
+        the = self._th
+        the[: self.nb] = th  # the ground's stays 0
+        c, s = np.cos(the), np.sin(the)
         ca, sa_, cb, sb_ = c[self.a], s[self.a], c[self.b], s[self.b]
         rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
         ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
@@ -47,32 +67,29 @@ class Pins:
         return rax, ray, rbx, rby
 
     def residual(self, q: np.ndarray) -> np.ndarray:
-        qe = np.concatenate([q, np.zeros(3)])  # the ground at the origin, at rest
+        qe = self._qe
+        qe[: self.nq] = q  # the ground at the origin, at rest
         rax, ray, rbx, rby = self._arms(q[2::3])
         out = np.empty(2 * len(self.a))
-        out[0::2] = qe[3 * self.a] + rax - qe[3 * self.b] - rbx
-        out[1::2] = qe[3 * self.a + 1] + ray - qe[3 * self.b + 1] - rby
+        out[0::2] = qe[self.ia] + rax - qe[self.ib] - rbx
+        out[1::2] = qe[self.ia + 1] + ray - qe[self.ib + 1] - rby
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         rax, ray, rbx, rby = self._arms(q[2::3])
-        J = np.zeros((2 * len(self.a), self.nq))
-        for moving, body, rx, ry, sign in (
-            (self.moving_a, self.a, rax, ray, 1.0),
-            (self.moving_b, self.b, rbx, rby, -1.0),
-        ):
-            rx_, ry_ = self.rows_x[moving], self.rows_y[moving]
-            col = 3 * body[moving]
-            J[rx_, col] = sign
-            J[ry_, col + 1] = sign
-            J[rx_, col + 2] = -sign * ry[moving]
-            J[ry_, col + 2] = sign * rx[moving]
+        J = self.template.copy()
+        flat = J.reshape(-1)
+        ma, mb = self.moving_a, self.moving_b
+        flat[self.fa_x] = -ray[ma]
+        flat[self.fa_y] = rax[ma]
+        flat[self.fb_x] = rby[mb]
+        flat[self.fb_y] = -rbx[mb]
         return J
 
     def gamma(self, th: np.ndarray, w: np.ndarray) -> np.ndarray:
         """``gamma`` from the bodies' angles ``th`` and angular velocities ``w``."""
         rax, ray, rbx, rby = self._arms(th)
-        w = np.concatenate([w, [0.0]])
+        w = np.append(w, 0.0)
         wa2, wb2 = w[self.a] ** 2, w[self.b] ** 2
         out = np.empty(2 * len(self.a))
         out[0::2] = rax * wa2 - rbx * wb2

@@ -1,0 +1,83 @@
+"""The file's loads on arrays, for the multibody evaluation at one configuration: torques
+and linear springs between points that always act (no ``when``), the common case of the
+benchmarks (Andrews' mechanism: a torque and a stiff spring). The general load machinery
+(:func:`mechsolve.core.loads.apply_loads`) builds its states and loops over loads for
+every position; at one configuration, evaluated a few thousand times a run, that cost
+more than the rest of the equations of motion. Any other load (forces, dampers,
+conditional loads) keeps the general path; tests/test_issue26_speed.py checks that both
+give the same forces, power and potential.
+
+For a spring between point ``a`` (on body ``i``, local ``s_a``) and point ``b`` (body
+``j``)::
+
+    d = p_b - p_a,  L = |d|,  e = d / L,  T = k (L - L0)
+    Q_i += T (e, r_a x e),   Q_j -= T (e, r_b x e),   V += k (L - L0)^2 / 2
+
+with ``r = R(theta) s`` the point's arm from its body's frame origin.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mechsolve.model import GROUND, Spring, Torque
+
+
+class ArrayLoads:
+    """Unconditional torques and linear springs of a mechanism, on arrays."""
+
+    def __init__(self, mech, index: dict[str, int], nb: int) -> None:
+        self.nb = nb
+        torques = [ld for ld in mech.loads if type(ld) is Torque]
+        springs = [ld for ld in mech.loads if type(ld) is Spring]
+        self.t_body = np.array([index[ld.link] for ld in torques], int)
+        self.t_value = np.array([ld.torque for ld in torques], float)
+        ends = [[], []]
+        for ld in springs:
+            for k, (link, point) in enumerate(ld.ends):
+                body = nb if link == GROUND else index[link]
+                ends[k].append((body, *mech.local_point(link, point)))
+        a = np.array(ends[0], float).reshape(-1, 3)
+        b = np.array(ends[1], float).reshape(-1, 3)
+        self.a, self.sa = a[:, 0].astype(int), a[:, 1:]
+        self.b, self.sb = b[:, 0].astype(int), b[:, 1:]
+        self.k = np.array([ld.stiffness for ld in springs], float)
+        self.l0 = np.array([ld.free_length for ld in springs], float)
+
+    @staticmethod
+    def applies(mech) -> bool:
+        return bool(mech.loads) and all(
+            type(ld) in (Torque, Spring) and ld.when is None for ld in mech.loads
+        )
+
+    def apply(self, q: np.ndarray, qd: np.ndarray, Q: np.ndarray) -> tuple[float, float]:
+        """Add the loads to ``Q`` (nq,); return their non-conservative power (the
+        torques') and the springs' potential."""
+        nb = self.nb
+        P = 0.0
+        if self.t_body.size:
+            np.add.at(Q, 3 * self.t_body + 2, self.t_value)
+            P = float(self.t_value @ qd[3 * self.t_body + 2])
+        if not self.k.size:
+            return P, 0.0
+        qe = np.append(q, [0.0, 0.0, 0.0])  # the ground: at the origin, not turned
+        ends = []
+        for body, s in ((self.a, self.sa), (self.b, self.sb)):
+            th = qe[3 * body + 2]
+            c, sn = np.cos(th), np.sin(th)
+            rx = c * s[:, 0] - sn * s[:, 1]
+            ry = sn * s[:, 0] + c * s[:, 1]
+            ends.append((body, qe[3 * body] + rx, qe[3 * body + 1] + ry, rx, ry))
+        (ba, xa, ya, rax, ray), (bb, xb, yb, rbx, rby) = ends
+        dx, dy = xb - xa, yb - ya
+        L = np.hypot(dx, dy)
+        ex, ey = dx / L, dy / L
+        T = self.k * (L - self.l0)  # tension: pulls b towards a and a towards b
+        for body, rx, ry, sign in ((ba, rax, ray, 1.0), (bb, rbx, rby, -1.0)):
+            moving = body != nb
+            fx, fy = (sign * T * ex)[moving], (sign * T * ey)[moving]
+            i = 3 * body[moving]
+            np.add.at(Q, i, fx)
+            np.add.at(Q, i + 1, fy)
+            np.add.at(Q, i + 2, rx[moving] * fy - ry[moving] * fx)
+        return P, float(0.5 * np.sum(self.k * (L - self.l0) ** 2))
