@@ -60,6 +60,9 @@ class Constraint:
     kind: str = ""
     letter: str = ""
     joins_points: bool = False
+    # its slip is a sliding speed and its friction a force (a slider), not a turning rate
+    # and a moment (a pin)
+    slides: bool = False
 
     def residual(self, st: State, u) -> np.ndarray:
         raise NotImplementedError

@@ -212,6 +212,7 @@ class SliderConstraint(Constraint):
     the guide's angle plus ``beta``."""
 
     kind = "slider"
+    slides = True
     letter = "P"
     m = 2
 

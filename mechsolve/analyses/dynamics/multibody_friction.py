@@ -38,8 +38,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mechsolve.joints.slider import SliderConstraint
-
 if TYPE_CHECKING:
     from mechsolve.base.state import State
 
@@ -77,7 +75,7 @@ class JointFriction:
 
     def describe(self) -> str:
         """The regularisation, in words, for the summary."""
-        kinds = {isinstance(r.constraint, SliderConstraint) for r in self.rows}
+        kinds = {r.constraint.slides for r in self.rows}
         parts = []
         if False in kinds:
             parts.append(f"{self.smoothing:.3g} rad/s in the pins")
@@ -91,7 +89,7 @@ class JointFriction:
 
     def speed(self, c) -> float:
         """The smoothing speed of constraint ``c``'s slip (rad/s, or m/s for a slider)."""
-        return self.smoothing * (self.mb.scale if isinstance(c, SliderConstraint) else 1.0)
+        return self.smoothing * (self.mb.scale if c.slides else 1.0)
 
     def laws(self, st: State) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """At a one-position state with rates: ``(g, k, v, slip)``: the generalised forces
@@ -243,7 +241,7 @@ class JointFriction:
         out = []
         for j, r in enumerate(self.rows):
             c = r.constraint
-            unit = "N" if isinstance(c, SliderConstraint) else "N*m"
+            unit = "N" if c.slides else "N*m"
             out.append((f"{c.name}.friction", unit, fr[:, j]))
             out.append((f"{c.name}.friction_power", "W", fr[:, j] * np.abs(slips[:, j])))
         out.append(("power.friction", "W", np.sum(fr * np.abs(slips), axis=1)))
