@@ -256,7 +256,7 @@ def place_labels(fig) -> None:
     point. A label with no free spot takes the one it overlaps least."""
     from matplotlib.transforms import Bbox
 
-    pending = [(ax, ax.__dict__.pop("_mechsolve_labels", [])) for ax in fig.axes]
+    pending = [(ax, ax.__dict__.pop("_mechsolve_labels", [])) for ax in getattr(fig, "axes", ())]
     if not any(items for _, items in pending):
         return
     renderer = fig.canvas.get_renderer()
