@@ -797,3 +797,63 @@ def test_a_sample_just_past_a_bifurcation_is_not_a_second_event(offset):
     np.testing.assert_allclose(wrap(res.link("rocker").angle - res.u), 0.0, atol=1e-7)
     angles = sorted(round(math.degrees(e.u) % 360, 3) for e in res.events)
     assert angles == [0.0, 0.0, 180.0, 180.0], angles  # twice round: each position once a turn
+
+
+@pytest.mark.parametrize("step", [1, 2, 5, 7, 10, 15])
+def test_newton_restart_on_a_limit_position_keeps_the_users_branch(step):
+    """A slider-crank whose rod equals its crank (r = l = 0.1, e = 0.05) cannot close for
+    210 < theta < 330 deg; the whole-system Newton sweep starts again past that range on
+    the edge itself, where both branches meet: the positions after it stay on the user's
+    branch (C behind A) at every step, not on either by chance (found by review: at a 2
+    deg step it drifted onto the other branch), and the edge is no bifurcation."""
+    from closed_form import slider_crank
+
+    text = f"""
+ground: {{O: [0, 0]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [0.1, 0]}}}}
+  rod: {{points: {{A: [0, 0], C: [0.1, 0]}}}}
+  piston: {{points: {{C: [0, 0]}}}}
+joints:
+  O: [ground, crank]
+  A: [crank, rod]
+  C: [rod, piston]
+  cyl: {{slider: [ground, piston], point: C, line: {{offset: 0.05, angle: 0}}}}
+assembly: ["C.x < A.x"]
+driver: {{joint: O, speed: 2 rad/s, start: 0 deg}}
+sweep: {{range: 360 deg, step: {step} deg}}
+solver: {{method: newton}}
+"""
+    res = ms.solve(ms.loads(text))
+    x, *_ = slider_crank(0.1, 0.1, 0.05, res.u, 2.0, False)
+    deg = np.degrees(res.u)
+    assert np.array_equal(res.ok, ~((deg > 210 + 1e-9) & (deg < 330 - 1e-9)))
+    both = res.ok & np.isfinite(x)
+    assert np.allclose(res.point("C").x[both], x[both], atol=1e-8)
+    assert not [e for e in res.events if e.kind == "bifurcation"]
+
+
+def test_newton_batched_sweep_reports_a_dead_zone_narrower_than_the_step():
+    """The four-bar whose coupler just fails to reach around 180 deg, at a 2 deg step: a
+    sweep of that many positions is refined in one batch, which cannot see the range it
+    steps over; the determinant's sign change sends it to the sequential sweep, which
+    reports the dead zone and keeps the user's branch (found by review: it reported a
+    bifurcation and put 88 positions on the other branch)."""
+    text = """
+ground: {O2: [0, 0], O4: [1.2, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.8, 0]}}
+  coupler: {points: {A: [0, 0], B: [1.2, 0]}}
+  rocker: {points: {O4: [0, 0], B: [0.79995, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 1 rad/s, start: 5 deg}
+sweep: {range: 350 deg, step: 2 deg}
+solver: {method: newton}
+"""
+    res = ms.solve(ms.loads(text))
+    assert res.ok.all() and len(res.u) >= 64
+    assert [e.kind for e in res.events] == ["dead zone"]
+    A = 0.8 * np.exp(1j * res.u)
+    B = res.point("B").x + 1j * res.point("B").y
+    assert np.all(np.imag((B - A) * np.conj(1.2 - A)) > 0)  # cross(A->O4, A->B) > 0

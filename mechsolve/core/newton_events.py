@@ -8,7 +8,7 @@ cross). Between two solved samples whose determinants differ in sign, the crossi
 located by Brent's method on the determinant of the group solved in between (from the
 interpolated pose), and reported as a bifurcation, as the branch analysis reports one of
 a two-branch group. A sample that is itself singular (to rounding: its reciprocal
-condition below :data:`~.conditioning.SINGULAR_RCOND`) between two samples of opposite
+condition below :data:`SIGN_RCOND`) between two samples of opposite
 signs is the event's position. A limit position (the edge of a range where the group
 cannot close) is not crossed, so it is not an event here: the range is reported as such.
 """
@@ -20,9 +20,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mechsolve.base.numerics import brent_root
-from mechsolve.core.conditioning import SINGULAR_RCOND, rcond
+from mechsolve.core.conditioning import rcond
 from mechsolve.core.solution import Event
 from mechsolve.groups import NewtonGroup
+
+# a sample whose block's reciprocal condition is below this is on the singular position
+# (its determinant's sign is rounding's: Newton converges to about sqrt(atol) at a limit
+# position)
+SIGN_RCOND = 1e-6
 
 if TYPE_CHECKING:
     from mechsolve.core.branches import _Context
@@ -56,19 +61,9 @@ def newton_events(
 def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> list[Event]:
     """The bifurcations the group passed: its determinant's sign changes."""
     st, u = ctx.st, ctx.u
-    if g.m != g.n or st.n < 2:
-        return []  # a redundant block has no determinant: its rank tells, not its sign
-    J = None
-    if g.red is not None:  # the free angles' Jacobian: the same sign changes (g._det)
-        if g.red.sub.nb == 0:
-            return []  # every angle fixed by a driver: a constant block
-        det, good = g.red_dets(st, ok)
-    else:
-        J = g.jacobian(st)
-        good = ok & np.all(np.isfinite(J), axis=(1, 2))
-        det = np.full(st.n, np.nan)
-        if good.any():
-            det[good] = np.linalg.det(J[good])
+    if st.n < 2:
+        return []
+    det, good = g.dets(st, ok)  # none for a redundant block: its rank tells, not its sign
     sign = np.sign(det)
     cross = np.flatnonzero(good[:-1] & good[1:] & (sign[:-1] * sign[1:] < 0))
     # (not crossed continuously: not a bifurcation)
@@ -77,16 +72,23 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
         return []
     ends = np.unique(np.r_[cross, cross + 1])
     singular = np.zeros(st.n, bool)
-    singular[ends] = rcond(g.jacobian(st.take(ends)) if J is None else J[ends]) <= SINGULAR_RCOND
+    singular[ends] = rcond(g.jacobian(st.take(ends))) <= SIGN_RCOND
     events: list[Event] = []
     seen: set[int] = set()
     for a in cross.tolist():
         b = a + 1
         if singular[a] or singular[b]:
+            # a sample on the singular position (its sign is rounding's): passed only if
+            # the samples on both sides close, regular and of opposite signs (else it is a
+            # limit position: the edge of a range where the group cannot close)
             j = a if singular[a] else b
             if j in seen or j == 0 or j == st.n - 1:
                 continue  # the sweep's ends: nothing is passed there
             seen.add(j)
+            if not (good[j - 1] and good[j + 1] and sign[j - 1] * sign[j + 1] < 0):
+                continue
+            if rcond(g.jacobian(st.take([j - 1, j + 1]))).min() <= SIGN_RCOND:
+                continue
             events.append(Event("bifurcation", g.label, float(u[j]), j - 1, 0.0))
             continue
         events.append(Event("bifurcation", g.label, _crossing(gi, g, ctx, a, det), a, 0.0))
@@ -112,7 +114,7 @@ def _crossing(gi: int, g: NewtonGroup, ctx: _Context, a: int, det: np.ndarray) -
 
     try:
         lo, hi = (u0, u1) if u0 < u1 else (u1, u0)
-        flo, fhi = (det[a], det[a + 1]) if u0 < u1 else (det[a + 1], det[a])
-        return brent_root(f, lo, hi, xtol=1e-12 * max(1.0, abs(u0)), fa=flo, fb=fhi)
+        # (the ends recomputed as the probes are: on the same, normalised, scale)
+        return brent_root(f, lo, hi, xtol=1e-12 * max(1.0, abs(u0)))
     except (ValueError, RuntimeError, FloatingPointError):
         return float(linear)

@@ -21,7 +21,9 @@ from mechsolve.groups.newton_rates import NewtonRates
 from mechsolve.groups.reduced import FLOATS_UP_TO, _Angles, _det_small, _rowmax_abs
 
 MAX_GAPS = 8  # a sweep starts again past at most this many breaks, then stops
-DET_ROUNDING = 1e-12  # a Hadamard ratio below this is a singular group's rounding
+# a Hadamard ratio of the group's determinant below this: a singular position, whose sign
+# is not to be trusted (Newton converges to about sqrt(atol) at a limit position)
+DET_SIGN = 1e-6
 
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
@@ -198,6 +200,28 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         good &= np.isfinite(det)
         return det, good
 
+    def dets(self, st: State, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The group's determinant at every position of ``st`` (of its free angles'
+        equations for a revolute group: :meth:`red_dets`) and where it is known (``ok``
+        and finite); a redundant group, or one whose angles the drivers fix, has none
+        (``known`` all False)."""
+        if self.m != self.n or (self.red is not None and self.red.sub.nb == 0):
+            return np.full(st.n, np.nan), np.zeros(st.n, bool)
+        if self.red is not None:
+            return self.red_dets(st, ok)
+        J = self.jacobian(st)
+        good = ok & np.all(np.isfinite(J), axis=(1, 2))
+        det = np.full(st.n, np.nan)
+        if good.any():
+            det[good] = np.linalg.det(J[good])
+        return det, good
+
+    def _sign_changes(self, st: State, ok: np.ndarray) -> bool:
+        """Does the determinant change sign between two solved positions?"""
+        det, good = self.dets(st, ok)
+        s = np.sign(det)
+        return bool(np.any(good[:-1] & good[1:] & (s[:-1] * s[1:] < 0)))
+
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
         """Place the group's links at all positions of ``st`` from their angles (N, n)."""
         C, S = np.cos(th), np.sin(th)
@@ -251,7 +275,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             return self._sweep_fixed(st, drive, ok_in)
         if self.batched and st.n >= BATCH_MIN and self.m == self.n and ok_in.all():
             out = self.sweep_batched(st, drive, q_start, prefix)
-            if out is not None:
+            # (a singular position passed: whether a bifurcation or a range where the
+            # group cannot close stepped over, the sequential sweep tells them apart)
+            if out is not None and not self._sign_changes(st, out[0]):
                 return out
         return self.sweep_sequential(st, drive, q_start, ok_in, prefix, restart)
 
@@ -297,8 +323,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         ok = np.zeros(n, bool)
         iters = np.zeros(n, int)
         methods = np.array(["" for _ in range(n)], dtype=object)
-        hu: list[float] = []
-        hq: list[np.ndarray] = []
+        hu, hq = [], []  # the last driver values and poses: the continuation's history
         last_good = np.asarray(q_start, float)
         last_det = 0.0
         # a revolute group needs only the solved bodies' terms at each position
@@ -337,12 +362,15 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             iters[i] = stats.iterations
             methods[i] = stats.method
             if good:
-                ok[i] = True
-                if not hq:  # (the next position compares its sign: none after the last)
+                ok[i], fresh = True, not hq
+                if fresh:  # (the next position compares its sign: none after the last)
                     det = self._det(st1, drive.u[i : i + 1], q, Ki) if i + 1 < n else 0.0
                 self.set_q(st, i, q)
                 last_good, last_det = q, det
-                hu, hq = (hu + [ui])[-3:], (hq + [q])[-3:]
+                # started again on a limit position (the edge of a range where it cannot
+                # close), where both branches meet: the next position starts again too
+                edge = fresh and i > 0 and restart is not None and abs(det) < DET_SIGN
+                hu, hq = ([], []) if edge else ((hu + [ui])[-3:], (hq + [q])[-3:])
             else:
                 self._nan(st, i)
                 hu, hq = [], []
@@ -352,9 +380,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         """The group's determinant at position ``i`` (solved as ``q``, continuously from
         the history ``hu``, ``hq``) and what the step passed where it changed sign: a
         range where the group cannot close (``"gap"``), a bifurcation (True), or nothing
-        (False; nor where rounding gives the sign of a group singular on both sides)."""
+        (False; nor where either end is singular, its sign then being rounding's)."""
         det = self._det(st1, drive.u[i : i + 1], q, Ki)
-        if not (det * last_det < 0 and max(abs(det), abs(last_det)) > DET_ROUNDING):
+        if not (det * last_det < 0 and min(abs(det), abs(last_det)) > DET_SIGN):
             return det, False
         ends = (hu[-1], hq[-1], last_det), (float(drive.u[i]), q)
         return det, "gap" if self._hidden_gap(st1, Ki, *ends, i - 1, prefix) else True

@@ -466,7 +466,9 @@ class Results(Summary):
         out = ["ok"] * len(self.u)
         for f in self.failures:
             for i in range(f.first, f.last + 1):
-                out[i] = "unassemblable: " + f.group
+                # (a sweep that stopped following a branch: not known to be unassemblable)
+                what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
+                out[i] = f"{what}: " + f.group
         if self.forces is not None:
             for i, label in self.forces.singular:
                 if out[i] == "ok":

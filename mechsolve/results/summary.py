@@ -75,24 +75,26 @@ class Summary:
         lines = []
         per = "per cycle" if self.is_full_cycle() else "over the sweep"
         w_f, why = friction_work(self.solution, self.forces)
+        U = shown(self)
         if math.isfinite(w_f):
             parts = []
             for name, p in fr.loss.items():
                 w = friction_work(self.solution, _Only(self.forces, p))[0]
-                parts.append(f"{name} {w:.4g} J")
-            lines.append(f"  friction losses {per}: {w_f:.6g} J ({', '.join(parts)})")
+                parts.append(f"{name} {U.text(w, 'J', '.4g')}")
+            lines.append(f"  friction losses {per}: {U.text(w_f, 'J')} ({', '.join(parts)})")
             work = self.work()
             if self.is_full_cycle() and math.isfinite(work) and work > 0:
                 lines.append(
                     f"  efficiency per cycle: {(work - w_f) / work:.4g} (output: the work "
-                    f"done on the loads, {work - w_f:.6g} J, over the driver's {work:.6g} J; "
-                    "the kinetic and potential energy return over the cycle)"
+                    f"done on the loads, {U.text(work - w_f, 'J')}, over the driver's "
+                    f"{U.text(work, 'J')}; the kinetic and potential energy return over the "
+                    "cycle)"
                 )
             elif self.is_full_cycle() and math.isfinite(work) and work < 0:
                 lines.append(
                     f"  efficiency per cycle: {-work / (w_f - work):.4g} (the loads drive: "
-                    f"output the work the driver takes, {-work:.6g} J, over the loads' "
-                    f"{w_f - work:.6g} J)"
+                    f"output the work the driver takes, {U.text(-work, 'J')}, over the loads' "
+                    f"{U.text(w_f - work, 'J')})"
                 )
         else:
             lines.append(f"  friction losses {per}: not defined ({why})")
