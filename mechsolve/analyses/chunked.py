@@ -184,6 +184,18 @@ def stream(
             summary.chunks += 1
             if progress is not None:
                 progress(len(u) - skip)
+            if getattr(sol, "stopped", None) and offset < len(u_all):
+                # a branch that could not be followed: the next chunk would start from a
+                # pose before the break, on a branch not known; the rest is not solved
+                # (its rows are not written), and the summary says so
+                last = next(f for f in reversed(res.failures))
+                summary.failures.append(
+                    Failure(
+                        offset, len(u_all) - 1, last.group, last.reason,
+                        float(u_all[offset]), float(u_all[-1]),
+                    )
+                )  # fmt: skip
+                break
         path = out.close()
     except BaseException:
         out.abort()

@@ -336,6 +336,11 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
         )
         if limits and derivs and inds:
             self._rates_at_singular(sol, velocity, acceleration, per_unit_driver)
+        # where a Newton group's sweep stopped (its branch past there not known): a next
+        # chunk cannot follow it
+        sol.stopped = next(
+            (g.stopped for g in self.plan if isinstance(g, NewtonGroup) and g.stopped), None
+        )
         return sol
 
     def _solve_groups(
