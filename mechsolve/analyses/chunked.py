@@ -185,16 +185,7 @@ def stream(
             if progress is not None:
                 progress(len(u) - skip)
             if getattr(sol, "stopped", None) and offset < len(u_all):
-                # a branch that could not be followed: the next chunk would start from a
-                # pose before the break, on a branch not known; the rest is not solved
-                # (its rows are not written), and the summary says so
-                last = next(f for f in reversed(res.failures))
-                summary.failures.append(
-                    Failure(
-                        offset, len(u_all) - 1, last.group, last.reason,
-                        float(u_all[offset]), float(u_all[-1]),
-                    )
-                )  # fmt: skip
+                _stopped(summary, res, u_all, offset)
                 break
         path = out.close()
     except BaseException:
@@ -203,6 +194,18 @@ def stream(
     summary.failures = _merge(summary.failures)
     summary.path = path
     return summary, coarse
+
+
+def _stopped(s: StreamSummary, res: Results, u_all: np.ndarray, offset: int) -> None:
+    """A chunk whose branch could not be followed: the next one would start from a pose
+    before the break, on a branch not known; the rest (from ``offset``) is not solved
+    (its rows are not written), and the summary says so with the chunk's reason."""
+    last = res.failures[-1]
+    s.failures.append(
+        Failure(
+            offset, len(u_all) - 1, last.group, last.reason, float(u_all[offset]), float(u_all[-1])
+        )
+    )
 
 
 def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
