@@ -193,7 +193,11 @@ def scale_rates(st: State, ud: np.ndarray, udd: np.ndarray, acceleration: bool =
     acc = st.block[8:11]  # ax, ay, al
     ud = np.asarray(ud, float)
     udd = np.asarray(udd, float)
-    if ud.size and np.all(ud == ud.flat[0]) and not np.any(udd):
+    if ud.ndim == 0 and udd.ndim == 0:  # one speed for every position (no array tests)
+        constant = float(udd) == 0.0
+    else:
+        constant = bool(ud.size and np.all(ud == ud.flat[0]) and not np.any(udd))
+    if constant:
         w = float(ud.flat[0])  # a constant speed: two scalar products, as the sweep does
         if acceleration and w != 1.0:
             acc *= w * w
