@@ -80,3 +80,17 @@ def test_expression_uses_follows_its_tree() -> None:
     other = Expression("max(P.x, 1) > 0")
     e.tree = other.tree
     assert e.uses("max") and not e.uses("stroke")
+
+
+def test_ground_points_are_shared_read_only_constants() -> None:
+    """A ground point at a few positions is one array per value, kept by the state and
+    read-only (as the broadcast views at many positions are), with the point's value."""
+    for n in (4, 100):
+        st = State(2, n)
+        x, y = st.point(2, np.array([0.0875, -0.01]))
+        np.testing.assert_array_equal(x, np.full(n, 0.0875))
+        np.testing.assert_array_equal(y, np.full(n, -0.01))
+        assert not x.flags.writeable and not y.flags.writeable
+        assert st.point(2, np.array([0.0875, 0.0]))[0] is x
+        vx, vy = st.point_velocity(2, np.array([0.0875, -0.01]))
+        assert vx is vy and not np.any(vx)

@@ -123,15 +123,18 @@ class State:
     # -- points ----------------------------------------------------------------------
     # The ground (row nb) is at rest with the identity frame, and many local vectors are
     # zero (a link's frame at one of its joints): both have fast paths, which return
-    # read-only broadcast views.
+    # read-only arrays kept per state (broadcast views beyond a few positions).
     def _const(self, v: float, idx) -> np.ndarray:
         n = self.n if isinstance(idx, slice) and idx == slice(None) else len(self.x[0, idx])
-        if n <= 8:  # a few positions: a plain array is cheaper than a cached view
-            return np.full(n, float(v))
-        key = (float(v), n)
+        key = (v, n)
         arr = self.consts.get(key)
         if arr is None:
-            arr = self.consts[key] = np.broadcast_to(np.float64(v), (n,))
+            if n <= 8:  # a few positions: a plain array is cheaper to compute with than a view
+                arr = np.full(n, float(v))
+                arr.flags.writeable = False  # shared, as the views are
+            else:
+                arr = np.broadcast_to(np.float64(v), (n,))
+            self.consts[key] = arr
         return arr
 
     def rotated(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
