@@ -267,8 +267,11 @@ class BranchEvents:
         d = self.mech.driver.direction
         u, H, Hs, good, near, at_sample, known = self._analysis_grid(gi, g, ctx, ok_prev)
         found = self._minima_between_samples(gi, g, ctx, u, H, Hs, good, near, at_sample)
-        _minima_at_grid_points(found, u, H, known, near)
-        _near_singular_at_grid_points(found, u, H, good, near)
+        # both add only grid points inside with H below NEAR_SINGULAR^2 (> TOUCH): one
+        # test over the grid when there are none (most sweeps)
+        if np.any(H[1:-1] < NEAR_SINGULAR**2):
+            _minima_at_grid_points(found, u, H, known, near)
+            _near_singular_at_grid_points(found, u, H, good, near)
         found.sort(key=lambda f: d * f[1])
         return self._events_at(gi, g, ctx, _merge_minima(found))
 
