@@ -57,5 +57,7 @@ def __getattr__(name: str) -> Any:
         import importlib
 
         mod = importlib.import_module(f".{_API[name]}", __name__)
-        return getattr(mod, name)
+        value = getattr(mod, name)
+        globals()[name] = value  # found directly from now on (no import machinery per call)
+        return value
     raise AttributeError(f"module 'mechsolve' has no attribute {name!r}")

@@ -123,15 +123,18 @@ class State:
     # -- points ----------------------------------------------------------------------
     # The ground (row nb) is at rest with the identity frame, and many local vectors are
     # zero (a link's frame at one of its joints): both have fast paths, which return
-    # read-only broadcast views.
+    # read-only arrays kept per state (broadcast views beyond a few positions).
     def _const(self, v: float, idx) -> np.ndarray:
         n = self.n if isinstance(idx, slice) and idx == slice(None) else len(self.x[0, idx])
-        if n <= 8:  # a few positions: a plain array is cheaper than a cached view
-            return np.full(n, float(v))
-        key = (float(v), n)
+        key = (v, n)
         arr = self.consts.get(key)
         if arr is None:
-            arr = self.consts[key] = np.broadcast_to(np.float64(v), (n,))
+            if n <= 8:  # a few positions: a plain array is cheaper to compute with than a view
+                arr = np.full(n, float(v))
+                arr.flags.writeable = False  # shared, as the views are
+            else:
+                arr = np.broadcast_to(np.float64(v), (n,))
+            self.consts[key] = arr
         return arr
 
     def rotated(self, i: int, s: np.ndarray, idx=slice(None)) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +196,11 @@ def scale_rates(st: State, ud: np.ndarray, udd: np.ndarray, acceleration: bool =
     acc = st.block[8:11]  # ax, ay, al
     ud = np.asarray(ud, float)
     udd = np.asarray(udd, float)
-    if ud.size and np.all(ud == ud.flat[0]) and not np.any(udd):
+    if ud.ndim == 0 and udd.ndim == 0:  # one speed for every position (no array tests)
+        constant = float(udd) == 0.0
+    else:
+        constant = bool(ud.size and np.all(ud == ud.flat[0]) and not np.any(udd))
+    if constant:
         w = float(ud.flat[0])  # a constant speed: two scalar products, as the sweep does
         if acceleration and w != 1.0:
             acc *= w * w

@@ -267,8 +267,11 @@ class BranchEvents:
         d = self.mech.driver.direction
         u, H, Hs, good, near, at_sample, known = self._analysis_grid(gi, g, ctx, ok_prev)
         found = self._minima_between_samples(gi, g, ctx, u, H, Hs, good, near, at_sample)
-        _minima_at_grid_points(found, u, H, known, near)
-        _near_singular_at_grid_points(found, u, H, good, near)
+        # both add only grid points inside with H below NEAR_SINGULAR^2 (> TOUCH): one
+        # test over the grid when there are none (most sweeps)
+        if np.any(H[1:-1] < NEAR_SINGULAR**2):
+            _minima_at_grid_points(found, u, H, known, near)
+            _near_singular_at_grid_points(found, u, H, good, near)
         found.sort(key=lambda f: d * f[1])
         return self._events_at(gi, g, ctx, _merge_minima(found))
 
@@ -279,11 +282,15 @@ class BranchEvents:
         intervals between two samples where the group closes: (sample before, u*, H*)."""
         # intervals between two samples where the group closes (a minimum elsewhere is
         # part of a range where it cannot close, reported as such)
-        hs_ = H[at_sample]
-        closes = good[at_sample] & (hs_ >= -TOUCH)
-        both = closes[:-1] & closes[1:]
-        owner = np.minimum(near[:-1], len(closes) - 2) if len(closes) > 1 else near[:-1]
-        pair = good[:-1] & good[1:] & (both[owner] if len(closes) > 1 else False)
+        if len(u) == len(ctx.u):  # no points between the samples: the grid is the sweep
+            closes = good & (H >= -TOUCH)
+            pair = closes[:-1] & closes[1:]  # good at both ends, and both close
+        else:
+            hs_ = H[at_sample]
+            closes = good[at_sample] & (hs_ >= -TOUCH)
+            both = closes[:-1] & closes[1:]
+            owner = np.minimum(near[:-1], len(closes) - 2) if len(closes) > 1 else near[:-1]
+            pair = good[:-1] & good[1:] & (both[owner] if len(closes) > 1 else False)
         inside = np.flatnonzero(pair & (Hs[:-1] < 0) & (Hs[1:] > 0))
         h = np.abs(u[inside + 1] - u[inside])
         est = _hermite_min(H[inside], H[inside + 1], Hs[inside] * h, Hs[inside + 1] * h)

@@ -76,6 +76,7 @@ def states(
     """
     u = np.atleast_1d(np.asarray(u, float))
     n = len(u)
+    constant = ud is None and udd is None  # the file's constant speed: one scalar to scale by
     ud = np.broadcast_to(np.asarray(an.speed if ud is None else ud, float), (n,)).copy()
     udd = np.broadcast_to(np.asarray(0.0 if udd is None else udd, float), (n,)).copy()
     d = an.mech.driver.direction
@@ -101,7 +102,10 @@ def states(
         order[np.r_[ahead, back]] = np.arange(n)
         out = _take(_concat(parts), order)
         out.u = u
-    scale_rates(out.state, ud, udd, acceleration)
+    if constant:
+        scale_rates(out.state, np.float64(an.speed), np.float64(0.0), acceleration)
+    else:
+        scale_rates(out.state, ud, udd, acceleration)
     out.ud, out.udd = ud, udd
     out.has_velocity, out.has_acceleration = velocity, velocity and acceleration
     if t is None:

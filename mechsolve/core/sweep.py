@@ -538,9 +538,12 @@ def _finish_lazy_start(
     """Keep the start's state, and check the assembly conditions no group decided."""
     start.state = st.take([0])
     start.group_modes = list(start.modes)
+    left = conds.remaining()
+    if not left:  # every condition chose a branch (the usual case): nothing to check
+        return
     view = StateView(an, start.state)
     view.has_velocity = view.has_acceleration = False
-    for _, c in conds.remaining():  # conditions no group decided: they must hold
+    for _, c in left:  # conditions no group decided: they must hold
         if not bool(np.all(c.evaluate(view))):
             raise AssemblyError(
                 f"{an._file()}the start position does not satisfy the assembly "

@@ -84,7 +84,16 @@ class Expression:
 
     def uses(self, func: str) -> bool:
         """True if the expression calls the function ``func``."""
-        return any(isinstance(n, Call) and n.func == func for n in walk(self.tree))
+        # kept per tree (a load's condition is asked this on every force analysis)
+        memo = self.__dict__.get("_uses")
+        if memo is None or memo[0] is not self.tree:
+            memo = self.__dict__["_uses"] = (self.tree, {})
+        found = memo[1].get(func)
+        if found is None:
+            found = memo[1][func] = any(
+                isinstance(n, Call) and n.func == func for n in walk(self.tree)
+            )
+        return found
 
     def reductions(self) -> list[str]:
         """The reductions over a run it calls (``max(q)``, ``mean(q)``, ``at(q, u)``...;
