@@ -653,11 +653,15 @@ def free_context(mech) -> SimpleNamespace:
 
 
 def _linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The augmented system's solution; at a singular position the least-squares one."""
-    try:
-        return np.linalg.solve(A, b)
-    except np.linalg.LinAlgError:  # a singular position: the least-squares motion
+    """The augmented system's solution; at a singular position the least-squares one.
+    LAPACK's ``gesv`` is called directly (numpy's wrapper costs more than the solve at a
+    mechanism's sizes)."""
+    from scipy.linalg.lapack import dgesv
+
+    _, _, x, info = dgesv(A, b)
+    if info != 0:  # a singular position: the least-squares motion
         return _least_squares(A, b)
+    return x
 
 
 def _least_squares(A: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -43,6 +43,11 @@ class ArrayLoads:
         self.b, self.sb = b[:, 0].astype(int), b[:, 1:]
         self.k = np.array([ld.stiffness for ld in springs], float)
         self.l0 = np.array([ld.free_length for ld in springs], float)
+        # where each spring end's (fx, fy, moment) goes in Q (the ground's: past its end)
+        self._spring_at = np.concatenate(
+            [3 * self.a, 3 * self.a + 1, 3 * self.a + 2, 3 * self.b, 3 * self.b + 1, 3 * self.b + 2]
+        )
+        self._spring_len = 3 * nb + 3
 
     @staticmethod
     def applies(mech) -> bool:
@@ -53,7 +58,6 @@ class ArrayLoads:
     def apply(self, q: np.ndarray, qd: np.ndarray, Q: np.ndarray) -> tuple[float, float]:
         """Add the loads to ``Q`` (nq,); return their non-conservative power (the
         torques') and the springs' potential."""
-        nb = self.nb
         P = 0.0
         if self.t_body.size:
             np.add.at(Q, 3 * self.t_body + 2, self.t_value)
@@ -73,11 +77,9 @@ class ArrayLoads:
         L = np.hypot(dx, dy)
         ex, ey = dx / L, dy / L
         T = self.k * (L - self.l0)  # tension: pulls b towards a and a towards b
-        for body, rx, ry, sign in ((ba, rax, ray, 1.0), (bb, rbx, rby, -1.0)):
-            moving = body != nb
-            fx, fy = (sign * T * ex)[moving], (sign * T * ey)[moving]
-            i = 3 * body[moving]
-            np.add.at(Q, i, fx)
-            np.add.at(Q, i + 1, fy)
-            np.add.at(Q, i + 2, rx[moving] * fy - ry[moving] * fx)
-        return P, float(0.5 * np.sum(self.k * (L - self.l0) ** 2))
+        fx, fy = T * ex, T * ey
+        # the ends' forces and moments summed into Q by one bincount (the ground's end,
+        # at the coordinates after q, cut off)
+        w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)])
+        Q += np.bincount(self._spring_at, w, minlength=self._spring_len)[: Q.size]
+        return P, float(0.5 * np.sum(T * (L - self.l0)))

@@ -48,6 +48,10 @@ class Pins:
         (self.fa_x, self.fa_y), (self.fb_x, self.fb_y) = flat
         self._qe = np.zeros(nq + 3)
         self._th = np.zeros(nb + 1)
+        self._sax, self._say = self.sa[:, 0].copy(), self.sa[:, 1].copy()
+        self._sbx, self._sby = self.sb[:, 0].copy(), self.sb[:, 1].copy()
+        self._arms_key: bytes | None = None
+        self._arms_val: tuple = ()
 
     @staticmethod
     def applies(constraints: list) -> bool:
@@ -55,16 +59,21 @@ class Pins:
 
     def _arms(self, th: np.ndarray):
         """The rotated local points ``R(theta) s`` of both ends (``th``: the bodies'
-        angles; the ground's is appended)."""
+        angles; the ground's is appended). Those of the last angles are kept: the
+        residual, the Jacobian and ``gamma`` of one configuration ask for the same."""
+        key = th.tobytes()
+        if key == self._arms_key:
+            return self._arms_val
         the = self._th
         the[: self.nb] = th  # the ground's stays 0
         c, s = np.cos(the), np.sin(the)
         ca, sa_, cb, sb_ = c[self.a], s[self.a], c[self.b], s[self.b]
-        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
-        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
-        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
-        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
-        return rax, ray, rbx, rby
+        rax = ca * self._sax - sa_ * self._say
+        ray = sa_ * self._sax + ca * self._say
+        rbx = cb * self._sbx - sb_ * self._sby
+        rby = sb_ * self._sbx + cb * self._sby
+        self._arms_key, self._arms_val = key, (rax, ray, rbx, rby)
+        return self._arms_val
 
     def residual(self, q: np.ndarray) -> np.ndarray:
         qe = self._qe
