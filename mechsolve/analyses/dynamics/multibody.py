@@ -340,7 +340,7 @@ class Multibody:
             phi = self.residual(q, t)
             if not every:
                 phi = phi[rows]
-            size = float(np.max(np.abs(phi)))
+            size = float(np.abs(phi).max())
             if not math.isfinite(size):
                 raise Repartition
             if size <= self.tol:
@@ -514,7 +514,7 @@ class Multibody:
             P += Pf
         else:
             x = _linear(A, b)
-        if not np.all(np.isfinite(x)):
+        if not np.isfinite(x).all():
             raise NotClosing(
                 t, "the accelerations are not determined (a massless link that can move?)"
             )
@@ -687,9 +687,9 @@ def _lu(A: np.ndarray):
     if A.size == 0:
         return None, 1.0
     lu, piv, info = dgetrf(A)
-    if info != 0 or not np.all(np.isfinite(lu)):
+    if info != 0 or not np.isfinite(lu).all():
         return None, 0.0
-    rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
+    rc, _ = dgecon(lu, float(np.abs(A).sum(axis=0).max()), norm="1")
     return (lu, piv), float(rc)
 
 

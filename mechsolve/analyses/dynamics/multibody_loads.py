@@ -48,6 +48,9 @@ class ArrayLoads:
             [3 * self.a, 3 * self.a + 1, 3 * self.a + 2, 3 * self.b, 3 * self.b + 1, 3 * self.b + 2]
         )
         self._spring_len = 3 * nb + 3
+        self._qe = np.zeros(3 * nb + 3)
+        self._t_at = 3 * self.t_body + 2
+        self._t_unique = len(set(self._t_at.tolist())) == self._t_at.size
 
     @staticmethod
     def applies(mech) -> bool:
@@ -60,19 +63,24 @@ class ArrayLoads:
         torques') and the springs' potential."""
         P = 0.0
         if self.t_body.size:
-            np.add.at(Q, 3 * self.t_body + 2, self.t_value)
-            P = float(self.t_value @ qd[3 * self.t_body + 2])
+            t_at = self._t_at
+            if self._t_unique:
+                Q[t_at] += self.t_value
+            else:
+                np.add.at(Q, t_at, self.t_value)
+            P = float(self.t_value @ qd[t_at])
         if not self.k.size:
             return P, 0.0
-        qe = np.append(q, [0.0, 0.0, 0.0])  # the ground: at the origin, not turned
-        ends = []
-        for body, s in ((self.a, self.sa), (self.b, self.sb)):
-            th = qe[3 * body + 2]
-            c, sn = np.cos(th), np.sin(th)
-            rx = c * s[:, 0] - sn * s[:, 1]
-            ry = sn * s[:, 0] + c * s[:, 1]
-            ends.append((body, qe[3 * body] + rx, qe[3 * body + 1] + ry, rx, ry))
-        (ba, xa, ya, rax, ray), (bb, xb, yb, rbx, rby) = ends
+        qe = self._qe
+        qe[: q.size] = q  # the ground: at the origin, not turned
+        n = self.k.size
+        xa, ya, tha, xb, yb, thb = qe[self._spring_at].reshape(6, n)
+        ca, sa_, cb, sb_ = np.cos(tha), np.sin(tha), np.cos(thb), np.sin(thb)
+        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
+        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
+        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
+        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
+        xa, ya, xb, yb = xa + rax, ya + ray, xb + rbx, yb + rby
         dx, dy = xb - xa, yb - ya
         L = np.hypot(dx, dy)
         ex, ey = dx / L, dy / L

@@ -48,6 +48,7 @@ class Pins:
         (self.fa_x, self.fa_y), (self.fb_x, self.fb_y) = flat
         self._qe = np.zeros(nq + 3)
         self._th = np.zeros(nb + 1)
+        self._we = np.zeros(nb + 1)
         self._sax, self._say = self.sa[:, 0].copy(), self.sa[:, 1].copy()
         self._sbx, self._sby = self.sb[:, 0].copy(), self.sb[:, 1].copy()
         self._arms_key: bytes | None = None
@@ -98,8 +99,9 @@ class Pins:
     def gamma(self, th: np.ndarray, w: np.ndarray) -> np.ndarray:
         """``gamma`` from the bodies' angles ``th`` and angular velocities ``w``."""
         rax, ray, rbx, rby = self._arms(th)
-        w = np.append(w, 0.0)
-        wa2, wb2 = w[self.a] ** 2, w[self.b] ** 2
+        we = self._we
+        we[: self.nb] = w  # the ground's stays 0
+        wa2, wb2 = we[self.a] ** 2, we[self.b] ** 2
         out = np.empty(2 * len(self.a))
         out[0::2] = rax * wa2 - rbx * wb2
         out[1::2] = ray * wa2 - rby * wb2
