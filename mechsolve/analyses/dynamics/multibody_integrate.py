@@ -112,7 +112,8 @@ class _Run:
         mb, rec = self.mb, self.rec
         mb._ev = self.evaluated.pop(id(q), None)
         qdd, lam, T, V = mb.output(self.part, q, qd, t)
-        nu = mb._nu_gamma(mb.state(q), t, gamma=False)
+        # pins: nu = 0 (no state to build for it)
+        nu = 0.0 if mb.pins is not None else mb._nu_gamma(mb.state(q), t, gamma=False)
         for key, value in (
             ("t", t),
             ("q", q.copy()),
