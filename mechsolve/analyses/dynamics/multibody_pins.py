@@ -35,9 +35,6 @@ class Pins:
         self.rows_x, self.rows_y = 2 * k, 2 * k + 1
         self.moving_a, self.moving_b = self.a != nb, self.b != nb
         nq = self.nq
-        # the body coordinates of each end, the ground's pointing at a zero appended to q
-        self.ia = np.where(self.moving_a, 3 * self.a, nq)
-        self.ib = np.where(self.moving_b, 3 * self.b, nq)
         self.template = np.zeros((2 * n, nq))
         flat = []
         for moving, body, sign in ((self.moving_a, self.a, 1.0), (self.moving_b, self.b, -1.0)):
@@ -46,9 +43,13 @@ class Pins:
             self.template[ry_, col + 1] = sign
             flat.append((rx_ * nq + col + 2, ry_ * nq + col + 2))
         (self.fa_x, self.fa_y), (self.fb_x, self.fb_y) = flat
-        self._qe = np.zeros(nq + 3)
+        self._pa = np.maximum(self.template, 0.0)  # picks r_a of each pin
+        self._pb = np.maximum(-self.template, 0.0)  # picks r_b
+        self._ra, self._rb = np.empty(2 * n), np.empty(2 * n)
         self._th = np.zeros(nb + 1)
         self._we = np.zeros(nb + 1)
+        # the pins whose end a (b) is on a moving body, by index
+        self._ka, self._kb = np.flatnonzero(self.moving_a), np.flatnonzero(self.moving_b)
         self._sax, self._say = self.sa[:, 0].copy(), self.sa[:, 1].copy()
         self._sbx, self._sby = self.sb[:, 0].copy(), self.sb[:, 1].copy()
         self._arms_key: bytes | None = None
@@ -77,19 +78,22 @@ class Pins:
         return self._arms_val
 
     def residual(self, q: np.ndarray) -> np.ndarray:
-        qe = self._qe
-        qe[: self.nq] = q  # the ground at the origin, at rest
+        # the ends' body positions by matrix products (the ground's: the origin), summed
+        # in the order (r_a + R s_a) - r_b - R s_b
         rax, ray, rbx, rby = self._arms(q[2::3])
-        out = np.empty(2 * len(self.a))
-        out[0::2] = qe[self.ia] + rax - qe[self.ib] - rbx
-        out[1::2] = qe[self.ia + 1] + ray - qe[self.ib + 1] - rby
+        ra, rb = self._ra, self._rb
+        ra[0::2], ra[1::2], rb[0::2], rb[1::2] = rax, ray, rbx, rby
+        out = self._pa @ q
+        out += ra
+        out -= self._pb @ q
+        out -= rb
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         rax, ray, rbx, rby = self._arms(q[2::3])
         J = self.template.copy()
         flat = J.reshape(-1)
-        ma, mb = self.moving_a, self.moving_b
+        ma, mb = self._ka, self._kb
         flat[self.fa_x] = -ray[ma]
         flat[self.fa_y] = rax[ma]
         flat[self.fb_x] = rby[mb]
