@@ -225,6 +225,7 @@ class Multibody:
         self.conditional = [ld for ld in mech.loads if ld.when is not None]
         self.array_loads = ArrayLoads(mech, idx, self.nb) if ArrayLoads.applies(mech) else None
         self._mg, self._mgy = self.m * self.gx, self.m * self.gy
+        self._sx, self._sy = self.s[:, 0].copy(), self.s[:, 1].copy()
         self.extremes: list = []
         self.nfev = 0
         self._last = None  # (t, q, q', q''): the last closed state, Newton's guess
@@ -340,7 +341,7 @@ class Multibody:
             phi = self.residual(q, t)
             if not every:
                 phi = phi[rows]
-            size = float(np.max(np.abs(phi)))
+            size = float(np.abs(phi).max())
             if not math.isfinite(size):
                 raise Repartition
             if size <= self.tol:
@@ -393,10 +394,14 @@ class Multibody:
         [-m ry, m rx, J + m |r|^2]] with r the centre of mass's arm."""
         return self._mass(st.c[:-1, 0], st.s[:-1, 0])
 
-    def _mass(self, c: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """:meth:`mass_matrix` from the bodies' cos and sin."""
-        rx = c * self.s[:, 0] - s * self.s[:, 1]
-        ry = s * self.s[:, 0] + c * self.s[:, 1]
+    def _arm(self, c: np.ndarray, s: np.ndarray):
+        """The centres of mass's arms ``R(theta) s`` from the bodies' cos and sin."""
+        sx, sy = self._sx, self._sy
+        return c * sx - s * sy, s * sx + c * sy
+
+    def _mass(self, c: np.ndarray, s: np.ndarray, arm=None) -> np.ndarray:
+        """:meth:`mass_matrix` from the bodies' cos and sin (and their arms, if known)."""
+        rx, ry = arm if arm is not None else self._arm(c, s)
         m = self.m
         M = np.zeros((self.nq, self.nq))
         flat = M.reshape(-1)
@@ -443,12 +448,11 @@ class Multibody:
             P += effort * rate
         return Q, P, V
 
-    def _forces_lite(self, q, qd, c, s):
+    def _forces_lite(self, q, qd, c, s, arm=None):
         """:meth:`forces` from arrays, where every load is on arrays (no motor, no
         condition): gravity, the centripetal terms, torques and springs."""
         w2 = qd[2::3] ** 2
-        rx = c * self.s[:, 0] - s * self.s[:, 1]
-        ry = s * self.s[:, 0] + c * self.s[:, 1]
+        rx, ry = arm if arm is not None else self._arm(c, s)
         m = self.m
         Q = np.empty(self.nq)
         Q[0::3] = m * (self.gx + w2 * rx)
@@ -494,8 +498,9 @@ class Multibody:
         if self.lite:  # pins and loads on arrays: no State to build
             th, w = q[2::3], qd[2::3]
             c, s = np.cos(th), np.sin(th)
-            M = self._mass(c, s)
-            Q, P, V = self._forces_lite(q, qd, c, s)
+            arm = self._arm(c, s)
+            M = self._mass(c, s, arm)
+            Q, P, V = self._forces_lite(q, qd, c, s, arm)
             g = self.pins.gamma(th, w)[part.rows]
         else:
             st = self.state(q, qd)
@@ -514,7 +519,7 @@ class Multibody:
             P += Pf
         else:
             x = _linear(A, b)
-        if not np.all(np.isfinite(x)):
+        if not np.isfinite(x).all():
             raise NotClosing(
                 t, "the accelerations are not determined (a massless link that can move?)"
             )
@@ -536,8 +541,9 @@ class Multibody:
         if self.lite:
             th = q[2::3]
             c, s = np.cos(th), np.sin(th)
-            M = self._mass(c, s)
-            Q, P, _ = self._forces_lite(q, qd, c, s)
+            arm = self._arm(c, s)
+            M = self._mass(c, s, arm)
+            Q, P, _ = self._forces_lite(q, qd, c, s, arm)
             g = self.pins.gamma(th, qd[2::3])
         else:
             st = self.state(q, qd)
@@ -653,11 +659,15 @@ def free_context(mech) -> SimpleNamespace:
 
 
 def _linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The augmented system's solution; at a singular position the least-squares one."""
-    try:
-        return np.linalg.solve(A, b)
-    except np.linalg.LinAlgError:  # a singular position: the least-squares motion
+    """The augmented system's solution; at a singular position the least-squares one.
+    LAPACK's ``gesv`` is called directly (numpy's wrapper costs more than the solve at a
+    mechanism's sizes)."""
+    from scipy.linalg.lapack import dgesv
+
+    _, _, x, info = dgesv(A, b)
+    if info != 0:  # a singular position: the least-squares motion
         return _least_squares(A, b)
+    return x
 
 
 def _least_squares(A: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -683,9 +693,9 @@ def _lu(A: np.ndarray):
     if A.size == 0:
         return None, 1.0
     lu, piv, info = dgetrf(A)
-    if info != 0 or not np.all(np.isfinite(lu)):
+    if info != 0 or not np.isfinite(lu).all():
         return None, 0.0
-    rc, _ = dgecon(lu, float(np.max(np.sum(np.abs(A), axis=0))), norm="1")
+    rc, _ = dgecon(lu, float(np.abs(A).sum(axis=0).max()), norm="1")
     return (lu, piv), float(rc)
 
 

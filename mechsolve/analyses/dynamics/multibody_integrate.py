@@ -86,6 +86,7 @@ class _Run:
 
     def __init__(self, mb: Multibody, q0, qd0, times, method, rtol, atol) -> None:
         self.mb, self.times, self.method, self.rtol, self.atol = mb, times, method, rtol, atol
+        self.substeps = bridge_substeps(method, rtol)
         self.rec: dict[str, list] = {k: [] for k in self.KEYS}
         self.q, self.qd, self.W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
         self.part = mb.partition(self.q)
@@ -111,7 +112,8 @@ class _Run:
         mb, rec = self.mb, self.rec
         mb._ev = self.evaluated.pop(id(q), None)
         qdd, lam, T, V = mb.output(self.part, q, qd, t)
-        nu = mb._nu_gamma(mb.state(q), t, gamma=False)
+        # pins: nu = 0 (no state to build for it)
+        nu = 0.0 if mb.pins is not None else mb._nu_gamma(mb.state(q), t, gamma=False)
         for key, value in (
             ("t", t),
             ("q", q.copy()),
@@ -220,7 +222,7 @@ class _Run:
                 retries += 1
                 t0 = times[k - 1]
                 bridged = retries <= BRIDGE_LIMIT and _bridge(
-                    mb, t0, times[k], self.q, self.qd, self.W
+                    mb, t0, times[k], self.q, self.qd, self.W, self.substeps
                 )
                 if not bridged:
                     self.halt(
@@ -264,7 +266,7 @@ class _Run:
             return out
 
         def at(tau):
-            b = _bridge(self.mb, t0, tau, self.q, self.qd, self.W)
+            b = _bridge(self.mb, t0, tau, self.q, self.qd, self.W, self.substeps)
             if not b:
                 raise Repartition
             return (tau, *b)
@@ -286,7 +288,7 @@ class _Run:
         found = locate_singular(
             mb, self.rank, t0, self.q, self.qd, self.W, t1 - t0, t1, NEWTON_ITERATIONS
         )
-        bridged = _bridge(mb, t0, t1, self.q, self.qd, self.W)
+        bridged = _bridge(mb, t0, t1, self.q, self.qd, self.W, self.substeps)
         # the stop condition met before the singular position (or the step's end)
         end = found[:4] if found is not None else (t1, *bridged) if bridged else None
         if self.stop is not None and end is not None:
@@ -355,21 +357,33 @@ def _redundant(mb: Multibody, q: np.ndarray) -> bool:
 
 
 BRIDGE_LIMIT = 40  # output steps in a row that may be bridged
-BRIDGE_SUBSTEPS = 32
+BRIDGE_SUBSTEPS = 32  # RK4 steps per bridged output step at rtol 1e-8 and tighter
+BRIDGE_FEWEST = 8  # and at the loosest rtol
 
 
-def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float):
+def bridge_substeps(method: str, rtol: float) -> int:
+    """RK4 steps per bridged output step: :data:`BRIDGE_SUBSTEPS` for the fixed-step
+    integrator and at ``rtol`` 1e-8 or tighter; at a looser ``rtol`` fewer, as RK4's
+    error goes with the fourth power of its step (``32 (1e-8 / rtol)^(1/4)``, at least
+    :data:`BRIDGE_FEWEST`): the bridge's error then stays about as far below the
+    tolerance as at 1e-8."""
+    if method == "rk4" or rtol <= 1e-8:
+        return BRIDGE_SUBSTEPS
+    return max(BRIDGE_FEWEST, math.ceil(BRIDGE_SUBSTEPS * (1e-8 / rtol) ** 0.25))
+
+
+def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int):
     """``(q, q', W)`` at ``t1`` from ``t0`` across a singular position: RK4 on all the
-    coordinates in :data:`BRIDGE_SUBSTEPS` steps (the accelerations by least squares on
+    coordinates in ``substeps`` steps (the accelerations by least squares on
     every equation, which stays determined for the motion where the equations lose
     rank), then projected onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``.
     None if the projection does not converge."""
     nq = mb.nq
     f = all_coordinates(mb)
     y = np.concatenate([q, qd, [W]])
-    h = (t1 - t0) / BRIDGE_SUBSTEPS
+    h = (t1 - t0) / substeps
     try:
-        for i in range(BRIDGE_SUBSTEPS):
+        for i in range(substeps):
             y = rk4(f, t0 + i * h, y, h)
         got = project(mb, t1, y[:nq].copy(), y[nq : 2 * nq], NEWTON_ITERATIONS)
     except (np.linalg.LinAlgError, NotClosing):

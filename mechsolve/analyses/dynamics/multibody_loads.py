@@ -43,6 +43,14 @@ class ArrayLoads:
         self.b, self.sb = b[:, 0].astype(int), b[:, 1:]
         self.k = np.array([ld.stiffness for ld in springs], float)
         self.l0 = np.array([ld.free_length for ld in springs], float)
+        # where each spring end's (fx, fy, moment) goes in Q (the ground's: past its end)
+        self._spring_at = np.concatenate(
+            [3 * self.a, 3 * self.a + 1, 3 * self.a + 2, 3 * self.b, 3 * self.b + 1, 3 * self.b + 2]
+        )
+        self._spring_len = 3 * nb + 3
+        self._qe = np.zeros(3 * nb + 3)
+        self._t_at = 3 * self.t_body + 2
+        self._t_unique = len(set(self._t_at.tolist())) == self._t_at.size
 
     @staticmethod
     def applies(mech) -> bool:
@@ -53,31 +61,33 @@ class ArrayLoads:
     def apply(self, q: np.ndarray, qd: np.ndarray, Q: np.ndarray) -> tuple[float, float]:
         """Add the loads to ``Q`` (nq,); return their non-conservative power (the
         torques') and the springs' potential."""
-        nb = self.nb
         P = 0.0
         if self.t_body.size:
-            np.add.at(Q, 3 * self.t_body + 2, self.t_value)
-            P = float(self.t_value @ qd[3 * self.t_body + 2])
+            t_at = self._t_at
+            if self._t_unique:
+                Q[t_at] += self.t_value
+            else:
+                np.add.at(Q, t_at, self.t_value)
+            P = float(self.t_value @ qd[t_at])
         if not self.k.size:
             return P, 0.0
-        qe = np.append(q, [0.0, 0.0, 0.0])  # the ground: at the origin, not turned
-        ends = []
-        for body, s in ((self.a, self.sa), (self.b, self.sb)):
-            th = qe[3 * body + 2]
-            c, sn = np.cos(th), np.sin(th)
-            rx = c * s[:, 0] - sn * s[:, 1]
-            ry = sn * s[:, 0] + c * s[:, 1]
-            ends.append((body, qe[3 * body] + rx, qe[3 * body + 1] + ry, rx, ry))
-        (ba, xa, ya, rax, ray), (bb, xb, yb, rbx, rby) = ends
+        qe = self._qe
+        qe[: q.size] = q  # the ground: at the origin, not turned
+        n = self.k.size
+        xa, ya, tha, xb, yb, thb = qe[self._spring_at].reshape(6, n)
+        ca, sa_, cb, sb_ = np.cos(tha), np.sin(tha), np.cos(thb), np.sin(thb)
+        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
+        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
+        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
+        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
+        xa, ya, xb, yb = xa + rax, ya + ray, xb + rbx, yb + rby
         dx, dy = xb - xa, yb - ya
         L = np.hypot(dx, dy)
         ex, ey = dx / L, dy / L
         T = self.k * (L - self.l0)  # tension: pulls b towards a and a towards b
-        for body, rx, ry, sign in ((ba, rax, ray, 1.0), (bb, rbx, rby, -1.0)):
-            moving = body != nb
-            fx, fy = (sign * T * ex)[moving], (sign * T * ey)[moving]
-            i = 3 * body[moving]
-            np.add.at(Q, i, fx)
-            np.add.at(Q, i + 1, fy)
-            np.add.at(Q, i + 2, rx[moving] * fy - ry[moving] * fx)
-        return P, float(0.5 * np.sum(self.k * (L - self.l0) ** 2))
+        fx, fy = T * ex, T * ey
+        # the ends' forces and moments summed into Q by one bincount (the ground's end,
+        # at the coordinates after q, cut off)
+        w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)])
+        Q += np.bincount(self._spring_at, w, minlength=self._spring_len)[: Q.size]
+        return P, float(0.5 * np.sum(T * (L - self.l0)))

@@ -35,9 +35,6 @@ class Pins:
         self.rows_x, self.rows_y = 2 * k, 2 * k + 1
         self.moving_a, self.moving_b = self.a != nb, self.b != nb
         nq = self.nq
-        # the body coordinates of each end, the ground's pointing at a zero appended to q
-        self.ia = np.where(self.moving_a, 3 * self.a, nq)
-        self.ib = np.where(self.moving_b, 3 * self.b, nq)
         self.template = np.zeros((2 * n, nq))
         flat = []
         for moving, body, sign in ((self.moving_a, self.a, 1.0), (self.moving_b, self.b, -1.0)):
@@ -46,8 +43,17 @@ class Pins:
             self.template[ry_, col + 1] = sign
             flat.append((rx_ * nq + col + 2, ry_ * nq + col + 2))
         (self.fa_x, self.fa_y), (self.fb_x, self.fb_y) = flat
-        self._qe = np.zeros(nq + 3)
+        self._pa = np.maximum(self.template, 0.0)  # picks r_a of each pin
+        self._pb = np.maximum(-self.template, 0.0)  # picks r_b
+        self._ra, self._rb = np.empty(2 * n), np.empty(2 * n)
         self._th = np.zeros(nb + 1)
+        self._we = np.zeros(nb + 1)
+        # the pins whose end a (b) is on a moving body, by index
+        self._ka, self._kb = np.flatnonzero(self.moving_a), np.flatnonzero(self.moving_b)
+        self._sax, self._say = self.sa[:, 0].copy(), self.sa[:, 1].copy()
+        self._sbx, self._sby = self.sb[:, 0].copy(), self.sb[:, 1].copy()
+        self._arms_key: bytes | None = None
+        self._arms_val: tuple = ()
 
     @staticmethod
     def applies(constraints: list) -> bool:
@@ -55,31 +61,39 @@ class Pins:
 
     def _arms(self, th: np.ndarray):
         """The rotated local points ``R(theta) s`` of both ends (``th``: the bodies'
-        angles; the ground's is appended)."""
+        angles; the ground's is appended). Those of the last angles are kept: the
+        residual, the Jacobian and ``gamma`` of one configuration ask for the same."""
+        key = th.tobytes()
+        if key == self._arms_key:
+            return self._arms_val
         the = self._th
         the[: self.nb] = th  # the ground's stays 0
         c, s = np.cos(the), np.sin(the)
         ca, sa_, cb, sb_ = c[self.a], s[self.a], c[self.b], s[self.b]
-        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
-        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
-        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
-        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
-        return rax, ray, rbx, rby
+        rax = ca * self._sax - sa_ * self._say
+        ray = sa_ * self._sax + ca * self._say
+        rbx = cb * self._sbx - sb_ * self._sby
+        rby = sb_ * self._sbx + cb * self._sby
+        self._arms_key, self._arms_val = key, (rax, ray, rbx, rby)
+        return self._arms_val
 
     def residual(self, q: np.ndarray) -> np.ndarray:
-        qe = self._qe
-        qe[: self.nq] = q  # the ground at the origin, at rest
+        # the ends' body positions by matrix products (the ground's: the origin), summed
+        # in the order (r_a + R s_a) - r_b - R s_b
         rax, ray, rbx, rby = self._arms(q[2::3])
-        out = np.empty(2 * len(self.a))
-        out[0::2] = qe[self.ia] + rax - qe[self.ib] - rbx
-        out[1::2] = qe[self.ia + 1] + ray - qe[self.ib + 1] - rby
+        ra, rb = self._ra, self._rb
+        ra[0::2], ra[1::2], rb[0::2], rb[1::2] = rax, ray, rbx, rby
+        out = self._pa @ q
+        out += ra
+        out -= self._pb @ q
+        out -= rb
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         rax, ray, rbx, rby = self._arms(q[2::3])
         J = self.template.copy()
         flat = J.reshape(-1)
-        ma, mb = self.moving_a, self.moving_b
+        ma, mb = self._ka, self._kb
         flat[self.fa_x] = -ray[ma]
         flat[self.fa_y] = rax[ma]
         flat[self.fb_x] = rby[mb]
@@ -89,8 +103,9 @@ class Pins:
     def gamma(self, th: np.ndarray, w: np.ndarray) -> np.ndarray:
         """``gamma`` from the bodies' angles ``th`` and angular velocities ``w``."""
         rax, ray, rbx, rby = self._arms(th)
-        w = np.append(w, 0.0)
-        wa2, wb2 = w[self.a] ** 2, w[self.b] ** 2
+        we = self._we
+        we[: self.nb] = w  # the ground's stays 0
+        wa2, wb2 = we[self.a] ** 2, we[self.b] ** 2
         out = np.empty(2 * len(self.a))
         out[0::2] = rax * wa2 - rbx * wb2
         out[1::2] = ray * wa2 - rby * wb2

@@ -1,0 +1,76 @@
+"""Issue 26: the general path's cost on the N-four-bar (N = 2, 10 s, about ten singular
+passages) at the benchmark's precision: its evaluations of the equations are counted
+(the time depends on the machine, the count does not), and B0's position is checked
+against the closed form (one pendulum) in the same run, so that fewer evaluations
+never buy a wrong motion. Before: 2434 evaluations at rtol 1e-5 (the bridges across
+the singular passages 32 RK4 steps per output step at every tolerance)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import mechsolve as ms
+from mechsolve.analyses.dynamics import simulate
+from mechsolve.analyses.dynamics.multibody import Multibody
+from mechsolve.analyses.dynamics.multibody_integrate import (
+    BRIDGE_FEWEST,
+    BRIDGE_SUBSTEPS,
+    bridge_substeps,
+)
+
+from conftest import MECH
+
+
+def _crank_angle(t: np.ndarray) -> np.ndarray:
+    """N = 2: I = 3 m l^2 / 3 + 2 m l^2, M_g = g m l (3 / 2 + 2), upright at -1 rad/s."""
+    inertia, mg = 1.0 + 2.0, 9.81 * 3.5
+    sol = solve_ivp(
+        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
+        (0, float(t[-1])),
+        [math.pi / 2, -1.0],
+        t_eval=t,
+        rtol=1e-13,
+        atol=1e-13,
+        method="DOP853",
+    )
+    return sol.y[0]
+
+
+def test_bridge_steps_follow_the_tolerance():
+    # RK4's error goes with h^4: a step 1e-3 times looser in rtol allows one 5.6x longer
+    assert bridge_substeps("rk4", 1e-3) == BRIDGE_SUBSTEPS
+    assert bridge_substeps("DOP853", 1e-8) == BRIDGE_SUBSTEPS
+    assert bridge_substeps("DOP853", 1e-10) == BRIDGE_SUBSTEPS
+    assert bridge_substeps("DOP853", 1e-7) == math.ceil(32 * 0.1**0.25)  # 18
+    assert bridge_substeps("DOP853", 1e-5) == BRIDGE_FEWEST
+    assert bridge_substeps("DOP853", 1e-3) == BRIDGE_FEWEST
+
+
+def test_n_four_bar_at_the_bench_precision_in_fewer_evaluations(monkeypatch):
+    # the evaluations on all coordinates (the bridges' only) counted: how many output
+    # steps get bridged depends on the last bits of the arithmetic (4 to 6 here), the
+    # evaluations per bridged step do not
+    free = Multibody.free_accelerations
+    calls = []
+
+    def counted(self, *args, **kwargs):
+        calls.append(1)
+        return free(self, *args, **kwargs)
+
+    monkeypatch.setattr(Multibody, "free_accelerations", counted)
+    mech = ms.load(MECH / "nfourbar-2.yaml")
+    mech.simulation.rtol, mech.simulation.atol = 1e-5, 1e-8
+    res = simulate(mech)
+    tr = res.trajectory
+    assert tr.t[-1] == pytest.approx(10.0) and not tr.early
+    assert tr.bridges >= 1  # it did cross singular passages on all coordinates
+    th = _crank_angle(tr.t)
+    b0 = res.point("B0")
+    assert np.max(np.hypot(b0.x - np.cos(th), b0.y - np.sin(th))) < 1e-3
+    # RK4: four evaluations per step, 8 steps per bridged output step (before: 32)
+    assert len(calls) == 4 * BRIDGE_FEWEST * tr.bridges
+    assert tr.nfev <= 2000  # before: 2434
