@@ -10,10 +10,12 @@ not by mechsolve's unit table.
 
 from __future__ import annotations
 
+import csv
 import math
 import re
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from mechsolve.cli.main import main
@@ -37,6 +39,7 @@ BY_HAND = {
     "J": ("J", 1.0),
     "W": ("W", 1.0),
     "-": ("-", 1.0),
+    "kg*m": ("kg*mm", 1 / MM),
 }
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?"
 
@@ -53,6 +56,66 @@ def _close(shown: float, si: float, factor: float, digits: int) -> None:
     want = si * factor
     tol = 0.5 * 10 ** (1 - digits) * (abs(want) + abs(shown)) * 1.01 + 1e-300
     assert abs(shown - want) <= tol, (shown, si, factor)
+
+
+TOKEN = re.compile(rf"(?<![\w.^])({NUMBER})(?:[ ]?([A-Za-z°][\w*/^°·²³]*))?")
+
+
+def _plain(unit: str) -> str:
+    """A printed unit in the ASCII form of the CSV headers (N·m -> N*m, s² -> s^2)."""
+    return unit.replace("·", "*").replace("²", "^2").replace("³", "^3").replace("°", "deg")
+
+
+def same_but_units(mine: list[str], si: list[str], digits: int = 6) -> int:
+    """Line by line, every number followed by a unit of :data:`BY_HAND` in ``si`` is the
+    number of ``mine`` at the same place in the shown unit; every other number and word
+    is the same. Returns how many numbers were converted."""
+    assert len(mine) == len(si), (mine, si)
+    converted = 0
+    for a, b in zip(mine, si):
+        ta, tb = TOKEN.findall(a), TOKEN.findall(b)
+        assert len(ta) == len(tb), (a, b)
+        for (va, ua), (vb, ub) in zip(ta, tb):
+            if _plain(ub) in BY_HAND and BY_HAND[_plain(ub)][1] != 1.0:
+                shown, factor = BY_HAND[_plain(ub)]
+                assert _plain(ua) == shown, (a, b)
+                _close(float(va), float(vb), factor, digits)
+                converted += 1
+            else:
+                assert (va, ua) == (vb, ub), (a, b)
+        assert TOKEN.sub("#", a) == TOKEN.sub("#", b)  # the words around are the same
+    return converted
+
+
+HEADER = re.compile(r"^(?P<name>.+?) \[(?P<unit>[^\]]+)\](?P<note>.*)$")
+
+
+def same_csv_but_units(mine: Path, si: Path) -> int:
+    """Column by column, ``mine`` is the SI table converted by the factors of
+    :data:`BY_HAND` (to the 12 digits written); columns without a unit are the same.
+    Returns how many columns were converted."""
+    with open(mine, newline="", encoding="utf-8") as fh:
+        ra = list(csv.reader(fh))
+    with open(si, newline="", encoding="utf-8") as fh:
+        rb = list(csv.reader(fh))
+    assert len(ra) == len(rb) and len(ra) > 1
+    converted = 0
+    for j, (ha, hb) in enumerate(zip(ra[0], rb[0])):
+        mb = HEADER.match(hb)
+        if mb is None:  # step, status, solver.method: no unit
+            assert ha == hb and [r[j] for r in ra] == [r[j] for r in rb]
+            continue
+        ma = HEADER.match(ha)
+        assert ma, f"column {ha!r} names no unit"
+        assert (ma["name"], ma["note"]) == (mb["name"], mb["note"])
+        shown, factor = BY_HAND[mb["unit"]]
+        assert ma["unit"] == shown, (ha, hb)
+        for x, y in zip((r[j] for r in ra[1:]), (r[j] for r in rb[1:])):
+            assert (x == "") == (y == "")
+            if y:
+                _close(float(x), float(y), factor, 12)
+        converted += factor != 1.0
+    return converted
 
 
 # ---------------------------------------------------------------- polygons
@@ -125,3 +188,22 @@ def test_polygons_summary_in_the_files_units(tmp_path):
             continue
         assert a == b  # the rest (names, equations) does not depend on the units
     assert checked >= 20
+
+
+# ---------------------------------------------------------------- shaking
+
+
+@pytest.mark.parametrize("file", ["fourbar.yaml", "slider-crank.yaml"])
+def test_shaking_table_and_summary_in_the_files_units(tmp_path, file):
+    """The moment in N*mm, the counterweights' m*r in kg*mm and radius in mm; forces stay
+    N (the file has no force unit); before and after balancing."""
+    outs = []
+    for name, extra in (("file", ()), ("si", ("--units", "SI"))):
+        out = tmp_path / name
+        text = _invoke("shaking", str(MECH / file), "--balance", "--no-plots", "-o", str(out),
+                       *extra)  # fmt: skip
+        outs.append((out, [ln for ln in text.splitlines() if "wrote" not in ln]))
+    (a, ta), (b, tb) = outs
+    assert same_but_units(ta, tb) >= 8  # four moments, two before/after pairs, m*r, r
+    for csv_name in ("shaking.csv", "shaking-balanced.csv"):
+        assert same_csv_but_units(a / csv_name, b / csv_name) == 1  # shaking.M
