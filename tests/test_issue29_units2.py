@@ -40,6 +40,7 @@ BY_HAND = {
     "W": ("W", 1.0),
     "-": ("-", 1.0),
     "kg*m": ("kg*mm", 1 / MM),
+    "kg*m^2": ("kg*m^2", 1.0),  # moments of inertia stay kg*m^2 (no key of units: names them)
 }
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?"
 
@@ -66,6 +67,14 @@ def _plain(unit: str) -> str:
     return unit.replace("·", "*").replace("²", "^2").replace("³", "^3").replace("°", "deg")
 
 
+PAIR = re.compile(rf"(?<![\w.^])({NUMBER})( / | \.\. )({NUMBER}) ([A-Za-z°][\w*/^°·²³]*)")
+
+
+def _shared(line: str) -> str:
+    """``'0.7 / 1.3 m/s'`` as ``'0.7 m/s / 1.3 m/s'``: a pair's unit named after each."""
+    return PAIR.sub(r"\1 \4\2\3 \4", line)
+
+
 def same_but_units(mine: list[str], si: list[str], digits: int = 6) -> int:
     """Line by line, every number followed by a unit of :data:`BY_HAND` in ``si`` is the
     number of ``mine`` at the same place in the shown unit; every other number and word
@@ -73,6 +82,7 @@ def same_but_units(mine: list[str], si: list[str], digits: int = 6) -> int:
     assert len(mine) == len(si), (mine, si)
     converted = 0
     for a, b in zip(mine, si):
+        a, b = _shared(a), _shared(b)
         ta, tb = TOKEN.findall(a), TOKEN.findall(b)
         assert len(ta) == len(tb), (a, b)
         for (va, ua), (vb, ub) in zip(ta, tb):
@@ -83,7 +93,8 @@ def same_but_units(mine: list[str], si: list[str], digits: int = 6) -> int:
                 converted += 1
             else:
                 assert (va, ua) == (vb, ub), (a, b)
-        assert TOKEN.sub("#", a) == TOKEN.sub("#", b)  # the words around are the same
+        # the words around are the same (a table's columns may be wider)
+        assert TOKEN.sub("#", a).split() == TOKEN.sub("#", b).split()
     return converted
 
 
@@ -207,3 +218,20 @@ def test_shaking_table_and_summary_in_the_files_units(tmp_path, file):
     assert same_but_units(ta, tb) >= 8  # four moments, two before/after pairs, m*r, r
     for csv_name in ("shaking.csv", "shaking-balanced.csv"):
         assert same_csv_but_units(a / csv_name, b / csv_name) == 1  # shaking.M
+
+
+# ---------------------------------------------------------------- compare
+
+
+def test_compare_table_and_csv_in_the_first_files_units(tmp_path):
+    """Two shaper schemes in mm: velocities in mm/s, the crank speed in deg/s, torques in
+    N*mm; in the text and in compare.csv."""
+    files = [str(MECH / "shaper.yaml"), str(MECH / "shaper-scheme3.yaml")]
+    texts = []
+    for name, extra in (("file", ()), ("si", ("--units", "SI"))):
+        text = _invoke("compare", *files, "--no-plots", "-o", str(tmp_path / name), *extra)
+        texts.append([ln for ln in text.splitlines() if "wrote" not in ln])
+    assert same_but_units(*texts, digits=4) >= 10
+    assert any("N*mm" in _plain(ln) for ln in texts[0])
+    n = same_csv_but_units(tmp_path / "file" / "compare.csv", tmp_path / "si" / "compare.csv")
+    assert n >= 10  # crank speed, stroke, velocities, torques
