@@ -67,11 +67,12 @@ def _plain(unit: str) -> str:
     return unit.replace("·", "*").replace("²", "^2").replace("³", "^3").replace("°", "deg")
 
 
-PAIR = re.compile(rf"(?<![\w.^])({NUMBER})( / | \.\. )({NUMBER}) ([A-Za-z°][\w*/^°·²³]*)")
+PAIR = re.compile(rf"(?<![\w.^])({NUMBER})( / | \.\. | to )({NUMBER}) ([A-Za-z°][\w*/^°·²³]*)")
 
 
 def _shared(line: str) -> str:
-    """``'0.7 / 1.3 m/s'`` as ``'0.7 m/s / 1.3 m/s'``: a pair's unit named after each."""
+    """``'0.7 / 1.3 m/s'`` as ``'0.7 m/s / 1.3 m/s'``: a pair's unit named after each
+    (also ``a .. b unit`` and ``a to b unit``)."""
     return PAIR.sub(r"\1 \4\2\3 \4", line)
 
 
@@ -92,7 +93,7 @@ def same_but_units(mine: list[str], si: list[str], digits: int = 6) -> int:
                 _close(float(va), float(vb), factor, digits)
                 converted += 1
             else:
-                assert (va, ua) == (vb, ub), (a, b)
+                assert (va, _plain(ua)) == (vb, _plain(ub)), (a, b)
         # the words around are the same (a table's columns may be wider)
         assert TOKEN.sub("#", a).split() == TOKEN.sub("#", b).split()
     return converted
@@ -235,3 +236,69 @@ def test_compare_table_and_csv_in_the_first_files_units(tmp_path):
     assert any("N*mm" in _plain(ln) for ln in texts[0])
     n = same_csv_but_units(tmp_path / "file" / "compare.csv", tmp_path / "si" / "compare.csv")
     assert n >= 10  # crank speed, stroke, velocities, torques
+
+
+# ---------------------------------------------------------------- report
+
+
+def _decimals(text: str) -> int:
+    mant = text.lower().split("e")[0]
+    return len(mant.split(".")[1]) if "." in mant else 0
+
+
+def _cell_close(shown: str, si: str, factor: float) -> None:
+    """Two printed cells: ``shown`` is ``si * factor``, each rounded to its own decimals."""
+    if "–" in (si, shown):  # not determined
+        assert shown == si, (shown, si)
+        return
+    x, y = float(shown), float(si)
+    if "e" in shown.lower() or "e" in si.lower():
+        _close(x, y, factor, 4)
+        return
+    tol = 0.5 * 10.0 ** -_decimals(shown) + 0.5 * 10.0 ** -_decimals(si) * factor
+    assert abs(x - y * factor) <= tol * 1.001, (shown, si, factor)
+
+
+def _report_units(text: str) -> str:
+    """The report writes N*m as 'N m' and m/s^2 as 'm/s²': back to the CSV's form."""
+    return re.sub(r"\b(k?N) (m|mm)\b", r"\1*\2", text)
+
+
+@pytest.fixture(scope="module")
+def report_contents():
+    from mechsolve.report import build
+
+    file = MECH / "slider-crank.yaml"
+    return build(file, frames=4), build(file, frames=4, units="SI")
+
+
+def test_report_summary_and_figures_in_the_files_units(report_contents):
+    mine, si = report_contents
+    assert same_but_units(mine.summary_text.splitlines(), si.summary_text.splitlines(), 4) >= 10
+    ta = [_report_units("  ".join(r)) for r in mine.figures.rows]
+    tb = [_report_units("  ".join(r)) for r in si.figures.rows]
+    assert same_but_units(ta, tb, 4) >= 5  # the limit positions, stroke, torques
+    assert any("N*mm" in t for t in ta) and not any("N*m " in t for t in ta)
+
+
+def test_report_position_tables_in_the_files_units(report_contents):
+    mine, si = report_contents
+    assert [t.caption for t in mine.tables] == [t.caption for t in si.tables]
+    converted = 0
+    for ta, tb in zip(mine.tables, si.tables):
+        assert len(ta.rows) == len(tb.rows) and len(ta.header) == len(tb.header)
+        for j, (ha, hb) in enumerate(zip(ta.header, tb.header)):
+            if j == 0:  # the position number
+                assert ha == hb
+                continue
+            pa, pb = (
+                HEADER.match(_plain(_report_units(ha))),
+                HEADER.match(_plain(_report_units(hb))),
+            )
+            assert pa and pb and pa["name"] == pb["name"], (ha, hb)
+            shown, factor = BY_HAND[pb["unit"]]
+            assert pa["unit"] == shown, (ha, hb)
+            for ra, rb in zip(ta.rows, tb.rows):
+                _cell_close(ra[j], rb[j], factor)
+            converted += factor != 1.0
+    assert converted >= 20
