@@ -302,3 +302,23 @@ def test_report_position_tables_in_the_files_units(report_contents):
                 _cell_close(ra[j], rb[j], factor)
             converted += factor != 1.0
     assert converted >= 20
+
+
+# ---------------------------------------------------------------- simulate
+
+
+def test_simulate_table_and_summary_in_the_files_units(tmp_path):
+    """The shaper's motor start-up: speeds in deg/s, torques in N*mm, lengths in mm."""
+    texts = []
+    for name, extra in (("file", ()), ("si", ("--units", "SI"))):
+        out = str(tmp_path / name)
+        text = _invoke("simulate", str(MECH / "shaper.yaml"), "--no-plots", "-o", out, *extra)
+        texts.append([ln for ln in text.splitlines() if "wrote" not in ln])
+    mine, si = texts
+    # the motor's law is quoted as the file gives it (its slope is per rad/s)
+    law = [k for k, ln in enumerate(si) if ln.startswith("  simulation:")]
+    assert len(law) == 1 and mine[law[0]] == si[law[0]]
+    del mine[law[0]], si[law[0]]
+    assert same_but_units(mine, si, 5) >= 20
+    n = same_csv_but_units(tmp_path / "file" / "simulation.csv", tmp_path / "si" / "simulation.csv")
+    assert n >= 20
