@@ -322,3 +322,17 @@ def test_simulate_table_and_summary_in_the_files_units(tmp_path):
     assert same_but_units(mine, si, 5) >= 20
     n = same_csv_but_units(tmp_path / "file" / "simulation.csv", tmp_path / "si" / "simulation.csv")
     assert n >= 20
+
+
+# ---------------------------------------------------------------- flywheel
+
+
+def test_flywheel_summary_in_the_files_units(tmp_path):
+    """The shaper's flywheel: the mean speed in deg/s and the motor torque in N*mm; the
+    energy (J) and the inertias (kg*m^2) as before."""
+    texts = []
+    for name, extra in (("file", ()), ("si", ("--units", "SI"))):
+        text = _invoke("flywheel", str(MECH / "shaper.yaml"), "-o", str(tmp_path / name), *extra)
+        texts.append([ln for ln in text.splitlines() if "wrote" not in ln])
+    assert same_but_units(*texts) == 2
+    assert "°/s" in texts[0][0] and "N·mm" in texts[0][1]
