@@ -702,7 +702,7 @@ def mechanism_content(
         pdir.mkdir()
         c.plots = [embed(p) for p in write_plots(fine, pdir, units=U)]
         if mech.motor is not None and mech.simulation is not None and simulate:
-            _simulation_section(c, mech, d)
+            _simulation_section(c, mech, d, U)
         if mech.driver is not None and not res.linear:
             _polygons_section(c, mech, d, polygons_at, U)
         if mech.requirements:
@@ -728,11 +728,11 @@ def _table_step(mech, res, units: OutputUnits | None = None) -> str | None:
     return None
 
 
-def _simulation_section(c: Content, mech, d: Path) -> None:
-    """The motor-driven start-up: its summary and plots."""
+def _simulation_section(c: Content, mech, d: Path, units: OutputUnits | None = None) -> None:
+    """The motor-driven start-up: its summary (in ``units``, default SI) and plots."""
 
     sim = run_simulation(mech)
-    c.dynamics_text = sim.summary()
+    c.dynamics_text = sim.summary(units=units)
     sdir = d / "simulation"
     sdir.mkdir()
     c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
