@@ -248,7 +248,8 @@ def test_energy_is_conserved_without_motor_or_damping():
 
 def test_simulate_command(tmp_path):
     r = CliRunner().invoke(
-        main, ["simulate", str(MECH / "motor-linkage.yaml"), "-o", str(tmp_path), "-q"]
+        main,
+        ["simulate", str(MECH / "motor-linkage.yaml"), "-o", str(tmp_path), "-q", "--units", "SI"],
     )
     assert r.exit_code == 0, r.output
     names = sorted(p.name for p in tmp_path.iterdir())

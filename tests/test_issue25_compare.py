@@ -254,6 +254,8 @@ def test_command_writes_csv_plots_and_report(tmp_path, slider_crank):
         out,
         "--report",
         out / "compare.html",
+        "--units",
+        "SI",
     )
     assert p.returncode == 0, p.stderr
     assert "312.632 mm" in p.stdout and "shaper (graphical)" in p.stdout

@@ -218,14 +218,16 @@ def test_shaper_with_its_switching_cutting_force_on_both_paths():
     assert np.max(np.abs(general.energy_residual)) < 1e-6
 
 
-def _invoke(tmp_path, text: str, name: str = "m.yaml"):
+def _invoke(tmp_path, text: str, name: str = "m.yaml", *extra: str):
     f = tmp_path / name
     f.write_text(text)
-    return CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    return CliRunner().invoke(
+        main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots", *extra]
+    )
 
 
 def test_cli_free_motion_writes_the_energy_balance_and_the_violation(tmp_path):
-    r = _invoke(tmp_path, SPRUNG % (400, 0.4, ""))
+    r = _invoke(tmp_path, SPRUNG % (400, 0.4, ""), "m.yaml", "--units", "SI")
     assert r.exit_code == 0, r.output
     assert "energy balance: T + V - W changed by at most" in r.output
     assert "largest constraint violation" in r.output and "free motion" in r.output

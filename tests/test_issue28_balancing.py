@@ -124,7 +124,9 @@ def test_balanced_file_is_written_in_the_files_units(tmp_path):
     src.write_text(SLIDER.format(w=100.0))
     out = tmp_path / "out"
     r = CliRunner().invoke(
-        main, ["shaking", str(src), "--fraction", "0.5", "--radius", "crank=40", "-o", str(out)]
+        main,
+        ["shaking", str(src), "--fraction", "0.5", "--radius", "crank=40", "-o", str(out)]
+        + ["--units", "SI"],
     )
     assert r.exit_code == 0, r.output
     text = (out / "sc-balanced.yaml").read_text()

@@ -375,7 +375,7 @@ def test_a_real_process(tmp_path):
     out = tmp_path / "p"
     proc = subprocess.run(
         [sys.executable, "-c", code, str(SHAPER), "--at", "7", "--variant", "graphical",
-         "-o", str(out)],
+         "-o", str(out), "--units", "SI"],
         capture_output=True, text=True, timeout=120, cwd=ROOT,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr

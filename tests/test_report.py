@@ -325,6 +325,8 @@ def test_real_process(tmp_path):
             str(out),
             "--frames",
             "6",
+            "--units",
+            "SI",
         ],
         capture_output=True,
         text=True,

@@ -31,7 +31,7 @@ import numpy as np
 
 from mechsolve.analyses.dynamics import MAX_STEPS, _with_flywheel, simulate, steady_fluctuation
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import _QUANTITY_RE, UnitError, parse_unit
+from mechsolve.base.units import _QUANTITY_RE, SI_OUTPUT, OutputUnits, UnitError, parse_unit
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
@@ -106,15 +106,20 @@ class FlywheelSizing:
         ratio = self.delta_reached / self.delta
         return not (1 / CHECK_TOLERANCE <= ratio <= CHECK_TOLERANCE)
 
-    def text(self) -> str:
+    def text(self, units: OutputUnits | None = None) -> str:
+        """The sizing as printed: speeds and torques in ``units`` (default SI: rad/s,
+        N*m); energies in J and inertias in kg*m^2 as ``units`` gives no key for them."""
+        U = units or SI_OUTPUT
+        kw, wu = U.convert("rad/s")
+        kt, tu = U.convert("N*m")
         if self.power is not None:
-            return self._power_text()
+            return self._power_text(U)
         n = self.omega_mean * 30 / math.pi
         lines = [
-            f"flywheel by the energy method: mean speed {self.omega_mean:.6g} rad/s "
+            f"flywheel by the energy method: mean speed {self.omega_mean * kw:.6g} {wu} "
             f"({n:.6g} rpm), delta = {self.delta:.6g}",
             f"  {'resisting' if self.source == 'torque curve' else 'motor'} torque "
-            f"(constant over the cycle): {self.motor_torque:.6g} N*m",
+            f"(constant over the cycle): {self.motor_torque * kt:.6g} {tu}",
             f"  largest energy excursion dE_max = {self.energy_max:.6g} J (the range of the "
             "cumulative work of the driving torque's excess over the resisting one over the "
             "cycle, never the net work per cycle)",
@@ -166,18 +171,20 @@ class FlywheelSizing:
             lines.append(f"  not checked by simulation: {self.check_note}")
         return "\n".join(lines)
 
-    def _power_text(self) -> str:
+    def _power_text(self, U: OutputUnits = SI_OUTPUT) -> str:
         assert self.power is not None
         driving, resisting, cycle, mean = self.power
         w = self.omega_mean
         n = w * 30 / math.pi
+        kw, wu = U.convert("rad/s")
+        kt, tu = U.convert("N*m")
         lines = [
-            f"flywheel from a power diagram: mean speed {w:.6g} rad/s ({n:.6g} rpm), "
+            f"flywheel from a power diagram: mean speed {w * kw:.6g} {wu} ({n:.6g} rpm), "
             f"delta = {self.delta:.6g}",
             f"  driving power: {driving.text(cycle)}",
             f"  resisting power: {resisting.text(cycle)}",
             f"  mean power over the cycle {_kw(mean)}; as torques at the mean speed, "
-            f"M = P / omega_m: mean {mean / w:.6g} N*m",
+            f"M = P / omega_m: mean {mean / w * kt:.6g} {tu}",
         ]
         if self.none_needed:
             lines.append(

@@ -20,6 +20,7 @@ from pathlib import Path
 from mechsolve import api
 from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import UnitError, parse_output_units
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import check_frame_count
 from mechsolve.report.build import Content, cam_content, mechanism_content
@@ -125,15 +126,25 @@ def build(
     frames: int | None = None,
     method: str | None = None,
     polygons_at: str | int | None = None,
+    units: str | None = None,
 ) -> Content:
-    """Solve ``file`` every way the report shows it."""
+    """Solve ``file`` every way the report shows it; ``units`` as ``--units`` reads it
+    (``SI``, ``file`` or a map; None: the file's units)."""
 
     file = Path(file)
     _environment()  # say that jinja2 is missing before solving anything
     if is_cam_file(file):
         return cam_content(file, variant)
     mech = api.load(file, variant)
-    content = mechanism_content(mech, frames=frames, method=method, polygons_at=polygons_at)
+    shown = mech.output_units()
+    if units is not None:
+        try:
+            shown = parse_output_units(units, shown)
+        except UnitError as exc:
+            raise InputError(f"--units {units!r}: {exc}") from None
+    content = mechanism_content(
+        mech, frames=frames, method=method, polygons_at=polygons_at, units=shown
+    )
     content.variant = variant
     content.file = str(file)
     return content
@@ -167,11 +178,13 @@ def write_report(
     method: str | None = None,
     polygons_at: str | int | None = None,
     paper: str = "a4",
+    units: str | None = None,
 ) -> ReportOutcome:
     """Write the HTML report of ``file`` to ``out`` (default: ``<file stem>.html`` in the
     current folder) and, with ``pdf``, print it to PDF beside it (or to the path given), on
     ``paper`` (``a4`` or ``letter``; also the page size when the HTML is printed from a
-    browser).
+    browser). ``units``: the units of its tables, summary and plots, as ``--units``
+    reads them (``SI``, ``file`` or a map such as ``force=kN``; None: the file's).
 
     Raises :class:`~mechsolve.base.errors.InputError` for a wrong file or option, or for
     ``pdf`` without a headless browser (the HTML is written first, so it is there
@@ -190,7 +203,9 @@ def write_report(
     pdf_path = None
     if pdf:
         pdf_path = Path(pdf) if not isinstance(pdf, bool) else out.with_suffix(".pdf")
-    content = build(file, variant, frames=frames, method=method, polygons_at=polygons_at)
+    content = build(
+        file, variant, frames=frames, method=method, polygons_at=polygons_at, units=units
+    )
     content.file = shown_name(file, out)
     html = render(content, paper)
     try:

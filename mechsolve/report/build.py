@@ -8,6 +8,7 @@ images are written by the same writers as ``run``, ``check --draw``, ``simulate`
 from __future__ import annotations
 
 import base64
+import dataclasses
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -24,7 +25,7 @@ from mechsolve.analyses.dynamics import simulate as run_simulation
 from mechsolve.analyses.dynamics.plots import write_simulation_plots
 from mechsolve.analyses.polygons import draw_polygons
 from mechsolve.base.errors import AssemblyError, InputError, SolverError
-from mechsolve.base.units import parse_quantity
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, parse_quantity
 from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import solve_frames
@@ -243,13 +244,14 @@ def num(x: float | None, digits: int = 5) -> str:
     return f"{x:.{digits - 1}e}"
 
 
-def column_format(values: np.ndarray, digits: int = 5) -> list[str]:
+def column_format(values: np.ndarray, digits: int = 5, zero: float = 1e-9) -> list[str]:
     """One column of a table with a common number of decimals (``digits`` significant
-    figures of its largest value), as printed tables align them."""
+    figures of its largest value), as printed tables align them; a column whose largest
+    value is below ``zero`` is zero but for rounding."""
     v = np.asarray(values, float)
     good = v[np.isfinite(v)]
     big = float(np.max(np.abs(good))) if good.size else 0.0
-    if big < 1e-9:  # zero but for rounding (SI values: nm, nm/s)
+    if big < zero:  # zero but for rounding (SI values: nm, nm/s)
         return ["–" if not math.isfinite(x) else "0" for x in v]
     if big == 0:
         dec = 3
@@ -428,10 +430,14 @@ def _driver_table(mech, check_report, lu: str, f: float) -> Table:
 
 
 # -- results ----------------------------------------------------------------------------
-def figures_table(res) -> Table:
+def figures_table(res, units: OutputUnits | None = None) -> Table:
     """Limit positions, stroke, time ratio, transmission angles, peak torque, work per
-    cycle and the power balance."""
-    an = res.analysis
+    cycle and the power balance, in ``units`` (default SI, with kN and kN m from 1e4)."""
+    U = units or SI_OUTPUT
+    k_len, L = U.convert("m")
+    k_ang, A = U.convert("deg")
+    deg = "°" if A == "deg" else f" {A}"
+    an = res.analysis if U.is_si else res  # res words driver values in its shown units
     rows: list[list[str]] = []
     for lp in res.limit_positions():
         a = " and at ".join(an.format_u(u) for u in lp.u_lows)  # an extreme reached twice
@@ -441,34 +447,37 @@ def figures_table(res) -> Table:
             rows.append(
                 [
                     f"limit positions of rocker {lp.name}",
-                    f"{num(math.degrees(lp.low), 6)}° to {num(math.degrees(lp.high), 6)}°",
+                    f"{num(math.degrees(lp.low) * k_ang, 6)}{deg} to "
+                    f"{num(math.degrees(lp.high) * k_ang, 6)}{deg}",
                     where,
                 ]
             )
-            rows.append([f"swing of {lp.name}", f"{num(math.degrees(lp.swing), 6)}°", ""])
+            rows.append(
+                [f"swing of {lp.name}", f"{num(math.degrees(lp.swing) * k_ang, 6)}{deg}", ""]
+            )
         else:
             rows.append(
                 [
                     f"limit positions of slider {lp.name}",
-                    f"{num(lp.low, 6)} m to {num(lp.high, 6)} m",
+                    f"{num(lp.low * k_len, 6)} {L} to {num(lp.high * k_len, 6)} {L}",
                     where,
                 ]
             )
-            rows.append([f"stroke of {lp.name}", f"{num(lp.swing, 6)} m", ""])
+            rows.append([f"stroke of {lp.name}", f"{num(lp.swing * k_len, 6)} {L}", ""])
         if lp.time_ratio is not None:
             rows.append(
                 [
                     f"time ratio of {lp.name}",
                     f"K = {num(lp.time_ratio, 4)}",
-                    f"{num(math.degrees(max(lp.forward, lp.back)))}° / "
-                    f"{num(math.degrees(min(lp.forward, lp.back)))}° of the driver",
+                    f"{num(math.degrees(max(lp.forward, lp.back)) * k_ang)}{deg} / "
+                    f"{num(math.degrees(min(lp.forward, lp.back)) * k_ang)}{deg} of the driver",
                 ]
             )
     for t in res.transmission_angles():
         rows.append(
             [
                 f"minimum transmission angle, {t.group}",
-                f"{num(math.degrees(t.angle), 4)}°",
+                f"{num(math.degrees(t.angle) * k_ang, 4)}{deg}",
                 f"at {an.format_u(t.u)}",
             ]
         )
@@ -477,7 +486,10 @@ def figures_table(res) -> Table:
         kind, unit = res.effort_name
         e = res.driving_effort
         if np.any(np.isfinite(e)):
-            sc, unit = (1e3, "k" + unit) if np.nanmax(np.abs(e)) >= 1e4 else (1.0, unit)
+            k, unit = U.convert(unit)
+            sc = 1.0 / k
+            if unit in ("N", "N*m") and np.nanmax(np.abs(e)) * k >= 1e4:
+                sc, unit = sc * 1e3, "k" + unit
             unit = unit.replace("*", " ")
             imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
             for what, i in (("largest", imax), ("smallest", imin)):
@@ -492,10 +504,11 @@ def figures_table(res) -> Table:
         if np.any(np.isfinite(resid)):
             big = float(np.nanmax(np.abs(resid)))
             ps = res.power_scale()
+            k_w, W = U.convert("W")
             rows.append(
                 [
                     "power balance",
-                    f"max residual {num(big, 3)} W",
+                    f"max residual {num(big * k_w, 3)} {W}",
                     f"{num(big / ps, 2) if ps > 0 else '0'} of the largest power term",
                 ]
             )
@@ -547,8 +560,10 @@ CAPTIONS = {
 }
 
 
-def position_tables(res) -> list[Table]:
-    """The tables at the file's step, the driver's columns first in each."""
+def position_tables(res, units: OutputUnits | None = None) -> list[Table]:
+    """The tables at the file's step, the driver's columns first in each, in ``units``
+    (default SI)."""
+    U = units or SI_OUTPUT
     groups = _groups(res)
     lead = groups.pop("driver")
     status = res.status()
@@ -557,8 +572,14 @@ def position_tables(res) -> list[Table]:
         cols = [c for c in cols if np.any(np.isfinite(c.values))]
         if not cols:
             continue
-        allc = lead + cols
-        formatted = [column_format(c.values) for c in allc]
+        allc = []
+        formatted = []
+        for c in lead + cols:  # in the shown units; zero but for rounding judged in SI
+            k, unit = U.convert(c.unit)
+            if k != 1.0 or unit != c.unit:
+                c = dataclasses.replace(c, unit=unit, values=np.asarray(c.values, float) * k)
+            allc.append(c)
+            formatted.append(column_format(c.values, zero=1e-9 * k))
         rows = []
         for i in range(len(res.u)):
             row = [str(i + 1)] + [f[i] for f in formatted]
@@ -642,8 +663,11 @@ def mechanism_content(
     method: str | None = None,
     simulate: bool = True,
     polygons_at: str | int | None = None,
+    units: OutputUnits | None = None,
 ) -> Content:
-    """Solve ``mech`` every way the report shows it and gather the results."""
+    """Solve ``mech`` every way the report shows it and gather the results; its tables,
+    summary and plots in ``units`` (default SI)."""
+    U = units or SI_OUTPUT
 
     file = str(mech.source.file) if mech.source is not None and mech.source.file else ""
     c = Content(mech.name, _description(mech.source), file, None, "mechanism")
@@ -663,11 +687,11 @@ def mechanism_content(
     # one computation of each figure for the whole report: the summary takes its limit
     # positions, transmission angles and torque figures from the sweep the figures
     # table and the plots are drawn from
-    c.summary_text = res.summary(figures=fine)  # also runs the checks that add warnings
+    c.summary_text = res.summary(figures=fine, units=U)  # also runs the checks that warn
     c.incomplete = res.incomplete()
-    c.figures = figures_table(fine)
-    c.tables = position_tables(res)
-    c.table_step = _table_step(mech, res) or c.table_step
+    c.figures = figures_table(fine, U)
+    c.tables = position_tables(res, U)
+    c.table_step = _table_step(mech, res, U) or c.table_step
     with tempfile.TemporaryDirectory(prefix="mechsolve-report-") as tmp:
         d = Path(tmp)
         draw_start(
@@ -676,11 +700,11 @@ def mechanism_content(
         c.drawing = embed(d / "start.png", "The mechanism at the start position, to scale")
         pdir = d / "plots"
         pdir.mkdir()
-        c.plots = [embed(p) for p in write_plots(fine, pdir)]
+        c.plots = [embed(p) for p in write_plots(fine, pdir, units=U)]
         if mech.motor is not None and mech.simulation is not None and simulate:
-            _simulation_section(c, mech, d)
+            _simulation_section(c, mech, d, U)
         if mech.driver is not None and not res.linear:
-            _polygons_section(c, mech, d, polygons_at)
+            _polygons_section(c, mech, d, polygons_at, U)
         if mech.requirements:
             c.verdicts = check_requirements(mech, res)
             c.requirements = verdict_rows(c.verdicts)
@@ -690,31 +714,34 @@ def mechanism_content(
     return c
 
 
-def _table_step(mech, res) -> str | None:
-    """How the position tables sample the motion."""
+def _table_step(mech, res, units: OutputUnits | None = None) -> str | None:
+    """How the position tables sample the motion (a linear driver's step in ``units``)."""
     n = len(res.u)
     if mech.driver.motion is not None or mech.sweep.duration is not None:
         return f"{n} positions in time"
     if n > 1:
         step = abs(float(res.u[1] - res.u[0]))
         if res.linear:
-            return f"{n} positions, every {num(step)} m"
+            k, L = (units or SI_OUTPUT).convert("m")
+            return f"{n} positions, every {num(step * k)} {L}"
         return f"{n} positions, every {num(math.degrees(step))}° of the driver"
     return None
 
 
-def _simulation_section(c: Content, mech, d: Path) -> None:
-    """The motor-driven start-up: its summary and plots."""
+def _simulation_section(c: Content, mech, d: Path, units: OutputUnits | None = None) -> None:
+    """The motor-driven start-up: its summary (in ``units``, default SI) and plots."""
 
     sim = run_simulation(mech)
-    c.dynamics_text = sim.summary()
+    c.dynamics_text = sim.summary(units=units)
     sdir = d / "simulation"
     sdir.mkdir()
     c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
     c.incomplete = c.incomplete or sim.incomplete()
 
 
-def _polygons_section(c: Content, mech, d: Path, polygons_at: str | int | None) -> None:
+def _polygons_section(
+    c: Content, mech, d: Path, polygons_at: str | int | None, units: OutputUnits | None = None
+) -> None:
     """The velocity and acceleration polygons at one position, or why there are none."""
     # the graphical check at one position (default: position 2 of 12, 30 deg
     # after the start, where a mechanism that starts at a limit already moves)
@@ -742,7 +769,7 @@ def _polygons_section(c: Content, mech, d: Path, polygons_at: str | int | None) 
         # asked for and not drawn: the report lacks it (warned); the default is not
         c.incomplete = c.incomplete or polygons_at is not None
     else:
-        c.polygons_text = pol.text()
+        c.polygons_text = pol.text(units)
         c.polygons_images = [embed(p) for p in pol.images if p.suffix == ".png"]
 
 

@@ -18,6 +18,7 @@ from mechsolve.report.build import Image, Table, embed, verdict_rows
 
 if TYPE_CHECKING:
     from mechsolve.analyses.compare import Comparison
+    from mechsolve.base.units import OutputUnits
 
 PLOT_TITLES = {
     "compare_velocity": "The outputs' velocity along their working stroke",
@@ -49,12 +50,13 @@ def check_report_path(out: Path) -> None:
         raise InputError(f"--report {out}: the folder {out.parent} does not exist")
 
 
-def compare_content(c: Comparison) -> CompareContent:
-    """The comparison as the page shows it (the plots drawn into a temporary folder)."""
+def compare_content(c: Comparison, units: OutputUnits | None = None) -> CompareContent:
+    """The comparison as the page shows it (the plots drawn into a temporary folder), its
+    table in ``units`` (None: the SI text)."""
     from mechsolve.analyses.compare.table import NOTE, side_by_side
 
     names = [s.name for s in c.schemes]
-    rows = [[label, *cells] for label, cells in side_by_side(c)]
+    rows = [[label, *cells] for label, cells in side_by_side(c, units)]
     table = Table(
         f"{len(names)} scheme(s), one turn of the crank each",
         ["figure", *names],
@@ -99,11 +101,14 @@ def render_compare(content: CompareContent, paper: str = "a4") -> str:
     )
 
 
-def write_compare_report(c: Comparison, out: str | Path, paper: str = "a4") -> Path:
-    """Write the comparison's page to ``out`` (atomically); return the path."""
+def write_compare_report(
+    c: Comparison, out: str | Path, paper: str = "a4", units: OutputUnits | None = None
+) -> Path:
+    """Write the comparison's page to ``out`` (atomically), its table in ``units`` (None:
+    the SI text); return the path."""
     out = Path(out)
     check_report_path(out)
-    return write_text(out, render_compare(compare_content(c), paper))
+    return write_text(out, render_compare(compare_content(c, units), paper))
 
 
 __all__ = [

@@ -25,6 +25,7 @@ from mechsolve.analyses.compare.figures import (
 )
 from mechsolve.analyses.compare.table import comparison_text, write_csv
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits
 from mechsolve.model.parse import load, variants
 
 __all__ = [
@@ -53,13 +54,15 @@ class Comparison:
         """A requirement of some scheme failed (exit 5)."""
         return any(s.failed for s in self.schemes)
 
-    def text(self) -> str:
-        """The figures side by side, each with its unit (what the command prints)."""
-        return comparison_text(self)
+    def text(self, units: OutputUnits | None = None) -> str:
+        """The figures side by side, each with its unit (what the command prints), in
+        ``units`` (None: the SI text)."""
+        return comparison_text(self, units)
 
-    def to_csv(self, path: str | Path) -> Path:
-        """The tidy table (one row per scheme), written atomically; returns the path."""
-        return write_csv(self, Path(path))
+    def to_csv(self, path: str | Path, units: OutputUnits | None = None) -> Path:
+        """The tidy table (one row per scheme) in ``units`` (default SI), written
+        atomically; returns the path."""
+        return write_csv(self, Path(path), units)
 
     def write_plots(self, outdir: str | Path, fmt: str = "png") -> list[Path]:
         """The overlaid curves (velocity, displacement, driving torque), written

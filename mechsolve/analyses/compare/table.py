@@ -6,12 +6,14 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mechsolve.base.atomic import write_text
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 
 if TYPE_CHECKING:
     from mechsolve.analyses.compare import Comparison
@@ -22,27 +24,58 @@ def _g(x: float, digits: int = 6) -> str:
     return f"{x:.{digits}g}" if math.isfinite(x) else "–"
 
 
-def _deg(x: float, digits: int = 5) -> str:
-    return f"{math.degrees(x):.{digits}g}°" if math.isfinite(x) else "–"
-
-
-def _force(x: float) -> str:
+def _deg(x: float, digits: int = 5, u: OutputUnits | None = None) -> str:
+    """An angle given in rad, in degrees (``u``'s angle unit when it is not deg)."""
     if not math.isfinite(x):
         return "–"
-    return f"{x / 1e3:.5g} kN" if abs(x) >= 1e4 else f"{x:.5g} N"
+    if u is None or u.angle == "deg":
+        return f"{math.degrees(x):.{digits}g}°"
+    k, unit = u.convert("deg")
+    return f"{math.degrees(x) * k:.{digits}g} {unit}"
 
 
-def _amount(s: SchemeFigures, x: float) -> str:
-    """A value of the output's kind: a length in mm, an angle in degrees."""
+def _force(x: float, u: OutputUnits | None = None) -> str:
     if not math.isfinite(x):
         return "–"
-    return _deg(x, 6) if s.output.angular else f"{x * 1e3:.6g} mm"
+    if u is None or u.force == "N":  # N, or kN from 10 kN on
+        return f"{x / 1e3:.5g} kN" if abs(x) >= 1e4 else f"{x:.5g} N"
+    k, unit = u.convert("N")
+    return f"{x * k:.5g} {unit}"
 
 
-def _rate(s: SchemeFigures, x: float) -> str:
+def _amount(s: SchemeFigures, x: float, u: OutputUnits | None = None) -> str:
+    """A value of the output's kind: a length in mm, an angle in degrees (SI); in ``u``'s
+    length and angle units when given."""
     if not math.isfinite(x):
         return "–"
-    return f"{x:.4g} rad/s" if s.output.angular else f"{x:.4g} m/s"
+    if s.output.angular:
+        return _deg(x, 6, u)
+    if u is None:
+        return f"{x * 1e3:.6g} mm"
+    k, unit = u.convert("m")
+    return f"{x * k:.6g} {unit}"
+
+
+def _rate(s: SchemeFigures, x: float, u: OutputUnits | None = None) -> str:
+    if not math.isfinite(x):
+        return "–"
+    k, unit = (u or SI_OUTPUT).convert("rad/s" if s.output.angular else "m/s")
+    return f"{x * k:.4g} {unit}"
+
+
+def _speed(x: float, u: OutputUnits | None = None) -> str:
+    k, unit = (u or SI_OUTPUT).convert("rad/s")
+    return f"{x * k:.6g} {unit}"
+
+
+def _torque(x: float, u: OutputUnits | None = None) -> str:
+    k, unit = (u or SI_OUTPUT).convert("N*m")
+    return f"{_g(x * k, 5)} {unit}"
+
+
+def _energy(x: float, u: OutputUnits | None = None) -> str:
+    k, unit = (u or SI_OUTPUT).convert("J")
+    return f"{_g(x * k, 5)} {unit}"
 
 
 def _fraction(x: float) -> str:
@@ -60,7 +93,12 @@ def _requirements(s: SchemeFigures) -> str:
     return f"{len(failed)} FAIL: " + ", ".join(failed)
 
 
-def _rows(c: Comparison) -> list[tuple[str, Callable[[SchemeFigures], str]]]:
+def _rows(
+    c: Comparison, u: OutputUnits | None = None
+) -> list[tuple[str, Callable[[SchemeFigures], str]]]:
+    """The rows of the text: (what, its cell of a scheme); ``u`` None: the SI text (a
+    stroke in mm, forces from 10 kN on in kN)."""
+    k_band = (u or SI_OUTPUT).convert
     mid = f"{c.middle * 100:g} %"
     return [
         ("file", lambda s: s.file + (f"@{s.variant}" if s.variant else "")),
@@ -69,47 +107,50 @@ def _rows(c: Comparison) -> list[tuple[str, Callable[[SchemeFigures], str]]]:
             "working stroke (the slower)",
             lambda s: ("increasing " if s.work_sign > 0 else "decreasing ") + s.output.spec,
         ),
-        ("stroke (swing for a rocker)", lambda s: _amount(s, s.stroke)),
+        ("stroke (swing for a rocker)", lambda s: _amount(s, s.stroke, u)),
         ("time ratio K", lambda s: _g(s.time_ratio)),
         (
             "crank angle: working / return",
-            lambda s: f"{_deg(s.work_travel)} / {_deg(s.return_travel)}",
+            lambda s: f"{_deg(s.work_travel, 5, u)} / {_deg(s.return_travel, 5, u)}",
         ),
-        ("mean velocity, working stroke", lambda s: _rate(s, s.v_mean)),
+        ("mean velocity, working stroke", lambda s: _rate(s, s.v_mean, u)),
         (
             "peak velocity: working / return",
-            lambda s: f"{_rate(s, s.v_peak_work).split()[0]} / {_rate(s, s.v_peak_return)}",
+            lambda s: f"{_rate(s, s.v_peak_work, u).split()[0]} / {_rate(s, s.v_peak_return, u)}",
         ),
         (f"velocity CV, middle {mid} of it", lambda s: _g(s.uniformity, 3)),
         (
             "velocity range there",
-            lambda s: f"{_g(s.v_band[0], 4)} .. {_rate(s, s.v_band[1])}",
+            lambda s: (
+                f"{_g(s.v_band[0] * k_band('rad/s' if s.output.angular else 'm/s')[0], 4)}"
+                f" .. {_rate(s, s.v_band[1], u)}"
+            ),
         ),
-        ("min transmission angle", lambda s: _deg(s.transmission, 4)),
+        ("min transmission angle", lambda s: _deg(s.transmission, 4, u)),
         ("  in loop", lambda s: s.transmission_loop.split(" (")[0] or "–"),
-        ("max pressure angle", lambda s: _deg(s.pressure, 4)),
-        ("max pressure angle at a cam", lambda s: _deg(s.contact_pressure, 4)),
+        ("max pressure angle", lambda s: _deg(s.pressure, 4, u)),
+        ("max pressure angle at a cam", lambda s: _deg(s.contact_pressure, 4, u)),
         (
             "  at joint, crank angle",
             lambda s: (
-                f"{s.contact_pressure_joint}, {_deg(s.contact_pressure_at, 4)}"
+                f"{s.contact_pressure_joint}, {_deg(s.contact_pressure_at, 4, u)}"
                 if s.contact_pressure_joint
                 else "–"
             ),
         ),
         (
             "peak driving torque",
-            lambda s: f"{_g(s.torque_peak_value, 5)} N*m" if math.isfinite(s.torque_peak) else "–",
+            lambda s: _torque(s.torque_peak_value, u) if math.isfinite(s.torque_peak) else "–",
         ),
-        ("  at crank angle", lambda s: _deg(s.torque_peak_at, 4)),
-        ("RMS driving torque", lambda s: f"{_g(s.torque_rms, 5)} N*m"),
-        ("mean driving torque", lambda s: f"{_g(s.torque_mean, 5)} N*m"),
-        ("peak joint reaction", lambda s: _force(s.reaction_peak)),
+        ("  at crank angle", lambda s: _deg(s.torque_peak_at, 4, u)),
+        ("RMS driving torque", lambda s: _torque(s.torque_rms, u)),
+        ("mean driving torque", lambda s: _torque(s.torque_mean, u)),
+        ("peak joint reaction", lambda s: _force(s.reaction_peak, u)),
         (
             "  at joint, crank angle",
-            lambda s: f"{s.reaction_joint or '–'}, {_deg(s.reaction_at, 4)}",
+            lambda s: f"{s.reaction_joint or '–'}, {_deg(s.reaction_at, 4, u)}",
         ),
-        ("flywheel: energy excursion", lambda s: f"{_g(s.energy_max, 5)} J"),
+        ("flywheel: energy excursion", lambda s: _energy(s.energy_max, u)),
         (
             f"  inertia needed, delta {_fraction(c.delta)}",
             lambda s: f"{_g(s.inertia_needed, 5)} kg*m^2",
@@ -119,11 +160,11 @@ def _rows(c: Comparison) -> list[tuple[str, Callable[[SchemeFigures], str]]]:
     ]
 
 
-def side_by_side(c: Comparison) -> list[tuple[str, list[str]]]:
-    """The figures as text: (what, one cell per scheme), each cell with its unit; a
-    figure a scheme lacks is a dash."""
+def side_by_side(c: Comparison, units: OutputUnits | None = None) -> list[tuple[str, list[str]]]:
+    """The figures as text: (what, one cell per scheme), each cell with its unit (in
+    ``units``; None: the SI text); a figure a scheme lacks is a dash."""
     out = []
-    for label, fn in _rows(c):
+    for label, fn in _rows(c, units):
         cells = [fn(s) for s in c.schemes]
         out.append((label, ["–" if v.startswith("– ") else v for v in cells]))
     return out
@@ -137,11 +178,11 @@ NOTE = (
 )
 
 
-def comparison_text(c: Comparison) -> str:
-    """The figures side by side; the crank angles are counted from the start of each
-    scheme's working stroke."""
+def comparison_text(c: Comparison, units: OutputUnits | None = None) -> str:
+    """The figures side by side (in ``units``; None: the SI text); the crank angles are
+    counted from the start of each scheme's working stroke."""
     schemes = c.schemes
-    table = side_by_side(c)
+    table = side_by_side(c, units)
     rows = [(label, None) for label, _ in table]
     cells = [r for _, r in table]
     label_w = max(len(label) for label, _ in rows) + 2
@@ -149,7 +190,7 @@ def comparison_text(c: Comparison) -> str:
     speed = schemes[0].speed
     head = (
         f"compare {len(schemes)} scheme(s) over one turn of the crank at "
-        f"{speed * 30 / math.pi:.6g} rpm ({speed:.6g} rad/s), 0.1° samples"
+        f"{speed * 30 / math.pi:.6g} rpm ({_speed(speed, units)}), 0.1° samples"
     )
     lines = [head, " " * label_w + "".join(f"{s.name:<{w}}" for s, w in zip(schemes, widths))]
     for (label, _), r in zip(rows, cells):
@@ -235,9 +276,30 @@ def columns(c: Comparison) -> list[tuple[str, list[str]]]:
     ]
 
 
-def write_csv(c: Comparison, path: Path) -> Path:
-    """Write the tidy table at ``path`` atomically; return the path."""
-    cols = columns(c)
+_HEADER = re.compile(r"^(?P<name>.+) \[(?P<unit>[^\]]+)\]$")
+
+
+def in_units(cols: list[tuple[str, list[str]]], units: OutputUnits | None):
+    """The CSV's columns with every figure in ``units`` (its header relabelled); columns
+    in kg*m^2 or without a unit are kept."""
+    if units is None or units.is_si:
+        return cols
+    out = []
+    for head, cells in cols:
+        m = _HEADER.match(head)
+        if m is not None:
+            k, unit = units.convert(m["unit"])
+            if k != 1.0 or unit != m["unit"]:
+                head = f"{m['name']} [{unit}]"
+                cells = [_num(float(v) * k) if v else "" for v in cells]
+        out.append((head, cells))
+    return out
+
+
+def write_csv(c: Comparison, path: Path, units: OutputUnits | None = None) -> Path:
+    """Write the tidy table at ``path`` atomically, in ``units`` (default SI); return
+    the path."""
+    cols = in_units(columns(c), units)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([h for h, _ in cols])

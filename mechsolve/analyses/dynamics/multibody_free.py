@@ -24,6 +24,7 @@ from mechsolve.analyses.dynamics.multibody import (
 from mechsolve.analyses.dynamics.multibody_events import stop_condition
 from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import GROUND, Mechanism
 
 RATE_RTOL = 1e-6  # how far given rates may be from consistent before it is an error
@@ -333,8 +334,19 @@ class FreeResults:
             cols += [(f"{n} [{u}]", v) for n, u, v in mb.friction.columns(st, tr.lam)]
         return cols
 
-    def to_csv(self, path):
+    def to_csv(self, path, units: OutputUnits | None = None):
+        """Write the table as CSV in ``units`` (default SI; each header names its unit)."""
         cols = self.columns()
+        if units is not None and not units.is_si:
+            shown_cols = []
+            for name, v in cols:
+                head, sep, rest = name.partition(" [")
+                unit, _, note = rest.partition("]")
+                k, unit_shown = units.convert(unit) if sep else (1.0, unit)
+                if sep and (k != 1.0 or unit_shown != unit):
+                    name, v = f"{head} [{unit_shown}]{note}", np.asarray(v, float) * k
+                shown_cols.append((name, v))
+            cols = shown_cols
         with replacing(path, ".csv") as tmp, open(tmp, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow([name for name, _ in cols])
@@ -342,8 +354,11 @@ class FreeResults:
                 w.writerow([f"{v[i]:.10g}" for _, v in cols])
         return path
 
-    def summary(self) -> str:
+    def summary(self, figures=None, units: OutputUnits | None = None) -> str:
+        """What the motion did, in ``units`` (default SI)."""
         tr, mb = self.trajectory, self.multibody
+        kl, L = (units or SI_OUTPUT).convert("m")
+        kv, V = (units or SI_OUTPUT).convert("m/s")
         dof = mb.nq - len(mb.partition(tr.q[0]).rows)
         red = mb.nc - len(mb.partition(tr.q[0]).rows)
         lines = [
@@ -355,8 +370,9 @@ class FreeResults:
             + (", ".join(f"{s.name} ({s.text})" for s in mb.sources) or "none (free motion)"),
             f"  energy balance: T + V - W changed by at most "
             f"{np.max(np.abs(tr.energy_residual)):.3g} J",
-            f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
-            f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)",
+            f"  largest constraint violation: {np.max(tr.violation) * kl:.3g} {L} (position, "
+            f"tolerance {mb.tol * kl:.3g} {L}), {np.max(tr.velocity_violation) * kv:.3g} {V} "
+            "(velocity)",
         ]
         if mb.friction is not None:
             lost = dict((n, v) for n, _, v in mb.friction.columns(trajectory_state(mb, tr), tr.lam))

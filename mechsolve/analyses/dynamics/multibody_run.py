@@ -27,6 +27,7 @@ from mechsolve.analyses.dynamics.multibody import (
 )
 from mechsolve.analyses.dynamics.multibody_events import stop_condition
 from mechsolve.analyses.dynamics.multibody_integrate import integrate
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
@@ -260,11 +261,14 @@ class MultibodyResults(Results):
         """T + V - W - (T0 + V0) along the motion (J): the integrator's error."""
         return self.trajectory.energy_residual
 
-    def summary(self) -> str:
+    def summary(self, figures=None, units: OutputUnits | None = None) -> str:
+        """The sweep's summary and the simulation's figures, in ``units`` (default SI)."""
         tr = self.trajectory
         mb = self.multibody
         sim = self.mechanism.simulation
-        lines = [super().summary()]
+        lines = [super().summary(figures, units=units)]
+        kl, L = (units or SI_OUTPUT).convert("m")
+        kv, V = (units or SI_OUTPUT).convert("m/s")
         how = (
             f"rk4, {len(tr.t) - 1} fixed steps of {sim.step:.6g} s"
             if sim.method == "rk4" and sim.step
@@ -292,8 +296,9 @@ class MultibodyResults(Results):
             f"{E:.6g} J)"
         )
         lines.append(
-            f"  largest constraint violation: {np.max(tr.violation):.3g} m (position, "
-            f"tolerance {mb.tol:.3g} m), {np.max(tr.velocity_violation):.3g} m/s (velocity)"
+            f"  largest constraint violation: {np.max(tr.violation) * kl:.3g} {L} (position, "
+            f"tolerance {mb.tol * kl:.3g} {L}), {np.max(tr.velocity_violation) * kv:.3g} {V} "
+            "(velocity)"
         )
         if mb.friction is not None:
             lines.append("  " + mb.friction.describe())

@@ -11,9 +11,10 @@ import numpy as np
 from mechsolve.analyses.dynamics.constants import REST_BAND, REST_BAND_LINEAR, REST_SPAN
 from mechsolve.analyses.dynamics.integrators import _STOPS, Trajectory
 from mechsolve.analyses.dynamics.model import drive_torque
-from mechsolve.base.units import pretty_unit
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.solution import angle_deg
 from mechsolve.results.results import Column, Results
+from mechsolve.results.summary import _kilo, shown
 
 
 class SimulationResults(Results):
@@ -63,11 +64,14 @@ class SimulationResults(Results):
         E = f.kinetic + f.potential
         return work - (E - E[0])
 
-    def summary(self) -> str:
+    def summary(self, figures=None, units: OutputUnits | None = None) -> str:
+        """The sweep's summary and the simulation's figures, in ``units`` (default SI)."""
         tr = self.trajectory
-        lines = [super().summary()]
+        lines = [super().summary(figures, units=units)]
+        U = units or SI_OUTPUT
         lin = self.linear
-        wu, au = ("m/s", "m/s^2") if lin else ("rad/s", "rad/s^2")
+        kw, wu = U.convert("m/s" if lin else "rad/s")
+        ka, au = U.convert("m/s^2" if lin else "rad/s^2")
         sim = self.mechanism.simulation
         how = (
             f"rk4, {len(tr.t) - 1} steps of {sim.step:.6g} s"
@@ -79,13 +83,13 @@ class SimulationResults(Results):
         if np.any(np.isfinite(tr.omega)):
             k = int(np.nanargmax(np.abs(tr.omega)))  # the fastest, either way
             parts.append(
-                f"fastest |{'v' if lin else 'omega'}| = {abs(tr.omega[k]):.6g} {wu} at "
+                f"fastest |{'v' if lin else 'omega'}| = {abs(tr.omega[k]) * kw:.6g} {wu} at "
                 f"t = {tr.t[k]:.6g} s" + (f", {self._sense(tr.omega[k])}" if tr.omega[k] else "")
             )
         if np.any(np.isfinite(tr.eps)):
             parts.append(
-                f"{'a' if lin else 'epsilon'} from {np.nanmin(tr.eps):.8g} to "
-                f"{np.nanmax(tr.eps):.8g} {au}"
+                f"{'a' if lin else 'epsilon'} from {np.nanmin(tr.eps) * ka:.8g} to "
+                f"{np.nanmax(tr.eps) * ka:.8g} {au}"
             )
         if np.any(np.isfinite(tr.J)):
             what, unit = ("reduced mass", "kg") if lin else ("reduced inertia J", "kg*m^2")
@@ -94,10 +98,11 @@ class SimulationResults(Results):
             lines.append("  " + "; ".join(parts))
         M = self.motor_torque()
         kind, unit = self.effort_name
+        km, unit = U.convert(unit)
         if f"  driving {kind} (" not in lines[0]:  # else that line gives the same
             lines.append(
-                f"  motor {kind}: from {np.nanmin(M):.6g} to {np.nanmax(M):.6g} {unit}, "
-                f"time mean {self.time_mean(M):.6g} {unit}"
+                f"  motor {kind}: from {np.nanmin(M) * km:.6g} to {np.nanmax(M) * km:.6g} "
+                f"{unit}, time mean {self.time_mean(M) * km:.6g} {unit}"
             )
         rest = self.stall()
         # a machine come to rest has no cycle to speak of
@@ -105,7 +110,7 @@ class SimulationResults(Results):
         if dl is not None:
             mean, delta = dl
             lines.append(
-                f"  last full revolution: time mean of |omega| {mean:.6g} rad/s, coefficient "
+                f"  last full revolution: time mean of |omega| {mean * kw:.6g} {wu}, coefficient "
                 f"of fluctuation delta = (max - min) / mean = {delta:.4g}"
             )
         if rest:
@@ -170,10 +175,10 @@ class SimulationResults(Results):
             # the RMS over time too (the rows of an adaptive method are not evenly spaced)
             rms = math.sqrt(self.time_mean(e * e))
             kind, unit = self.effort_name
-            scale, sym = (1e3, "k") if np.nanmax(np.abs(e)) >= 1e4 else (1.0, "")  # as super's
+            scale, unit = _kilo(e, unit, shown(self))  # as super's
             lines[0] = re.sub(
                 r", RMS [^,]*, time mean",
-                f", RMS over time {rms / scale:.6g} {pretty_unit(sym + unit)}, time mean",
+                f", RMS over time {rms / scale:.6g} {pretty_unit(unit)}, time mean",
                 lines[0],
             )
         return lines

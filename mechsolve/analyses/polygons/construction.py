@@ -16,7 +16,7 @@ from mechsolve.analyses.instants import Instant, solve_instants
 from mechsolve.analyses.polygons.dyads import DyadConstructions
 from mechsolve.analyses.polygons.vectors import Arrow, _k_cross
 from mechsolve.base.errors import InputError, SolverError
-from mechsolve.base.units import UnitError, parse_quantity
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, UnitError, parse_quantity
 from mechsolve.core.sweep import Analysis
 from mechsolve.joints.revolute import RevoluteConstraint
 from mechsolve.joints.slider import SliderConstraint
@@ -330,16 +330,26 @@ class PolygonResult:
                 return a
         raise KeyError(symbol)
 
-    def text(self) -> str:
+    def text(self, units: OutputUnits | None = None) -> str:
+        """The printed summary; its figures in ``units`` (default SI: m, m/s, rad/s). The
+        drawn lengths stay mm of the drawing, and the scales are the shown unit per mm."""
+        u = units or SI_OUTPUT
+        L = u.unit_of("length")
+        k_len, _ = u.convert("m")
         mech = self.mechanism
         lines = [f"{mech.name}: velocity and acceleration polygons at {self.label}"]
         lines.append("  links: " + ", ".join(f"{n} {name}" for name, n in self.links.items()))
+        kv, uv = u.convert("m/s")
+        ka, ua = u.convert("m/s^2")
+        kw, uw = u.convert("rad/s")
+        kal, ual = u.convert("rad/s^2")
         lines.append(
-            f"  scales: μl = {self.length_scale:g} m/mm, μv = {self.velocity.scale:g} (m/s)/mm, "
-            f"μa = {self.acceleration.scale:g} (m/s^2)/mm"
+            f"  scales: μl = {self.length_scale * k_len:g} {L}/mm, "
+            f"μv = {self.velocity.scale * kv:g} ({uv})/mm, "
+            f"μa = {self.acceleration.scale * ka:g} ({ua})/mm"
         )
         for poly in (self.velocity, self.acceleration):
-            unit = poly.unit
+            k, unit = u.convert(poly.unit)
             lines.append(f"{poly.quantity} polygon (pole {poly.pole}), group by group:")
             for eq in poly.equations:
                 lines.append(f"  {eq}")
@@ -349,7 +359,7 @@ class PolygonResult:
             )
             lines.append(f"  {'':<{w}}  {'':<12}  {'[mm]':>8}  {'[' + unit + ']':>9}")
             for a in poly.arrows:
-                val = f"{a.value:.4g}" if a.along is None else f"{a.along:+.4g}"
+                val = f"{a.value * k:.4g}" if a.along is None else f"{a.along * k:+.4g}"
                 lines.append(
                     f"  {a.name:<{w}}  {a.tail + ' -> ' + a.head:<12}  {poly.mm(a):8.1f}  "
                     f"{val:>9}  {a.note}"
@@ -358,21 +368,22 @@ class PolygonResult:
             "angular velocities and accelerations of the links (ω = v_rel / l, "
             "α = a^t / l; + counter-clockwise):"
         )
-        for ang, unit in [(a, "rad/s") for a in self.omegas] + [
-            (a, "rad/s^2") for a in self.alphas
+        for ang, k, k_num, unit in [(a, kw, kv, uw) for a in self.omegas] + [
+            (a, kal, ka, ual) for a in self.alphas
         ]:
             sense = "counter-clockwise" if ang.value > 0 else "clockwise" if ang.value else ""
             lines.append(
-                f"  {ang.symbol} ({ang.link}) = {ang.formula} = {ang.num:.4g} / "
-                f"{ang.length:.4g} m = {ang.value:+.4g} {unit} {sense}".rstrip()
+                f"  {ang.symbol} ({ang.link}) = {ang.formula} = {ang.num * k_num:.4g} / "
+                f"{ang.length * k_len:.4g} {L} = {ang.value * k:+.4g} {unit} {sense}".rstrip()
             )
         c = self.check
         lines.append(
             "check against mechsolve's analytic solution (largest differences): "
-            f"velocities {c['velocity']:.2g} m/s ({c['velocity'] / self.velocity.scale:.2g} mm "
-            f"on the drawing), accelerations {c['acceleration']:.2g} m/s^2 "
+            f"velocities {c['velocity'] * kv:.2g} {uv} "
+            f"({c['velocity'] / self.velocity.scale:.2g} mm "
+            f"on the drawing), accelerations {c['acceleration'] * ka:.2g} {ua} "
             f"({c['acceleration'] / self.acceleration.scale:.2g} mm), "
-            f"ω {c['omega']:.2g} rad/s, α {c['alpha']:.2g} rad/s^2"
+            f"ω {c['omega'] * kw:.2g} {uw}, α {c['alpha'] * kal:.2g} {ual}"
         )
         return "\n".join(lines)
 

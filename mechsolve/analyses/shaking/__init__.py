@@ -23,6 +23,7 @@ from mechsolve.analyses.shaking.balance import (
 from mechsolve.analyses.shaking.edit import with_counterweights
 from mechsolve.analyses.shaking.frame import Shaking, frame_load, inertia_only, shaking
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import Mechanism
 
 __all__ = [
@@ -50,20 +51,23 @@ class Balanced:
     after: Shaking
     text: str
 
-    def lines(self) -> list[str]:
-        lines = self.balance.lines()
+    def lines(self, units: OutputUnits | None = None) -> list[str]:
+        """The counterweights and the residual shaking, in ``units`` (default SI)."""
+        u = units or SI_OUTPUT
+        lines = self.balance.lines(u)
         drv = self.before.results.mechanism.driver
-        lines += self.balance.textbook(drv.speed if drv.motion is None else None)
+        lines += self.balance.textbook(drv.speed if drv.motion is None else None, u)
         lines.append(
             "residual shaking (inertia forces only: gravity and loads off), "
             f"moment about {self.before.about_name}:"
         )
         fb, fa = self.before.figures(), self.after.figures()
         r = self.before.results
-        unit = "m" if r.linear else "deg"
+        k_at, unit = u.convert("m" if r.linear else "deg")
         for key in fb:
-            un = "N" if key.endswith("force") else "N*m"
+            k, un = u.convert("N" if key.endswith("force") else "N*m")
             (vb, ab, how), (va, aa, _) = fb[key], fa.get(key, (float("nan"),) * 2 + ("",))
+            vb, va, ab, aa = vb * k, va * k, ab * k_at, aa * k_at
             after = f"{va:.6g} {un}{_at(aa, unit)}"
             if va <= ROUNDING * vb:  # what is left is rounding: no figure to print
                 after = f"0 {un} to rounding (below {ROUNDING:g} of before)"

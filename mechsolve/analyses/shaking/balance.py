@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import parse_quantity
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, parse_quantity
 from mechsolve.model import GROUND, Mechanism
 
 
@@ -100,8 +100,10 @@ class Balance:
     method: str = "exact"  # "rms": least squares over the turn (see least_squares)
     rms_fraction: complex | None = None  # a slider-crank's equivalent c (rms)
 
-    def lines(self) -> list[str]:
-        """The counterweights and the mass distribution, with units."""
+    def lines(self, units: OutputUnits | None = None) -> list[str]:
+        """The counterweights and the mass distribution, with units: lengths in
+        ``units`` (default SI: m)."""
+        k_len, L = (units or SI_OUTPUT).convert("m")
         lk = self.linkage
         out = [f"balancing ({lk.kind}):"]
         pins = (lk.A, lk.B)
@@ -130,14 +132,15 @@ class Balance:
             )
         for cw in self.counterweights:
             out.append(
-                f"  counterweight on {cw.link!r} about {cw.pivot}: m*r = {cw.mr:.6g} kg*m at "
-                f"{math.degrees(cw.angle):.6g} deg from {cw.pivot}->{cw.towards}; "
-                f"{cw.mass:.6g} kg at r = {cw.radius:.6g} m (point {cw.point})"
+                f"  counterweight on {cw.link!r} about {cw.pivot}: m*r = {cw.mr * k_len:.6g} "
+                f"kg*{L} at {math.degrees(cw.angle):.6g} deg from {cw.pivot}->{cw.towards}; "
+                f"{cw.mass:.6g} kg at r = {cw.radius * k_len:.6g} {L} (point {cw.point})"
             )
         return out + [f"  note: {n}" for n in self.notes]
 
-    def textbook(self, omega: float | None) -> list[str]:
-        """The slider-crank's residual by the textbook formulas (in-line only)."""
+    def textbook(self, omega: float | None, units: OutputUnits | None = None) -> list[str]:
+        """The slider-crank's residual by the textbook formulas (in-line only), in
+        ``units`` (default SI: rad/s, N)."""
         if self.fraction is None or not omega:
             return []
         if not self.inline:
@@ -148,11 +151,14 @@ class Balance:
         c, m, r = self.fraction, self.m_rec, self.crank_length
         lam = r / self.rod_length
         a = m * r * omega * omega
+        u = units or SI_OUTPUT
+        kw, uw = u.convert("rad/s")
+        kf, uf = u.convert("N")
         return [
-            f"  textbook residual at {omega:.6g} rad/s: along the stroke, primary "
-            f"(1 - c) m_rec r w^2 = {(1 - c) * a:.6g} N (x cos th), secondary "
-            f"m_rec r w^2 r/l = {a * lam:.6g} N (x cos 2th, first term of a series); "
-            f"across it c m_rec r w^2 = {c * a:.6g} N (x sin th)"
+            f"  textbook residual at {omega * kw:.6g} {uw}: along the stroke, primary "
+            f"(1 - c) m_rec r w^2 = {(1 - c) * a * kf:.6g} {uf} (x cos th), secondary "
+            f"m_rec r w^2 r/l = {a * lam * kf:.6g} {uf} (x cos 2th, first term of a series); "
+            f"across it c m_rec r w^2 = {c * a * kf:.6g} {uf} (x sin th)"
         ]
 
 

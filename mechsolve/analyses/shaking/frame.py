@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import GROUND, Mechanism
 from mechsolve.results.results import Column, Results
 
@@ -124,10 +125,12 @@ class Shaking:
                 out[f"RMS {name}"] = (rms, math.nan, "of the solved samples")
         return out
 
-    def summary_lines(self) -> list[str]:
-        """The summary: peak and RMS of the force and the moment, with units."""
+    def summary_lines(self, units: OutputUnits | None = None) -> list[str]:
+        """The summary: peak and RMS of the force and the moment, with units: ``units``
+        (default SI: N, N*m, the driver in deg or m)."""
         r = self.results
-        unit = "m" if r.linear else "deg"
+        u = units or SI_OUTPUT
+        k_at, unit = u.convert("m" if r.linear else "deg")
         lines = [
             "shaking force and moment on the frame"
             + (" (inertia forces only: gravity and loads off)" if self.inertia_only else "")
@@ -137,9 +140,9 @@ class Shaking:
         if not figs:
             return lines + ["  not determined at any position"]
         for key, (val, at, how) in figs.items():
-            un = "N" if key.endswith("force") else "N*m"
-            where = f" at {_fmt(at)} {unit}" if math.isfinite(at) else ""
-            lines.append(f"  {key:<13} {_fmt(val)} {un}{where} ({how})")
+            k, un = u.convert("N" if key.endswith("force") else "N*m")
+            where = f" at {_fmt(at * k_at)} {unit}" if math.isfinite(at) else ""
+            lines.append(f"  {key:<13} {_fmt(val * k)} {un}{where} ({how})")
         bad = int(np.sum(~self.ok))
         if bad:
             lines.append(f"  {bad} position(s) not determined (left blank)")

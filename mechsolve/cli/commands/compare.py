@@ -13,9 +13,11 @@ from mechsolve.cli.kit import (
     EPILOG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     Command,
     finish,
     output_folder,
+    output_units,
     writing,
 )
 
@@ -79,10 +81,12 @@ from mechsolve.cli.kit import (
     show_default=True,
     help="Image format of the plots.",
 )
+@UNITS
 @QUIET
 def compare(
-    schemes, outdir, outputs, all_variants, delta, middle, method, report, no_plots, fmt, quiet
-) -> None:
+    schemes, outdir, outputs, all_variants, delta, middle, method, report, no_plots, fmt, units,
+    quiet,
+) -> None:  # fmt: skip
     """Compare SCHEMEs (mechanism files, or FILE@VARIANT) of one machine: each is solved
     over one turn of its crank (all at the same speed) and the same figures are printed
     side by side, each with its unit: the output's stroke (a rocker's swing), the time
@@ -90,16 +94,20 @@ def compare(
     and its uniformity, the smallest transmission (largest pressure) angle, the peak and
     RMS driving torque, the peak joint reaction, the flywheel needed for DELTA and the
     requirements' verdicts. Writes compare.csv (one row per scheme) and overlaid plots;
-    exit 5 when a requirement of any scheme fails."""
+    exit 5 when a requirement of any scheme fails. The figures are in the units of the
+    first scheme's file (--units to change them)."""
     import numpy as np
 
     from mechsolve import api
-    from mechsolve.analyses.compare import parse_middle
+    from mechsolve.analyses.compare import expand_schemes, parse_middle
     from mechsolve.analyses.flywheel import parse_delta
 
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     dl = parse_delta(delta)
     mid = parse_middle(middle)
+    first, first_variant = expand_schemes(list(schemes[:1]))[0]
+    shown = output_units(api.load(first, first_variant), units)
+    text_units = None if shown.is_si else shown  # None: the SI text as it always was
     output_folder(outdir)
     if report is not None:  # before anything is solved
         from mechsolve.report.compare import check_report_path
@@ -113,15 +121,15 @@ def compare(
         method=method,
         all_variants=all_variants,
     )
-    written = [result.to_csv(outdir / "compare.csv")]
+    written = [result.to_csv(outdir / "compare.csv", shown)]
     if not no_plots:
         written += result.write_plots(outdir, fmt)
     if report is not None:
         from mechsolve.report.compare import write_compare_report
 
         with writing(report, "--report"):
-            written.append(write_compare_report(result, report))
+            written.append(write_compare_report(result, report, units=text_units))
     if not quiet:
-        click.echo(pretty_text(result.text()))
+        click.echo(pretty_text(result.text(text_units)))
         click.echo("  wrote " + ", ".join(str(p) for p in written))
     finish(check_failed=result.check_failed)

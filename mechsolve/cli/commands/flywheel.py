@@ -11,11 +11,13 @@ from mechsolve.base.units import pretty_text
 from mechsolve.cli.kit import (
     EPILOG,
     FILE_ARG,
+    UNITS,
     VARIANT,
     Command,
     finish,
     outdir_option,
     output_folder,
+    output_units,
 )
 
 
@@ -36,7 +38,8 @@ from mechsolve.cli.kit import (
 @outdir_option("energy plots")
 @VARIANT
 @click.option("--no-check", is_flag=True, help="Do not verify the flywheel by simulation.")
-def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
+@UNITS
+def flywheel(file: Path, delta_given, speed, outdir, variant, no_check, units) -> None:
     """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
     energy method over the steady cycle (with a motor and a simulate: section, checked by
     simulating the machine with it); FILE is a mechanism, or a torque curve over a cycle
@@ -69,6 +72,8 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
     src = load_file(file)
+    # a torque curve or a power diagram has no mechanism: SI unless --units says else
+    shown = output_units(_NoMechanism, units)
     if is_power_problem(src.data):  # a power diagram, as course books pose the shaper
         q = read_power_problem(src)
         if delta_given is None and q["delta"] is not None:
@@ -93,12 +98,23 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check) -> None:
         name = p["name"]
     else:
         mech = api.load(file, variant)
+        shown = output_units(mech, units)
         output_folder(outdir)
         res = size_flywheel(mech, dl, omega_mean=w, check=not no_check)
         name = mech.name
     from mechsolve.analyses.dynamics.plots import write_energy_mass_plot, write_energy_plot
 
     paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
-    click.echo(pretty_text(res.text()))
+    click.echo(pretty_text(res.text(shown)))
     click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
     finish(check_failed=res.check_missed())
+
+
+class _NoMechanism:
+    """The units of a file without a mechanism (a torque curve, a power diagram): SI."""
+
+    @staticmethod
+    def output_units():
+        from mechsolve.base.units import SI_OUTPUT
+
+        return SI_OUTPUT

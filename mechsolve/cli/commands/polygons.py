@@ -7,7 +7,17 @@ from pathlib import Path
 import click
 
 from mechsolve.base.units import pretty_text
-from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from mechsolve.cli.kit import (
+    EPILOG_NO_CHECK,
+    FILE_ARG,
+    QUIET,
+    UNITS,
+    VARIANT,
+    Command,
+    finish,
+    output_units,
+    writes_to,
+)
 
 SHEET_SUFFIXES = (".png", ".svg")
 
@@ -53,8 +63,11 @@ SHEET_SUFFIXES = (".png", ".svg")
     help="How many numbered positions a turn of the crank has.",
 )
 @click.option("--svg", is_flag=True, help="Also write the drawings as SVG (text kept as text).")
+@UNITS
 @QUIET
-def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, quiet) -> None:
+def polygons(
+    file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, units, quiet
+) -> None:
     """Draw the velocity and acceleration polygons of FILE at one position, to a stated
     scale, as the graphical method builds them (Assur group by group, each unknown point at
     the intersection of two direction lines), print the vectors read from them with the
@@ -76,6 +89,7 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
     else:
         outdir = output or Path(file.stem + (f"-{variant}" if variant else ""))
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     if sheet is None:
         output_folder(outdir)
     res = draw_polygons(
@@ -88,7 +102,7 @@ def polygons(file: Path, at, variant, output, scale_v, scale_a, per_turn, svg, q
         svg=svg,
         sheet=sheet,
     )
-    text = res.text()
+    text = res.text(shown)
     written = list(res.images)
     if sheet is None:
         txt = outdir / "polygons.txt"

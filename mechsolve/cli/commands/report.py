@@ -14,6 +14,7 @@ from mechsolve.cli.kit import (
     EXIT_OK,
     FILE_ARG,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     warn,
@@ -60,8 +61,11 @@ from mechsolve.cli.kit import watch as watch_file
     is_flag=True,
     help="Write the report again whenever FILE is saved; Ctrl-C stops (needs watchfiles).",
 )
+@UNITS
 @QUIET
-def report(file: Path, output, variant, pdf, paper, frames, polygons_at, watch, quiet) -> None:
+def report(
+    file: Path, output, variant, pdf, paper, frames, polygons_at, watch, units, quiet
+) -> None:
     """Write one HTML file about FILE that opens in any browser without a network: the
     model's tables with units, degrees of freedom and Assur groups with their branches,
     the mechanism drawn to scale, the figures of the motion, the position tables at the
@@ -81,8 +85,9 @@ def report(file: Path, output, variant, pdf, paper, frames, polygons_at, watch, 
     def once():
         at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
         done = write_report(
-            file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper
-        )
+            file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper,
+            units=units,
+        )  # fmt: skip
         if not quiet:
             click.echo(pretty_text(done.text()))
             click.echo(f"  wrote {done.html}" + (f" and {done.pdf}" if done.pdf else ""))

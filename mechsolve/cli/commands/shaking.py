@@ -13,11 +13,13 @@ from mechsolve.cli.kit import (
     FILE_ARG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     finish,
     outdir_option,
     output_folder,
+    output_units,
 )
 
 
@@ -67,10 +69,11 @@ from mechsolve.cli.kit import (
 @outdir_option("shaking table, plots and balanced file")
 @VARIANT
 @NO_PLOTS
+@UNITS
 @QUIET
 def shaking(
     file: Path, about, step, inertia_only, balance, fraction, rms, radius, outdir, variant,
-    no_plots, quiet,
+    no_plots, units, quiet,
 ) -> None:  # fmt: skip
     """The shaking force and moment that the moving links of FILE transmit to the frame
     over the sweep (through its joints and the motor), their peak and RMS, a CSV and the
@@ -82,6 +85,7 @@ def shaking(
     from mechsolve.results.csv import write_csv
 
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     at, at_name = parse_about(mech, about)
     radii = parse_radii(mech, radius)
     u_step = api.parse_step(mech, step) if step is not None else None
@@ -96,14 +100,14 @@ def shaking(
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
     output_folder(outdir)
     sh = api.shaking(mech, about=at, about_name=at_name, step=u_step, inertia=inertia_only)
-    paths = [write_csv(sh, outdir / "shaking.csv")]
+    paths = [write_csv(sh, outdir / "shaking.csv", shown)]
     if not no_plots:
         paths.append(write_shaking_plot([(mech.name, sh)], mech.name, outdir / "shaking.png"))
-    lines = sh.summary_lines()
+    lines = sh.summary_lines(shown)
     if bal is not None:
         stem = file.stem + (f"-{variant}" if variant else "")
         paths.append(write_text(outdir / f"{stem}-balanced.yaml", bal.text))
-        paths.append(write_csv(bal.after, outdir / "shaking-balanced.csv"))
+        paths.append(write_csv(bal.after, outdir / "shaking-balanced.csv", shown))
         if not no_plots:
             paths.append(
                 write_shaking_plot(
@@ -113,7 +117,7 @@ def shaking(
                     title="shaking force before and after balancing",
                 )
             )
-        lines += bal.lines()
+        lines += bal.lines(shown)
     if not quiet:
         click.echo(pretty_text("\n".join(lines)))
         click.echo("  wrote " + ", ".join(str(p) for p in paths))

@@ -13,11 +13,13 @@ from mechsolve.cli.kit import (
     FILE_ARG,
     NO_PLOTS,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     finish,
     outdir_option,
     output_folder,
+    output_units,
 )
 from mechsolve.cli.kit import progress_bar as _progress_bar
 
@@ -40,8 +42,9 @@ from mechsolve.cli.kit import progress_bar as _progress_bar
     help="Allow up to N integrator steps (output rows) [default: 200000]; a longer run is "
     "refused before it starts, with its estimated size.",
 )
+@UNITS
 @QUIET
-def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> None:
+def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, units, quiet) -> None:
     """Simulate the machine of FILE (its simulate: section, with its motor: or free):
     write simulation.csv (time, angle, speed, acceleration, J or the energy balance and
     the constraint violation, motor torque, every quantity and joint force) and plots."""
@@ -53,6 +56,7 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
 
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     check_size(mech, max_steps)  # before anything is computed or created
     if outdir is None:
         outdir = Path(file.stem + (f"-{variant}" if variant else ""))
@@ -70,7 +74,7 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
     finally:
         if bar is not None:
             bar.close()
-    written = [res.to_csv(outdir / "simulation.csv")]
+    written = [res.to_csv(outdir / "simulation.csv", shown)]
     if not no_plots and getattr(res, "multibody", None) is not None:
         from mechsolve.analyses.dynamics.multibody_plots import write_multibody_plots
 
@@ -81,7 +85,7 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, quiet) -> 
         written += write_simulation_plots(res, res.model, outdir)
     tr = res.trajectory
     if not quiet:
-        click.echo(pretty_text(res.summary()))
+        click.echo(pretty_text(res.summary(units=shown)))
         upto = f" with the motion up to t = {tr.t[-1]:.6g} s" if tr.early else ""
         click.echo(
             f"  wrote {len(written)} file(s){upto} to {outdir}/: "
