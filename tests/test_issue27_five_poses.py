@@ -89,7 +89,8 @@ def test_cli_writes_a_file_mechsolve_runs_through_the_five_poses(tmp_path):
         f"  positions: [{rows}]\n"
     )
     out, png = tmp_path / "d.yaml", tmp_path / "b.png"
-    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--plot", str(png)])
+    # every digit written (--digits 17): the poses are checked to 1e-9
+    r = CliRunner().invoke(synth, [str(prob), "-o", str(out), "--plot", str(png), "--digits", "17"])
     assert r.exit_code == 0, r.output
     assert "mechsolve run of the written file: pose errors" in r.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -481,6 +481,14 @@ def figures_table(res, units: OutputUnits | None = None) -> Table:
                 f"at {an.format_u(t.u)}",
             ]
         )
+    rows += _force_figure_rows(res, U)
+    return Table("Figures of the motion", ["figure", "value", "where / note"], rows)
+
+
+def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
+    """The figures table's rows of the forces: the driving effort's extremes and mean, the
+    driver's work, the power balance (in ``U``; kN and kN m from 1e4 in SI)."""
+    rows: list[list[str]] = []
     f = res.forces
     if f is not None and np.any(f.ok):
         kind, unit = res.effort_name
@@ -512,7 +520,7 @@ def figures_table(res, units: OutputUnits | None = None) -> Table:
                     f"{num(big / ps, 2) if ps > 0 else '0'} of the largest power term",
                 ]
             )
-    return Table("Figures of the motion", ["figure", "value", "where / note"], rows)
+    return rows
 
 
 def _groups(res) -> dict[str, list]:
