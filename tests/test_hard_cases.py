@@ -231,24 +231,29 @@ solver: {{method: {method}}}
         assert len(res.failures) == 1  # one dead zone around 180 deg
 
 
+def narrow_dead_zone(step: float, method: str) -> str:
+    """A four-bar whose coupler just fails to reach around 180 deg, for about 1 deg:
+    |A - O4| there is a + d = 2.0, b + c = 1.99995 < 2.0."""
+    return f"""
+ground: {{O2: [0, 0], O4: [1.2, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [0.8, 0]}}}}
+  coupler: {{points: {{A: [0, 0], B: [1.2, 0]}}}}
+  rocker: {{points: {{O4: [0, 0], B: [0.79995, 0]}}}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: ["B left of A -> O4"]
+driver: {{joint: O2, speed: 1 rad/s, start: 5 deg}}
+sweep: {{range: 350 deg, step: {step} deg}}
+solver: {{method: {method}}}
+"""
+
+
 @pytest.mark.parametrize("method", ["auto", "newton"])
 def test_dead_zone_narrower_than_the_step_is_reported(method):
     """A four-bar whose coupler just fails to reach around 180 deg for about 1 deg: a
     10 deg step jumps over it, and the summary says so (the whole-system Newton sweep
     too: it starts again past it on the user's branch)."""
-    # |A - O4| at 180 deg is a + d = 2.0; b + c = 1.99995 < 2.0
-    text = """
-ground: {O2: [0, 0], O4: [1.2, 0]}
-links:
-  crank: {points: {O2: [0, 0], A: [0.8, 0]}}
-  coupler: {points: {A: [0, 0], B: [1.2, 0]}}
-  rocker: {points: {O4: [0, 0], B: [0.79995, 0]}}
-joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
-assembly: ["B left of A -> O4"]
-driver: {joint: O2, speed: 1 rad/s, start: 5 deg}
-sweep: {range: 350 deg, step: 10 deg}
-"""
-    res = ms.solve(ms.loads(text + f"solver: {{method: {method}}}\n"))
+    res = ms.solve(ms.loads(narrow_dead_zone(10, method)))
     assert res.ok.all()
     kinds = [e.kind for e in res.events]
     assert "dead zone" in kinds
@@ -839,19 +844,7 @@ def test_newton_batched_sweep_reports_a_dead_zone_narrower_than_the_step():
     steps over; the determinant's sign change sends it to the sequential sweep, which
     reports the dead zone and keeps the user's branch (found by review: it reported a
     bifurcation and put 88 positions on the other branch)."""
-    text = """
-ground: {O2: [0, 0], O4: [1.2, 0]}
-links:
-  crank: {points: {O2: [0, 0], A: [0.8, 0]}}
-  coupler: {points: {A: [0, 0], B: [1.2, 0]}}
-  rocker: {points: {O4: [0, 0], B: [0.79995, 0]}}
-joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
-assembly: ["B left of A -> O4"]
-driver: {joint: O2, speed: 1 rad/s, start: 5 deg}
-sweep: {range: 350 deg, step: 2 deg}
-solver: {method: newton}
-"""
-    res = ms.solve(ms.loads(text))
+    res = ms.solve(ms.loads(narrow_dead_zone(2, "newton")))
     assert res.ok.all() and len(res.u) >= 64
     assert [e.kind for e in res.events] == ["dead zone"]
     A = 0.8 * np.exp(1j * res.u)
