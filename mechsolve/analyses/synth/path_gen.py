@@ -494,14 +494,7 @@ def solve_path(
     found = search(batch.objective, batch.constraints, bounds, seed=seed, max_time=max_time,
                    max_iter=spec.max_iter, popsize=spec.popsize, progress=progress,
                    tol=1e-14)  # fmt: skip
-    cands: list[tuple[float, np.ndarray]] = []
-    if found.x is not None:
-        cands.append((found.fun, found.x))
-    if len(found.population):
-        ok = np.all(batch.constraints(found.population.T) > 0, axis=0)
-        for f, x, good in zip(found.energies, found.population, ok):
-            if good and np.isfinite(f):
-                cands.append((float(f), x))
+    cands = _candidates(found, batch)
     if not found.interrupted:
         # polish the distinct best ones (a local minimum of one is not the others')
         for k, (_, x) in enumerate(distinct(cands, bounds, 2 * spec.top)):
@@ -517,6 +510,20 @@ def solve_path(
     return res
 
 
+def _candidates(found, batch) -> list[tuple[float, np.ndarray]]:
+    """The search's best design and every feasible member of its last population, as
+    ``(objective, x)``: the starts of the polish."""
+    cands: list[tuple[float, np.ndarray]] = []
+    if found.x is not None:
+        cands.append((found.fun, found.x))
+    if len(found.population):
+        ok = np.all(batch.constraints(found.population.T) > 0, axis=0)
+        for f, x, good in zip(found.energies, found.population, ok):
+            if good and np.isfinite(f):
+                cands.append((float(f), x))
+    return cands
+
+
 def _solve_chain(spec: PathSpec, *, seed, max_time, progress) -> PathResult:
     """As :func:`solve_path`, the template solved by its group plan over the batch."""
     from mechsolve.analyses.synth.chain_gen import design, polish
@@ -526,14 +533,7 @@ def _solve_chain(spec: PathSpec, *, seed, max_time, progress) -> PathResult:
     found = search(batch.objective, batch.constraints, bounds, seed=seed, max_time=max_time,
                    max_iter=spec.max_iter, popsize=spec.popsize, progress=progress,
                    tol=1e-14)  # fmt: skip
-    cands: list[tuple[float, np.ndarray]] = []
-    if found.x is not None:
-        cands.append((found.fun, found.x))
-    if len(found.population):
-        ok = np.all(batch.constraints(found.population.T) > 0, axis=0)
-        for f, x, good in zip(found.energies, found.population, ok):
-            if good and np.isfinite(f):
-                cands.append((float(f), x))
+    cands = _candidates(found, batch)
     if not found.interrupted:
         for _, x in distinct(cands, bounds, 2 * spec.top):
             p = polish(batch, x, bounds)
