@@ -105,13 +105,21 @@ def friction_work(sol: Solution, fr: ForceResult) -> tuple[float, str]:
     """The work the joints' friction dissipates over the sweep (J, >= 0) and why it is not
     defined when it is NaN: ``integral of P_friction dt = integral of P_friction / u' du``
     by the trapezoidal rule on the samples (second order in the step; a joint's slip
-    changing sign between two samples makes that interval first order)."""
+    changing sign between two samples makes that interval first order). A motion of
+    varying speed is integrated over time, ``integral of P_friction dt``, by the same
+    rule (the driver may stop and reverse there)."""
     if len(sol.u) < 2:
         return float("nan"), "not enough positions"
     if not np.all(fr.ok):
         bad = int(np.sum(~fr.ok))
         return float("nan"), f"the friction losses are not known at {bad} position(s)"
     rate = np.broadcast_to(np.asarray(fr.speed, float), np.shape(sol.u))
+    t = np.asarray(sol.t, float) if sol.t is not None else None
+    if t is not None and t.shape == np.shape(sol.u) and np.any(rate != rate[0]):
+        # a motion of varying speed (a simulation, whose driver may reverse): over time,
+        # where the power is continuous through a reversal (P / u' is not)
+        p = fr.power_friction
+        return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t))), ""
     if np.any(rate == 0):
         return float("nan"), "the driver stands still at some position (friction losses)"
     per_u = fr.power_friction / rate
@@ -188,13 +196,17 @@ def _power_integral(
         return 0.0, ""
     total_time = float(t[-1] - t[0]) if t[-1] != t[0] else 1.0
 
+    steady = law is None and np.all(ud == ud[0]) and not np.any(udd)
+
     def power(tau: np.ndarray, ks: np.ndarray) -> np.ndarray:
         if law is not None:
             uu, vv, ww = law.at(tau)
-        else:  # a constant speed: u is linear in t between samples
+        elif steady:  # a constant speed: u is linear in t between samples
             frac = (tau - t[ks]) / (t[ks + 1] - t[ks])
             uu = u[ks] + (u[ks + 1] - u[ks]) * frac
             vv, ww = ud[ks], udd[ks]
+        else:  # a simulated motion: its rows' u, u', u'' (quintic Hermite)
+            uu, vv, ww = hermite5(t, u, ud, udd, tau, ks)
         return _load_power(an, sol, fr, loads, uu, vv, ww)
 
     lo = np.array([p[0] for p in panels])
@@ -243,7 +255,7 @@ def _panels(an: Analysis, sol: Solution, fr: ForceResult, loads: list):
                 on = fr.active.get(load.name)
                 if on is not None and on[k] != on[k + 1]:
                     us = _switch(an, sol, fr, load, k)[0]
-                    cuts.append(a + (b - a) * (us - u[k]) / (u[k + 1] - u[k]))
+                    cuts.append(_time_at(sol, k, us))
         edges = [a, *sorted(c for c in cuts if a < c < b), b]
         panels += [(lo, hi, k) for lo, hi in zip(edges[:-1], edges[1:])]
     return panels
@@ -268,3 +280,75 @@ def _load_power(
     _, per_load, _ = apply_loads(an, st, active, _Q(an, st))
     p = sum(per_load[ld.name] for ld in loads)
     return np.where(ok, p, np.nan)
+
+
+def hermite5(t, u, ud, udd, tau: np.ndarray, ks: np.ndarray):
+    """The driver's motion between rows ``ks`` and ``ks + 1`` at times ``tau``: the
+    quintic Hermite interpolant of ``u, u', u''`` at both rows (exact for a motion of
+    constant speed or acceleration; error O(h^6) in u for a smooth one), with its first
+    two time derivatives: ``(u, u', u'')``."""
+    t0 = t[ks]
+    h = t[ks + 1] - t0
+    s = (tau - t0) / h
+    s2 = s * s
+    s3 = s2 * s
+    s4, s5 = s3 * s, s3 * s2
+    u0, u1, v0, v1 = u[ks], u[ks + 1], ud[ks] * h, ud[ks + 1] * h
+    a0, a1 = udd[ks] * h * h, udd[ks + 1] * h * h
+    h5 = 10 * s3 - 15 * s4 + 6 * s5
+    uu = (
+        u0
+        + (u1 - u0) * h5
+        + v0 * (s - 6 * s3 + 8 * s4 - 3 * s5)
+        + v1 * (-4 * s3 + 7 * s4 - 3 * s5)
+        + a0 * 0.5 * (s2 - 3 * s3 + 3 * s4 - s5)
+        + a1 * 0.5 * (s3 - 2 * s4 + s5)
+    )
+    dh5 = 30 * s2 - 60 * s3 + 30 * s4
+    vv = (
+        (u1 - u0) * dh5
+        + v0 * (1 - 18 * s2 + 32 * s3 - 15 * s4)
+        + v1 * (-12 * s2 + 28 * s3 - 15 * s4)
+        + a0 * 0.5 * (2 * s - 9 * s2 + 12 * s3 - 5 * s4)
+        + a1 * 0.5 * (3 * s2 - 8 * s3 + 5 * s4)
+    ) / h
+    ddh5 = 60 * s - 180 * s2 + 120 * s3
+    ww = (
+        (u1 - u0) * ddh5
+        + v0 * (-36 * s + 96 * s2 - 60 * s3)
+        + v1 * (-24 * s + 84 * s2 - 60 * s3)
+        + a0 * 0.5 * (2 - 18 * s + 36 * s2 - 20 * s3)
+        + a1 * 0.5 * (6 * s - 24 * s2 + 20 * s3)
+    ) / (h * h)
+    return uu, vv, ww
+
+
+def _time_at(sol: Solution, k: int, us: float) -> float:
+    """The time between rows ``k`` and ``k + 1`` at which the driver is at ``us``:
+    linear in time at a constant speed; on the quintic Hermite interpolant of a
+    simulated motion (bisection), else linear."""
+    t = np.asarray(sol.t, float)
+    u = np.asarray(sol.u, float)
+    a, b = float(t[k]), float(t[k + 1])
+    linear = a + (b - a) * (us - u[k]) / (u[k + 1] - u[k])
+    ud, udd = sol.driver_rates()
+    if ud[k] == ud[k + 1] and udd[k] == 0 and udd[k + 1] == 0:
+        return linear
+    ks = np.array([k])
+
+    def f(tau: float) -> float:
+        return float(hermite5(t, u, ud, udd, np.array([tau]), ks)[0][0]) - us
+
+    fa = f(a)
+    if fa * f(b) > 0:
+        return linear
+    for _ in range(60):
+        m = 0.5 * (a + b)
+        fm = f(m)
+        if fm == 0:
+            return m
+        if (fm > 0) == (fa > 0):
+            a, fa = m, fm
+        else:
+            b = m
+    return 0.5 * (a + b)

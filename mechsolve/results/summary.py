@@ -240,8 +240,9 @@ class Summary:
         fscale, funit = (1e3 / kf, "kN") if kilo else (1.0 / kf, U.force)
         unit, funit = pretty_unit(unit), pretty_unit(funit)
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
-        rms = float(np.sqrt(np.nanmean(e**2)))
+        rms = rms_over(src.u, e)
         mean, what = src.mean_effort()
+        mean += 0.0  # no "-0"
         # the extremes are the largest and smallest samples (the requirements locate
         # them between the samples: max(input.torque) in requirements:)
         lines.append(
@@ -504,3 +505,20 @@ class _Only:
 
     def __init__(self, forces, loss: np.ndarray) -> None:
         self.ok, self.speed, self.power_friction = forces.ok, forces.speed, loss
+
+
+def rms_over(u: np.ndarray, e: np.ndarray) -> float:
+    """The RMS of ``e`` over the motion: ``sqrt(integral of e^2 du / travel)`` by the
+    trapezoidal rule on the samples (a figures sweep's samples are uneven: its limit
+    positions and load switches are inserted), over the runs of solved samples; the
+    plain mean of the squares where the driver does not move."""
+    u = np.asarray(u, float)
+    e2 = np.asarray(e, float) ** 2
+    ok = np.isfinite(e2)
+    both = ok[1:] & ok[:-1]
+    du = np.abs(np.diff(u))[both]
+    travel = float(np.sum(du))
+    if travel <= 0:
+        return float(np.sqrt(np.mean(e2[ok]))) if ok.any() else float("nan")
+    area = float(np.sum(0.5 * (e2[1:][both] + e2[:-1][both]) * du))
+    return float(np.sqrt(area / travel))

@@ -55,6 +55,7 @@ if TYPE_CHECKING:
 
 RECONDITION = 1e-3  # repartition when Phi_d's reciprocal condition falls below this
 NEWTON_ITERATIONS = 25
+RATES_RCOND = 1e-6  # consistent rates: singular directions below this of the largest are kept
 
 
 class Repartition(Exception):
@@ -607,19 +608,24 @@ class Multibody:
 
     def consistent_rates(self, q: np.ndarray, qd: np.ndarray, t: float = 0.0) -> np.ndarray:
         """The rates nearest ``qd`` (in the mass-weighted norm where there is mass) that
-        satisfy ``Phi_q q' = nu``."""
+        satisfy ``Phi_q q' = nu``.
+
+        Directions whose singular value is below :data:`RATES_RCOND` of the largest are
+        left uncorrected: at (or next to) a singular position the residual's component
+        along such a direction is rounding, and dividing it by a singular value of 1e-9
+        would throw the rates far off the motion."""
         Jq = self.jacobian(q)
         nu = self._nu_gamma(self.state(q), t, gamma=False)
         r = nu - Jq @ qd
         try:  # M = L L^T: the correction of least kinetic energy, L^-T (J L^-T)^+ r
             L = np.linalg.cholesky(self.mass_matrix(self.state(q)))
         except np.linalg.LinAlgError:  # a massless coordinate: the least correction
-            dq, *_ = np.linalg.lstsq(Jq, r, rcond=1e-10)
+            dq, *_ = np.linalg.lstsq(Jq, r, rcond=RATES_RCOND)
             return qd + dq
         from scipy.linalg import solve_triangular
 
         Jh = solve_triangular(L, Jq.T, lower=True).T  # J L^-T
-        dh, *_ = np.linalg.lstsq(Jh, r, rcond=1e-10)
+        dh, *_ = np.linalg.lstsq(Jh, r, rcond=RATES_RCOND)
         # (in this metric the kinetic energy changes only to second order in r, however
         # ill-conditioned J is next to a singular position)
         return qd + solve_triangular(L, dh, lower=True, trans="T")

@@ -218,6 +218,17 @@ class MultibodyResults(Results):
         self.coordinate = drv
         self.model = None
 
+    def _work_why(self) -> tuple[float, str]:
+        """The driver's work: zero where nothing drives the driver's joint (free motion,
+        or motors on other joints: the driver only places the mechanism, and its effort
+        is zero but for rounding), else by the energy method as for a sweep."""
+        if not hasattr(self, "_work"):
+            mech = self.mechanism
+            joint = mech.driver.joint
+            driven = mech.motor is not None or any(j == joint for j, _ in mech.motors.values())
+            self._work = super()._work_why() if driven else (0.0, "")
+        return self._work
+
     def limit_positions(self):
         """Not reported: a rocker's extremes over a sweep of the driver are not the
         extremes of a motion in time (the CSV has every position)."""

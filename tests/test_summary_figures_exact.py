@@ -1,0 +1,54 @@
+"""Figures of the summary computed over the motion, not as plain means of the samples.
+
+The figures sweep has uneven samples (its limit positions and load switches are
+inserted), so a figure that is an integral over the motion (the RMS of the driving
+torque) must weigh each sample by the travel it stands for. Checked against closed forms
+integrated by scipy's quad.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+from click.testing import CliRunner
+from scipy.integrate import quad
+
+from mechsolve.cli.main import main
+
+DATA = Path(__file__).parent / "data"
+
+
+def _slider_crank_torque(phi: float) -> float:
+    """The driving torque of a massless offset slider-crank (crank 50 mm, rod 180 mm,
+    piston line 20 mm above the crank pivot) against a constant 1000 N push on the
+    piston towards the crank: by virtual work, T = -F_x dx/dphi."""
+    r, rod, e, fx = 0.05, 0.18, 0.02, -1000.0
+    s = r * np.sin(phi) - e
+    dx = -r * np.sin(phi) - s * r * np.cos(phi) / np.sqrt(rod * rod - s * s)
+    return -fx * dx
+
+
+def test_rms_driving_torque_is_over_the_turn(tmp_path):
+    """The slider-crank's limit positions fall between the 1-degree samples and are
+    inserted into the figures sweep: the RMS over the turn is still the closed form's
+    (the plain mean of the squares was 0.4 % low)."""
+    res = CliRunner().invoke(
+        main,
+        [
+            "run",
+            str(DATA / "slider_crank_constant_force.yaml"),
+            "-o",
+            str(tmp_path),
+            "--no-plots",
+            "--units",
+            "SI",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    assert "limit positions" in res.output
+    rms = float(re.search(r"RMS ([-\d.e+]+) N·m", res.output).group(1))
+    area, _ = quad(lambda p: _slider_crank_torque(p) ** 2, 0, 2 * np.pi, limit=200)
+    exact = np.sqrt(area / (2 * np.pi))
+    assert abs(rms - exact) <= 2e-5 * exact, (rms, exact)
