@@ -46,10 +46,17 @@ class _Eqs:
         x, ok, it, r, nfev = self.newton_list(K, th0, atol, max_iterations)
         return np.array(x), SolveStats(ok, "newton", it, nfev, nfev, r)
 
-    def newton_list(self, K, th0, atol: float, max_iterations: int):
+    def newton_list(self, K, th0, atol: float, max_iterations: int, predict: bool = False):
         """:meth:`newton_floats` as ``(angles (list), converged, iterations, residual,
         evaluations)``:
-        the coarse continuation's form, without an array and a record per position."""
+        the coarse continuation's form, without an array and a record per position.
+
+        With ``predict``, a step that leaves an error predicted below ``1e-3 atol`` (the
+        steps contracting, ``2 step^2 / last <= 1e-3 atol``: see
+        :func:`~mechsolve.groups.newton_batched._converges_next`) is taken and ends the
+        iteration, converged, without evaluating the residual once more; the residual
+        returned is then the one before that step (the caller checks the whole system's
+        residual afterwards)."""
         nb, rows = self.nb, self._rows
         x = [float(v) for v in th0]
         K = [float(v) for v in K]
@@ -84,6 +91,8 @@ class _Eqs:
                 if r <= atol and step >= last:  # converged already: rounding level
                     return [x0, x1], True, it, r, it + 1
                 x0, x1 = x0 + dx0, x1 + dx1
+                if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                    return [x0, x1], True, it + 1, r, it + 1
                 last = step
             return [x0, x1], r <= atol, max_iterations, r, max_iterations
         terms = self._terms
@@ -118,6 +127,8 @@ class _Eqs:
             if r <= atol and step >= last:  # converged already: rounding level
                 return x, True, it, r, it + 1
             x = [a + b for a, b in zip(x, dx)]
+            if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                return x, True, it + 1, r, it + 1
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
 
