@@ -81,3 +81,106 @@ def test_float_newton_with_prediction_converges_to_the_same_root(predict):
     _, _, it0, _, nfev0 = red.sub.newton_list(Kr[0], th0, g.atol, 30)
     assert it == it0 >= 2
     assert nfev == (nfev0 - 1 if predict else nfev0)
+
+
+def test_one_triad_position_next_to_a_sweep_is_the_hand_written_newtons():
+    """One position of the triad next to its solved sweep (its rates, conditioning
+    bound and residual in floats) against the batched Newton written by hand."""
+    n = 360
+    an, u, start, sol = _sweep(_triad_mech(n), "auto")
+    idx = [an.system.index[k] for k in ("L1", "T", "L2", "L3")]
+    tht = R.TRIAD_START + np.arange(n) * 2 * np.pi / n
+    for i in (5, 120, 250):
+        s1 = an.solve(u[i : i + 1], start=start, near=(sol, i - 1))
+        th, w, al, _ = R.triad_newton(tht[i : i + 1])
+        st = s1.state
+        assert np.max(np.abs(_wrap(st.th[idx, 0] - th[0]))) <= 1e-11
+        assert np.max(np.abs(st.w[idx, 0] - w[0])) <= 1e-9
+        assert np.max(np.abs(st.al[idx, 0] - al[0])) <= 1e-9
+        assert s1.residual[0] <= an.atol
+
+
+def _pin_residual(an, st, i):
+    """max |Phi| of the four-bar's pins and driver by hand from the bodies' poses."""
+    out = 0.0
+    for c in an.system.constraints:
+        if c.letter == "R":
+            p = []
+            for b, s in ((c.a, c.sa), (c.b, c.sb)):
+                if b == st.nb:
+                    p.append(np.asarray(s, float))
+                else:
+                    t = st.th[b, i]
+                    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+                    p.append(np.array([st.x[b, i], st.y[b, i]]) + rot @ np.asarray(s, float))
+            out = max(out, float(np.max(np.abs(p[0] - p[1]))))
+    return out
+
+
+def test_one_positions_residual_in_floats_is_the_pins_by_hand_and_keeps_nan():
+    from mechsolve.base.state import State
+
+    an = Analysis(ms.loads(fourbar_yaml(360)), "split-newton")
+    sol = an.solve(np.array([0.3]))
+    st = sol.state
+    rng = np.random.default_rng(1)
+    for _ in range(5):  # poses off the solution: a residual of the order of 1e-3 m
+        st1 = st.take([0])
+        for b in range(st.nb):
+            st1.x[b, 0] += rng.normal(scale=1e-3)
+            st1.set_angle(b, st1.th[b] + rng.normal(scale=1e-3))
+        got = float(an.system.max_residual(st1, np.array([0.3]))[0])
+        assert got == pytest.approx(_pin_residual(an, st1, 0), rel=1e-12, abs=1e-17)
+        assert got > 1e-5
+    st1 = st.take([0])
+    st1.y[2, 0] = np.nan
+    assert np.isnan(an.system.max_residual(st1, np.array([0.3]))[0])
+    assert isinstance(st1, State)
+
+
+def test_one_positions_conditioning_bound_is_the_one_from_lapacks_inverse():
+    """The rcond bound at one position (the inverse's Frobenius norm in floats) is the
+    one from LAPACK's inverse of the same F_theta, for the four-bar's and the triad's
+    Newton groups, and NaN where F_theta is exactly singular."""
+    for mech, method in ((ms.loads(fourbar_yaml(360)), "split-newton"), (_triad_mech(360), "auto")):
+        an, u, start, sol = _sweep(mech, method)
+        g = an.plan[-1]
+        red = g.red
+        for i in (7, 100, 300):
+            st1 = sol.state.take([i])
+            c, s = st1.c[g.bodies].T, st1.s[g.bodies].T
+            inv = np.linalg.inv(red.jacobian(c, s))
+            got = g.rcond_bound(st1)[0]
+            c0, a0, a1 = g._bound
+            want = 1.0 / (c0 * (a0 + a1 * np.linalg.norm(inv[0])))
+            assert got == pytest.approx(want, rel=1e-12)
+        st1 = sol.state.take([0])
+        st1.c[g.bodies, 0] = 0.0  # every entry of F_theta zero: exactly singular
+        st1.s[g.bodies, 0] = 0.0
+        assert np.isnan(g.rcond_bound(st1)[0])
+
+
+@pytest.mark.parametrize("which", ["four-bar", "triad"])
+def test_one_position_takes_no_batched_inverse_or_residual(which, monkeypatch):
+    """One position next to a solved sweep: the conditioning bound, the rates (the
+    driven crank's too) and the residual check in floats, none of the batched code's
+    (N, n, n) inverses or joint-by-joint array residuals; the numbers as before."""
+    from mechsolve.groups.newton_rates import NewtonRates
+    from mechsolve.joints.revolute import RevoluteConstraint
+
+    mech, method = (
+        (ms.loads(fourbar_yaml(360)), "split-newton")
+        if which == "four-bar"
+        else (_triad_mech(360), "auto")
+    )
+    an, u, start, sol = _sweep(mech, method)
+    want = an.solve(u[40:41], start=start, near=(sol, 39))
+
+    def no(*a, **k):
+        raise AssertionError("batched code at one position")
+
+    monkeypatch.setattr(NewtonRates, "_angle_inverse", no)
+    monkeypatch.setattr(RevoluteConstraint, "max_residual_into", no)
+    got = an.solve(u[40:41], start=start, near=(sol, 39))
+    assert np.array_equal(got.state.block, want.state.block)
+    assert np.array_equal(got.residual, want.residual)

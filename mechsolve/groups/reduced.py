@@ -421,6 +421,51 @@ class _Angles(_Eqs):
             Px[:, kb], Py[:, kb] = pts[j]
         return K, Px, Py
 
+    def known_one(self, st: State, order: int = 0) -> tuple[list, list, list]:
+        """:meth:`known` at the one position of ``st`` as lists of floats (``K``, ``Px``,
+        ``Py``), the same operations in the same order (a NumPy call on one-element
+        arrays costs more than its arithmetic)."""
+        kc, pxc, pyc, points, kmov, dmov, pmov = self._known_plan(st.nb)
+        if any(s.ndim != 1 for _, s in points):  # one local vector per position
+            K, Px, Py = self.known(st, order)
+            return K[0].tolist(), Px[0].tolist(), Py[0].tolist()
+        nb, ne, ground = self.nb, self.ne, st.nb
+        pts = []
+        for body, s in points:  # as State.point, point_velocity, point_acceleration
+            s0, s1 = s.tolist()
+            if body == ground:
+                pts.append((s0, s1) if order == 0 else (0.0, 0.0))
+                continue
+            a = ((st.x, st.y), (st.vx, st.vy), (st.ax, st.ay))[order]
+            px, py = float(a[0][body, 0]), float(a[1][body, 0])
+            if s0 == 0.0 and s1 == 0.0:
+                pts.append((px, py))
+                continue
+            c, sn = float(st.c[body, 0]), float(st.s[body, 0])
+            rx, ry = c * s0 - sn * s1, sn * s0 + c * s1
+            if order == 0:
+                pts.append((px + rx, py + ry))
+            elif order == 1:
+                w = float(st.w[body, 0])
+                pts.append((px - w * ry, py + w * rx))
+            else:
+                w = float(st.w[body, 0])
+                w2, al = w * w, float(st.al[body, 0])
+                pts.append((px - al * ry - w2 * rx, py + al * rx - w2 * ry))
+        K = kc.tolist() if order == 0 else [0.0] * nb
+        for e, sign, j in kmov:
+            px, py = pts[j]
+            K[e] += sign * px
+            K[ne + e] += sign * py
+        ang = (st.th, st.w, st.al)[order]
+        for col, sign, body in dmov:
+            K[col] += sign * float(ang[body, 0])
+        Px = pxc.tolist() if order == 0 else [0.0] * nb
+        Py = pyc.tolist() if order == 0 else [0.0] * nb
+        for kb, j in pmov:
+            Px[kb], Py[kb] = pts[j]
+        return K, Px, Py
+
     def _known_plan(self, ground: int):
         """:meth:`known`'s terms split once: the ground's points (fixed local vectors) and
         the drivers' offsets as constant rows of ``K`` and ``(Px, Py)`` at order 0 (zero
