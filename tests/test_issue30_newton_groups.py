@@ -160,18 +160,19 @@ def test_one_positions_conditioning_bound_is_the_one_from_lapacks_inverse():
         assert np.isnan(g.rcond_bound(st1)[0])
 
 
-@pytest.mark.parametrize("which", ["four-bar", "triad"])
+@pytest.mark.parametrize("which", ["split-newton", "newton", "triad"])
 def test_one_position_takes_no_batched_inverse_or_residual(which, monkeypatch):
-    """One position next to a solved sweep: the conditioning bound, the rates (the
-    driven crank's too) and the residual check in floats, none of the batched code's
-    (N, n, n) inverses or joint-by-joint array residuals; the numbers as before."""
+    """One position next to a solved sweep: the solved bodies' terms, the positions (the
+    driven crank's too, and a crank inside the group: ``newton``), the conditioning
+    bound, the rates and the residual check in floats, none of the batched code's
+    arrays ((N, n) terms, (N, n, n) inverses, joint-by-joint array residuals); the
+    numbers as before."""
     from mechsolve.groups.newton_rates import NewtonRates
+    from mechsolve.groups.reduced import _Angles
     from mechsolve.joints.revolute import RevoluteConstraint
 
     mech, method = (
-        (ms.loads(fourbar_yaml(360)), "split-newton")
-        if which == "four-bar"
-        else (_triad_mech(360), "auto")
+        (_triad_mech(360), "auto") if which == "triad" else (ms.loads(fourbar_yaml(360)), which)
     )
     an, u, start, sol = _sweep(mech, method)
     want = an.solve(u[40:41], start=start, near=(sol, 39))
@@ -180,7 +181,14 @@ def test_one_position_takes_no_batched_inverse_or_residual(which, monkeypatch):
         raise AssertionError("batched code at one position")
 
     monkeypatch.setattr(NewtonRates, "_angle_inverse", no)
+    monkeypatch.setattr(_Angles, "known", no)
     monkeypatch.setattr(RevoluteConstraint, "max_residual_into", no)
     got = an.solve(u[40:41], start=start, near=(sol, 39))
     assert np.array_equal(got.state.block, want.state.block)
     assert np.array_equal(got.residual, want.residual)
+    if which != "triad":  # and Norton's
+        th2 = 40 * 2 * np.pi / 360
+        want_n = R.fourbar_textbook(np.array([th2]))
+        for k, v in enumerate(_sol_fourbar(got)):
+            d = _wrap(v - want_n[k]) if k < 2 else v - want_n[k]
+            assert abs(float(d[0])) <= 1e-10 * max(1.0, abs(float(want_n[k][0])))

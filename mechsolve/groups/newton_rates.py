@@ -215,6 +215,12 @@ class NewtonRates:
             [m2 * c[k] - m1 * s[k] + m3 for k, (m1, m2, m3) in enumerate(row)] for row in red._rows
         ]
         nb = red.nb
+        if nb == 2:  # the inverse is the adjugate over det: |J^-1|_F = |J|_F / |det J|
+            (a, b), (c_, d) = J
+            det = a * d - b * c_
+            if det == 0:
+                return math.nan
+            return math.sqrt(a * a + b * b + c_ * c_ + d * d) / abs(det)
         total = 0.0
         for j in range(nb):
             col = _solve_small(J, [-1.0 if i == j else 0.0 for i in range(nb)])

@@ -542,6 +542,13 @@ class _Angles(_Eqs):
             ys.append(py)
         return xs, ys
 
+    def mtf_list(self) -> list:
+        """:attr:`MTf` as lists of floats (:meth:`reduce` at one position)."""
+        m = getattr(self, "_mtf_list", None)
+        if m is None:
+            m = self._mtf_list = self.MTf.tolist()
+        return m
+
     def wr_list(self) -> list:
         """:attr:`Wr` as lists of floats (the frames' rates at one position)."""
         wr = getattr(self, "_wr_list", None)
