@@ -192,3 +192,36 @@ def test_one_position_takes_no_batched_inverse_or_residual(which, monkeypatch):
         for k, v in enumerate(_sol_fourbar(got)):
             d = _wrap(v - want_n[k]) if k < 2 else v - want_n[k]
             assert abs(float(d[0])) <= 1e-10 * max(1.0, abs(float(want_n[k][0])))
+
+
+def test_a_sweeps_determinants_are_computed_once_and_follow_the_poses(monkeypatch):
+    """The batched sweep's test for a sign change and the bifurcation search read the
+    same determinants: computed once per sweep; new poses (another sweep, or the same
+    state's angles changed) compute them again (the four-bar's F_theta determinant is
+    sin(th4 - th3) times the coupler's and rocker's lengths, up to sign)."""
+    from mechsolve.groups.generic import NewtonGroup
+
+    calls = []
+    red_dets = NewtonGroup.red_dets
+    monkeypatch.setattr(
+        NewtonGroup, "red_dets", lambda g, st, ok: calls.append(1) or red_dets(g, st, ok)
+    )
+    n = 720
+    an, u, start, sol = _sweep(ms.loads(fourbar_yaml(n)), "split-newton")
+    assert len(calls) == 1
+    g = an.plan[1]
+    st = sol.state
+    ok = np.ones(n, bool)
+    det, good = g.dets(st, ok)
+    assert len(calls) == 1 and good.all()
+    th3, th4 = st.th[1], st.th[2]
+    want = R.B3 * R.C4 * np.sin(th4 - th3)
+    assert np.allclose(np.abs(det), np.abs(want), rtol=1e-12, atol=0)
+    st.th[2, 5] += 0.1  # another pose of the rocker at one position
+    np.cos(st.th[2], out=st.c[2])
+    np.sin(st.th[2], out=st.s[2])
+    det2, _ = g.dets(st, ok)
+    assert len(calls) == 2
+    assert det2[5] != det[5] and np.array_equal(np.delete(det2, 5), np.delete(det, 5))
+    an.solve(u, start=start)
+    assert len(calls) == 3

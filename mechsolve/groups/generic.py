@@ -48,6 +48,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         except ValueError:
             self.red = None
         self._inv_cache: tuple | None = None
+        self._det_cache: tuple | None = None  # see dets()
         self._bound: tuple[float, float, float] | None = None
         self._jump_w: tuple[float, np.ndarray] | None = None
         # where the last sweep was not continuous: (the position before, a driver value
@@ -254,7 +255,22 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if self.m != self.n or (self.red is not None and self.red.sub.nb == 0):
             return np.full(st.n, np.nan), np.zeros(st.n, bool)
         if self.red is not None:
-            return self.red_dets(st, ok)
+            # kept for the same poses (the state's token and the angles) and the same
+            # ``ok``: the batched sweep's check for a sign change and the bifurcation
+            # search ask for the same determinants one after the other
+            th = st.th[self.bodies]
+            c = self._det_cache
+            if (
+                c is not None
+                and c[0] == st.token
+                and c[1].shape == th.shape
+                and np.array_equal(c[1], th)
+                and np.array_equal(c[2], ok)
+            ):
+                return c[3], c[4]
+            det, good = self.red_dets(st, ok)
+            self._det_cache = (st.token, th, ok.copy(), det, good)
+            return det, good
         J = self.jacobian(st)
         good = ok & np.all(np.isfinite(J), axis=(1, 2))
         det = np.full(st.n, np.nan)

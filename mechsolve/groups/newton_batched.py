@@ -243,21 +243,21 @@ class BatchedSweep:
                 take &= todo
                 D = np.where(take[:, None], dq, 0.0)
                 th += D
-                if Cf is not None:
-                    _rotate(Cf, Sf, D, th)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
+                if Cf is not None and todo.any():  # (not after the last iteration)
+                    _rotate(Cf, Sf, D, th)
             else:
                 it, D = idx[take], dq[take]
                 th[it] += D
-                if Cf is not None:
-                    Ci, Si = Cf[it], Sf[it]
-                    _rotate(Ci, Si, D, th[it])
-                    Cf[it], Sf[it] = Ci, Si
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
+                if Cf is not None and todo.any():
+                    Ci, Si = Cf[it], Sf[it]
+                    _rotate(Ci, Si, D, th[it])
+                    Cf[it], Sf[it] = Ci, Si
         if todo.any() or not np.all(np.isfinite(th)):
             return None
         self._put_angles(st, red.join(th, thp), Px, Py)
@@ -303,24 +303,25 @@ class BatchedSweep:
                 D0, D1 = np.where(take, dq0, 0.0), np.where(take, dq1, 0.0)
                 x0 += D0
                 x1 += D1
-                _rotate(cs[0], cs[1], D0, x0)
-                _rotate(cs[2], cs[3], D1, x1)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
+                if todo.any():  # (not after the last iteration: nothing reads them)
+                    _rotate(cs[0], cs[1], D0, x0)
+                    _rotate(cs[2], cs[3], D1, x1)
             else:
                 it, D0, D1 = idx[take], dq0[take], dq1[take]
                 x0[it] += D0
                 x1[it] += D1
-                if cs is not None:
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+                if cs is not None and todo.any():
                     c = [a[take] for a in csk]
                     _rotate(c[0], c[1], D0, x0[it])
                     _rotate(c[2], c[3], D1, x1[it])
                     for a, b in zip(cs, c):
                         a[it] = b
-                iters[idx] += 1
-                last[idx] = step
-                todo[idx[done]] = False
         th[:, 0], th[:, 1] = x0, x1
         return not todo.any() and bool(np.isfinite(x0).all() and np.isfinite(x1).all())
 
