@@ -225,3 +225,35 @@ def test_a_sweeps_determinants_are_computed_once_and_follow_the_poses(monkeypatc
     assert det2[5] != det[5] and np.array_equal(np.delete(det2, 5), np.delete(det, 5))
     an.solve(u, start=start)
     assert len(calls) == 3
+
+
+def test_determinants_and_inverse_of_the_same_poses_factor_once():
+    """The triad's F_theta at a sweep's poses: its determinants and then its inverse
+    (as the sign-change test and the rates ask for them) from one factorisation, equal
+    to LAPACK's; other poses factor again."""
+    from mechsolve.groups import reduced
+
+    n = 360
+    an, u, start, sol = _sweep(_triad_mech(n), "auto")
+    red = an.plan[-1].red
+    bodies = an.plan[-1].bodies
+    C, S = sol.state.c[bodies].T, sol.state.s[bodies].T
+    red._lu_kept = None
+    made = []
+    lu = red.lu
+    red.lu = lambda C, S: made.append(1) or lu(C, S)
+    try:
+        det = red.dets(C, S)
+        inv = red.inverse(C, S)
+        assert len(made) == 1
+        J = red.jacobian(C, S)
+        assert np.allclose(det, np.linalg.det(J), rtol=1e-10, atol=0)
+        assert np.allclose(inv, np.linalg.inv(J), rtol=1e-9, atol=1e-12)
+        C2 = np.roll(C, 1, axis=0)
+        S2 = np.roll(S, 1, axis=0)
+        det2 = red.dets(C2, S2)
+        assert len(made) == 2
+        assert np.allclose(det2, np.linalg.det(red.jacobian(C2, S2)), rtol=1e-10, atol=0)
+    finally:
+        del red.lu
+    assert reduced.STACKED_MIN <= n

@@ -165,6 +165,18 @@ class _Eqs:
         ``C``, ``S`` (N, n)."""
         return _StackedLU(self.entries(C, S), C.shape[0])
 
+    def lu_kept(self, C, S) -> _StackedLU:
+        """:meth:`lu`, kept for the same cosines and sines: a sweep's determinants
+        (the sign-change test) and its rates' inverse factor ``F_theta`` at the same
+        solved poses, one after the other."""
+        c = getattr(self, "_lu_kept", None)
+        if c is not None and c[0].shape == C.shape and np.array_equal(c[0], C):
+            if np.array_equal(c[1], S):
+                return c[2]
+        lu = self.lu(C, S)
+        self._lu_kept = (np.array(C), np.array(S), lu)
+        return lu
+
     def dets(self, C, S) -> np.ndarray:
         """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
         if self.nb == 1:
@@ -178,7 +190,7 @@ class _Eqs:
                 det -= b * c
             return det
         if self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
-            return _lu_det(self.lu(C, S))
+            return _lu_det(self.lu_kept(C, S))
         return np.linalg.det(self.jacobian(C, S))
 
     def step_small(self, C, S, f) -> np.ndarray:
@@ -213,7 +225,7 @@ class _Eqs:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
         if 2 < self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
-            return _lu_inverse(self.lu(C, S))
+            return _lu_inverse(self.lu_kept(C, S))
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
         (a1, b1), (c1, d1) = self.M1.tolist()
