@@ -10,6 +10,8 @@ started on. Velocities and accelerations solve the group's block of
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mechsolve.base.newton import SolveStats, newton_lean, solve
@@ -46,6 +48,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         except ValueError:
             self.red = None
         self._inv_cache: tuple | None = None
+        self._det_cache: tuple | None = None  # see dets()
         self._bound: tuple[float, float, float] | None = None
         self._jump_w: tuple[float, np.ndarray] | None = None
         # where the last sweep was not continuous: (the position before, a driver value
@@ -118,6 +121,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             return self.solve_at(st1, u1, q0)
         if K is None:
             K = red.known(st1)
+        if isinstance(K[0], list):  # known_one's floats: a lone position, in floats
+            return self._solve_one_floats(st1, u1, q0, K)
         Kr0, thp, fun_jac = self._reduced(K, u1)
         sub = red.sub
         th0 = np.asarray(q0, float)[2::3][red.free]
@@ -144,6 +149,48 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if st1 is not None:
             self.set_q(st1, 0, q)
         return q, stats
+
+    def _solve_one_floats(self, st1: State | None, u1: np.ndarray, q0: np.ndarray, K):
+        """:meth:`_solve_one` with the solved bodies' terms ``K`` as
+        :meth:`_Angles.known_one` gives them (lists of floats): the constant part and the
+        fixed angles (:meth:`_Angles.reduce`) in floats; a Newton solve that does not
+        converge in floats goes through :meth:`_solve_one` with arrays."""
+        red = self.red
+        sub = red.sub
+        if sub.nb == 0 or sub.nb > FLOATS_UP_TO:
+            return self._solve_one(st1, u1, q0, [np.array([k]) for k in K])
+        K0, Px, Py = K
+        u = float(u1[0])
+        Ku = list(K0)
+        for e in range(2 * red.ne, red.nb):  # with_driver
+            Ku[e] -= u
+        th = np.asarray(q0, float)[2::3].tolist()
+        free, fixed = red.free.tolist(), red.fixed.tolist()
+        if fixed:  # reduce(): theta_k = sign (u - K_d), their terms into the constant part
+            thp = [-Ku[r] * sg for r, sg in zip(red.frows.tolist(), red.fsign.tolist())]
+            v = [math.cos(t) for t in thp] + [math.sin(t) for t in thp] + thp
+            MTf = red.mtf_list()
+            Kr0 = [
+                Ku[r] + sum(vj * MTf[j][col] for j, vj in enumerate(v))
+                for col, r in enumerate(red.rows.tolist())
+            ]
+        else:
+            thp, Kr0 = [], Ku
+        thf, ok, it, r, nfev = sub.newton_list(
+            Kr0, [th[k] for k in free], self.atol, self.max_iterations
+        )
+        if not ok:  # the full Newton with its scipy fallback, as _solve_one takes it
+            return self._solve_one(st1, u1, q0, [np.array([k]) for k in K])
+        for j, k in enumerate(free):
+            th[k] = thf[j]
+        for j, k in enumerate(fixed):
+            th[k] = thp[j]
+        q = np.empty(self.n)
+        q[2::3] = th
+        q[0::3], q[1::3] = red.poses_one(th, Px, Py)
+        if st1 is not None:
+            self.set_q(st1, 0, q)
+        return q, SolveStats(True, "newton", it, nfev, nfev, r)
 
     def _reduced(self, K, u1: np.ndarray):
         """A revolute group's equations in its free angles at one position: the known
@@ -208,7 +255,22 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if self.m != self.n or (self.red is not None and self.red.sub.nb == 0):
             return np.full(st.n, np.nan), np.zeros(st.n, bool)
         if self.red is not None:
-            return self.red_dets(st, ok)
+            # kept for the same poses (the state's token and the angles) and the same
+            # ``ok``: the batched sweep's check for a sign change and the bifurcation
+            # search ask for the same determinants one after the other
+            th = st.th[self.bodies]
+            c = self._det_cache
+            if (
+                c is not None
+                and c[0] == st.token
+                and c[1].shape == th.shape
+                and np.array_equal(c[1], th)
+                and np.array_equal(c[2], ok)
+            ):
+                return c[3], c[4]
+            det, good = self.red_dets(st, ok)
+            self._det_cache = (st.token, th, ok.copy(), det, good)
+            return det, good
         J = self.jacobian(st)
         good = ok & np.all(np.isfinite(J), axis=(1, 2))
         det = np.full(st.n, np.nan)
@@ -285,6 +347,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         """A group whose every angle a driver fixes alone (a driven crank): its poses
         follow from the driver values directly, at every position."""
         red = self.red
+        if st.n == 1 and ok_in[0] and self._fixed_one(st, float(drive.u[0])):
+            return ok_in.copy(), np.zeros(1, int), "newton"
         K, Px, Py = red.known(st)
         thp = red.fixed_angles(red.with_driver(K, drive.u))
         self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
@@ -295,6 +359,34 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             self._nan(st, i)
         methods = np.where(ok, "newton", np.where(ok_in, "failed", "")).astype(object)
         return ok, np.zeros(st.n, int), methods
+
+    def _fixed_one(self, st: State, u: float) -> bool:
+        """:meth:`_sweep_fixed` at the one position of ``st`` in floats, the same
+        operations in the same order (a NumPy call on one-element arrays costs more than
+        its arithmetic): False (nothing written) where an angle is not finite."""
+        red = self.red
+        K, Px, Py = red.known_one(st)
+        for e in range(2 * red.ne, red.nb):  # with_driver
+            K[e] -= u
+        th = [0.0] * red.nb
+        for k, row, sign in zip(red.fixed.tolist(), red.frows.tolist(), red.fsign.tolist()):
+            th[k] = -K[row] * sign
+        if not all(math.isfinite(v) for v in th):
+            return False
+        C = np.cos(th).tolist()  # as _put_angles
+        S = np.sin(th).tolist()
+        wx, wy = red._wx, red._wy
+        for b, k in self.col.items():  # red.poses: Px + C Wx^T - S Wy^T
+            x, y = Px[k], Py[k]
+            cx = sy = sx = cy = 0.0
+            for j in range(red.nb):
+                cx += C[j] * wx[k][j]
+                sy += S[j] * wy[k][j]
+                sx += S[j] * wx[k][j]
+                cy += C[j] * wy[k][j]
+            st.x[b, 0], st.y[b, 0], st.th[b, 0] = (x + cx) - sy, (y + sx) + cy, th[k]
+            st.c[b, 0], st.s[b, 0] = C[k], S[k]
+        return True
 
     def sweep_sequential(
         self,
@@ -327,13 +419,15 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         last_good = np.asarray(q_start, float)
         last_det = 0.0
         # a revolute group needs only the solved bodies' terms at each position
-        Kall = self.red.known(st) if self.red is not None else None
+        Kall = self.red.known(st) if self.red is not None and n > 1 else None
+        # a lone position: those terms as floats (_solve_one solves it in floats)
+        Kone = self.red.known_one(st) if self.red is not None and n == 1 else None
         for i in range(n):
             if not ok_in[i]:
                 self._nan(st, i)
                 hu, hq = [], []
                 continue
-            Ki = None if Kall is None else [k[i : i + 1] for k in Kall]
+            Ki = Kone if Kall is None else [k[i : i + 1] for k in Kall]
             st1 = st.take([i]) if Ki is None else None
             ui = float(drive.u[i])
             if not hq:  # the start, or the first position after a gap

@@ -126,7 +126,7 @@ class BatchedSweep:
             elif hq:
                 q_pred = _extrapolate_floats(hu, hq, ui)
             thf, plain, it, _, _ = sub.newton_list(
-                Kr[i], [q_pred[3 * k + 2] for k in free], atol, its
+                Kr[i], [q_pred[3 * k + 2] for k in free], atol, its, predict=True
             )
             if plain:
                 for j, k in enumerate(free):
@@ -203,7 +203,7 @@ class BatchedSweep:
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
         Cf = Sf = None  # cos and sin of th at every position, turned with its small steps
-        for _ in range(self.max_iterations):
+        for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
@@ -233,28 +233,31 @@ class BatchedSweep:
                     return None
             step = _rowmax_abs(dq)
             # as below: converged when the residual is small and the step tiny or no
-            # longer shrinking (the rounding level); that last step is not taken
-            done = (r <= self.atol) & ((step <= tol) | (step >= lastk))
-            take = ~done | (step <= tol)
+            # longer shrinking (the rounding level); that last step is not taken; or
+            # when this step leaves an error predicted below tol (_converges_next)
+            small = step <= tol
+            pred = _converges_next(step, lastk, tol) if it_k else False
+            done = ((r <= self.atol) & (small | (step >= lastk))) | pred
+            take = ~done | small | pred
             if idx is None:
                 take &= todo
                 D = np.where(take[:, None], dq, 0.0)
                 th += D
-                if Cf is not None:
-                    _rotate(Cf, Sf, D, th)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
+                if Cf is not None and todo.any():  # (not after the last iteration)
+                    _rotate(Cf, Sf, D, th)
             else:
                 it, D = idx[take], dq[take]
                 th[it] += D
-                if Cf is not None:
-                    Ci, Si = Cf[it], Sf[it]
-                    _rotate(Ci, Si, D, th[it])
-                    Cf[it], Sf[it] = Ci, Si
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
+                if Cf is not None and todo.any():
+                    Ci, Si = Cf[it], Sf[it]
+                    _rotate(Ci, Si, D, th[it])
+                    Cf[it], Sf[it] = Ci, Si
         if todo.any() or not np.all(np.isfinite(th)):
             return None
         self._put_angles(st, red.join(th, thp), Px, Py)
@@ -274,7 +277,7 @@ class BatchedSweep:
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
         cs = None  # cos and sin of x0 and x1 everywhere, turned with their small steps
-        for _ in range(self.max_iterations):
+        for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
@@ -289,33 +292,36 @@ class BatchedSweep:
                 csk = None if cs is None else [a[idx] for a in cs]
             r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1, csk)
             # as _refine_angles: converged when the residual is small and the step tiny
-            # or no longer shrinking (the rounding level); that last step is not taken
+            # or no longer shrinking (the rounding level); that last step is not taken;
+            # or when this step leaves an error predicted below tol (_converges_next)
             small = step <= tol
-            done = (r <= self.atol) & (small | (step >= lastk))
-            take = ~done | small
+            pred = _converges_next(step, lastk, tol) if it_k else False
+            done = ((r <= self.atol) & (small | (step >= lastk))) | pred
+            take = ~done | small | pred
             if idx is None:
                 take &= todo
                 D0, D1 = np.where(take, dq0, 0.0), np.where(take, dq1, 0.0)
                 x0 += D0
                 x1 += D1
-                _rotate(cs[0], cs[1], D0, x0)
-                _rotate(cs[2], cs[3], D1, x1)
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
+                if todo.any():  # (not after the last iteration: nothing reads them)
+                    _rotate(cs[0], cs[1], D0, x0)
+                    _rotate(cs[2], cs[3], D1, x1)
             else:
                 it, D0, D1 = idx[take], dq0[take], dq1[take]
                 x0[it] += D0
                 x1[it] += D1
-                if cs is not None:
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+                if cs is not None and todo.any():
                     c = [a[take] for a in csk]
                     _rotate(c[0], c[1], D0, x0[it])
                     _rotate(c[2], c[3], D1, x1[it])
                     for a, b in zip(cs, c):
                         a[it] = b
-                iters[idx] += 1
-                last[idx] = step
-                todo[idx[done]] = False
         th[:, 0], th[:, 1] = x0, x1
         return not todo.any() and bool(np.isfinite(x0).all() and np.isfinite(x1).all())
 
@@ -363,6 +369,22 @@ class BatchedSweep:
 
     def _set_q_rows_into(self, st: State, q: np.ndarray) -> None:
         self._set_q_rows(st, q)
+
+
+def _converges_next(step: np.ndarray, last: np.ndarray, tol: float) -> np.ndarray:
+    """Where the Newton step ``step`` (its largest component), following one of size
+    ``last``, leaves an error predicted below ``tol``: the steps contract (``step <=
+    last / 2``) and ``2 step^2 / last <= tol``. Under quadratic convergence the next step
+    is about ``step^2 * (step / last^2)``, smaller than ``step^2 / last`` by the factor
+    ``step / last``; under linear convergence with the ratio ``rho = step / last`` the
+    error left is ``step rho / (1 - rho) <= 2 step^2 / last``. So a refinement can stop
+    once the step is taken, instead of spending one more residual and step only to see
+    the next step at rounding level (the lean hand-written programs stop after two
+    updates). The whole system's residual is checked after the sweep as before
+    (positions above the tolerance are polished)."""
+    ok = 2.0 * step * step <= tol * last
+    ok &= step <= 0.5 * last
+    return ok
 
 
 def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None:

@@ -93,7 +93,7 @@ class NewtonRates:
     def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
         red = self.red
         nb = red.nb
-        if st.n == 1 and 0 < red.sub.nb and nb <= FLOATS_UP_TO:
+        if st.n == 1 and nb <= FLOATS_UP_TO:  # (a driven crank too: F_theta = +-1)
             if self._angle_rates_one(st, drive, order):
                 return
         K, Px, Py = red.known(st, order)  # fresh arrays: the right-hand side in place
@@ -133,8 +133,8 @@ class NewtonRates:
         the batched code then takes the position (its least squares)."""
         red = self.red
         nb, ne = red.nb, red.ne
-        K, Px, Py = red.known(st, order)
-        rhs = [-v for v in K[0].tolist()]
+        K, px, py = red.known_one(st, order)
+        rhs = [-v for v in K]
         if red.nd:  # the driver values' rates off the drivers' equations
             dv = float((drive.ud if order == 1 else drive.udd)[0])
             for e in range(2 * ne, nb):
@@ -162,7 +162,6 @@ class NewtonRates:
             Q = [q - sk * v for q, sk, v in zip(Q, s, w2)]
         out = (st.vx, st.vy, st.w) if order == 1 else (st.ax, st.ay, st.al)
         Wr = red.wr_list()
-        px, py = Px[0].tolist(), Py[0].tolist()
         for b, k in self.col.items():
             vx, vy = px[k], py[k]
             for j in range(nb):
@@ -199,9 +198,36 @@ class NewtonRates:
         red = self.red
         if red.sub.nb == 0:  # all angles fixed: F_theta^-1 is constant
             return np.full(st.n, 1.0 / (c * (a0 + a1 * float(np.linalg.norm(red.inv_fixed)))))
+        if st.n == 1 and red.nb <= FLOATS_UP_TO:  # one position: in floats
+            return np.array([1.0 / (c * (a0 + a1 * self._inverse_norm_one(st)))])
         inv = self._angle_inverse(st)
         nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
         return 1.0 / (c * (a0 + a1 * nf))
+
+    def _inverse_norm_one(self, st: State) -> float:
+        """``|F_theta^-1|_F`` at the one position of ``st``, in floats: the inverse's
+        columns by :func:`~mechsolve.groups.reduced._solve_small` (NaN where ``F_theta``
+        is exactly singular or not finite, as :meth:`_angle_inverse` gives it)."""
+        red = self.red
+        c = st.c[self.bodies, 0].tolist()
+        s = st.s[self.bodies, 0].tolist()
+        J = [
+            [m2 * c[k] - m1 * s[k] + m3 for k, (m1, m2, m3) in enumerate(row)] for row in red._rows
+        ]
+        nb = red.nb
+        if nb == 2:  # the inverse is the adjugate over det: |J^-1|_F = |J|_F / |det J|
+            (a, b), (c_, d) = J
+            det = a * d - b * c_
+            if det == 0:
+                return math.nan
+            return math.sqrt(a * a + b * b + c_ * c_ + d * d) / abs(det)
+        total = 0.0
+        for j in range(nb):
+            col = _solve_small(J, [-1.0 if i == j else 0.0 for i in range(nb)])
+            if col is None:
+                return math.nan
+            total += sum(v * v for v in col)
+        return math.sqrt(total)
 
     def _bound_constants(self, st: State) -> tuple[float, float, float]:
         st1 = st.take([0])

@@ -46,10 +46,17 @@ class _Eqs:
         x, ok, it, r, nfev = self.newton_list(K, th0, atol, max_iterations)
         return np.array(x), SolveStats(ok, "newton", it, nfev, nfev, r)
 
-    def newton_list(self, K, th0, atol: float, max_iterations: int):
+    def newton_list(self, K, th0, atol: float, max_iterations: int, predict: bool = False):
         """:meth:`newton_floats` as ``(angles (list), converged, iterations, residual,
         evaluations)``:
-        the coarse continuation's form, without an array and a record per position."""
+        the coarse continuation's form, without an array and a record per position.
+
+        With ``predict``, a step that leaves an error predicted below ``1e-3 atol`` (the
+        steps contracting, ``2 step^2 / last <= 1e-3 atol``: see
+        :func:`~mechsolve.groups.newton_batched._converges_next`) is taken and ends the
+        iteration, converged, without evaluating the residual once more; the residual
+        returned is then the one before that step (the caller checks the whole system's
+        residual afterwards)."""
         nb, rows = self.nb, self._rows
         x = [float(v) for v in th0]
         K = [float(v) for v in K]
@@ -84,6 +91,8 @@ class _Eqs:
                 if r <= atol and step >= last:  # converged already: rounding level
                     return [x0, x1], True, it, r, it + 1
                 x0, x1 = x0 + dx0, x1 + dx1
+                if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                    return [x0, x1], True, it + 1, r, it + 1
                 last = step
             return [x0, x1], r <= atol, max_iterations, r, max_iterations
         terms = self._terms
@@ -118,6 +127,8 @@ class _Eqs:
             if r <= atol and step >= last:  # converged already: rounding level
                 return x, True, it, r, it + 1
             x = [a + b for a, b in zip(x, dx)]
+            if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                return x, True, it + 1, r, it + 1
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
 
@@ -154,6 +165,18 @@ class _Eqs:
         ``C``, ``S`` (N, n)."""
         return _StackedLU(self.entries(C, S), C.shape[0])
 
+    def lu_kept(self, C, S) -> _StackedLU:
+        """:meth:`lu`, kept for the same cosines and sines: a sweep's determinants
+        (the sign-change test) and its rates' inverse factor ``F_theta`` at the same
+        solved poses, one after the other."""
+        c = getattr(self, "_lu_kept", None)
+        if c is not None and c[0].shape == C.shape and np.array_equal(c[0], C):
+            if np.array_equal(c[1], S):
+                return c[2]
+        lu = self.lu(C, S)
+        self._lu_kept = (np.array(C), np.array(S), lu)
+        return lu
+
     def dets(self, C, S) -> np.ndarray:
         """``det F_theta`` (N,) at the angles whose cosines and sines are ``C``, ``S``."""
         if self.nb == 1:
@@ -167,7 +190,7 @@ class _Eqs:
                 det -= b * c
             return det
         if self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
-            return _lu_det(self.lu(C, S))
+            return _lu_det(self.lu_kept(C, S))
         return np.linalg.det(self.jacobian(C, S))
 
     def step_small(self, C, S, f) -> np.ndarray:
@@ -202,7 +225,7 @@ class _Eqs:
         """``F_theta^-1`` (N, n, n) as :func:`_batch_inverse` gives it; up to two angles
         from the entries directly (a broadcast product over (N, n, n) costs more)."""
         if 2 < self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
-            return _lu_inverse(self.lu(C, S))
+            return _lu_inverse(self.lu_kept(C, S))
         if self.nb != 2:
             return _batch_inverse(self.jacobian(C, S))
         (a1, b1), (c1, d1) = self.M1.tolist()
@@ -410,6 +433,51 @@ class _Angles(_Eqs):
             Px[:, kb], Py[:, kb] = pts[j]
         return K, Px, Py
 
+    def known_one(self, st: State, order: int = 0) -> tuple[list, list, list]:
+        """:meth:`known` at the one position of ``st`` as lists of floats (``K``, ``Px``,
+        ``Py``), the same operations in the same order (a NumPy call on one-element
+        arrays costs more than its arithmetic)."""
+        kc, pxc, pyc, points, kmov, dmov, pmov = self._known_plan(st.nb)
+        if any(s.ndim != 1 for _, s in points):  # one local vector per position
+            K, Px, Py = self.known(st, order)
+            return K[0].tolist(), Px[0].tolist(), Py[0].tolist()
+        nb, ne, ground = self.nb, self.ne, st.nb
+        pts = []
+        for body, s in points:  # as State.point, point_velocity, point_acceleration
+            s0, s1 = s.tolist()
+            if body == ground:
+                pts.append((s0, s1) if order == 0 else (0.0, 0.0))
+                continue
+            a = ((st.x, st.y), (st.vx, st.vy), (st.ax, st.ay))[order]
+            px, py = float(a[0][body, 0]), float(a[1][body, 0])
+            if s0 == 0.0 and s1 == 0.0:
+                pts.append((px, py))
+                continue
+            c, sn = float(st.c[body, 0]), float(st.s[body, 0])
+            rx, ry = c * s0 - sn * s1, sn * s0 + c * s1
+            if order == 0:
+                pts.append((px + rx, py + ry))
+            elif order == 1:
+                w = float(st.w[body, 0])
+                pts.append((px - w * ry, py + w * rx))
+            else:
+                w = float(st.w[body, 0])
+                w2, al = w * w, float(st.al[body, 0])
+                pts.append((px - al * ry - w2 * rx, py + al * rx - w2 * ry))
+        K = kc.tolist() if order == 0 else [0.0] * nb
+        for e, sign, j in kmov:
+            px, py = pts[j]
+            K[e] += sign * px
+            K[ne + e] += sign * py
+        ang = (st.th, st.w, st.al)[order]
+        for col, sign, body in dmov:
+            K[col] += sign * float(ang[body, 0])
+        Px = pxc.tolist() if order == 0 else [0.0] * nb
+        Py = pyc.tolist() if order == 0 else [0.0] * nb
+        for kb, j in pmov:
+            Px[kb], Py[kb] = pts[j]
+        return K, Px, Py
+
     def _known_plan(self, ground: int):
         """:meth:`known`'s terms split once: the ground's points (fixed local vectors) and
         the drivers' offsets as constant rows of ``K`` and ``(Px, Py)`` at order 0 (zero
@@ -485,6 +553,13 @@ class _Angles(_Eqs):
             xs.append(px)
             ys.append(py)
         return xs, ys
+
+    def mtf_list(self) -> list:
+        """:attr:`MTf` as lists of floats (:meth:`reduce` at one position)."""
+        m = getattr(self, "_mtf_list", None)
+        if m is None:
+            m = self._mtf_list = self.MTf.tolist()
+        return m
 
     def wr_list(self) -> list:
         """:attr:`Wr` as lists of floats (the frames' rates at one position)."""

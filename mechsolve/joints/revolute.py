@@ -6,6 +6,7 @@ exerted on ``b`` by ``a`` (``Fx``, ``Fy`` and the magnitude ``F``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -129,6 +130,17 @@ class RevoluteConstraint(Constraint):
         np.maximum(out, np.abs(xa - xb), out=out)
         np.maximum(out, np.abs(ya - yb), out=out)
 
+    def max_residual_one(self, st: State, u) -> float:
+        """:meth:`max_residual_into` at the one position of ``st``, in floats (the same
+        operations as :meth:`State.point`; NaN when a coordinate is)."""
+        if self.sa.ndim != 1 or self.sb.ndim != 1:  # one local vector per position
+            return float(np.max(np.abs(self.residual(st, u))))
+        (xa, ya), (xb, yb) = _point_one(st, self.a, self.sa), _point_one(st, self.b, self.sb)
+        dx, dy = abs(xa - xb), abs(ya - yb)
+        if dx != dx or dy != dy:
+            return math.nan
+        return dx if dx > dy else dy
+
     def jacobian(self, st: State) -> dict[int, np.ndarray]:
         out = {}
         for body, s, sign in ((self.a, self.sa, 1.0), (self.b, self.sb, -1.0)):
@@ -179,3 +191,16 @@ class RevoluteConstraint(Constraint):
         x, y = st.point(self.b, self.sb)
         zero = np.zeros(st.n)
         return [(self.b, x, y, zero, zero, -sg), (self.a, x, y, zero, zero, sg)]
+
+
+def _point_one(st: State, i: int, s: np.ndarray) -> tuple[float, float]:
+    """:meth:`State.point` of a constant local vector ``s`` at the one position of
+    ``st``, in floats."""
+    s0, s1 = float(s[0]), float(s[1])
+    if i == st.nb:
+        return s0, s1
+    x, y = float(st.x[i, 0]), float(st.y[i, 0])
+    if s0 == 0.0 and s1 == 0.0:
+        return x, y
+    c, sn = float(st.c[i, 0]), float(st.s[i, 0])
+    return x + (c * s0 - sn * s1), y + (sn * s0 + c * s1)

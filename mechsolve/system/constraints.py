@@ -39,6 +39,11 @@ class AngleDriverConstraint(Constraint):
     def residual(self, st: State, u) -> np.ndarray:
         return (self.value(st) - u)[None, :]
 
+    def max_residual_one(self, st: State, u) -> float:
+        """``|Phi|`` at the one position of ``st``, in floats."""
+        tb, ta = float(st.th[self.b, 0]), float(st.th[self.a, 0])
+        return abs(tb + self.delta - ta - float(np.asarray(u).reshape(-1)[0]))
+
     def jacobian(self, st: State) -> dict[int, np.ndarray]:
         out = {}
         for body, sign in ((self.a, -1.0), (self.b, 1.0)):
@@ -236,6 +241,20 @@ class ConstraintSystem:
         is slower, as arrays of that size are allocated by mmap, page by page.
         """
         out = np.zeros(st.n)
+        if st.n == 1:  # one position: revolute joints and drivers in floats
+            r = 0.0
+            for c in self.constraints:
+                one = getattr(c, "max_residual_one", None)
+                if one is None:
+                    c.max_residual_into(st, u, out)
+                    continue
+                v = one(st, u)
+                if v != v or v > r:  # NaN kept, as np.maximum keeps it
+                    r = v
+                    if v != v:
+                        break
+            np.maximum(out, r, out=out)
+            return out
         for c in self.constraints:
             c.max_residual_into(st, u, out)
         return out
