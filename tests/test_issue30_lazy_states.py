@@ -1,0 +1,71 @@
+"""Issue 30 (target 2): the one-design sweep and its kinetostatics do only the work that
+something reads, and the trust checks stay, cheaper.
+
+- a pin's reaction magnitude is computed when first read, and is |(Fx, Fy)|;
+- the kinetostatics' test for singular and near-singular positions, now one reduction
+  where a group is far from singular, still finds every such position (and a position
+  where an earlier group failed, NaN in the indicator, is neither).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+import mechsolve as ms
+from mechsolve.core import kinetostatics
+from mechsolve.core.conditioning import NEAR_SINGULAR_INDICATOR, SINGULAR_INDICATOR
+from mechsolve.core.kinetostatics import _Q
+
+FOURBAR = """
+name: four-bar with masses
+ground: {O2: [0, 0], O4: [0.0875, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [0.0265, 0]}, mass: 0.05, uniform_bar: [O2, A]}
+  coupler: {points: {A: [0, 0], B: [0.1056, 0], P: [0.05, 0.02]}, mass: 0.2, uniform_bar: [A, B]}
+  rocker: {points: {O4: [0, 0], B: [0.059, 0]}, mass: 0.11, uniform_bar: [O4, B]}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 3 rad/s, start: 0}
+sweep: {range: 350 deg, steps: 35}
+gravity: 9.81 m/s^2
+loads:
+  F: {force: [1 N, -2 N], at: P}
+"""
+
+
+def test_pin_reaction_magnitude_is_computed_when_read() -> None:
+    res = ms.solve(ms.loads(FOURBAR))
+    for joint in ("O2", "A", "B", "O4"):
+        r = res.reaction(joint)
+        assert isinstance(r, Mapping)
+        assert list(r) == ["Fx", "Fy", "F"] and len(r) == 3
+        assert r._f is None  # nothing has read it yet
+        fx, fy = np.asarray(r["Fx"]), np.asarray(r["Fy"])
+        np.testing.assert_allclose(r["F"], np.hypot(fx, fy), rtol=1e-15, atol=0)
+        assert r["F"] is r["F"]  # computed once
+        assert dict(r).keys() == {"Fx", "Fy", "F"}
+
+
+def test_singular_and_near_singular_positions_are_still_found() -> None:
+    mech = ms.loads(FOURBAR)
+    res = ms.solve(mech)
+    an, sol = res.analysis, res.solution
+    n = len(sol.u)
+    ind = np.array(sol.indicator, float)
+    gi = next(k for k, g in enumerate(an.plan) if g.n_modes == 2)
+    assert ind[gi].min() > NEAR_SINGULAR_INDICATOR  # the sweep itself is far from it
+    ind[gi, 5] = 0.5 * NEAR_SINGULAR_INDICATOR  # near singular
+    ind[gi, 7] = 0.5 * SINGULAR_INDICATOR  # singular
+    ind[gi, 9] = np.nan  # an earlier group failed here: neither
+    acc = _Q(an, sol.state)
+    acc.Q[:] = 1.0
+    lam, singular, _, near = kinetostatics._solve_groups(an, sol.state, acc.Q, ind, sol.ok)
+    label = an.plan[gi].label
+    assert singular == [(7, label)]
+    assert sorted(near) == [5, 7]
+    assert near[5] == ind[gi, 5] and near[7] == ind[gi, 7]
+    # the group's reactions are empty at the singular position only
+    assert np.isnan(lam[7]).any() and np.isfinite(np.delete(lam, [7, 9], axis=0)).all()
+    assert lam.shape == (n, an.system.nc)
