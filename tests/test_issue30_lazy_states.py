@@ -69,3 +69,44 @@ def test_singular_and_near_singular_positions_are_still_found() -> None:
     # the group's reactions are empty at the singular position only
     assert np.isnan(lam[7]).any() and np.isfinite(np.delete(lam, [7, 9], axis=0)).all()
     assert lam.shape == (n, an.system.nc)
+
+
+def test_constants_are_shared_between_states_and_read_only() -> None:
+    from mechsolve.base.state import State
+
+    for n in (4, 3600):
+        a, b = State(2, n), State(3, n)
+        xa, _ = a.point(2, np.array([0.0875, -0.01]))
+        xb, _ = b.point(3, np.array([0.0875, 0.5]))
+        assert xa is xb and not xa.flags.writeable
+        np.testing.assert_array_equal(xa, np.full(n, 0.0875))
+
+
+def test_discriminant_is_computed_once_per_state() -> None:
+    res = ms.solve(ms.loads(FOURBAR), forces=False)
+    an = res.analysis
+    g = next(g for g in an.plan if g.n_modes == 2)
+    st = res.solution.state
+    H, dH = g.disc(st)
+    assert g.disc(st)[1] is dH  # the start's check and the branch analysis share it
+    # the discriminant is sin^2 of the transmission angle (B on the coupler at M)
+    th3, th4 = st.th[g.b1], st.th[g.b2]
+    np.testing.assert_allclose(H, np.sin(th4 - th3) ** 2, rtol=0, atol=1e-12)
+
+
+def test_analysis_grid_points_only_where_samples_are_further_apart_than_its_step() -> None:
+    from mechsolve.base.state import State
+    from mechsolve.core.branches import EVENT_STEP, _Context
+
+    for step_deg, extra in ((1.9, 0), (1.0, 0), (2.5, 1), (5.0, 2)):
+        text = FOURBAR.replace("steps: 35", f"step: {step_deg} deg")
+        an = ms.solve(ms.loads(text), forces=False).analysis
+        u, _ = an.sweep_values(0.0)
+        ctx = _Context(an, State(an.system.nb, len(u)), u, None, {}, {})
+        ctx.build_grid(EVENT_STEP)
+        if extra == 0:
+            assert ctx.grid is None
+        else:
+            ug, at_sample, _, _ = ctx.grid
+            assert np.max(np.abs(np.diff(ug))) <= EVENT_STEP * (1 + 1e-12)
+            assert np.count_nonzero(~at_sample) >= extra * (len(u) - 2)

@@ -18,6 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 
+# read-only constant arrays shared by all states, by (value, length): see State._const
+_CONSTS: dict[tuple[float, int], np.ndarray] = {}
+
 
 class State:
     """Poses, velocities and accelerations of all bodies over N positions."""
@@ -129,11 +132,18 @@ class State:
         key = (v, n)
         arr = self.consts.get(key)
         if arr is None:
-            if n <= 8:  # a few positions: a plain array is cheaper to compute with than a view
-                arr = np.full(n, float(v))
-                arr.flags.writeable = False  # shared, as the views are
-            else:
-                arr = np.broadcast_to(np.float64(v), (n,))
+            # read-only, so one array per value and length serves every state (a
+            # broadcast view costs some microseconds to make: several per solve)
+            arr = _CONSTS.get(key)
+            if arr is None:
+                if n <= 8:  # a few positions: a plain array is cheaper to compute with
+                    arr = np.full(n, float(v))
+                    arr.flags.writeable = False  # shared, as the views are
+                else:
+                    arr = np.broadcast_to(np.float64(v), (n,))
+                if len(_CONSTS) >= 512:  # bounded: the local points of the models in use
+                    _CONSTS.clear()
+                _CONSTS[key] = arr
             self.consts[key] = arr
         return arr
 

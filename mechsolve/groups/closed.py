@@ -340,15 +340,19 @@ class RRR(Group):
 
     def disc(self, st: State):
         """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2,
-        which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close)."""
-        dx, dy, D2 = self.ends(st)[4:]
-        _, _, dvx, dvy = self._dv(st)
-        H = self._triangle(st)[3]
-        L1s, L2s = self.L1**2, self.L2**2
-        dD2 = dx * dvx + dy * dvy  # half the rate of D^2
-        dH = ((L1s + L2s) - D2) * dD2
-        dH *= 1.0 / (L1s * L2s)
-        return H, dH
+        which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close).
+        Cached for the state: the branch analysis and the start's checks read it."""
+        c = self.cache(st)
+        if "disc" not in c:
+            dx, dy, D2 = self.ends(st)[4:]
+            _, _, dvx, dvy = self._dv(st)
+            H = self._triangle(st)[3]
+            L1s, L2s = self.L1**2, self.L2**2
+            dD2 = dx * dvx + dy * dvy  # half the rate of D^2
+            dH = ((L1s + L2s) - D2) * dD2
+            dH *= 1.0 / (L1s * L2s)
+            c["disc"] = (H, dH)
+        return c["disc"]
 
     def _g(self, st: State):
         c = self.cache(st)
