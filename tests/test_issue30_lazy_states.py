@@ -110,3 +110,41 @@ def test_analysis_grid_points_only_where_samples_are_further_apart_than_its_step
             ug, at_sample, _, _ = ctx.grid
             assert np.max(np.abs(np.diff(ug))) <= EVENT_STEP * (1 + 1e-12)
             assert np.count_nonzero(~at_sample) >= extra * (len(u) - 2)
+
+
+def test_positions_cached_by_a_dyad_survive_the_scaling_of_the_rates() -> None:
+    """The force analysis reads the dyad's ends and link vectors from the positions;
+    turning rates per unit driver angle into time rates changes no position."""
+    from mechsolve.core.evaluate import states
+    from mechsolve.core.sweep import Analysis
+
+    an = Analysis(ms.loads(FOURBAR))
+    u, _ = an.sweep_values(0.0)
+    sol = states(an, u)
+    g = next(g for g in an.plan if g.n_modes == 2)
+    st = sol.state
+    assert g._ctoken == st.token and set(g.cache(st)) == {"ends", "g"}
+    px, py, qx, qy, *_ = g.ends(st)
+    g1x, g1y, g2x, g2y = g._g(st)
+    mx, my = st.point(g.b1, g.sM1)  # M on link 1 and on link 2, from the poses
+    nx, ny = st.point(g.b2, g.sM2)
+    for a, b in ((px + g1x, mx), (py + g1y, my), (qx + g2x, nx), (qy + g2y, ny)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)
+    # the rates are the time rates (speed 3 rad/s): the dropped rate terms are not reused
+    vpx, vpy, dvx, dvy = g._dv(st)
+    vqx, vqy = st.point_velocity(g.k2, g.sQk)
+    np.testing.assert_allclose(dvx, vqx - vpx, rtol=0, atol=0)
+    np.testing.assert_allclose(np.hypot(vpx, vpy), 3.0 * 0.0265, rtol=1e-13)
+
+
+def test_no_separating_force_pass_without_a_pair_that_has_one(monkeypatch) -> None:
+    made = []
+    init = _Q.__init__
+
+    def counting(self, an, st):
+        made.append(1)
+        init(self, an, st)
+
+    monkeypatch.setattr(_Q, "__init__", counting)
+    ms.solve(ms.loads(FOURBAR))
+    assert len(made) == 1  # the loads' own accumulator only

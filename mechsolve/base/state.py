@@ -158,9 +158,13 @@ class State:
             return c * s0 - sn * s1, sn * s0 + c * s1
         if i == self.nb:
             return self._const(s[0], idx), self._const(s[1], idx)
-        if s[0] == 0.0 and s[1] == 0.0:
-            z = self._const(0.0, idx)
-            return z, z
+        if s[1] == 0.0:  # along the frame's x axis (the usual frame: x along the link)
+            if s[0] == 0.0:
+                z = self._const(0.0, idx)
+                return z, z
+            # A s = (c s0, sn s0): the products by zero dropped (the same values, but
+            # for the sign of a zero)
+            return self.c[i, idx] * s[0], self.s[i, idx] * s[0]
         c = self.c[i, idx]
         sn = self.s[i, idx]
         return c * s[0] - sn * s[1], sn * s[0] + c * s[1]

@@ -191,17 +191,17 @@ def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) ->
     added: the pairs' own rows get nothing from it (the force is normal to their motion).
     """
     sys_ = an.system
-    extra = _Q(an, st)
-    found = False
+    extra = None  # made when a pair has a separating force (most models have none)
     for r in sys_.rows:
         c = r.constraint
         loads = c.separating(st, lam[:, r.start : r.start + c.m])
         for b, px, py, fx, fy in loads or ():
             if b == sys_.nb:
                 continue
-            found = True
+            if extra is None:
+                extra = _Q(an, st)
             extra.force(b, None, fx, fy, (px - st.x[b], py - st.y[b]))
-    if not found:
+    if extra is None:
         return lam
     lam2 = _solve_groups(an, st, extra.Q, sol.indicator, sol.ok, own=True)[0]
     return lam + lam2

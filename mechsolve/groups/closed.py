@@ -199,6 +199,8 @@ class RRR(Group):
 
     kind = "RRR"
     n_modes = 2
+    # kept for the force analysis: P, Q and Q - P, M - P and M - Q
+    POSITION_KEYS = ("ends", "g")
 
     def __init__(self, b1, b2, j1, j2, j3, names):
         # j1: b1-known at P, j2: b1-b2 at M, j3: b2-known at Q
