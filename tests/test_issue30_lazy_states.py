@@ -148,3 +148,19 @@ def test_no_separating_force_pass_without_a_pair_that_has_one(monkeypatch) -> No
     monkeypatch.setattr(_Q, "__init__", counting)
     ms.solve(ms.loads(FOURBAR))
     assert len(made) == 1  # the loads' own accumulator only
+
+
+def test_rates_at_singular_positions_still_find_them() -> None:
+    """The kinematics' check for (near-)singular positions is one reduction where a
+    group is far from singular; an indicator below the thresholds is still found."""
+    res = ms.solve(ms.loads(FOURBAR), forces=False)
+    an, sol = res.analysis, res.solution
+    gi = next(k for k, g in enumerate(an.plan) if g.n_modes == 2)
+    assert an._singular_positions(sol)[0] == {}
+    sol.indicator = np.array(sol.indicator, float)
+    sol.indicator[gi, 4] = 0.5 * NEAR_SINGULAR_INDICATOR
+    sol.indicator[gi, 6] = 0.5 * SINGULAR_INDICATOR
+    sol.indicator[gi, 8] = np.nan
+    sing_by, _, deep = an._singular_positions(sol)
+    assert sing_by == {4: [gi], 6: [gi]}
+    assert list(np.flatnonzero(deep)) == [6]

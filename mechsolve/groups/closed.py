@@ -397,6 +397,7 @@ class RRR(Group):
         mx, my = px + g1x, py + g1y
         f1x, f1y, t1 = resultant_about(st, R, self.b1, mx, my)
         f2x, f2y, t2 = resultant_about(st, R, self.b2, mx, my)
+        del mx, my  # (each temporary freed once read: a lower peak of memory)
         # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta.
         # Written in place (t1, t2 are resultant_about's own arrays), the same operations
         # in the same order as alpha = -t1 - (g1 x f1), beta = t2 + (g2 x f2),
@@ -409,6 +410,7 @@ class RRR(Group):
         np.divide(1.0, inv, out=inv)
         fmx = _combine(alpha, g2x, g1x, beta, inv)
         fmy = _combine(alpha, g2y, g1y, beta, inv)
+        del alpha, beta, inv, t1, t2
         fpx, fpy = fmx - f1x, fmy - f1y  # on link 1 at P
         fqx = np.negative(fmx)  # on link 2 at Q: -F_M - f2
         fqx -= f2x
