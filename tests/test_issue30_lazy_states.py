@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
+import pytest
 
 import mechsolve as ms
 from mechsolve.core import kinetostatics
@@ -164,3 +165,29 @@ def test_rates_at_singular_positions_still_find_them() -> None:
     sing_by, _, deep = an._singular_positions(sol)
     assert sing_by == {4: [gi], 6: [gi]}
     assert list(np.flatnonzero(deep)) == [6]
+
+
+@pytest.mark.parametrize("written", [0, 5, 8, 11])
+def test_state_rows_not_written_by_the_groups_start_at_zero(written) -> None:
+    """Rows the closed-form groups fill whole are not zeroed first; the ground's rows
+    (at rest, the identity frame) and the arrays no group writes are."""
+    from mechsolve.base.state import State
+
+    st = State(3, 50, written)
+    g = st.nb
+    for k, name in enumerate(State.ARRAYS):
+        arr = getattr(st, name)
+        assert np.all(arr[g] == (1.0 if name == "c" else 0.0))
+        if k >= written:
+            assert not np.any(arr[:g])
+
+
+def test_positions_only_sweep_has_zero_rates() -> None:
+    from mechsolve.core.sweep import Analysis
+
+    an = Analysis(ms.loads(FOURBAR))
+    sol = an.solve(np.array([0.3]), velocity=False, acceleration=False)
+    st = sol.state
+    assert np.all(np.isfinite(st.block[:5])) and not np.any(st.block[5:])
+    sol = an.solve(np.array([0.3]), velocity=True, acceleration=False)
+    assert np.all(np.isfinite(sol.state.block[:8])) and not np.any(sol.state.block[8:])
