@@ -540,7 +540,7 @@ def _finish_lazy_start(
     an: Analysis, start: StartAssembly, st: State, conds: _PendingConditions
 ) -> None:
     """Keep the start's state, and check the assembly conditions no group decided."""
-    start.state = st.take([0])
+    start.state = st.take(slice(0, 1))  # (a copy of the first column: no fancy index)
     start.group_modes = list(start.modes)
     left = conds.remaining()
     if not left:  # every condition chose a branch (the usual case): nothing to check

@@ -9,6 +9,8 @@ velocities (accelerations) by projection, which is Cramer's rule written out:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mechsolve.base.state import State
@@ -212,8 +214,12 @@ class RRR(Group):
         self.sM1, self.sM2 = _local(j2, b1), _local(j2, b2)
         self.L1 = length(diff(self.sM1, self.sP1))
         self.L2 = length(diff(self.sM2, self.sQ2))
-        self.Lmax2 = np.maximum(self.L1, self.L2) ** 2
-        self.equal_arms = bool(np.any(np.abs(self.L1 - self.L2) <= 1e-12 * np.sqrt(self.Lmax2)))
+        if isinstance(self.L1, float) and isinstance(self.L2, float):  # (in floats: 4 us less)
+            self.Lmax2 = max(self.L1, self.L2) ** 2
+            self.equal_arms = abs(self.L1 - self.L2) <= 1e-12 * math.sqrt(self.Lmax2)
+        else:  # a batch of designs: one length per position
+            self.Lmax2 = np.maximum(self.L1, self.L2) ** 2
+            self.equal_arms = bool(np.any(np.abs(self.L1 - self.L2) <= 1e-12 * np.sqrt(self.Lmax2)))
         self.direction = 1.0  # the sweep's direction along the driver; the analysis sets it
         super().__init__([b1, b2], [j1, j2, j3], names)
 
