@@ -191,3 +191,17 @@ def test_positions_only_sweep_has_zero_rates() -> None:
     assert np.all(np.isfinite(st.block[:5])) and not np.any(st.block[5:])
     sol = an.solve(np.array([0.3]), velocity=True, acceleration=False)
     assert np.all(np.isfinite(sol.state.block[:8])) and not np.any(sol.state.block[8:])
+
+
+def test_a_point_velocity_from_the_arm_already_rotated_is_the_same() -> None:
+    res = ms.solve(ms.loads(FOURBAR), forces=False)
+    st = res.solution.state
+    b = res.analysis.system.index["coupler"]
+    s = np.array([0.05, 0.02])
+    arm = st.rotated(b, s)
+    for got, want in zip(st.point_velocity(b, s, arm=arm), st.point_velocity(b, s)):
+        np.testing.assert_array_equal(got, want)
+    # and the load's power is F . v_P, with v_P from the coupler's motion
+    f = ms.solve(ms.loads(FOURBAR)).forces
+    vx, vy = st.point_velocity(b, s)
+    np.testing.assert_allclose(f.power_loads, 1.0 * vx - 2.0 * vy, rtol=1e-14, atol=1e-16)

@@ -188,14 +188,15 @@ class State:
         return self.x[i, idx] + rx, self.y[i, idx] + ry
 
     def point_velocity(
-        self, i: int, s: np.ndarray, idx=slice(None)
+        self, i: int, s: np.ndarray, idx=slice(None), arm=None
     ) -> tuple[np.ndarray, np.ndarray]:
+        """``arm``: ``rotated(i, s, idx)`` when the caller has it already."""
         if i == self.nb:
             z = self._const(0.0, idx)
             return z, z
         if s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0:
             return self.vx[i, idx], self.vy[i, idx]
-        rx, ry = self.rotated(i, s, idx)
+        rx, ry = self.rotated(i, s, idx) if arm is None else arm
         w = self.w[i, idx]
         return self.vx[i, idx] - w * ry, self.vy[i, idx] + w * rx
 

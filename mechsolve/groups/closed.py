@@ -96,14 +96,20 @@ class DriverLink(Group):
         fx, fy, tp = resultant_about(st, R, self.b, px, py)
         # on the link: F_P + F = 0 and M_driver + T_P = 0
         out[self.pin] = pin_multiplier(self.pin, self.b, -fx, -fy)
-        m = -tp if self.drv.b == self.b else tp  # the torque on the driver's second link
-        out[self.drv] = (-m,)
+        drv, nb = self.drv, st.nb
+        # m, the torque on the driver's second link, is -tp when that link is this one;
+        # its multiplier is -m (tp itself then: -(-tp) is tp exactly)
+        out[drv] = (tp,) if drv.b == self.b else (np.negative(tp),)
         add_force(st, R, self.k, px, py, fx, fy)
         # the driver applies m to its second link and -m to its first
-        if self.drv.a != st.nb and self.drv.a != self.b:
-            R[3 * self.drv.a + 2] -= m
-        if self.drv.b != st.nb and self.drv.b != self.b:
-            R[3 * self.drv.b + 2] += m
+        on_a = drv.a != nb and drv.a != self.b
+        on_b = drv.b != nb and drv.b != self.b
+        if on_a or on_b:
+            m = -tp if drv.b == self.b else tp
+            if on_a:
+                R[3 * drv.a + 2] -= m
+            if on_b:
+                R[3 * drv.b + 2] += m
 
 
 class DrivenSlider(Group):
