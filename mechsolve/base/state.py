@@ -18,6 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 
+# read-only constant arrays shared by all states, by (value, length): see State._const
+_CONSTS: dict[tuple[float, int], np.ndarray] = {}
+
 
 class State:
     """Poses, velocities and accelerations of all bodies over N positions."""
@@ -49,14 +52,23 @@ class State:
         State._count += 1
         return State._count
 
-    def __init__(self, nb: int, n: int) -> None:
+    def __init__(self, nb: int, n: int, written: int = 0) -> None:
+        """``written``: how many of the arrays, in the order of :attr:`ARRAYS`, the
+        caller fills for every body at every position (the closed-form groups write
+        whole rows): those rows are not zeroed first. The ground's rows always are."""
         self.nb = nb
         self.n = n
         State._count += 1
         self.token = State._count  # tells group caches which state they belong to
         self.consts: dict = {}
         # one block for all arrays: a single zeroed allocation is far cheaper than eleven
-        self._unpack(np.zeros((11, nb + 1, n)))
+        if written <= 0:
+            block = np.zeros((11, nb + 1, n))
+        else:  # (zeroing a block of 3600 positions costs some 30 us: not for rows written)
+            block = np.empty((11, nb + 1, n))
+            block[:written, nb] = 0.0
+            block[written:] = 0.0
+        self._unpack(block)
         self.c[nb] = 1.0  # the ground's frame; the bodies' are set by their groups
 
     def _unpack(self, block: np.ndarray) -> None:
@@ -129,11 +141,18 @@ class State:
         key = (v, n)
         arr = self.consts.get(key)
         if arr is None:
-            if n <= 8:  # a few positions: a plain array is cheaper to compute with than a view
-                arr = np.full(n, float(v))
-                arr.flags.writeable = False  # shared, as the views are
-            else:
-                arr = np.broadcast_to(np.float64(v), (n,))
+            # read-only, so one array per value and length serves every state (a
+            # broadcast view costs some microseconds to make: several per solve)
+            arr = _CONSTS.get(key)
+            if arr is None:
+                if n <= 8:  # a few positions: a plain array is cheaper to compute with
+                    arr = np.full(n, float(v))
+                    arr.flags.writeable = False  # shared, as the views are
+                else:
+                    arr = np.broadcast_to(np.float64(v), (n,))
+                if len(_CONSTS) >= 512:  # bounded: the local points of the models in use
+                    _CONSTS.clear()
+                _CONSTS[key] = arr
             self.consts[key] = arr
         return arr
 
@@ -148,9 +167,13 @@ class State:
             return c * s0 - sn * s1, sn * s0 + c * s1
         if i == self.nb:
             return self._const(s[0], idx), self._const(s[1], idx)
-        if s[0] == 0.0 and s[1] == 0.0:
-            z = self._const(0.0, idx)
-            return z, z
+        if s[1] == 0.0:  # along the frame's x axis (the usual frame: x along the link)
+            if s[0] == 0.0:
+                z = self._const(0.0, idx)
+                return z, z
+            # A s = (c s0, sn s0): the products by zero dropped (the same values, but
+            # for the sign of a zero)
+            return self.c[i, idx] * s[0], self.s[i, idx] * s[0]
         c = self.c[i, idx]
         sn = self.s[i, idx]
         return c * s[0] - sn * s[1], sn * s[0] + c * s[1]
@@ -165,14 +188,15 @@ class State:
         return self.x[i, idx] + rx, self.y[i, idx] + ry
 
     def point_velocity(
-        self, i: int, s: np.ndarray, idx=slice(None)
+        self, i: int, s: np.ndarray, idx=slice(None), arm=None
     ) -> tuple[np.ndarray, np.ndarray]:
+        """``arm``: ``rotated(i, s, idx)`` when the caller has it already."""
         if i == self.nb:
             z = self._const(0.0, idx)
             return z, z
         if s.ndim == 1 and s[0] == 0.0 and s[1] == 0.0:
             return self.vx[i, idx], self.vy[i, idx]
-        rx, ry = self.rotated(i, s, idx)
+        rx, ry = self.rotated(i, s, idx) if arm is None else arm
         w = self.w[i, idx]
         return self.vx[i, idx] - w * ry, self.vy[i, idx] + w * rx
 

@@ -87,7 +87,10 @@ class _Context:
         n = len(u)
         if n < 2:
             return
-        extra = np.maximum(np.ceil(np.abs(np.diff(u)) / step).astype(int) - 1, 0)
+        gaps = np.abs(np.diff(u))
+        if not (gaps > step).any():  # every gap is within the step: no point to add
+            return
+        extra = np.maximum(np.ceil(gaps / step).astype(int) - 1, 0)
         if not extra.any():
             return
         counts = extra + 1

@@ -102,10 +102,13 @@ def states(
         order[np.r_[ahead, back]] = np.arange(n)
         out = _take(_concat(parts), order)
         out.u = u
+    token = out.state.token
     if constant:
         scale_rates(out.state, np.float64(an.speed), np.float64(0.0), acceleration)
     else:
         scale_rates(out.state, ud, udd, acceleration)
+    for g in an.plan:  # the groups' results from the positions alone stay (for the forces)
+        g.rates_rescaled(token, out.state.token)
     out.ud, out.udd = ud, udd
     out.has_velocity, out.has_acceleration = velocity, velocity and acceleration
     if t is None:

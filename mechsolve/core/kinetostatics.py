@@ -191,17 +191,17 @@ def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) ->
     added: the pairs' own rows get nothing from it (the force is normal to their motion).
     """
     sys_ = an.system
-    extra = _Q(an, st)
-    found = False
+    extra = None  # made when a pair has a separating force (most models have none)
     for r in sys_.rows:
         c = r.constraint
         loads = c.separating(st, lam[:, r.start : r.start + c.m])
         for b, px, py, fx, fy in loads or ():
             if b == sys_.nb:
                 continue
-            found = True
+            if extra is None:
+                extra = _Q(an, st)
             extra.force(b, None, fx, fy, (px - st.x[b], py - st.y[b]))
-    if not found:
+    if extra is None:
         return lam
     lam2 = _solve_groups(an, st, extra.Q, sol.indicator, sol.ok, own=True)[0]
     return lam + lam2
@@ -248,11 +248,16 @@ def _solve_groups(
         g = an.plan[gi]
         if hasattr(g, "forces") and not isinstance(g, NewtonGroup):
             out: dict = {}
-            ind = indicator[gi] if len(indicator) > gi else np.ones(n)
-            sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
-            close = np.isfinite(ind) & (ind <= NEAR_SINGULAR_INDICATOR) & solved
-            near = np.where(close, np.minimum(near, ind), near)
-            any_sing = bool(sing.any())
+            ind = indicator[gi] if len(indicator) > gi else None
+            # one reduction where the group is far from singular everywhere (the usual
+            # case; a NaN in the indicator makes the minimum NaN: the full test below)
+            if ind is None or not n or ind.min() > NEAR_SINGULAR_INDICATOR:
+                sing, any_sing = None, False
+            else:
+                sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
+                close = np.isfinite(ind) & (ind <= NEAR_SINGULAR_INDICATOR) & solved
+                near = np.where(close, np.minimum(near, ind), near)
+                any_sing = bool(sing.any())
             before = R[:, sing].copy() if any_sing else None
             with np.errstate(invalid="ignore", divide="ignore"):
                 g.forces(st, R, out)
@@ -266,7 +271,8 @@ def _solve_groups(
                 r0 = row_of[id(c)]
                 for k, v in enumerate(comps):
                     lam[:, r0 + k] = np.where(sing, np.nan, v) if any_sing else v
-            singular += [(int(i), g.label) for i in np.flatnonzero(sing & solved)]
+            if any_sing:
+                singular += [(int(i), g.label) for i in np.flatnonzero(sing & solved)]
             continue
         J, blocks = group_block(g, st)
         m = J.shape[1]

@@ -356,8 +356,10 @@ def apply_loads(
                 if load.frame == "link":
                     fx, fy = st.rotated(b, np.array(load.force))
                 fx, fy = fx * f, fy * f
-                acc.force(b, s, fx, fy)
-                vx, vy = st.point_velocity(b, s)
+                # the point's arm, once for its moment and its velocity
+                r = None if b == nb else st.rotated(b, np.asarray(s, float))
+                acc.force(b, s, fx, fy, r)
+                vx, vy = st.point_velocity(b, s, arm=r)
                 power_loads += fx * vx + fy * vy
             elif isinstance(load, Torque):
                 b = sys_.index[load.link]
@@ -376,9 +378,10 @@ def apply_loads(
             elif isinstance(load, Damper) and load.drag is not None:
                 b = sys_.index[load.drag[0]]
                 s = an.mech.local_point(*load.drag)
-                vx, vy = st.point_velocity(b, s)
+                r = None if b == nb else st.rotated(b, np.asarray(s, float))
+                vx, vy = st.point_velocity(b, s, arm=r)
                 c = load.coefficient * f
-                acc.force(b, s, -c * vx, -c * vy)
+                acc.force(b, s, -c * vx, -c * vy, r)
                 power_loads += -c * (vx * vx + vy * vy)
             else:  # spring or damper between two points
                 (la, pa), (lb, pb) = load.ends

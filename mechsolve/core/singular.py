@@ -124,6 +124,8 @@ class SingularRates:
         deep = np.zeros(n, bool)  # singular to rounding: no value but a limit
         for gi, g in enumerate(self.plan):
             if g.n_modes == 2 and gi < len(ind):
+                if not n or ind[gi].min() > NEAR_SINGULAR_INDICATOR:
+                    continue  # far from singular everywhere (a NaN: the full test)
                 where = ind[gi] <= NEAR_SINGULAR_INDICATOR
                 deep |= ind[gi] <= SINGULAR_INDICATOR
             elif isinstance(g, NewtonGroup):

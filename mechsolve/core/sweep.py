@@ -299,10 +299,14 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             conds = _PendingConditions(self, self.mech.assembly.conditions)
         elif start is None:
             start = self.assemble(float(u[0]))
-        st = State(self.system.nb, n)
-        unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
         analyse = near is None and n > 1
         derivs = velocity or acceleration or analyse
+        # closed-form groups write whole rows of their bodies: positions, and the rates
+        # computed (see _solve_groups); a Newton group may leave rows to the zero start
+        closed = not any(isinstance(g, NewtonGroup) for g in self.plan)
+        written = (5 + 3 * derivs + 3 * (derivs and acceleration)) if closed else 0
+        st = State(self.system.nb, n, written)
+        unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
         q_start, flips = self._continued_from(start, near, follow)
         ctx = self._context(st, u, start, flips, q_start, near is None and follow is None, analyse)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -536,7 +540,7 @@ def _finish_lazy_start(
     an: Analysis, start: StartAssembly, st: State, conds: _PendingConditions
 ) -> None:
     """Keep the start's state, and check the assembly conditions no group decided."""
-    start.state = st.take([0])
+    start.state = st.take(slice(0, 1))  # (a copy of the first column: no fancy index)
     start.group_modes = list(start.modes)
     left = conds.remaining()
     if not left:  # every condition chose a branch (the usual case): nothing to check

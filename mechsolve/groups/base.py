@@ -76,6 +76,19 @@ class Group:
             self._cache = {}
         return self._cache
 
+    # the entries of the cache that depend on the positions alone (see rates_rescaled)
+    POSITION_KEYS: tuple[str, ...] = ()
+
+    def rates_rescaled(self, old: int, new: int) -> None:
+        """The state of token ``old`` had its rates rescaled in place (time derivatives
+        from rates per unit driver coordinate), and is now token ``new``: the cached
+        results that depend on its positions alone stay valid, the others are dropped."""
+        if getattr(self, "_ctoken", None) != old:
+            return
+        c = self._cache
+        self._cache = {k: c[k] for k in self.POSITION_KEYS if k in c}
+        self._ctoken = new
+
     def disc(self, st: State) -> tuple[np.ndarray, np.ndarray] | None:
         """The group's discriminant and its rate, for branch groups (``n_modes == 2``).
 

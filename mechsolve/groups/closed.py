@@ -9,6 +9,8 @@ velocities (accelerations) by projection, which is Cramer's rule written out:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mechsolve.base.state import State
@@ -94,14 +96,20 @@ class DriverLink(Group):
         fx, fy, tp = resultant_about(st, R, self.b, px, py)
         # on the link: F_P + F = 0 and M_driver + T_P = 0
         out[self.pin] = pin_multiplier(self.pin, self.b, -fx, -fy)
-        m = -tp if self.drv.b == self.b else tp  # the torque on the driver's second link
-        out[self.drv] = (-m,)
+        drv, nb = self.drv, st.nb
+        # m, the torque on the driver's second link, is -tp when that link is this one;
+        # its multiplier is -m (tp itself then: -(-tp) is tp exactly)
+        out[drv] = (tp,) if drv.b == self.b else (np.negative(tp),)
         add_force(st, R, self.k, px, py, fx, fy)
         # the driver applies m to its second link and -m to its first
-        if self.drv.a != st.nb and self.drv.a != self.b:
-            R[3 * self.drv.a + 2] -= m
-        if self.drv.b != st.nb and self.drv.b != self.b:
-            R[3 * self.drv.b + 2] += m
+        on_a = drv.a != nb and drv.a != self.b
+        on_b = drv.b != nb and drv.b != self.b
+        if on_a or on_b:
+            m = -tp if drv.b == self.b else tp
+            if on_a:
+                R[3 * drv.a + 2] -= m
+            if on_b:
+                R[3 * drv.b + 2] += m
 
 
 class DrivenSlider(Group):
@@ -199,6 +207,8 @@ class RRR(Group):
 
     kind = "RRR"
     n_modes = 2
+    # kept for the force analysis: P, Q and Q - P, M - P and M - Q
+    POSITION_KEYS = ("ends", "g")
 
     def __init__(self, b1, b2, j1, j2, j3, names):
         # j1: b1-known at P, j2: b1-b2 at M, j3: b2-known at Q
@@ -210,8 +220,12 @@ class RRR(Group):
         self.sM1, self.sM2 = _local(j2, b1), _local(j2, b2)
         self.L1 = length(diff(self.sM1, self.sP1))
         self.L2 = length(diff(self.sM2, self.sQ2))
-        self.Lmax2 = np.maximum(self.L1, self.L2) ** 2
-        self.equal_arms = bool(np.any(np.abs(self.L1 - self.L2) <= 1e-12 * np.sqrt(self.Lmax2)))
+        if isinstance(self.L1, float) and isinstance(self.L2, float):  # (in floats: 4 us less)
+            self.Lmax2 = max(self.L1, self.L2) ** 2
+            self.equal_arms = abs(self.L1 - self.L2) <= 1e-12 * math.sqrt(self.Lmax2)
+        else:  # a batch of designs: one length per position
+            self.Lmax2 = np.maximum(self.L1, self.L2) ** 2
+            self.equal_arms = bool(np.any(np.abs(self.L1 - self.L2) <= 1e-12 * np.sqrt(self.Lmax2)))
         self.direction = 1.0  # the sweep's direction along the driver; the analysis sets it
         super().__init__([b1, b2], [j1, j2, j3], names)
 
@@ -340,15 +354,19 @@ class RRR(Group):
 
     def disc(self, st: State):
         """``sin^2`` of the angle at M: 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2,
-        which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close)."""
-        dx, dy, D2 = self.ends(st)[4:]
-        _, _, dvx, dvy = self._dv(st)
-        H = self._triangle(st)[3]
-        L1s, L2s = self.L1**2, self.L2**2
-        dD2 = dx * dvx + dy * dvy  # half the rate of D^2
-        dH = ((L1s + L2s) - D2) * dD2
-        dH *= 1.0 / (L1s * L2s)
-        return H, dH
+        which is ``(h / D)^2 D^4 / (L1 L2)^2`` (negative where the loop cannot close).
+        Cached for the state: the branch analysis and the start's checks read it."""
+        c = self.cache(st)
+        if "disc" not in c:
+            dx, dy, D2 = self.ends(st)[4:]
+            _, _, dvx, dvy = self._dv(st)
+            H = self._triangle(st)[3]
+            L1s, L2s = self.L1**2, self.L2**2
+            dD2 = dx * dvx + dy * dvy  # half the rate of D^2
+            dH = ((L1s + L2s) - D2) * dD2
+            dH *= 1.0 / (L1s * L2s)
+            c["disc"] = (H, dH)
+        return c["disc"]
 
     def _g(self, st: State):
         c = self.cache(st)
@@ -391,6 +409,7 @@ class RRR(Group):
         mx, my = px + g1x, py + g1y
         f1x, f1y, t1 = resultant_about(st, R, self.b1, mx, my)
         f2x, f2y, t2 = resultant_about(st, R, self.b2, mx, my)
+        del mx, my  # (each temporary freed once read: a lower peak of memory)
         # e1 = P - M = -g1, e2 = Q - M = -g2; e1 x F_M = alpha, e2 x F_M = beta.
         # Written in place (t1, t2 are resultant_about's own arrays), the same operations
         # in the same order as alpha = -t1 - (g1 x f1), beta = t2 + (g2 x f2),
@@ -403,6 +422,7 @@ class RRR(Group):
         np.divide(1.0, inv, out=inv)
         fmx = _combine(alpha, g2x, g1x, beta, inv)
         fmy = _combine(alpha, g2y, g1y, beta, inv)
+        del alpha, beta, inv, t1, t2
         fpx, fpy = fmx - f1x, fmy - f1y  # on link 1 at P
         fqx = np.negative(fmx)  # on link 2 at Q: -F_M - f2
         fqx -= f2x

@@ -27,6 +27,40 @@ from mechsolve.joints.base import (
 )
 
 
+class PinReaction(Mapping):
+    """A pin's reaction components ``Fx``, ``Fy`` and ``F``: the magnitude is computed
+    when first read (a force analysis that reads only some joints' magnitudes, or none,
+    does not pay for the others)."""
+
+    __slots__ = ("fx", "fy", "_f")
+    _KEYS = ("Fx", "Fy", "F")
+
+    def __init__(self, fx: np.ndarray, fy: np.ndarray) -> None:
+        self.fx, self.fy = fx, fy
+        self._f: np.ndarray | None = None
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key == "Fx":
+            return self.fx
+        if key == "Fy":
+            return self.fy
+        if key == "F":
+            if self._f is None:
+                fx, fy = self.fx, self.fy
+                self._f = np.sqrt(fx * fx + fy * fy)
+            return self._f
+        raise KeyError(key)
+
+    def __iter__(self):
+        return iter(self._KEYS)
+
+    def __len__(self) -> int:
+        return 3
+
+    def __repr__(self) -> str:
+        return f"PinReaction({dict(self)!r})"
+
+
 @dataclass
 class PinJoint(Joint):
     """A revolute joint: the point ``point`` of link ``a`` and of link ``b`` coincide.
@@ -169,9 +203,8 @@ class RevoluteConstraint(Constraint):
     def equation_names(self) -> list[str]:
         return [f"{self.name} (x)", f"{self.name} (y)"]
 
-    def reaction(self, st: State, lam: np.ndarray) -> dict[str, np.ndarray]:
-        fx, fy = lam[:, 0], lam[:, 1]
-        return {"Fx": fx, "Fy": fy, "F": np.sqrt(fx * fx + fy * fy)}
+    def reaction(self, st: State, lam: np.ndarray) -> Mapping[str, np.ndarray]:
+        return PinReaction(lam[:, 0], lam[:, 1])
 
     def indeterminate(self, free: np.ndarray) -> set[str]:
         return {k for k, on in zip(("Fx", "Fy"), free) if on} | {"F"}
