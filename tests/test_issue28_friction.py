@@ -166,6 +166,33 @@ def test_block_on_an_incline_matches_its_free_body(speed, push):
     assert np.allclose(fr.friction.ideal_effort, -load @ u, rtol=1e-12)
 
 
+@pytest.mark.parametrize("speed", [0.3, -0.3])
+@pytest.mark.parametrize("push", [(5.0, -10.0), (-20.0, 45.0)])
+def test_guide_force_components_include_the_friction(speed, push):
+    """The guide's force on the block (its Fx, Fy) is the normal force N n and the
+    friction -(f |N| + c |v|) sign(v) u: with it the block's free body balances,
+    weight + push + guide force = 0 (it slides at a constant speed). The components
+    were the normal force alone."""
+    import mechsolve as ms
+
+    f, c = 0.3, 2.0
+    res = ms.solve(ms.loads(incline(f, speed, push, c)))
+    a = math.radians(ALPHA)
+    u = np.array([math.cos(a), math.sin(a)])
+    n = np.array([-math.sin(a), math.cos(a)])
+    load = np.array([push[0], push[1] - 3.0 * G])
+    N = -load @ n
+    friction = -(f * abs(N) + c * abs(speed)) * math.copysign(1.0, speed) * u
+    guide = N * n + friction
+    r = res.forces.reactions["slope"]
+    assert np.allclose(r["Fx"], guide[0], rtol=1e-12, atol=1e-12)
+    assert np.allclose(r["Fy"], guide[1], rtol=1e-12, atol=1e-12)
+    assert np.allclose(r["N"], N, rtol=1e-12)  # N stays the normal force alone
+    # the driving force along the incline completes the free body
+    drive = res.forces.effort * u[:, None]
+    assert np.allclose(load[:, None] + np.array([r["Fx"], r["Fy"]]) + drive, 0.0, atol=1e-10)
+
+
 # -- a wedge (a screw unrolled): efficiency and self-locking ---------------------------
 def wedge(lam: float, f: float, speed: float = 0.1, weight: float = 1000.0) -> str:
     """A wedge driven along the bed lifts a block (on the wedge's face at ``lam`` to the

@@ -116,6 +116,8 @@ def solve_forces(
         lam, fric = _with_friction(an, st, sol, lam, row)
         effort = -lam[:, row]
     reactions = _reactions(an, st, lam)
+    if fric is not None:
+        _add_friction(an, st, reactions, fric)
     ok = sol.ok & np.isfinite(lam.T).all(axis=0)  # lam.T: the rows stored whole
     return ForceResult(
         lam,
@@ -334,6 +336,19 @@ def _min_norm(J: np.ndarray, rhs: np.ndarray, good: np.ndarray):
     null = Vt[:, nn:, :]  # (k, m - nn, m)
     free = np.max(np.abs(null), axis=(0, 1)) > 1e-8
     return x, rc, free
+
+
+def _add_friction(an: Analysis, st, reactions: dict, fric) -> None:
+    """The friction forces added to the reaction components they belong to (a slider's
+    contact force along its line), as each joint says (``friction_reaction``)."""
+    for row in frictional(an):
+        c = row.constraint
+        extra = c.friction_reaction(st, fric.friction[c.name])
+        if extra and c.name in reactions:
+            r = dict(reactions[c.name])
+            for key, value in extra.items():
+                r[key] = r[key] + value
+            reactions[c.name] = r
 
 
 def _reactions(an: Analysis, st, lam: np.ndarray) -> dict[str, dict[str, np.ndarray]]:

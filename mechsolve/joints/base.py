@@ -152,8 +152,15 @@ class Constraint:
     def friction_pull(self, st: State) -> list[tuple]:
         """A unit of friction opposing the slip (N,) at every position, as loads on the
         two bodies ``(body, x, y, fx, fy, torque)`` (a point force at the global point
-        ``(x, y)`` and a torque, arrays over the positions); zero where the slip is."""
+        ``(x, y)`` and a torque, arrays over the positions), the second body's (the one
+        :meth:`reaction` gives the force on) first; zero where the slip is."""
         raise NotImplementedError
+
+    def friction_reaction(self, st: State, t: np.ndarray) -> dict[str, np.ndarray]:
+        """The friction's part of the reaction components :meth:`reaction` names, for a
+        friction of magnitude ``t`` (N,): what the joint's contact carries besides its
+        ideal reaction (a slider's force along the line). None by default."""
+        return {}
 
 
 class Reader(Protocol):

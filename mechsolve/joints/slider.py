@@ -336,6 +336,12 @@ class SliderConstraint(Constraint):
         zero = np.zeros(st.n)
         return [(self.b, x, y, -sg * ux, -sg * uy, zero), (self.a, x, y, sg * ux, sg * uy, zero)]
 
+    def friction_reaction(self, st: State, t: np.ndarray) -> dict[str, np.ndarray]:
+        """The guide's contact force is the normal force and the friction along the line
+        (``N`` stays the normal force alone)."""
+        _, _, _, fx, fy, _ = self.friction_pull(st)[0]
+        return {"Fx": t * fx, "Fy": t * fy}
+
     def guide(self, st: State, scale: float) -> np.ndarray | None:
         if self.a != st.nb:  # a moving guide is drawn with its link
             return None

@@ -156,7 +156,7 @@ def _fmt(x: float) -> str:
 def frame_load(res: Results, about: tuple[float, float] = (0.0, 0.0)):
     """The load on the frame (Fx, Fy in N; moment about ``about`` in N m) from a sweep
     with its force analysis: the sum over the constraints that touch the frame of
-    ``Phi_b^T lambda`` (see the module's docstring)."""
+    ``Phi_b^T lambda`` (see the module's docstring), and the friction of those joints."""
     if res.forces is None:
         raise ValueError("the sweep has no force analysis")
     an = res.analysis
@@ -183,6 +183,17 @@ def frame_load(res: Results, about: tuple[float, float] = (0.0, 0.0)):
                 fx += sx
                 fy += sy
                 mo += px * sy - py * sx
+    fric = res.forces.friction
+    for row in sys_.rows if fric is not None else ():
+        c = row.constraint
+        t = fric.friction.get(c.name)
+        if t is None or nb not in c.bodies:
+            continue
+        for body, x, y, ux, uy, tq in c.friction_pull(st):
+            if body == nb:  # the friction the links' slip puts on the frame
+                fx += t * ux
+                fy += t * uy
+                mo += t * (tq + x * uy - y * ux)
     px, py = about
     mo = mo - (px * fy - py * fx)
     bad = ~res.forces.ok
