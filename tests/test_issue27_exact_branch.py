@@ -170,3 +170,50 @@ def test_every_design_the_check_accepts_is_feasible_on_a_fine_grid(tmp_path):
             assert least > 0 and row <= least + 1e-12  # a true lower bound
         else:
             assert row <= 0
+
+
+def test_synthesis_on_the_near_toggle_chain_prints_the_true_least_angle(tmp_path):
+    # the chain at d = 30.5 traces P (10, 5 on link5); the synthesis varies G's x and
+    # F-G and must find them again; the table's smallest transmission angle is the first
+    # dyad's, acos((b^2 + c^2 - (d - a)^2) / (2 b c)) at crank angle 0, proven from below
+    from click.testing import CliRunner
+
+    import mechsolve as ms
+    from mechsolve.cli.commands.synth import synth
+
+    d = 30.5
+    L1, L2 = lengths_with_margin(d, 5.0)
+    angles = np.arange(0, 360, 45)
+    u = np.radians(angles)
+    ex, ey = coupler_e(u, d)
+    # F left of E -> G: |EF| = L1, |GF| = L2
+    vx, vy = G[0] - ex, G[1] - ey
+    D = np.hypot(vx, vy)
+    along = (L1 * L1 - L2 * L2 + D * D) / (2 * D)
+    h = np.sqrt(L1 * L1 - along * along)
+    fx, fy = ex + (along * vx - h * vy) / D, ey + (along * vy + h * vx) / D
+    th = np.arctan2(ey - fy, ex - fx)
+    px, py = fx + np.cos(th) * 10 - np.sin(th) * 5, fy + np.sin(th) * 10 + np.cos(th) * 5
+    problem = write_problem(tmp_path, d, L1, L2)
+    text = problem.read_text()
+    targets = ", ".join(f"[{x!r}, {y!r}]" for x, y in zip(px.tolist(), py.tolist()))
+    text = text.replace("targets: [[0, 0], [10, 0], [10, 10], [0, 10]]", f"targets: [{targets}]")
+    text = text.replace("timing: [0.0, 90.0, 180.0, 270.0]", f"timing: {angles.tolist()}")
+    text = text.replace(
+        "    links.link6.points.F[0]: [1, 1000]\n",
+        f"    links.link6.points.F[0]: [{L2 - 8!r}, {L2 + 8!r}]\n"
+        f"    ground.G[0]: [{G[0] - 8}, {G[0] + 8}]\n"
+        "  optimise: {max_iter: 60, popsize: 12, top: 1}\n",
+    )
+    problem.write_text(text)
+    out = tmp_path / "d.yaml"
+    r = CliRunner().invoke(synth, [str(problem), "-o", str(out), "--seed", "1"])
+    assert r.exit_code == 0, r.output
+    row = next(line for line in r.output.splitlines() if line.startswith(" *"))
+    printed = float(row.split()[-1])  # deg
+    true = math.degrees(math.acos((B * B + C * C - (d - A) ** 2) / (2 * B * C)))
+    assert true - 2e-4 <= printed <= true + 5e-5, (printed, true)
+    # mechsolve's own run of the written file at a fine step: one branch, every position
+    res = ms.run(out, step=math.radians(0.01))
+    assert res.ok.all()
+    assert not [e for e in res.events if "branch" in str(e.kind)]
