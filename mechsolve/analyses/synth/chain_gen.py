@@ -3,10 +3,10 @@
 A ``path:`` problem whose template is not a four-bar (a Watt or Stephenson six-bar, or
 any chain of dyads the file format expresses) is evaluated through the design batch of
 :mod:`mechsolve.analyses.batch`: the varied numbers of every design of a generation are
-stacked into the model's numbers, one column per design and crank angle, and the
-template's own group plan (driver link, then RRR dyads ...) solves all of them in one
-pass, once per combination of the dyads' assembly branches. Each design keeps the
-combination with the smallest objective among those that meet the constraints.
+stacked into the model's numbers, one column per design, combination of the dyads'
+assembly branches and crank angle, and the template's own group plan (driver link, then
+RRR dyads ...) solves all of them in one pass. Each design keeps the combination with
+the smallest objective among those that meet the constraints.
 
 Constraints (rows >= 0, scipy's feasibility rule, no penalty):
 
