@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -183,7 +184,7 @@ class ChainBatch:
 
         S = X.shape[1]
         u = np.asarray(self.angles(X), float)
-        su, h = self._samples(u)
+        su, _ = self._samples(u)
         allu = np.vstack([u, su]).T  # (S, N + SAMPLES)
         L = allu.shape[1]
         modes = np.ones((len(self.an0.plan), S))
@@ -296,7 +297,33 @@ class ChainBatch:
                 V[c["b2"]] = vq + times(w2, c["r2"])
         return out
 
-    def margins(self, num, modes, su, a, st, ok, cols, tol: float | None = None):
+    def _solve_at(self, num, modes, d: np.ndarray, u: np.ndarray, Cd: list[dict]):
+        """The designs ``d`` (one column each) solved at the crank angles ``u``, as one
+        batch: each dyad's distance D between its outer joints, and its
+        ``H - sin^2(min transmission)`` there (-1 where a group before it is open)."""
+        from mechsolve.analyses.batch import _design_states
+
+        solve = _design_states(self.an0, num[d], modes[:, d], 1.0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            a, st, ok = solve(u[:, None])
+            D = self._distances(a, st, len(ok))
+            v = {}
+            for gi in self.branch_groups:
+                h = self._sin2(C_at(Cd[gi], d), D[gi]) - self.sin2_min
+                v[gi] = np.where(np.isfinite(h), h, -1.0)
+        return D, v
+
+    def margins(
+        self,
+        num: np.ndarray,
+        modes: np.ndarray,
+        su: np.ndarray,
+        a: Any,
+        st: Any,
+        ok: np.ndarray,
+        cols: np.ndarray,
+        tol: float | None = None,
+    ) -> Iterator[np.ndarray]:
         """Each dyad's least ``H - sin^2(min transmission)`` over the whole motion: one
         row per dyad (S,), positive only where proven positive at every crank angle.
 
@@ -308,10 +335,10 @@ class ChainBatch:
         :data:`MAX_HALVINGS` (the row is then the bound, not positive). With ``tol``, the
         intervals whose bound is more than ``tol`` below the least solved value are halved
         too, so that a proven row is the least value to within ``tol`` (below)."""
-        from mechsolve.analyses.batch import _design_states
-
         S, Ls = su.shape
         gs = self.branch_groups
+        if not gs:
+            return
         first = cols.reshape(S, Ls)[:, 0]
         Cd = self._constants(a, first)
         Dc = self._distances(a, st, len(ok))
@@ -350,15 +377,10 @@ class ChainBatch:
             Da = {gi: v[need] for gi, v in Da.items()}
             Db = {gi: v[need] for gi, v in Db.items()}
             um = 0.5 * (ua + ub)
-            solve = _design_states(self.an0, num[d], modes[:, d], 1.0)
-            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                am, stm, okm = solve(um[:, None])
-                Dm = self._distances(am, stm, len(okm))
+            Dm, vm = self._solve_at(num, modes, d, um, Cd)
             for gi in gs:
-                v = self._sin2(C_at(Cd[gi], d), Dm[gi]) - self.sin2_min
-                v = np.where(np.isfinite(v), v, -1.0)
-                np.minimum.at(real[gi], d, v)
-                np.minimum.at(worst, d, v)
+                np.minimum.at(real[gi], d, vm[gi])
+                np.minimum.at(worst, d, vm[gi])
             d = np.concatenate([d, d])
             ua, ub = np.concatenate([ua, um]), np.concatenate([um, ub])
             Da = {gi: np.concatenate([Da[gi], Dm[gi]]) for gi in gs}
