@@ -3,42 +3,60 @@
 A ``path:`` problem whose template is not a four-bar (a Watt or Stephenson six-bar, or
 any chain of dyads the file format expresses) is evaluated through the design batch of
 :mod:`mechsolve.analyses.batch`: the varied numbers of every design of a generation are
-stacked into the model's numbers, one column per design and crank angle, and the
-template's own group plan (driver link, then RRR dyads ...) solves all of them in one
-pass, once per combination of the dyads' assembly branches. Each design keeps the
-combination with the smallest objective among those that meet the constraints.
+stacked into the model's numbers, one column per design, combination of the dyads'
+assembly branches and crank angle, and the template's own group plan (driver link, then
+RRR dyads ...) solves all of them in one pass. Each design keeps the combination with
+the smallest objective among those that meet the constraints.
 
 Constraints (rows >= 0, scipy's feasibility rule, no penalty):
 
 * every dyad closes and keeps its branch over the whole motion (from the first target
-  to the last, or a full turn when ``closed``): the dyad's discriminant (``sin^2`` of the
-  angle at its middle joint, :meth:`mechsolve.groups.closed.RRR.disc`) stays above
-  ``sin^2`` of the minimum transmission angle at 73 crank angles spread over the motion
-  and on the cubic Hermite interpolant between them (a lower bound from its value and
-  rate at both ends, as the design batch bounds a sweep), so that no branch point is
-  passed between samples;
+  to the last, or a full turn when ``closed``), with its transmission angle (the angle at
+  its middle joint) at least ``min_transmission``, proven for every crank angle, not on
+  samples (:meth:`ChainBatch.margins`). A dyad's discriminant ``H = sin^2`` of that angle is
+  a function of the distance ``D`` between its outer joints alone, concave in ``D^2``, so
+  its least value over an interval of crank angles is at one end of ``D``'s range there.
+  ``D`` is Lipschitz in the crank angle with the constant ``V_P + V_Q``, bounds of the
+  outer joints' speeds (per radian of crank), and a dyad whose ``H`` stays above
+  ``H_min > 0`` turns its links at most ``(V_P + V_Q) / (L sqrt(H_min))``: these bounds,
+  carried from the crank (speed 1) through the group plan, give ``D``'s range, hence a
+  lower bound of ``H``, on every interval between two solved crank angles. The motion is
+  solved at 73 crank angles, and every interval whose bound does not prove the margin
+  is halved (the midpoints of all designs and branch combinations solved as one batch)
+  until it is proven or a solved crank angle violates it (a real defect); one still
+  undecided after 24 halvings counts as a violation (a design that grazes the limit is
+  refused, never accepted unproven);
 * without timing: the crank turns less than one turn from the first target to the last
   (the targets are reached in order).
 
-The design written is confirmed by mechsolve's own sweep of the file, whose branch-event
-detection is the final check (:func:`mechsolve.analyses.synth.path_gen.verify_path`).
+The design written is also run by mechsolve's own sweep of the file, with its
+branch-event detection (:func:`mechsolve.analyses.synth.path_gen.verify_path`).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
 from mechsolve.analyses.synth.common import Design
 from mechsolve.base.errors import InputError, MechsolveError
+from mechsolve.groups.closed import RRR, DriverLink
 
 __all__ = ["ChainBatch", "polish", "design", "assembly_lines"]
 
 TWO_PI = 2 * math.pi
-SAMPLES = 73  # crank angles over the motion where the dyads' discriminants are bounded
+SAMPLES = 73  # crank angles solved first over the motion, before the intervals are halved
+MAX_HALVINGS = 24  # an interval still unproven after this many halvings is refused
+MIN_TOL = 1e-7  # the reported smallest sin^2 of a transmission angle is this close (below)
+
+
+def C_at(c: dict, d: np.ndarray) -> dict:
+    """A group's constants (arrays over designs) at the designs ``d``."""
+    return {k: (v[d] if isinstance(v, np.ndarray) else v) for k, v in c.items()}
 
 
 class ChainBatch:
@@ -66,13 +84,19 @@ class ChainBatch:
                 "such as a Watt or Stephenson six-bar)"
             )
         self.an0 = an0
-        from mechsolve.groups.closed import RRR
 
         odd = [g for g in an0.plan if g.n_modes == 2 and not isinstance(g, RRR)]
         if odd:
             raise InputError(
                 f"the template's {odd[0].describe()} is not a revolute dyad: path "
                 "generation on a chain takes revolute dyads (RRR) only"
+            )
+        odd = [g for g in an0.plan if not isinstance(g, (RRR, DriverLink))]
+        if odd:
+            raise InputError(
+                f"the template's {odd[0].describe()} is neither a driven crank nor a "
+                "revolute dyad: path generation on a chain takes a crank driving "
+                "revolute dyads (RRR) only"
             )
         self.base = np.array(_numbers(mech), float)
         self.slots: dict[tuple[str, str], int] = {}
@@ -149,17 +173,25 @@ class ChainBatch:
     # -- one evaluation of every design on every branch combination ----------------------
     def evaluate_combo(self, X: np.ndarray, combo: np.ndarray):
         """(dx, dy) residuals (N, S) and constraint rows (M, S) on branches ``combo``."""
+        X = np.asarray(X, float)
+        combos = np.broadcast_to(np.asarray(combo, float)[:, None], (len(combo), X.shape[1]))
+        return self._evaluate_columns(X, combos)
+
+    def _evaluate_columns(self, X: np.ndarray, combos: np.ndarray, tol: float | None = None):
+        """As :meth:`evaluate_combo`, each design (column of X) on its own branches (the
+        column of ``combos``): all of them solved as one batch."""
         from mechsolve.analyses.batch import _design_states
 
         S = X.shape[1]
         u = np.asarray(self.angles(X), float)
-        su, h = self._samples(u)
+        su, _ = self._samples(u)
         allu = np.vstack([u, su]).T  # (S, N + SAMPLES)
         L = allu.shape[1]
         modes = np.ones((len(self.an0.plan), S))
-        for gi, m in zip(self.branch_groups, combo):
+        for gi, m in zip(self.branch_groups, combos):
             modes[gi] = m
-        solve = _design_states(self.an0, self.numbers(X), modes, 1.0)
+        num = self.numbers(X)
+        solve = _design_states(self.an0, num, modes, 1.0)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             a, st, ok = solve(allu)
             ref = a.points[self.spec.names["P"]]
@@ -167,23 +199,194 @@ class ChainBatch:
             px, py = px.reshape(S, L)[:, : self.n].T, py.reshape(S, L)[:, : self.n].T
             t = self.spec.targets
             dx, dy = px - t[:, 0:1], py - t[:, 1:2]
-            rows = []
+            cols = (np.arange(S)[:, None] * L + np.arange(self.n, L)[None, :]).ravel()
+            rows = list(self.margins(num, modes, su.T, a, st, ok, cols, tol))
             okm = ok.reshape(S, L)
-            for gi in self.branch_groups:
-                H, dH = a.plan[gi].disc(st)
-                H = np.broadcast_to(H, (S * L,)).reshape(S, L)[:, self.n :]
-                dH = np.abs(np.broadcast_to(dH, (S * L,)).reshape(S, L)[:, self.n :])
-                hd = h[:, None] * dH
-                low = np.minimum(H[:, :-1], H[:, 1:]) - (4.0 / 27.0) * (hd[:, :-1] + hd[:, 1:])
-                m = np.minimum(np.min(H, axis=1), np.min(low, axis=1)) - self.sin2_min
-                m = np.where(np.all(okm, axis=1) & np.isfinite(m), m, -1.0)
-                rows.append(m)
             for gi in range(len(self.an0.plan)):
                 if gi not in self.branch_groups:  # a group that must close everywhere
                     rows.append(np.where(np.all(okm, axis=1), 1.0, -1.0))
         if self.spec.timing is None:
             rows.append((TWO_PI - np.sum(X[self.nv + 1 :], axis=0)) / TWO_PI)
         return dx, dy, np.vstack(rows)
+
+    # -- the exact check of the dyads between the solved crank angles -------------------
+    def _constants(self, a, cols: np.ndarray) -> list[dict]:
+        """What the bounds need of each group, at the columns ``cols`` of a solve of the
+        group plan ``a.plan``: the bodies, and the distances of the joints from the
+        bodies' frames (constant over the motion)."""
+        n = len(cols)
+
+        def norm(v):
+            v = np.asarray(v, float)
+            if v.ndim == 1:
+                return np.full(n, math.hypot(v[0], v[1]))
+            return np.hypot(v[0], v[1])[cols]
+
+        def per(v):
+            v = np.asarray(v, float)
+            return np.full(n, float(v)) if v.ndim == 0 else v[cols]
+
+        out = []
+        for g in a.plan:
+            if isinstance(g, DriverLink):
+                other = g._angle_terms(None, None, "")[0]
+                out.append({"b": g.b, "k": g.k, "other": other, "rk": norm(g.sk),
+                            "rb": norm(g.sp)})  # fmt: skip
+            else:
+                L1, L2 = per(g.L1), per(g.L2)
+                out.append({"b1": g.b1, "b2": g.b2, "k1": g.k1, "k2": g.k2,
+                            "rP": norm(g.sPk), "rQ": norm(g.sQk), "r1": norm(g.sP1),
+                            "r2": norm(g.sQ2), "L1": L1, "L2": L2})  # fmt: skip
+        return out
+
+    def _distances(self, a, st, n: int) -> dict[int, np.ndarray]:
+        """Each dyad's distance D between its outer joints at every column (NaN where a
+        group before it does not close there)."""
+        return {gi: np.sqrt(np.broadcast_to(a.plan[gi].ends(st)[6], (n,)))
+                for gi in self.branch_groups}  # fmt: skip
+
+    def _sin2(self, c: dict, D: np.ndarray) -> np.ndarray:
+        """``sin^2`` of the angle at the middle joint as a function of D (negative where
+        the dyad cannot close)."""
+        L1s, L2s = c["L1"] ** 2, c["L2"] ** 2
+        D2 = D * D
+        half = 0.5 * (L1s - L2s + D2)
+        return (L1s * D2 - half * half) / (L1s * L2s)
+
+    def _interval_margins(self, C: list[dict], Da: dict, Db: dict, w: np.ndarray):
+        """A lower bound of each dyad's ``H - sin^2(min transmission)`` over intervals of
+        crank angles of width ``w`` whose ends have the distances ``Da``, ``Db``.
+
+        Speeds are per radian of crank. Ground: 0. The driven link turns at most 1 plus
+        the angular speed of the body it is driven from. A dyad whose outer joints move
+        at most ``V_P``, ``V_Q`` has ``|dD/du| <= V_P + V_Q = K``, so over the interval
+        ``D`` lies within ``(Da + Db) / 2 -+ K w / 2``; ``H`` is concave in ``D^2``, so its
+        least value is at one end of that range. With ``H >= H_min > 0`` the dyad's links
+        turn at most ``K / (L1 sqrt(H_min))`` and ``K / (L2 sqrt(H_min))`` (the rate of
+        its closure equations projected on the other link). A dyad that is not proven
+        leaves the ones after it unbounded (their bound is not positive)."""
+        nb = self.an0.system.nb
+        V: dict[int, Any] = {nb: 0.0}
+        Om: dict[int, Any] = {nb: 0.0}
+
+        def times(x, r):
+            return np.where(r > 0, x * r, 0.0)
+
+        out = {}
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for gi, c in enumerate(C):
+                if "other" in c:  # the driven link
+                    Om[c["b"]] = Om[c["other"]] + 1.0
+                    V[c["b"]] = V[c["k"]] + times(Om[c["k"]], c["rk"]) + times(Om[c["b"]], c["rb"])
+                    continue
+                vp = V[c["k1"]] + times(Om[c["k1"]], c["rP"])
+                vq = V[c["k2"]] + times(Om[c["k2"]], c["rQ"])
+                K = vp + vq
+                half = np.where(w > 0, 0.5 * K * w, 0.0)
+                mid = 0.5 * (Da[gi] + Db[gi])
+                lo = np.maximum(mid - half, 0.0)
+                hi = np.minimum(mid + half, 2.0 * (c["L1"] + c["L2"]))
+                H = np.minimum(self._sin2(c, lo), self._sin2(c, hi))
+                H = np.where(np.isfinite(H), H, -1.0)
+                out[gi] = H - self.sin2_min
+                root = np.sqrt(np.maximum(H, 0.0))
+                w1 = np.where(H > 0, K / (c["L1"] * root), np.inf)
+                w2 = np.where(H > 0, K / (c["L2"] * root), np.inf)
+                Om[c["b1"]], Om[c["b2"]] = w1, w2
+                V[c["b1"]] = vp + times(w1, c["r1"])
+                V[c["b2"]] = vq + times(w2, c["r2"])
+        return out
+
+    def _solve_at(self, num, modes, d: np.ndarray, u: np.ndarray, Cd: list[dict]):
+        """The designs ``d`` (one column each) solved at the crank angles ``u``, as one
+        batch: each dyad's distance D between its outer joints, and its
+        ``H - sin^2(min transmission)`` there (-1 where a group before it is open)."""
+        from mechsolve.analyses.batch import _design_states
+
+        solve = _design_states(self.an0, num[d], modes[:, d], 1.0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            a, st, ok = solve(u[:, None])
+            D = self._distances(a, st, len(ok))
+            v = {}
+            for gi in self.branch_groups:
+                h = self._sin2(C_at(Cd[gi], d), D[gi]) - self.sin2_min
+                v[gi] = np.where(np.isfinite(h), h, -1.0)
+        return D, v
+
+    def margins(
+        self,
+        num: np.ndarray,
+        modes: np.ndarray,
+        su: np.ndarray,
+        a: Any,
+        st: Any,
+        ok: np.ndarray,
+        cols: np.ndarray,
+        tol: float | None = None,
+    ) -> Iterator[np.ndarray]:
+        """Each dyad's least ``H - sin^2(min transmission)`` over the whole motion: one
+        row per dyad (S,), positive only where proven positive at every crank angle.
+
+        ``su`` (S, SAMPLES) are the crank angles solved in ``a``/``st`` at the columns
+        ``cols`` (design by design). Every interval between two solved angles gets the
+        lower bound of :meth:`_interval_margins`; those not proven are halved, their
+        midpoints solved as one batch, until proven, or a solved angle shows a real
+        violation (the row is then that value, the design is infeasible), or after
+        :data:`MAX_HALVINGS` (the row is then the bound, not positive). With ``tol``, the
+        intervals whose bound is more than ``tol`` below the least solved value are halved
+        too, so that a proven row is the least value to within ``tol`` (below)."""
+        S, Ls = su.shape
+        gs = self.branch_groups
+        if not gs:
+            return
+        first = cols.reshape(S, Ls)[:, 0]
+        Cd = self._constants(a, first)
+        Dc = self._distances(a, st, len(ok))
+        Ds = {gi: Dc[gi][cols].reshape(S, Ls) for gi in gs}
+        real = {}
+        for gi in gs:
+            c = {key: val[:, None] for key, val in Cd[gi].items() if key in ("L1", "L2")}
+            v = self._sin2(c, Ds[gi]) - self.sin2_min
+            v = np.where(np.isfinite(v), v, -1.0)
+            real[gi] = np.min(v, axis=1)
+        worst = np.min(np.vstack([real[gi] for gi in gs]), axis=0)
+        lb = {gi: np.full(S, np.inf) for gi in gs}
+        d = np.repeat(np.arange(S), Ls - 1)
+        ua, ub = su[:, :-1].ravel(), su[:, 1:].ravel()
+        Da = {gi: Ds[gi][:, :-1].ravel() for gi in gs}
+        Db = {gi: Ds[gi][:, 1:].ravel() for gi in gs}
+        for depth in range(MAX_HALVINGS + 1):
+            live = worst[d] > 0  # designs with a real violation are decided
+            d, ua, ub = d[live], ua[live], ub[live]
+            Da = {gi: v[live] for gi, v in Da.items()}
+            Db = {gi: v[live] for gi, v in Db.items()}
+            if not len(d):
+                break
+            C = [C_at(c, d) for c in Cd]
+            m = self._interval_margins(C, Da, Db, np.abs(ub - ua))
+            low = np.min(np.vstack([m[gi] for gi in gs]), axis=0)
+            need = low <= 0
+            if tol is not None:
+                need |= low < worst[d] - tol
+            final = ~need if depth < MAX_HALVINGS else np.ones(len(d), bool)
+            for gi in gs:
+                np.minimum.at(lb[gi], d[final], m[gi][final])
+            if depth == MAX_HALVINGS or not need.any():
+                break
+            d, ua, ub = d[need], ua[need], ub[need]
+            Da = {gi: v[need] for gi, v in Da.items()}
+            Db = {gi: v[need] for gi, v in Db.items()}
+            um = 0.5 * (ua + ub)
+            Dm, vm = self._solve_at(num, modes, d, um, Cd)
+            for gi in gs:
+                np.minimum.at(real[gi], d, vm[gi])
+                np.minimum.at(worst, d, vm[gi])
+            d = np.concatenate([d, d])
+            ua, ub = np.concatenate([ua, um]), np.concatenate([um, ub])
+            Da = {gi: np.concatenate([Da[gi], Dm[gi]]) for gi in gs}
+            Db = {gi: np.concatenate([Dm[gi], Db[gi]]) for gi in gs}
+        for gi in gs:
+            yield np.where(worst > 0, np.minimum(real[gi], lb[gi]), real[gi])
 
     def evaluate(self, X: np.ndarray):
         """(objective (S,), constraints (M, S), combo index (S,)) with each design on its
@@ -193,16 +396,20 @@ class ChainBatch:
         hit = self._cache.get(key)
         if hit is not None:
             return hit
+        S, nc = X.shape[1], len(self.combos)
+        # every design on every branch combination, as one batch
+        dx, dy, call = self._evaluate_columns(np.tile(X, nc), np.repeat(self.combos.T, S, 1))
         best_f = best_c = best_k = None
-        for k, combo in enumerate(self.combos):
-            dx, dy, c = self.evaluate_combo(X, combo)
-            f = np.sum(dx * dx + dy * dy, axis=0)
+        for k in range(nc):
+            part = slice(k * S, (k + 1) * S)
+            c = call[:, part]
+            f = np.sum(dx[:, part] ** 2 + dy[:, part] ** 2, axis=0)
             f = np.where(np.isfinite(f), f, np.inf)
             feas = np.all(c > 0, axis=0)
             score = np.where(feas, f, np.inf)
             viol = np.min(c, axis=0)
             if best_f is None:
-                best_f, best_c, best_k = score, c, np.zeros(X.shape[1], int)
+                best_f, best_c, best_k = score, c, np.zeros(S, int)
                 best_v, best_raw = viol, f
                 continue
             better = (score < best_f) | (~np.isfinite(best_f) & ~feas & (viol > best_v))
@@ -285,10 +492,11 @@ def design(batch: ChainBatch, names: list[str], x: np.ndarray, family: str) -> D
     X = np.asarray(x, float)[:, None]
     _, c, kk = batch.evaluate(X)
     combo = batch.combos[int(kk[0])]
-    dx, dy, c = batch.evaluate_combo(X, combo)
+    # the smallest transmission angle over the motion: the dyads' proven margins, refined
+    # to within MIN_TOL of the least value (a lower bound)
+    dx, dy, c = batch._evaluate_columns(X, combo[:, None], tol=MIN_TOL)
     dist = np.hypot(dx[:, 0], dy[:, 0])
     u = np.asarray(batch.angles(X), float)[:, 0]
-    # the smallest transmission angle over the motion, from the dyads' margins
     sin2 = [float(c[i, 0]) + batch.sin2_min for i in range(len(batch.branch_groups))]
     mu = math.asin(math.sqrt(min(1.0, max(0.0, min(sin2))))) if sin2 else math.pi / 2
     ground = {}
