@@ -103,19 +103,19 @@ def states(
         out = _take(_concat(parts), order)
         out.u = u
     token = out.state.token
-    if constant:
-        scale_rates(out.state, np.float64(an.speed), np.float64(0.0), acceleration)
-    else:
-        scale_rates(out.state, ud, udd, acceleration)
+    rates = (np.float64(an.speed), np.float64(0.0)) if constant else (ud, udd)
+    scale_rates(out.state, *rates, acceleration)
     for g in an.plan:  # the groups' results from the positions alone stay (for the forces)
         g.rates_rescaled(token, out.state.token)
     out.ud, out.udd = ud, udd
     out.has_velocity, out.has_acceleration = velocity, velocity and acceleration
-    if t is None:
-        out.t = np.abs(u - u0) / abs(an.speed) if an.speed else np.zeros(n)
-    else:
-        out.t = np.asarray(t, float)
+    out.t = np.asarray(t, float) if t is not None else _time(an, u, u0)
     return out
+
+
+def _time(an: Analysis, u: np.ndarray, u0: float) -> np.ndarray:
+    """The time at each driver value at the file's constant speed from the start."""
+    return np.abs(u - u0) / abs(an.speed) if an.speed else np.zeros(len(u))
 
 
 def _inside(an: Analysis, sweep: Solution, travel: np.ndarray, tol: float) -> bool:

@@ -224,6 +224,18 @@ def _nonunique_components(an: Analysis, free: np.ndarray) -> dict[str, set[str]]
     return out
 
 
+def _singular_where(ind, solved: np.ndarray, near: np.ndarray):
+    """A closed-form group's singular positions from its indicator ``ind`` (None where
+    it has none): ``(mask or None, any, near)``, ``near`` lowered where it is close to
+    singular. One reduction where the group is far from singular everywhere (the usual
+    case; a NaN in the indicator makes the minimum NaN: the full test)."""
+    if ind is None or not len(ind) or ind.min() > NEAR_SINGULAR_INDICATOR:
+        return None, False, near
+    sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
+    close = np.isfinite(ind) & (ind <= NEAR_SINGULAR_INDICATOR) & solved
+    return sing, bool(sing.any()), np.where(close, np.minimum(near, ind), near)
+
+
 def _solve_groups(
     an: Analysis, st, Q: np.ndarray, indicator: np.ndarray, solved: np.ndarray, own: bool = False
 ):
@@ -251,15 +263,7 @@ def _solve_groups(
         if hasattr(g, "forces") and not isinstance(g, NewtonGroup):
             out: dict = {}
             ind = indicator[gi] if len(indicator) > gi else None
-            # one reduction where the group is far from singular everywhere (the usual
-            # case; a NaN in the indicator makes the minimum NaN: the full test below)
-            if ind is None or not n or ind.min() > NEAR_SINGULAR_INDICATOR:
-                sing, any_sing = None, False
-            else:
-                sing = np.isfinite(ind) & (ind <= SINGULAR_INDICATOR)
-                close = np.isfinite(ind) & (ind <= NEAR_SINGULAR_INDICATOR) & solved
-                near = np.where(close, np.minimum(near, ind), near)
-                any_sing = bool(sing.any())
+            sing, any_sing, near = _singular_where(ind, solved, near)
             before = R[:, sing].copy() if any_sing else None
             with np.errstate(invalid="ignore", divide="ignore"):
                 g.forces(st, R, out)

@@ -350,17 +350,7 @@ def apply_loads(
             on = active.get(load.name)
             f = on.astype(float) if on is not None else 1.0
             if isinstance(load, PointForce):
-                b = sys_.index[load.link]
-                s = an.mech.local_point(load.link, load.point)
-                fx, fy = load.force
-                if load.frame == "link":
-                    fx, fy = st.rotated(b, np.array(load.force))
-                fx, fy = fx * f, fy * f
-                # the point's arm, once for its moment and its velocity
-                r = None if b == nb else st.rotated(b, np.asarray(s, float))
-                acc.force(b, s, fx, fy, r)
-                vx, vy = st.point_velocity(b, s, arm=r)
-                power_loads += fx * vx + fy * vy
+                power_loads += _point_force(an, st, acc, load, f)
             elif isinstance(load, Torque):
                 b = sys_.index[load.link]
                 acc.torque(b, load.torque * f)
@@ -413,6 +403,22 @@ def apply_loads(
                 acc.force(ba, sa, t * ex, t * ey)
             load_power[load.name] = power_loads - before
     return power_loads, load_power, springs
+
+
+def _point_force(an: Analysis, st, acc: _Q, load: PointForce, f) -> np.ndarray:
+    """Add a point force (``f``: where it acts, 1 or 0) to ``acc``; its power."""
+    sys_ = an.system
+    b = sys_.index[load.link]
+    s = an.mech.local_point(load.link, load.point)
+    fx, fy = load.force
+    if load.frame == "link":
+        fx, fy = st.rotated(b, np.array(load.force))
+    fx, fy = fx * f, fy * f
+    # the point's arm, once for its moment and its velocity
+    r = None if b == sys_.nb else st.rotated(b, np.asarray(s, float))
+    acc.force(b, s, fx, fy, r)
+    vx, vy = st.point_velocity(b, s, arm=r)
+    return fx * vx + fy * vy
 
 
 def _force_at_global(acc: _Q, st, b: int, x, y, fx, fy) -> None:

@@ -418,10 +418,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         hu, hq = [], []  # the last driver values and poses: the continuation's history
         last_good = np.asarray(q_start, float)
         last_det = 0.0
-        # a revolute group needs only the solved bodies' terms at each position
-        Kall = self.red.known(st) if self.red is not None and n > 1 else None
-        # a lone position: those terms as floats (_solve_one solves it in floats)
-        Kone = self.red.known_one(st) if self.red is not None and n == 1 else None
+        Kall, Kone = self._known_terms(st)
         for i in range(n):
             if not ok_in[i]:
                 self._nan(st, i)
@@ -469,6 +466,14 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 self._nan(st, i)
                 hu, hq = [], []
         return ok, iters, methods
+
+    def _known_terms(self, st: State):
+        """A revolute group needs only the solved bodies' terms at each position:
+        ``(per position, None)``; a lone position ``(None, as floats)`` (``_solve_one``
+        solves it in floats); ``(None, None)`` for other groups."""
+        if self.red is None:
+            return None, None
+        return (self.red.known(st), None) if st.n > 1 else (None, self.red.known_one(st))
 
     def _passed(self, st1, drive: Drive, i: int, Ki, q, hu, hq, last_det: float, prefix):
         """The group's determinant at position ``i`` (solved as ``q``, continuously from

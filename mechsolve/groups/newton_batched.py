@@ -220,17 +220,9 @@ class BatchedSweep:
                     Cf, Sf = C, S
             f = sub.residual(t, C, S, Kk)
             r = _rowmax_abs(f)
-            if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails below
-                dq = sub.step_small(C, S, f)
-            else:
-                try:  # by elimination over the positions (LAPACK where it must)
-                    if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
-                        dq = _lu_solve(sub.lu(C, S), -f)
-                    else:
-                        Jk = sub.jacobian(C, S, out=J[: t.shape[0]])
-                        dq = np.linalg.solve(Jk, -f[..., None])[..., 0]
-                except np.linalg.LinAlgError:
-                    return None
+            dq = _newton_step(sub, C, S, f, J[: t.shape[0]])
+            if dq is None:
+                return None
             step = _rowmax_abs(dq)
             # as below: converged when the residual is small and the step tiny or no
             # longer shrinking (the rounding level); that last step is not taken; or
@@ -456,3 +448,17 @@ def _newton_step2(rows, nd, t0, t1, k0, k1, cs=None):
     step = maximum(absolute(dq0), absolute(dq1))
     step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
     return r, dq0, dq1, step
+
+
+def _newton_step(sub, C: np.ndarray, S: np.ndarray, f: np.ndarray, J: np.ndarray):
+    """The batched Newton step ``-F_theta^-1 f`` at every position (``J``: room for the
+    Jacobians); None where LAPACK finds a matrix singular."""
+    if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails the caller
+        return sub.step_small(C, S, f)
+    try:  # by elimination over the positions (LAPACK where it must)
+        if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
+            return _lu_solve(sub.lu(C, S), -f)
+        Jk = sub.jacobian(C, S, out=J)
+        return np.linalg.solve(Jk, -f[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return None

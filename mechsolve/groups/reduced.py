@@ -57,44 +57,14 @@ class _Eqs:
         iteration, converged, without evaluating the residual once more; the residual
         returned is then the one before that step (the caller checks the whole system's
         residual afterwards)."""
-        nb, rows = self.nb, self._rows
+        nb = self.nb
         x = [float(v) for v in th0]
         K = [float(v) for v in K]
         xtol = 1e-3 * atol
         last = r = r_prev = math.inf
         cos, sin = math.cos, math.sin
         if nb == 2:  # unrolled: the four-bar's loop, the commonest group
-            ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
-            k0, k1 = K
-            x0, x1 = x
-            for it in range(max_iterations + 1):
-                C0, C1, S0, S1 = cos(x0), cos(x1), sin(x0), sin(x1)
-                f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
-                f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
-                r = max(abs(f0), abs(f1))
-                if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, diverging
-                    break
-                r_prev = r
-                if r <= atol and (last <= xtol or r == 0.0):
-                    return [x0, x1], True, it, r, it + 1
-                if it == max_iterations:
-                    break
-                ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
-                jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
-                det = ja * jd - jb * jc  # as _solve_small
-                if det == 0:
-                    break
-                dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
-                step = max(abs(dx0), abs(dx1))
-                if not step <= 1e300:
-                    break
-                if r <= atol and step >= last:  # converged already: rounding level
-                    return [x0, x1], True, it, r, it + 1
-                x0, x1 = x0 + dx0, x1 + dx1
-                if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
-                    return [x0, x1], True, it + 1, r, it + 1
-                last = step
-            return [x0, x1], r <= atol, max_iterations, r, max_iterations
+            return self._newton_list2(K, x, atol, max_iterations, predict)
         terms = self._terms
         for it in range(max_iterations + 1):
             c = [cos(v) for v in x]
@@ -131,6 +101,44 @@ class _Eqs:
                 return x, True, it + 1, r, it + 1
             last = step
         return x, r <= atol, max_iterations, r, max_iterations
+
+    def _newton_list2(self, K, x, atol: float, max_iterations: int, predict: bool):
+        """:meth:`newton_list` for two angles, unrolled (the four-bar's loop)."""
+        rows = self._rows
+        xtol = 1e-3 * atol
+        last = r = r_prev = math.inf
+        cos, sin = math.cos, math.sin
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
+        k0, k1 = K
+        x0, x1 = x
+        for it in range(max_iterations + 1):
+            C0, C1, S0, S1 = cos(x0), cos(x1), sin(x0), sin(x1)
+            f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
+            f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
+            r = max(abs(f0), abs(f1))
+            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, diverging
+                break
+            r_prev = r
+            if r <= atol and (last <= xtol or r == 0.0):
+                return [x0, x1], True, it, r, it + 1
+            if it == max_iterations:
+                break
+            ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+            jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+            det = ja * jd - jb * jc  # as _solve_small
+            if det == 0:
+                break
+            dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
+            step = max(abs(dx0), abs(dx1))
+            if not step <= 1e300:
+                break
+            if r <= atol and step >= last:  # converged already: rounding level
+                return [x0, x1], True, it, r, it + 1
+            x0, x1 = x0 + dx0, x1 + dx1
+            if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                return [x0, x1], True, it + 1, r, it + 1
+            last = step
+        return [x0, x1], r <= atol, max_iterations, r, max_iterations
 
     def entries(self, C, S) -> list:
         """``F_theta``'s entries as :class:`_StackedLU` takes them: 1-D arrays over the
