@@ -37,6 +37,12 @@ EXIT_CHECK_FAILED = 5  # the command completed and a design check failed
 EXIT_INTERRUPTED = 130  # the shell's convention for Ctrl-C
 
 
+class InputWarning(UserWarning):
+    """Input read as written that was probably not meant so (a plain number in a
+    condition read in metres in a file whose plain lengths are millimetres). The command
+    line prints it as a ``warning:`` line; the API raises it as a Python warning."""
+
+
 class MechsolveError(Exception):
     """Base class of every error caused by the user's input or mechanism."""
 

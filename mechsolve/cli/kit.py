@@ -8,6 +8,7 @@ import os
 import sys
 import tempfile
 import traceback
+import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -23,6 +24,7 @@ from mechsolve.base.errors import (
     EXIT_INTERRUPTED,
     EXIT_OK,
     InputError,
+    InputWarning,
     MechsolveError,
 )
 
@@ -311,7 +313,18 @@ def _guarded(invoke: Any, ctx: click.Context) -> Any:
     else is a bug, 4. Click's own exits (usage errors: 2) pass through."""
     interrupt_on_sigterm()
     try:
-        return invoke(ctx)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default", InputWarning)
+            shown = warnings.showwarning
+
+            def show(message, category, *args, **kwargs) -> None:
+                if issubclass(category, InputWarning):  # a "warning:" line, under -q too
+                    warn(str(message))
+                else:
+                    shown(message, category, *args, **kwargs)
+
+            warnings.showwarning = show
+            return invoke(ctx)
     except (click.exceptions.Exit, click.ClickException, SystemExit):
         raise
     except BaseException as exc:  # noqa: BLE001 - every error becomes its exit code

@@ -355,6 +355,38 @@ def check_refs(mech: Mechanism, expr, where) -> None:
         expr.dimension()
     except DimensionError as exc:
         raise mech.error(where, str(exc)) from None
+    warn_bare_numbers(mech, expr, where)
+
+
+def warn_bare_numbers(mech: Mechanism, expr, where, ref_dim=None, driver=None) -> None:
+    """Warn (:class:`InputWarning`) where a plain number meets a length or an angle in a
+    condition: it is read in SI (metres, radians), but the file's other plain lengths are
+    in ``units.length`` and its plain angles in ``units.angle`` (degrees by default)."""
+    import warnings
+
+    from mechsolve.base.errors import InputWarning
+    from mechsolve.model.expr.dims import bare_lengths_and_angles, condition_dim
+
+    file_unit = {"length": mech.length_unit or "m", "angle": mech.angle_unit or "deg"}
+    si = {"length": "m", "angle": "rad"}
+    for value, kind in bare_lengths_and_angles(expr.tree, ref_dim or condition_dim, driver):
+        unit = file_unit[kind]
+        if unit == si[kind]:
+            continue
+        message = str(
+            mech.error(
+                where,
+                f"{expr.text!r}: the plain number {value:g} meets {kind_word(kind)} and is "
+                f"read in SI, {value:g} {si[kind]}, though the file's plain {kind}s are in "
+                f"{unit}: write '{value:g} {unit}' if that is what is meant (or "
+                f"'{value:g} {si[kind]}' to keep it and silence this warning)",
+            )
+        )
+        warnings.warn(message, InputWarning, stacklevel=2)
+
+
+def kind_word(kind: str) -> str:
+    return "a length" if kind == "length" else "an angle"
 
 
 def _check_requirements(mech: Mechanism) -> None:
@@ -375,6 +407,13 @@ def _check_requirements(mech: Mechanism) -> None:
             req.expr.dimension(lambda ref: figure_dim(ref, linear), _LENGTH if linear else _ANGLE)
         except ExprError as exc:
             raise mech.error(("requirements", req.name), str(exc)) from None
+        warn_bare_numbers(
+            mech,
+            req.expr,
+            ("requirements", req.name),
+            lambda ref: figure_dim(ref, linear),
+            _LENGTH if linear else _ANGLE,
+        )
 
 
 def _check_load(mech: Mechanism, load, links: dict) -> None:

@@ -21,6 +21,7 @@ from mechsolve.model.expr.tree import (
     Unary,
     Var,
     bottom_up,
+    children,
 )
 
 # --- dimensions ----------------------------------------------------------------------
@@ -256,3 +257,45 @@ def dimension_of(tree: Any, ref_dim: Callable[[Ref], Any], driver: Dim | None = 
 def condition_dim(ref: Ref) -> Dim | None:
     """The dimension of a quantity a condition reads (by its attribute)."""
     return QUANTITY_DIMS.get(ref.attr)
+
+
+_LENGTH_DIM: Dim = (1, 0, 0, 0)
+
+
+def bare_lengths_and_angles(
+    tree: Any, ref_dim: Callable[[Ref], Any], driver: Dim | None = None
+) -> list[tuple[float, str]]:
+    """The nonzero numbers without a unit that meet a length or an angle (compared with
+    it, added to it, or given to ``min``/``max`` with it): ``(value, "length" or
+    "angle")`` for each. They are read in SI (metres, radians), which a file whose plain
+    lengths are millimetres or whose plain angles are degrees probably did not mean."""
+    found: list[tuple[float, str]] = []
+
+    def dim(node: Any) -> Any:
+        try:
+            return dimension_of(node, ref_dim, driver)
+        except DimensionError:
+            return UNKNOWN
+
+    def meet(operands: tuple[Any, ...]) -> None:
+        dims = [dim(o) for o in operands]
+        known = [d for d in dims if d not in (BARE, UNKNOWN, TRUTH)]
+        kinds = {d for d in known if d in (_LENGTH_DIM, _ANGLE)}
+        if len(kinds) != 1:
+            return
+        kind = "length" if kinds.pop() == _LENGTH_DIM else "angle"
+        for o, d in zip(operands, dims):
+            value = _const(o)  # a number, or minus a number, as written
+            if d == BARE and value is not None and value != 0:
+                found.append((float(value), kind))
+
+    def visit(n: Any) -> None:
+        if isinstance(n, Compare) or (isinstance(n, Chain) and n.ops[0] in ("+", "-")):
+            meet(n.operands)
+        elif isinstance(n, Call) and n.func in ("min", "max") and len(n.args) == 2:
+            meet(n.args)
+        for child in children(n):
+            visit(child)
+
+    visit(tree)
+    return found
