@@ -434,7 +434,10 @@ def test_two_uncoupled_pendulums_each_driven_by_its_motor():
 def test_cli_pose_placed_machine_with_two_motors(tmp_path):
     r = _invoke(tmp_path, TWO % "")
     assert r.exit_code == 0, r.output
-    assert "2 degree(s) of freedom" in r.output and "first (M = 30 - 4 * omega on O)" in r.output
+    assert (
+        "2 degree(s) of freedom" in r.output
+        and "first (M = 30 N·m - 4 N·m·s * omega on O)" in r.output
+    )
     header = (tmp_path / "o" / "simulation.csv").read_text().splitlines()[0]
     assert "first.effort [N*m]" in header and "O.Fx [N]" in header
 
@@ -514,7 +517,10 @@ def test_motors_or_a_pose_take_the_general_path_and_the_reduced_one_refuses_them
         text.replace("simulate: {duration: 2.2 s", "simulate: {duration: 0.02 s") + extra
     )
     res = simulate(mech)  # two motors: the general path, not the driver's one equation
-    assert res.multibody is not None and "second (M = 1 - 0.1 * omega on O1)" in res.summary()
+    assert (
+        res.multibody is not None
+        and "second (M = 1 N*m - 0.1 N*m*s * omega on O1)" in res.summary()
+    )
     bad = text.replace("from: rest}", "from: rest, formulation: reduced}") + extra
     r = _invoke(tmp_path, bad)
     assert r.exit_code == 2 and "motors: needs formulation: multibody" in r.output, r.output

@@ -41,12 +41,21 @@ class Motor:
         val = self.expr.evaluate_at({"omega": omega, "v": omega, "t": t})
         return np.broadcast_to(np.asarray(val, float), omega.shape)
 
-    def describe(self) -> str:
+    def describe(self, linear: bool = False, units: bool = True) -> str:
+        """The law in words with its units (SI): ``M = 50 N*m - 1.25 N*m*s * omega``; a
+        force ``F`` of the speed ``v`` for a ``linear`` (sliding) driver; an expression
+        as written (with the units it is read in unless ``units`` is false)."""
         if self.kind == "linear":
-            return f"M = {self.stall:.6g} - {self.slope:.6g} * omega"
+            if linear:
+                return f"F = {self.stall:.6g} N - {self.slope:.6g} N*s/m * v"
+            return f"M = {self.stall:.6g} N*m - {self.slope:.6g} N*m*s * omega"
         if self.kind == "table":
             return f"table of {len(self.speeds)} (speed, torque) points"
-        return f"M = {self.text}"
+        if not units:
+            return f"{'F' if linear else 'M'} = {self.text}"
+        if linear:
+            return f"F = {self.text} (in N, of v in m/s and t in s)"
+        return f"M = {self.text} (in N*m, of omega in rad/s and t in s)"
 
 
 @dataclass

@@ -49,7 +49,7 @@ def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) ->
         mech = model.mech
         lin = model.an.linear
         speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
-        law = mech.motor.describe() if mech.motor is not None else "the motor's law"
+        law = mech.motor.describe(lin, units=False) if mech.motor is not None else "the motor's law"
         text = (
             f"the motor's law {law} gives {exc.value:g} at {speed} = {exc.omega:.6g} {unit}, "
             f"t = {exc.t:.6g} s: it must give a finite {'force' if lin else 'torque'} at "

@@ -41,7 +41,7 @@ def motor_sources(mech: Mechanism, system) -> list[Source]:
                 name,
                 c,
                 lambda w, t, m=motor: float(drive_torque(m, 1, w, t)),
-                f"{motor.describe()} on {joint}",
+                f"{motor.describe(mech.joint(joint).coordinate == 'length')} on {joint}",
             )
         )
     return out

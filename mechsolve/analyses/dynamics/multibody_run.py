@@ -104,7 +104,7 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
                 "motor",
                 drv,
                 lambda w, t: float(drive_torque(motor, sense, w, t)),
-                f"{motor.describe()} on {d.joint}",
+                f"{motor.describe(an.linear)} on {d.joint}",
             )
         )
     from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources

@@ -126,12 +126,7 @@ class SimulationResults(Results):
 
     def _motor_text(self) -> str:
         """The motor's law with its units (``M = 50 N*m - 1.25 N*m*s * omega``)."""
-        m = self.motor
-        if m.kind != "linear":
-            return m.describe()
-        if self.linear:
-            return f"F = {m.stall:.6g} N - {m.slope:.6g} N*s/m * v"
-        return f"M = {m.stall:.6g} N*m - {m.slope:.6g} N*m*s * omega"
+        return self.motor.describe(self.linear)
 
     def _sense(self, omega: float) -> str:
         """The sense of a signed driver speed in words, against the driver's direction."""

@@ -11,6 +11,8 @@ Columns (SI but for angles, in degrees as everywhere in mechsolve):
 * with a force analysis ``max(abs(input.torque)) [N*m]`` (``input.force`` for a linear
   driver), the peak reactions ``max(JOINT.F) [N]`` (``max(abs(JOINT.N))`` for a slider),
   and ``cycle.work [J]``: the driver's work over the sweep (per cycle for a full turn).
+  The peaks are the largest of the samples (a requirement or an extra figure of the same
+  text locates them between the samples, at the cost of a finer sweep per design).
 
 Each column is named by the figure as the requirements' language writes it, so that a
 column can be copied into ``requirements:`` or ``--best``;
