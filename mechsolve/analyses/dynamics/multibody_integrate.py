@@ -42,6 +42,7 @@ from mechsolve.analyses.dynamics.multibody_events import (
     rk4,
     singular_measure,
 )
+from mechsolve.analyses.dynamics.multibody_rows import close_rows
 
 
 def integrate(
@@ -97,6 +98,7 @@ class _Run:
         self.singular, self.branch, self.branch0 = "pass", None, None
         self.last_rc = None  # (t, y, rcond of Phi_d) of the last evaluation
         self.evaluated: dict = {}  # the evaluations of the closed outputs, by id(q)
+        self.rows: dict = {}  # the outputs closed on arrays: what record() keeps, by id(q)
         self.record(0.0, self.q, self.qd, self.W)
 
     def halt(self, kind: str, why: str) -> None:
@@ -110,6 +112,12 @@ class _Run:
     def record(self, t, q, qd, W) -> None:
         """Keep an output: its state, accelerations, multipliers, energies, violations."""
         mb, rec = self.mb, self.rec
+        done = self.rows.pop(id(q), None)
+        if done is not None:  # closed with its stretch of rows (see _closed_rows)
+            for key, value in zip(self.KEYS, (t, q.copy(), qd.copy(), *done[:4], W, *done[4:])):
+                rec[key].append(value)
+            mb._last = (t, q.copy(), qd.copy(), done[0])
+            return
         mb._ev = self.evaluated.pop(id(q), None)
         qdd, lam, T, V = mb.output(self.part, q, qd, t)
         # pins: nu = 0 (no state to build for it)
@@ -152,12 +160,33 @@ class _Run:
         self.evaluated[id(q1)] = mb._ev  # record() takes its accelerations, multipliers
         return (t1, q1, qd1, float(y1[-1]))
 
+    def _closed_rows(self, ts, ys) -> list:
+        """The outputs ``(t, q, q', W)`` of the integrated states: all closed at once on
+        arrays where the mechanism allows (their accelerations, multipliers, energies
+        and violations kept for :meth:`record`), else one by one."""
+        done = close_rows(self.mb, self.part, ys) if ts else None
+        if done is None:
+            return [self._closed(t1, y1) for t1, y1 in zip(ts, ys)]
+        out = []
+        for i, (t1, y1) in enumerate(zip(ts, ys)):
+            q1 = done.q[i]
+            self.rows[id(q1)] = (
+                done.qdd[i],
+                done.lam[i],
+                float(done.T[i]),
+                float(done.V[i]),
+                float(done.viol[i]),
+                float(done.vviol[i]),
+            )
+            out.append((t1, q1, done.qd[i], float(y1[-1])))
+        return out
+
     def outputs(self, k: int) -> list:
         """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
         adaptive run until an event), each closed on the partition."""
         mb = self.mb
         t0 = self.times[k - 1]
-        self.evaluated = {}
+        self.evaluated, self.rows = {}, {}
         y0 = np.concatenate([self.q, self.qd, [self.W]])
         fired = None
         if self.method == "rk4":
@@ -169,7 +198,7 @@ class _Run:
             raise Repartition  # the conditioning event at once: no partition here
         self.event_fired = fired[0] if fired else ""
         mb._last = (t0, self.q, self.qd, self.rec["qdd"][-1])
-        out = [self._closed(t1, y1) for t1, y1 in zip(ts, ys)]
+        out = self._closed_rows(ts, ys)
         if fired is not None and fired[0] == "stop":
             out.append(self._closed(fired[1], fired[2]))
         elif self.method == "rk4" and self.stop is not None:

@@ -91,3 +91,31 @@ class ArrayLoads:
         w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)])
         Q += np.bincount(self._spring_at, w, minlength=self._spring_len)[: Q.size]
         return P, float(0.5 * np.sum(T * (L - self.l0)))
+
+    def apply_rows(self, q: np.ndarray, Q: np.ndarray) -> np.ndarray:
+        """:meth:`apply` at the rows of ``q`` (n, nq): the loads added to ``Q`` (n, nq);
+        returns the springs' potential of each row (the power is not needed there)."""
+        n = q.shape[0]
+        if self.t_body.size:
+            for at, value in zip(self._t_at, self.t_value):
+                Q[:, at] += value
+        if not self.k.size:
+            return np.zeros(n)
+        qe = np.zeros((n, 3 * self.nb + 3))
+        qe[:, : q.shape[1]] = q
+        ns = self.k.size
+        xa, ya, tha, xb, yb, thb = qe[:, self._spring_at].reshape(n, 6, ns).transpose(1, 0, 2)
+        ca, sa_, cb, sb_ = np.cos(tha), np.sin(tha), np.cos(thb), np.sin(thb)
+        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
+        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
+        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
+        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
+        dx, dy = (xb + rbx) - (xa + rax), (yb + rby) - (ya + ray)
+        L = np.hypot(dx, dy)
+        T = self.k * (L - self.l0)
+        fx, fy = T * (dx / L), T * (dy / L)
+        w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)], axis=1)
+        scatter = np.zeros((6 * ns, self._spring_len))
+        scatter[np.arange(6 * ns), self._spring_at] = 1.0
+        Q += (w @ scatter)[:, : Q.shape[1]]
+        return 0.5 * np.sum(T * (L - self.l0), axis=1)
