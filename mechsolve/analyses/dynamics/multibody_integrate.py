@@ -97,6 +97,7 @@ class _Run:
         self.stop: Stop | None = None
         self.singular, self.branch, self.branch0 = "pass", None, None
         self.last_rc = None  # (t, y, rcond of Phi_d) of the last evaluation
+        self.h_last = self.h_next = None  # the integrator's next step (see _adaptive)
         self.evaluated: dict = {}  # the evaluations of the closed outputs, by id(q)
         self.rows: dict = {}  # the outputs closed on arrays: what record() keeps, by id(q)
         self.record(0.0, self.q, self.qd, self.W)
@@ -468,18 +469,24 @@ def _adaptive(run: _Run, times, y0):
         kinds.append("near")
     for e in events:
         e.terminal = True
+    # a stretch that goes on from where the last one ended (no event between) starts
+    # with the step the integrator would have taken next, not a new first step
+    first, run.h_next = run.h_next, None
     sol = solve_ivp(
         run.rhs,
         (times[0], times[-1]),
         y0,
-        method=run.method,
+        method=_stepper(run),
         rtol=run.rtol,
         atol=run.atol,
         t_eval=times[1:],
         events=events,
+        first_step=min(first, times[-1] - times[0]) if first else None,
     )
     if sol.status < 0:
         raise Repartition
+    if sol.status == 0:
+        run.h_next = run.h_last
     fired = None
     if sol.status == 1:
         for kind, te, ye in zip(kinds, sol.t_events, sol.y_events):
@@ -489,3 +496,21 @@ def _adaptive(run: _Run, times, y0):
     if fired is not None and fired[0] == "stop" and ts and ts[-1] >= fired[1]:
         ts, ys = ts[:-1], ys[:-1]  # the event's own row replaces an output at its time
     return ts, ys, fired
+
+
+def _stepper(run: _Run):
+    """The run's integrator for ``solve_ivp``: scipy's explicit Runge-Kutta methods
+    remembering their next step size in ``run.h_last`` (others: by name)."""
+    from scipy.integrate import DOP853, RK23, RK45
+
+    base = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}.get(run.method)
+    if base is None:
+        return run.method
+
+    class Remembering(base):
+        def _step_impl(self):
+            done = super()._step_impl()
+            run.h_last = self.h_abs
+            return done
+
+    return Remembering
