@@ -406,8 +406,8 @@ def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int)
     """``(q, q', W)`` at ``t1`` from ``t0`` across a singular position: RK4 on all the
     coordinates in ``substeps`` steps (the accelerations by least squares on
     every equation, which stays determined for the motion where the equations lose
-    rank), then projected onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``.
-    None if the projection does not converge."""
+    rank), each step's end projected onto ``Phi = 0`` (minimum-norm Newton) and
+    ``Phi_q q' = nu``. None if a projection does not converge."""
     nq = mb.nq
     f = all_coordinates(mb)
     y = np.concatenate([q, qd, [W]])
@@ -415,10 +415,13 @@ def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int)
     try:
         for i in range(substeps):
             y = rk4(f, t0 + i * h, y, h)
-        got = project(mb, t1, y[:nq].copy(), y[nq : 2 * nq], NEWTON_ITERATIONS)
+            # back onto the constraints after every step: the stages' departure from
+            # them is what the least squares amplify next to the singular position
+            got = project(mb, t0 + (i + 1) * h, y[:nq].copy(), y[nq : 2 * nq], NEWTON_ITERATIONS)
+            if got is None:
+                return None
+            y = np.concatenate([got[0], got[1], y[-1:]])
     except (np.linalg.LinAlgError, NotClosing):
-        return None
-    if got is None:
         return None
     return got[0], got[1], float(y[-1])
 
