@@ -42,6 +42,7 @@ from mechsolve.analyses.dynamics.multibody_events import (
     rk4,
     singular_measure,
 )
+from mechsolve.analyses.dynamics.multibody_lite import LiteEquations
 from mechsolve.analyses.dynamics.multibody_rows import close_rows
 
 
@@ -98,6 +99,7 @@ class _Run:
         self.singular, self.branch, self.branch0 = "pass", None, None
         self.last_rc = None  # (t, y, rcond of Phi_d) of the last evaluation
         self.h_last = self.h_next = None  # the integrator's next step (see _adaptive)
+        self.lite = LiteEquations(mb) if mb.lite else None  # the evaluation on arrays
         self.evaluated: dict = {}  # the evaluations of the closed outputs, by id(q)
         self.rows: dict = {}  # the outputs closed on arrays: what record() keeps, by id(q)
         self.record(0.0, self.q, self.qd, self.W)
@@ -141,6 +143,8 @@ class _Run:
     def rhs(self, t, y):
         """d/dt (z, z', W) on the current partition."""
         mb, part = self.mb, self.part
+        if self.lite is not None and len(part.dep):  # pins, loads on arrays
+            return self.lite.rhs(self, part, t, y)
         nq = mb.nq
         # Newton starts from the integrated dependent coordinates (the state carries
         # them all, a predictor to the integrator's accuracy)
