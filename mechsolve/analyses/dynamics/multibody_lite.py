@@ -62,6 +62,9 @@ class LiteEquations:
         self.torques = loads is not None and loads.t_body.size > 0
         self.springs = loads is not None and loads.k.size > 0
         self._parts: dict = {}
+        from scipy.linalg.lapack import dgesv, dgetrs
+
+        self._gesv, self._getrs = dgesv, dgetrs  # looked up once, not at each call
 
     def _part(self, part):
         """What a partition fixes: the rows' matrices, the blocks' flat indices, the
@@ -101,6 +104,7 @@ class LiteEquations:
                 [(j[:, None] * N + th[None, :]).ravel(), (th[None, :] * N + j[:, None]).ravel()]
             ),
         }
+        p["moving"] = np.concatenate([p["mx"], p["my"], p["jt"]])  # all written at once
         self._parts[id(part)] = (part, p)
         return p
 
@@ -126,12 +130,10 @@ class LiteEquations:
         if lu is None or rc < RECONDITION * part.rcond1:
             raise Repartition
         mb._chord = (part, lu)
-        from scipy.linalg.lapack import dgetrs
-
         qd = np.empty(nq)
         zd = y[nq + part.ind]
         qd[part.ind] = zd
-        qd[part.dep] = dgetrs(lu[0], lu[1], -(J.take(p["dz"]) @ zd))[0]
+        qd[part.dep] = self._getrs(lu[0], lu[1], -(J.take(p["dz"]) @ zd))[0]
         x, P = self._accelerations(p, q, qd, c, s, J, t)
         out = np.empty(2 * nq + 1)
         out[:nq] = qd
@@ -144,9 +146,7 @@ class LiteEquations:
     def _close(self, p, part, q: np.ndarray):
         """Newton (the chord of the last factors while it converges) on the partition's
         equations for the dependent coordinates: ``(q, cos theta, sin theta)``."""
-        from scipy.linalg.lapack import dgetrs
-
-        mb = self.mb
+        mb, dgetrs = self.mb, self._getrs
         chord = mb._chord
         lu = chord[1] if chord is not None and chord[0] is part else None
         dep, last = p["dep"], math.inf
@@ -172,16 +172,13 @@ class LiteEquations:
     def _accelerations(self, p, q, qd, c, s, J, t: float):
         """``(x, P)``: the augmented system's solution ``(q'', lambda_r)`` and the power
         of the torques."""
-        from scipy.linalg.lapack import dgesv
-
         mb, nq = self.mb, self.nq
         m = mb.m
         rx, ry = c * mb._sx - s * mb._sy, s * mb._sx + c * mb._sy
         flat, b = p["flat"], p["b"]
-        flat[p["mx"]] = np.concatenate([-m * ry] * 2)
-        flat[p["my"]] = np.concatenate([m * rx] * 2)
-        jth = J[:, 2::3] if p["every"] else J[p["rows"], 2::3]
-        flat[p["jt"]] = np.concatenate([jth.ravel()] * 2)
+        jth = (J[:, 2::3] if p["every"] else J[p["rows"], 2::3]).ravel()
+        mry, mrx = -m * ry, m * rx
+        flat[p["moving"]] = np.concatenate([mry, mry, mrx, mrx, jth, jth])
         w = qd[2::3]
         w2 = w * w
         Q = b[:nq]
@@ -194,7 +191,7 @@ class LiteEquations:
         g = self.K @ np.concatenate([c * w2, s * w2])
         b[nq:] = g if p["every"] else g[p["rows"]]
         A = p["A"]
-        _, _, x, info = dgesv(A, b)
+        _, _, x, info = self._gesv(A, b)
         if info != 0:  # a singular position: the least-squares motion
             x = _least_squares(A, b)
         if not math.isfinite(float(x.sum())):
