@@ -479,17 +479,26 @@ def _adaptive(run: _Run, times, y0):
     # a stretch that goes on from where the last one ended (no event between) starts
     # with the step the integrator would have taken next, not a new first step
     first, run.h_next = run.h_next, None
-    sol = solve_ivp(
-        run.rhs,
-        (times[0], times[-1]),
-        y0,
-        method=_stepper(run),
-        rtol=run.rtol,
-        atol=run.atol,
-        t_eval=times[1:],
-        events=events,
-        first_step=min(first, times[-1] - times[0]) if first else None,
-    )
+    try:
+        sol = solve_ivp(
+            run.rhs,
+            (times[0], times[-1]),
+            y0,
+            method=_stepper(run),
+            rtol=run.rtol,
+            atol=run.atol,
+            t_eval=times[1:],
+            events=events,
+            first_step=min(first, times[-1] - times[0]) if first else None,
+        )
+    except ValueError as exc:
+        # an event seen at a step's end (from the step's last evaluation) but not on
+        # the fresh closures of the root finder (they differ within the constraint
+        # tolerance, next to the threshold): no bracket to locate it, so the output
+        # step is bridged, as where no partition closes
+        if "different signs" not in str(exc):
+            raise
+        raise Repartition from exc
     if sol.status < 0:
         raise Repartition
     if sol.status == 0:
