@@ -67,10 +67,12 @@ def test_n_four_bar_at_the_bench_precision_in_fewer_evaluations(monkeypatch):
     res = simulate(mech)
     tr = res.trajectory
     assert tr.t[-1] == pytest.approx(10.0) and not tr.early
-    assert tr.bridges >= 1  # it did cross singular passages on all coordinates
+    # (it crosses about ten singular passages: bridged on all coordinates where an
+    # integrator's step ends next to one, else stepped across)
     th = _crank_angle(tr.t)
     b0 = res.point("B0")
     assert np.max(np.hypot(b0.x - np.cos(th), b0.y - np.sin(th))) < 1e-3
     # RK4: four evaluations per step, 8 steps per bridged output step (before: 32)
     assert len(calls) == 4 * BRIDGE_FEWEST * tr.bridges
-    assert tr.nfev <= 2000  # before: 2434
+    assert tr.nfev <= 1500  # before: 2434; 1629 before the output rows were closed on
+    # arrays and a stretch of outputs went on with the integrator's step

@@ -386,7 +386,7 @@ class FreeResults:
         if tr.bridges:
             lines.append(
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
-                "all coordinates, then projected onto the constraints)"
+                "all coordinates, each step projected onto the constraints)"
             )
         if tr.early:
             lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")

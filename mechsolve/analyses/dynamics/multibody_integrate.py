@@ -42,6 +42,8 @@ from mechsolve.analyses.dynamics.multibody_events import (
     rk4,
     singular_measure,
 )
+from mechsolve.analyses.dynamics.multibody_lite import LiteEquations
+from mechsolve.analyses.dynamics.multibody_rows import close_rows
 
 
 def integrate(
@@ -96,7 +98,10 @@ class _Run:
         self.stop: Stop | None = None
         self.singular, self.branch, self.branch0 = "pass", None, None
         self.last_rc = None  # (t, y, rcond of Phi_d) of the last evaluation
+        self.h_last = self.h_next = None  # the integrator's next step (see _adaptive)
+        self.lite = LiteEquations(mb) if mb.lite else None  # the evaluation on arrays
         self.evaluated: dict = {}  # the evaluations of the closed outputs, by id(q)
+        self.rows: dict = {}  # the outputs closed on arrays: what record() keeps, by id(q)
         self.record(0.0, self.q, self.qd, self.W)
 
     def halt(self, kind: str, why: str) -> None:
@@ -110,6 +115,12 @@ class _Run:
     def record(self, t, q, qd, W) -> None:
         """Keep an output: its state, accelerations, multipliers, energies, violations."""
         mb, rec = self.mb, self.rec
+        done = self.rows.pop(id(q), None)
+        if done is not None:  # closed with its stretch of rows (see _closed_rows)
+            for key, value in zip(self.KEYS, (t, q.copy(), qd.copy(), *done[:4], W, *done[4:])):
+                rec[key].append(value)
+            mb._last = (t, q.copy(), qd.copy(), done[0])
+            return
         mb._ev = self.evaluated.pop(id(q), None)
         qdd, lam, T, V = mb.output(self.part, q, qd, t)
         # pins: nu = 0 (no state to build for it)
@@ -132,6 +143,8 @@ class _Run:
     def rhs(self, t, y):
         """d/dt (z, z', W) on the current partition."""
         mb, part = self.mb, self.part
+        if self.lite is not None and len(part.dep):  # pins, loads on arrays
+            return self.lite.rhs(self, part, t, y)
         nq = mb.nq
         # Newton starts from the integrated dependent coordinates (the state carries
         # them all, a predictor to the integrator's accuracy)
@@ -152,12 +165,33 @@ class _Run:
         self.evaluated[id(q1)] = mb._ev  # record() takes its accelerations, multipliers
         return (t1, q1, qd1, float(y1[-1]))
 
+    def _closed_rows(self, ts, ys) -> list:
+        """The outputs ``(t, q, q', W)`` of the integrated states: all closed at once on
+        arrays where the mechanism allows (their accelerations, multipliers, energies
+        and violations kept for :meth:`record`), else one by one."""
+        done = close_rows(self.mb, self.part, ys) if ts else None
+        if done is None:
+            return [self._closed(t1, y1) for t1, y1 in zip(ts, ys)]
+        out = []
+        for i, (t1, y1) in enumerate(zip(ts, ys)):
+            q1 = done.q[i]
+            self.rows[id(q1)] = (
+                done.qdd[i],
+                done.lam[i],
+                float(done.T[i]),
+                float(done.V[i]),
+                float(done.viol[i]),
+                float(done.vviol[i]),
+            )
+            out.append((t1, q1, done.qd[i], float(y1[-1])))
+        return out
+
     def outputs(self, k: int) -> list:
         """The outputs from ``times[k]`` on (one RK4 step, or up to :data:`CHUNK` of an
         adaptive run until an event), each closed on the partition."""
         mb = self.mb
         t0 = self.times[k - 1]
-        self.evaluated = {}
+        self.evaluated, self.rows = {}, {}
         y0 = np.concatenate([self.q, self.qd, [self.W]])
         fired = None
         if self.method == "rk4":
@@ -169,7 +203,7 @@ class _Run:
             raise Repartition  # the conditioning event at once: no partition here
         self.event_fired = fired[0] if fired else ""
         mb._last = (t0, self.q, self.qd, self.rec["qdd"][-1])
-        out = [self._closed(t1, y1) for t1, y1 in zip(ts, ys)]
+        out = self._closed_rows(ts, ys)
         if fired is not None and fired[0] == "stop":
             out.append(self._closed(fired[1], fired[2]))
         elif self.method == "rk4" and self.stop is not None:
@@ -376,8 +410,8 @@ def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int)
     """``(q, q', W)`` at ``t1`` from ``t0`` across a singular position: RK4 on all the
     coordinates in ``substeps`` steps (the accelerations by least squares on
     every equation, which stays determined for the motion where the equations lose
-    rank), then projected onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``.
-    None if the projection does not converge."""
+    rank), each step's end projected onto ``Phi = 0`` (minimum-norm Newton) and
+    ``Phi_q q' = nu``. None if a projection does not converge."""
     nq = mb.nq
     f = all_coordinates(mb)
     y = np.concatenate([q, qd, [W]])
@@ -385,10 +419,13 @@ def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int)
     try:
         for i in range(substeps):
             y = rk4(f, t0 + i * h, y, h)
-        got = project(mb, t1, y[:nq].copy(), y[nq : 2 * nq], NEWTON_ITERATIONS)
+            # back onto the constraints after every step: the stages' departure from
+            # them is what the least squares amplify next to the singular position
+            got = project(mb, t0 + (i + 1) * h, y[:nq].copy(), y[nq : 2 * nq], NEWTON_ITERATIONS)
+            if got is None:
+                return None
+            y = np.concatenate([got[0], got[1], y[-1:]])
     except (np.linalg.LinAlgError, NotClosing):
-        return None
-    if got is None:
         return None
     return got[0], got[1], float(y[-1])
 
@@ -439,18 +476,33 @@ def _adaptive(run: _Run, times, y0):
         kinds.append("near")
     for e in events:
         e.terminal = True
-    sol = solve_ivp(
-        run.rhs,
-        (times[0], times[-1]),
-        y0,
-        method=run.method,
-        rtol=run.rtol,
-        atol=run.atol,
-        t_eval=times[1:],
-        events=events,
-    )
+    # a stretch that goes on from where the last one ended (no event between) starts
+    # with the step the integrator would have taken next, not a new first step
+    first, run.h_next = run.h_next, None
+    try:
+        sol = solve_ivp(
+            run.rhs,
+            (times[0], times[-1]),
+            y0,
+            method=_stepper(run),
+            rtol=run.rtol,
+            atol=run.atol,
+            t_eval=times[1:],
+            events=events,
+            first_step=min(first, times[-1] - times[0]) if first else None,
+        )
+    except ValueError as exc:
+        # an event seen at a step's end (from the step's last evaluation) but not on
+        # the fresh closures of the root finder (they differ within the constraint
+        # tolerance, next to the threshold): no bracket to locate it, so the output
+        # step is bridged, as where no partition closes
+        if "different signs" not in str(exc):
+            raise
+        raise Repartition from exc
     if sol.status < 0:
         raise Repartition
+    if sol.status == 0:
+        run.h_next = run.h_last
     fired = None
     if sol.status == 1:
         for kind, te, ye in zip(kinds, sol.t_events, sol.y_events):
@@ -460,3 +512,21 @@ def _adaptive(run: _Run, times, y0):
     if fired is not None and fired[0] == "stop" and ts and ts[-1] >= fired[1]:
         ts, ys = ts[:-1], ys[:-1]  # the event's own row replaces an output at its time
     return ts, ys, fired
+
+
+def _stepper(run: _Run):
+    """The run's integrator for ``solve_ivp``: scipy's explicit Runge-Kutta methods
+    remembering their next step size in ``run.h_last`` (others: by name)."""
+    from scipy.integrate import DOP853, RK23, RK45
+
+    base = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}.get(run.method)
+    if base is None:
+        return run.method
+
+    class Remembering(base):
+        def _step_impl(self):
+            done = super()._step_impl()
+            run.h_last = self.h_abs
+            return done
+
+    return Remembering

@@ -18,6 +18,8 @@ with ``r = R(theta) s`` the point's arm from its body's frame origin.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mechsolve.model import GROUND, Spring, Torque
@@ -51,6 +53,8 @@ class ArrayLoads:
         self._qe = np.zeros(3 * nb + 3)
         self._t_at = 3 * self.t_body + 2
         self._t_unique = len(set(self._t_at.tolist())) == self._t_at.size
+        self._t_list: list | None = None  # the loads in Python floats (apply_fast)
+        self._s_list: list = []
 
     @staticmethod
     def applies(mech) -> bool:
@@ -91,3 +95,73 @@ class ArrayLoads:
         w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)])
         Q += np.bincount(self._spring_at, w, minlength=self._spring_len)[: Q.size]
         return P, float(0.5 * np.sum(T * (L - self.l0)))
+
+    def apply_rows(self, q: np.ndarray, Q: np.ndarray) -> np.ndarray:
+        """:meth:`apply` at the rows of ``q`` (n, nq): the loads added to ``Q`` (n, nq);
+        returns the springs' potential of each row (the power is not needed there)."""
+        n = q.shape[0]
+        if self.t_body.size:
+            for at, value in zip(self._t_at, self.t_value):
+                Q[:, at] += value
+        if not self.k.size:
+            return np.zeros(n)
+        qe = np.zeros((n, 3 * self.nb + 3))
+        qe[:, : q.shape[1]] = q
+        ns = self.k.size
+        xa, ya, tha, xb, yb, thb = qe[:, self._spring_at].reshape(n, 6, ns).transpose(1, 0, 2)
+        ca, sa_, cb, sb_ = np.cos(tha), np.sin(tha), np.cos(thb), np.sin(thb)
+        rax = ca * self.sa[:, 0] - sa_ * self.sa[:, 1]
+        ray = sa_ * self.sa[:, 0] + ca * self.sa[:, 1]
+        rbx = cb * self.sb[:, 0] - sb_ * self.sb[:, 1]
+        rby = sb_ * self.sb[:, 0] + cb * self.sb[:, 1]
+        dx, dy = (xb + rbx) - (xa + rax), (yb + rby) - (ya + ray)
+        L = np.hypot(dx, dy)
+        T = self.k * (L - self.l0)
+        fx, fy = T * (dx / L), T * (dy / L)
+        w = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, -(rbx * fy - rby * fx)], axis=1)
+        scatter = np.zeros((6 * ns, self._spring_len))
+        scatter[np.arange(6 * ns), self._spring_at] = 1.0
+        Q += (w @ scatter)[:, : Q.shape[1]]
+        return 0.5 * np.sum(T * (L - self.l0), axis=1)
+
+    def apply_fast(
+        self, q: np.ndarray, qd: np.ndarray, c: np.ndarray, s: np.ndarray, Q: np.ndarray
+    ) -> float:
+        """:meth:`apply` from the bodies' ``cos theta``, ``sin theta`` (``c``, ``s``),
+        each load in Python floats (a few of them: cheaper than arrays); returns the
+        torques' power (the springs' potential is not needed there)."""
+        P = 0.0
+        if self._t_list is None:
+            self._t_list = [(int(at), float(v)) for at, v in zip(self._t_at, self.t_value)]
+            self._s_list = [
+                (int(ia), *map(float, sa), int(ib), *map(float, sb), float(k), float(l0))
+                for ia, sa, ib, sb, k, l0 in zip(self.a, self.sa, self.b, self.sb, self.k, self.l0)
+            ]
+        for at, value in self._t_list:
+            Q[at] += value
+            P += value * float(qd[at])
+        if not self._s_list:
+            return P
+        ql, cl, sl, nb = q.tolist(), c.tolist(), s.tolist(), self.nb
+        for ia, sax, say, ib, sbx, sby, k, l0 in self._s_list:
+            ca, sa_, xa, ya = (
+                (cl[ia], sl[ia], ql[3 * ia], ql[3 * ia + 1]) if ia < nb else (1, 0, 0, 0)
+            )
+            cb, sb_, xb, yb = (
+                (cl[ib], sl[ib], ql[3 * ib], ql[3 * ib + 1]) if ib < nb else (1, 0, 0, 0)
+            )
+            rax, ray = ca * sax - sa_ * say, sa_ * sax + ca * say
+            rbx, rby = cb * sbx - sb_ * sby, sb_ * sbx + cb * sby
+            dx, dy = (xb + rbx) - (xa + rax), (yb + rby) - (ya + ray)
+            L = math.hypot(dx, dy)
+            T = k * (L - l0)
+            fx, fy = T * (dx / L), T * (dy / L)
+            if ia < nb:
+                Q[3 * ia] += fx
+                Q[3 * ia + 1] += fy
+                Q[3 * ia + 2] += rax * fy - ray * fx
+            if ib < nb:
+                Q[3 * ib] -= fx
+                Q[3 * ib + 1] -= fy
+                Q[3 * ib + 2] -= rbx * fy - rby * fx
+        return P

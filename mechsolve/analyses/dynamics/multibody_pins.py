@@ -110,3 +110,53 @@ class Pins:
         out[0::2] = rax * wa2 - rbx * wb2
         out[1::2] = ray * wa2 - rby * wb2
         return out
+
+    # -- the same equations at many configurations at once (the output rows) ----------
+    def arms_rows(self, th: np.ndarray):
+        """:meth:`_arms` for the rows of ``th`` (n, nb): each (n, pins)."""
+        the = np.zeros((th.shape[0], self.nb + 1))
+        the[:, : self.nb] = th
+        c, s = np.cos(the), np.sin(the)
+        ca, sa_, cb, sb_ = c[:, self.a], s[:, self.a], c[:, self.b], s[:, self.b]
+        return (
+            ca * self._sax - sa_ * self._say,
+            sa_ * self._sax + ca * self._say,
+            cb * self._sbx - sb_ * self._sby,
+            sb_ * self._sbx + cb * self._sby,
+        )
+
+    def residual_rows(self, q: np.ndarray, arms) -> np.ndarray:
+        """:meth:`residual` of each row of ``q`` (n, nq), summed in the same order."""
+        rax, ray, rbx, rby = arms
+        n = q.shape[0]
+        ra, rb = np.empty((n, 2 * len(self.a))), np.empty((n, 2 * len(self.a)))
+        ra[:, 0::2], ra[:, 1::2], rb[:, 0::2], rb[:, 1::2] = rax, ray, rbx, rby
+        out = q @ self._pa.T
+        out += ra
+        out -= q @ self._pb.T
+        out -= rb
+        return out
+
+    def jacobian_rows(self, arms) -> np.ndarray:
+        """:meth:`jacobian` of each row: (n, 2 pins, nq)."""
+        rax, ray, rbx, rby = arms
+        n = rax.shape[0]
+        J = np.repeat(self.template[None], n, axis=0)
+        flat = J.reshape(n, -1)
+        ma, mb = self._ka, self._kb
+        flat[:, self.fa_x] = -ray[:, ma]
+        flat[:, self.fa_y] = rax[:, ma]
+        flat[:, self.fb_x] = rby[:, mb]
+        flat[:, self.fb_y] = -rbx[:, mb]
+        return J
+
+    def gamma_rows(self, arms, w: np.ndarray) -> np.ndarray:
+        """:meth:`gamma` of each row (``w``: (n, nb))."""
+        rax, ray, rbx, rby = arms
+        we = np.zeros((w.shape[0], self.nb + 1))
+        we[:, : self.nb] = w
+        wa2, wb2 = we[:, self.a] ** 2, we[:, self.b] ** 2
+        out = np.empty((w.shape[0], 2 * len(self.a)))
+        out[:, 0::2] = rax * wa2 - rbx * wb2
+        out[:, 1::2] = ray * wa2 - rby * wb2
+        return out

@@ -321,7 +321,7 @@ class MultibodyResults(Results):
         if tr.bridges:
             lines.append(
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
-                "all coordinates, then projected onto the constraints)"
+                "all coordinates, each step projected onto the constraints)"
             )
         if tr.early:
             lines.append(
