@@ -359,9 +359,10 @@ class Results(Summary):
         cols += self._friction_columns()
         for name, on in f.active.items():
             cols.append(Column(f"load.{name}.active", "-", on.astype(float)))
+        solved = self.solution.ok  # the energies need the motion only, not the forces
         cols += [
-            Column("energy.kinetic", "J", m(f.kinetic)),
-            Column("energy.potential", "J", m(f.potential)),
+            Column("energy.kinetic", "J", np.where(solved, f.kinetic, np.nan)),
+            Column("energy.potential", "J", np.where(solved, f.potential, np.nan)),
             Column("power.input", "W", m(f.power_input)),
             Column("power.kinetic_rate", "W", m(f.kinetic_rate)),
             Column("power.potential_rate", "W", m(f.potential_rate)),

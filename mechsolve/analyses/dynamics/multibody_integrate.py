@@ -140,6 +140,14 @@ class _Run:
             rec[key].append(value)
         mb._last = (t, q.copy(), qd.copy(), qdd)
 
+    def undetermined(self) -> None:
+        """The last output is at a singular position: its accelerations and multipliers
+        are not determined by the equations there (the equations' rank drops; a solve
+        gives numbers of 1e13 N), so they are left empty."""
+        rec = self.rec
+        rec["qdd"][-1] = np.full_like(np.asarray(rec["qdd"][-1], float), np.nan)
+        rec["lam"][-1] = np.full_like(np.asarray(rec["lam"][-1], float), np.nan)
+
     def rhs(self, t, y):
         """d/dt (z, z', W) on the current partition."""
         mb, part = self.mb, self.part
@@ -339,12 +347,14 @@ class _Run:
             )
             if self.singular == "stop":
                 self.record(ts, qs, qds, Ws)
+                self.undetermined()
                 self.halt("singular", f"a singular position {where}")
                 return k
             if bridged and self.branch is not None:
                 after = self.branch(bridged[0])
                 if after != self.branch0:
                     self.record(ts, qs, qds, Ws)
+                    self.undetermined()
                     self.halt("branch", f"the branch would change at the singular position {where}")
                     return k
         if not bridged:

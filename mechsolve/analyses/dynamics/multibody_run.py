@@ -229,6 +229,16 @@ class MultibodyResults(Results):
             self._work = super()._work_why() if driven else (0.0, "")
         return self._work
 
+    def status(self) -> list[str]:
+        """Per row: ``ok`` or why not; a row at a singular position (an event that ends
+        the run there) has no accelerations or forces: the equations do not fix them."""
+        out = super().status()
+        qdd = self.trajectory.qdd
+        for i in np.flatnonzero(~np.all(np.isfinite(qdd), axis=1)):
+            if out[i] == "ok":
+                out[i] = "singular: accelerations and forces not determined"
+        return out
+
     def limit_positions(self):
         """Not reported: a rocker's extremes over a sweep of the driver are not the
         extremes of a motion in time (the CSV has every position)."""
