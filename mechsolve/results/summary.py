@@ -240,7 +240,10 @@ class Summary:
         fscale, funit = (1e3 / kf, "kN") if kilo else (1.0 / kf, U.force)
         unit, funit = pretty_unit(unit), pretty_unit(funit)
         imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
-        rms = rms_over(src.u, e)
+        # over the motion: in time for a motion law (a dwell counts), else along the
+        # driver (at a constant speed the same)
+        timed = self.mechanism.driver.motion is not None
+        rms = rms_over(src.solution.t if timed else src.u, e)
         mean, what = src.mean_effort()
         mean += 0.0  # no "-0"
         # the extremes are the largest and smallest samples (the requirements locate
@@ -511,7 +514,8 @@ def rms_over(u: np.ndarray, e: np.ndarray) -> float:
     """The RMS of ``e`` over the motion: ``sqrt(integral of e^2 du / travel)`` by the
     trapezoidal rule on the samples (a figures sweep's samples are uneven: its limit
     positions and load switches are inserted), over the runs of solved samples; the
-    plain mean of the squares where the driver does not move."""
+    plain mean of the squares where ``u`` does not change. ``u``: the driver coordinate,
+    or the time (a motion law: its dwells count)."""
     u = np.asarray(u, float)
     e2 = np.asarray(e, float) ** 2
     ok = np.isfinite(e2)
