@@ -26,6 +26,9 @@ MAX_GAPS = 8  # a sweep starts again past at most this many breaks, then stops
 # a Hadamard ratio of the group's determinant below this: a singular position, whose sign
 # is not to be trusted (Newton converges to about sqrt(atol) at a limit position)
 DET_SIGN = 1e-6
+# the poses either side of a bisected sign change farther apart than this (radians, or
+# lengths over the size): two branches that pass close, not a bifurcation they share
+JUMP_APART = 1e-6
 
 
 class NewtonGroup(BatchedSweep, NewtonRates, Group):
@@ -437,11 +440,10 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 q, stats = self._solve_one(st1, drive.u[i : i + 1], q0, Ki)
                 good = stats.converged
             else:
-                q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki)
-                if good:
-                    det, passed = self._passed(st1, drive, i, Ki, q, hu, hq, last_det, prefix)
-                    good = None if passed == "gap" else True
-                    crossed = crossed or passed is True
+                q, stats, good, det, passed = self._step(
+                    st1, drive, i, Ki, hu, hq, last_det, prefix
+                )
+                crossed = crossed or passed is True
                 if not good:  # not reached continuously from i - 1: start again at i
                     q, stats, good = self._start_again(st1, drive, i, Ki, good, restart, crossed)
                     if good is None:  # the branch past here is not known: stop
@@ -475,6 +477,26 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             return None, None
         return (self.red.known(st), None) if st.n > 1 else (None, self.red.known_one(st))
 
+    def _step(self, st1, drive: Drive, i: int, Ki, hu, hq, last_det: float, prefix):
+        """Position ``i`` by continuation from the history: ``(q, stats, good, det,
+        passed)`` (see :meth:`_advance`, :meth:`_passed`; ``good`` None past a range
+        where the group cannot close). A step onto the other branch next to a
+        near-singular position is taken again in substeps that keep the sign."""
+        ui = float(drive.u[i])
+        q, stats, good = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki)
+        det, passed = last_det, False
+        if good:
+            det, passed = self._passed(st1, drive, i, Ki, q, hu, hq, last_det, prefix)
+            if passed == "jump":  # unless no substeps keep the sign: a bifurcation
+                got = self._advance(st1, ui, hu, hq, i - 1, prefix, Ki, keep=last_det)
+                if got[2]:
+                    q, stats, good = got
+                    det, passed = self._det(st1, drive.u[i : i + 1], q, Ki), False
+                else:
+                    passed = True
+            good = None if passed == "gap" else good
+        return q, stats, good, det, passed
+
     def _passed(self, st1, drive: Drive, i: int, Ki, q, hu, hq, last_det: float, prefix):
         """The group's determinant at position ``i`` (solved as ``q``, continuously from
         the history ``hu``, ``hq``) and what the step passed where it changed sign: a
@@ -483,8 +505,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         det = self._det(st1, drive.u[i : i + 1], q, Ki)
         if not (det * last_det < 0 and min(abs(det), abs(last_det)) > DET_SIGN):
             return det, False
-        ends = (hu[-1], hq[-1], last_det), (float(drive.u[i]), q)
-        return det, "gap" if self._hidden_gap(st1, Ki, *ends, i - 1, prefix) else True
+        ends = (hu[-1], hq[-1], last_det), (float(drive.u[i]), q, det)
+        found = self._hidden_gap(st1, Ki, *ends, i - 1, prefix)
+        return det, {"gap": "gap", "jump": "jump"}.get(found, True)
 
     def _start_again(self, st1, drive: Drive, i: int, Ki, good, restart, crossed: bool):
         """Position ``i``, which the sweep did not reach continuously from ``i - 1``
@@ -510,17 +533,21 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             self.gaps.append((i - 1, self._gap_u))
         return q, stats, solved
 
-    def _hidden_gap(self, st1, K1, before, after, k: int, prefix) -> bool:
+    def _hidden_gap(self, st1, K1, before, after, k: int, prefix) -> str:
         """Between two positions reached continuously, ``before = (u0, q0, det0)`` and
-        ``after = (u1, q1)``, where the group's determinant changes sign: is there a point
-        where it cannot close (a range narrower than the substeps, stepped over onto the
-        other branch), or is it a bifurcation passed smoothly? Bisection on the sign of
-        the determinant, each probe reached by continuation (:meth:`_advance`) from one
-        end of the bracket or the other: a probe that neither reaches continuously is
-        in such a range (``self._gap_u`` there; ``self._gap_open`` when it cannot close
-        there at all)."""
+        ``after = (u1, q1, det1)``, where the group's determinant changes sign: is there a
+        point where it cannot close (a range narrower than the substeps, stepped over onto
+        the other branch: ``"gap"``), a bifurcation passed smoothly (``"crossing"``), or a
+        step onto the other branch next to a near-singular position (``"jump"``: the two
+        branches pass closer than a Newton step, but never meet)?
+        Bisection on the sign of the determinant, each probe reached by continuation
+        (:meth:`_advance`) from one end of the bracket or the other: a probe that neither
+        reaches continuously is in such a range (``self._gap_u`` there;
+        ``self._gap_open`` when it cannot close there at all); where the bracket closes
+        on poses still apart (by more than :data:`JUMP_APART`), the sign changed by a
+        jump between two branches, not at a point they share."""
         a, qa, da = before
-        b, qb = after
+        b, qb, _ = after
         # (to rounding of the driver value: a sign that rounding flips next to a singular
         # position must not bisect for ever)
         width = max(1e-9 * abs(b - a), 8 * np.finfo(float).eps * max(abs(a), abs(b), 1.0))
@@ -540,20 +567,27 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                     break
             else:
                 self._gap_u = m
-                return True
-            if self._det(stm, np.array([m]), qm, Km) * da > 0:
-                a, qa = m, qm
+                return "gap"
+            dm = self._det(stm, np.array([m]), qm, Km)
+            if dm * da > 0:
+                a, qa, da = m, qm, dm
             else:
                 b, qb = m, qm
-        return False
+        # both branches pass through a bifurcation, so the poses either side of it meet
+        # as the bracket closes; next to a near-singular position they stay apart (the
+        # determinant's ratio is no measure: it stays finite where a row vanishes)
+        return "jump" if self._jump(qa, qb) > JUMP_APART else "crossing"
 
-    def _advance(self, st1: State | None, ui: float, hu, hq, k: int, prefix, K1=None):
+    def _advance(self, st1: State | None, ui: float, hu, hq, k: int, prefix, K1=None, keep=None):
         """One continuation step to ``ui``; substeps when the full step jumps. ``K1``:
-        the solved bodies' terms at ``ui`` for a revolute group (``st1`` is then None)."""
+        the solved bodies' terms at ``ui`` for a revolute group (``st1`` is then None).
+        ``keep``: the determinant's value at the last position, whose sign the substeps
+        must keep (the full step went onto the other branch past a near-singular
+        position; a sign change of trusted size counts as a jump)."""
         q_pred = _extrapolate(hu, hq, ui)
         q, stats = self._solve_one(st1, np.array([ui]), q_pred, K1)
         q = _near_angles(q, q_pred)
-        if stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
+        if keep is None and stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
             return q, stats, True
         u0 = hu[-1]
         uj = 0.5 * (u0 + ui)  # where the substeps last broke
@@ -577,10 +611,14 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 qj, sj = self._solve_one(stj, np.array([uj]), qp, Kj)
                 qj = _near_angles(qj, qp)
                 total += sj.iterations
-                if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP):
+                if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP) or (
+                    keep is not None and self._flips(stj, uj, qj, Kj, keep)
+                ):
                     ok_all = False
                     self._gap_open = not sj.converged
                     break
+                if keep is not None:
+                    keep = self._last_det
                 lu, lq = (lu + [uj])[-3:], (lq + [qj])[-3:]
             if ok_all:
                 sj.iterations = total
@@ -594,6 +632,13 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             # narrower than the finest substep; the caller starts again at ui
             return q, stats, None
         return q, stats, False
+
+    def _flips(self, st1, u: float, q, K, keep: float) -> bool:
+        """Whether the determinant at ``q`` (position ``u``) has the other sign than
+        ``keep``, both of trusted size; keeps the value in ``self._last_det``."""
+        d = self._det(st1, np.array([u]), q, K)
+        self._last_det = d
+        return d * keep < 0 and min(abs(d), abs(keep)) > DET_SIGN
 
     def _nan(self, st: State, i: int) -> None:
         for b in self.bodies:
