@@ -94,3 +94,18 @@ def test_rms_of_a_motion_law_is_over_time():
     line = next(s for s in res.summary().splitlines() if "RMS" in s)
     rms = float(re.search(r"RMS ([-\d.e+]+) N", line).group(1))
     assert abs(rms - exact) <= 1e-5 * exact, (line, exact)
+
+
+def test_an_extreme_reached_every_turn_is_named_once_with_the_turns():
+    """The motor-driven linkage runs 11 turns in its simulation: each limit position is
+    at the same driver angle every turn, said once with the number of turns (it was the
+    same text repeated eleven times)."""
+    import mechsolve as ms
+    from mechsolve.analyses.dynamics import simulate
+    from mechsolve.results.summary import places
+
+    assert places(str, [1, 2, 1]) == "1 (in each of 2 turns) and at 2"
+    res = simulate(ms.load(Path(__file__).parents[1] / "mechanisms" / "motor-linkage.yaml"))
+    line = next(s for s in res.summary().splitlines() if "limit positions" in s)
+    assert "turns)" in line
+    assert line.count("at driver angle") == 4, line  # low and high of the rocker and slider

@@ -30,6 +30,7 @@ from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import solve_frames
 from mechsolve.results.requirements import check_requirements
+from mechsolve.results.summary import places
 from mechsolve.writers.plots import draw_start, write_plots
 
 PLOT_TITLES = {
@@ -440,8 +441,7 @@ def figures_table(res, units: OutputUnits | None = None) -> Table:
     an = res.analysis if U.is_si else res  # res words driver values in its shown units
     rows: list[list[str]] = []
     for lp in res.limit_positions():
-        a = " and at ".join(an.format_u(u) for u in lp.u_lows)  # an extreme reached twice
-        b = " and at ".join(an.format_u(u) for u in lp.u_highs)
+        a, b = places(an.format_u, lp.u_lows), places(an.format_u, lp.u_highs)
         where = f"the lower at {a}; the higher at {b}"
         if lp.kind == "rocker":
             rows.append(

@@ -104,7 +104,8 @@ class Summary:
             lines.append(
                 f"  instantaneous efficiency (the driving {self.effort_name[0]} without "
                 f"friction over the {self.effort_name[0]} with it, where the driver delivers "
-                f"power): min {eta[i]:.4g} at {self.describe_u(i)}"
+                f"power): smallest of the {self.sample_spacing()} samples {eta[i]:.4g} at "
+                f"{self.describe_u(i)}"
             )
         locked = np.flatnonzero(fr.locked)
         if locked.size:
@@ -387,8 +388,7 @@ def _limit_lines(res, src) -> list[str]:
 
     for lp in lim:
         fmt = res.format_u
-        a = " and at ".join(fmt(u) for u in lp.u_lows)  # an extreme reached twice
-        b = " and at ".join(fmt(u) for u in lp.u_highs)
+        a, b = places(fmt, lp.u_lows), places(fmt, lp.u_highs)
         if lp.kind == "rocker":
             parts.append(
                 f"rocker {lp.name} {deg(lp.low)} at {a} to "
@@ -526,3 +526,14 @@ def rms_over(u: np.ndarray, e: np.ndarray) -> float:
         return float(np.sqrt(np.mean(e2[ok]))) if ok.any() else float("nan")
     area = float(np.sum(0.5 * (e2[1:][both] + e2[:-1][both]) * du))
     return float(np.sqrt(area / travel))
+
+
+def places(fmt, us) -> str:
+    """Where an extreme is reached, in words: ``fmt(u)`` of each value, joined by "and
+    at" (an extreme reached twice in a turn); the same place reached in several turns
+    once, with their number (``driver angle 164.193° (in each of 11 turns)``)."""
+    texts = [fmt(u) for u in us]
+    seen: dict[str, int] = {}
+    for t in texts:
+        seen[t] = seen.get(t, 0) + 1
+    return " and at ".join(t if c == 1 else f"{t} (in each of {c} turns)" for t, c in seen.items())
