@@ -33,7 +33,7 @@ if TYPE_CHECKING:  # what the writer reads of a table (mechsolve.results.results
 
 def format_values(values: np.ndarray) -> list[str]:
     """Numbers with 12 significant digits; NaN as an empty cell."""
-    return ["" if not np.isfinite(v) else format(float(v), ".12g") for v in values]
+    return ["" if not np.isfinite(v) else format(float(v) + 0.0, ".12g") for v in values]
 
 
 BATCH = 4096
@@ -116,6 +116,7 @@ class CsvStream:
         for lo in range(skip, n, BATCH):  # a few thousand rows at a time: bounded memory
             hi = min(n, lo + BATCH)
             M = np.column_stack([np.asarray(c.values[lo:hi], float) for c in cols])
+            M += 0.0  # -0.0 + 0.0 is +0.0: no "-0" cell
             finite = np.all(np.isfinite(M), axis=1)
             buf = io.StringIO()
             w = csv.writer(buf)
