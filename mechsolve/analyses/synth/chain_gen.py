@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from mechsolve.analyses.synth.common import Design
+from mechsolve.analyses.synth.common import Design, batch_least_squares
 from mechsolve.base.errors import InputError, MechsolveError
 from mechsolve.groups.closed import RRR, DriverLink
 
@@ -453,33 +453,17 @@ class ChainBatch:
 def polish(batch: ChainBatch, x0: np.ndarray, bounds) -> tuple[float, np.ndarray] | None:
     """Least squares from ``x0`` on its branch combination, within the bounds; kept only
     if the result meets the constraints."""
-    from scipy.optimize import least_squares
-
     lo, hi = np.array(bounds).T
     x0 = np.clip(np.asarray(x0, float), lo, hi)
     k = int(batch.evaluate(x0[:, None])[2][0])
     combo = batch.combos[k]
 
-    def cols(X):
+    def columns(X):
         dx, dy, _ = batch.evaluate_combo(X, combo)
-        r = np.vstack([dx, dy])
-        return np.where(np.isfinite(r), r, 1e3)
+        return np.vstack([dx, dy])
 
-    def fun(x):
-        return cols(np.asarray(x)[:, None])[:, 0]
-
-    def jac(x):
-        x = np.asarray(x, float)
-        h = 1e-7 * np.maximum(1.0, np.abs(x)) * (hi - lo > 0)
-        n = len(x)
-        X = np.hstack([x[:, None] + np.diag(h), x[:, None] - np.diag(h)])
-        r = cols(X)
-        return (r[:, :n] - r[:, n:]) / np.where(h > 0, 2 * h, 1.0)
-
-    try:
-        r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), xtol=1e-15, ftol=1e-15,
-                          gtol=1e-15, max_nfev=300)  # fmt: skip
-    except ValueError:
+    r = batch_least_squares(columns, x0, lo, hi, max_nfev=300)
+    if r is None:
         return None
     dx, dy, c = batch.evaluate_combo(r.x[:, None], combo)
     if np.all(c > 0):

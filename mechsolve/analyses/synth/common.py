@@ -132,3 +132,37 @@ def pick(designs: list[Design], rule: str = "transmission") -> Design:
     if rule == "smallest":
         return min(ok, key=lambda d: sum(d.lengths.values()))
     raise InputError(f"unknown rule {rule!r}: choose one of {', '.join(RULES)}")
+
+
+def fd_columns(x: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """Central-difference steps ``h`` (zero for a variable with no room between its
+    bounds) and the 2n perturbed designs as one batch's columns: ``(h, X, n)``."""
+    h = 1e-7 * np.maximum(1.0, np.abs(x)) * (hi - lo > 0)
+    n = len(x)
+    return h, np.hstack([x[:, None] + np.diag(h), x[:, None] - np.diag(h)]), n
+
+
+def batch_least_squares(columns, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, max_nfev: int):
+    """scipy's ``least_squares`` from ``x0`` within the bounds, of the residuals
+    ``columns(X)`` (one column of residuals per design of ``X``'s columns; a residual
+    that is not finite counts as 1e3), its Jacobian by central differences with every
+    perturbed design in one batch. The result, or None where scipy refuses the problem."""
+    from scipy.optimize import least_squares
+
+    def cols(X):
+        r = columns(X)
+        return np.where(np.isfinite(r), r, 1e3)
+
+    def fun(x):
+        return cols(np.asarray(x, float)[:, None])[:, 0]
+
+    def jac(x):
+        h, X, n = fd_columns(np.asarray(x, float), lo, hi)
+        r = cols(X)
+        return (r[:, :n] - r[:, n:]) / np.where(h > 0, 2 * h, 1.0)
+
+    try:
+        return least_squares(fun, np.clip(x0, lo, hi), jac=jac, bounds=(lo, hi), xtol=1e-15,
+                             ftol=1e-15, gtol=1e-15, max_nfev=max_nfev)  # fmt: skip
+    except ValueError:
+        return None

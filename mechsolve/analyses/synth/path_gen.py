@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from mechsolve.analyses.synth.common import Design, grashof_type
+from mechsolve.analyses.synth.common import Design, batch_least_squares, fd_columns, grashof_type
 from mechsolve.analyses.synth.fourbar_batch import dyad_point, grashof_margin
 from mechsolve.analyses.synth.fourbar_batch import transmission_margin as _margin
 from mechsolve.analyses.synth.optimise import Search, distinct, search
@@ -565,46 +565,21 @@ def _violated(batch: Batch, found: Search) -> str:
 
 
 def _polish(batch: Batch, x0, bounds):
-    from scipy.optimize import least_squares
-
     lo, hi = np.array(bounds).T
     fp, fm = batch.objective_both(np.asarray(x0)[:, None])
     sigma = 1.0 if fp[0] <= fm[0] else -1.0
 
-    def cols(X):
-        dx, dy = batch.residuals(X, sigma)
-        r = np.vstack([dx, dy])
-        return np.where(np.isfinite(r), r, 1e3)
+    def columns(X):
+        return np.vstack(batch.residuals(X, sigma))
 
-    def fun(x):
-        return cols(np.asarray(x)[:, None])[:, 0]
-
-    def jac(x):
-        # central differences, every perturbed design in one batch
-        x = np.asarray(x, float)
-        h = 1e-7 * np.maximum(1.0, np.abs(x)) * (hi - lo > 0)
-        n = len(x)
-        X = np.hstack([x[:, None] + np.diag(h), x[:, None] - np.diag(h)])
-        r = cols(X)
-        return (r[:, :n] - r[:, n:]) / (2 * h)
-
-    try:
-        r = least_squares(fun, np.clip(x0, lo, hi), jac=jac, bounds=(lo, hi), xtol=1e-15,
-                          ftol=1e-15, gtol=1e-15, max_nfev=500)  # fmt: skip
-    except ValueError:
+    r = batch_least_squares(columns, np.asarray(x0, float), lo, hi, max_nfev=500)
+    if r is None:
         return None
     X = r.x[:, None]
     if np.all(batch.constraints(X) > 0):
         f = float(batch.objective(X)[0])
         return (f, np.array(r.x))
     return None
-
-
-def _fd_columns(x: np.ndarray, lo: np.ndarray, hi: np.ndarray):
-    """Central-difference steps and the 2n perturbed designs as one batch's columns."""
-    h = 1e-7 * np.maximum(1.0, np.abs(x)) * (hi - lo > 0)
-    n = len(x)
-    return h, np.hstack([x[:, None] + np.diag(h), x[:, None] - np.diag(h)]), n
 
 
 def _polish_constrained(batch: Batch, x0, bounds):
@@ -622,7 +597,7 @@ def _polish_constrained(batch: Batch, x0, bounds):
         return float(batch.objective(np.asarray(x, float)[:, None])[0])
 
     def fjac(x):
-        h, X, n = _fd_columns(np.asarray(x, float), lo, hi)
+        h, X, n = fd_columns(np.asarray(x, float), lo, hi)
         v = batch.objective(X)
         return np.where(h > 0, (v[:n] - v[n:]) / np.where(h > 0, 2 * h, 1), 0.0)
 
@@ -630,7 +605,7 @@ def _polish_constrained(batch: Batch, x0, bounds):
         return batch.constraints(np.asarray(x, float)[:, None])[:, 0]
 
     def gjac(x):
-        h, X, n = _fd_columns(np.asarray(x, float), lo, hi)
+        h, X, n = fd_columns(np.asarray(x, float), lo, hi)
         c = batch.constraints(X)
         return np.where(h > 0, (c[:, :n] - c[:, n:]) / np.where(h > 0, 2 * h, 1), 0.0)
 
