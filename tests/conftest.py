@@ -48,3 +48,25 @@ def pytest_collection_modifyitems(config, items):
         module = nodeid.split("::", 1)[0]
         if nodeid in slow or module in slow or nodeid.split("[", 1)[0] in slow:
             item.add_marker(pytest.mark.slow)
+
+
+def nfourbar_crank_angle(n: int, t):
+    """The N-four-bar's crank angle (rad) at times ``t``, in closed form: every window is
+    a parallelogram, so it moves as one pendulum with I = (N + 1) m l^2 / 3 + N m l^2 and
+    M_g = g m l ((N + 1) / 2 + N), starting upright at -1 rad/s (B0 along +x at 1 m/s);
+    m = 1 kg, l = 1 m, g = 9.81 m/s^2, integrated to 1e-13."""
+    import math
+
+    from scipy.integrate import solve_ivp
+
+    inertia, mg = (n + 1) / 3 + n, 9.81 * ((n + 1) / 2 + n)
+    sol = solve_ivp(
+        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
+        (0, float(t[-1])),
+        [math.pi / 2, -1.0],
+        t_eval=t,
+        rtol=1e-13,
+        atol=1e-13,
+        method="DOP853",
+    )
+    return sol.y[0]

@@ -12,34 +12,13 @@ least-squares accelerations at the singular position lost up to 2.5e-3 J and put
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import mechsolve as ms
 from mechsolve.analyses.dynamics import simulate
 
-from conftest import MECH
-
-G = 9.81
-
-
-def _crank_angle(n: int, t: np.ndarray) -> np.ndarray:
-    """One pendulum: I = (N + 1) m l^2 / 3 + N m l^2, M_g = g m l ((N + 1) / 2 + N),
-    upright at -1 rad/s (B0 along +x at 1 m/s)."""
-    inertia, mg = (n + 1) / 3 + n, G * ((n + 1) / 2 + n)
-    sol = solve_ivp(
-        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
-        (0, float(t[-1])),
-        [math.pi / 2, -1.0],
-        t_eval=t,
-        rtol=1e-13,
-        atol=1e-13,
-        method="DOP853",
-    )
-    return sol.y[0]
+from conftest import MECH, nfourbar_crank_angle
 
 
 @pytest.mark.parametrize("rtol", [1e-5, 1e-6])
@@ -49,7 +28,7 @@ def test_n_four_bar_keeps_its_energy_at_loose_tolerances(rtol):
     res = simulate(mech)
     tr = res.trajectory
     assert tr.t[-1] == pytest.approx(10.0) and not tr.early
-    th = _crank_angle(2, tr.t)
+    th = nfourbar_crank_angle(2, tr.t)
     b0 = res.point("B0")
     err = np.max(np.hypot(b0.x - np.cos(th), b0.y - np.sin(th)))
     assert err < 1e-3

@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import mechsolve as ms
 from mechsolve.analyses.dynamics import simulate
@@ -22,22 +21,7 @@ from mechsolve.analyses.dynamics.multibody_integrate import (
     bridge_substeps,
 )
 
-from conftest import MECH
-
-
-def _crank_angle(t: np.ndarray) -> np.ndarray:
-    """N = 2: I = 3 m l^2 / 3 + 2 m l^2, M_g = g m l (3 / 2 + 2), upright at -1 rad/s."""
-    inertia, mg = 1.0 + 2.0, 9.81 * 3.5
-    sol = solve_ivp(
-        lambda _, y: [y[1], -mg / inertia * math.cos(y[0])],
-        (0, float(t[-1])),
-        [math.pi / 2, -1.0],
-        t_eval=t,
-        rtol=1e-13,
-        atol=1e-13,
-        method="DOP853",
-    )
-    return sol.y[0]
+from conftest import MECH, nfourbar_crank_angle
 
 
 def test_bridge_steps_follow_the_tolerance():
@@ -69,7 +53,7 @@ def test_n_four_bar_at_the_bench_precision_in_fewer_evaluations(monkeypatch):
     assert tr.t[-1] == pytest.approx(10.0) and not tr.early
     # (it crosses about ten singular passages: bridged on all coordinates where an
     # integrator's step ends next to one, else stepped across)
-    th = _crank_angle(tr.t)
+    th = nfourbar_crank_angle(2, tr.t)
     b0 = res.point("B0")
     assert np.max(np.hypot(b0.x - np.cos(th), b0.y - np.sin(th))) < 1e-3
     # RK4: four evaluations per step, 8 steps per bridged output step (before: 32)
