@@ -186,8 +186,12 @@ def confirm_poses(out) -> str:
         e_ang = abs(math.remainder(math.atan2(q.y[i] - p.y[i], q.x[i] - p.x[i]) - f, 2 * math.pi))
         errs.append((e_pos, e_ang))
     out.check = {"poses": errs}
+    from mechsolve.analyses.synth.writer import Numbers
+
+    k = Numbers(out.unit).factor
     return "  mechsolve run of the written file: pose errors " + ", ".join(
-        f"{i + 1}: {e:.2e} m, {math.degrees(a):.2e} deg" for i, (e, a) in enumerate(errs)
+        f"{i + 1}: {e / k:.2e} {out.unit}, {math.degrees(a):.2e} deg"
+        for i, (e, a) in enumerate(errs)
     )
 
 
@@ -214,8 +218,12 @@ def plot_curves(plt, out):
     ys = [g[0][1], ip[0][1], op[0][1], g[1][1]]
     ax.plot(xs, ys, "o-", color="C2", label=f"the design in pose 1 ({d.family})")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    from mechsolve.base.units import OutputUnits
+    from mechsolve.writers.plots import length_axes
+
+    unit = length_axes(ax, OutputUnits(length=out.unit))
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
     ax.set_title(f"{out.name}: Burmester curves of four poses")
     ax.legend(fontsize=8)
     fig.tight_layout()

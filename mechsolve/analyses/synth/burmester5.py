@@ -293,8 +293,12 @@ def plot_five(plt, out):
     ax.plot([g[0][0], ip[0][0], op[0][0], g[1][0]], [g[0][1], ip[0][1], op[0][1], g[1][1]],
             "o-", color="C2", label=f"the design in pose 1 ({d.family})")  # fmt: skip
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    from mechsolve.base.units import OutputUnits
+    from mechsolve.writers.plots import length_axes
+
+    unit = length_axes(ax, OutputUnits(length=out.unit))
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
     ax.set_title(f"{out.name}: Burmester points of five poses")
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -26,7 +26,9 @@ from typing import Any
 import numpy as np
 
 from mechsolve.analyses.synth.common import Design
+from mechsolve.analyses.synth.writer import Numbers
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits
 
 __all__ = ["solve_optimised", "confirm_optimised", "describe_optimised", "write_plot"]
 
@@ -235,11 +237,12 @@ def describe_optimised(out: Any) -> str:
             f"{found.seconds:.2f} s (seed {found.seed}); stopped: {found.stopped}"
         )
     if out.method == "function":
-        head = "  #  design                 crank      coupler    rocker     frame (m)" \
+        head = f"  #  design                 crank      coupler    rocker     frame ({out.unit})" \
                "  max error (deg)  min transmission (deg)  Grashof"  # fmt: skip
         lines.append(head)
+        k = Numbers(out.unit).factor
         for i, d in enumerate(out.designs, 1):
-            L = d.lengths
+            L = {n: v / k for n, v in d.lengths.items()}
             mark = "*" if d is out.chosen else " "
             bad = "" if d.valid else "  INVALID: " + "; ".join(d.notes)
             ok = math.isfinite(d.extra["max_error"])  # the loop closes over the range
@@ -289,11 +292,12 @@ def confirm_optimised(out: Any) -> str:
 
     ch = verify_path(out.yaml, out.chosen, out.check["result"])
     out.check["verified"] = ch
+    k, u = Numbers(out.unit).factor, out.unit
     return (
         "  mechsolve run of the written file: distance of the coupler point from each "
         "target point "
-        + ", ".join(f"{e:.3e}" for e in ch.distances)
-        + f" m (largest {float(np.max(ch.distances)):.3e} m); "
+        + ", ".join(f"{e / k:.3e}" for e in ch.distances)
+        + f" {u} (largest {float(np.max(ch.distances)) / k:.3e} {u}); "
         + (
             "precision points reached in order on one branch"
             if ch.in_order
@@ -306,7 +310,7 @@ def write_plot(out: Any, path: Path) -> Path:
     """Target against achieved (by mechsolve's run of the written file), as a PNG."""
     from mechsolve.base.atomic import replacing
     from mechsolve.writers.fonts import pyplot
-    from mechsolve.writers.plots import pretty_figure
+    from mechsolve.writers.plots import length_axes, pretty_figure
 
     plt = pyplot()
     if out.method in ("four-positions", "five-positions"):
@@ -347,8 +351,9 @@ def write_plot(out: Any, path: Path) -> Path:
         ax1.plot(tx, ty, "o", mfc="none", ms=9, label="target points")
         ax1.plot(ch.reached_x, ch.reached_y, "x", label="reached")
         ax1.set_aspect("equal", adjustable="datalim")
-        ax1.set_xlabel("x (m)")
-        ax1.set_ylabel("y (m)")
+        unit = length_axes(ax1, OutputUnits(length=out.unit))
+        ax1.set_xlabel(f"x ({unit})")
+        ax1.set_ylabel(f"y ({unit})")
         ax1.legend()
     ax1.set_title(f"{out.name}: {out.chosen.family}")
     fig.tight_layout()

@@ -47,7 +47,7 @@ from mechsolve.analyses.synth.fourbar_batch import dyad_point, grashof_margin
 from mechsolve.analyses.synth.fourbar_batch import transmission_margin as _margin
 from mechsolve.analyses.synth.optimise import Search, distinct, search
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import UnitError, parse_quantity
+from mechsolve.base.units import UnitError, parse_quantity, parse_unit
 
 __all__ = ["PathSpec", "read_path", "solve_path", "path_yaml", "verify_path", "describe_rows"]
 
@@ -696,11 +696,12 @@ def path_yaml(d: Design, name: str, spec: PathSpec, digits: int | None = None) -
     travel = TWO_PI if spec.closed else abs(float(u[-1] - u[0]))
     data["sweep"] = {"range": f"{math.degrees(max(travel, 1e-9)):.12g} deg", "step": "1 deg"}
     kind = "four-bar" if spec.chain is None else "linkage"
+    lu = _default_unit(spec.units, "length")
     head = [
         f"# {name}: {kind} path generator (mechsolve synth, {d.family})",
         f"# Template {spec.template.name}; point {n['P']} through "
         f"{len(spec.targets)} targets: sum of squared distances "
-        f"{d.extra['objective']:.6e} m^2 (the synthesis' model).",
+        f"{d.extra['objective'] / parse_unit(lu).factor ** 2:.6e} {lu}^2 (the synthesis' model).",
         "# Crank angles at the targets (deg): "
         + ", ".join(f"{math.degrees(float(x)):.6f}" for x in u),
     ]
@@ -744,25 +745,26 @@ def verify_path(text: str, d: Design, result: PathResult) -> PathCheck:
 
 
 def describe_rows(out: Any) -> list[str]:
+    """The designs' table, lengths in the problem's unit ``out.unit``."""
+    u, k = out.unit, parse_unit(out.unit).factor
+    head = f"  #  design        {f'sum of squares ({u}^2)':<21} {f'largest distance ({u})':<21} "
     if out.check["spec"].chain is not None:
-        rows = ["  #  design        sum of squares (m^2)  largest distance (m)  "
-                "min transmission (deg)"]  # fmt: skip
+        rows = [head + " min transmission (deg)"]
         for i, d in enumerate(out.designs, 1):
             mark = "*" if d is out.chosen else " "
             rows.append(
-                f" {mark}{i:<2} {d.family:<13} {d.extra['objective']:<21.6e} "
-                f"{float(np.max(d.extra['distances'])):<21.6e} "
+                f" {mark}{i:<2} {d.family:<13} {d.extra['objective'] / k**2:<21.6e} "
+                f"{float(np.max(d.extra['distances'])) / k:<21.6e} "
                 f"{math.degrees(d.min_transmission):.4f}"
             )
         return rows
-    rows = ["  #  design        sum of squares (m^2)  largest distance (m)  crank      coupler"
-            "    rocker     frame (m)  Grashof"]  # fmt: skip
+    rows = [head + f" crank      coupler    rocker     frame ({u})  Grashof"]
     for i, d in enumerate(out.designs, 1):
-        L = d.lengths
+        L = {n: v / k for n, v in d.lengths.items()}
         mark = "*" if d is out.chosen else " "
         rows.append(
-            f" {mark}{i:<2} {d.family:<13} {d.extra['objective']:<21.6e} "
-            f"{float(np.max(d.extra['distances'])):<21.6e} {L['crank']:<10.6f} "
+            f" {mark}{i:<2} {d.family:<13} {d.extra['objective'] / k**2:<21.6e} "
+            f"{float(np.max(d.extra['distances'])) / k:<21.6e} {L['crank']:<10.6f} "
             f"{L['coupler']:<10.6f} {L['rocker']:<10.6f} {L['frame']:<10.6f} {d.grashof}"
         )
     return rows

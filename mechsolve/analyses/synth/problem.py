@@ -248,7 +248,7 @@ def _solve_optimised(
     designs, chosen, text, check = solve_optimised(
         r, method, name, solution, digits, seed=seed, max_time=max_time, progress=progress
     )
-    out = Outcome(name, method, designs, chosen, text, check)
+    out = Outcome(name, method, designs, chosen, text, check, unit=r.length)
     out.text = describe_optimised(out)
     return out
 

@@ -58,7 +58,15 @@ class Numbers:
         ``1.387798 m``."""
         scale = parse_unit(self.unit).factor
         places = max(0, 6 + round(math.log10(scale)))
-        return f"{x / scale:.{places}f} {self.unit}"
+        text = f"{x / scale:.{places}f}"
+        if text.startswith("-") and float(text) == 0.0:
+            text = text[1:]  # no "-0.000 mm" for a coordinate rounded to zero
+        return f"{text} {self.unit}"
+
+    @property
+    def factor(self) -> float:
+        """Metres per ``unit``: a length in SI divided by it is the number shown."""
+        return parse_unit(self.unit).factor
 
     @property
     def units_line(self) -> str:
