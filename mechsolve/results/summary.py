@@ -264,8 +264,10 @@ class Summary:
             mag = np.where(g.ok, mag, np.nan)
             if np.any(np.isfinite(mag)):
                 i = int(np.nanargmax(mag))
-                peaks.append(f"{j.name} {mag[i] / fscale:.4g} {funit} at {src.describe_u(i)}")
-        lines.append("  peak reactions: " + "; ".join(peaks))
+                note = f" ({j.magnitude_note.strip()})" if j.magnitude_note else ""
+                peaks.append(f"{j.name} {mag[i] / fscale:.4g} {funit}{note} at {src.describe_u(i)}")
+        # the largest sample of each (the requirements locate a peak between samples)
+        lines.append(f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks))
         for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
             more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u)
             lines += ["  " + t for t in more]
