@@ -208,8 +208,16 @@ def chain_yaml(loops: int, positions: int) -> str:
 
 
 def _kinematic_rows(
-    mech, ref: Callable, compare: Callable, repeats: int, newton_n: int
+    mech,
+    ref: Callable,
+    compare: Callable,
+    repeats: int,
+    newton_n: int,
+    extra: dict[str, Callable[[], object]] | None = None,
 ) -> list[Row]:
+    """The reference, mechsolve's whole call and sweep, and its Newton settings; the
+    functions ``extra`` are timed in the same interleaved runs as the first three (their
+    times and results are put in ``extra`` in place of the functions)."""
     import mechsolve as ms
     from mechsolve.core.sweep import Analysis
 
@@ -221,8 +229,10 @@ def _kinematic_rows(
         "ref": lambda: ref(th),
         "call": lambda: ms.solve(mech, forces=False),
         "sweep": lambda: an.solve(u, start=start),
-    }
+    } | (extra or {})
     t = interleaved(fns, repeats)
+    if extra:
+        extra.update({k: t[k] for k in extra})
     want = t["ref"][1]
     rows = [
         Row("closed form by hand (reference)", t["ref"][0], {}, ""),
@@ -291,19 +301,16 @@ def case_fourbar_kinematics(n: int, repeats: int, newton_n: int) -> Case:
     case = Case(
         "fourbar-kinematics", f"crank-rocker, {n} positions: positions, velocities, accelerations"
     )
-    rows = _kinematic_rows(mech, R.fourbar_textbook, _compare_fourbar, repeats, newton_n)
-    rows[0].setting = "closed form by hand, Norton's textbook formulas (reference)"
     th = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    t = interleaved(
-        {
-            "v": lambda: R.fourbar_vector(th.copy()),
-            "floor": lambda: FL.fourbar_floor(th.copy()),
-            # a new model object each time: its analysis is built (a repeated solve of
-            # one unchanged model, as in the row "whole call", reuses it)
-            "first": lambda: ms.solve(copy.copy(mech), forces=False),
-        },
-        repeats,
-    )
+    t = {
+        "v": lambda: R.fourbar_vector(th.copy()),
+        "floor": lambda: FL.fourbar_floor(th.copy()),
+        # a new model object each time: its analysis is built (a repeated solve of one
+        # unchanged model, as in the row "whole call", reuses it)
+        "first": lambda: ms.solve(copy.copy(mech), forces=False),
+    }
+    rows = _kinematic_rows(mech, R.fourbar_textbook, _compare_fourbar, repeats, newton_n, t)
+    rows[0].setting = "closed form by hand, Norton's textbook formulas (reference)"
     vec = R.fourbar_vector(th)
     fl = t["floor"][1]
     rows.insert(
