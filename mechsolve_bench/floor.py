@@ -38,6 +38,13 @@ position (a closed form closes by construction), so the floor does not check it 
 ``residual=True`` adds that check (the largest loop-closure error of the two pins at
 B), to show its cost.
 
+Two of mechsolve's cases cost it nothing here and are left out: the limit pose of a dyad
+whose arms are equal (its outer joints can coincide; the benchmark's coupler and rocker
+differ in length, which mechsolve finds by one comparison when it builds the group), and
+a sweep that starts where the dyad cannot close (mechsolve then assembles at the first
+position that closes; here the branch comes from the condition alone, so the first
+positions are simply not ok).
+
 The thresholds are mechsolve's (``core/branches.py``, ``core/conditioning.py``,
 ``core/singular.py``), restated here: nothing in this module imports the solver.
 """
