@@ -22,6 +22,7 @@ adds the peers (``pip install 'mechsolve[bench]'``).
 
 from __future__ import annotations
 
+import copy
 import math
 import os
 import random
@@ -40,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.writers.plots import save_figure
+from mechsolve_bench import floor as FL
 from mechsolve_bench import lean_newton as LN
 from mechsolve_bench import references as R
 
@@ -206,8 +208,16 @@ def chain_yaml(loops: int, positions: int) -> str:
 
 
 def _kinematic_rows(
-    mech, ref: Callable, compare: Callable, repeats: int, newton_n: int
+    mech,
+    ref: Callable,
+    compare: Callable,
+    repeats: int,
+    newton_n: int,
+    extra: dict[str, Callable[[], object]] | None = None,
 ) -> list[Row]:
+    """The reference, mechsolve's whole call and sweep, and its Newton settings; the
+    functions ``extra`` are timed in the same interleaved runs as the first three (their
+    times and results are put in ``extra`` in place of the functions)."""
     import mechsolve as ms
     from mechsolve.core.sweep import Analysis
 
@@ -219,8 +229,10 @@ def _kinematic_rows(
         "ref": lambda: ref(th),
         "call": lambda: ms.solve(mech, forces=False),
         "sweep": lambda: an.solve(u, start=start),
-    }
+    } | (extra or {})
     t = interleaved(fns, repeats)
+    if extra:
+        extra.update({k: t[k] for k in extra})
     want = t["ref"][1]
     rows = [
         Row("closed form by hand (reference)", t["ref"][0], {}, ""),
@@ -289,12 +301,18 @@ def case_fourbar_kinematics(n: int, repeats: int, newton_n: int) -> Case:
     case = Case(
         "fourbar-kinematics", f"crank-rocker, {n} positions: positions, velocities, accelerations"
     )
-    rows = _kinematic_rows(mech, R.fourbar_textbook, _compare_fourbar, repeats, newton_n)
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    t = {
+        "v": lambda: R.fourbar_vector(th.copy()),
+        "floor": lambda: FL.fourbar_floor(th.copy()),
+        # a new model object each time: its analysis is built (a repeated solve of one
+        # unchanged model, as in the row "whole call", reuses it)
+        "first": lambda: ms.solve(copy.copy(mech), forces=False),
+    }
+    rows = _kinematic_rows(mech, R.fourbar_textbook, _compare_fourbar, repeats, newton_n, t)
     rows[0].setting = "closed form by hand, Norton's textbook formulas (reference)"
-    t = interleaved(
-        {"v": lambda: R.fourbar_vector(np.linspace(0, 2 * np.pi, n, endpoint=False))}, repeats
-    )
-    vec = R.fourbar_vector(np.linspace(0, 2 * np.pi, n, endpoint=False))
+    vec = R.fourbar_vector(th)
+    fl = t["floor"][1]
     rows.insert(
         1,
         Row(
@@ -303,13 +321,36 @@ def case_fourbar_kinematics(n: int, repeats: int, newton_n: int) -> Case:
             {"angle": 0.0, "omega": 0.0, "alpha": 0.0} | _errs_ref(vec, n),
         ),
     )
+    rows.insert(
+        2,
+        Row(
+            "the same with mechsolve's checks by hand (the floor)",
+            t["floor"][0],
+            _errs_ref((fl.th3, fl.th4, fl.w3, fl.w4, fl.al3, fl.al4), n),
+            "branch from the condition, ok flags, indicator, events, singular rates",
+        ),
+    )
+    rows.insert(
+        4,
+        Row(
+            "mechsolve auto: whole call, a model's first solve",
+            t["first"][0],
+            _compare_fourbar(t["first"][1], R.fourbar_textbook(th)),
+            "the row above solves one unchanged model again (its analysis kept)",
+        ),
+    )
     case.rows = rows
     ref = rows[0].seconds
     case.lines = [
-        f"ratio mechsolve (whole call) / closed form (textbook): {rows[2].seconds / ref:.2f}",
-        f"ratio mechsolve (sweep alone) / closed form (textbook): {rows[3].seconds / ref:.2f}",
+        f"ratio mechsolve (whole call) / closed form (textbook): {rows[3].seconds / ref:.2f}",
+        f"ratio mechsolve (sweep alone) / closed form (textbook): {rows[5].seconds / ref:.2f}",
         f"ratio mechsolve (whole call) / closed form (vector form): "
-        f"{rows[2].seconds / rows[1].seconds:.2f}",
+        f"{rows[3].seconds / rows[1].seconds:.2f}",
+        f"ratio floor (vector form with mechsolve's checks) / vector form: "
+        f"{rows[2].seconds / rows[1].seconds:.2f} (of the 1.5 allowed)",
+        f"ratio mechsolve (whole call) / floor: {rows[3].seconds / rows[2].seconds:.2f}",
+        f"ratio mechsolve (whole call, first solve) / closed form (vector form): "
+        f"{rows[4].seconds / rows[1].seconds:.2f}",
     ]
     return case
 

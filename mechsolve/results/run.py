@@ -13,7 +13,7 @@ import numpy as np
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.core import evaluate as core
-from mechsolve.core.sweep import Analysis
+from mechsolve.core.kept import analysis_for
 from mechsolve.model import Mechanism
 from mechsolve.results.results import Results
 
@@ -78,7 +78,7 @@ def solve(
     """
     if not mech.__dict__.get("_validated"):  # built in code: check it first
         mech.validate()
-    an = Analysis(mech, method)
+    an = analysis_for(mech, method)  # kept between solves of an unchanged model
     ud = udd = None
     if mech.driver.motion is not None:  # a motion law of time
         u, t, ud, udd = an.motion_values(step if mech.sweep.duration is not None else None)
