@@ -743,7 +743,8 @@ def _simulation_section(c: Content, mech, d: Path, units: OutputUnits | None = N
     c.dynamics_text = sim.summary(units=units)
     sdir = d / "simulation"
     sdir.mkdir()
-    c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
+    plots = write_simulation_plots(sim, sim.model, sdir, units or SI_OUTPUT)
+    c.dynamics_plots = [embed(p) for p in plots]
     c.incomplete = c.incomplete or sim.incomplete()
 
 

@@ -1,0 +1,169 @@
+"""Issue 29: the figures of ``simulate``, ``flywheel``, ``shaking``, ``compare``,
+``polygons`` and ``animate`` are drawn in the units their tables use (the file's by
+default, ``--units`` when given), as ``run``'s are.
+
+Each test captures the matplotlib figures a command saves and compares what is drawn
+(a line's data, or the tick labels against the tick positions) with the same command's
+``--units SI`` figure multiplied by a factor written out here by hand (1 mm = 1e-3 m,
+1 deg = pi/180 rad, 1 N*mm = 1e-3 N*m, 1 kN = 1e3 N), not by mechsolve's unit table;
+and checks that each axis names the unit.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from click.testing import CliRunner
+
+from mechsolve.cli.main import main
+
+MECH = Path(__file__).resolve().parent.parent / "mechanisms"
+
+MM = 1e-3  # m
+DEG = math.pi / 180  # rad
+NMM = 1e-3  # N*m
+
+
+def _figures(monkeypatch, *args: str) -> list:
+    """The figures the command ``args`` saves, in the order saved (their texts as
+    written: the report's units, ``N·mm``)."""
+    import mechsolve.writers.plots as plots
+
+    figs = []
+    real = plots.pretty_figure
+
+    def keep(fig):
+        real(fig)
+        if fig not in figs:  # a figure saved twice (png and svg) counts once
+            figs.append(fig)
+
+    monkeypatch.setattr(plots, "pretty_figure", keep)
+    r = CliRunner().invoke(main, list(args))
+    assert r.exit_code == 0, r.output
+    assert figs
+    return figs
+
+
+def _by_title(figs, words: str):
+    """The figure whose axes' or suptitle's text contains ``words``."""
+    for f in figs:
+        texts = [a.get_title() for a in f.axes]
+        if f._suptitle is not None:
+            texts.append(f._suptitle.get_text())
+        if any(words in t for t in texts):
+            return f
+    raise AssertionError(f"no figure titled {words!r}")
+
+
+def _y(ax, k: int = 0) -> np.ndarray:
+    return np.asarray(ax.get_lines()[k].get_ydata(), float)
+
+
+def _x(ax, k: int = 0) -> np.ndarray:
+    return np.asarray(ax.get_lines()[k].get_xdata(), float)
+
+
+def _same(shown, si, factor: float) -> None:
+    np.testing.assert_allclose(shown, np.asarray(si) * factor, rtol=1e-12, atol=1e-300)
+
+
+def _tick_values(axis) -> list[tuple[float, float]]:
+    """(the label read as a number, the tick's position) of each labelled tick."""
+    axis.axes.figure.canvas.draw()
+    labels = [t.get_text().replace("\u2212", "-") for t in axis.get_ticklabels()]
+    return [(float(t), v) for t, v in zip(labels, axis.get_ticklocs()) if t]
+
+
+# --- simulate -----------------------------------------------------------------------------
+
+
+def test_simulate_figures_in_the_files_units(monkeypatch, tmp_path):
+    """shaper.yaml is in mm and deg: the driver's speed in deg/s, its acceleration in
+    deg/s^2 and the motor torque in N*mm (the summary's units); the reactions with a
+    force unit given."""
+    f = str(MECH / "shaper.yaml")
+    mm = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "a"), "-q",
+                  "--units", "force=kN")  # fmt: skip
+    si = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "b"), "-q", "--units", "SI")
+    m_mm, m_si = (_by_title(x, "simulated motion") for x in (mm, si))
+    speed, acc, torque = m_mm.axes
+    _same(_y(speed), _y(m_si.axes[0]), 1 / DEG)
+    _same(_y(speed, 1), _y(m_si.axes[0], 1), 1 / DEG)  # the mean over each revolution
+    _same(_y(acc), _y(m_si.axes[1]), 1 / DEG)
+    assert speed.get_ylabel() == "driver speed [°/s]"
+    assert acc.get_ylabel() == "driver acceleration [°/s²]"
+    assert m_si.axes[0].get_ylabel() == "driver speed [rad/s]"
+    assert m_si.axes[2].get_ylabel() == "motor torque [N·m]"
+    assert torque.get_ylabel() == "motor torque [kN·mm]"
+    _same(_y(torque), _y(m_si.axes[2]), 1 / (1e3 * MM))  # 1 kN*mm = 1 N*m
+    _same(_x(torque), _x(m_si.axes[2]), 1.0)  # time stays s
+    r_mm, r_si = (_by_title(x, "joint reactions") for x in (mm, si))
+    assert r_mm.axes[0].get_ylabel() == "reaction magnitude [kN]"
+    assert r_si.axes[0].get_ylabel() == "reaction magnitude [N]"
+    _same(_y(r_mm.axes[0]), _y(r_si.axes[0]), 1e-3)
+    i_mm, i_si = (_by_title(x, "reduced moment of inertia") for x in (mm, si))
+    _same(_y(i_mm.axes[0]), _y(i_si.axes[0]), 1.0)  # J stays kg*m^2
+
+
+def test_simulate_torque_in_newton_millimetres_by_default(monkeypatch, tmp_path):
+    f = str(MECH / "shaper.yaml")
+    mm = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "a"), "-q")
+    si = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "b"), "-q", "--units", "SI")
+    t_mm = _by_title(mm, "simulated motion").axes[2]
+    t_si = _by_title(si, "simulated motion").axes[2]
+    assert t_mm.get_ylabel() == "motor torque [N·mm]"
+    _same(_y(t_mm), _y(t_si), 1 / NMM)
+    _same(_y(t_mm, 1), _y(t_si, 1), 1 / NMM)  # the time mean's line
+    mean_si = float(_y(t_si, 1)[0])
+    assert t_mm.get_legend().get_texts()[1].get_text() == f"time mean {mean_si / NMM:.6g} N·mm"
+
+
+def test_multibody_figures_in_the_files_units(monkeypatch, tmp_path):
+    """nfourbar-2.yaml (m and deg) is integrated in body coordinates: the driver's angle
+    in deg, its rate in deg/s; with a map, the energies in kJ and the constraint
+    violation in mm."""
+    f = str(MECH / "nfourbar-2.yaml")
+    mm = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "a"), "-q",
+                  "--units", "length=mm,energy=kJ")  # fmt: skip
+    si = _figures(monkeypatch, "simulate", f, "-o", str(tmp_path / "b"), "-q", "--units", "SI")
+    m_mm, m_si = (_by_title(x, "motion (multibody)") for x in (mm, si))
+    assert m_mm.axes[1].get_ylabel() == "its rate [°/s]"
+    assert m_si.axes[1].get_ylabel() == "its rate [rad/s]"
+    _same(_y(m_mm.axes[1]), _y(m_si.axes[1]), 1 / DEG)
+    _same(_y(m_mm.axes[2]), _y(m_si.axes[2]), 1 / DEG)
+    _same(_y(m_mm.axes[0]), _y(m_si.axes[0]), 1.0)  # the angle: deg either way
+    e_mm, e_si = (_by_title(x, "energy balance") for x in (mm, si))
+    assert e_mm.axes[0].get_ylabel() == "energy [kJ]"
+    _same(_y(e_mm.axes[0]), _y(e_si.axes[0]), 1e-3)
+    _same(_y(e_mm.axes[2]), _y(e_si.axes[2]), 1 / MM)  # the position violation
+    assert [t.get_text() for t in e_mm.axes[2].get_legend().get_texts()] == [
+        "position [mm]",
+        "velocity [mm/s]",
+    ]
+
+
+# --- flywheel -----------------------------------------------------------------------------
+
+
+def test_flywheel_figures_in_the_files_units(monkeypatch, tmp_path):
+    """The torque in N*mm (the summary's motor torque), the energies in the energy unit."""
+    f = str(MECH / "shaper.yaml")
+    mm = _figures(monkeypatch, "flywheel", f, "-o", str(tmp_path / "a"), "--no-check",
+                  "--units", "energy=kJ")  # fmt: skip
+    si = _figures(monkeypatch, "flywheel", f, "-o", str(tmp_path / "b"), "--no-check",
+                  "--units", "SI")  # fmt: skip
+    e_mm, e_si = (_by_title(x, "energy method") for x in (mm, si))
+    assert e_mm.axes[0].get_ylabel() == "torque [N·mm]"
+    assert e_si.axes[0].get_ylabel() == "torque [N·m]"
+    _same(_y(e_mm.axes[0]), _y(e_si.axes[0]), 1 / NMM)
+    _same(_y(e_mm.axes[0], 1), _y(e_si.axes[0], 1), 1 / NMM)  # the constant motor torque
+    assert e_mm.axes[1].get_ylabel() == "energy excursion dE [kJ]"
+    _same(_y(e_mm.axes[1]), _y(e_si.axes[1]), 1e-3)
+    _same(_x(e_mm.axes[1]), _x(e_si.axes[1]), 1.0)  # deg either way
+    w_mm, w_si = (_by_title(x, "energy-mass") for x in (mm, si))
+    assert w_mm.axes[0].get_ylabel() == "work of the motor and the loads W [kJ]"
+    for k in range(3):  # the curve and the two touching lines
+        _same(_y(w_mm.axes[0], k), _y(w_si.axes[0], k), 1e-3)
+        _same(_x(w_mm.axes[0], k), _x(w_si.axes[0], k), 1.0)  # J stays kg*m^2
