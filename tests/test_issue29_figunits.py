@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from click.testing import CliRunner
 
+import mechsolve.writers.plots as plots
 from mechsolve.cli.main import main
 
 MECH = Path(__file__).resolve().parent.parent / "mechanisms"
@@ -24,15 +25,14 @@ MECH = Path(__file__).resolve().parent.parent / "mechanisms"
 MM = 1e-3  # m
 DEG = math.pi / 180  # rad
 NMM = 1e-3  # N*m
+_PRETTY = plots.pretty_figure
 
 
 def _figures(monkeypatch, *args: str) -> list:
     """The figures the command ``args`` saves, in the order saved (their texts as
     written: the report's units, ``N·mm``)."""
-    import mechsolve.writers.plots as plots
-
     figs = []
-    real = plots.pretty_figure
+    real = _PRETTY  # the function itself, not a spy of an earlier call
 
     def keep(fig):
         real(fig)
@@ -167,3 +167,36 @@ def test_flywheel_figures_in_the_files_units(monkeypatch, tmp_path):
     for k in range(3):  # the curve and the two touching lines
         _same(_y(w_mm.axes[0], k), _y(w_si.axes[0], k), 1e-3)
         _same(_x(w_mm.axes[0], k), _x(w_si.axes[0], k), 1.0)  # J stays kg*m^2
+
+
+# --- shaking ------------------------------------------------------------------------------
+
+
+def test_shaking_figures_in_the_files_units(monkeypatch, tmp_path):
+    """fourbar.yaml is in mm and deg: the shaking moment in N*mm (the table's), before
+    and after balancing; the force in the force unit asked for."""
+    f = str(MECH / "fourbar.yaml")
+    mm = _figures(monkeypatch, "shaking", f, "-o", str(tmp_path / "a"), "-q", "--balance")
+    kn = _figures(monkeypatch, "shaking", f, "-o", str(tmp_path / "k"), "-q", "--balance",
+                  "--units", "force=kN,torque=N*mm")  # fmt: skip
+    si = _figures(monkeypatch, "shaking", f, "-o", str(tmp_path / "b"), "-q", "--balance",
+                  "--units", "SI")  # fmt: skip
+    assert len(mm) == len(si) == len(kn) == 2  # shaking.png and balance.png
+    for a, k, b in zip(mm, kn, si):
+        force, moment = a.axes
+        assert moment.get_ylabel().endswith("[N·mm] (ccw)")
+        assert b.axes[1].get_ylabel().endswith("[N·m] (ccw)")
+        assert moment.get_xlabel() == "driver angle [°]"
+        for line in range(len(moment.get_lines())):  # before and after balancing
+            _same(_y(moment, line), _y(b.axes[1], line), 1 / NMM)
+            _same(_x(moment, line), _x(b.axes[1], line), 1.0)
+        _same(_y(force), _y(b.axes[0]), 1.0)  # N in a mm file: no key names a force unit
+        assert force.get_xlabel() == "Fx on the frame [N]"
+        assert k.axes[0].get_xlabel() == "Fx on the frame [kN]"
+        assert k.axes[0].get_ylabel() == "Fy on the frame [kN]"
+        _same(_y(k.axes[0]), _y(b.axes[0]), 1e-3)
+        _same(_x(k.axes[0]), _x(b.axes[0]), 1e-3)
+        _same(_y(k.axes[1]), _y(b.axes[1]), 1 / NMM)
+    peak_si = float(np.nanmax(np.hypot(_x(si[0].axes[0]), _y(si[0].axes[0]))))
+    legend = kn[0].axes[0].get_legend().get_texts()[0].get_text()
+    assert legend.endswith(f"(peak {peak_si * 1e-3:.4g} kN)"), legend
