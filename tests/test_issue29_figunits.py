@@ -200,3 +200,39 @@ def test_shaking_figures_in_the_files_units(monkeypatch, tmp_path):
     peak_si = float(np.nanmax(np.hypot(_x(si[0].axes[0]), _y(si[0].axes[0]))))
     legend = kn[0].axes[0].get_legend().get_texts()[0].get_text()
     assert legend.endswith(f"(peak {peak_si * 1e-3:.4g} kN)"), legend
+
+
+# --- compare ------------------------------------------------------------------------------
+
+
+def test_compare_figures_in_the_first_files_units(monkeypatch, tmp_path):
+    """The shaper schemes are in mm and deg: the velocities in mm/s and the torques in
+    N*mm, as compare.csv and the printed table; the strokes in mm either way (the SI
+    table's strokes are in mm too)."""
+    files = [str(MECH / f"shaper-scheme{k}.yaml") for k in (2, 3)]
+    mm = _figures(monkeypatch, "compare", *files, "-o", str(tmp_path / "a"), "-q")
+    si = _figures(monkeypatch, "compare", *files, "-o", str(tmp_path / "b"), "-q",
+                  "--units", "SI")  # fmt: skip
+    v_mm, v_si = (_by_title(x, "Output velocity").axes[0] for x in (mm, si))
+    t_mm, t_si = (_by_title(x, "Driving torque").axes[0] for x in (mm, si))
+    d_mm, d_si = (_by_title(x, "Output displacement").axes[0] for x in (mm, si))
+    assert v_mm.get_ylabel() == "output velocity along the working stroke [mm/s]"
+    assert v_si.get_ylabel() == "output velocity along the working stroke [m/s]"
+    assert t_mm.get_ylabel() == "driving torque along the crank's motion [N·mm]"
+    assert t_si.get_ylabel() == "driving torque along the crank's motion [N·m]"
+    assert d_mm.get_ylabel() == d_si.get_ylabel()
+    assert d_mm.get_ylabel().endswith("[mm]")
+    assert v_mm.get_xlabel() == "crank angle from the start of the working stroke [°]"
+    for k in range(2):  # one line per scheme
+        _same(_y(v_mm, k), _y(v_si, k), 1 / MM)
+        _same(_y(t_mm, k), _y(t_si, k), 1 / NMM)
+        _same(_y(d_mm, k), _y(d_si, k), 1.0)
+        _same(_x(t_mm, k), _x(t_si, k), 1.0)
+    # the dotted band: the printed "velocity range there", in mm/s
+    bands = [c for c in v_mm.collections if len(c.get_segments()) == 2]
+    assert bands
+    bands_si = [c for c in v_si.collections if len(c.get_segments()) == 2]
+    for a, b in zip(bands, bands_si):
+        ya = [seg[0][1] for seg in a.get_segments()]
+        yb = [seg[0][1] for seg in b.get_segments()]
+        _same(ya, yb, 1 / MM)
