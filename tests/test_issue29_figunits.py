@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 import mechsolve.writers.plots as plots
@@ -236,3 +237,47 @@ def test_compare_figures_in_the_first_files_units(monkeypatch, tmp_path):
         ya = [seg[0][1] for seg in a.get_segments()]
         yb = [seg[0][1] for seg in b.get_segments()]
         _same(ya, yb, 1 / MM)
+
+
+# --- polygons -----------------------------------------------------------------------------
+
+
+def _mu(title: str) -> float:
+    """The scale a polygon's (or the mechanism's) title states: ``μv = 0.2 (mm/s)/mm``."""
+    return float(title.split(" = ")[1].split()[0])
+
+
+def test_polygons_figures_in_the_files_units(monkeypatch, tmp_path):
+    """fourbar.yaml is in mm: the mechanism's axes in mm, the polygons' scales and vector
+    axes in mm/s and mm/s^2 (polygons.txt's units); the polygons themselves, drawn in mm
+    of the drawing, are the same."""
+    f = str(MECH / "fourbar.yaml")
+    mm = _figures(monkeypatch, "polygons", f, "--at", "2", "-o", str(tmp_path / "a"), "-q")
+    si = _figures(monkeypatch, "polygons", f, "--at", "2", "-o", str(tmp_path / "b"), "-q",
+                  "--units", "SI")  # fmt: skip
+    sheet_mm, sheet_si = mm[-1], si[-1]  # the sheet: the mechanism beside both polygons
+    mech_mm, mech_si = sheet_mm.axes[0], sheet_si.axes[0]
+    assert (mech_mm.get_xlabel(), mech_mm.get_ylabel()) == ("x [mm]", "y [mm]")
+    assert (mech_si.get_xlabel(), mech_si.get_ylabel()) == ("x [m]", "y [m]")
+    for axis in (mech_mm.xaxis, mech_mm.yaxis):  # a label is its tick's position (m) in mm
+        ticks = _tick_values(axis)
+        assert len(ticks) >= 3
+        for text, loc in ticks:
+            assert text == pytest.approx(loc / MM, abs=1e-9)
+    for text, loc in _tick_values(mech_si.xaxis):
+        assert abs(text - loc) < 1e-12
+    assert _mu(mech_mm.get_title()) == _mu(mech_si.get_title()) / MM
+    assert mech_mm.get_title().endswith("mm/mm")
+    for k, unit in ((1, "mm/s"), (2, "mm/s²")):
+        p_mm, p_si = sheet_mm.axes[k], sheet_si.axes[k]
+        assert p_mm.get_xlim() == p_si.get_xlim()  # the same drawing, in mm of paper
+        mu_si = _mu(p_si.get_title())  # (m/s)/mm or (m/s^2)/mm
+        assert _mu(p_mm.get_title()) == pytest.approx(mu_si / MM, rel=1e-12)
+        assert p_mm.get_title().endswith(f"({unit})/mm")
+        top, right = p_mm.child_axes
+        assert top.get_xlabel().endswith(f"[{unit}]") and right.get_ylabel().endswith(f"[{unit}]")
+        sheet_mm.canvas.draw()
+        np.testing.assert_allclose(top.get_xlim(), np.array(p_mm.get_xlim()) * mu_si / MM)
+        np.testing.assert_allclose(right.get_ylim(), np.array(p_mm.get_ylim()) * mu_si / MM)
+    # the separate polygon drawings say the same
+    assert _mu(mm[0].axes[0].get_title()) == _mu(sheet_mm.axes[1].get_title())

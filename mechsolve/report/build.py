@@ -756,7 +756,7 @@ def _polygons_section(
     # after the start, where a mechanism that starts at a limit already moves)
 
     try:
-        pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
+        pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol", units=units)
     except InputError as exc:  # a group the graphical method here does not draw
         if polygons_at is not None:
             raise
