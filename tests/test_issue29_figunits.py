@@ -281,3 +281,80 @@ def test_polygons_figures_in_the_files_units(monkeypatch, tmp_path):
         np.testing.assert_allclose(right.get_ylim(), np.array(p_mm.get_ylim()) * mu_si / MM)
     # the separate polygon drawings say the same
     assert _mu(mm[0].axes[0].get_title()) == _mu(sheet_mm.axes[1].get_title())
+
+
+# --- animate ------------------------------------------------------------------------------
+
+
+def _animated(monkeypatch, tmp_path: Path, *args: str):
+    """(frames, figure) of ``mechsolve animate`` on fourbar.yaml (mm), 6 frames."""
+    import mechsolve.report.animate as animate
+
+    kept = []
+    real = animate._render
+
+    def spy(fr, fig):
+        kept.append((fr, fig))
+        yield from real(fr, fig)
+
+    monkeypatch.setattr(animate, "_render", spy)
+    out = tmp_path / f"a{len(list(tmp_path.iterdir()))}.gif"
+    r = CliRunner().invoke(
+        main, ["animate", str(MECH / "fourbar.yaml"), "-o", str(out), "--frames", "6", *args]
+    )
+    assert r.exit_code == 0, r.output
+    assert out.exists() and len(kept) == 1
+    return kept[0]
+
+
+def _scale_bar(ax) -> tuple[float, float, str, float, str]:
+    """(the bar's drawn length in m, its length as read, its unit, the force as read,
+    its unit) of the force scale bar."""
+    import re
+
+    bar_text = re.compile(r"([\d.e+-]+) (\w+) = ([\d.e+-]+) (\w+)")
+    (m,) = [m for t in ax.texts if (m := bar_text.fullmatch(t.get_text()))]
+    (bar,) = [ln for ln in ax.get_lines() if ln.get_linewidth() == 2 and ln.get_color() == "k"]
+    xs = bar.get_xdata()
+    return float(xs[1] - xs[0]), float(m[1]), m[2], float(m[3]), m[4]
+
+
+def test_animate_axes_and_scale_in_the_files_units(monkeypatch, tmp_path):
+    """fourbar.yaml is in mm: the axes read mm (the tick labels are the tick positions,
+    metres inside, times 1000); with a map the scale bar reads cm and kN, and stands for
+    the same force per metre of arrow as the SI one."""
+    fr_mm, fig_mm = _animated(monkeypatch, tmp_path)
+    fr_si, fig_si = _animated(monkeypatch, tmp_path, "--units", "SI")
+    fr_cm, fig_cm = _animated(monkeypatch, tmp_path, "--units", "length=cm,force=kN")
+    ax_mm, ax_si, ax_cm = fig_mm.axes[0], fig_si.axes[0], fig_cm.axes[0]
+    assert (ax_mm.get_xlabel(), ax_mm.get_ylabel()) == ("x [mm]", "y [mm]")
+    assert (ax_si.get_xlabel(), ax_si.get_ylabel()) == ("x [m]", "y [m]")
+    assert ax_cm.get_xlabel() == "x [cm]"
+    for axis in (ax_mm.xaxis, ax_mm.yaxis):
+        ticks = _tick_values(axis)
+        assert len(ticks) >= 3
+        for text, loc in ticks:
+            assert text == pytest.approx(loc / MM, abs=1e-9)
+    for text, loc in _tick_values(ax_cm.xaxis):
+        assert text == pytest.approx(loc * 100, abs=1e-9)
+    for text, loc in _tick_values(ax_si.xaxis):
+        assert text == pytest.approx(loc, abs=1e-12)
+    drawn_mm, read_mm, unit_mm, force_mm, f_unit_mm = _scale_bar(ax_mm)
+    assert (unit_mm, f_unit_mm) == ("mm", "N") and read_mm == pytest.approx(drawn_mm / MM)
+    drawn_si, read_si, unit_si, force_si, f_unit_si = _scale_bar(ax_si)
+    assert f_unit_si == "N"
+    drawn_cm, read_cm, unit_cm, force_cm, f_unit_cm = _scale_bar(ax_cm)
+    assert (unit_cm, f_unit_cm) == ("cm", "kN") and read_cm == pytest.approx(drawn_cm * 100)
+    # one arrow scale: metres of arrow per newton, whatever the units it is read in
+    assert drawn_cm / (force_cm * 1e3) == pytest.approx(drawn_si / force_si, rel=1e-12)
+    assert drawn_mm / force_mm == pytest.approx(drawn_si / force_si, rel=1e-12)
+    # the load's tag: 2 N as the force unit reads it
+    from mechsolve.report.animate import arrow_labels
+
+    assert arrow_labels(fr_cm)["pull"] == "pull 0.002 kN"
+    assert arrow_labels(fr_mm)["pull"] == "pull 2 N"
+    # the HTML player's texts (its coordinates stay metres, unlabelled)
+    js = fr_cm.to_json()
+    assert js["bar"]["text"] == f"{read_cm:g} cm = {force_cm:g} kN"
+    assert js["loads"]["pull"]["text"] == "pull 0.002 kN"
+    assert js["bounds"] == fr_si.to_json()["bounds"]

@@ -717,7 +717,7 @@ def mechanism_content(
             c.verdicts = check_requirements(mech, res)
             c.requirements = verdict_rows(c.verdicts)
             c.failed_requirements = sum(not v.passed for v in c.verdicts)
-    fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method)
+    fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method, units=U)
     c.animation = fr.to_json()
     return c
 
