@@ -358,3 +358,26 @@ def test_animate_axes_and_scale_in_the_files_units(monkeypatch, tmp_path):
     assert js["bar"]["text"] == f"{read_cm:g} cm = {force_cm:g} kN"
     assert js["loads"]["pull"]["text"] == "pull 0.002 kN"
     assert js["bounds"] == fr_si.to_json()["bounds"]
+
+
+# --- report -------------------------------------------------------------------------------
+
+
+def test_report_polygons_drawn_in_the_files_units(monkeypatch, tmp_path):
+    """The report's polygons are drawn in the units of its text, as ``polygons``'s."""
+    f = str(MECH / "fourbar.yaml")
+    mm = _figures(monkeypatch, "report", f, "-o", str(tmp_path / "a.html"), "--frames", "3")
+    titles = [a.get_title() for fig in mm for a in fig.axes]
+    mu_v = [t for t in titles if t.startswith("velocity polygon")]
+    assert mu_v and all(t.endswith("(mm/s)/mm") for t in mu_v), titles
+    mech = [t for t in titles if t.startswith("mechanism, μl")]
+    assert mech and all(t.endswith(" mm/mm") for t in mech), titles
+
+
+def test_report_start_up_plots_in_the_files_units(monkeypatch, tmp_path):
+    """The report's start-up plots are in the units of its start-up summary."""
+    f = str(MECH / "shaper.yaml")
+    figs = _figures(monkeypatch, "report", f, "-o", str(tmp_path / "a.html"), "--frames", "3")
+    speed, _, torque = _by_title(figs, "simulated motion").axes
+    assert speed.get_ylabel() == "driver speed [°/s]"
+    assert torque.get_ylabel() == "motor torque [N·mm]"
