@@ -9,6 +9,10 @@ file's point loads as labelled arrows (where they act); with ``forces`` also the
 at each joint as a labelled arrow (the force on the joint's second link by its first, the
 convention of the CSV). All arrows are on one scale, drawn as a scale bar that reads two round
 numbers (1, 2 or 5 times a power of ten): ``5 m = 200 kN``.
+
+The axes, the scale bar, the driver's value and the loads' sizes are in the units of the
+file (an :class:`~mechsolve.base.units.OutputUnits`: a file in mm is drawn with its axes in
+mm, ``50 mm = 20 N``); the coordinates stay metres inside, as the HTML player's numbers.
 """
 
 from __future__ import annotations
@@ -24,8 +28,9 @@ import numpy as np
 from mechsolve import api
 from mechsolve.base.atomic import replacing
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.writers.fonts import pyplot
-from mechsolve.writers.plots import length_text, round_125
+from mechsolve.writers.plots import length_axes, length_text, round_125
 
 if TYPE_CHECKING:
     from mechsolve.model import Mechanism
@@ -92,14 +97,29 @@ class Frames:
         default_factory=dict
     )  # point load -> (x, y, Fx, Fy) per frame, zero where it does not act
     load_points: dict[str, str] = field(default_factory=dict)  # load -> its point
-    bar: float = 0.0  # the scale bar's length (m), 1, 2 or 5 times a power of ten
+    bar: float = 0.0  # the scale bar's length (m), 1, 2 or 5 times a power of ten (shown)
+    units: OutputUnits = SI_OUTPUT  # what the axes and the texts are shown in
 
     @property
     def bar_text(self) -> str:
-        """The scale bar's reading: ``1 m = 50 kN``."""
+        """The scale bar's reading: ``1 m = 50 kN``, ``50 mm = 20 N``."""
         if not (self.force_scale > 0 and self.bar > 0):
             return ""
-        return f"{length_text(self.bar)} = {force_text(self.bar / self.force_scale)}"
+        return f"{self.length_text(self.bar)} = {self.force_text(self.bar / self.force_scale)}"
+
+    def length_text(self, metres: float) -> str:
+        """A length as the drawing reads it: in the shown length unit, or for metres as
+        :func:`~mechsolve.writers.plots.length_text` (``2 m``, ``50 mm``)."""
+        if self.units.length == "m":
+            return length_text(metres)
+        return self.units.text(metres, "m")
+
+    def force_text(self, newtons: float) -> str:
+        """A force in the shown force unit; in N, with the prefix engineers read
+        (:func:`force_text`: ``69.09 kN``)."""
+        if self.units.force == "N":
+            return force_text(newtons)
+        return self.units.text(newtons, "N", ".4g")
 
     def arrows(self) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """Every force arrow: the reactions, then the loads."""
@@ -139,14 +159,11 @@ class Frames:
 
     def label(self, i: int) -> str:
         """``driver O1 = 120°, t = 18.87 s`` for frame ``i``."""
-        u = float(self.u[i])
-        text = (
-            f"driver {self.driver} = {u:.1f}°"
-            if self.u_unit == "deg"
-            else f"driver {self.driver} = {u:.4g} m"
-        )
+        u, U = float(self.u[i]), self.units
+        fmt = (".1f" if U.angle == "deg" else ".4g") if self.u_unit == "deg" else ".4g"
+        text = f"driver {self.driver} = {U.text(u, self.u_unit, fmt)}"
         if self.timed:
-            text += f", t = {float(self.t[i]):.3f} s"
+            text += f", t = {U.text(float(self.t[i]), 's', '.3f')}"
         return text
 
     def to_json(self, digits: int = 5) -> dict[str, Any]:
@@ -195,7 +212,7 @@ class Frames:
                     "at": self.load_points[name],
                     "fx": arr(fx * self.force_scale),
                     "fy": arr(fy * self.force_scale),
-                    "text": f"{name} {force_text(float(np.nanmax(np.hypot(fx, fy))))}",
+                    "text": f"{name} {self.force_text(float(np.nanmax(np.hypot(fx, fy))))}",
                 }
                 for name, (x, y, fx, fy) in self.loads.items()
             }
@@ -276,8 +293,8 @@ def fine_step(mech: Mechanism, count: int | None) -> tuple[float | None, int | N
     return travel / (n - 1), n
 
 
-def frames_of(res: Results, forces: bool = False) -> Frames:
-    """The drawing of every position of ``res``."""
+def frames_of(res: Results, forces: bool = False, units: OutputUnits | None = None) -> Frames:
+    """The drawing of every position of ``res``, shown in ``units`` (default SI)."""
     an = res.analysis
     mech = res.mechanism
     st = res.solution.state
@@ -335,6 +352,7 @@ def frames_of(res: Results, forces: bool = False) -> Frames:
         paths=[p for p in res.point_names() if p in points],
         guides=guides,
         ok=np.asarray(res.ok, bool),
+        units=units or SI_OUTPUT,
     )
     if forces and res.forces is None:
         raise InputError(
@@ -375,7 +393,9 @@ def _add_forces(fr: Frames, res: Results, points: dict, reactions: bool) -> None
         if np.any(np.isfinite(mag)):
             big = max(big, float(np.nanmax(mag)))
     x0, x1, y0, y1 = fr.bounds(0.0)
-    fr.force_scale, fr.bar = arrow_scale(big, max(x1 - x0, y1 - y0))
+    k = fr.units.convert("m")[0]  # round numbers in the shown length unit
+    per_n, bar = arrow_scale(big, k * max(x1 - x0, y1 - y0))
+    fr.force_scale, fr.bar = per_n / k, bar / k
 
 
 def arrow_scale(big: float, size: float) -> tuple[float, float]:
@@ -398,10 +418,14 @@ def arrow_scale(big: float, size: float) -> tuple[float, float]:
 
 
 def solve_frames(
-    mech: Mechanism, count: int | None = None, forces: bool = False, method: str | None = None
+    mech: Mechanism,
+    count: int | None = None,
+    forces: bool = False,
+    method: str | None = None,
+    units: OutputUnits | None = None,
 ) -> Frames:
     """Solve the fine sweep of ``mech`` for an animation of ``count`` frames (see
-    :func:`fine_step`) and draw it."""
+    :func:`fine_step`) and draw it, shown in ``units`` (default SI)."""
 
     if forces and not mech.needs_forces:
         raise InputError(
@@ -417,7 +441,7 @@ def solve_frames(
             acceleration=False,
             forces=forces or _has_point_loads(mech),
         )
-        return frames_of(res, forces)
+        return frames_of(res, forces, units)
 
 
 def _has_point_loads(mech: Mechanism) -> bool:
@@ -455,8 +479,9 @@ def _render(fr: Frames, fig):
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    unit = length_axes(ax, fr.units)  # the ticks in the shown unit, the artists in m
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"y [{unit}]")
     ax.grid(True, alpha=0.3)
     ax.set_title(fr.name)
     for g in fr.guides:
@@ -563,13 +588,13 @@ def arrow_labels(fr: Frames) -> dict[str, str]:
     for name, (_, _, fx, fy) in fr.loads.items():
         mag = np.hypot(fx, fy)
         size = float(np.nanmax(mag)) if np.any(np.isfinite(mag)) else 0.0
-        out[name] = f"{name} {force_text(size)}"
+        out[name] = f"{name} {fr.force_text(size)}"
     return out
 
 
 def _scale_bar(ax, fr: Frames) -> None:
     """The force scale in the drawing's lower left corner: a bar ``fr.bar`` m long with
-    end ticks, reading ``1 m = 50 kN``, and what the colours are."""
+    end ticks, reading ``1 m = 50 kN`` (in the shown units), and what the colours are."""
     x0, x1, y0, y1 = ax.get_xlim() + ax.get_ylim()
     span = max(x1 - x0, y1 - y0)
     bx, by = x0 + 0.03 * (x1 - x0), y0 + 0.05 * (y1 - y0)

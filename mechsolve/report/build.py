@@ -717,7 +717,7 @@ def mechanism_content(
             c.verdicts = check_requirements(mech, res)
             c.requirements = verdict_rows(c.verdicts)
             c.failed_requirements = sum(not v.passed for v in c.verdicts)
-    fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method)
+    fr = solve_frames(mech, frames, forces=mech.needs_forces, method=method, units=U)
     c.animation = fr.to_json()
     return c
 
@@ -743,7 +743,8 @@ def _simulation_section(c: Content, mech, d: Path, units: OutputUnits | None = N
     c.dynamics_text = sim.summary(units=units)
     sdir = d / "simulation"
     sdir.mkdir()
-    c.dynamics_plots = [embed(p) for p in write_simulation_plots(sim, sim.model, sdir)]
+    plots = write_simulation_plots(sim, sim.model, sdir, units or SI_OUTPUT)
+    c.dynamics_plots = [embed(p) for p in plots]
     c.incomplete = c.incomplete or sim.incomplete()
 
 
@@ -755,7 +756,7 @@ def _polygons_section(
     # after the start, where a mechanism that starts at a limit already moves)
 
     try:
-        pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol")
+        pol = draw_polygons(mech, 2 if polygons_at is None else polygons_at, d / "pol", units=units)
     except InputError as exc:  # a group the graphical method here does not draw
         if polygons_at is not None:
             raise

@@ -71,7 +71,7 @@ def compare_content(c: Comparison, units: OutputUnits | None = None) -> CompareC
     )
     content.notes = [f"{s.name}: {n}" for s in c.schemes for n in s.notes]
     with tempfile.TemporaryDirectory(prefix="mechsolve-compare-") as tmp:
-        for p in c.write_plots(Path(tmp)):
+        for p in c.write_plots(Path(tmp), units=units):
             content.plots.append(embed(p, PLOT_TITLES.get(p.stem)))
     for s in c.schemes:
         if s.verdicts:

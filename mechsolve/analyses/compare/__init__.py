@@ -64,12 +64,15 @@ class Comparison:
         atomically; returns the path."""
         return write_csv(self, Path(path), units)
 
-    def write_plots(self, outdir: str | Path, fmt: str = "png") -> list[Path]:
-        """The overlaid curves (velocity, displacement, driving torque), written
-        atomically into ``outdir``; returns the files written."""
+    def write_plots(
+        self, outdir: str | Path, fmt: str = "png", units: OutputUnits | None = None
+    ) -> list[Path]:
+        """The overlaid curves (velocity, displacement, driving torque) in ``units``
+        (None: the SI figures), written atomically into ``outdir``; returns the files
+        written."""
         from mechsolve.analyses.compare.plots import write_plots
 
-        return write_plots(self, Path(outdir), fmt)
+        return write_plots(self, Path(outdir), fmt, units)
 
 
 def parse_middle(text: str | float) -> float:

@@ -1,6 +1,12 @@
 """Plots of a simulated motion (``mechsolve simulate``): the driver's speed with its mean
 over each revolution, its acceleration, the motor's torque with its mean, the reduced
-inertia J(phi) and J'(phi) over a turn, and the reaction magnitudes over time."""
+inertia J(phi) and J'(phi) over a turn, and the reaction magnitudes over time; and the
+flywheel's energy figures (``mechsolve flywheel``).
+
+Every axis is in the units the command's tables use (an
+:class:`~mechsolve.base.units.OutputUnits`, SI by default): the results stay SI and are
+converted here, where they are drawn (:func:`mechsolve.writers.plots.shown`). Inertias
+stay kg·m², as ``units:`` has no key for them."""
 
 from __future__ import annotations
 
@@ -10,8 +16,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.writers.fonts import pyplot
-from mechsolve.writers.plots import break_at_switches
+from mechsolve.writers.plots import break_at_switches, shown
 
 if TYPE_CHECKING:
     from mechsolve.analyses.dynamics import ReducedModel, SimulationResults
@@ -37,8 +44,14 @@ def revolution_means(t: np.ndarray, phi: np.ndarray, w: np.ndarray):
     return np.array(out_t), np.array(out_w)
 
 
-def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) -> list[Path]:
+def write_simulation_plots(
+    res: SimulationResults, model: ReducedModel, outdir, units: OutputUnits = SI_OUTPUT
+) -> list[Path]:
+    """``simulation-motion.png``, ``simulation-inertia.png`` (a revolute driver) and
+    ``simulation-reactions.png`` (with forces) in ``outdir``, in ``units``."""
     from mechsolve.writers.plots import names_of
+
+    U = units
 
     plt = pyplot(names_of(res.mechanism))
 
@@ -46,24 +59,29 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
     tr = res.trajectory
     name = res.mechanism.name
     lin = res.linear
-    wu, au = ("m/s", "m/s^2") if lin else ("rad/s", "rad/s^2")
+    t, tu = shown(U, tr.t, "s")
     out = []
 
     fig, axes = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
-    axes[0].plot(tr.t, tr.omega, lw=1.2, label="speed")
+    w, wu = shown(U, tr.omega, "m/s" if lin else "rad/s")
+    axes[0].plot(t, w, lw=1.2, label="speed")
     tm, wm = revolution_means(tr.t, tr.phi, tr.omega)
     if len(tm):
-        axes[0].plot(tm, wm, "o-", ms=3, color="C3", label="time mean over each revolution")
+        axes[0].plot(shown(U, tm, "s")[0], shown(U, wm, "m/s" if lin else "rad/s")[0], "o-",
+                     ms=3, color="C3", label="time mean over each revolution")  # fmt: skip
     axes[0].set_ylabel(f"driver speed [{wu}]")
     axes[0].legend(loc="lower right", fontsize=8)
-    axes[1].plot(tr.t, tr.eps, lw=1.0, color="C1")
+    eps, au = shown(U, tr.eps, "m/s^2" if lin else "rad/s^2")
+    axes[1].plot(t, eps, lw=1.0, color="C1")
     axes[1].set_ylabel(f"driver acceleration [{au}]")
-    M = res.motor_torque()
-    axes[2].plot(tr.t, M, lw=1.2, color="C2", label="motor")
-    mean, unit = res.time_mean(M), ("N" if lin else "N*m")  # the summary's mean
-    axes[2].axhline(mean, ls="--", color="C3", label=f"time mean {mean:.6g} {unit}")
+    M, unit = shown(U, res.motor_torque(), "N" if lin else "N*m")
+    axes[2].plot(t, M, lw=1.2, color="C2", label="motor")
+    mean = res.time_mean(M)  # the summary's mean, in the shown unit (written as the
+    # summary writes it; the figure's texts take the report's symbols when it is saved)
+    said = U.convert("N" if lin else "N*m")[1]
+    axes[2].axhline(mean, ls="--", color="C3", label=f"time mean {mean:.6g} {said}")
     axes[2].set_ylabel(f"motor force [{unit}]" if lin else f"motor torque [{unit}]")
-    axes[2].set_xlabel("time [s]")
+    axes[2].set_xlabel(f"time [{tu}]")
     axes[2].legend(loc="upper right", fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
@@ -75,10 +93,10 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
     if not lin:
         phi, J, dJ = model.inertia_curve()
         fig, ax = plt.subplots(figsize=(10, 4.5))
-        x = np.degrees(np.abs(phi - phi[0]))
+        x, xu = shown(U, np.degrees(np.abs(phi - phi[0])), "deg")
         ax.plot(x, J, label="J [kg*m^2]")
         ax.plot(x, dJ, label="J' [kg*m^2/rad]")
-        ax.set_xlabel("driver angle travelled from the start [deg]")
+        ax.set_xlabel(f"driver angle travelled from the start [{xu}]")
         ax.set_ylabel("reduced moment of inertia J [kg*m^2], J' [kg*m^2/rad]")
         ax.set_title(f"{name}: reduced moment of inertia over a turn")
         ax.grid(alpha=0.3)
@@ -92,9 +110,10 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
         for j, comp in res.forces.reactions.items():
             F = comp.get("F")
             if F is not None:  # a load switching on or off: a gap, not a slope
-                ax.plot(*break_at_switches(res.forces.active, tr.t, F), lw=1.0, label=j)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("reaction magnitude [N]")
+                ax.plot(*break_at_switches(res.forces.active, t, shown(U, F, "N")[0]),
+                        lw=1.0, label=j)  # fmt: skip
+        ax.set_xlabel(f"time [{tu}]")
+        ax.set_ylabel(f"reaction magnitude [{shown(U, 0.0, 'N')[1]}]")
         ax.set_title(f"{name}: joint reactions along the motion")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=4)
@@ -104,22 +123,29 @@ def write_simulation_plots(res: SimulationResults, model: ReducedModel, outdir) 
     return out
 
 
-def write_energy_plot(sizing, name: str, outdir) -> Path:
-    """The energy excursion over the cycle (the flywheel's energy method)."""
+def write_energy_plot(sizing, name: str, outdir, units: OutputUnits = SI_OUTPUT) -> Path:
+    """The energy excursion over the cycle (the flywheel's energy method), in ``units``
+    (the flywheel's J_F stays kg·m²)."""
     plt = pyplot([name])
+    U = units
 
-    x = np.degrees(np.abs(sizing.phi - sizing.phi[0]))
+    x, xu = shown(U, np.degrees(np.abs(sizing.phi - sizing.phi[0])), "deg")
     fig, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    axes[0].plot(x, sizing.torque, label=sizing.torque_label)
-    axes[0].axhline(sizing.motor_torque, ls="--", color="C3", label=sizing.constant_label)
-    axes[0].set_ylabel("torque [N*m]")
+    torque, tu = shown(U, sizing.torque, "N*m")
+    axes[0].plot(x, torque, label=sizing.torque_label)
+    axes[0].axhline(shown(U, sizing.motor_torque, "N*m")[0], ls="--", color="C3",
+                    label=sizing.constant_label)  # fmt: skip
+    axes[0].set_ylabel(f"torque [{tu}]")
     axes[0].legend(fontsize=8)
-    axes[1].plot(x, sizing.energy, color="C2")
-    axes[1].set_ylabel("energy excursion dE [J]")
-    axes[1].set_xlabel("driver angle travelled from the start [deg]")
-    k_hi, k_lo = int(np.argmax(sizing.energy)), int(np.argmin(sizing.energy))
-    axes[1].plot([x[k_hi], x[k_lo]], [sizing.energy[k_hi], sizing.energy[k_lo]], "o", color="C3")
-    axes[1].set_title(f"dE_max = {sizing.energy_max:.6g} J; J_F = {sizing.J_flywheel:.6g} kg*m^2")
+    energy, eu = shown(U, sizing.energy, "J")
+    axes[1].plot(x, energy, color="C2")
+    axes[1].set_ylabel(f"energy excursion dE [{eu}]")
+    axes[1].set_xlabel(f"driver angle travelled from the start [{xu}]")
+    k_hi, k_lo = int(np.argmax(energy)), int(np.argmin(energy))
+    axes[1].plot([x[k_hi], x[k_lo]], [energy[k_hi], energy[k_lo]], "o", color="C3")
+    axes[1].set_title(
+        f"dE_max = {U.text(sizing.energy_max, 'J')}; J_F = {sizing.J_flywheel:.6g} kg*m^2"
+    )
     for ax in axes:
         ax.grid(alpha=0.3)
     axes[0].set_title(f"{name}: flywheel by the energy method, delta = {sizing.delta:.4g}")
@@ -129,17 +155,21 @@ def write_energy_plot(sizing, name: str, outdir) -> Path:
     return out
 
 
-def write_energy_mass_plot(sizing, name: str, outdir) -> Path | None:
+def write_energy_mass_plot(
+    sizing, name: str, outdir, units: OutputUnits = SI_OUTPUT
+) -> Path | None:
     """The energy-mass (Wittenbauer) diagram: the work W(phi) against the reduced inertia
-    J(phi), with the lines of slopes omega_max^2 / 2 and omega_min^2 / 2 that touch it."""
+    J(phi), with the lines of slopes omega_max^2 / 2 and omega_min^2 / 2 that touch it;
+    the work in ``units``' energy unit, J in kg·m²."""
     if sizing.energy_mass is None:
         return None
     plt = pyplot([name])
 
     J, W = sizing.energy_mass
+    kE, eu = shown(units, 1.0, "J")
     w, dl = sizing.omega_mean, sizing.delta
     fig, ax = plt.subplots(figsize=(8, 6))
-    ax.plot(J, W, color="C0", label="W(phi) against J(phi) over a turn")
+    ax.plot(J, W * kE, color="C0", label="W(phi) against J(phi) over a turn")
     for w2, col, lab in (
         ((w * (1 + dl / 2)) ** 2, "C3", "max"),
         ((w * (1 - dl / 2)) ** 2, "C2", "min"),
@@ -148,10 +178,14 @@ def write_energy_mass_plot(sizing, name: str, outdir) -> Path | None:
         k = int(np.argmin(c)) if lab == "max" else int(np.argmax(c))
         jj = np.linspace(np.min(J), np.max(J), 50)
         ax.plot(
-            jj, W[k] + 0.5 * w2 * (jj - J[k]), "--", color=col, label=f"slope omega_{lab}^2 / 2"
+            jj,
+            (W[k] + 0.5 * w2 * (jj - J[k])) * kE,
+            "--",
+            color=col,
+            label=f"slope omega_{lab}^2 / 2",
         )
     ax.set_xlabel("reduced moment of inertia J [kg*m^2]")
-    ax.set_ylabel("work of the motor and the loads W [J]")
+    ax.set_ylabel(f"work of the motor and the loads W [{eu}]")
     ax.set_title(f"{name}\nenergy-mass diagram: J_F = {sizing.J_exact:.6g} kg*m^2", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

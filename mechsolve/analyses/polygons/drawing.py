@@ -1,4 +1,8 @@
-"""Drawing the polygons and the mechanism beside them (see :mod:`mechsolve.analyses.polygons`)."""
+"""Drawing the polygons and the mechanism beside them (see :mod:`mechsolve.analyses.polygons`).
+
+The polygons are drawn in mm of the drawing; their scales, the vector axes beside them
+and the mechanism's axes are in the units of the printed text (an
+:class:`~mechsolve.base.units.OutputUnits`, SI by default): ``μv = 10 (mm/s)/mm``."""
 
 from __future__ import annotations
 
@@ -9,9 +13,10 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.analyses.polygons.construction import Polygon, PolygonResult, build_polygons
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.model import Mechanism
 from mechsolve.writers.fonts import pyplot
-from mechsolve.writers.plots import draw_mechanism, names_of, save_figure
+from mechsolve.writers.plots import draw_mechanism, length_axes, names_of, save_figure
 
 COLOURS = {
     "absolute": "k",
@@ -58,7 +63,7 @@ def _free_spot(cands, taken: list[np.ndarray], gap: float) -> np.ndarray:
     return best
 
 
-def _draw_polygon(ax, poly: Polygon) -> None:
+def _draw_polygon(ax, poly: Polygon, U: OutputUnits = SI_OUTPUT) -> None:
     mu = poly.scale
     lo, hi, span = _bounds(poly)
     nodes = {k: v / mu for k, v in poly.nodes.items()}
@@ -115,15 +120,16 @@ def _draw_polygon(ax, poly: Polygon) -> None:
     ax.set_aspect("equal", adjustable="box")
     ax.grid(True, alpha=0.25)
     sym = "μv" if poly.quantity == "velocity" else "μa"
-    unit = "(m/s)/mm" if poly.quantity == "velocity" else "(m/s²)/mm"
-    ax.set_title(f"{poly.quantity} polygon, {sym} = {mu:g} {unit}", fontsize=10)
+    k, u = U.convert(poly.unit)  # the vectors in the printed text's unit
+    u = pretty_unit(u)
+    ax.set_title(f"{poly.quantity} polygon, {sym} = {mu * k:g} ({u})/mm", fontsize=10)
     ax.set_xlabel("x on the drawing [mm]")
     ax.set_ylabel("y on the drawing [mm]")
-    u = "m/s" if poly.quantity == "velocity" else "m/s²"
     q = "v" if poly.quantity == "velocity" else "a"
-    top = ax.secondary_xaxis("top", functions=(lambda x: x * mu, lambda x: x / mu))
+    mk = mu * k  # shown unit per mm of the drawing
+    top = ax.secondary_xaxis("top", functions=(lambda x: x * mk, lambda x: x / mk))
     top.set_xlabel(f"{q}x [{u}]", fontsize=8)
-    right = ax.secondary_yaxis("right", functions=(lambda x: x * mu, lambda x: x / mu))
+    right = ax.secondary_yaxis("right", functions=(lambda x: x * mk, lambda x: x / mk))
     right.set_ylabel(f"{q}y [{u}]", fontsize=8)
     top.tick_params(labelsize=7)
     right.tick_params(labelsize=7)
@@ -153,14 +159,16 @@ def _legend(fig, *polys: Polygon) -> None:
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8, frameon=False)
 
 
-def _draw_mechanism(ax, res: PolygonResult) -> None:
-
+def _draw_mechanism(ax, res: PolygonResult, U: OutputUnits = SI_OUTPUT) -> None:
+    """The mechanism at the position (drawn in m, its ticks in the shown length unit)."""
     draw_mechanism(ax, res.analysis, res.state, 0)
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.25)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(f"mechanism, μl = {res.length_scale:g} m/mm", fontsize=10)
+    unit = length_axes(ax, U)
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"y [{unit}]")
+    k = U.convert("m")[0]
+    ax.set_title(f"mechanism, μl = {res.length_scale * k:g} {unit}/mm", fontsize=10)
 
 
 def draw_polygons(
@@ -174,12 +182,15 @@ def draw_polygons(
     svg: bool = False,
     sheet: str | Path | None = None,
     method: str | None = None,
+    units: OutputUnits | None = None,
 ) -> PolygonResult:
     """Build the polygons (:func:`build_polygons`) and draw them into ``outdir``:
     ``velocity-polygon.png``, ``acceleration-polygon.png`` and ``polygons.png`` (the sheet:
     the mechanism to scale beside both polygons); with ``svg`` also the SVGs (text kept as
     text). ``sheet``: write the sheet to this file only (``.png`` or ``.svg``) instead.
-    The result's ``images`` lists the files written."""
+    The scales and axes are in ``units`` (default SI), as the printed text of
+    :meth:`PolygonResult.text`. The result's ``images`` lists the files written."""
+    U = units or SI_OUTPUT
 
     res = build_polygons(
         mech, at, scale_v=scale_v, scale_a=scale_a, per_turn=per_turn, method=method
@@ -197,7 +208,7 @@ def draw_polygons(
             (res.acceleration, "acceleration-polygon"),
         ):
             fig, ax = plt.subplots(figsize=(7.5, 6.5 * _aspect(poly) + 2.2))
-            _draw_polygon(ax, poly)
+            _draw_polygon(ax, poly, U)
             fig.suptitle(title, fontsize=9)
             _legend(fig, poly)
             fig.tight_layout(rect=(0, 0.07, 1, 1))
@@ -210,12 +221,12 @@ def draw_polygons(
     fig, axes = plt.subplots(
         1, 3, figsize=(18, 7), gridspec_kw={"width_ratios": [1.0, 1 / asp[0], 1 / asp[1]]}
     )
-    _draw_mechanism(axes[0], res)
-    _draw_polygon(axes[1], res.velocity)
-    _draw_polygon(axes[2], res.acceleration)
+    _draw_mechanism(axes[0], res, U)
+    _draw_polygon(axes[1], res.velocity, U)
+    _draw_polygon(axes[2], res.acceleration, U)
     fig.suptitle(title, fontsize=11)
     _legend(fig, res.velocity, res.acceleration)
-    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.tight_layout(rect=(0, 0.07, 1, 0.96))  # the top: the title, clear of the axes
     if sheet is not None:
         path = Path(sheet)
         save_figure(fig, path, 120)

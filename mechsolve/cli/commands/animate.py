@@ -10,9 +10,11 @@ from mechsolve.cli.kit import (
     EPILOG_NO_CHECK,
     FILE_ARG,
     QUIET,
+    UNITS,
     VARIANT,
     Command,
     finish,
+    output_units,
     writes_to,
     writing,
 )
@@ -57,11 +59,13 @@ def _size(text: str) -> tuple[int, int]:
 )
 @click.option("--size", "size_text", default="800x600", show_default=True,
               help="Image size in pixels, WIDTHxHEIGHT.")  # fmt: skip
+@UNITS
 @QUIET
-def animate(file: Path, output, variant, frames, fps, forces, size_text, quiet) -> None:
+def animate(file: Path, output, variant, frames, fps, forces, size_text, units, quiet) -> None:
     """Animate FILE: the mechanism to scale over its sweep, the paths of its output points
     traced, the driver's angle (or position) and the time shown; frames from a fine sweep
-    (1 degree by default) whatever the file's step."""
+    (1 degree by default) whatever the file's step. The axes, the force scale and the
+    driver's value are in the file's units (--units to change them)."""
     import numpy as np
 
     from mechsolve import api
@@ -86,8 +90,9 @@ def animate(file: Path, output, variant, frames, fps, forces, size_text, quiet) 
     if not output.parent.is_dir():
         raise InputError(f"-o {output}: the folder {output.parent} does not exist")
     mech = api.load(file, variant)
+    shown = output_units(mech, units)
     writes_to(output)
-    fr = solve_frames(mech, frames, forces=forces)
+    fr = solve_frames(mech, frames, forces=forces, units=shown)
     with writing(output, "-o"):
         write_animation(fr, output, fps=fps, size=size)
     missing = int(np.count_nonzero(~fr.ok))

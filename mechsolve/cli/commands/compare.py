@@ -123,7 +123,7 @@ def compare(
     )
     written = [result.to_csv(outdir / "compare.csv", shown)]
     if not no_plots:
-        written += result.write_plots(outdir, fmt)
+        written += result.write_plots(outdir, fmt, text_units)
     if report is not None:
         from mechsolve.report.compare import write_compare_report
 

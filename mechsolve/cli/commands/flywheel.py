@@ -104,7 +104,10 @@ def flywheel(file: Path, delta_given, speed, outdir, variant, no_check, units) -
         name = mech.name
     from mechsolve.analyses.dynamics.plots import write_energy_mass_plot, write_energy_plot
 
-    paths = [write_energy_plot(res, name, outdir), write_energy_mass_plot(res, name, outdir)]
+    paths = [
+        write_energy_plot(res, name, outdir, shown),
+        write_energy_mass_plot(res, name, outdir, shown),
+    ]
     click.echo(pretty_text(res.text(shown)))
     click.echo("  wrote " + ", ".join(str(p) for p in paths if p is not None))
     finish(check_failed=res.check_missed())

@@ -101,6 +101,7 @@ def polygons(
         per_turn=per_turn,
         svg=svg,
         sheet=sheet,
+        units=shown,
     )
     text = res.text(shown)
     written = list(res.images)

@@ -102,7 +102,9 @@ def shaking(
     sh = api.shaking(mech, about=at, about_name=at_name, step=u_step, inertia=inertia_only)
     paths = [write_csv(sh, outdir / "shaking.csv", shown)]
     if not no_plots:
-        paths.append(write_shaking_plot([(mech.name, sh)], mech.name, outdir / "shaking.png"))
+        paths.append(
+            write_shaking_plot([(mech.name, sh)], mech.name, outdir / "shaking.png", units=shown)
+        )
     lines = sh.summary_lines(shown)
     if bal is not None:
         stem = file.stem + (f"-{variant}" if variant else "")
@@ -115,6 +117,7 @@ def shaking(
                     mech.name,
                     outdir / "balance.png",
                     title="shaking force before and after balancing",
+                    units=shown,
                 )
             )
         lines += bal.lines(shown)

@@ -78,11 +78,11 @@ def simulate(file: Path, outdir, variant, no_plots, exact, max_steps, units, qui
     if not no_plots and getattr(res, "multibody", None) is not None:
         from mechsolve.analyses.dynamics.multibody_plots import write_multibody_plots
 
-        written += write_multibody_plots(res, outdir)
+        written += write_multibody_plots(res, outdir, shown)
     elif not no_plots:
         from mechsolve.analyses.dynamics.plots import write_simulation_plots
 
-        written += write_simulation_plots(res, res.model, outdir)
+        written += write_simulation_plots(res, res.model, outdir, shown)
     tr = res.trajectory
     if not quiet:
         click.echo(pretty_text(res.summary(units=shown)))
