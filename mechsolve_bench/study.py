@@ -157,11 +157,13 @@ def case_study(quick: bool = False, designs: int | None = None):
         kin = kinematics(vals[:, 0], vals[:, 1], 0.059, 0.0875, u)
         return kin, kinetostatics(kin)
 
+    # a study without forces reads positions, rates and transmission angles (its
+    # figures), no accelerations: both sides compute what it reads
     def closed_kin():
-        return kinematics_only(vals[:, 0], vals[:, 1], 0.059, 0.0875, u)
+        return kinematics_only(vals[:, 0], vals[:, 1], 0.059, 0.0875, u, acceleration=False)
 
     def batch_kin():
-        return solve_designs(mechs, forces=False)
+        return solve_designs(mechs, forces=False, acceleration=False)
 
     # one call first: imports, and the allocator's first large arrays (a process's first
     # batch costs up to twice as much: the memory's pages are mapped as it goes)

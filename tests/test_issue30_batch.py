@@ -96,7 +96,7 @@ def test_a_study_with_forces_still_gets_its_force_figures():
     (the pull's condition P.vx > 0 switches between samples: the peak is taken where it
     does not switch)."""
     study = _study(step="1 deg")
-    rows = execute(study, jobs=1).rows
+    rows = execute(study, jobs=1, chunk=len(study)).rows  # one batch
     vals = np.array([study.values(k) for k in range(len(study))]) / 1e3
     u = np.linspace(0.0, 2 * math.pi, 361)
     kin = kinematics(vals[:, 0], vals[:, 1], C, D, u)
@@ -109,3 +109,93 @@ def test_a_study_with_forces_still_gets_its_force_figures():
             ref = np.max(np.hypot(frc[j + ".Fx"][k], frc[j + ".Fy"][k]))
             assert abs(row[f"max({j}.F) [N]"] - ref) < 1e-9 * ref, (k, j)
         assert math.isfinite(row["cycle.work [J]"])
+
+
+# -- a study without forces: no accelerations where no figure reads them ---------------
+
+KIN_FOURBAR = """
+name: kinematics study
+units: {length: mm, angle: deg}
+ground: {O2: [0, 0], O4: [87.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [26.5, 0]}}
+  coupler: {points: {A: [0, 0], B: [105.6, 0], P: {length: 60, angle: 30}}}
+  rocker: {points: {O4: [0, 0], B: [59, 0]}}
+joints: {O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}
+assembly: ["B left of A -> O4"]
+driver: {joint: O2, speed: 1 rad/s, start: 0 deg}
+sweep: {range: 360 deg, step: 1 deg}
+"""
+
+
+def _limits(a, b, c=C, d=D):
+    """Rocker swing (rad), time ratio and smallest transmission angle (rad) of a Grashof
+    crank-rocker, from its triangles: the rocker's extremes are where crank and coupler
+    are in line (O2 B = b + a, b - a), the transmission angle is extreme at crank angles
+    0 and pi."""
+    phi, crank = [], []
+    for R, turn in ((b + a, 0.0), (b - a, math.pi)):
+        phi.append(math.acos((d * d + c * c - R * R) / (2 * d * c)))  # at O4, from O4->O2
+        crank.append(math.acos((d * d + R * R - c * c) / (2 * d * R)) + turn)
+    fwd = (crank[0] - crank[1]) % (2 * math.pi)
+    ratio = max(fwd, 2 * math.pi - fwd) / min(fwd, 2 * math.pi - fwd)
+    mus = [math.acos((b * b + c * c - (d - s * a) ** 2) / (2 * b * c)) for s in (1.0, -1.0)]
+    mu = min(min(m, math.pi - m) for m in mus)
+    return abs(phi[0] - phi[1]), ratio, mu
+
+
+def test_kinematics_only_batch_without_accelerations():
+    study = _study(KIN_FOURBAR)
+    mechs = [study.mechanism(k) for k in range(len(study))]
+    full = solve_designs(mechs)
+    lean = solve_designs(mechs, acceleration=False)
+    assert lean.batched.all()
+    for k in range(len(mechs)):
+        rf, rl = full.results(k), lean.results(k)
+        assert rf.solution.has_acceleration and not rl.solution.has_acceleration
+        assert rl.solution.has_velocity
+        for link in ("coupler", "rocker"):
+            lf, ll = rf.link(link), rl.link(link)
+            assert np.array_equal(lf.angle, ll.angle) and np.array_equal(lf.omega, ll.omega)
+            assert np.isnan(ll.alpha).all()
+        assert np.array_equal(rf.solution.indicator, rl.solution.indicator)
+    # with forces the accelerations are computed whatever is asked
+    forced = solve_designs(mechs[:2], forces=True, acceleration=False)
+    assert forced.results(0).solution.has_acceleration
+
+
+def test_a_kinematics_study_reads_no_accelerations_and_its_figures_are_right(monkeypatch):
+    import mechsolve.analyses.study.execute as ex
+
+    asked = []
+    real = ex.solve_designs
+
+    def spy(mechs, **kw):
+        asked.append(kw.get("acceleration"))
+        return real(mechs, **kw)
+
+    monkeypatch.setattr(ex, "solve_designs", spy)
+    study = _study(KIN_FOURBAR, step="1 deg")
+    rows = execute(study, jobs=1, chunk=len(study)).rows  # one batch
+    assert asked and all(a is False for a in asked)
+    for k, row in enumerate(rows):
+        a, b = (v / 1e3 for v in study.values(k))
+        swing, ratio, mu = _limits(a, b)
+        assert row["status"] == "ok"
+        assert abs(row["rocker.swing [deg]"] - math.degrees(swing)) < 1e-8
+        assert abs(row["rocker.time_ratio [-]"] - ratio) < 1e-9
+        assert abs(row["min(transmission_angle.B) [deg]"] - math.degrees(mu)) < 1e-8
+        assert row == ex.solve_design(study, k)  # the design solved on its own
+
+
+def test_a_study_whose_figure_reads_an_acceleration_still_gets_it():
+    src = load_text(KIN_FOURBAR.replace("step: 1 deg", "step: 4 deg"), "k.yaml")
+    study = make_study(src, OPTS, figures=["max(abs(rocker.alpha))"])
+    rows = execute(study, jobs=1, chunk=len(study)).rows  # one batch
+    vals = np.array([study.values(k) for k in range(len(study))]) / 1e3
+    # the figure's extreme is located between the samples: against a fine grid
+    ref = kinematics_only(vals[:, 0], vals[:, 1], C, D, np.linspace(0, 2 * math.pi, 720001))
+    for k, row in enumerate(rows):
+        (key,) = [c for c in row if c.startswith("max(abs(rocker.alpha))")]
+        top = np.max(np.abs(ref["al4"][k]))
+        assert abs(row[key] - top) < 1e-8 * top, (k, row[key], top)

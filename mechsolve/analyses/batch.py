@@ -416,6 +416,7 @@ def solve_designs(
     step: float | None = None,
     method: str | None = None,
     forces: bool | None = None,
+    acceleration: bool | None = None,
 ) -> DesignBatch:
     """Solve the sweeps of many designs of one mechanism at once.
 
@@ -428,6 +429,13 @@ def solve_designs(
         As for :func:`mechsolve.solve` (the same for every design).
     forces
         Run the force analysis (default: when the first design has masses or loads).
+    acceleration
+        Compute the accelerations (default: as the first design's outputs ask). The
+        force analysis needs them: with forces they are always computed. A caller that
+        reads no acceleration (a study without forces whose figures are positions,
+        rates and transmission angles) saves their work; the results then say that
+        they have none (``solution.has_acceleration``), as ``mechsolve.solve`` with
+        ``acceleration=False`` does.
 
     Returns
     -------
@@ -446,6 +454,9 @@ def solve_designs(
         return out
     ref = mechs[0]
     want_forces = ref.needs_forces if forces is None else forces
+    want_acc = bool(
+        want_forces or (ref.outputs.acceleration if acceleration is None else acceleration)
+    )
     alone: dict[int, str] = {}
     try:
         an0 = Analysis(ref, method)
@@ -467,15 +478,11 @@ def solve_designs(
         X = np.array([_numbers(mechs[k]) for k in inside], dtype=float)
         per = max(1, CHUNK_COLUMNS // max(len(u), 1))
         for i in range(0, len(inside), per):
-            _solve_pass(out, an0, inside[i : i + per], X[i : i + per], u, t, alone, want_forces)
+            todo = (inside[i : i + per], X[i : i + per])
+            _solve_pass(out, an0, *todo, u, t, alone, want_forces, want_acc)
         for k in alone:
             out._where.pop(k, None)
-    for k, reason in alone.items():
-        out.why[k] = reason
-        try:
-            out._separate[k] = solve_sweep(mechs[k], step=step, method=method, forces=want_forces)
-        except MechsolveError as exc:
-            out._separate[k] = exc
+    _solve_alone(out, alone, step, method, None if want_forces else acceleration, want_forces)
     if out.u.size == 0 and out._separate:
         first = next(iter(out._separate.values()))
         if not isinstance(first, BaseException):
@@ -483,11 +490,27 @@ def solve_designs(
     return out
 
 
-def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> None:
+def _solve_alone(out: DesignBatch, alone: dict, step, method, acceleration, forces) -> None:
+    """The designs the batch did not take, each solved on its own (its error kept)."""
+    for k, reason in alone.items():
+        out.why[k] = reason
+        try:
+            out._separate[k] = solve_sweep(
+                out.mechanisms[k],
+                step=step,
+                method=method,
+                acceleration=acceleration,
+                forces=forces,
+            )
+        except MechsolveError as exc:
+            out._separate[k] = exc
+
+
+def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:
     """Solve the designs ``inside`` (numbers ``X``) as one pass into ``out``; designs that
-    leave the closed forms' safe ground go to ``alone``."""
+    leave the closed forms' safe ground go to ``alone``. The velocities are always
+    computed (the discriminant's rate reads them), the accelerations with ``has_acc``."""
     ref = an0.mech
-    has_acc = bool(want_forces or ref.outputs.acceleration)
     has_vel = bool(has_acc or ref.outputs.velocity)
     nd = len(inside)
     u0 = float(u[0])
@@ -509,7 +532,8 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
             two = g.n_modes == 2
             ok, ind = g.position(st, unit, np.repeat(modes[gi], P) if two else 1.0)
             g.velocity(st, unit)
-            g.acceleration(st, unit)
+            if has_acc:
+                g.acceleration(st, unit)
             ok_all &= ok
             inds.append(ind)
             bad = ~ok | ~(ind > NEAR)
@@ -534,7 +558,8 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
     speed = an0.speed
     if speed != 1.0:  # rates per unit driver coordinate -> time rates
         st.block[5:8] *= speed
-        st.block[8:11] *= speed * speed
+        if has_acc:
+            st.block[8:11] *= speed * speed
         st.token = State.new_token()
     for j, k in enumerate(inside):
         if risky[j]:
