@@ -199,3 +199,42 @@ def test_a_study_whose_figure_reads_an_acceleration_still_gets_it():
         (key,) = [c for c in row if c.startswith("max(abs(rocker.alpha))")]
         top = np.max(np.abs(ref["al4"][k]))
         assert abs(row[key] - top) < 1e-8 * top, (k, row[key], top)
+
+
+# -- no recomputed trigonometry: the driver's angle repeats from design to design ------
+
+
+def test_set_angle_over_one_period_equals_the_whole():
+    from mechsolve.base.state import State
+
+    u = np.linspace(-7.0, 7.0, 91)
+    th = np.tile(u, 13)
+    a, b = State(2, th.size), State(2, th.size)
+    a.set_angle(0, th)
+    b.set_angle(0, th, period=u.size)
+    assert np.array_equal(a.block, b.block)
+    assert np.array_equal(b.c[0], np.cos(th)) and np.array_equal(b.s[0], np.sin(th))
+    c = State(2, 10)
+    c.set_angle(0, np.arange(10.0), period=3)  # not a whole number of periods: all of it
+    assert np.array_equal(c.c[0], np.cos(np.arange(10.0)))
+
+
+def test_the_batch_turns_the_driver_angle_once_per_period(monkeypatch):
+    """The crank on the ground turns through the same angles in every design: its cosine
+    and sine are computed over one design's positions and repeated (the results equal
+    the separate solves: tests/test_batch.py)."""
+    from mechsolve.base.state import State
+
+    calls = []
+    real = State.set_angle
+
+    def spy(self, i, th, idx=slice(None), period=0):
+        calls.append((self.n, period))
+        return real(self, i, th, idx, period)
+
+    monkeypatch.setattr(State, "set_angle", spy)
+    study = _study()
+    mechs = [study.mechanism(k) for k in range(len(study))]
+    batch = solve_designs(mechs, forces=False)
+    P = len(batch.u)
+    assert (len(mechs) * P, P) in calls

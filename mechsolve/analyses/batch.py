@@ -524,7 +524,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
         ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, np.repeat(np.arange(nd), P))))
         N = nd * P
         st = State(ab.system.nb, N)
-        unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N))
+        unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N), period=P)
         ok_all = np.ones(N, bool)
         inds = []
         h = float(abs(u[1] - u[0])) if P > 1 else 0.0
