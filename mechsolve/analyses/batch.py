@@ -235,26 +235,45 @@ def _numbers(m: Mechanism) -> list[float]:
 
 class _Columns:
     """Hands out the stacked numbers in :func:`_numbers`' order: a number equal in every
-    design stays a float; one that varies is an array over the columns."""
+    design stays a float; one that varies is an array over the columns.
 
-    def __init__(self, X: np.ndarray, design_of_column: np.ndarray) -> None:
-        self.X, self.cols, self.k = X, design_of_column, 0
+    The columns are either given by their designs (``design_of_column``), or each
+    design has ``per`` consecutive columns (the sweep's layout): then a design's number
+    is written into its columns by broadcasting, without an index array."""
 
-    def one(self):
+    def __init__(self, X: np.ndarray, design_of_column=None, *, per: int = 0) -> None:
+        self.X, self.cols, self.k, self.per = X, design_of_column, 0, per
+        self.n = X.shape[0] * per if per else len(design_of_column)
+
+    def _next(self):
+        """The next number: a float when every design has the same, else its column."""
         col = self.X[:, self.k]
         self.k += 1
-        if np.all(col == col[0]):
-            return float(col[0])
-        return col[self.cols]
+        return float(col[0]) if np.all(col == col[0]) else col
+
+    def _spread(self, col: np.ndarray, out: np.ndarray) -> np.ndarray:
+        if self.per:
+            out.reshape(-1, self.per)[:] = col[:, None]
+        else:
+            np.take(col, self.cols, out=out)
+        return out
+
+    def one(self):
+        v = self._next()
+        return v if isinstance(v, float) else self._spread(v, np.empty(self.n))
 
     def pair(self):
         """A point or vector: a pair of floats, or one array (2, N) (which ``np.asarray``
         takes as it is, where the model's pairs are read)."""
-        a, b = self.one(), self.one()
+        a, b = self._next(), self._next()
         if isinstance(a, float) and isinstance(b, float):
             return (a, b)
-        out = np.empty((2, len(self.cols)))
-        out[0], out[1] = a, b
+        out = np.empty((2, self.n))
+        for row, v in zip(out, (a, b)):
+            if isinstance(v, float):
+                row[:] = v
+            else:
+                self._spread(v, row)
         return out
 
 
@@ -338,7 +357,7 @@ def _design_states(an0, X: np.ndarray, modes: np.ndarray, speed: float):
 
     def solve(u: np.ndarray):
         nd, L = u.shape
-        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, np.repeat(np.arange(nd), L))))
+        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, per=L)))
         n = nd * L
         st = State(a.system.nb, n)
         unit = Drive(u.ravel(), np.ones(n), np.zeros(n))
@@ -521,7 +540,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
         a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
         modes, reasons, start_state, risky = _assemble(a2, u0, nd)
         # the sweep: one column per position of each design
-        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, np.repeat(np.arange(nd), P))))
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, per=P)))
         N = nd * P
         st = State(ab.system.nb, N)
         unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N), period=P)
@@ -541,12 +560,16 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
                 # the discriminant stays clear of zero at and between the samples: no
                 # toggle, bifurcation or dead zone that the sweep's branch analysis meets
                 H, dH = g.disc(st)
-                bad |= ~(H - h * np.abs(dH) > 0)
+                hdH = np.abs(dH)  # h |dH|: how far H can move within a step
+                hdH *= h
+                clear = np.subtract(H, hdH)
+                bad |= ~(clear > 0)
+                del clear
                 if P > 1:
                     # a lower bound of the cubic Hermite interpolant on each step (the
                     # sweep's branch analysis interpolates so): its value weights are
                     # positive and sum to 1, its slope weights are at most 4/27 in size
-                    Hd, dHd = H.reshape(nd, P), (h * np.abs(dH)).reshape(nd, P)
+                    Hd, dHd = H.reshape(nd, P), hdH.reshape(nd, P)
                     low = np.minimum(Hd[:, :-1], Hd[:, 1:])
                     low -= (4.0 / 27.0) * (dHd[:, :-1] + dHd[:, 1:])
                     bad.reshape(nd, P)[:, 1:] |= ~(low > 0)
@@ -572,8 +595,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
         st = st.take(cols)
         ok_all = ok_all[cols]
         inds = [i[cols] for i in inds]
-        colsK = np.repeat(np.arange(keep.size), P)
-        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X[keep], colsK)))
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X[keep], per=P)))
         modes = modes[:, keep]
         reasons = [[r[j] for j in keep] for r in reasons]
         start_state = start_state.take(keep)
@@ -582,7 +604,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
     n = keep.size * P
     sol = Solution(
         ab,
-        np.tile(u, keep.size),
+        unit.u if keep.size == nd else np.tile(u, keep.size),  # (the sweep's own)
         np.tile(t, keep.size),
         st,
         ok_all,
