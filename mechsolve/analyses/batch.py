@@ -166,10 +166,33 @@ def _slice_friction(fr: FrictionResult, sl: slice) -> FrictionResult:
 _LOAD_KEYS = ("link", "point", "frame", "ends", "slider", "drag")  # a load's structure
 
 
-def _structure(m: Mechanism) -> tuple:
-    """Everything of a design but the numbers the batch stacks, as far as it is not
-    compared by :func:`_same_structure` directly."""
-    # plain loops and list comprehensions: a design study checks thousands of designs
+def _split(m: Mechanism) -> tuple[tuple, list[float]]:
+    """A design's structure and its numbers, in one pass over it (a design study checks
+    thousands of designs: plain loops, each object read once).
+
+    The structure is everything but the numbers the batch stacks: two designs whose
+    structures are equal differ only in those numbers, and can be solved as one batch.
+    The numbers come in a fixed order (see :func:`_with_numbers`)."""
+    nums: list[float] = []
+    add, one = nums.extend, nums.append
+    for xy in m.ground.values():
+        add(xy)
+    links = []
+    for lk in m.links:
+        pts, mass, inertia, com = lk.points, lk.mass, lk.inertia, lk.com
+        for xy in pts.values():
+            add(xy)
+        if mass is not None:
+            one(mass)
+        if inertia is not None:
+            one(inertia)
+        if com is not None:
+            add(com)
+        links.append((lk.name, tuple(pts), mass is None, com is None, inertia is None))
+    joints = []
+    for j in m.joints:
+        add(j.geometry())
+        joints.append((j.kind, j.name, j.a, j.b, j.point))
     loads = []
     for ld in m.loads:
         when = ld.when
@@ -177,60 +200,47 @@ def _structure(m: Mechanism) -> tuple:
             (type(ld), ld.name, None if when is None else when.text)
             + tuple([getattr(ld, k, None) for k in _LOAD_KEYS])
         )
-    return (
+        if isinstance(ld, PointForce):
+            nums += ld.force
+        elif isinstance(ld, Torque):
+            one(ld.torque)
+        elif isinstance(ld, Spring):
+            nums += [ld.stiffness, ld.free_length]
+        elif isinstance(ld, Damper):
+            one(ld.coefficient)
+    structure = (
+        m.driver,
+        m.sweep,
+        m.outputs,
+        m.solver,
+        m.assembly.sketch,
+        m.gravity_vector(),
         tuple(m.ground),
-        tuple(
-            [
-                (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
-                for lk in m.links
-            ]
-        ),
-        tuple([(j.kind, j.name, j.a, j.b, j.point) for j in m.joints]),
+        tuple(links),
+        tuple(joints),
         tuple(loads),
         tuple([c.text for c in m.assembly.conditions]),
     )
-
-
-def _same_structure(m: Mechanism, ref: Mechanism, ref_structure: tuple) -> bool:
-    """Can design ``m`` join the batch of ``ref`` (only numbers differ)?"""
-    return (
-        m.driver == ref.driver
-        and m.sweep == ref.sweep
-        and m.outputs == ref.outputs
-        and m.solver == ref.solver
-        and m.assembly.sketch == ref.assembly.sketch
-        and m.gravity_vector() == ref.gravity_vector()
-        and _structure(m) == ref_structure
-    )
+    return structure, nums  # numbers: np.array(..., float) makes them floats
 
 
 def _numbers(m: Mechanism) -> list[float]:
     """The numbers the batch stacks, in a fixed order (see :func:`_with_numbers`)."""
-    out: list[float] = []
-    add, one = out.extend, out.append  # (a design study has thousands of designs)
-    for xy in m.ground.values():
-        add(xy)
-    for lk in m.links:
-        for xy in lk.points.values():
-            add(xy)
-        if lk.mass is not None:
-            one(lk.mass)
-        if lk.inertia is not None:
-            one(lk.inertia)
-        if lk.com is not None:
-            add(lk.com)
-    for j in m.joints:
-        add(j.geometry())
-    for ld in m.loads:
-        if isinstance(ld, PointForce):
-            out += ld.force
-        elif isinstance(ld, Torque):
-            out.append(ld.torque)
-        elif isinstance(ld, Spring):
-            out += [ld.stiffness, ld.free_length]
-        elif isinstance(ld, Damper):
-            out.append(ld.coefficient)
-    return out  # numbers: np.array(..., float) makes them floats
+    return _split(m)[1]
+
+
+def _stackable(mechs: list[Mechanism], alone: dict[int, str]) -> dict[int, list[float]]:
+    """The numbers of every design whose structure is the first one's; the others go to
+    ``alone``, with the reason."""
+    ref_structure, nums = _split(mechs[0])
+    rows = {0: nums}
+    for k in range(1, len(mechs)):
+        structure, nums = _split(mechs[k])
+        if structure == ref_structure:
+            rows[k] = nums
+        else:
+            alone[k] = "its structure differs from the first design's"
+    return rows
 
 
 class _Columns:
@@ -484,17 +494,15 @@ def solve_designs(
         an0, why = None, str(exc)
     if why is not None:
         alone = dict.fromkeys(range(nd), why)
+        rows = {}
     else:
-        shape0 = _structure(ref)
-        for k in range(1, nd):
-            if not _same_structure(mechs[k], ref, shape0):
-                alone[k] = "its structure differs from the first design's"
+        rows = _stackable(mechs, alone)
     inside = [k for k in range(nd) if k not in alone]
     if inside:
         u0 = an0.start_value()
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
-        X = np.array([_numbers(mechs[k]) for k in inside], dtype=float)
+        X = np.array([rows[k] for k in inside], dtype=float)
         per = max(1, CHUNK_COLUMNS // max(len(u), 1))
         for i in range(0, len(inside), per):
             todo = (inside[i : i + per], X[i : i + per])
