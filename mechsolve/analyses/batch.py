@@ -639,7 +639,11 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
             "reasons": reasons,
             "start": start_state,
             "u0": u0,
-            "solution": sol,
+            # without the pass's analysis: a design's results are made from the state,
+            # the flags and the forces, and the analysis holds the stacked numbers and
+            # its groups' intermediate arrays (some twenty of the pass's size), whose
+            # memory the next pass can then reuse
+            "solution": dataclasses.replace(sol, analysis=None),
             "forces": forces,
         }
     )
