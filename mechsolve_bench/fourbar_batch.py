@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-__all__ = ["kinematics", "kinetostatics"]
+__all__ = ["kinematics", "kinematics_only", "kinetostatics"]
 
 _POINTS = ("A", "B", "P", "G2", "G3", "G4")
 _COMPS = ("x", "y", "vx", "vy", "ax", "ay")
@@ -148,6 +148,79 @@ def kinematics(
         for comp, v in zip(_COMPS, vals):
             out[f"{name}.{comp}"] = v
     out.update(a=a, b=b, c=c, d=d, u=u, w2=float(w2), al2=float(al2))
+    return out
+
+
+def kinematics_only(
+    a, b, c, d, u, *, w2: float = 1.0, al2: float = 0.0, acceleration: bool = True
+) -> dict[str, np.ndarray]:
+    """What a kinematics-only design study reads of the four-bar, closed form.
+
+    The same mechanism and branch as :func:`kinematics`, written for the figures of a
+    study without forces: the coupler's and rocker's angles and rates (the rocker's
+    swing and time ratio are located from its angle and angular velocity), the sine of
+    the transmission angle at B, and the moving joints A and B. No coupler point and no
+    centres of mass (nothing reads them), accelerations only with ``acceleration``.
+
+    Parameters
+    ----------
+    a, b, c, d
+        Crank, coupler, rocker and ground lengths (m): scalars or arrays of D designs.
+    u
+        Crank angles (rad), P positions.
+    w2, al2
+        The crank's angular speed (rad/s) and acceleration (rad/s^2).
+    acceleration
+        Also the angular accelerations ``al3``, ``al4``.
+
+    Returns
+    -------
+    dict of arrays (D, P): ``th3``, ``th4`` (rad, in (-pi, pi]), ``w3``, ``w4`` (rad/s),
+    ``al3``, ``al4`` (rad/s^2, with ``acceleration``), ``sin_mu`` (the sine of the angle
+    between coupler and rocker at B, 0 at a toggle position), ``A.x``, ``A.y``, ``B.x``,
+    ``B.y`` (m).
+
+    B - A = f e + h (k x e), with e the unit vector from A to O4 at the distance r,
+    f = (b^2 - c^2 + r^2) / (2 r) and h = sqrt(b^2 - f^2); the rates solve
+    w3 k x AB - w4 k x O4B = -v_A and its derivative by Cramer's rule.
+    """
+    a, b, c, d = _col(a), _col(b), _col(c), _col(d)
+    u = np.asarray(u, dtype=float).reshape(1, -1)
+    Ax = a * np.cos(u)
+    Ay = a * np.sin(u)
+    # e r = O4 - A; AB = (f e r + h k x e r) / r
+    erx = d - Ax
+    r2 = erx * erx + Ay * Ay
+    r = np.sqrt(r2)
+    f = (b * b - c * c + r2) / (2.0 * r)
+    with np.errstate(invalid="ignore"):
+        h = np.sqrt(b * b - f * f)  # NaN where the loop cannot close
+    ABx = (f * erx + h * Ay) / r
+    ABy = (h * erx - f * Ay) / r
+    Bx, By = Ax + ABx, Ay + ABy
+    CBx = Bx - d  # O4 -> B
+    det = CBx * ABy - By * ABx
+    # v_A = w2 k x A
+    Avx, Avy = -w2 * Ay, w2 * Ax
+    w3 = (Avx * CBx + Avy * By) / det
+    w4 = (Avx * ABx + Avy * ABy) / det
+    out = {
+        "th3": np.arctan2(ABy, ABx),
+        "th4": np.arctan2(By, CBx),
+        "w3": w3,
+        "w4": w4,
+        "sin_mu": np.abs(det) / (b * c),
+        "A.x": Ax,
+        "A.y": Ay,
+        "B.x": Bx,
+        "B.y": By,
+    }
+    if acceleration:
+        # a_A = al2 k x A - w2^2 A
+        Rx = -al2 * Ay - w2 * w2 * Ax - w3 * w3 * ABx + w4 * w4 * CBx
+        Ry = al2 * Ax - w2 * w2 * Ay - w3 * w3 * ABy + w4 * w4 * By
+        out["al3"] = (Rx * CBx + Ry * By) / det
+        out["al4"] = (Rx * ABx + Ry * ABy) / det
     return out
 
 

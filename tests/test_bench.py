@@ -81,8 +81,9 @@ def test_every_case_runs(quick):
             "study",
             [
                 "pool of 2 / 1 process: speed-up",
-                "ratio batch / closed form:",
-                "ratio separate solves / batch:",
+                "ratio batch / closed form, with forces:",
+                "ratio batch / closed form, kinematics only:",
+                "separate solves / batch:",
             ],
         ),
     ],

@@ -166,10 +166,33 @@ def _slice_friction(fr: FrictionResult, sl: slice) -> FrictionResult:
 _LOAD_KEYS = ("link", "point", "frame", "ends", "slider", "drag")  # a load's structure
 
 
-def _structure(m: Mechanism) -> tuple:
-    """Everything of a design but the numbers the batch stacks, as far as it is not
-    compared by :func:`_same_structure` directly."""
-    # plain loops and list comprehensions: a design study checks thousands of designs
+def _split(m: Mechanism) -> tuple[tuple, list[float]]:
+    """A design's structure and its numbers, in one pass over it (a design study checks
+    thousands of designs: plain loops, each object read once).
+
+    The structure is everything but the numbers the batch stacks: two designs whose
+    structures are equal differ only in those numbers, and can be solved as one batch.
+    The numbers come in a fixed order (see :func:`_with_numbers`)."""
+    nums: list[float] = []
+    add, one = nums.extend, nums.append
+    for xy in m.ground.values():
+        add(xy)
+    links = []
+    for lk in m.links:
+        pts, mass, inertia, com = lk.points, lk.mass, lk.inertia, lk.com
+        for xy in pts.values():
+            add(xy)
+        if mass is not None:
+            one(mass)
+        if inertia is not None:
+            one(inertia)
+        if com is not None:
+            add(com)
+        links.append((lk.name, tuple(pts), mass is None, com is None, inertia is None))
+    joints = []
+    for j in m.joints:
+        add(j.geometry())
+        joints.append((j.kind, j.name, j.a, j.b, j.point))
     loads = []
     for ld in m.loads:
         when = ld.when
@@ -177,84 +200,90 @@ def _structure(m: Mechanism) -> tuple:
             (type(ld), ld.name, None if when is None else when.text)
             + tuple([getattr(ld, k, None) for k in _LOAD_KEYS])
         )
-    return (
+        if isinstance(ld, PointForce):
+            nums += ld.force
+        elif isinstance(ld, Torque):
+            one(ld.torque)
+        elif isinstance(ld, Spring):
+            nums += [ld.stiffness, ld.free_length]
+        elif isinstance(ld, Damper):
+            one(ld.coefficient)
+    structure = (
+        m.driver,
+        m.sweep,
+        m.outputs,
+        m.solver,
+        m.assembly.sketch,
+        m.gravity_vector(),
         tuple(m.ground),
-        tuple(
-            [
-                (lk.name, tuple(lk.points), lk.mass is None, lk.com is None, lk.inertia is None)
-                for lk in m.links
-            ]
-        ),
-        tuple([(j.kind, j.name, j.a, j.b, j.point) for j in m.joints]),
+        tuple(links),
+        tuple(joints),
         tuple(loads),
         tuple([c.text for c in m.assembly.conditions]),
     )
-
-
-def _same_structure(m: Mechanism, ref: Mechanism, ref_structure: tuple) -> bool:
-    """Can design ``m`` join the batch of ``ref`` (only numbers differ)?"""
-    return (
-        m.driver == ref.driver
-        and m.sweep == ref.sweep
-        and m.outputs == ref.outputs
-        and m.solver == ref.solver
-        and m.assembly.sketch == ref.assembly.sketch
-        and m.gravity_vector() == ref.gravity_vector()
-        and _structure(m) == ref_structure
-    )
+    return structure, nums  # numbers: np.array(..., float) makes them floats
 
 
 def _numbers(m: Mechanism) -> list[float]:
     """The numbers the batch stacks, in a fixed order (see :func:`_with_numbers`)."""
-    out: list[float] = []
-    add, one = out.extend, out.append  # (a design study has thousands of designs)
-    for xy in m.ground.values():
-        add(xy)
-    for lk in m.links:
-        for xy in lk.points.values():
-            add(xy)
-        if lk.mass is not None:
-            one(lk.mass)
-        if lk.inertia is not None:
-            one(lk.inertia)
-        if lk.com is not None:
-            add(lk.com)
-    for j in m.joints:
-        add(j.geometry())
-    for ld in m.loads:
-        if isinstance(ld, PointForce):
-            out += ld.force
-        elif isinstance(ld, Torque):
-            out.append(ld.torque)
-        elif isinstance(ld, Spring):
-            out += [ld.stiffness, ld.free_length]
-        elif isinstance(ld, Damper):
-            out.append(ld.coefficient)
-    return out  # numbers: np.array(..., float) makes them floats
+    return _split(m)[1]
+
+
+def _stackable(mechs: list[Mechanism], alone: dict[int, str]) -> dict[int, list[float]]:
+    """The numbers of every design whose structure is the first one's; the others go to
+    ``alone``, with the reason."""
+    ref_structure, nums = _split(mechs[0])
+    rows = {0: nums}
+    for k in range(1, len(mechs)):
+        structure, nums = _split(mechs[k])
+        if structure == ref_structure:
+            rows[k] = nums
+        else:
+            alone[k] = "its structure differs from the first design's"
+    return rows
 
 
 class _Columns:
     """Hands out the stacked numbers in :func:`_numbers`' order: a number equal in every
-    design stays a float; one that varies is an array over the columns."""
+    design stays a float; one that varies is an array over the columns.
 
-    def __init__(self, X: np.ndarray, design_of_column: np.ndarray) -> None:
-        self.X, self.cols, self.k = X, design_of_column, 0
+    The columns are either given by their designs (``design_of_column``), or each
+    design has ``per`` consecutive columns (the sweep's layout): then a design's number
+    is written into its columns by broadcasting, without an index array."""
 
-    def one(self):
+    def __init__(self, X: np.ndarray, design_of_column=None, *, per: int = 0) -> None:
+        self.X, self.cols, self.k, self.per = X, design_of_column, 0, per
+        self.n = X.shape[0] * per if per else len(design_of_column)
+
+    def _next(self):
+        """The next number: a float when every design has the same, else its column."""
         col = self.X[:, self.k]
         self.k += 1
-        if np.all(col == col[0]):
-            return float(col[0])
-        return col[self.cols]
+        return float(col[0]) if np.all(col == col[0]) else col
+
+    def _spread(self, col: np.ndarray, out: np.ndarray) -> np.ndarray:
+        if self.per:
+            out.reshape(-1, self.per)[:] = col[:, None]
+        else:
+            np.take(col, self.cols, out=out)
+        return out
+
+    def one(self):
+        v = self._next()
+        return v if isinstance(v, float) else self._spread(v, np.empty(self.n))
 
     def pair(self):
         """A point or vector: a pair of floats, or one array (2, N) (which ``np.asarray``
         takes as it is, where the model's pairs are read)."""
-        a, b = self.one(), self.one()
+        a, b = self._next(), self._next()
         if isinstance(a, float) and isinstance(b, float):
             return (a, b)
-        out = np.empty((2, len(self.cols)))
-        out[0], out[1] = a, b
+        out = np.empty((2, self.n))
+        for row, v in zip(out, (a, b)):
+            if isinstance(v, float):
+                row[:] = v
+            else:
+                self._spread(v, row)
         return out
 
 
@@ -338,7 +367,7 @@ def _design_states(an0, X: np.ndarray, modes: np.ndarray, speed: float):
 
     def solve(u: np.ndarray):
         nd, L = u.shape
-        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, np.repeat(np.arange(nd), L))))
+        a = _analysis_of(an0, _with_numbers(an0.mech, _Columns(X, per=L)))
         n = nd * L
         st = State(a.system.nb, n)
         unit = Drive(u.ravel(), np.ones(n), np.zeros(n))
@@ -416,6 +445,7 @@ def solve_designs(
     step: float | None = None,
     method: str | None = None,
     forces: bool | None = None,
+    acceleration: bool | None = None,
 ) -> DesignBatch:
     """Solve the sweeps of many designs of one mechanism at once.
 
@@ -428,6 +458,13 @@ def solve_designs(
         As for :func:`mechsolve.solve` (the same for every design).
     forces
         Run the force analysis (default: when the first design has masses or loads).
+    acceleration
+        Compute the accelerations (default: as the first design's outputs ask). The
+        force analysis needs them: with forces they are always computed. A caller that
+        reads no acceleration (a study without forces whose figures are positions,
+        rates and transmission angles) saves their work; the results then say that
+        they have none (``solution.has_acceleration``), as ``mechsolve.solve`` with
+        ``acceleration=False`` does.
 
     Returns
     -------
@@ -446,6 +483,9 @@ def solve_designs(
         return out
     ref = mechs[0]
     want_forces = ref.needs_forces if forces is None else forces
+    want_acc = bool(
+        want_forces or (ref.outputs.acceleration if acceleration is None else acceleration)
+    )
     alone: dict[int, str] = {}
     try:
         an0 = Analysis(ref, method)
@@ -454,28 +494,22 @@ def solve_designs(
         an0, why = None, str(exc)
     if why is not None:
         alone = dict.fromkeys(range(nd), why)
+        rows = {}
     else:
-        shape0 = _structure(ref)
-        for k in range(1, nd):
-            if not _same_structure(mechs[k], ref, shape0):
-                alone[k] = "its structure differs from the first design's"
+        rows = _stackable(mechs, alone)
     inside = [k for k in range(nd) if k not in alone]
     if inside:
         u0 = an0.start_value()
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
-        X = np.array([_numbers(mechs[k]) for k in inside], dtype=float)
+        X = np.array([rows[k] for k in inside], dtype=float)
         per = max(1, CHUNK_COLUMNS // max(len(u), 1))
         for i in range(0, len(inside), per):
-            _solve_pass(out, an0, inside[i : i + per], X[i : i + per], u, t, alone, want_forces)
+            todo = (inside[i : i + per], X[i : i + per])
+            _solve_pass(out, an0, *todo, u, t, alone, want_forces, want_acc)
         for k in alone:
             out._where.pop(k, None)
-    for k, reason in alone.items():
-        out.why[k] = reason
-        try:
-            out._separate[k] = solve_sweep(mechs[k], step=step, method=method, forces=want_forces)
-        except MechsolveError as exc:
-            out._separate[k] = exc
+    _solve_alone(out, alone, step, method, None if want_forces else acceleration, want_forces)
     if out.u.size == 0 and out._separate:
         first = next(iter(out._separate.values()))
         if not isinstance(first, BaseException):
@@ -483,11 +517,27 @@ def solve_designs(
     return out
 
 
-def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> None:
+def _solve_alone(out: DesignBatch, alone: dict, step, method, acceleration, forces) -> None:
+    """The designs the batch did not take, each solved on its own (its error kept)."""
+    for k, reason in alone.items():
+        out.why[k] = reason
+        try:
+            out._separate[k] = solve_sweep(
+                out.mechanisms[k],
+                step=step,
+                method=method,
+                acceleration=acceleration,
+                forces=forces,
+            )
+        except MechsolveError as exc:
+            out._separate[k] = exc
+
+
+def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:
     """Solve the designs ``inside`` (numbers ``X``) as one pass into ``out``; designs that
-    leave the closed forms' safe ground go to ``alone``."""
+    leave the closed forms' safe ground go to ``alone``. The velocities are always
+    computed (the discriminant's rate reads them), the accelerations with ``has_acc``."""
     ref = an0.mech
-    has_acc = bool(want_forces or ref.outputs.acceleration)
     has_vel = bool(has_acc or ref.outputs.velocity)
     nd = len(inside)
     u0 = float(u[0])
@@ -498,10 +548,10 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
         a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
         modes, reasons, start_state, risky = _assemble(a2, u0, nd)
         # the sweep: one column per position of each design
-        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, np.repeat(np.arange(nd), P))))
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, per=P)))
         N = nd * P
         st = State(ab.system.nb, N)
-        unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N))
+        unit = Drive(np.tile(u, nd), np.ones(N), np.zeros(N), period=P)
         ok_all = np.ones(N, bool)
         inds = []
         h = float(abs(u[1] - u[0])) if P > 1 else 0.0
@@ -509,7 +559,8 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
             two = g.n_modes == 2
             ok, ind = g.position(st, unit, np.repeat(modes[gi], P) if two else 1.0)
             g.velocity(st, unit)
-            g.acceleration(st, unit)
+            if has_acc:
+                g.acceleration(st, unit)
             ok_all &= ok
             inds.append(ind)
             bad = ~ok | ~(ind > NEAR)
@@ -517,12 +568,16 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
                 # the discriminant stays clear of zero at and between the samples: no
                 # toggle, bifurcation or dead zone that the sweep's branch analysis meets
                 H, dH = g.disc(st)
-                bad |= ~(H - h * np.abs(dH) > 0)
+                hdH = np.abs(dH)  # h |dH|: how far H can move within a step
+                hdH *= h
+                clear = np.subtract(H, hdH)
+                bad |= ~(clear > 0)
+                del clear
                 if P > 1:
                     # a lower bound of the cubic Hermite interpolant on each step (the
                     # sweep's branch analysis interpolates so): its value weights are
                     # positive and sum to 1, its slope weights are at most 4/27 in size
-                    Hd, dHd = H.reshape(nd, P), (h * np.abs(dH)).reshape(nd, P)
+                    Hd, dHd = H.reshape(nd, P), hdH.reshape(nd, P)
                     low = np.minimum(Hd[:, :-1], Hd[:, 1:])
                     low -= (4.0 / 27.0) * (dHd[:, :-1] + dHd[:, 1:])
                     bad.reshape(nd, P)[:, 1:] |= ~(low > 0)
@@ -534,7 +589,8 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
     speed = an0.speed
     if speed != 1.0:  # rates per unit driver coordinate -> time rates
         st.block[5:8] *= speed
-        st.block[8:11] *= speed * speed
+        if has_acc:
+            st.block[8:11] *= speed * speed
         st.token = State.new_token()
     for j, k in enumerate(inside):
         if risky[j]:
@@ -547,8 +603,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
         st = st.take(cols)
         ok_all = ok_all[cols]
         inds = [i[cols] for i in inds]
-        colsK = np.repeat(np.arange(keep.size), P)
-        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X[keep], colsK)))
+        ab = _analysis_of(an0, _with_numbers(ref, _Columns(X[keep], per=P)))
         modes = modes[:, keep]
         reasons = [[r[j] for j in keep] for r in reasons]
         start_state = start_state.take(keep)
@@ -557,7 +612,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
     n = keep.size * P
     sol = Solution(
         ab,
-        np.tile(u, keep.size),
+        unit.u if keep.size == nd else np.tile(u, keep.size),  # (the sweep's own)
         np.tile(t, keep.size),
         st,
         ok_all,
@@ -584,7 +639,11 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces) -> N
             "reasons": reasons,
             "start": start_state,
             "u0": u0,
-            "solution": sol,
+            # without the pass's analysis: a design's results are made from the state,
+            # the flags and the forces, and the analysis holds the stacked numbers and
+            # its groups' intermediate arrays (some twenty of the pass's size), whose
+            # memory the next pass can then reuse
+            "solution": dataclasses.replace(sol, analysis=None),
             "forces": forces,
         }
     )

@@ -91,10 +91,18 @@ class State:
     def ground(self) -> int:
         return self.nb
 
-    def set_angle(self, i: int, th: np.ndarray, idx=slice(None)) -> None:
-        """Set body ``i``'s angle (and its cosine and sine)."""
+    def set_angle(self, i: int, th: np.ndarray, idx=slice(None), period: int = 0) -> None:
+        """Set body ``i``'s angle (and its cosine and sine). ``period``: the angles repeat
+        every ``period`` positions (see :class:`~mechsolve.groups.base.Drive`), so the
+        cosine and sine of the first period are repeated, not computed again."""
         if isinstance(idx, slice) and idx == slice(None):  # in place: no temporaries
             self.th[i] = th
+            if 0 < period < self.n and self.n % period == 0:
+                for f, out in ((np.cos, self.c[i]), (np.sin, self.s[i])):
+                    rows = out.reshape(-1, period)
+                    f(self.th[i, :period], out=rows[0])
+                    rows[1:] = rows[0]
+                return
             np.cos(self.th[i], out=self.c[i])
             np.sin(self.th[i], out=self.s[i])
             return

@@ -33,11 +33,17 @@ from mechsolve.joints.base import Constraint
 
 @dataclass
 class Drive:
-    """The driver coordinate and its first two time derivatives at N positions."""
+    """The driver coordinate and its first two time derivatives at N positions.
+
+    ``period``: when positive, ``u`` repeats every ``period`` positions (designs solved
+    as one batch, each over the same driver values): what depends on ``u`` alone is the
+    same in every period and may be computed over one.
+    """
 
     u: np.ndarray
     ud: np.ndarray
     udd: np.ndarray
+    period: int = 0
 
     def take(self, idx) -> Drive:
         return Drive(self.u[idx], self.ud[idx], self.udd[idx])

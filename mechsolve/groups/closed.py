@@ -70,7 +70,9 @@ class DriverLink(Group):
             th += st.th[other]
         if off:
             th += off
-        st.set_angle(self.b, th)
+        # on the ground with one offset the angle repeats with the driver (a batch)
+        period = getattr(drive, "period", 0) if other == st.nb and np.ndim(off) == 0 else 0
+        st.set_angle(self.b, th, period=period)
         px, py = st.point(self.k, self.sk)
         rx, ry = st.rotated(self.b, self.sp)
         st.x[self.b] = px - rx

@@ -142,6 +142,18 @@ def precheck(study: Study, nominal) -> None:
         check_requirements(nominal, res)
 
 
+def _rows_acceleration(study: Study, mech, results_dir: str | None) -> bool | None:
+    """False when the rows read no acceleration, so that a batch need not compute them:
+    no extra figure, no ``--best``, no requirement, no results written (the design
+    figures are positions, rates and transmission angles; the force analysis computes
+    the accelerations it needs whatever this says). None otherwise: the file's outputs."""
+    if results_dir is not None or study.figures or study.best is not None:
+        return None
+    if getattr(mech, "requirements", None):
+        return None
+    return False
+
+
 def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None) -> list[Row]:
     """The rows of designs ``indices``, as :func:`solve_design` gives them; the valid
     designs are solved as one batch (:func:`mechsolve.analyses.batch.solve_designs`, the same
@@ -161,7 +173,12 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            batch = solve_designs(list(mechs.values()), step=study.step, method=study.method)
+            batch = solve_designs(
+                list(mechs.values()),
+                step=study.step,
+                method=study.method,
+                acceleration=_rows_acceleration(study, next(iter(mechs.values())), results_dir),
+            )
     except Exception:  # noqa: BLE001 - then each design is solved on its own, as always
         return [solve_design(study, k, results_dir) for k in indices]
     slot = {k: j for j, k in enumerate(mechs)}
