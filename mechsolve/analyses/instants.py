@@ -9,8 +9,9 @@ position is reached from there along the driver's direction, on the same branche
 
 Loads act as in a sweep. A ``when:`` condition is evaluated on the instant's own state
 (its velocities and accelerations come from the given rates). ``stroke(q)`` needs the
-extremes of ``q`` over the motion: they are taken over the file's sweep (solved for its
-positions only when a condition uses ``stroke``).
+extremes of ``q`` over the motion: they are those of the file's sweep, located exactly
+between its samples as the run locates them (the sweep is solved only when a condition
+uses ``stroke``).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import OutputUnits, UnitError, parse_quantity
 from mechsolve.core import evaluate as core
-from mechsolve.core.loads import stroke_function
+from mechsolve.core.loads import stroke_extremes, stroke_function
 from mechsolve.core.sweep import Analysis, StateView
 from mechsolve.model import Mechanism
 from mechsolve.model.expr import ExprError
@@ -305,7 +306,8 @@ def _stroke_extremes(an: Analysis) -> list[tuple[float, float]]:
     """The extremes that ``stroke(q)`` uses: over the file's sweep, solved as ``run``
     solves it (with its velocities and accelerations, which conditions such as
     ``C.vx > 0 and 0.05 <= stroke(C.x) <= 0.95`` read beside the stroke), in the order
-    that the force analysis asks for them."""
+    that the force analysis asks for them, located exactly between the samples by the
+    same function as the run's (:func:`mechsolve.core.loads.stroke_extremes`)."""
     mech = an.mech
     ud = udd = None
     if mech.driver.motion is not None:
@@ -313,9 +315,9 @@ def _stroke_extremes(an: Analysis) -> list[tuple[float, float]]:
     else:
         u, t = an.sweep_values(an.start_value())
     sweep = core.states(an, u, ud, udd, t=t)
-    extremes: list[tuple[float, float]] = []
-    _conditions(an, sweep, stroke_function(extremes), "over the file's sweep")
-    return extremes
+    # first each condition alone, so that an error names the load's file, line and key
+    _conditions(an, sweep, stroke_function([]), "over the file's sweep")
+    return stroke_extremes(an, sweep)
 
 
 def _conditions(an: Analysis, sol, stroke, context: str) -> None:

@@ -1,0 +1,137 @@
+"""Instants (``run --at`` and a file's ``instants:``): a review's findings.
+
+1. ``stroke(q)`` in a load's condition uses the exact extremes of ``q`` over the motion,
+   the same ones the run uses, not the sweep's samples (whose maximum on the slider-crank
+   sits on the first sample and was never refined).
+5. A bare number in ``--at`` is read in the file's units, as the file's own ``instants:``
+   are (mm and rad where ``units:`` says so; m and deg where it names none).
+9. With a motion law, the instant is where the law reaches the driver value asked (on
+   any turn), with the law's rates there, and the ``t`` column holds that time.
+
+References written here, independently of mechsolve: the offset slider-crank in closed
+form (piston x, its rates, the rod's angle, the driving torque from the power balance
+T omega = dE_kin/dt - P_gravity - P_gas), its stroke's ends sqrt((l -+ r)^2 - e^2), and
+the segmented motion law integrated by hand.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.optimize import brentq
+
+import mechsolve as ms
+from mechsolve.analyses.instants import parse_instant, solve_instants
+from mechsolve.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SLIDER_CRANK = ROOT / "mechanisms" / "slider-crank.yaml"
+
+# mechanisms/slider-crank.yaml in SI: crank r, rod l, the line e above the pivot
+R, L, E = 0.05, 0.2, 0.01
+W = 1500 * 2 * math.pi / 60
+M1, M2, M3, J2, G = 2.4, 0.9, 0.6, 0.0045, 9.81
+X_LO, X_HI = math.sqrt((L - R) ** 2 - E * E), math.sqrt((L + R) ** 2 - E * E)
+F_GAS = 1500.0
+
+
+def _crank(th: float, w: float = W) -> dict:
+    """Positions, velocities and accelerations at the crank angle ``th`` (constant ``w``):
+    A = r (cos, sin), sin(phi) = (e - r sin th) / l, C = A + l (cos phi, sin phi)."""
+    c, s = math.cos(th), math.sin(th)
+    phi = math.asin((E - R * s) / L)
+    dphi = -R * c * w / (L * math.cos(phi))
+    ddphi = (R * s * w * w + L * math.sin(phi) * dphi * dphi) / (L * math.cos(phi))
+    u = np.array([math.cos(phi), math.sin(phi)])
+    n = np.array([-math.sin(phi), math.cos(phi)])
+    a = R * np.array([c, s])
+    va = R * w * np.array([-s, c])
+    aa = -R * w * w * np.array([c, s])
+
+    def on_rod(d: float):
+        return a + d * u, va + d * dphi * n, aa + d * ddphi * n - d * dphi * dphi * u
+
+    return {"A": (a, va, aa), "G1": (-0.1 * a, -0.1 * va, -0.1 * aa), "G": on_rod(0.06)} | {
+        "C": on_rod(L),
+        "dphi": dphi,
+        "ddphi": ddphi,
+    }
+
+
+def _stroke(th: float) -> float:
+    return (_crank(th)["C"][0][0] - X_LO) / (X_HI - X_LO)
+
+
+def _torque(th: float) -> tuple[float, bool]:
+    """The driving torque (N m) at a constant 1500 rpm and whether the gas acts."""
+    k = _crank(th)
+    power = J2 * k["ddphi"] * k["dphi"]
+    for name, m in (("G1", M1), ("G", M2), ("C", M3)):
+        _, v, acc = k[name]
+        power += m * float((acc + [0.0, G]) @ v)
+    vcx = k["C"][1][0]
+    gas = bool(vcx < 0 and _stroke(th) > 0.3)
+    if gas:
+        power -= -F_GAS * vcx
+    return power / W, gas
+
+
+# where the gas switches off on the way in: stroke(C.x) = 0.3 exactly
+SWITCH = brentq(lambda d: _stroke(math.radians(d)) - 0.3, 90.0, 130.0, xtol=1e-13)
+
+
+def test_the_reference_holds_together():
+    """The closed forms checked against themselves: C's speed by central differences, the
+    stroke's ends reached (C.x over the turn stays inside them and touches both)."""
+    th, h = math.radians(40.0), 1e-6
+    x = [_crank(t)["C"][0][0] for t in (th - h, th + h)]
+    assert (x[1] - x[0]) / (2 * h) * W == pytest.approx(_crank(th)["C"][1][0], rel=1e-7)
+    xs = [_crank(t)["C"][0][0] for t in np.radians(np.linspace(0, 360, 72001))]
+    assert X_LO <= min(xs) < X_LO + 1e-9 and X_HI - 1e-9 < max(xs) <= X_HI
+    assert 109.66 < SWITCH < 109.67
+
+
+@pytest.mark.parametrize("offset", [-0.005, 0.002, 0.005, 0.01])
+def test_stroke_condition_at_an_instant_uses_the_exact_extremes(offset):
+    """Near the gas's switch the instant agrees with the closed form: on before it, off
+    after (the sampled maximum, 249.7498 mm instead of 249.7999, kept the gas on up to
+    109.684 deg)."""
+    theta = SWITCH + offset
+    torque, gas = _torque(math.radians(theta))
+    assert gas is (offset < 0)
+    mech = ms.load(SLIDER_CRANK)
+    res = solve_instants(mech, [parse_instant(mech, f"theta={theta!r} deg")])
+    assert bool(res.forces.active["gas"][0]) is gas
+    assert res.driving_effort[0] == pytest.approx(torque, rel=1e-9)
+
+
+def _csv_rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(row for row in fh if not row.startswith("#")))
+
+
+def test_the_files_instants_and_at_switch_the_gas_as_the_run_does(tmp_path):
+    """The reviewer's case, 109.67 deg: gas off, -24433.370 N mm, from ``--at`` and from
+    the file's ``instants:`` alike (the closed form, gas off)."""
+    torque, gas = _torque(math.radians(109.67))
+    assert not gas and torque * 1e3 == pytest.approx(-24433.370, abs=1e-3)
+    text = SLIDER_CRANK.read_text() + (
+        "instants: [{theta: 109.67 deg, omega: 1500 rpm, alpha: 0 rad/s^2}]\n"
+    )
+    f = tmp_path / "sc.yaml"
+    f.write_text(text)
+    for args in (
+        ["run", str(SLIDER_CRANK), "--at", "theta=109.67 deg"],
+        ["run", str(f), "--no-plots", "-q"],
+    ):
+        out = tmp_path / "out"
+        r = CliRunner().invoke(main, [*args, "-o", str(out)])
+        assert r.exit_code == 0, r.output
+        row = _csv_rows(out / "instants.csv")[0]
+        assert float(row["load.gas.active [-]"]) == 0
+        assert float(row["input.torque [N*mm]"]) == pytest.approx(torque * 1e3, rel=1e-9)
