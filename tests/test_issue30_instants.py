@@ -135,3 +135,80 @@ def test_the_files_instants_and_at_switch_the_gas_as_the_run_does(tmp_path):
         row = _csv_rows(out / "instants.csv")[0]
         assert float(row["load.gas.active [-]"]) == 0
         assert float(row["input.torque [N*mm]"]) == pytest.approx(torque * 1e3, rel=1e-9)
+
+
+# -- 5: bare numbers in --at -----------------------------------------------------------
+
+# a slider driving a crank through a rod: crank r = 50 mm about O, rod 150 mm, the
+# slider C on the x axis (the reviewer's file); its own instant at s = 150 (mm)
+PISTON_DRIVEN = """\
+name: piston-driven
+units: {length: mm, angle: deg}
+ground: {O: [0, 0]}
+links:
+  crank: {points: {O: [0, 0], A: [50, 0]}, mass: 1 kg, com: A, inertia: 0.001 kg m^2}
+  rod: {points: {A: [0, 0], C: [150, 0]}, mass: 0.5 kg, uniform_bar: [A, C]}
+  piston: {points: {C: [0, 0]}, mass: 0.3 kg, com: C}
+joints:
+  O: [ground, crank]
+  A: [crank, rod]
+  C: [rod, piston]
+  cyl: {slider: [ground, piston], point: C, line: {through: [0, 0], angle: 0}}
+assembly: ["A.y > 0"]
+driver: {joint: cyl, speed: -0.2 m/s, start: 190 mm}
+sweep: {range: 85 mm, step: 5 mm}
+gravity: 9.81 m/s^2
+instants: [{s: 150, v: -0.2, a: 0}]
+"""
+
+
+def _a_x(s: float, r: float = 0.05, rod: float = 0.15) -> float:
+    """A.x with C at (s, 0): |A| = r, |C - A| = rod."""
+    return (r * r - rod * rod + s * s) / (2 * s)
+
+
+def test_a_bare_length_is_in_the_files_length_unit(tmp_path):
+    mech = ms.loads(PISTON_DRIVEN)
+    assert parse_instant(mech, "s=150").u == pytest.approx(0.150, rel=1e-15)
+    assert parse_instant(mech, "s=150, v=-0.2").ud == pytest.approx(-0.2)  # a rate: SI
+    f = tmp_path / "lin.yaml"
+    f.write_text(PISTON_DRIVEN)
+    rows = {}
+    for name, args in (("at", ["--at", "s=150"]), ("file", ["--no-plots", "-q"])):
+        out = tmp_path / name
+        r = CliRunner().invoke(main, ["run", str(f), *args, "-o", str(out)])
+        assert r.exit_code == 0, r.output
+        rows[name] = _csv_rows(out / "instants.csv")[0]
+    for row in rows.values():  # --at and the file's own instant: one position, 150 mm
+        assert float(row["input.s [mm]"]) == pytest.approx(150.0, rel=1e-12)
+        assert float(row["A.x [mm]"]) == pytest.approx(_a_x(0.150) * 1e3, rel=1e-10)
+
+
+def test_a_bare_length_without_units_is_in_metres():
+    text = PISTON_DRIVEN.replace("units: {length: mm, angle: deg}\n", "")
+    for a, b in (("[50, 0]", "[0.05, 0]"), ("[150, 0]", "[0.15, 0]"), ("190 mm", "0.19 m")):
+        text = text.replace(a, b)
+    text = text.replace("range: 85 mm, step: 5 mm", "range: 0.085 m, step: 0.005 m")
+    text = text.replace("{s: 150,", "{s: 0.15,")
+    mech = ms.loads(text)
+    assert mech.length_unit == "m"
+    i = parse_instant(mech, "s=0.15")
+    assert i.u == pytest.approx(0.15, rel=1e-15)
+    res = solve_instants(mech, [i])
+    assert res.point("A").x[0] == pytest.approx(_a_x(0.15), rel=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("units", "theta"),
+    [("{length: mm, angle: rad}", 1.5), ("{length: mm}", math.radians(1.5))],
+)
+def test_a_bare_angle_is_in_the_files_angle_unit(units, theta):
+    """1.5 is 1.5 rad in a file whose angles are in rad, 1.5 deg where it names none."""
+    text = SLIDER_CRANK.read_text().replace("units: {length: mm, angle: deg}", f"units: {units}")
+    text = text.replace("start: 0 deg", "start: 0 rad")
+    mech = ms.loads(text)
+    i = parse_instant(mech, "theta=1.5")
+    assert i.u == pytest.approx(theta, rel=1e-15)
+    res = solve_instants(mech, [i])
+    assert res.point("C").x[0] == pytest.approx(_crank(theta)["C"][0][0], rel=1e-12)
+    assert res.driving_effort[0] == pytest.approx(_torque(theta)[0], rel=1e-9)

@@ -91,7 +91,11 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
     ``omega``, ``α`` (also ``ε``, ``epsilon``) is ``alpha``. A name given twice, under
     either spelling, is refused. The position must be given; the speed and acceleration
     default to the file's driver at that position (its constant speed and no acceleration,
-    or the rates of its motion law where the law first reaches the position)."""
+    or the rates of its motion law where the law first reaches the position).
+
+    A bare number is read as the file reads its own ``instants:``: a position in the
+    file's length or angle unit (``units:``; m and deg when it names none), a speed or
+    acceleration in SI (m/s, rad/s; m/s^2, rad/s^2)."""
     linear = _is_linear(mech)
     keys = _KEYS[linear]
     names = instant_names(mech)
@@ -137,12 +141,14 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
             "by default the file's driver's)"
         )
     vals = {}
+    # a bare number is in the file's units, as in its own instants: its length unit,
+    # its angle unit (deg when it names none); rates in SI
+    plain = {"length": mech.length_unit, "angle": mech.angle_unit or "deg"}
     for k, kind in keys.items():
         if k not in items:
             continue
         try:
-            default = "deg" if kind == "angle" else None
-            vals[k] = parse_quantity(items[k], kind, default)
+            vals[k] = parse_quantity(items[k], kind, plain.get(kind))
         except UnitError as exc:
             raise InputError(f"{where}: {spelled[k]}: {exc}") from None
     u = vals[pos]
