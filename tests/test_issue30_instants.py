@@ -212,3 +212,161 @@ def test_a_bare_angle_is_in_the_files_angle_unit(units, theta):
     res = solve_instants(mech, [i])
     assert res.point("C").x[0] == pytest.approx(_crank(theta)["C"][0][0], rel=1e-12)
     assert res.driving_effort[0] == pytest.approx(_torque(theta)[0], rel=1e-9)
+
+
+# -- 9: a motion law past its first turn -------------------------------------------------
+
+SEGMENTS = """driver:
+  joint: O
+  direction: ccw
+  start: 0 deg
+  motion:
+    from: 0 rpm
+    segments:
+      - {accelerate: 0.5 s, to: 60 rpm}
+      - {run: 1 s}
+      - {decelerate: 0.5 s}
+      - {dwell: 0.5 s}
+sweep: {duration: 2.5 s, time_step: 0.05 s}
+"""
+
+
+def _with_driver(driver: str) -> str:
+    text = SLIDER_CRANK.read_text()
+    old = (
+        "driver: {joint: O, speed: 1500 rpm, start: 0 deg}\nsweep: {range: 360 deg, step: 5 deg}\n"
+    )
+    assert old in text
+    return text.replace(old, driver)
+
+
+def _segments_by_hand(theta: float) -> tuple[float, float, float]:
+    """(t, omega, alpha) in s, deg/s, deg/s^2 where the law first reaches ``theta`` deg:
+    0 to 360 deg/s in 0.5 s (90 deg), 1 s at 360 deg/s (to 450 deg), to rest in 0.5 s
+    (to 540 deg), at rest."""
+    if theta <= 90:
+        t = math.sqrt(theta / 360)
+        return t, 720 * t, 720.0
+    if theta <= 450:
+        return 0.5 + (theta - 90) / 360, 360.0, 0.0
+    # 450 + 360 tau - 360 tau^2 = theta, the smaller root
+    tau = (1 - math.sqrt(1 - (theta - 450) / 90)) / 2
+    return 1.5 + tau, 360 - 720 * tau, -720.0
+
+
+@pytest.mark.parametrize("theta", [530.0, 500.0, 170.0, 60.0])
+def test_a_segmented_law_is_met_on_the_turn_asked(theta):
+    """530 deg is on the second turn, in the deceleration: 120 deg/s, -720 deg/s^2 at
+    1.8333 s (not the first turn's 170 deg at 360 deg/s)."""
+    mech = ms.loads(_with_driver(SEGMENTS))
+    i = parse_instant(mech, f"theta={theta} deg")
+    t, w, a = _segments_by_hand(theta)
+    assert math.degrees(i.u) == pytest.approx(theta, rel=1e-14)
+    assert (i.t, math.degrees(i.ud), math.degrees(i.udd)) == pytest.approx((t, w, a), rel=1e-9)
+    assert f"t = {t:.6g} s" in i.note
+    res = solve_instants(mech, [i])
+    assert res.t[0] == pytest.approx(t, rel=1e-9)
+    k = _crank(math.radians(theta), math.radians(w))
+    assert res.point("C").x[0] == pytest.approx(k["C"][0][0], rel=1e-12)
+    assert res.point("C").vx[0] == pytest.approx(k["C"][1][0], rel=1e-9)
+
+
+def test_the_end_of_a_law_that_comes_to_rest():
+    """540 deg is where the deceleration ends, at 2 s: at rest (no speed left over from
+    meeting it within rounding a little before)."""
+    mech = ms.loads(_with_driver(SEGMENTS))
+    i = parse_instant(mech, "theta=540 deg")
+    assert i.t == pytest.approx(2.0, rel=1e-12)
+    assert abs(i.ud) < 1e-12
+    assert math.degrees(i.u) == pytest.approx(540, rel=1e-14)
+
+
+def test_an_angle_behind_the_start_is_met_on_the_next_turn():
+    """-10 deg: the law never turns back, it meets the angle at 350 deg (1.2222 s); the
+    instant is solved there and says so."""
+    mech = ms.loads(_with_driver(SEGMENTS))
+    i = parse_instant(mech, "theta=-10 deg")
+    t, w, a = _segments_by_hand(350.0)
+    assert math.degrees(i.u) == pytest.approx(350, rel=1e-12)
+    assert (i.t, math.degrees(i.ud), math.degrees(i.udd)) == pytest.approx((t, w, a), rel=1e-9)
+    assert "later turn, at 350 deg" in i.note
+
+
+def test_an_angle_beyond_the_law_is_refused(tmp_path):
+    f = tmp_path / "law.yaml"
+    f.write_text(_with_driver(SEGMENTS))
+    r = CliRunner().invoke(main, ["run", str(f), "--at", "theta=600 deg", "-o", str(tmp_path)])
+    assert r.exit_code == 2, r.output
+    assert "does not reach this position" in r.output and "0 to 540 deg" in r.output
+    assert "Traceback" not in r.output
+    # with both rates given, it is solved where it is asked; the law is never there: no t
+    r = CliRunner().invoke(
+        main,
+        [
+            "run",
+            str(f),
+            "--at",
+            "theta=600 deg, omega=1 rad/s, alpha=0 rad/s^2",
+            "-o",
+            str(tmp_path),
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    row = _csv_rows(tmp_path / "instants.csv")[0]
+    assert float(row["input.angle [deg]"]) == pytest.approx(600)
+    assert row["t [s]"] == ""
+
+
+def test_the_time_column_holds_the_time_of_each_instant(tmp_path):
+    """``t [s]``: the law's time where it is at each instant (the file's own instants too,
+    their rates given), the constant-speed driver's travel over its speed."""
+    text = _with_driver(SEGMENTS) + (
+        "instants: [{theta: 530 deg, omega: 120 deg/s, alpha: -720 deg/s^2},\n"
+        "           {theta: 170 deg, omega: 360 deg/s}]\n"
+    )
+    f = tmp_path / "law.yaml"
+    f.write_text(text)
+    r = CliRunner().invoke(main, ["run", str(f), "--no-plots", "-q", "-o", str(tmp_path / "a")])
+    assert r.exit_code == 0, r.output
+    rows = _csv_rows(tmp_path / "a" / "instants.csv")
+    for row, theta in zip(rows, (530.0, 170.0)):
+        assert float(row["t [s]"]) == pytest.approx(_segments_by_hand(theta)[0], rel=1e-9)
+    r = CliRunner().invoke(
+        main,
+        ["run", str(SLIDER_CRANK), "--at", "theta=100 deg", "-o", str(tmp_path / "b")],
+    )
+    assert r.exit_code == 0, r.output
+    row = _csv_rows(tmp_path / "b" / "instants.csv")[0]
+    assert float(row["t [s]"]) == pytest.approx(100 / 360 / 25, rel=1e-12)  # 1500 rpm
+
+
+def test_a_law_that_turns_back():
+    """u = 2 sin t (rad): 90 deg first at asin(pi / 4); -60 deg, behind the start, on the
+    way back at pi + asin(pi / 6), with the law's rates 2 cos t and -2 sin t there; 150
+    deg (beyond its 114.6 deg) is never reached."""
+    law = (
+        'driver: {joint: O, motion: {law: "2 * sin(t)"}}\n'
+        "sweep: {duration: 6 s, time_step: 0.05 s}\n"
+    )
+    mech = ms.loads(_with_driver(law))
+    for theta, t in ((90.0, math.asin(math.pi / 4)), (-60.0, math.pi + math.asin(math.pi / 6))):
+        i = parse_instant(mech, f"theta={theta} deg")
+        assert math.degrees(i.u) == pytest.approx(theta, rel=1e-14)
+        assert (i.t, i.ud, i.udd) == pytest.approx((t, 2 * math.cos(t), -2 * math.sin(t)), rel=1e-9)
+    with pytest.raises(ms.InputError, match="does not reach"):
+        parse_instant(mech, "theta=150 deg")
+
+
+def test_a_constant_acceleration_on_a_later_turn():
+    """The exact inverse of a constant acceleration (4 rad/s^2 from 1.5 rad/s, from 20
+    deg): 400 deg is 380 deg of travel, omega^2 = omega0^2 + 2 eps dtheta."""
+    text = (ROOT / "mechanisms" / "fourbar.yaml").read_text()
+    line = "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}"
+    law = "driver: {joint: O2, start: 20 deg, motion: {accelerate: 4 rad/s^2, from: 1.5 rad/s}}"
+    mech = ms.loads(
+        text.replace(line, law).replace("range: 360 deg, step: 2 deg", "range: 720 deg")
+    )
+    i = parse_instant(mech, "theta=400 deg")
+    w = math.sqrt(1.5**2 + 2 * 4 * math.radians(380))
+    assert (i.ud, i.udd, i.t) == pytest.approx((w, 4.0, (w - 1.5) / 4), rel=1e-12)
+    assert math.degrees(i.u) == pytest.approx(400, rel=1e-14)
