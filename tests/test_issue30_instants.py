@@ -370,3 +370,19 @@ def test_a_constant_acceleration_on_a_later_turn():
     w = math.sqrt(1.5**2 + 2 * 4 * math.radians(380))
     assert (i.ud, i.udd, i.t) == pytest.approx((w, 4.0, (w - 1.5) / 4), rel=1e-12)
     assert math.degrees(i.u) == pytest.approx(400, rel=1e-14)
+
+
+def test_a_sliders_law():
+    """s = 0.19 - 0.02 t (m) over 2 s: 170 mm at exactly 1 s (met within rounding, then
+    put on the value by a Newton step); 100 mm is beyond it, said in the file's mm."""
+    text = PISTON_DRIVEN.replace(
+        "driver: {joint: cyl, speed: -0.2 m/s, start: 190 mm}",
+        'driver: {joint: cyl, motion: {law: "0.19 - 0.02 * t"}}',
+    ).replace("sweep: {range: 85 mm, step: 5 mm}", "sweep: {duration: 2 s, time_step: 0.1 s}")
+    mech = ms.loads(text)
+    i = parse_instant(mech, "s=170")
+    assert (i.u, i.ud, i.udd, i.t) == pytest.approx((0.17, -0.02, 0.0, 1.0), rel=1e-14)
+    res = solve_instants(mech, [i])
+    assert res.point("A").x[0] == pytest.approx(_a_x(0.17), rel=1e-10)
+    with pytest.raises(ms.InputError, match="it covers 150 to 190 mm"):
+        parse_instant(mech, "s=100")

@@ -352,6 +352,12 @@ def _first_time(mech: Mechanism, law, u: float, period: float | None) -> tuple[f
     k = after // 2 if after % 2 == 0 else max(int(first), after) // 2
     if after % 2 == 0:  # met within rounding: where it comes to rest, if it does
         b = _settle(law, b, 1.0 if first < after else -1.0, tol)
+    # a crossing met within rounding: one Newton step onto the level itself
+    x, v, _ = law.at(np.array([b]))
+    x = float(x[0]) - u - (period or 0.0) * k
+    step = x / float(v[0]) if v[0] != 0 and abs(x) <= tol else math.inf
+    if abs(step) <= 1e-9 * max(1.0, b) and b - step >= 0:  # not at a stop: a small step
+        b -= step
     return float(b), k
 
 
