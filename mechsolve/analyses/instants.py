@@ -9,8 +9,9 @@ position is reached from there along the driver's direction, on the same branche
 
 Loads act as in a sweep. A ``when:`` condition is evaluated on the instant's own state
 (its velocities and accelerations come from the given rates). ``stroke(q)`` needs the
-extremes of ``q`` over the motion: they are taken over the file's sweep (solved for its
-positions only when a condition uses ``stroke``).
+extremes of ``q`` over the motion: they are those of the file's sweep, located exactly
+between its samples as the run locates them (the sweep is solved only when a condition
+uses ``stroke``).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import OutputUnits, UnitError, parse_quantity
 from mechsolve.core import evaluate as core
-from mechsolve.core.loads import stroke_function
+from mechsolve.core.loads import stroke_extremes, stroke_function
 from mechsolve.core.sweep import Analysis, StateView
 from mechsolve.model import Mechanism
 from mechsolve.model.expr import ExprError
@@ -73,13 +74,15 @@ class Instant:
     """A driver position ``u`` (rad or m) with its speed and acceleration.
 
     ``note``: what the output should say beside it (rates taken from the file, a speed
-    against the file's direction of motion)."""
+    against the file's direction of motion). ``t``: the time at which the file's driver is
+    there (its motion law's); None: :func:`solve_instants` finds it from ``u``."""
 
     u: float
     ud: float
     udd: float
     label: str = ""
     note: str = ""
+    t: float | None = None  # the time (s) of the file's motion there; None: found from u
 
 
 def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Instant:
@@ -90,7 +93,13 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
     ``omega``, ``α`` (also ``ε``, ``epsilon``) is ``alpha``. A name given twice, under
     either spelling, is refused. The position must be given; the speed and acceleration
     default to the file's driver at that position (its constant speed and no acceleration,
-    or the rates of its motion law where the law first reaches the position)."""
+    or the rates of its motion law where the law first reaches the position: the value as
+    written, 530 deg on the second turn; an angle behind the start on the turn where the
+    law first meets it, which then becomes the instant's position).
+
+    A bare number is read as the file reads its own ``instants:``: a position in the
+    file's length or angle unit (``units:``; m and deg when it names none), a speed or
+    acceleration in SI (m/s, rad/s; m/s^2, rad/s^2)."""
     linear = _is_linear(mech)
     keys = _KEYS[linear]
     names = instant_names(mech)
@@ -136,36 +145,48 @@ def parse_instant(mech: Mechanism, spec: str | dict, where: str = "--at") -> Ins
             "by default the file's driver's)"
         )
     vals = {}
+    # a bare number is in the file's units, as in its own instants: its length unit,
+    # its angle unit (deg when it names none); rates in SI
+    plain = {"length": mech.length_unit, "angle": mech.angle_unit or "deg"}
     for k, kind in keys.items():
         if k not in items:
             continue
         try:
-            default = "deg" if kind == "angle" else None
-            vals[k] = parse_quantity(items[k], kind, default)
+            vals[k] = parse_quantity(items[k], kind, plain.get(kind))
         except UnitError as exc:
             raise InputError(f"{where}: {spelled[k]}: {exc}") from None
-    u = vals[pos]
-    notes = []
-    if vel not in vals or acc not in vals:
-        try:
-            ud, udd, source = _file_rates(mech, u, linear, label, where)
-        except InputError:
-            if vel not in vals:
-                raise
-            # the speed is given, the law never reaches the position: no acceleration
-            ud, udd, source = vals[vel], 0.0, "the file's motion law does not reach here"
-        filled = []
-        if vel not in vals:
-            vals[vel] = ud
-            filled.append(f"{vel} = {_rate_text(ud, linear, 1)}")
-        if acc not in vals:
-            vals[acc] = udd
-            filled.append(f"{acc} = {_rate_text(udd, linear, 2)}")
-        notes.append(f"{', '.join(filled)}: {source}")
+    u, t, notes = _fill_rates(mech, vals[pos], vals, keys, label, where)
     against = _against_the_file(mech, vals[vel], linear)
     if against:
         notes.append(against)
-    return Instant(u, vals[vel], vals[acc], label, "; ".join(notes))
+    return Instant(u, vals[vel], vals[acc], label, "; ".join(notes), t)
+
+
+def _fill_rates(
+    mech: Mechanism, u: float, vals: dict, keys: dict, label: str, where: str
+) -> tuple[float, float | None, list[str]]:
+    """Fill the speed and acceleration that ``vals`` lacks with the file's driver's at
+    ``u``; the driver value (moved to the turn where a motion law reaches the angle), the
+    law's time there (None: none) and the note that says so."""
+    linear = _is_linear(mech)
+    _, vel, acc = keys
+    if vel in vals and acc in vals:
+        return u, None, []
+    try:
+        got = _file_rates(mech, u, linear, label, where)
+    except InputError:
+        if vel not in vals:
+            raise
+        # the speed is given, the law never reaches the position: no acceleration
+        got = _Reached(vals[vel], 0.0, "the file's motion law does not reach here", None, u)
+    filled = []
+    if vel not in vals:
+        vals[vel] = got.ud
+        filled.append(f"{vel} = {_rate_text(got.ud, linear, 1)}")
+    if acc not in vals:
+        vals[acc] = got.udd
+        filled.append(f"{acc} = {_rate_text(got.udd, linear, 2)}")
+    return got.u, got.t, [f"{', '.join(filled)}: {got.source}"]
 
 
 def _example(linear: bool) -> str:
@@ -211,62 +232,158 @@ def _against_the_file(mech: Mechanism, speed: float, linear: bool) -> str:
     )
 
 
-def _file_rates(
-    mech: Mechanism, u: float, linear: bool, label: str, where: str
-) -> tuple[float, float, str]:
-    """The file's driver speed and acceleration at the driver value ``u``, and where they
-    come from (for the output)."""
+def _file_rates(mech: Mechanism, u: float, linear: bool, label: str, where: str) -> _Reached:
+    """The file's driver speed and acceleration at the driver value ``u``, where they come
+    from (for the output), and for a motion law the time and the value it reaches."""
     d = mech.driver
     law = d.motion
     if law is None:
         what = "a constant speed" if d.speed else "at rest: positions quasi-static"
-        return float(d.speed), 0.0, f"the file's driver ({what})"
-    t = _first_time(mech, law, u, linear)
-    if t is None:
+        return _Reached(float(d.speed), 0.0, f"the file's driver ({what})", None, u)
+    found = _law_reaches(mech, law, u, linear)
+    if found is None:
         vel, acc = ("v", "a") if linear else ("omega", "alpha")
         raise InputError(
             f"{where}: {label!r}: the file's motion law does not reach this position "
-            f"{'' if mech.sweep.duration is None else 'within the sweep '}(from its start, "
-            f"in its direction), so it gives no speed here: give {vel} (and {acc})"
+            f"{'' if mech.sweep.duration is None else 'within the sweep '}(from its start; "
+            f"{'' if linear else 'an angle behind the start on a later turn; '}"
+            f"{_law_span(mech, law, linear)}), so it gives no speed here: give {vel} (and "
+            f"{acc})"
         )
+    t, value = found
     _, ud, udd = law.at(np.array([t]))
-    return (
-        float(ud[0]),
-        float(udd[0]),
-        f"the file's motion law where it first reaches the position, t = {t:.6g} s",
-    )
+    source = f"the file's motion law where it first reaches the position, t = {t:.6g} s"
+    if value != u:  # behind the start: the same angle on a later turn
+        source = (
+            f"the file's motion law reaches this angle on a later turn, at "
+            f"{math.degrees(value):.6g} deg, t = {t:.6g} s: the instant is there"
+        )
+    return _Reached(float(ud[0]), float(udd[0]), source, t, value)
 
 
-def _first_time(mech: Mechanism, law, u: float, linear: bool) -> float | None:
-    """The first time at which the driver's motion law reaches the value ``u`` (for a
-    revolute driver, the same angle on any turn); None if it never does (within the
-    sweep's duration, or the law's own)."""
-    from scipy.optimize import brentq
-
-    start = float(law.start)
-    period = None if linear else 2 * math.pi
-    if hasattr(law, "time_at"):  # one direction of motion: exact
-        travel = law.direction() * (u - start)
-        if period is not None:
-            travel %= period
-        t = float(np.asarray(law.time_at(np.array([travel])))[0])
-        end = mech.sweep.duration
-        return t if math.isfinite(t) and (end is None or t <= end * (1 + 1e-12)) else None
+def _law_span(mech: Mechanism, law, linear: bool) -> str:
+    """The range the motion law covers (for a message), e.g. 'it covers 0 to 540 deg'."""
     end = mech.sweep.duration or law.duration
     if not end:
+        return "it has no end"
+    u = law.at(np.linspace(0.0, end, 4097))[0]
+    lo, hi = float(u.min()), float(u.max())
+    if linear:
+        f = 1.0 / parse_quantity(1.0, "length", mech.length_unit)
+        return f"it covers {lo * f:.6g} to {hi * f:.6g} {mech.length_unit}"
+    return f"it covers {math.degrees(lo):.6g} to {math.degrees(hi):.6g} deg"
+
+
+@dataclass
+class _Reached:
+    """The file's driver at an instant's position: its rates, where they come from, the
+    time (None: not a motion law) and the driver value (the position asked, or the same
+    angle on the turn where the motion law reaches it)."""
+
+    ud: float
+    udd: float
+    source: str
+    t: float | None
+    u: float
+
+
+def _law_reaches(mech: Mechanism, law, u: float, linear: bool) -> tuple[float, float] | None:
+    """``(t, value)``: the first time at which the driver's motion law reaches the value
+    ``u`` itself (on whichever turn ``u`` names: 530 deg is the second turn's 170 deg),
+    and ``u``; for a revolute driver and an angle behind the start that the law never
+    reaches, the first time it reaches the same angle on a later turn, and that angle.
+    None if it reaches neither within the sweep's duration (or the law's)."""
+    found = _first_time(mech, law, u, None)
+    if found is not None:
+        return found[0], u
+    if linear or law.direction() * (u - float(law.start)) >= 0:
+        return None  # beyond the law's reach: no other turn stands in for the one named
+    turn = 2 * math.pi
+    found = _first_time(mech, law, u, turn)
+    return None if found is None else (found[0], u + turn * found[1])
+
+
+def _first_time(mech: Mechanism, law, u: float, period: float | None) -> tuple[float, int] | None:
+    """The first time at which the driver's motion law reaches the value ``u`` (with a
+    ``period``, any value ``u + k period``: then also that ``k``), as ``(t, k)``; None if
+    it never does (within the sweep's duration, or the law's own). Any law, one that
+    turns back too; a value met within rounding (1e-14 of it) is reached."""
+    end = mech.sweep.duration or law.duration
+    if hasattr(law, "time_at"):  # one direction of motion until it stops: exact
+        travel = law.direction() * (u - float(law.start))
+        if period is not None:
+            travel %= period
+        if travel >= 0:
+            t = float(np.asarray(law.time_at(np.array([travel])))[0])
+            if math.isfinite(t) and (end is None or t <= end * (1 + 1e-12)):
+                value = float(law.start) + law.direction() * travel
+                return t, (0 if period is None else round((value - u) / period))
+    if not end:
         return None
+    tol = 1e-14 * max(1.0, abs(u))
+
+    def side(s: np.ndarray) -> np.ndarray:
+        """2k on the level u + k period (u itself: 0), 2k + 1 between levels k and k + 1
+        (without a period: -1 below u, 1 above)."""
+        x = law.at(s)[0] - u
+        p = period if period is not None else 2 * tol + np.abs(x).max() + 1.0
+        k = np.round(x / p)
+        return np.where(np.abs(x - k * p) <= tol, 2 * k, 2 * np.floor(x / p) + 1)
+
     t = np.linspace(0.0, end, 4097)
-    x = law.at(t)[0] - u  # reached where x is 0 (a multiple of a turn for an angle)
-    turn = np.floor(x / period) if period is not None else np.sign(x)
-    if (x[0] % period if period is not None else x[0]) == 0:
-        return 0.0
-    change = np.flatnonzero(turn[1:] != turn[:-1])
+    sides = side(t)
+    if sides[0] % 2 == 0:
+        return 0.0, int(sides[0]) // 2
+    change = np.flatnonzero(sides[1:] != sides[:-1])
     if not change.size:
         return None
-    k = int(change[0])
-    # the level passed between the samples: the upper one's turn, or 0
-    level = u + (period * max(turn[k], turn[k + 1]) if period is not None else 0.0)
-    return float(brentq(lambda s: float(law.at(np.array([s]))[0][0]) - level, t[k], t[k + 1]))
+    a, b = t[change[0]], t[change[0] + 1]
+    first = sides[0]
+    for _ in range(80):  # bisection to the first time the side changes
+        mid = 0.5 * (a + b)
+        if not a < mid < b:
+            break
+        if side(np.array([mid]))[0] == first:
+            a = mid
+        else:
+            b = mid
+    after = int(side(np.array([b]))[0])
+    # on a level, or past one: the level between the two sides
+    k = after // 2 if after % 2 == 0 else max(int(first), after) // 2
+    if after % 2 == 0:  # met within rounding: where it comes to rest, if it does
+        b = _settle(law, b, 1.0 if first < after else -1.0, tol)
+    # a crossing met within rounding: one Newton step onto the level itself
+    x, v, _ = law.at(np.array([b]))
+    x = float(x[0]) - u - (period or 0.0) * k
+    step = x / float(v[0]) if v[0] != 0 and abs(x) <= tol else math.inf
+    if abs(step) <= 1e-9 * max(1.0, b) and b - step >= 0:  # not at a stop: a small step
+        b -= step
+    return float(b), k
+
+
+def _settle(law, b: float, sense: float, tol: float) -> float:
+    """A law that comes to rest on a level (the end of a deceleration, a turning point)
+    is within ``tol`` of it a little before it stops, at ``b``: the time it stops, where
+    its speed (``sense``: towards the level) vanishes; ``b`` itself for a crossing."""
+    _, v, acc = law.at(np.array([b]))
+    v, acc = sense * float(v[0]), abs(float(acc[0]))
+    if acc == 0 or v <= 0:
+        return b
+    reach = math.sqrt(2 * tol / acc)  # the time a stop takes from within tol of the level
+    if v > 4 * acc * reach:
+        return b  # too fast to stop there: a crossing
+    hi = b + 8 * reach
+    if sense * float(law.at(np.array([hi]))[1][0]) > 0:
+        return b  # still moving on
+    for _ in range(80):  # bisection to the first time the speed vanishes
+        mid = 0.5 * (b + hi)
+        if not b < mid < hi:
+            break
+        if sense * float(law.at(np.array([mid]))[1][0]) > 0:
+            b = mid
+        else:
+            hi = mid
+    return hi
 
 
 def solve_instants(
@@ -277,14 +394,16 @@ def solve_instants(
     forces: bool | None = None,
 ) -> Results:
     """Positions, velocities, accelerations and (with masses or loads) forces at the
-    instants, as :class:`~mechsolve.results.results.Results` with one row per instant."""
+    instants, as :class:`~mechsolve.results.results.Results` with one row per instant;
+    its time is when the file's driver is there (:func:`_time_there`)."""
     if not instants:
         raise InputError("no instants to solve")
     an = Analysis(mech, method)
     u = np.array([i.u for i in instants])
     ud = np.array([i.ud for i in instants])
     udd = np.array([i.udd for i in instants])
-    sol = core.states(an, u, ud, udd, t=np.zeros(len(u)))
+    t = np.array([_time_there(an, i) for i in instants])
+    sol = core.states(an, u, ud, udd, t=t)
     forces = mech.needs_forces if forces is None else forces
     fr = None
     if forces:
@@ -301,11 +420,26 @@ def solve_instants(
     return res
 
 
+def _time_there(an: Analysis, instant: Instant) -> float:
+    """The time at which the file's driver is at the instant's position, from its start:
+    its motion law's (where the law first reaches it), or the travel at its constant
+    speed; NaN where it never is there (at rest, behind the start, beyond the law)."""
+    if instant.t is not None:
+        return float(instant.t)
+    d = an.mech.driver
+    if d.motion is not None:
+        found = _first_time(an.mech, d.motion, instant.u, None)
+        return math.nan if found is None else found[0]
+    travel = d.direction * (instant.u - an.start_value())
+    return travel / abs(d.speed) if d.speed and travel >= 0 else math.nan
+
+
 def _stroke_extremes(an: Analysis) -> list[tuple[float, float]]:
     """The extremes that ``stroke(q)`` uses: over the file's sweep, solved as ``run``
     solves it (with its velocities and accelerations, which conditions such as
     ``C.vx > 0 and 0.05 <= stroke(C.x) <= 0.95`` read beside the stroke), in the order
-    that the force analysis asks for them."""
+    that the force analysis asks for them, located exactly between the samples by the
+    same function as the run's (:func:`mechsolve.core.loads.stroke_extremes`)."""
     mech = an.mech
     ud = udd = None
     if mech.driver.motion is not None:
@@ -313,9 +447,9 @@ def _stroke_extremes(an: Analysis) -> list[tuple[float, float]]:
     else:
         u, t = an.sweep_values(an.start_value())
     sweep = core.states(an, u, ud, udd, t=t)
-    extremes: list[tuple[float, float]] = []
-    _conditions(an, sweep, stroke_function(extremes), "over the file's sweep")
-    return extremes
+    # first each condition alone, so that an error names the load's file, line and key
+    _conditions(an, sweep, stroke_function([]), "over the file's sweep")
+    return stroke_extremes(an, sweep)
 
 
 def _conditions(an: Analysis, sol, stroke, context: str) -> None:

@@ -126,9 +126,7 @@ def condition_masks(
     (:func:`exact_extremes`), not read off the samples, so that a conditional load acts
     over the same part of the motion whatever the step."""
     if not replay and any(ld.when is not None and ld.when.uses("stroke") for ld in an.mech.loads):
-        found: list = []
-        args = stroke_arguments(an, view, found)
-        extremes += exact_extremes(an, sol, args, found)
+        extremes += stroke_extremes(an, sol, view)
         replay = True
     out = {}
     funcs = {"stroke": stroke_function(extremes, replay, getattr(an, "blocks", None))}
@@ -140,6 +138,18 @@ def condition_masks(
             val = load.when.evaluate(view, funcs)
         out[load.name] = np.broadcast_to(np.asarray(val, bool), (n,)) & sol.ok
     return out
+
+
+def stroke_extremes(an: Analysis, sol: Solution, view=None) -> list[tuple]:
+    """The extremes of every ``stroke(q)`` of the load conditions over the motion of
+    ``sol``, in the order the conditions evaluate them: each located exactly
+    (:func:`exact_extremes`, from the samples' extremes). The one place they are found:
+    the force analysis of a sweep and the instants (:mod:`mechsolve.analyses.instants`,
+    over the file's sweep) both take them from here, so that a conditional load switches
+    at the same driver value in both."""
+    found: list = []
+    args = stroke_arguments(an, view if view is not None else StateView(an, sol.state), found)
+    return exact_extremes(an, sol, args, found)
 
 
 def stroke_arguments(an: Analysis, view, extremes: list | None = None) -> list[np.ndarray]:

@@ -58,7 +58,9 @@ INCOMPLETE_INSTANTS = "some instants are not solved: the table says why"
     help="Solve only this instant, e.g. 'theta=30 deg, omega=10 rad/s, alpha=5 rad/s^2' "
     "('s=..., v=..., a=...' for a linear driver; θ/φ, ω, α/ε are the same names; signed, "
     "counter-clockwise positive); omega and alpha default to the file's driver; may be "
-    "repeated. Prints every quantity and force and writes instants.csv.",
+    "repeated. A bare number is read as in the file's instants: a position in the file's "
+    "length or angle unit (m and deg where its units: names none), a rate in SI (rad/s, "
+    "m/s, rad/s^2, m/s^2). Prints every quantity and force and writes instants.csv.",
 )
 @click.option(
     "--junit",
