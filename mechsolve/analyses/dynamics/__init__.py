@@ -29,13 +29,14 @@ states and forces along the motion, the summary) and :mod:`._run` (:func:`simula
 
 from mechsolve.analyses.dynamics._run import check_size, simulate
 from mechsolve.analyses.dynamics.constants import MAX_STEPS, TABLE_MAX, TABLE_MIN
+from mechsolve.analyses.dynamics.cycle import _repeats
 from mechsolve.analyses.dynamics.integrators import (
     Trajectory,
     _acceleration,
     _with_flywheel,
     integrate,
 )
-from mechsolve.analyses.dynamics.model import ReducedModel, _repeats, drive_torque
+from mechsolve.analyses.dynamics.model import ReducedModel, drive_torque
 from mechsolve.analyses.dynamics.results import SimulationResults, steady_fluctuation
 from mechsolve.analyses.dynamics.tables import _harmonics, _spectral_samples, _Table
 

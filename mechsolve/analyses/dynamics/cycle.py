@@ -8,7 +8,7 @@ simulation's reference sweep all need the whole cycle, so it is found here, once
 the mechanism itself: the driver is swept turn after turn (1 degree apart, on the
 branches the sweep follows) and the cycle ends at the first whole turn after which every
 body is back at its starting pose with the same rates per unit of the driver (as
-:func:`~mechsolve.analyses.dynamics.model._repeats` compares them).
+:func:`_repeats` compares them).
 """
 
 from __future__ import annotations
@@ -82,8 +82,6 @@ def machine_cycle(
         The sweep's step (degrees): the turn's positions are checked at the multiples of
         360 degrees, so 360 / step must be whole.
     """
-    from mechsolve.analyses.dynamics.model import _repeats
-
     if an.linear:
         raise InputError("a slider driver has no turns: its cycle is the file's sweep")
     per = int(round(360.0 / step))
@@ -109,3 +107,11 @@ def machine_cycle(
         if _repeats(many.state.take(np.array([0, end])), an.scale):
             return Cycle(k, core._take(many, np.arange(end + 1)))
     return Cycle(0, one)
+
+
+def _repeats(st, scale: float) -> bool:
+    """Whether the first and last positions of a state are the same configuration
+    (poses and rates per unit of the driver)."""
+    rows = [0, 1, 3, 4, 5, 6, 7]  # x, y, cos, sin, vx, vy, w
+    blk = st.block
+    return bool(np.allclose(blk[rows, :, 0], blk[rows, :, -1], rtol=0, atol=1e-8 * max(1, scale)))

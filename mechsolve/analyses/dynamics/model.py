@@ -474,14 +474,6 @@ class _EffortSampler:
         return np.array(table)
 
 
-def _repeats(st, scale: float) -> bool:
-    """Whether the first and last positions of a state are the same configuration
-    (poses and rates per unit of the driver)."""
-    rows = [0, 1, 3, 4, 5, 6, 7]  # x, y, cos, sin, vx, vy, w
-    blk = st.block
-    return bool(np.allclose(blk[rows, :, 0], blk[rows, :, -1], rtol=0, atol=1e-8 * max(1, scale)))
-
-
 def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray, rel: float = 1e-12) -> None:
     """The reduced moment of inertia must stay positive: where it vanishes (a massless
     crank whose massive links stop at a limit position) the motion is not determined."""
