@@ -16,8 +16,9 @@ supplies ``M(omega, t)``, so the driver's acceleration is
 Nothing is reduced by hand: a model that the sweep can analyse can be simulated, with the
 same loads. ``J'(phi) = 2 dT/dt`` at omega = 1, epsilon = 0.
 
-The kinematics at a new angle is solved next to a reference sweep over one turn (which
-fixes the branches; a crank's configuration repeats every turn), and the integration is
+The kinematics at a new angle is solved next to a reference sweep over the machine's
+cycle (which fixes the branches; a crank's configuration repeats every turn, a geared
+machine's after several: :mod:`.cycle`), and the integration is
 RK4 with a fixed step (Mathcad's ``rkfixed``) or scipy's ``solve_ivp``. Along the computed
 motion the states and every joint force follow from :mod:`mechsolve.core.evaluate`.
 
