@@ -218,10 +218,10 @@ def test_gear_train_flywheel_over_the_wheels_turn():
     # acts over 0.8 of the 120 mm stroke once per turn of the wheel
     assert M == pytest.approx(1200 * 0.8 * 0.120 / (6 * math.pi), rel=1e-9)
     fw = size_flywheel(api.load(MECH / "gear-train.yaml"), 1 / 40, check=False)
-    assert fw.motor_torque == pytest.approx(M, rel=1e-6)
-    assert fw.energy_max == pytest.approx(dE, rel=1e-6)  # 81.18 J
-    assert fw.J_mean == pytest.approx(Jm, rel=1e-7)
-    assert fw.J_flywheel == pytest.approx(JF, rel=1e-6)  # 3.29 kg m^2
+    assert fw.motor_torque == pytest.approx(M, rel=1e-9)
+    assert fw.energy_max == pytest.approx(dE, rel=1e-9)  # 81.18 J
+    assert fw.J_mean == pytest.approx(Jm, rel=1e-9)
+    assert fw.J_flywheel == pytest.approx(JF, rel=1e-9)  # 3.29 kg m^2
     assert fw.phi[-1] - fw.phi[0] == pytest.approx(6 * math.pi)
 
 
@@ -249,10 +249,10 @@ def test_slider_crank_flywheel_across_the_gas_switch():
     assert M == pytest.approx(-1500 * 0.7 * (sc.smax - sc.smin) / (2 * math.pi), rel=1e-9)
     fw = size_flywheel(api.load(MECH / "slider-crank.yaml"), 1 / 40, omega_mean=omega,
                        check=False)  # fmt: skip
-    assert fw.motor_torque == pytest.approx(M, rel=1e-6)  # -16733.60 N*mm
-    assert fw.energy_max == pytest.approx(dE, rel=1e-6)  # 66.83009 J
-    assert fw.J_mean == pytest.approx(Jm, rel=1e-7)  # 0.006645617 kg m^2
-    assert fw.J_flywheel == pytest.approx(JF, rel=1e-6)  # 0.1016952 kg m^2
+    assert fw.motor_torque == pytest.approx(M, rel=1e-9)  # -16733.60 N*mm
+    assert fw.energy_max == pytest.approx(dE, rel=1e-9)  # 66.83009 J
+    assert fw.J_mean == pytest.approx(Jm, rel=1e-9)  # 0.006645617 kg m^2
+    assert fw.J_flywheel == pytest.approx(JF, rel=1e-9)  # 0.1016952 kg m^2
 
 
 def _gear_train_motor(tmp_path, formulation: str) -> Path:

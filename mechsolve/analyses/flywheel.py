@@ -315,7 +315,7 @@ def _energy_mass(out: FlywheelSizing, J: np.ndarray, Q: np.ndarray, x: np.ndarra
     at constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
     omega^2 = 2 (T0 + W) / (J + J_F) must stay between omega_min and omega_max."""
     w, delta = out.omega_mean, out.delta
-    W = _cumulative(out.motor_torque + Q, x)
+    W = _hermite_work(out.motor_torque + Q, x)[0]
     wmax2, wmin2 = (w * (1 + delta / 2)) ** 2, (w * (1 - delta / 2)) ** 2
     jf = (np.max(0.5 * wmin2 * J - W) - np.min(0.5 * wmax2 * J - W)) / (0.5 * (wmax2 - wmin2))
     out.J_exact = max(0.0, float(jf))
@@ -392,22 +392,64 @@ def _cycle_torque(an: Analysis, u: np.ndarray, d: int, w: float):
 
 
 def _piecewise_mean(T: np.ndarray, x: np.ndarray, span: float) -> float:
-    """The mean of ``T`` over the cycle ``span``: trapezoids between samples, which the
-    switch angles of :func:`_cycle_torque` split where the torque jumps."""
-    return float(np.trapezoid(T, x) / span)
+    """The mean of ``T`` over the cycle ``span``, integrated piecewise between the angles
+    where it jumps (:func:`_hermite_work`)."""
+    return float(_hermite_work(T, x)[0][-1] / span)
+
+
+# an interval this short (rad) holds a jump of the torque: the two samples either side of
+# a switch angle (:func:`_cycle_torque`)
+_JUMP = 1e-6
+
+
+def _slopes(f: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """df/dx at the samples, second order, on each smooth piece between the jumps (zero
+    on a piece too short for it)."""
+    df = np.zeros_like(f)
+    cuts = np.flatnonzero(np.diff(x) < _JUMP) + 1
+    for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, len(x)]):
+        if hi - lo >= 3:
+            df[lo:hi] = np.gradient(f[lo:hi], x[lo:hi], edge_order=2)
+    return df
+
+
+def _hermite_work(f: np.ndarray, x: np.ndarray):
+    """``(W, df)``: the running integral of ``f`` over ``x`` from 0 by the cubic Hermite
+    interpolant through the samples and their slopes (:func:`_slopes`) on each smooth
+    piece, h (f0 + f1) / 2 + h^2 (f0' - f1') / 12 an interval (error O(h^5), the
+    trapezoid's O(h^3)); across a jump, the trapezoid over its 2e-9 rad."""
+    df = _slopes(f, x)
+    h = np.diff(x)
+    inc = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12 * (df[:-1] - df[1:])
+    return np.r_[0.0, np.cumsum(inc)], df
 
 
 def _excess_work(x: np.ndarray, T: np.ndarray, M: float):
-    """``(x', W, T')``: the running integral W of the excess ``M - T`` over ``x``, exact
-    for the piecewise-linear curve through the samples, with the points where the excess
-    changes sign inside an interval added (where W has its extremes; T' is M there)."""
+    """``(x', W, T')``: the running integral W of the excess ``M - T`` over ``x``
+    (:func:`_hermite_work`), with the points where the excess changes sign inside an
+    interval added (where W has its extremes; T' is M there): the root of the interval's
+    Hermite cubic, and W there its integral up to it."""
     e = M - T
+    W, de = _hermite_work(e, x)
     k = np.flatnonzero(e[:-1] * e[1:] < 0)
-    xc = x[k] - e[k] * (x[k + 1] - x[k]) / (e[k + 1] - e[k])
-    order = np.argsort(np.r_[x, xc], kind="stable")
-    xs = np.r_[x, xc][order]
-    Ts = np.r_[T, np.full(len(xc), M)][order]
-    return xs, _cumulative(M - Ts, xs), Ts
+    h = x[k + 1] - x[k]
+    e0, e1, m0, m1 = e[k], e[k + 1], h * de[k], h * de[k + 1]
+    s = e0 / (e0 - e1)  # the chord's root, then Newton on the cubic (monotone there)
+    for _ in range(8):
+        s2, s3 = s * s, s * s * s
+        p = (2 * s3 - 3 * s2 + 1) * e0 + (s3 - 2 * s2 + s) * m0 + (3 * s2 - 2 * s3) * e1
+        p += (s3 - s2) * m1
+        dp = (6 * s2 - 6 * s) * (e0 - e1) + (3 * s2 - 4 * s + 1) * m0 + (3 * s2 - 2 * s) * m1
+        s = np.clip(s - p / np.where(dp != 0, dp, 1.0), 0.0, 1.0)
+    s2, s3, s4 = s * s, s * s * s, s**4
+    Wc = W[k] + h * (
+        (s4 / 2 - s3 + s) * e0
+        + (s4 / 4 - 2 * s3 / 3 + s2 / 2) * m0
+        + (s3 - s4 / 2) * e1
+        + (s4 / 4 - s3 / 3) * m1
+    )
+    order = np.argsort(np.r_[x, x[k] + s * h], kind="stable")
+    return np.r_[x, x[k] + s * h][order], np.r_[W, Wc][order], np.r_[T, np.full(len(k), M)][order]
 
 
 def _cumulative(f: np.ndarray, x: np.ndarray) -> np.ndarray:
