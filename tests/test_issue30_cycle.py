@@ -369,3 +369,21 @@ def test_reduced_adaptive_simulation_meets_its_tolerance_across_switches(tmp_pat
     assert tr.t[-1] == pytest.approx(0.3)
     rel = np.abs(tr.omega[1:] - exact[1:]) / np.abs(exact[1:])
     assert rel.max() < 3e-10
+
+
+def test_fluctuation_over_the_machines_cycle():
+    """A speed that fluctuates once per three turns of the driver, omega = w (1 + a
+    sin(phi / 3)): over the cycle delta = (max - min) / mean = 2 a (to O(a^2)); the last
+    revolution alone sees only part of it."""
+    from mechsolve.analyses.dynamics import Trajectory, steady_fluctuation
+
+    w, a = 10.0, 0.01
+    phi = np.linspace(0.0, 12 * math.pi, 200001)
+    omega = w * (1 + a * np.sin(phi / 3))
+    # time along the motion: dt = dphi / omega (exact for this closed form, by quadrature)
+    t = np.r_[0.0, np.cumsum(np.diff(phi) * 0.5 * (1 / omega[1:] + 1 / omega[:-1]))]
+    tr = Trajectory(t, phi, omega, np.zeros_like(t), np.ones_like(t))
+    mean, delta = steady_fluctuation(tr, 3)
+    assert delta == pytest.approx(2 * a * w / mean, rel=1e-6)
+    assert mean == pytest.approx(w * math.sqrt(1 - a * a), rel=1e-6)  # 2 pi / the period
+    assert steady_fluctuation(tr, 1)[1] < 0.9 * delta

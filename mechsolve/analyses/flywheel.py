@@ -353,9 +353,12 @@ def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> 
     sim.formulation = "reduced"  # its revolutions and fluctuation: the reduced path's
     machine.simulation = sim
     res = simulate(machine)
-    fl = steady_fluctuation(res.trajectory)
+    # the machine's cycle, in revolutions (several for a pinion driving a wheel)
+    turns = getattr(getattr(res, "model", None), "turns", None) or 1
+    fl = steady_fluctuation(res.trajectory, turns)
     if fl is None:
-        out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
+        what = "a revolution" if turns == 1 else f"a cycle ({turns} revolutions)"
+        out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete {what}"
     else:
         out.delta_reached = fl[1]
         if short and 10 * tau > sim.duration:
