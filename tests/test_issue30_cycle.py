@@ -233,8 +233,9 @@ def test_never_repeating_machine_is_refused():
     saved = cycle.MAX_CYCLE_TURNS
     cycle.MAX_CYCLE_TURNS = 2  # the gear train needs 3
     try:
-        with pytest.raises(InputError, match="within 2 turns of the driver"):
+        with pytest.raises(InputError, match="within 2 turns of the driver") as err:
             size_flywheel(mech, 1 / 40, check=False)
+        assert "gear-train.yaml:43: driver" in str(err.value)  # where the file says it
     finally:
         cycle.MAX_CYCLE_TURNS = saved
 

@@ -218,7 +218,7 @@ def size_flywheel(
     d = mech.driver.direction
     u0 = an.start_value()
     # the machine's cycle: one turn of a crank, several of a pinion driving a wheel
-    turns = machine_cycle(an, velocity=False, acceleration=False).require("a flywheel")
+    turns = machine_cycle(an, velocity=False, acceleration=False).require("a flywheel", mech)
     span = 2 * math.pi * turns
     grid = np.radians(np.arange(0.0, 360.0 * turns + 0.05, 0.1))
 

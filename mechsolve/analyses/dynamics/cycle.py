@@ -49,21 +49,23 @@ class Cycle:
         """The cycle's travel of the driver (rad)."""
         return 2 * math.pi * (self.turns or 1)
 
-    def require(self, what: str) -> int:
+    def require(self, what: str, mech=None) -> int:
         """The turns per cycle, or an input error saying why ``what`` (e.g. 'a flywheel')
-        has no cycle to work over."""
+        has no cycle to work over (at the file's driver, when ``mech`` is given)."""
         if self.turns is None:
-            raise InputError(
-                f"the mechanism does not turn fully: {what} needs a full cycle of the crank"
-            )
-        if self.turns == 0:
-            raise InputError(
+            text = f"the mechanism does not turn fully: {what} needs a full cycle of the crank"
+        elif self.turns == 0:
+            text = (
                 f"the machine does not come back to its starting position within "
                 f"{MAX_CYCLE_TURNS} turns of the driver (its gear ratios, or a linkage that "
                 f"changes branch every turn, give it no shorter cycle): {what} needs the "
                 "machine's cycle"
             )
-        return self.turns
+        else:
+            return self.turns
+        if mech is not None and getattr(mech, "source", None) is not None:
+            raise mech.error(("driver",), text)
+        raise InputError(text)
 
 
 def machine_cycle(

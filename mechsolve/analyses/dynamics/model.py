@@ -57,7 +57,7 @@ class ReducedModel:
         if self.turns == 0 and any(
             ld.when is not None and ld.when.uses("stroke") for ld in mech.loads
         ):
-            cyc.require("stroke(q) in a load condition (its extremes over the cycle)")
+            cyc.require("stroke(q) in a load condition (its extremes over the cycle)", mech)
         self.extremes = core.forces(an, self.ref).stroke_extremes if conditions else []
         self.nfev = 0  # evaluations of the equation of motion
         # which conditional loads act, held fixed by an integrator between two switches

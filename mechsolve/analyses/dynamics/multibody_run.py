@@ -122,7 +122,7 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         else:
             cyc = machine_cycle(an)
             if cyc.turns == 0:
-                cyc.require("stroke(q) in a load condition (its extremes over the cycle)")
+                cyc.require("stroke(q) in a load condition (its extremes over the cycle)", mech)
             ref = cyc.sweep
         mb.extremes = list(core.forces(an, ref).stroke_extremes)
     if sim.rates:
