@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.analyses.dynamics import MAX_STEPS, _with_flywheel, simulate, steady_fluctuation
+from mechsolve.analyses.dynamics.cycle import machine_cycle
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import _QUANTITY_RE, SI_OUTPUT, OutputUnits, UnitError, parse_unit
 from mechsolve.core import evaluate as core
@@ -216,21 +217,22 @@ def size_flywheel(
         raise InputError("a flywheel turns: the driver must be a revolute joint")
     d = mech.driver.direction
     u0 = an.start_value()
-    x = np.radians(np.arange(0.0, 360.0 + 0.05, 0.1))
-    u = u0 + d * x
+    # the machine's cycle: one turn of a crank, several of a pinion driving a wheel
+    turns = machine_cycle(an, velocity=False, acceleration=False).require("a flywheel", mech)
+    span = 2 * math.pi * turns
+    grid = np.radians(np.arange(0.0, 360.0 * turns + 0.05, 0.1))
 
     def cycle(w: float):
-        sol = core.states(an, u, d * w, 0.0)
-        if not sol.ok.all():
-            raise InputError("the mechanism does not turn fully: a flywheel needs a full cycle")
-        T = d * core.forces(an, sol).effort  # the torque along the motion
-        return T, float(np.trapezoid(T, x) / (2 * math.pi))
+        x, T, on_grid = _cycle_torque(an, u0 + d * grid, d, w)
+        return (x, T, on_grid), _piecewise_mean(T, x, span)
 
-    w, T, M = _speed_and_cycle(mech, omega_mean, cycle)
-    work = _cumulative(M - T, x)
-    dE = float(work.max() - work.min())
+    w, (x, T, on_grid), M = _speed_and_cycle(mech, omega_mean, cycle)
+    u = u0 + d * x
     J, dJ = _reduced_inertia(an, u)
-    J_mean = float(np.mean(J))
+    # the mean over the period: the uniform grid's positions without its repeated end
+    J_mean = float(np.mean(J[on_grid][:-1]))
+    xe, work, Te = _excess_work(x, T, M)
+    dE = float(work.max() - work.min())
     # the machine's energy scale: its kinetic energy and the work its largest torque does
     # over a turn; an excursion below 1e-9 of it is rounding: no fluctuation
     scale = J_mean * w * w + float(np.max(np.abs(T))) * 2 * math.pi
@@ -242,11 +244,12 @@ def size_flywheel(
                 "torque is zero over the whole cycle; give the links' 'mass' (and "
                 "'inertia') and the loads the machine works against",
             )
-        out = FlywheelSizing(w, delta, M, 0.0, J_mean, 0.0, u, work, T, none_needed=True)
+        out = FlywheelSizing(w, delta, M, 0.0, J_mean, 0.0, u0 + d * xe, work, Te,
+                             none_needed=True)  # fmt: skip
         out.J_exact = 0.0
         return out
     need = dE / (w * w * delta)
-    out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u, work, T)
+    out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u0 + d * xe, work, Te)
     if not mech.has_masses and mech.flywheel is None:
         out.notes.append(
             "the file gives no masses: the machine's own inertia is taken as zero and "
@@ -258,6 +261,11 @@ def size_flywheel(
             f"{need:.6g} kg*m^2 required: no flywheel is needed"
         )
     _energy_mass(out, J, 0.5 * d * dJ * w * w - T, x)
+    if turns > 1:
+        out.notes.append(
+            f"the machine's cycle is {turns} turns of the driver ({360 * turns} deg): it "
+            "comes back to its start only then (its gear ratios)"
+        )
     if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
         _check_by_simulation(out, mech, an)
     elif check and mech.motor is not None and mech.simulation is None:
@@ -307,7 +315,7 @@ def _energy_mass(out: FlywheelSizing, J: np.ndarray, Q: np.ndarray, x: np.ndarra
     at constant speed less its inertia part 1/2 J' omega^2); with a flywheel J_F the speed
     omega^2 = 2 (T0 + W) / (J + J_F) must stay between omega_min and omega_max."""
     w, delta = out.omega_mean, out.delta
-    W = _cumulative(out.motor_torque + Q, x)
+    W = _hermite_work(out.motor_torque + Q, x)[0]
     wmax2, wmin2 = (w * (1 + delta / 2)) ** 2, (w * (1 - delta / 2)) ** 2
     jf = (np.max(0.5 * wmin2 * J - W) - np.min(0.5 * wmax2 * J - W)) / (0.5 * (wmax2 - wmin2))
     out.J_exact = max(0.0, float(jf))
@@ -345,13 +353,106 @@ def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> 
     sim.formulation = "reduced"  # its revolutions and fluctuation: the reduced path's
     machine.simulation = sim
     res = simulate(machine)
-    fl = steady_fluctuation(res.trajectory)
+    # the machine's cycle, in revolutions (several for a pinion driving a wheel)
+    turns = getattr(getattr(res, "model", None), "turns", None) or 1
+    fl = steady_fluctuation(res.trajectory, turns)
     if fl is None:
-        out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete a revolution"
+        what = "a revolution" if turns == 1 else f"a cycle ({turns} revolutions)"
+        out.check_note = f"the simulation ({sim.duration:.4g} s) did not complete {what}"
     else:
         out.delta_reached = fl[1]
         if short and 10 * tau > sim.duration:
             out.check_note = f"{short}, less than 10 time constants J/(-dM/domega)"
+
+
+def _cycle_torque(an: Analysis, u: np.ndarray, d: int, w: float):
+    """``(x, T, on_grid)``: the driving torque along the motion at the speed ``w`` over the
+    driver values ``u`` (travel ``x`` from the first), with each angle where a conditional
+    load switches added on both sides of it (1e-9 rad apart, located to rounding as the
+    run's summary locates them), so that the torque's jumps fall between samples;
+    ``on_grid`` marks the samples of ``u``."""
+    from mechsolve.core.loads import switch_points
+
+    sol = core.states(an, u, d * w, 0.0)
+    if not sol.ok.all():
+        raise InputError("the mechanism does not turn fully: a flywheel needs a full cycle")
+    f = core.forces(an, sol)
+    extra = [s + h for s in switch_points(an, sol, f) for h in (-1e-9, 1e-9)]
+    lo, hi = (u[0], u[-1]) if d > 0 else (u[-1], u[0])
+    extra = [v for v in extra if lo < v < hi]
+    on_grid = np.ones(len(u), bool)
+    if extra:
+        uu = np.concatenate([u, extra])
+        order = np.argsort(d * (uu - u[0]), kind="stable")
+        uu = uu[order]
+        on_grid = np.r_[on_grid, np.zeros(len(extra), bool)][order]
+        sol = core.states(an, uu, d * w, 0.0)
+        if not sol.ok.all():
+            raise InputError("the mechanism does not turn fully: a flywheel needs a full cycle")
+        f = core.forces(an, sol, f.stroke_extremes)
+        u = uu
+    return d * (u - u[0]), d * f.effort, on_grid  # the torque along the motion
+
+
+def _piecewise_mean(T: np.ndarray, x: np.ndarray, span: float) -> float:
+    """The mean of ``T`` over the cycle ``span``, integrated piecewise between the angles
+    where it jumps (:func:`_hermite_work`)."""
+    return float(_hermite_work(T, x)[0][-1] / span)
+
+
+# an interval this short (rad) holds a jump of the torque: the two samples either side of
+# a switch angle (:func:`_cycle_torque`)
+_JUMP = 1e-6
+
+
+def _slopes(f: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """df/dx at the samples, second order, on each smooth piece between the jumps (zero
+    on a piece too short for it)."""
+    df = np.zeros_like(f)
+    cuts = np.flatnonzero(np.diff(x) < _JUMP) + 1
+    for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, len(x)]):
+        if hi - lo >= 3:
+            df[lo:hi] = np.gradient(f[lo:hi], x[lo:hi], edge_order=2)
+    return df
+
+
+def _hermite_work(f: np.ndarray, x: np.ndarray):
+    """``(W, df)``: the running integral of ``f`` over ``x`` from 0 by the cubic Hermite
+    interpolant through the samples and their slopes (:func:`_slopes`) on each smooth
+    piece, h (f0 + f1) / 2 + h^2 (f0' - f1') / 12 an interval (error O(h^5), the
+    trapezoid's O(h^3)); across a jump, the trapezoid over its 2e-9 rad."""
+    df = _slopes(f, x)
+    h = np.diff(x)
+    inc = 0.5 * h * (f[:-1] + f[1:]) + h * h / 12 * (df[:-1] - df[1:])
+    return np.r_[0.0, np.cumsum(inc)], df
+
+
+def _excess_work(x: np.ndarray, T: np.ndarray, M: float):
+    """``(x', W, T')``: the running integral W of the excess ``M - T`` over ``x``
+    (:func:`_hermite_work`), with the points where the excess changes sign inside an
+    interval added (where W has its extremes; T' is M there): the root of the interval's
+    Hermite cubic, and W there its integral up to it."""
+    e = M - T
+    W, de = _hermite_work(e, x)
+    k = np.flatnonzero(e[:-1] * e[1:] < 0)
+    h = x[k + 1] - x[k]
+    e0, e1, m0, m1 = e[k], e[k + 1], h * de[k], h * de[k + 1]
+    s = e0 / (e0 - e1)  # the chord's root, then Newton on the cubic (monotone there)
+    for _ in range(8):
+        s2, s3 = s * s, s * s * s
+        p = (2 * s3 - 3 * s2 + 1) * e0 + (s3 - 2 * s2 + s) * m0 + (3 * s2 - 2 * s3) * e1
+        p += (s3 - s2) * m1
+        dp = (6 * s2 - 6 * s) * (e0 - e1) + (3 * s2 - 4 * s + 1) * m0 + (3 * s2 - 2 * s) * m1
+        s = np.clip(s - p / np.where(dp != 0, dp, 1.0), 0.0, 1.0)
+    s2, s3, s4 = s * s, s * s * s, s**4
+    Wc = W[k] + h * (
+        (s4 / 2 - s3 + s) * e0
+        + (s4 / 4 - 2 * s3 / 3 + s2 / 2) * m0
+        + (s3 - s4 / 2) * e1
+        + (s4 / 4 - s3 / 3) * m1
+    )
+    order = np.argsort(np.r_[x, x[k] + s * h], kind="stable")
+    return np.r_[x, x[k] + s * h][order], np.r_[W, Wc][order], np.r_[T, np.full(len(k), M)][order]
 
 
 def _cumulative(f: np.ndarray, x: np.ndarray) -> np.ndarray:

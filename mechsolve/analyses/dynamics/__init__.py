@@ -16,8 +16,9 @@ supplies ``M(omega, t)``, so the driver's acceleration is
 Nothing is reduced by hand: a model that the sweep can analyse can be simulated, with the
 same loads. ``J'(phi) = 2 dT/dt`` at omega = 1, epsilon = 0.
 
-The kinematics at a new angle is solved next to a reference sweep over one turn (which
-fixes the branches; a crank's configuration repeats every turn), and the integration is
+The kinematics at a new angle is solved next to a reference sweep over the machine's
+cycle (which fixes the branches; a crank's configuration repeats every turn, a geared
+machine's after several: :mod:`.cycle`), and the integration is
 RK4 with a fixed step (Mathcad's ``rkfixed``) or scipy's ``solve_ivp``. Along the computed
 motion the states and every joint force follow from :mod:`mechsolve.core.evaluate`.
 
@@ -29,13 +30,14 @@ states and forces along the motion, the summary) and :mod:`._run` (:func:`simula
 
 from mechsolve.analyses.dynamics._run import check_size, simulate
 from mechsolve.analyses.dynamics.constants import MAX_STEPS, TABLE_MAX, TABLE_MIN
+from mechsolve.analyses.dynamics.cycle import _repeats
 from mechsolve.analyses.dynamics.integrators import (
     Trajectory,
     _acceleration,
     _with_flywheel,
     integrate,
 )
-from mechsolve.analyses.dynamics.model import ReducedModel, _repeats, drive_torque
+from mechsolve.analyses.dynamics.model import ReducedModel, drive_torque
 from mechsolve.analyses.dynamics.results import SimulationResults, steady_fluctuation
 from mechsolve.analyses.dynamics.tables import _harmonics, _spectral_samples, _Table
 

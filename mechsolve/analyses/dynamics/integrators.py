@@ -301,9 +301,11 @@ def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
 
 def _adaptive(model, sim, accel, y0, turns: _Turns, max_steps: int):
     """scipy's ``solve_ivp`` on a grid of output times, one revolution at a time when
-    revolutions are counted (a terminal event at each). Where the motion cannot go on,
-    the integrator's step fails (:func:`_guarded`) and the rows computed so far, with its
-    last accepted state, are kept."""
+    revolutions are counted (a terminal event at each), and from one switch of a
+    conditional load to the next (:func:`_switch_events`), so that the equation it
+    integrates is smooth over each run and the result meets its tolerance. Where the
+    motion cannot go on, the integrator's step fails (:func:`_guarded`) and the rows
+    computed so far, with its last accepted state, are kept."""
     from scipy.integrate import solve_ivp
 
     phi0 = y0[0]
@@ -317,52 +319,105 @@ def _adaptive(model, sim, accel, y0, turns: _Turns, max_steps: int):
     t0, y = 0.0, np.array(y0, float)
     end = _End()
     guard = _guarded(sim.method, model, max_steps)
-    while True:
-        events = None
-        if turns.wanted:
-            target = turns.next_angle()
+    switches = model.switch_angles()
+    try:
+        while True:
+            events = []
+            if turns.wanted:
+                target = turns.next_angle()
 
-            def turn(t, y, target=target):
-                return abs(y[0] - phi0) - target
+                def turn(t, y, target=target):
+                    return abs(y[0] - phi0) - target
 
-            turn.terminal = True
-            events = [turn]
-        try:
-            with np.errstate(all="ignore"):
-                out = solve_ivp(
-                    rhs,
-                    (t0, sim.duration),
-                    y,
-                    method=guard,
-                    t_eval=grid[grid > t0] if t0 > 0 else grid,
-                    rtol=sim.rtol,
-                    atol=sim.atol,
-                    events=events,
-                )
-        except _STOPS as exc:  # at the first evaluations, before any step
-            end = _stop_for(model, exc)
+                turn.terminal = True
+                events.append(turn)
+            events += _switch_events(model, switches, y)
+            try:
+                with np.errstate(all="ignore"):
+                    out = solve_ivp(
+                        rhs,
+                        (t0, sim.duration),
+                        y,
+                        method=guard,
+                        t_eval=grid[grid > t0] if t0 > 0 else grid,
+                        rtol=sim.rtol,
+                        atol=sim.atol,
+                        events=events or None,
+                    )
+            except _STOPS as exc:  # at the first evaluations, before any step
+                end = _stop_for(model, exc)
+                break
+            if not accel.counted:
+                model.nfev += out.nfev
+            start = 1 if t0 == 0 else 0
+            ts += list(out.t[start:])
+            # (no output time within a short run between two switches: an empty list)
+            ys += [tuple(v) for v in np.reshape(out.y, (2, -1)).T[start:]]
+            if out.status == 1:
+                hit = next(i for i, te in enumerate(out.t_events) if len(te))
+                te, ye = float(out.t_events[hit][0]), out.y_events[hit][0]
+                if not (turns.wanted and hit == 0):  # a switch: on from there
+                    t0, y = te, ye
+                    continue
+                end.reason = turns.passed(te)
+                if not end.reason and te < sim.duration:
+                    t0, y = te, ye
+                    continue
+                if end.reason and te > ts[-1]:
+                    ts.append(te)
+                    ys.append(tuple(ye))
+            elif out.status < 0:
+                end = guard.end or _End(f"the integrator {sim.method} failed: {out.message}", True)
+                if guard.last is not None and guard.last[0] > ts[-1]:  # last accepted state
+                    ts.append(guard.last[0])
+                    ys.append(tuple(guard.last[1]))
             break
-        if not accel.counted:
-            model.nfev += out.nfev
-        start = 1 if t0 == 0 else 0
-        ts += list(out.t[start:])
-        ys += [tuple(v) for v in out.y.T[start:]]
-        if out.status == 1:
-            te, ye = float(out.t_events[0][0]), out.y_events[0][0]
-            end.reason = turns.passed(te)
-            if not end.reason and te < sim.duration:
-                t0, y = te, ye
-                continue
-            if end.reason and te > ts[-1]:
-                ts.append(te)
-                ys.append(tuple(ye))
-        elif out.status < 0:
-            end = guard.end or _End(f"the integrator {sim.method} failed: {out.message}", True)
-            if guard.last is not None and guard.last[0] > ts[-1]:  # its last accepted state
-                ts.append(guard.last[0])
-                ys.append(tuple(guard.last[1]))
-        break
+    finally:
+        model.frozen = None
     return ts, ys, end
+
+
+def _switch_events(model: ReducedModel, switches: np.ndarray, y) -> list:
+    """Terminal events for the run from the state ``y`` to the next switch of a
+    conditional load (``switches``: :meth:`ReducedModel.switch_angles`) the way the
+    driver moves, or to a reversal of its motion (where the loads' intervals change
+    with the sense), with the loads that act over that run held fixed in
+    ``model.frozen``: the equation is then smooth up to the event and past it, so the
+    integrator's steps and its location of the event keep their accuracy. From rest the
+    way is not known: the switches on both sides end the run, and the loads are decided
+    at each angle."""
+    model.frozen = None
+    if switches.size == 0:
+        return []
+    d = model.mech.driver.direction
+    two_pi = 2 * math.pi
+    x0 = d * (float(y[0]) - model.u0)  # travel from the start
+    base = math.floor(x0 / two_pi) * two_pi
+    near = np.concatenate([switches + base + k * two_pi for k in (-1.0, 0.0, 1.0)])
+    tiny = 1e-10 * max(1.0, abs(x0))  # the switch just reached is behind
+    ahead, behind = near[near > x0 + tiny].min(), near[near < x0 - tiny].max()
+    sense = d * float(y[1])  # the travel's rate
+    drv = model.mech.driver
+    if abs(sense) <= 1e-9 * (abs(drv.speed) if drv.speed else 1.0):
+        sense = 0.0  # at rest (where a reversal ended the last run): the way is not known
+
+    def at(goal: float):
+        def event(t, y):
+            return d * (y[0] - model.u0) - goal
+
+        event.terminal = True
+        return event
+
+    if sense == 0.0:
+        return [at(ahead), at(behind)]
+    goal = ahead if sense > 0 else behind
+    model.frozen = model._acting(0.5 * (x0 + goal) % two_pi, float(y[1]))
+
+    def reversal(t, y):
+        return y[1]
+
+    reversal.terminal = True
+    return [at(goal), reversal]
 
 
 def _guarded(method: str, model: ReducedModel, max_steps: int):

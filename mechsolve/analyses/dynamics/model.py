@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from mechsolve.analyses.dynamics.constants import BESIDE_STEP, NEAR_EXACT, SWITCH_GRID
+from mechsolve.analyses.dynamics.cycle import machine_cycle
 from mechsolve.analyses.dynamics.tables import (
     _harmonics,
     _limit,
@@ -38,22 +39,30 @@ class ReducedModel:
         self.an = Analysis(mech, method)
         an = self.an
         self.u0 = an.start_value()
-        d = mech.driver.direction
-        # the reference sweep: a turn of a crank (or the file's sweep), 1 degree apart
+        # the reference sweep, 1 degree apart: the machine's cycle (a turn of a crank,
+        # several of a pinion driving a wheel: see .cycle), or the file's sweep
         if an.linear:
             u, _ = an.sweep_values(self.u0)
+            self.ref = core.states(an, u, 1.0, 0.0, velocity=True, acceleration=True)
+            self.turns = None
         else:
-            u = self.u0 + d * np.radians(np.arange(0.0, 360.0 + 0.5, 1.0))
-        self.ref = core.states(an, u, 1.0, 0.0, velocity=True, acceleration=True)
+            cyc = machine_cycle(an)
+            self.ref, self.turns = cyc.sweep, cyc.turns
         # a crank that turns fully and whose linkage comes back as it started after a
         # turn (not, say, on its other branch): its motion is periodic in the angle
-        self.full_turn = (
-            (not an.linear) and bool(self.ref.ok.all()) and _repeats(self.ref.state, an.scale)
-        )
-        # the extremes that stroke(q) in load conditions means (none without conditions)
+        self.full_turn = self.turns == 1
+        # the extremes that stroke(q) in load conditions means (none without conditions),
+        # over the machine's cycle
         conditions = any(ld.when is not None for ld in mech.loads)
+        if self.turns == 0 and any(
+            ld.when is not None and ld.when.uses("stroke") for ld in mech.loads
+        ):
+            cyc.require("stroke(q) in a load condition (its extremes over the cycle)", mech)
         self.extremes = core.forces(an, self.ref).stroke_extremes if conditions else []
         self.nfev = 0  # evaluations of the equation of motion
+        # which conditional loads act, held fixed by an integrator between two switches
+        # (see switch_angles), or None: decided at each angle
+        self.frozen: list[bool] | None = None
         # joint friction: Coulomb's law regularised through a standstill of the driver
         # (see FRICTION_SMOOTHING), the equation solved at every stage (not tabulated)
         self.friction = bool(frictional(an))
@@ -263,6 +272,14 @@ class ReducedModel:
                 out.append(on0 ^ bool(np.searchsorted(sw, x, side="right") % 2))
         return out
 
+    def switch_angles(self) -> np.ndarray:
+        """The angles (from the start along the driver's direction, in [0, 2 pi)) where a
+        tabulated conditional load switches, in either sense of motion: where the
+        equation of motion jumps (empty without a table or such loads)."""
+        if getattr(self, "_table", None) is None or not getattr(self, "_masks", None):
+            return np.empty(0)
+        return np.unique(np.concatenate([sw for _, sw in self._masks.values()]))
+
     def terms(self, phi: float, omega: float, t: float = 0.0):
         """``(J, E0)``: the reduced inertia and the effort at zero driver acceleration."""
         self.nfev += 1
@@ -274,7 +291,8 @@ class ReducedModel:
             w2 = omega * omega
             e0 = v[1] + v[2] * omega + v[3] * w2
             if self._masks:
-                for k, on in enumerate(self._acting(x, omega)):
+                acting = self.frozen if self.frozen is not None else self._acting(x, omega)
+                for k, on in enumerate(acting):
                     if on:
                         e0 += v[4 + 3 * k] + v[5 + 3 * k] * omega + v[6 + 3 * k] * w2
             return v[0], e0
@@ -454,14 +472,6 @@ class _EffortSampler:
         for Ek in out[1:]:
             table += list(np.linalg.solve(self.vander, Ek[1:] - E[1:]))
         return np.array(table)
-
-
-def _repeats(st, scale: float) -> bool:
-    """Whether the first and last positions of a state are the same configuration
-    (poses and rates per unit of the driver)."""
-    rows = [0, 1, 3, 4, 5, 6, 7]  # x, y, cos, sin, vx, vy, w
-    blk = st.block
-    return bool(np.allclose(blk[rows, :, 0], blk[rows, :, -1], rtol=0, atol=1e-8 * max(1, scale)))
 
 
 def _check_inertia(model: ReducedModel, J: np.ndarray, u: np.ndarray, rel: float = 1e-12) -> None:

@@ -16,6 +16,7 @@ import dataclasses
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.cycle import machine_cycle
 from mechsolve.analyses.dynamics.integrators import _with_flywheel
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
@@ -112,13 +113,17 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     sources += motor_sources(machine, free.system)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
     if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
-        # stroke(q) means the extremes over the driver's sweep (a turn of a crank), as
-        # for the reduced path: found once, replayed at every state of the motion
+        # stroke(q) means the extremes over the driver's sweep (the machine's cycle: a
+        # turn of a crank, several of a pinion driving a wheel), as for the reduced path:
+        # found once, replayed at every state of the motion
         if an.linear:
             u, _ = an.sweep_values(u0)
+            ref = core.states(an, u, 1.0, 0.0)
         else:
-            u = u0 + d.direction * np.radians(np.arange(0.0, 360.5, 1.0))
-        ref = core.states(an, u, 1.0, 0.0)
+            cyc = machine_cycle(an)
+            if cyc.turns == 0:
+                cyc.require("stroke(q) in a load condition (its extremes over the cycle)", mech)
+            ref = cyc.sweep
         mb.extremes = list(core.forces(an, ref).stroke_extremes)
     if sim.rates:
         qd0 = initial_rates(mech, mb, q0, qd0, d)

@@ -106,11 +106,13 @@ class SimulationResults(Results):
             )
         rest = self.stall()
         # a machine come to rest has no cycle to speak of
-        dl = steady_fluctuation(tr) if not (lin or rest.startswith("stalled")) else None
+        turns = getattr(getattr(self, "model", None), "turns", None) or 1
+        dl = steady_fluctuation(tr, turns) if not (lin or rest.startswith("stalled")) else None
         if dl is not None:
             mean, delta = dl
+            over = "revolution" if turns == 1 else f"cycle ({turns} revolutions)"
             lines.append(
-                f"  last full revolution: time mean of |omega| {mean * kw:.6g} {wu}, coefficient "
+                f"  last full {over}: time mean of |omega| {mean * kw:.6g} {wu}, coefficient "
                 f"of fluctuation delta = (max - min) / mean = {delta:.4g}"
             )
         if rest:
@@ -288,11 +290,13 @@ class SimulationResults(Results):
         return super().incomplete() or self.trajectory.early
 
 
-def steady_fluctuation(tr: Trajectory):
-    """(mean speed, delta = (max - min) / mean) over the last full revolution, or None."""
+def steady_fluctuation(tr: Trajectory, turns: int = 1):
+    """(mean speed, delta = (max - min) / mean) over the last full cycle of ``turns``
+    revolutions of the driver (the machine's cycle: several for a pinion driving a
+    wheel), or None."""
     if len(tr.phi) < 3:
         return None
-    turn = 2 * math.pi
+    turn = 2 * math.pi * max(1, turns)
     end = tr.phi[-1]
     k = np.flatnonzero(np.abs(tr.phi - end) >= turn)
     if not k.size:
