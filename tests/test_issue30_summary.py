@@ -226,3 +226,30 @@ def test_time_law_summary_gives_its_time_step_and_the_shown_time_unit():
     text = res.summary(units=U)
     assert text.splitlines()[0].endswith(" over 2500 ms"), text.splitlines()[0]
     assert "t = 500 ms (" in text and "(50 ms samples)" in text
+
+
+# -- sweep -p naming a parameter twice --------------------------------------------------
+@pytest.mark.parametrize(
+    "second",
+    ["links.crank.points.A[0]=22,24 mm", "links.crank.points.A[ 0 ]=22,24 mm"],
+)
+def test_sweep_refuses_a_parameter_given_twice(tmp_path, second):
+    """Two -p of one key path (or of two spellings of it) exit 2 naming both, as --at and
+    compare refuse a repeat (it ran the last one only, exit 0); a -p still replaces the
+    file's own parameter of that key path."""
+    from click.testing import CliRunner
+
+    from mechsolve.cli.commands.sweep import sweep
+
+    first = "links.crank.points.A[0]=20,25 mm"
+    args = [str(MECH / "fourbar.yaml"), "-p", first, "-p", second, "-o", str(tmp_path)]
+    r = CliRunner().invoke(sweep, args + ["--no-plots", "-q"])
+    assert r.exit_code == 2, r.output
+    assert repr(first) in r.output and repr(second) in r.output, r.output
+    assert not (tmp_path / "study.csv").exists()
+    study = MECH / "studies" / "fourbar-study.yaml"
+    args = [str(study), "-p", "links.crank.points.A[0]=22 mm", "-o", str(tmp_path / "s")]
+    r = CliRunner().invoke(sweep, args + ["--no-plots", "-q", "-j", "1"])
+    assert r.exit_code in (0, 5), r.output
+    rows = (tmp_path / "s" / "study.csv").read_text().splitlines()
+    assert len(rows) == 1 + 8  # 1 value of A[0] (the file's 7 replaced) x 8 of B[0]
