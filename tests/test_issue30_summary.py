@@ -253,3 +253,23 @@ def test_sweep_refuses_a_parameter_given_twice(tmp_path, second):
     assert r.exit_code in (0, 5), r.output
     rows = (tmp_path / "s" / "study.csv").read_text().splitlines()
     assert len(rows) == 1 + 8  # 1 value of A[0] (the file's 7 replaced) x 8 of B[0]
+
+
+# -- a mm file's "cannot close" -------------------------------------------------------
+def test_cannot_close_message_in_the_files_length_unit(tmp_path):
+    """A mm four-bar whose coupler (15 mm) and rocker (59 mm) cannot reach across
+    |AO4| = sqrt(a^2 + d^2 - 2 a d cos(theta)) (a = 26.5, d = 87.5 mm): the reason is in
+    mm (it was in m), in the summary, the CSV's status and the error at the start."""
+    from mechsolve.base.errors import CannotCloseAtStart
+
+    y = (MECH / "fourbar.yaml").read_text().replace("B: [105.6, 0]", "B: [15, 0]")
+    res = ms.solve(ms.loads(y))
+    f = res.failures[0]
+    th = f.u_first
+    D = math.sqrt(26.5**2 + 87.5**2 - 2 * 26.5 * 87.5 * math.cos(th))
+    assert f"|AO4| = {D:.6g} mm > 15 mm + 59 mm" in f.reason, f.reason
+    assert f.reason in res.summary()
+    start = y.replace("start: 0 deg", "start: 180 deg").replace("range: 360 deg", "range: 10 deg")
+    with pytest.raises(CannotCloseAtStart) as exc:
+        ms.solve(ms.loads(start))
+    assert "|AO4| = 114 mm > 15 mm + 59 mm" in str(exc.value), str(exc.value)
