@@ -90,7 +90,7 @@ def test_run_0_2_5(tmp_path, short, nongrashof):
     p = mechsolve("run", short, "-o", tmp_path / "b", "--no-plots")
     assert p.returncode == 2, p.stdout + p.stderr
     assert re.search(r"cannot assemble at driver angle 0°: loop B .* cannot close", p.stderr)
-    assert "|AO4| = 0.8 m > 0.25 + 0.25 m" in p.stderr
+    assert "|AO4| = 0.8 m > 0.25 m + 0.25 m" in p.stderr
     assert not (tmp_path / "b" / "results.csv").exists()
     # a bad file: 2
     bad = write(tmp_path, "bad.yaml", fourbar(0.2, 0.25, 0.25, 1.0).replace("O4: [1.0", "O4: [x"))

@@ -102,10 +102,8 @@ def test_an_extreme_reached_every_turn_is_named_once_with_the_turns():
     same text repeated eleven times)."""
     import mechsolve as ms
     from mechsolve.analyses.dynamics import simulate
-    from mechsolve.results.summary import places
 
-    assert places(str, [1, 2, 1]) == "1 (in each of 2 turns) and at 2"
     res = simulate(ms.load(Path(__file__).parents[1] / "mechanisms" / "motor-linkage.yaml"))
     line = next(s for s in res.summary().splitlines() if "limit positions" in s)
-    assert "turns)" in line
+    assert "(in each of " in line and "turns)" in line, line
     assert line.count("at driver angle") == 4, line  # low and high of the rocker and slider

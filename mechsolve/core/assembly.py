@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -391,7 +392,8 @@ class StartAssembler(BranchChoice):
         return q
 
     def _cannot_close(self, g: Group, st: State, u0: float, first_ok=None) -> CannotCloseAtStart:
-        reason = g.fail_reason(st, 0)
+        words = partial(self.mech.output_units().text, unit="m")  # the file's unit
+        reason = g.fail_reason(st, 0, words)
         return CannotCloseAtStart(
             f"{self._file()}cannot assemble at {self.format_u(u0)}: {reason}",
             g.label,

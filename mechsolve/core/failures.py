@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -172,7 +173,8 @@ class FailureReports:
                 g = self.plan[gi]
                 group = g.label
                 if not isinstance(g, NewtonGroup):
-                    reason = g.fail_reason(st, i)
+                    words = partial(self.mech.output_units().text, unit="m")  # the file's unit
+                    reason = g.fail_reason(st, i, words)
                 elif g.stopped is not None and i >= g.stopped[0] and i > 0:
                     k, near, before = g.stopped
                     reason = (

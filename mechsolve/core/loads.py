@@ -14,6 +14,7 @@ from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import StateView
 from mechsolve.groups.generic import NewtonGroup
 from mechsolve.model import GROUND, Damper, PointForce, Spring, Torque
+from mechsolve.model.expr import Call, Ref, Var, walk
 
 if TYPE_CHECKING:
     from mechsolve.core.sweep import Analysis, Solution
@@ -191,14 +192,28 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
     (``an.blocks``) are located together, each on its own motion, when the batch gives
     their states (``an.design_states``); a driver with a motion law of time keeps the
     samples' extremes.
+
+    A driver with a motion law of time: the positions it visits are those between the
+    smallest and largest driver value of the samples, whatever the time it takes, so
+    arguments that read positions only (coordinates, angles, slider displacements) are
+    located over the samples ordered by the driver value (a dwell's repeats once) as at
+    a constant speed; arguments that read rates keep the samples' extremes.
     """
 
     blocks = getattr(an, "blocks", None)
     B = blocks or 1
     u_all = np.asarray(sol.u, float)
     P = len(u_all) // B
-    if not args or P < 3 or an.mech.driver.motion is not None:
+    if not args or P < 3:
         return list(sampled)
+    if an.mech.driver.motion is not None:
+        if blocks or not _positions_only(an.mech):
+            return list(sampled)
+        u_all, keep = np.unique(u_all, return_index=True)  # along the driver, each once
+        args = [np.asarray(q, float)[keep] for q in args]
+        P = len(u_all)
+        if P < 3:
+            return list(sampled)
     evaluate = _design_evaluator(an, sol) if blocks else _sweep_evaluator(an, sol)
     if evaluate is None:
         return list(sampled)
@@ -224,6 +239,21 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
 
 
 _SIGN = np.array([-1.0, 1.0])  # min, max: the sign that makes each a maximum
+_POSITION_ATTRS = frozenset({"x", "y", "angle", "s"})  # a pose's, not its rates'
+
+
+def _positions_only(mech) -> bool:
+    """Do the arguments of every ``stroke(q)`` in the load conditions read the pose only
+    (no velocity, acceleration or time)?"""
+    for load in mech.loads:
+        if load.when is None or not load.when.uses("stroke"):
+            continue
+        for call in walk(load.when.tree):
+            if isinstance(call, Call) and call.func == "stroke":
+                for n in walk(call.args):
+                    if isinstance(n, Var) or (isinstance(n, Ref) and n.attr not in _POSITION_ATTRS):
+                        return False
+    return True
 
 
 def _brackets(Q: np.ndarray, x: np.ndarray, T: float, periodic: bool):
@@ -316,8 +346,10 @@ def _sweep_evaluator(an: Analysis, sol: Solution):
     """``stroke(q)``'s arguments at driver values ``u`` (1, L): the mechanism solved
     there on the sweep's branches, at the file's speed."""
 
+    speed = an.speed or 1.0  # (a motion law: only the pose is read, see exact_extremes)
+
     def evaluate(u: np.ndarray):
-        st, ok = states_between(an, sol, u.ravel(), an.speed, 0.0)
+        st, ok = states_between(an, sol, u.ravel(), speed, 0.0)
         args = stroke_arguments(an, StateView(an, st))
         return [np.where(ok, q, np.nan).reshape(u.shape) for q in args]
 

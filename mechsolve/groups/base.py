@@ -23,12 +23,18 @@ Contract of a subclass:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from mechsolve.base.state import State
 from mechsolve.joints.base import Constraint
+
+
+def metres(x: float) -> str:
+    """A length in m in words (the default of :meth:`Group.fail_reason`)."""
+    return f"{x:.6g} m"
 
 
 @dataclass
@@ -115,8 +121,9 @@ class Group:
         None otherwise."""
         return None
 
-    def fail_reason(self, st: State, i: int) -> str:
-        """Why the group cannot close at position ``i`` (for messages)."""
+    def fail_reason(self, st: State, i: int, words: Callable[[float], str] = metres) -> str:
+        """Why the group cannot close at position ``i`` (for messages); ``words``
+        gives a length in m in words in the file's unit (``'74.1847 mm'``)."""
         return "the loop cannot close"
 
 

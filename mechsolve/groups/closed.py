@@ -10,6 +10,7 @@ velocities (accelerations) by projection, which is Cramer's rule written out:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from mechsolve.groups.base import (
     body_velocity_from_point,
     diff,
     length,
+    metres,
     pin_multiplier,
     resultant_about,
     set_pose_from_vectors,
@@ -449,14 +451,15 @@ class RRR(Group):
         sign = 1.0 if side == "left" else -1.0
         return sign if (start, end) == (p, q) else -sign
 
-    def fail_reason(self, st: State, i: int) -> str:
+    def fail_reason(self, st: State, i: int, words: Callable[[float], str] = metres) -> str:
         px, py, qx, qy = (v[i] for v in self.ends(st)[:4])
         D = float(np.hypot(qx - px, qy - py))
         L1, L2 = self.L1, self.L2
+        d, a, b = words(D), words(L1), words(L2)
         if D > L1 + L2:
-            why = f"|{self.j1.name}{self.j3.name}| = {D:.6g} m > {L1:.6g} + {L2:.6g} m"
+            why = f"|{self.j1.name}{self.j3.name}| = {d} > {a} + {b}"
         else:
-            why = f"|{self.j1.name}{self.j3.name}| = {D:.6g} m < |{L1:.6g} - {L2:.6g}| m"
+            why = f"|{self.j1.name}{self.j3.name}| = {d} < |{a} - {b}|"
         return f"{self.label} cannot close: {why}"
 
 
@@ -596,13 +599,13 @@ class RRP(Group):
         where = "ahead of" if mode > 0 else "behind"
         return f"{pn[self.j2]} {where} the foot of {pn[self.j1]} along {self.sl.name}"
 
-    def fail_reason(self, st: State, i: int) -> str:
+    def fail_reason(self, st: State, i: int, words: Callable[[float], str] = metres) -> str:
         px, py = (v[i] for v in st.point(self.k1, self.sPk))
         lx, ly, ux, uy, *_ = (np.atleast_1d(v)[i] if np.ndim(v) else v for v in self._line(st))
         dist = abs((px - lx) * -uy + (py - ly) * ux)
         return (
-            f"{self.label} cannot close: {self.j1.name} is {dist:.6g} m from the guide line, "
-            f"farther than the rod length {self.L:.6g} m"
+            f"{self.label} cannot close: {self.j1.name} is {words(dist)} from the guide "
+            f"line, farther than the rod length {words(self.L)}"
         )
 
 
@@ -750,11 +753,11 @@ class RPR(Group):
             return f"{pn[self.jp]} on the {where} side of {pn[self.jq]} along {self.sl.name}"
         return f"branch {'+' if mode > 0 else '-'} of {self.sl.name}"
 
-    def fail_reason(self, st: State, i: int) -> str:
+    def fail_reason(self, st: State, i: int, words: Callable[[float], str] = metres) -> str:
         px, py = (v[i] for v in st.point(self.kp, self.sPk))
         qx, qy = (v[i] for v in st.point(self.kq, self.sQk))
         D = float(np.hypot(px - qx, py - qy))
         return (
-            f"{self.label} cannot close: {self.jp.name} is {D:.6g} m from {self.jq.name}, "
-            f"nearer than the line's offset {abs(self.e):.6g} m"
+            f"{self.label} cannot close: {self.jp.name} is {words(D)} from {self.jq.name}, "
+            f"nearer than the line's offset {words(abs(self.e))}"
         )

@@ -438,10 +438,10 @@ def figures_table(res, units: OutputUnits | None = None) -> Table:
     k_len, L = U.convert("m")
     k_ang, A = U.convert("deg")
     deg = "°" if A == "deg" else f" {A}"
-    an = res.analysis if U.is_si else res  # res words driver values in its shown units
+    res._shown = U  # res words driver values (and their turns) in the shown units
     rows: list[list[str]] = []
     for lp in res.limit_positions():
-        a, b = places(an.format_u, lp.u_lows), places(an.format_u, lp.u_highs)
+        a, b = places(res, lp.u_lows), places(res, lp.u_highs)
         where = f"the lower at {a}; the higher at {b}"
         if lp.kind == "rocker":
             rows.append(
@@ -478,7 +478,7 @@ def figures_table(res, units: OutputUnits | None = None) -> Table:
             [
                 f"minimum transmission angle, {t.group}",
                 f"{num(math.degrees(t.angle) * k_ang, 4)}{deg}",
-                f"at {an.format_u(t.u)}",
+                f"at {res.format_u(t.u)}",
             ]
         )
     rows += _force_figure_rows(res, U)

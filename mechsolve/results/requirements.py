@@ -369,7 +369,7 @@ class _Reducer:
         if self.fine is None:
             self.notes.append(f"{func} the {word} of the {self._samples()} samples, not located")
         elif math.isfinite(u):
-            self.notes.append(f"{func} at {self.res.analysis.format_u(u)}")
+            self.notes.append(f"{func} at {self.res.format_u(u)}")
 
     def extreme(self, arg, sense: int) -> tuple[float, float | None]:
         """(the largest (sense +1) or smallest value of ``arg`` over the run, the driver

@@ -57,11 +57,47 @@ class Summary:
         return f"work of the driver {per}: {U.text(work, 'J')}"
 
     def format_u(self, u: float) -> str:
-        """A driver value in words in the shown units: ``driver angle 246.8°``."""
+        """A driver value in words in the shown units: ``driver angle 246.8°``; on a sweep
+        longer than one turn, also which turn (``driver angle 180° after 1 turn``, see
+        :meth:`turn_words`)."""
         U = shown(self)
         if self.linear:
             return f"driver position {U.text(u, 'm')}"
-        return f"driver angle {U.text(angle_deg(u), 'deg')}"
+        angle, _, where = self.turn_words(u)
+        return angle + where
+
+    def multi_turn(self) -> bool:
+        """Does the sweep go beyond one turn of a crank (so that a driver angle alone
+        does not say where)?"""
+        if self.linear or len(self.u) < 2:
+            return False
+        return float(np.nanmax(np.abs(self.u - self.u[0]))) > 2 * math.pi + 1e-9
+
+    def turn_words(self, u: float) -> tuple[str, int, str]:
+        """``(angle, turns, where)``: driver value ``u`` (unwrapped, as :attr:`u`) in
+        words, the whole turns made from the start before it, and the words that place it
+        in the sweep. A sweep of one turn or less: ``('driver angle 180°', 0, '')``.
+        Longer, from 0 counter-clockwise (the angle is the turn's part):
+        ``('driver angle 180°', 1, ' after 1 turn')`` for 540°; the end of the sweep at a
+        whole number of turns is the end of the last turn (``360° after 2 turns``, as a
+        single turn ends at 360°). From elsewhere or clockwise, the travel:
+        ``('driver angle 30°', 1, ' (540° from the start)')``."""
+        U = shown(self)
+        deg = angle_deg(u)
+        if not self.multi_turn():
+            return f"driver angle {U.text(deg, 'deg')}", 0, ""
+        d = self.mechanism.driver.direction
+        travel = round(math.degrees(d * (u - float(self.u[0]))), 9)
+        turns, part = divmod(abs(travel), 360.0)
+        end = round(math.degrees(float(np.nanmax(np.abs(self.u - self.u[0])))), 9)
+        if turns and not part and abs(travel) >= end:
+            turns, part = turns - 1, 360.0  # the end of the sweep's last turn
+        back = " backwards" if travel < 0 else ""
+        if float(self.u[0]) == 0 and d > 0 and not back:
+            n = f" after {int(turns)} turn{'s' if turns > 1 else ''}" if turns else ""
+            return f"driver angle {U.text(part, 'deg')}", int(turns), n
+        where = f" ({U.text(abs(travel), 'deg')}{back} from the start)"
+        return f"driver angle {U.text(deg, 'deg')}", int(turns), where
 
     def friction_lines(self) -> list[str]:
         """With friction in the joints: the losses per joint over the sweep, the
@@ -127,7 +163,7 @@ class Summary:
     def describe_u(self, i: int) -> str:
         """The driver position of sample ``i`` in words, e.g. ``driver angle 246.8°``."""
         u = float(self.u[i])
-        if self.linear:
+        if self.linear or self.multi_turn():
             return self.format_u(u)
         U = shown(self)
         deg = angle_deg(u)
@@ -163,7 +199,7 @@ class Summary:
             lines.append(
                 "  driver acceleration jumps (position and speed continuous) at "
                 + ", ".join(
-                    f"t = {t:.6g} s ({a * k:.6g} -> {b * k:.6g} {unit})" for t, a, b in jumps
+                    f"t = {U.text(t, 's')} ({a * k:.6g} -> {b * k:.6g} {unit})" for t, a, b in jumps
                 )
             )
         return lines
@@ -192,7 +228,9 @@ class Summary:
             span = f"from {U.text(dv[0], unit)} to {U.text(dv[-1], unit)}"
         lines.append(
             f"{mech.name}: {int(np.sum(self.ok))} of {n} positions solved, "
-            f"driver {mech.driver.joint} " + span + (f" over {self.t[-1]:.6g} s" if n else "")
+            f"driver {mech.driver.joint} "
+            + span
+            + (f" over {U.text(self.t[-1], 's')}" if n else "")
         )
         lines += self.motion_summary()
         lines += _start_and_failure_lines(self)
@@ -206,8 +244,10 @@ class Summary:
         return "\n".join(lines)
 
     def sample_spacing(self) -> str:
-        """The spacing of the sweep's samples, as text ('1°', '2 mm'; 'uneven')."""
-        du = np.abs(np.diff(self.u))
+        """The spacing of the sweep's samples, as text ('1°', '2 mm'); a motion law's
+        samples are even in time, not along the driver: their time step ('0.05 s')."""
+        timed = self.mechanism.driver.motion is not None and len(self.t) > 1
+        du = np.abs(np.diff(self.t if timed else self.u))
         if du.size == 0:
             return "1"
         # the median without np.median, whose first call imports numpy.ma (~10 ms)
@@ -215,6 +255,8 @@ class Summary:
         m = du.size // 2
         step = float(du[m]) if du.size % 2 else float(0.5 * (du[m - 1] + du[m]))
         U = shown(self)
+        if timed:
+            return U.text(step, "s", ".4g")
         if self.linear:
             if U.is_si:
                 return f"{step * 1e3:.4g} mm" if step < 1 else f"{step:.4g} m"
@@ -389,8 +431,7 @@ def _limit_lines(res, src) -> list[str]:
         return U.text(math.degrees(x), "deg", fmt)
 
     for lp in lim:
-        fmt = res.format_u
-        a, b = places(fmt, lp.u_lows), places(fmt, lp.u_highs)
+        a, b = places(res, lp.u_lows), places(res, lp.u_highs)
         if lp.kind == "rocker":
             parts.append(
                 f"rocker {lp.name} {deg(lp.low)} at {a} to "
@@ -530,12 +571,27 @@ def rms_over(u: np.ndarray, e: np.ndarray) -> float:
     return float(np.sqrt(area / travel))
 
 
-def places(fmt, us) -> str:
-    """Where an extreme is reached, in words: ``fmt(u)`` of each value, joined by "and
-    at" (an extreme reached twice in a turn); the same place reached in several turns
-    once, with their number (``driver angle 164.193° (in each of 11 turns)``)."""
-    texts = [fmt(u) for u in us]
-    seen: dict[str, int] = {}
-    for t in texts:
-        seen[t] = seen.get(t, 0) + 1
-    return " and at ".join(t if c == 1 else f"{t} (in each of {c} turns)" for t, c in seen.items())
+def places(res, us) -> str:
+    """Where an extreme is reached, in words: ``res.format_u(u)`` of each driver value
+    ``u``, joined by "and at" (an extreme reached twice in a turn). The same angle reached
+    in consecutive turns from the first is said once, with their number
+    (``driver angle 164.193° (in each of 11 turns)``), from a later turn with the first
+    and last (``driver angle 164.193° after each of 1 to 10 turns``); hits in turns that
+    do not follow each other are named one by one, each with its turn."""
+    if res.linear:
+        return " and at ".join(res.format_u(u) for u in us)
+    groups: dict[str, list[tuple[int, str]]] = {}
+    for u in us:
+        angle, turns, where = res.turn_words(u)
+        groups.setdefault(angle, []).append((turns, angle + where))
+    texts = []
+    for angle, hits in groups.items():
+        ks = sorted(k for k, _ in hits)
+        if len(ks) > 1 and ks == list(range(ks[0], ks[0] + len(ks))):
+            if ks[0] == 0:
+                texts.append(f"{angle} (in each of {len(ks)} turns)")
+            else:
+                texts.append(f"{angle} after each of {ks[0]} to {ks[-1]} turns")
+        else:
+            texts += [t for _, t in hits]
+    return " and at ".join(dict.fromkeys(texts))

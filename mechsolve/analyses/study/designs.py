@@ -201,9 +201,13 @@ def _parameters(src: Source, sec: dict, data: dict, options) -> list:
         raise src.error(("study", "parameters"), "'parameters' maps key paths to values")
     for key, value in (raw or {}).items():
         given[str(key)] = (value, ("study", "parameters", key))
+    said = {key: f"study.parameters.{key}" for key in given}  # where each was given
     for opt in options:
         key, value = parse_option(opt)
+        if key in given and given[key][1] == ():  # (one of the file's: replaced)
+            raise InputError(f"{said[key]} and -p {opt!r} both vary {key}: give it once")
         given[key] = (value, ())
+        said[key] = f"-p {opt!r}"
     params = []
     for key, (value, where) in given.items():
         try:
@@ -212,10 +216,14 @@ def _parameters(src: Source, sec: dict, data: dict, options) -> list:
             if where:
                 raise src.error(where, exc.message) from None
             raise InputError(f"-p: {exc.message}") from None
-    names = [p.name for p in params]
-    for n in names:
-        if names.count(n) > 1:
-            raise InputError(f"the parameter {n} is given twice (once under another spelling)")
+    first: dict[str, str] = {}
+    for key, p in zip(given, params):
+        if p.name in first:
+            raise InputError(
+                f"the parameter {p.name} is given twice, as {first[p.name]} and "
+                f"{said[key]}: give it once"
+            )
+        first[p.name] = said[key]
     if not params:
         raise InputError(
             f"{src.file}: nothing to vary: give parameters with -p KEYPATH=VALUES "
