@@ -74,8 +74,12 @@ class Column:
         return f"{head} ({self.note})" if self.note else head
 
 
+ANGLE_SNAP = 1e-9  # turns: a start this close below a whole turn counts as on it
+
+
 def unwrap_angle(th: np.ndarray, near: float | None = None) -> np.ndarray:
-    """Unwrap an angle along the sweep: the first finite value in [0, 2 pi), or within
+    """Unwrap an angle along the sweep: the first finite value in [0, 2 pi) (a start
+    within :data:`ANGLE_SNAP` turns below a whole turn is taken as on it), or within
     half a turn of ``near`` (to continue a previous chunk of the sweep)."""
     out = np.array(th, dtype=float)
     good = np.isfinite(out)
@@ -84,7 +88,9 @@ def unwrap_angle(th: np.ndarray, near: float | None = None) -> np.ndarray:
     out[good] = np.unwrap(out[good])
     first = out[good][0]
     if near is None or not math.isfinite(near):
-        out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi))
+        # a start rounded to just below a whole turn (-1e-16 for a link drawn at 0) is
+        # that turn: 0, not 360 deg
+        out[good] -= 2 * math.pi * math.floor(first / (2 * math.pi) + ANGLE_SNAP)
     else:
         out[good] -= 2 * math.pi * round((first - near) / (2 * math.pi))
     return out
