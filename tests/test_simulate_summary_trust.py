@@ -67,14 +67,12 @@ def test_work_of_the_motor_does_not_depend_on_the_output_step(tmp_path):
 
 def test_free_motion_has_no_driver_work(tmp_path):
     """Nothing drives the N-four-bar (free motion): the driver's work is zero, not the
-    integrator's energy drift (2e-5 J), and its mean effort lies within the extremes."""
+    integrator's energy drift (2e-5 J), and it has no driving torque."""
     output, _ = _simulate(tmp_path, (MECH / "nfourbar-1.yaml").read_text(), "nf1")
     assert _work(output) == 0.0
-    line = next(s for s in output.splitlines() if "driving torque" in s)
-    hi, lo, mean = (
-        float(re.search(rf"{k} ([-\d.e+]+) N·m", line).group(1)) for k in ("max", "min", "mean")
-    )
-    assert lo <= mean <= hi, line
+    # nothing acts at the driver's joint: no driving torque figures (they were the
+    # integration error, 1e-9 N m)
+    assert "  driving torque: none (free motion)" in output
 
 
 def test_state_at_a_singular_stop_is_the_motion(tmp_path):

@@ -43,6 +43,11 @@ class Summary:
         lines += _transmission_lines(self, src)
         return lines
 
+    def idle_driver(self) -> str:
+        """Why nothing acts at the driver's joint (its effort is zero), or ``""``: a
+        sweep's driver always drives; a simulated free motion's does not."""
+        return ""
+
     def work_text(self, units: OutputUnits | None = None) -> str:
         """``work of the driver per cycle: 31.74 kJ``, or why it is not defined; in
         ``units`` (default: the summary's)."""
@@ -291,12 +296,16 @@ class Summary:
         mean += 0.0  # no "-0"
         # the extremes are the largest and smallest samples (the requirements locate
         # them between the samples: max(input.torque) in requirements:)
-        lines.append(
-            f"  driving {kind} ({src.sample_spacing()} samples): "
-            f"max {e[imax] / scale:.6g} {unit} at {src.describe_u(imax)}, "
-            f"min {e[imin] / scale:.6g} {unit} at {src.describe_u(imin)}, "
-            f"RMS {rms / scale:.6g} {unit}, {what} {mean / scale:.6g} {unit}"
-        )
+        idle = self.idle_driver()
+        if idle:  # nothing acts at the driver's joint: its effort is zero, not a figure
+            lines.append(f"  driving {kind}: none ({idle})")
+        else:
+            lines.append(
+                f"  driving {kind} ({src.sample_spacing()} samples): "
+                f"max {e[imax] / scale:.6g} {unit} at {src.describe_u(imax)}, "
+                f"min {e[imin] / scale:.6g} {unit} at {src.describe_u(imin)}, "
+                f"RMS {rms / scale:.6g} {unit}, {what} {mean / scale:.6g} {unit}"
+            )
         lines.append("  " + src.work_text())
         lines += src.friction_lines()
         peaks = []

@@ -228,11 +228,24 @@ class MultibodyResults(Results):
         or motors on other joints: the driver only places the mechanism, and its effort
         is zero but for rounding), else by the energy method as for a sweep."""
         if not hasattr(self, "_work"):
-            mech = self.mechanism
-            joint = mech.driver.joint
-            driven = mech.motor is not None or any(j == joint for j, _ in mech.motors.values())
-            self._work = super()._work_why() if driven else (0.0, "")
+            self._work = (0.0, "") if self.idle_driver() else super()._work_why()
         return self._work
+
+    def idle_driver(self) -> str:
+        """Why the driver's joint has no effort: no motor acts there (free motion, or
+        motors on other joints); ``""`` when one does."""
+        mech = self.mechanism
+        joint = mech.driver.joint
+        if mech.motor is not None or any(j == joint for j, _ in mech.motors.values()):
+            return ""
+        return "free motion" if not mech.motors else f"no motor acts at joint {joint}"
+
+    @property
+    def driving_effort(self) -> np.ndarray:
+        """Zero where no motor acts at the driver's joint (the inverse dynamics of the
+        integrated motion gives only its integration error there), else as for a sweep."""
+        e = super().driving_effort
+        return np.where(np.isfinite(e), 0.0, np.nan) if self.idle_driver() else e
 
     def status(self) -> list[str]:
         """Per row: ``ok`` or why not; a row at a singular position (an event that ends
