@@ -145,7 +145,8 @@ class Summary:
             lines.append(
                 f"  instantaneous efficiency (the driving {self.effort_name[0]} without "
                 f"friction over the {self.effort_name[0]} with it, where the driver delivers "
-                f"power): smallest of the {self.sample_spacing()} samples {eta[i]:.4g} at "
+                f"power): smallest of the {self.sample_spacing()} samples "
+                f"{_or_zero(eta[i], 1.0):.4g} at "
                 f"{self.describe_u(i)}"
             )
         locked = np.flatnonzero(fr.locked)
@@ -308,17 +309,7 @@ class Summary:
             )
         lines.append("  " + src.work_text())
         lines += src.friction_lines()
-        peaks = []
-        for j in self.mechanism.joints:
-            r = g.reactions[j.name]
-            mag = np.abs(r[j.magnitude])  # the joint's magnitude: F, N, Fn...
-            mag = np.where(g.ok, mag, np.nan)
-            if np.any(np.isfinite(mag)):
-                i = int(np.nanargmax(mag))
-                note = f" ({j.magnitude_note.strip()})" if j.magnitude_note else ""
-                peaks.append(f"{j.name} {mag[i] / fscale:.4g} {funit}{note} at {src.describe_u(i)}")
-        # the largest sample of each (the requirements locate a peak between samples)
-        lines.append(f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks))
+        lines.append(_peak_reactions(src, self.mechanism.joints, fscale, funit))
         for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
             more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u)
             lines += ["  " + t for t in more]
@@ -604,3 +595,30 @@ def places(res, us) -> str:
         else:
             texts += [t for _, t in hits]
     return " and at ".join(dict.fromkeys(texts))
+
+
+def _peak_reactions(src, joints, fscale: float, funit: str) -> str:
+    """The summary's line of each joint's largest reaction sample (the requirements
+    locate a peak between samples), its magnitude named where it is not the resultant
+    (a slider's normal force); a peak that is rounding beside the others is 0."""
+    g = src.forces
+    found = []
+    for j in joints:
+        mag = np.where(g.ok, np.abs(g.reactions[j.name][j.magnitude]), np.nan)
+        if np.any(np.isfinite(mag)):
+            i = int(np.nanargmax(mag))
+            found.append((j, i, float(mag[i])))
+    top = max((m for _, _, m in found), default=0.0)
+    peaks = []
+    for j, i, m in found:
+        note = f" ({j.magnitude_note.strip()})" if j.magnitude_note else ""
+        m = _or_zero(m, top)
+        where = f" at {src.describe_u(i)}" if m else ""  # zero throughout: no place
+        peaks.append(f"{j.name} {m / fscale:.4g} {funit}{note}{where}")
+    return f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks)
+
+
+def _or_zero(x: float, scale: float) -> float:
+    """``x``, or 0 where it is rounding against ``scale`` (a reaction of 6e-15 N beside
+    forces of 100 N, an efficiency of 6e-15): such a figure is zero, not a value."""
+    return 0.0 if abs(x) <= 1e-12 * abs(scale) else x
