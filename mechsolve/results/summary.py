@@ -3,6 +3,7 @@ forces, anything unusual (a part of :class:`mechsolve.results.results.Results`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -311,9 +312,14 @@ class Summary:
         # the largest sample of each (the requirements locate a peak between samples)
         lines.append(f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks))
         for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
-            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u)
+            # located between the samples by solving there (not along a motion law of
+            # time, whose samples are in time)
+            solve = None
+            if not timed:
+                solve = functools.partial(src.reaction_at, j.name)
+            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u, solve)
             lines += ["  " + t for t in more]
-            self.warnings += warn
+            self.warnings += [w for w in warn if w not in self.warnings]
         res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
         ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
