@@ -562,7 +562,7 @@ class _Only:
 def rms_over(u: np.ndarray, e: np.ndarray) -> float:
     """The RMS of ``e`` over the motion: ``sqrt(integral of e^2 du / travel)`` by the
     trapezoidal rule on the samples (a figures sweep's samples are uneven: its limit
-    positions and load switches are inserted), over the runs of solved samples; the
+    positions, load switches and a cam's joins are inserted), over the runs of solved samples; the
     plain mean of the squares where ``u`` does not change. ``u``: the driver coordinate,
     or the time (a motion law: its dwells count)."""
     u = np.asarray(u, float)
