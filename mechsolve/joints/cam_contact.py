@@ -649,6 +649,8 @@ def _cross(
     lo, hi, q_lo, q_hi = float(u[i]), float(u[j]), float(q[i]), float(q[j])
     if abs(hi - lo) <= _event_gap(u):  # it jumps across zero at an event
         return 0.5 * (lo + hi), True
+    if q_lo == 0.0 or q_hi == 0.0:  # a sample is the crossing
+        return (lo if q_lo == 0.0 else hi), True
     if f is None:
         return lo + (hi - lo) * q_lo / (q_lo - q_hi), False
     side = 0
