@@ -255,7 +255,8 @@ loads:
     text = res.summary()
     assert "LOSS OF CONTACT" in text and "warning: the follower leaves the cam" in text
     line = next(t for t in text.splitlines() if "LOSS OF CONTACT" in t)
-    found = [float(x) for x in re.findall(r"driver angle ([0-9.]+)°", line)]
+    spans = line.rsplit("): ", 1)[1]  # after the least force and where it is
+    found = [float(x) for x in re.findall(r"driver angle ([0-9.]+)°", spans)]
     hand = math.degrees(math.acos(-35 / 62))
     assert len(found) == 2
     np.testing.assert_allclose(found, [hand, 360 - hand], atol=2e-3)

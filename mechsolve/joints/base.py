@@ -128,6 +128,14 @@ class Constraint:
         undetermined (redundant constraints)."""
         return {"effort"}
 
+    def law_breaks(self, st: State) -> np.ndarray | None:
+        """Where the joint's own motion law is not smooth (a cam program's joins, where
+        the follower's acceleration, and with it the forces, jump): for each such place
+        a row of the signed distance to it at each position of ``st``, in the joint's own
+        coordinate (rad), wrapped to (-pi, pi], shape (k, N); it changes sign where the
+        motion passes the place. ``None``: the joint's motion is smooth everywhere."""
+        return None
+
     @property
     def bodies(self) -> tuple[int, int]:
         return (self.a, self.b)
@@ -289,11 +297,17 @@ class Joint:
 
     # -- what is written ---------------------------------------------------------------
     def findings(
-        self, r: Mapping[str, np.ndarray], ok: np.ndarray, u: np.ndarray, at: Callable
+        self,
+        r: Mapping[str, np.ndarray],
+        ok: np.ndarray,
+        u: np.ndarray,
+        at: Callable,
+        solve: Callable[[np.ndarray, int], Mapping[str, np.ndarray]] | None = None,
     ) -> tuple[list[str], list[str]]:
         """Lines for the force summary and warnings from its reaction ``r`` over the sweep
         (``ok``: the positions solved, ``u``: the driver's values, ``at(u)``: a driver
-        value in words)."""
+        value in words; ``solve(x, i)``, when given: its reaction solved at driver values
+        ``x`` next to sample ``i``, to locate a figure between the samples)."""
         return [], []
 
     def describe(

@@ -298,23 +298,45 @@ class CamContact(Joint):
         )
 
     def findings(
-        self, r: Mapping[str, np.ndarray], ok: np.ndarray, u: np.ndarray, at: Callable
+        self,
+        r: Mapping[str, np.ndarray],
+        ok: np.ndarray,
+        u: np.ndarray,
+        at: Callable,
+        solve: Callable[[np.ndarray, int], Mapping[str, np.ndarray]] | None = None,
     ) -> tuple[list[str], list[str]]:
         """The summary's lines and warnings: the largest pressure angle, and for a
         force-closed cam the positions where the contact force turns negative (loss of
-        contact), located between the samples by linear interpolation."""
+        contact) with the least force.
+
+        ``solve(x, i)``: the contact's reaction solved at driver values ``x`` next to
+        sample ``i``; with it the figures are located between the samples: a change of
+        sign between the two samples that straddle a jump of the force (a join of the
+        cam's program, sampled 1e-9 on either side) is at the jump, a smooth one is found
+        by regula falsi to rounding, and an extreme by Brent's method (or it is the
+        sample at a jump or kink, within 1e-9 of it). Without it they are the samples'
+        (the crossings interpolated), and say so."""
         N = np.where(ok, r["N"], np.nan)
         pa = np.where(ok, r["pressure_angle"], np.nan)
+        u = np.asarray(u, float)
         lines, warn = [], []
+
+        def of(key: str) -> Callable[[np.ndarray, int], np.ndarray] | None:
+            if solve is None:
+                return None
+            return lambda x, k: np.asarray(solve(x, k)[key], float)
+
         if np.any(np.isfinite(pa)):
-            i = int(np.nanargmax(pa))
-            lines.append(f"{self.name} (cam contact): largest pressure angle {pa[i]:.4g}° at "
-                         f"{at(float(u[i]))}")  # fmt: skip
+            v, x, exact = _extreme(pa, u, +1, of("pressure_angle"))
+            lines.append(f"{self.name} (cam contact): largest pressure angle "
+                         + (f"{v:.6g}° at {at(x)}" if exact else
+                            f"{v:.4g}° (the largest sample) at {at(x)}"))  # fmt: skip
         if self.closure != "force" or not np.any(N < 0):
             return lines, warn
         neg = N < 0
         spans = []
         k = 0
+        f = of("N")
         while k < len(N):
             if not neg[k]:
                 k += 1
@@ -322,24 +344,24 @@ class CamContact(Joint):
             j = k
             while j + 1 < len(N) and neg[j + 1]:
                 j += 1
-            spans.append((self._cross(u, N, k - 1, k), self._cross(u, N, j, j + 1)))
+            spans.append((_cross(u, N, k - 1, k, f), _cross(u, N, j, j + 1, f)))
             k = j + 1
-        text = "; ".join(
-            f"from {at(a) if a is not None else 'the start'} to "
-            f"{at(b) if b is not None else 'the end'}"
-            for a, b in spans
-        )
-        lines.append(f"{self.name} (cam contact): LOSS OF CONTACT (the contact force would be "
-                     f"negative, least {np.nanmin(N):.4g} N): {text}")  # fmt: skip
-        warn.append(f"the follower leaves the cam at {self.name} ({text}): the spring or "
-                    "load is too weak for the speed; the forces there assume contact")  # fmt: skip
-        return lines, warn
 
-    @staticmethod
-    def _cross(u: np.ndarray, N: np.ndarray, i: int, j: int) -> float | None:
-        if i < 0 or j >= len(N) or not (np.isfinite(N[i]) and np.isfinite(N[j])):
-            return None
-        return float(u[i] + (u[j] - u[i]) * N[i] / (N[i] - N[j]))
+        def where(c: tuple[float, bool] | None, end: str) -> str:
+            if c is None:
+                return end
+            return at(c[0]) if c[1] else "about " + at(c[0])
+
+        text = "; ".join(f"from {where(a, 'the start')} to {where(b, 'the end')}"
+                         for a, b in spans)  # fmt: skip
+        v, x, exact = _extreme(N, u, -1, f)
+        least = f"least {v:.6g} N at {at(x)}" if exact else f"least sample {v:.4g} N"
+        lines.append(f"{self.name} (cam contact): LOSS OF CONTACT (the contact force would be "
+                     f"negative, {least}): {text}")  # fmt: skip
+        warn.append(f"the follower leaves the cam at {self.name} over {len(spans)} span(s) "
+                    "(the LOSS OF CONTACT line above): the spring or load is too weak for "
+                    "the speed; the forces there assume contact")  # fmt: skip
+        return lines, warn
 
 
 class CamConstraint(Constraint):
@@ -529,6 +551,21 @@ class CamConstraint(Constraint):
     def indeterminate(self, free: np.ndarray) -> set[str]:
         return {"N", "Fx", "Fy"}
 
+    def law_breaks(self, st: State) -> np.ndarray | None:
+        """The signed angle (rad, wrapped) from each join of the cam's program (where the
+        follower's velocity or acceleration jumps): the roller centre's polar angle psi
+        (a face's normal's angle mu) in the cam frame, less each join's."""
+        xk = self.curve.breaks()
+        if not xk.size:
+            return None
+        if self.roller is not None:
+            Dx, Dy = self._D(st)
+            x = np.arctan2(Dy, Dx) - st.th[self.a] - self.beta
+        else:
+            x = st.th[self.b] + self.nloc - st.th[self.a] - self.beta
+        d = np.asarray(x, float)[None, :] - xk[:, None]
+        return np.pi - np.mod(np.pi - d, TWO_PI)
+
     # -- the contact's normal, point and pressure angle
     def contact(self, st: State):
         """The unit common normal (from the cam to the follower) and the contact point of
@@ -593,3 +630,85 @@ def _fixed_centre(j: CamContact, mech: Any) -> np.ndarray | None:
         if other.point == j.centre:
             return np.asarray(mech.local_point(GROUND, j.centre), float)
     return None
+
+
+def _event_gap(u: np.ndarray) -> float:
+    """Two samples closer than this straddle an event (a jump, a kink: they are 2e-9
+    apart, the sweep's spacing some 1e7 times more)."""
+    du = np.abs(np.diff(u))
+    return 1e-6 * float(du.max()) if du.size else 0.0
+
+
+def _cross(
+    u: np.ndarray, q: np.ndarray, i: int, j: int, f: Callable | None
+) -> tuple[float, bool] | None:
+    """Where ``q`` changes sign between samples i and j (None: outside the sweep, or not
+    determined), and whether that is located (True) or interpolated between samples."""
+    if i < 0 or j >= len(q) or not (np.isfinite(q[i]) and np.isfinite(q[j])):
+        return None
+    lo, hi, q_lo, q_hi = float(u[i]), float(u[j]), float(q[i]), float(q[j])
+    if abs(hi - lo) <= _event_gap(u):  # it jumps across zero at an event
+        return 0.5 * (lo + hi), True
+    if q_lo == 0.0 or q_hi == 0.0:  # a sample is the crossing
+        return (lo if q_lo == 0.0 else hi), True
+    if f is None:
+        return lo + (hi - lo) * q_lo / (q_lo - q_hi), False
+    side = 0
+    for _ in range(60):  # regula falsi, Illinois: q is smooth between the samples
+        x = hi - q_hi * (hi - lo) / (q_hi - q_lo)
+        if not (min(lo, hi) < x < max(lo, hi)):
+            x = 0.5 * (lo + hi)
+            if x in (lo, hi):
+                break
+        qx = float(f(np.array([x]), i)[0])
+        if not math.isfinite(qx):
+            return lo + (hi - lo) * q_lo / (q_lo - q_hi), False
+        if qx == 0.0 or abs(hi - lo) <= 1e-13 * max(1.0, abs(x)):
+            return x, True
+        if (qx < 0) == (q_lo < 0):
+            lo, q_lo = x, qx
+            if side == -1:
+                q_hi *= 0.5
+            side = -1
+        else:
+            hi, q_hi = x, qx
+            if side == +1:
+                q_lo *= 0.5
+            side = +1
+    return 0.5 * (lo + hi), True
+
+
+def _extreme(
+    q: np.ndarray, u: np.ndarray, sense: int, f: Callable | None
+) -> tuple[float, float, bool]:
+    """The largest (``sense`` +1) or smallest value of ``q``, where it is, and whether it
+    is located (True) or the best sample's. A sample that straddles an event with its
+    neighbour (a jump, a kink) is the value there, to 1e-9; else each neighbouring
+    interval into which ``q`` still grows (a probe 1e-6 of the spacing in) is searched by
+    Brent's method to 1e-9 of the spacing."""
+    s = sense * q
+    k = int(np.nanargmax(s))
+    best, where = float(s[k]), float(u[k])
+    if f is None:
+        return sense * best, where, False
+    gap = _event_gap(u)
+    n = len(u)
+    for a in (k - 1, k + 1):
+        if not (0 <= a < n and np.isfinite(s[a])) or abs(u[a] - u[k]) <= gap:
+            continue
+        span = float(u[a] - u[k])
+        probe = sense * float(f(np.array([u[k] + 1e-6 * span]), k)[0])
+        if not probe > s[k]:
+            continue  # it falls into this interval: the extreme is not inside it
+        from scipy.optimize import minimize_scalar
+
+        def g(x: float) -> float:
+            v = sense * float(f(np.array([x]), k)[0])
+            return -v if math.isfinite(v) else math.inf
+
+        lo, hi = sorted((float(u[k]), float(u[a])))
+        opt = minimize_scalar(g, bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9 * abs(span)})  # fmt: skip
+        if -opt.fun > best:
+            best, where = float(-opt.fun), float(opt.x)
+    return sense * best, where, True

@@ -270,12 +270,13 @@ def _rebuild(n: Any, kids: list[Any]) -> Any:
 class _Reducer:
     """Reduces a run to its figures. ``max``, ``min`` and ``range`` are taken over the
     sweep the plots are drawn from (:func:`mechsolve.api.for_plots`: 1 degree or finer,
-    with the exact driver values of the limit positions and of the switching of loads)
-    and each extreme is then located between its neighbouring samples: the quantity is
-    evaluated on a grid between them, solved there, and the grid narrowed around its
-    best point down to 1e-8 of the driver coordinate (a value the quantity takes, so
-    never beyond the true extreme). Where that sweep cannot be had (a motion law of
-    time, a sweep that does not close at its ends) they are the samples' and say so;
+    with the exact driver values of the limit positions, of the switching of loads and
+    of a cam program's joins) and each extreme is then located between its neighbouring
+    samples: the quantity is evaluated on a grid between them, solved there, and the
+    grid narrowed around its best point down to 1e-8 of the driver coordinate (a value
+    the quantity takes, so never beyond the true extreme). Where that sweep cannot be
+    had (a motion law of time, a sweep that does not close at its ends) they are the
+    samples' and say so;
     ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u."""
 
     def __init__(self, results: Results) -> None:

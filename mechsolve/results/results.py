@@ -336,6 +336,29 @@ class Results(Summary):
             raise KeyError("no force analysis was run (the model has no masses or loads)")
         return self.forces.reactions[name]
 
+    def reaction_at(self, name: str, x: np.ndarray, near: int) -> dict[str, np.ndarray]:
+        """Joint ``name``'s reaction components solved at driver values ``x`` next to
+        sample ``near`` of this sweep (on its branches, at its driver's speed there),
+        for locating a figure between the samples; NaN where a position does not solve.
+        Not for a motion law of time (its samples are in time)."""
+        from mechsolve.core import evaluate as core
+
+        an, sol = self.analysis, self.solution
+        x = np.asarray(x, float)
+        one = an.solve(x, start=sol.start, near=(sol, near), per_unit_driver=True)
+        ud, udd = sol.driver_rates()
+        m = len(x)
+        rates = np.full(m, ud[near]), np.full(m, udd[near])
+        core.scale_rates(one.state, *rates, sol.has_acceleration)
+        one.ud, one.udd = rates
+        one.has_velocity, one.has_acceleration = sol.has_velocity, sol.has_acceleration
+        one.t = np.zeros(m)
+        extremes = self.forces.stroke_extremes if self.forces is not None else None
+        with np.errstate(all="ignore"):
+            r = core.forces(an, one, extremes).reactions[name]
+        bad = ~np.asarray(one.ok, bool)
+        return {k: np.where(bad, np.nan, np.asarray(v, float)) for k, v in r.items()}
+
     @property
     def driving_effort(self) -> np.ndarray:
         """The driving torque (N m) or force (N) the driver applies to the driven link."""

@@ -101,9 +101,12 @@ def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Resul
     """The results that plots are drawn from: the same sweep at 1 degree or finer (a 360th
     of a linear driver's range), whatever step the file gives for its table, plus the
     exact driver values of its events: each rocker's and slider's limit positions, and
-    where a conditional load switches, sampled on both sides (1e-9 apart) so that a curve
-    jumps there instead of joining the samples around it. ``res`` itself when it is
-    already that fine and has no events to add, or has a motion law of time. Made once
+    where a conditional load switches or a joint's motion law is not smooth (a cam
+    program's joins, where the follower's acceleration jumps:
+    :meth:`~mechsolve.joints.base.Constraint.law_breaks`), sampled on both sides (1e-9
+    apart) so that a curve jumps there instead of joining the samples around it.
+    ``res`` itself when it is already that fine and has no switch or break to add, or
+    has a motion law of time. Made once
     per run: the summary, the plots and the requirements read the same figures."""
     cached = getattr(res, "_plots_sweep", None)
     if cached is not None and cached[0] is mech:
@@ -123,16 +126,23 @@ def _for_plots(mech: Mechanism, res: Results) -> Results:
     switching = res.forces is not None and any(
         np.any(on[1:] != on[:-1]) for on in res.forces.active.values()
     )
-    if coarse <= fine * (1 + 1e-9) and not switching:
-        return res
-    step = min(fine, coarse)
-    u, t = an.sweep_values(an.start_value(), step=step, travel=travel)
+    # the places where a joint's motion law is not smooth (a cam program's joins)
+    breaks = any(r.constraint.law_breaks(res.solution.state) is not None for r in an.system.rows)
     vel, acc = res.solution.has_velocity, res.solution.has_acceleration
-    sol = core.states(an, u, t=t, velocity=vel, acceleration=acc)
-    # stroke(q) over the extremes of the results' own sweep: one definition of a
-    # conditional load's range, so the plots' work and mean effort are the table's
-    f = core.forces(an, sol, res.forces.stroke_extremes) if res.forces is not None else None
-    first = Results(an, sol, f)
+    if coarse <= fine * (1 + 1e-9) and not switching:
+        if not breaks:
+            return res
+        # fine enough already: only the breaks' samples to add
+        first, sol, f = res, res.solution, res.forces
+        u, t = np.asarray(sol.u, float), np.asarray(sol.t, float)
+    else:
+        step = min(fine, coarse)
+        u, t = an.sweep_values(an.start_value(), step=step, travel=travel)
+        sol = core.states(an, u, t=t, velocity=vel, acceleration=acc)
+        # stroke(q) over the extremes of the results' own sweep: one definition of a
+        # conditional load's range, so the plots' work and mean effort are the table's
+        f = core.forces(an, sol, res.forces.stroke_extremes) if res.forces is not None else None
+        first = Results(an, sol, f)
     extra: list[float] = []
     for lp in first.limit_positions():
         extra += [lp.u_low, lp.u_high]
@@ -142,6 +152,15 @@ def _for_plots(mech: Mechanism, res: Results) -> Results:
         h = 1e-9 * (an.scale if an.linear else 1.0)
         for us in switch_points(an, sol, f):
             extra += [us - h, us + h]
+    if breaks:
+        from mechsolve.core.breaks import break_points
+
+        h = 1e-9 * (an.scale if an.linear else 1.0)
+        ends = (float(u[0]), float(u[-1]))
+        for ub in break_points(an, sol):
+            # one at an end of the sweep: its sample there is already the one side's
+            if min(abs(ub - e) for e in ends) > 10 * h:
+                extra += [ub - h, ub + h]
     d = mech.driver.direction
     lo, hi = (u[0], u[-1]) if d > 0 else (u[-1], u[0])
     extra = [x for x in extra if lo < x < hi]

@@ -3,6 +3,7 @@ forces, anything unusual (a part of :class:`mechsolve.results.results.Results`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -311,9 +312,14 @@ class Summary:
         lines += src.friction_lines()
         lines.append(_peak_reactions(src, self.mechanism.joints, fscale, funit))
         for j in self.mechanism.joints:  # what a joint's own reaction tells (a cam's contact)
-            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u)
+            # located between the samples by solving there (not along a motion law of
+            # time, whose samples are in time)
+            solve = None
+            if not timed:
+                solve = functools.partial(src.reaction_at, j.name)
+            more, warn = j.findings(g.reactions[j.name], g.ok, src.u, self.format_u, solve)
             lines += ["  " + t for t in more]
-            self.warnings += warn
+            self.warnings += [w for w in warn if w not in self.warnings]
         res = np.nanmax(np.abs(np.where(g.ok, g.residual, np.nan)))
         ps = src.power_scale()
         rel = res / ps if ps > 0 else 0.0
@@ -556,7 +562,7 @@ class _Only:
 def rms_over(u: np.ndarray, e: np.ndarray) -> float:
     """The RMS of ``e`` over the motion: ``sqrt(integral of e^2 du / travel)`` by the
     trapezoidal rule on the samples (a figures sweep's samples are uneven: its limit
-    positions and load switches are inserted), over the runs of solved samples; the
+    positions, load switches and a cam's joins are inserted), over the runs of solved samples; the
     plain mean of the squares where ``u`` does not change. ``u``: the driver coordinate,
     or the time (a motion law: its dwells count)."""
     u = np.asarray(u, float)

@@ -160,6 +160,9 @@ class RowSubset(Constraint):
     def gamma(self, st: State, udd) -> np.ndarray:
         return self.base.gamma(st, udd)[self.rows]
 
+    def law_breaks(self, st: State) -> np.ndarray | None:
+        return self.base.law_breaks(st)
+
 
 @dataclass
 class Row:

@@ -4,7 +4,8 @@ transmission angle, the driving torque, the largest joint reaction, the flywheel
 requirements.
 
 Each scheme is solved over one full turn of its crank at 0.1° (:func:`solve`, with the
-plots' events added by :func:`for_plots`: the exact limit positions and load switches).
+plots' events added by :func:`for_plots`: the exact limit positions, load switches and
+a cam program's joins).
 
 Definitions (the same for every scheme, so that the columns compare):
 

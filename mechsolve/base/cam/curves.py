@@ -31,6 +31,12 @@ class Curve:
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         raise NotImplementedError
 
+    def breaks(self) -> np.ndarray:
+        """The angles x (rad, in [0, 2 pi)) where the curve's second derivative (or its
+        first) jumps: where the follower's acceleration (or velocity) jumps, and with it
+        the contact force. None for a smooth curve (a circle, a spline through a table)."""
+        return np.zeros(0)
+
 
 class CirclePolar(Curve):
     """The polar radius about O of a circle of radius ``R`` centred ``e`` from O on the x
@@ -255,6 +261,15 @@ class ProgramCurve(Curve):
         B1 = (px * q2y - py * q2x) / r2 - 2 * cr1 * dot1 / (r2 * r2)
         x = np.arctan2(py, px) - sg * th
         return x, r, A / B, (A1 * B - A * B1) / B**3, B
+
+    def breaks(self) -> np.ndarray:
+        """The program's joins where the follower's velocity or acceleration jumps (at the
+        segments' ends and inside a law, :meth:`Program.remarks`), as the curve's angles x
+        where the follower's point is seen when the cam is at each join."""
+        th = np.array(sorted({float(r.angle) for r in self.program.remarks()}))
+        if not th.size:
+            return th
+        return np.mod(self._at(th)[0], TWO_PI)
 
     def __call__(self, x):
         x = np.asarray(x, float)
