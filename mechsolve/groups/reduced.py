@@ -576,10 +576,22 @@ class _Angles(_Eqs):
             wr = self._wr_list = self.Wr.tolist()
         return wr
 
-    def accel_terms(self, C, S, wd2) -> np.ndarray:
-        """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
-        closing joints' second derivative (zero for drivers)."""
-        return (C * wd2) @ self.M1.T + (S * wd2) @ self.M2.T
+    def wr_terms(self) -> list:
+        """:attr:`Wr`'s nonzero entries per link ``k``: ``(j, Wr[j, k], Wr[nb + j, k],
+        Wr[j, nb + k], Wr[nb + j, nb + k])`` for the angles ``j`` that move its frame (the
+        coefficients of ``P_j`` and ``Q_j`` in its x and y rates)."""
+        t = getattr(self, "_wr_terms", None)
+        if t is None:
+            nb, Wr = self.nb, self.wr_list()
+            t = self._wr_terms = [
+                [
+                    (j, Wr[j][k], Wr[nb + j][k], Wr[j][nb + k], Wr[nb + j][nb + k])
+                    for j in range(nb)
+                    if Wr[j][k] or Wr[nb + j][k] or Wr[j][nb + k] or Wr[nb + j][nb + k]
+                ]
+                for k in range(nb)
+            ]
+        return t
 
 
 def _rowmax_abs(a: np.ndarray) -> np.ndarray:
