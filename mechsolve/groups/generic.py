@@ -288,12 +288,26 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         return bool(np.any(good[:-1] & good[1:] & (s[:-1] * s[1:] < 0)))
 
     def _put_angles(self, st: State, th: np.ndarray, Px: np.ndarray, Py: np.ndarray) -> None:
-        """Place the group's links at all positions of ``st`` from their angles (N, n)."""
-        C, S = np.cos(th), np.sin(th)
-        x, y = self.red.poses(C, S, Px, Py)
+        """Place the group's links at all positions of ``st`` from their angles (N, n):
+        each link's angle, cosine and sine written in place into its rows, its frame
+        ``P_b + sum_k A(theta_k) W[b, k]`` from the tree's nonzero local vectors only
+        (none for a link whose frame sits at a solved body's point)."""
+        red = self.red
         for b, k in self.col.items():
-            st.x[b], st.y[b], st.th[b] = x[:, k], y[:, k], th[:, k]
-            st.c[b], st.s[b] = C[:, k], S[:, k]
+            st.set_angle(b, th[:, k])
+        C = [st.c[b] for b in self.bodies]
+        S = [st.s[b] for b in self.bodies]
+        for b, k in self.col.items():
+            x, y = st.x[b], st.y[b]
+            x[:] = Px[:, k]
+            y[:] = Py[:, k]
+            for j, a, c in red._wterms[k]:  # as poses_one: + c_j a - s_j c, + s_j a + c_j c
+                t = C[j] * a
+                t -= S[j] * c
+                x += t
+                t = S[j] * a
+                t += C[j] * c
+                y += t
 
     def _q_rows(self, st: State, rates: bool = False) -> np.ndarray:
         """The group's body coordinates at every position (N, 3 links), or their rates."""

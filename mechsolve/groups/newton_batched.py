@@ -33,7 +33,9 @@ class BatchedSweep:
         """
         n = st.n
         k = max(1, n // COARSE)
-        coarse = np.unique(np.r_[np.arange(0, n, k), n - 1])
+        coarse = np.arange(0, n, k)  # every k-th position and the last
+        if coarse[-1] != n - 1:
+            coarse = np.append(coarse, n - 1)
         sub = st.take(coarse)
         dsub = drive.take(coarse)
         # the coarse pass counts its own positions; prefix() wants the sweep's sample

@@ -539,12 +539,6 @@ class _Angles(_Eqs):
         out[:, 2 * self.ne :] -= u[:, None]
         return out
 
-    def poses(self, C, S, Px, Py):
-        """The links' frame origins (N, links) from their angles."""
-        x = Px + C @ self.Wx.T - S @ self.Wy.T
-        y = Py + S @ self.Wx.T + C @ self.Wy.T
-        return x, y
-
     def poses_one(self, th, Px, Py) -> tuple[list, list]:
         """:meth:`poses` at one position, in floats (the angles ``th``, the roots'
         points ``Px``, ``Py``: (links,), arrays or lists)."""
