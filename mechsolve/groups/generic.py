@@ -243,7 +243,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         C, S = st.c[bodies].T, st.s[bodies].T
         det = np.full(st.n, np.nan)
         good = ok & np.isfinite(_rowmax_abs(C)) & np.isfinite(_rowmax_abs(S))
-        if good.all():
+        if good.all() and sub is red and red.elim is not None:  # kept for the rates
+            det = self._angle_elim(st)[0].dets()
+        elif good.all():
             det = sub.dets(C, S)
         elif good.any():
             det[good] = sub.dets(C[good], S[good])

@@ -464,6 +464,12 @@ def _newton_step(sub, C: np.ndarray, S: np.ndarray, f: np.ndarray, J: np.ndarray
     Jacobians); None where LAPACK finds a matrix singular."""
     if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails the caller
         return sub.step_small(C, S, f)
+    if sub.elim is not None:  # eliminated to 2 x 2: likewise NaN where singular
+        x = sub.elim.parts(C, S).solve([f[:, k] for k in range(sub.nb)])
+        out = np.empty(f.shape)
+        for k, v in enumerate(x):
+            out[:, k] = v
+        return out
     try:  # by elimination over the positions (LAPACK where it must)
         if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
             return _lu_solve(sub.lu(C, S), -f)

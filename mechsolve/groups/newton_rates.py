@@ -82,7 +82,17 @@ class NewtonRates:
             for k, r, sg in zip(red.fixed.tolist(), red.frows.tolist(), red.fsign.tolist()):
                 w[k] = rhs[:, r] * sg
             return w
-        if red.nb == 2:
+        if red.elim is not None:  # eliminated to 2 x 2 (each loop a link of its own)
+            parts, nf = self._angle_elim(st)
+            w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+            sing = ~np.isfinite(nf)
+            if sing.any():
+                for v in w:
+                    v[sing] = np.nan
+                out = np.stack(w, axis=1)
+            else:
+                return w
+        elif red.nb == 2:
             a, b, c, d, det, nf = self._angle_entries2(st)
             r0, r1 = rhs[:, 0], rhs[:, 1]
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -108,6 +118,26 @@ class NewtonRates:
             if np.all(np.isfinite(J)):
                 out[i] = np.linalg.lstsq(J, rhs[i], rcond=None)[0]
         return [out[:, k] for k in range(red.nb)]
+
+    def _angle_elim(self, st: State) -> tuple:
+        """:class:`~mechsolve.groups.eliminated.Eliminated` at the poses of ``st`` and
+        ``|F_theta^-1|_F`` there (NaN where exactly singular), kept for the same poses (the
+        velocities, accelerations, determinants and conditioning bound read them)."""
+        th = st.th[self.bodies]
+        c = self._inv_cache
+        if (
+            c is not None
+            and c[0] == st.token
+            and c[1].shape == th.shape
+            and _same(c[1], th)
+            and len(c[2]) == 2
+        ):
+            return c[2]
+        bodies = self.bodies
+        parts = self.red.elim.parts([st.c[b] for b in bodies], [st.s[b] for b in bodies])
+        out = (parts, parts.inverse_norm())
+        self._inv_cache = (st.token, th, out)
+        return out
 
     def _angle_entries2(self, st: State) -> tuple:
         """``F_theta``'s entries ``a, b, c, d`` (rows ``(a, b), (c, d)``) of a group of two
@@ -276,7 +306,9 @@ class NewtonRates:
             return np.full(st.n, 1.0 / (c * (a0 + a1 * float(np.linalg.norm(red.inv_fixed)))))
         if st.n == 1 and red.nb <= FLOATS_UP_TO:  # one position: in floats
             return np.array([1.0 / (c * (a0 + a1 * self._inverse_norm_one(st)))])
-        if red.nb == 2:  # from the entries: |F_theta^-1|_F = |F_theta|_F / |det|
+        if red.elim is not None:  # from the elimination's blocks, exactly
+            nf = self._angle_elim(st)[1]
+        elif red.nb == 2:  # from the entries: |F_theta^-1|_F = |F_theta|_F / |det|
             nf = self._angle_entries2(st)[5]
         else:
             inv = self._angle_inverse(st)
