@@ -51,6 +51,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         except ValueError:
             self.red = None
         self._inv_cache: tuple | None = None
+        self._elim_cache: tuple | None = None  # see _angle_elim, _angle_entries2
+        self._entries2_cache: tuple | None = None
         self._det_cache: tuple | None = None  # see dets()
         self._bound: tuple[float, float, float] | None = None
         self._jump_w: tuple[float, np.ndarray] | None = None

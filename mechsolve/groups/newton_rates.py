@@ -124,19 +124,13 @@ class NewtonRates:
         ``|F_theta^-1|_F`` there (NaN where exactly singular), kept for the same poses (the
         velocities, accelerations, determinants and conditioning bound read them)."""
         th = st.th[self.bodies]
-        c = self._inv_cache
-        if (
-            c is not None
-            and c[0] == st.token
-            and c[1].shape == th.shape
-            and _same(c[1], th)
-            and len(c[2]) == 2
-        ):
+        c = self._elim_cache
+        if c is not None and c[0] == st.token and c[1].shape == th.shape and _same(c[1], th):
             return c[2]
         bodies = self.bodies
         parts = self.red.elim.parts([st.c[b] for b in bodies], [st.s[b] for b in bodies])
         out = (parts, parts.inverse_norm())
-        self._inv_cache = (st.token, th, out)
+        self._elim_cache = (st.token, th, out)
         return out
 
     def _angle_entries2(self, st: State) -> tuple:
@@ -146,7 +140,7 @@ class NewtonRates:
         where ``F_theta`` is exactly singular or not finite, as :meth:`_angle_inverse`
         gives the inverse), kept for the same poses as the inverse is."""
         th0, th1 = st.th[self.bodies[0]], st.th[self.bodies[1]]
-        c = self._inv_cache
+        c = self._entries2_cache
         if (
             c is not None
             and c[0] == st.token
@@ -171,7 +165,7 @@ class NewtonRates:
         if bad.any():
             nf[bad] = np.nan
         out = (a, b, cc, d, det, nf)
-        self._inv_cache = (st.token, (th0.copy(), th1.copy()), out)
+        self._entries2_cache = (st.token, (th0.copy(), th1.copy()), out)
         return out
 
     def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
