@@ -66,8 +66,8 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
     det, good = g.dets(st, ok)  # none for a redundant block: its rank tells, not its sign
     sign = np.sign(det)
     cross = np.flatnonzero(good[:-1] & good[1:] & (sign[:-1] * sign[1:] < 0))
-    # (not crossed continuously: not a bifurcation)
-    cross = cross[~np.isin(cross, [k for k, _ in g.gaps])]
+    if cross.size and g.gaps:  # (not crossed continuously: not a bifurcation)
+        cross = cross[~np.isin(cross, [k for k, _ in g.gaps])]
     if not cross.size:
         return []
     ends = np.unique(np.r_[cross, cross + 1])

@@ -33,7 +33,9 @@ class BatchedSweep:
         """
         n = st.n
         k = max(1, n // COARSE)
-        coarse = np.unique(np.r_[np.arange(0, n, k), n - 1])
+        coarse = np.arange(0, n, k)  # every k-th position and the last
+        if coarse[-1] != n - 1:
+            coarse = np.append(coarse, n - 1)
         sub = st.take(coarse)
         dsub = drive.take(coarse)
         # the coarse pass counts its own positions; prefix() wants the sweep's sample
@@ -195,9 +197,10 @@ class BatchedSweep:
         if sub.nb == 0:
             todo[:] = False
         if sub.nb == 2:
-            if not self._refine2(th, Kr, iters, todo):
+            cs = self._refine2(th, Kr, iters, todo)
+            if cs is None:
                 return None
-            self._put_angles(st, red.join(th, thp), Px, Py)
+            self._put_angles(st, red.join(th, thp), Px, Py, cs)
             return iters
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
@@ -238,7 +241,7 @@ class BatchedSweep:
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
-                if Cf is not None and todo.any():  # (not after the last iteration)
+                if Cf is not None:  # (after the last iteration too: the state's)
                     _rotate(Cf, Sf, D, th)
             else:
                 it, D = idx[take], dq[take]
@@ -246,20 +249,23 @@ class BatchedSweep:
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-                if Cf is not None and todo.any():
+                if Cf is not None:
                     Ci, Si = Cf[it], Sf[it]
                     _rotate(Ci, Si, D, th[it])
                     Cf[it], Sf[it] = Ci, Si
         if todo.any() or not np.all(np.isfinite(th)):
             return None
-        self._put_angles(st, red.join(th, thp), Px, Py)
+        cs = None if Cf is None else ([c for c in Cf.T], [s for s in Sf.T])
+        self._put_angles(st, red.join(th, thp), Px, Py, cs)
         return iters
 
     def _refine2(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo: np.ndarray):
         """:meth:`_refine_angles`'s iterations for two angles (the four-bar's loop), on
         each angle's own 1-D array: the same residual, step (by the adjugate), tests and
         updates, without the (N, 2) products and reductions, which cost more than the
-        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place; False when a
+        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place. Returns the
+        angles' cosines and sines, turned with every step taken (the state's: see
+        :meth:`_put_angles`), as ``([cos x0, cos x1], [sin x0, sin x1])``; None when a
         position does not converge."""
         n = th.shape[0]
         rows = self.red.sub._rows
@@ -298,9 +304,8 @@ class BatchedSweep:
                 iters += todo
                 last = np.where(todo, step, last)
                 todo &= ~done
-                if todo.any():  # (not after the last iteration: nothing reads them)
-                    _rotate(cs[0], cs[1], D0, x0)
-                    _rotate(cs[2], cs[3], D1, x1)
+                _rotate(cs[0], cs[1], D0, x0)  # (after the last iteration too: the
+                _rotate(cs[2], cs[3], D1, x1)  # state's cosines and sines)
             else:
                 it, D0, D1 = idx[take], dq0[take], dq1[take]
                 x0[it] += D0
@@ -308,14 +313,18 @@ class BatchedSweep:
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-                if cs is not None and todo.any():
+                if cs is not None:
                     c = [a[take] for a in csk]
                     _rotate(c[0], c[1], D0, x0[it])
                     _rotate(c[2], c[3], D1, x1[it])
                     for a, b in zip(cs, c):
                         a[it] = b
         th[:, 0], th[:, 1] = x0, x1
-        return not todo.any() and bool(np.isfinite(x0).all() and np.isfinite(x1).all())
+        if todo.any() or not (np.isfinite(x0).all() and np.isfinite(x1).all()):
+            return None
+        if cs is None:  # (no iteration on whole arrays)
+            cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
+        return [cs[0], cs[2]], [cs[1], cs[3]]
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,
@@ -455,6 +464,12 @@ def _newton_step(sub, C: np.ndarray, S: np.ndarray, f: np.ndarray, J: np.ndarray
     Jacobians); None where LAPACK finds a matrix singular."""
     if sub.nb <= 2:  # by the adjugate; a singular one gives NaN and fails the caller
         return sub.step_small(C, S, f)
+    if sub.elim is not None:  # eliminated to 2 x 2: likewise NaN where singular
+        x = sub.elim.parts(C, S).solve([f[:, k] for k in range(sub.nb)])
+        out = np.empty(f.shape)
+        for k, v in enumerate(x):
+            out[:, k] = v
+        return out
     try:  # by elimination over the positions (LAPACK where it must)
         if sub.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
             return _lu_solve(sub.lu(C, S), -f)

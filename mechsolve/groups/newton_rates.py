@@ -71,23 +71,101 @@ class NewtonRates:
         self._inv_cache = (st.token, th, inv)
         return inv
 
-    def _angle_solve(self, st: State, rhs: np.ndarray) -> np.ndarray:
+    def _angle_solve(self, st: State, rhs: np.ndarray) -> list:
+        """``F_theta w = rhs`` (rhs (N, n)) at every position: the angles' rates as one
+        1-D array per angle. Two angles by Cramer's rule from the entries
+        (:meth:`_angle_entries2`), more from the kept inverse; least squares where
+        ``F_theta`` is exactly singular, as a singular body block would get."""
         red = self.red
         if red.sub.nb == 0:  # every angle fixed by a driver: theta_k' = sign (u' - K_d')
-            out = np.empty((rhs.shape[0], red.nb))
-            out[:, red.fixed] = rhs[:, red.frows] * red.fsign
-            return out
-        inv = self._angle_inverse(st)
-        out = inv[:, :, 0] * rhs[:, None, 0]  # inv @ rhs, elementwise: small matrices
-        for j in range(1, rhs.shape[1]):
-            out += inv[:, :, j] * rhs[:, None, j]
+            w = [None] * red.nb
+            for k, r, sg in zip(red.fixed.tolist(), red.frows.tolist(), red.fsign.tolist()):
+                w[k] = rhs[:, r] * sg
+            return w
+        if red.elim is not None:  # eliminated to 2 x 2 (each loop a link of its own)
+            parts, nf = self._angle_elim(st)
+            w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+            sing = ~np.isfinite(nf)
+            if sing.any():
+                for v in w:
+                    v[sing] = np.nan
+                out = np.stack(w, axis=1)
+            else:
+                return w
+        elif red.nb == 2:
+            a, b, c, d, det, nf = self._angle_entries2(st)
+            r0, r1 = rhs[:, 0], rhs[:, 1]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                w0 = d * r0
+                w0 -= b * r1
+                w0 /= det
+                w1 = a * r1
+                w1 -= c * r0
+                w1 /= det
+            out = np.stack([w0, w1], axis=1)
+            sing = ~np.isfinite(nf)
+            out[sing] = np.nan
+        else:
+            inv = self._angle_inverse(st)
+            out = inv[:, :, 0] * rhs[:, None, 0]  # inv @ rhs, elementwise: small matrices
+            for j in range(1, rhs.shape[1]):
+                out += inv[:, :, j] * rhs[:, None, j]
+            sing = np.isnan(inv[:, 0, 0])
         # exactly singular positions: least squares, as a singular body block would get
-        sing = np.isnan(inv[:, 0, 0])
         for i in np.flatnonzero(sing & np.all(np.isfinite(rhs), axis=1)) if sing.any() else ():
             t = st.th[self.bodies, i][None]
             J = self.red.jacobian(np.cos(t), np.sin(t))[0]
             if np.all(np.isfinite(J)):
                 out[i] = np.linalg.lstsq(J, rhs[i], rcond=None)[0]
+        return [out[:, k] for k in range(red.nb)]
+
+    def _angle_elim(self, st: State) -> tuple:
+        """:class:`~mechsolve.groups.eliminated.Eliminated` at the poses of ``st`` and
+        ``|F_theta^-1|_F`` there (NaN where exactly singular), kept for the same poses (the
+        velocities, accelerations, determinants and conditioning bound read them)."""
+        th = st.th[self.bodies]
+        c = self._elim_cache
+        if c is not None and c[0] == st.token and c[1].shape == th.shape and _same(c[1], th):
+            return c[2]
+        bodies = self.bodies
+        parts = self.red.elim.parts([st.c[b] for b in bodies], [st.s[b] for b in bodies])
+        out = (parts, parts.inverse_norm())
+        self._elim_cache = (st.token, th, out)
+        return out
+
+    def _angle_entries2(self, st: State) -> tuple:
+        """``F_theta``'s entries ``a, b, c, d`` (rows ``(a, b), (c, d)``) of a group of two
+        angles at every position of ``st``, its determinant and ``|F_theta^-1|_F =
+        |F_theta|_F / |det|`` (the inverse being the adjugate over the determinant; NaN
+        where ``F_theta`` is exactly singular or not finite, as :meth:`_angle_inverse`
+        gives the inverse), kept for the same poses as the inverse is."""
+        th0, th1 = st.th[self.bodies[0]], st.th[self.bodies[1]]
+        c = self._entries2_cache
+        if (
+            c is not None
+            and c[0] == st.token
+            and c[1][0].shape == th0.shape
+            and _same(c[1][0], th0)
+            and _same(c[1][1], th1)
+        ):
+            return c[2]
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red._rows
+        C0, C1 = st.c[self.bodies[0]], st.c[self.bodies[1]]
+        S0, S1 = st.s[self.bodies[0]], st.s[self.bodies[1]]
+        a = a2 * C0 - a1 * S0 + a3
+        b = b2 * C1 - b1 * S1 + b3
+        cc = c2 * C0 - c1 * S0 + c3
+        d = d2 * C1 - d1 * S1 + d3
+        det = a * d - b * cc
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            nf = a * a + b * b + cc * cc + d * d
+            np.sqrt(nf, out=nf)
+            nf /= np.abs(det)
+        bad = ~np.isfinite(nf)
+        if bad.any():
+            nf[bad] = np.nan
+        out = (a, b, cc, d, det, nf)
+        self._entries2_cache = (st.token, (th0.copy(), th1.copy()), out)
         return out
 
     def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
@@ -100,30 +178,52 @@ class NewtonRates:
         if red.nd:  # the driver values' rates off the drivers' equations
             K[:, 2 * red.ne :] -= (drive.ud if order == 1 else drive.udd)[:, None]
         rhs = np.negative(K, out=K)
-        C, S = st.c[self.bodies].T, st.s[self.bodies].T
+        bodies = self.bodies
+        C, S = [st.c[b] for b in bodies], [st.s[b] for b in bodies]  # rows: no copies
         # the frames' rates: r_b = P_b + sum_k A(theta_k) W[b, k] differentiated, with
         # A' = w A(theta + 90 deg) and A'' = al A(theta + 90 deg) - w^2 A: both are
-        # P @ Wr[:nb] + Q @ Wr[nb:], P = S w, Q = C w (velocities) or P = S al + C w^2,
-        # Q = C al - S w^2
+        # sum_k P_k Wr[k] + Q_k Wr[nb + k], P = S w, Q = C w (velocities) or
+        # P = S al + C w^2, Q = C al - S w^2
         if order == 1:
             w = self._angle_solve(st, rhs)
-            P, Q = S * w, C * w
             out = (st.vx, st.vy, st.w)
         else:
-            wd = st.w[self.bodies].T
-            w2 = wd * wd
-            if red.ne:  # the closing joints' centripetal terms (none for drivers)
-                rhs += red.accel_terms(C, S, w2)
+            w2 = [st.w[b] * st.w[b] for b in bodies]
+            for e, row in enumerate(red._rows[: 2 * red.ne]):  # the closing joints'
+                for k, (m1, m2, _) in enumerate(row):  # centripetal terms (no drivers')
+                    if m1:
+                        rhs[:, e] += (m1 * C[k]) * w2[k]
+                    if m2:
+                        rhs[:, e] += (m2 * S[k]) * w2[k]
             w = self._angle_solve(st, rhs)
-            P, Q = S * w, C * w
-            P += C * w2
-            Q -= S * w2
             out = (st.ax, st.ay, st.al)
-        v = P @ red.Wr[:nb]
-        v += Q @ red.Wr[nb:]
-        vx, vy = Px + v[:, :nb], Py + v[:, nb:]
         for b, k in self.col.items():
-            out[0][b], out[1][b], out[2][b] = vx[:, k], vy[:, k], w[:, k]
+            out[2][b] = w[k]
+        terms = red.wr_terms()
+        if not any(terms):  # every frame at a solved body's point (the four-bar's)
+            for b, k in self.col.items():
+                out[0][b], out[1][b] = Px[:, k], Py[:, k]
+            return
+        P, Q = [], []
+        for k in range(nb):
+            p, q = S[k] * w[k], C[k] * w[k]
+            if order == 2:
+                p += C[k] * w2[k]
+                q -= S[k] * w2[k]
+            P.append(p)
+            Q.append(q)
+        for b, k in self.col.items():
+            vx, vy = Px[:, k].copy(), Py[:, k].copy()
+            for j, px, qx, py, qy in terms[k]:  # the nonzero entries of Wr only
+                if px:
+                    vx += px * P[j]
+                if qx:
+                    vx += qx * Q[j]
+                if py:
+                    vy += py * P[j]
+                if qy:
+                    vy += qy * Q[j]
+            out[0][b], out[1][b] = vx, vy
 
     def _angle_rates_one(self, st: State, drive: Drive, order: int) -> bool:
         """:meth:`_angle_rates` at one position in Python floats (a NumPy call on
@@ -200,8 +300,13 @@ class NewtonRates:
             return np.full(st.n, 1.0 / (c * (a0 + a1 * float(np.linalg.norm(red.inv_fixed)))))
         if st.n == 1 and red.nb <= FLOATS_UP_TO:  # one position: in floats
             return np.array([1.0 / (c * (a0 + a1 * self._inverse_norm_one(st)))])
-        inv = self._angle_inverse(st)
-        nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
+        if red.elim is not None:  # from the elimination's blocks, exactly
+            nf = self._angle_elim(st)[1]
+        elif red.nb == 2:  # from the entries: |F_theta^-1|_F = |F_theta|_F / |det|
+            nf = self._angle_entries2(st)[5]
+        else:
+            inv = self._angle_inverse(st)
+            nf = np.sqrt(np.einsum("nij,nij->n", inv, inv))
         return 1.0 / (c * (a0 + a1 * nf))
 
     def _inverse_norm_one(self, st: State) -> float:
@@ -274,3 +379,9 @@ class NewtonRates:
         qdd = self._solve_batch(st, self._rhs(st, drive, 2))
         for b, k in self.col.items():
             st.ax[b], st.ay[b], st.al[b] = qdd[:, 3 * k], qdd[:, 3 * k + 1], qdd[:, 3 * k + 2]
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Equal arrays, NaN equal to NaN (the exact test first: the one with NaN costs
+    more)."""
+    return bool(np.array_equal(a, b) or np.array_equal(a, b, equal_nan=True))

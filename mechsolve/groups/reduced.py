@@ -10,6 +10,7 @@ import numpy as np
 
 from mechsolve.base.newton import SolveStats
 from mechsolve.base.state import State
+from mechsolve.groups.eliminated import Eliminated
 from mechsolve.system.constraints import AngleDriverConstraint
 
 
@@ -25,6 +26,9 @@ class _Eqs:
         self.nd = bool(np.any(self.M3))
         # which entries of F_theta can be nonzero (the stacked elimination skips others)
         self.nzm = (self.M1 != 0) | (self.M2 != 0) | (self.M3 != 0)
+        # F_theta eliminated to 2 x 2 where each loop has a link of its own (see
+        # _Angles: set there, where the loops' rows are known)
+        self.elim: Eliminated | None = None
         # rows of (M1, M2, M3) as Python floats, for one small position at a time
         self._rows = [
             tuple(zip(self.M1[e].tolist(), self.M2[e].tolist(), self.M3[e].tolist()))
@@ -197,6 +201,8 @@ class _Eqs:
             if b is not None and c is not None:
                 det -= b * c
             return det
+        if self.elim is not None:  # from the 2 x 2 elimination
+            return self.elim.parts(C, S).dets()
         if self.nb <= FLOATS_UP_TO and C.shape[0] >= STACKED_MIN:
             return _lu_det(self.lu_kept(C, S))
         return np.linalg.det(self.jacobian(C, S))
@@ -385,6 +391,13 @@ class _Angles(_Eqs):
             return [k for k in ks] + [nb + k for k in ks] + [2 * nb + k for k in ks]
 
         self.sub = _Eqs(M[np.ix_(rows, cols(self.free))]) if fixed else self
+        # the loops' rows stay first in sub (the drivers' rows left are the fixed angles')
+        for eqs in {id(self): self, id(self.sub): self.sub}.values():
+            if eqs.nb > 2:  # (two angles: Cramer's rule on F_theta itself)
+                try:
+                    eqs.elim = Eliminated(eqs, ne)
+                except ValueError:
+                    pass
         self.rows = np.array(rows, int)
         self.MTf = M[np.ix_(rows, cols(fixed))].T.copy()
         # all angles fixed: F_theta is the drivers' signed permutation, its inverse exact
@@ -539,12 +552,6 @@ class _Angles(_Eqs):
         out[:, 2 * self.ne :] -= u[:, None]
         return out
 
-    def poses(self, C, S, Px, Py):
-        """The links' frame origins (N, links) from their angles."""
-        x = Px + C @ self.Wx.T - S @ self.Wy.T
-        y = Py + S @ self.Wx.T + C @ self.Wy.T
-        return x, y
-
     def poses_one(self, th, Px, Py) -> tuple[list, list]:
         """:meth:`poses` at one position, in floats (the angles ``th``, the roots'
         points ``Px``, ``Py``: (links,), arrays or lists)."""
@@ -576,10 +583,22 @@ class _Angles(_Eqs):
             wr = self._wr_list = self.Wr.tolist()
         return wr
 
-    def accel_terms(self, C, S, wd2) -> np.ndarray:
-        """``sum_k A(theta_k) V[e, k] w_k^2`` (N, n): the centripetal part of the
-        closing joints' second derivative (zero for drivers)."""
-        return (C * wd2) @ self.M1.T + (S * wd2) @ self.M2.T
+    def wr_terms(self) -> list:
+        """:attr:`Wr`'s nonzero entries per link ``k``: ``(j, Wr[j, k], Wr[nb + j, k],
+        Wr[j, nb + k], Wr[nb + j, nb + k])`` for the angles ``j`` that move its frame (the
+        coefficients of ``P_j`` and ``Q_j`` in its x and y rates)."""
+        t = getattr(self, "_wr_terms", None)
+        if t is None:
+            nb, Wr = self.nb, self.wr_list()
+            t = self._wr_terms = [
+                [
+                    (j, Wr[j][k], Wr[nb + j][k], Wr[j][nb + k], Wr[nb + j][nb + k])
+                    for j in range(nb)
+                    if Wr[j][k] or Wr[nb + j][k] or Wr[j][nb + k] or Wr[nb + j][nb + k]
+                ]
+                for k in range(nb)
+            ]
+        return t
 
 
 def _rowmax_abs(a: np.ndarray) -> np.ndarray:
