@@ -14,12 +14,24 @@ from typing import Any
 
 import numpy as np
 
-from mechsolve.base.errors import CannotCloseAtStart
+from mechsolve.base.errors import AssemblyError, CannotCloseAtStart
 from mechsolve.base.newton import solve as newton_solve
 from mechsolve.base.state import State
 from mechsolve.core.branches import TOUCH, _Context
 from mechsolve.core.solution import Failure, Solution
 from mechsolve.groups import Drive, NewtonGroup
+
+SKIP_PROBES = 36  # start searches spent finding where a sweep that starts dead can begin
+
+
+def _probed(an: Any) -> str:
+    s = getattr(an, "probe_stride", 1)
+    if s <= 1:
+        return ""
+    return (
+        f" (positions probed every {s} samples, then one by one back from the first that "
+        "closes: a shorter range that closes inside this one would not be seen)"
+    )
 
 
 def _prepend_gap(an: Any, sol: Solution, u: np.ndarray, k: int, exc) -> Solution:
@@ -54,6 +66,7 @@ def _prepend_gap(an: Any, sol: Solution, u: np.ndarray, k: int, exc) -> Solution
         f"the mechanism cannot close at the start of the sweep: from {an.format_u(u[0])} to "
         f"{an.format_u(u[k - 1])} the {exc.reason}; the sweep starts at "
         f"{an.format_u(u[k])}, the first position that closes, on the branches chosen there"
+        + _probed(an)
     ] + sol.warnings
     speed = an.speed
     out = Solution(
@@ -109,7 +122,7 @@ class FailureReports:
             except CannotCloseAtStart as exc:
                 if first is None:
                     first = exc
-                nxt = k + (exc.first_ok if exc.first_ok else 1)
+                nxt = k + exc.first_ok if exc.first_ok else self._next_closing(u, k)
                 if nxt >= len(u) or nxt <= k:
                     raise first from None
                 k = nxt
@@ -117,6 +130,41 @@ class FailureReports:
             sol = _prepend_gap(self, sol, u, k, first)
         self.locate_edges(sol)
         return sol
+
+    def _next_closing(self, u: np.ndarray, k: int) -> int:
+        """The first position after ``k`` where the mechanism closes at the start (its
+        index; ``len(u)`` if none): positions probed every ``stride`` (about
+        :data:`SKIP_PROBES` probes over the rest of the sweep), then one by one back from
+        the first that closes. A probe that fails is a whole start search (every guess,
+        Newton and scipy: up to a second for a six-bar's triad), so probing each of 360
+        positions of a mechanism that never closes took minutes; this takes about
+        SKIP_PROBES. A closing range narrower than the stride inside a range that does
+        not close can be missed (the warning says the positions were probed)."""
+        n = len(u)
+        stride = max(1, math.ceil((n - 1 - k) / SKIP_PROBES))
+        self.probe_stride = max(stride, getattr(self, "probe_stride", 1))  # for the warning
+        j = k + stride
+        while j < n + stride - 1:
+            j = min(j, n - 1)
+            if self._closes_at(float(u[j])):
+                while j - 1 > k and self._closes_at(float(u[j - 1])):
+                    j -= 1
+                return j
+            if j == n - 1:
+                break
+            j += stride
+        return n
+
+    def _closes_at(self, u0: float) -> bool:
+        """Whether the start search closes every group at ``u0`` (an assembly condition it
+        cannot meet there counts as closing: the sweep started there says so)."""
+        try:
+            self.assemble(u0)
+        except CannotCloseAtStart:
+            return False
+        except AssemblyError:
+            return True
+        return True
 
     def locate_edges(self, sol: Solution) -> None:
         """Where each unassemblable range truly begins and ends: the root of the failing
