@@ -268,16 +268,33 @@ class RRR(Group):
             L1, L2 = self.L1, self.L2
             L1s, L2s = L1 * L1, L2 * L2
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                # (in place where the terms are arrays, one temporary ``t``: the same
+                # operations in the same order as the formulas in the comments)
                 inv = 1.0 / D2
-                a = (0.5 * (L1s - L2s)) * inv + 0.5  # along P->Q, fraction of D
-                h2 = L1s * inv - a * a  # (height / D)^2
+                # a = (0.5 (L1^2 - L2^2)) / D^2 + 0.5: along P->Q, fraction of D
+                a = np.multiply(L1s - L2s, 0.5)
+                a = np.multiply(a, inv, out=a if np.ndim(a) else None)
+                a += 0.5
+                h2 = L1s * inv  # h2 = L1^2 / D^2 - a^2: (height / D)^2
+                t = a * a
+                h2 -= t
                 # 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2, written without a
-                # division so that it stays finite where P and Q coincide
-                aD2 = 0.5 * (L1s - L2s + D2)
-                H = (L1s * D2 - aD2 * aD2) * (1.0 / (L1s * L2s))
-                # a toggle position (h = 0) within rounding still closes
-                tol = (1e-12 * self.Lmax2) * inv
-                ok = (h2 >= -tol) & (D2 > 0)
+                # division so that it stays finite where P and Q coincide:
+                # H = (L1^2 D^2 - aD2^2) / (L1^2 L2^2), aD2 = 0.5 (L1^2 - L2^2 + D^2)
+                np.subtract(L1s, L2s, out=t)
+                t += D2
+                t *= 0.5
+                t *= t
+                H = L1s * D2
+                H -= t
+                H *= 1.0 / (L1s * L2s)
+                # a toggle position (h = 0) within rounding still closes:
+                # h2 >= -(1e-12 Lmax^2) / D^2
+                np.multiply(1e-12 * self.Lmax2, inv, out=t)
+                np.negative(t, out=t)
+                ok = h2 >= t
+                ok &= D2 > 0
+                del t
                 coincident = None
                 if self.equal_arms:
                     # P and Q (nearly) coincide: with equal arms every position of M on
@@ -299,10 +316,17 @@ class RRR(Group):
         px, py, qx, qy, dx, dy, D2 = self.ends(st)
         a, h2, ok, H, coincident = self._triangle(st)
         with np.errstate(invalid="ignore", divide="ignore"):
-            hs = np.sqrt(np.maximum(h2, 0.0))
-            h = hs * mode
-            g1x = a * dx - h * dy  # M - P
-            g1y = a * dy + h * dx
+            h = np.maximum(h2, 0.0)
+            np.sqrt(h, out=h)
+            h *= mode
+            # M - P = a (dx, dy) + h (-dy, dx), in place
+            g1x = a * dx
+            t = h * dy
+            g1x -= t
+            g1y = a * dy
+            np.multiply(h, dx, out=t)
+            g1y += t
+            del t
             if coincident is not None:
                 g1x, g1y = self._coincident_pose(st, coincident, mode, g1x, g1y)
         closes = bool(ok.all())
