@@ -173,6 +173,16 @@ class DrivenSlider(Group):
             R[3 * g + 2] -= t
 
 
+def _point_and_arm(st: State, i: int, s: np.ndarray):
+    """``st.point(i, s)``, and the arm ``st.rotated(i, s)`` it adds where that is an
+    array of the state's size (a batch of designs' local points), which the point's
+    velocity then reuses; else None."""
+    if i == st.nb or s.ndim == 1:
+        return st.point(i, s), None
+    rx, ry = st.rotated(i, s)
+    return (st.x[i] + rx, st.y[i] + ry), (rx, ry)
+
+
 def _carried_velocity(st: State, g: int, px, py):
     """Velocity of the point of body ``g`` that is at (px, py) now."""
     w = st.w[g]
@@ -212,7 +222,7 @@ class RRR(Group):
     kind = "RRR"
     n_modes = 2
     # kept for the force analysis: P, Q and Q - P, M - P and M - Q
-    POSITION_KEYS = ("ends", "g")
+    POSITION_KEYS = ("ends", "g", "arms")
 
     def __init__(self, b1, b2, j1, j2, j3, names):
         # j1: b1-known at P, j2: b1-b2 at M, j3: b2-known at Q
@@ -243,8 +253,10 @@ class RRR(Group):
         """P and Q, and Q - P with its squared length (cached for this state)."""
         c = self.cache(st)
         if "ends" not in c:
-            px, py = st.point(self.k1, self.sPk)
-            qx, qy = st.point(self.k2, self.sQk)
+            (px, py), armP = _point_and_arm(st, self.k1, self.sPk)
+            (qx, qy), armQ = _point_and_arm(st, self.k2, self.sQk)
+            if armP is not None or armQ is not None:  # for the velocities of P and Q
+                c["arms"] = (armP, armQ)
             dx, dy = qx - px, qy - py
             c["ends"] = (px, py, qx, qy, dx, dy, dx * dx + dy * dy)
         return c["ends"]
@@ -253,8 +265,9 @@ class RRR(Group):
         """v_P and v_Q - v_P (cached)."""
         c = self.cache(st)
         if "dv" not in c:
-            vpx, vpy = st.point_velocity(self.k1, self.sPk)
-            vqx, vqy = st.point_velocity(self.k2, self.sQk)
+            armP, armQ = c["arms"] if "arms" in c else (None, None)
+            vpx, vpy = st.point_velocity(self.k1, self.sPk, arm=armP)
+            vqx, vqy = st.point_velocity(self.k2, self.sQk, arm=armQ)
             c["dv"] = (vpx, vpy, vqx - vpx, vqy - vpy)
         return c["dv"]
 
@@ -407,10 +420,21 @@ class RRR(Group):
     def velocity(self, st: State, drive: Drive) -> None:
         g1x, g1y, g2x, g2y = self._g(st)
         vpx, vpy, dvx, dvy = self._dv(st)
-        inv = 1.0 / (g1x * g2y - g1y * g2x)
+        # inv = 1 / (g1 x g2), w1 = (dv . g2) inv, w2 = (dv . g1) inv; in place
+        inv = g1x * g2y
+        t = g1y * g2x
+        inv -= t
+        np.divide(1.0, inv, out=inv)
         self.cache(st)["inv"] = inv
-        w1 = (dvx * g2x + dvy * g2y) * inv
-        w2 = (dvx * g1x + dvy * g1y) * inv
+        w1 = dvx * g2x
+        np.multiply(dvy, g2y, out=t)
+        w1 += t
+        w1 *= inv
+        w2 = dvx * g1x
+        np.multiply(dvy, g1y, out=t)
+        w2 += t
+        w2 *= inv
+        del t
         body_velocity_from_point(st, self.b1, self.sP1, vpx, vpy, w1)
         body_velocity_from_point(st, self.b2, self.sQ2, vpx + dvx, vpy + dvy, w2)
 
