@@ -142,6 +142,8 @@ def diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def length(v):
     """``|v|`` of a local vector (a float), or of a batch of them (an array)."""
+    if np.ndim(v) > 1 and not v[1].any():  # a batch along x: hypot(x, 0) is |x| exactly
+        return np.abs(v[0])
     r = np.hypot(v[0], v[1])
     return float(r) if np.ndim(r) == 0 else r
 
