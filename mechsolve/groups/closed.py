@@ -403,8 +403,14 @@ class RRR(Group):
             _, _, dvx, dvy = self._dv(st)
             H = self._triangle(st)[3]
             L1s, L2s = self.L1**2, self.L2**2
-            dD2 = dx * dvx + dy * dvy  # half the rate of D^2
-            dH = ((L1s + L2s) - D2) * dD2
+            # dH = ((L1^2 + L2^2) - D^2) dD2 / (L1^2 L2^2), dD2 = d . d' (half the
+            # rate of D^2); in place
+            dD2 = dx * dvx
+            dH = dy * dvy
+            dD2 += dH
+            np.subtract(L1s + L2s, D2, out=dH)
+            dH *= dD2
+            del dD2
             dH *= 1.0 / (L1s * L2s)
             c["disc"] = (H, dH)
         return c["disc"]
