@@ -84,7 +84,8 @@ class DriverLink(Group):
 
     def velocity(self, st: State, drive: Drive) -> None:
         other, sign, _ = self._angle_terms(st, drive.u, "vel")
-        w = st.w[other] + sign * drive.ud
+        w = np.multiply(drive.ud, sign)  # st.w[other] + sign ud, in one array
+        w = np.add(st.w[other], w, out=w if np.shape(w) == (st.n,) else None)
         vpx, vpy = st.point_velocity(self.k, self.sk)
         body_velocity_from_point(st, self.b, self.sp, vpx, vpy, w)
 
