@@ -172,6 +172,8 @@ class State:
                 return s0, s1
             c = self.c[i, idx]
             sn = self.s[i, idx]
+            if not s1.any():  # along the frame's x axis in every design (as below)
+                return c * s0, sn * s0
             return c * s0 - sn * s1, sn * s0 + c * s1
         if i == self.nb:
             return self._const(s[0], idx), self._const(s[1], idx)

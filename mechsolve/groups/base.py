@@ -142,6 +142,8 @@ def diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def length(v):
     """``|v|`` of a local vector (a float), or of a batch of them (an array)."""
+    if np.ndim(v) > 1 and not v[1].any():  # a batch along x: hypot(x, 0) is |x| exactly
+        return np.abs(v[0])
     r = np.hypot(v[0], v[1])
     return float(r) if np.ndim(r) == 0 else r
 
@@ -154,17 +156,36 @@ def set_pose_from_vectors(st: State, b: int, s0, sm, px, py, gx, gy) -> None:
     read with ``arctan2``.
     """
     ex, ey = sm[0] - s0[0], sm[1] - s0[1]
-    l2 = ex * ex + ey * ey
-    if np.ndim(ey) == 0 and ey == 0.0:  # the usual frame: x along the segment
-        c = st.c[b]
-        s = st.s[b]
-        np.multiply(gx, ex / l2, out=c)
-        np.multiply(gy, ex / l2, out=s)
-    else:
-        c = (ex * gx + ey * gy) / l2
-        s = (ex * gy - ey * gx) / l2
-        st.c[b] = c
-        st.s[b] = s
+    c, s = st.c[b], st.s[b]
+    if np.ndim(ey) == 0:
+        l2 = ex * ex + ey * ey
+        if ey == 0.0:  # the usual frame: x along the segment
+            np.multiply(gx, ex / l2, out=c)
+            np.multiply(gy, ex / l2, out=s)
+        else:
+            c[...] = (ex * gx + ey * gy) / l2
+            s[...] = (ex * gy - ey * gx) / l2
+    elif not ey.any():
+        # a batch of designs whose frames all have x along the segment (lengths that
+        # differ): the general formula's terms in ey are zeros, dropped (the same
+        # values, but for the sign of a zero where g itself is zero); written in place
+        l2 = ex * ex
+        np.multiply(ex, gx, out=c)
+        c /= l2
+        np.multiply(ex, gy, out=s)
+        s /= l2
+    else:  # the general formula, in place (the same operations in the same order)
+        l2 = ex * ex
+        t = ey * ey
+        l2 += t
+        np.multiply(ex, gx, out=c)
+        np.multiply(ey, gy, out=t)
+        c += t
+        c /= l2
+        np.multiply(ex, gy, out=s)
+        np.multiply(ey, gx, out=t)
+        s -= t
+        s /= l2
     np.arctan2(s, c, out=st.th[b])
     if is_zero(s0):
         st.x[b] = px

@@ -84,7 +84,8 @@ class DriverLink(Group):
 
     def velocity(self, st: State, drive: Drive) -> None:
         other, sign, _ = self._angle_terms(st, drive.u, "vel")
-        w = st.w[other] + sign * drive.ud
+        w = np.multiply(drive.ud, sign)  # st.w[other] + sign ud, in one array
+        w = np.add(st.w[other], w, out=w if np.shape(w) == (st.n,) else None)
         vpx, vpy = st.point_velocity(self.k, self.sk)
         body_velocity_from_point(st, self.b, self.sp, vpx, vpy, w)
 
@@ -173,6 +174,16 @@ class DrivenSlider(Group):
             R[3 * g + 2] -= t
 
 
+def _point_and_arm(st: State, i: int, s: np.ndarray):
+    """``st.point(i, s)``, and the arm ``st.rotated(i, s)`` it adds where that is an
+    array of the state's size (a batch of designs' local points), which the point's
+    velocity then reuses; else None."""
+    if i == st.nb or s.ndim == 1:
+        return st.point(i, s), None
+    rx, ry = st.rotated(i, s)
+    return (st.x[i] + rx, st.y[i] + ry), (rx, ry)
+
+
 def _carried_velocity(st: State, g: int, px, py):
     """Velocity of the point of body ``g`` that is at (px, py) now."""
     w = st.w[g]
@@ -212,7 +223,7 @@ class RRR(Group):
     kind = "RRR"
     n_modes = 2
     # kept for the force analysis: P, Q and Q - P, M - P and M - Q
-    POSITION_KEYS = ("ends", "g")
+    POSITION_KEYS = ("ends", "g", "arms")
 
     def __init__(self, b1, b2, j1, j2, j3, names):
         # j1: b1-known at P, j2: b1-b2 at M, j3: b2-known at Q
@@ -243,8 +254,10 @@ class RRR(Group):
         """P and Q, and Q - P with its squared length (cached for this state)."""
         c = self.cache(st)
         if "ends" not in c:
-            px, py = st.point(self.k1, self.sPk)
-            qx, qy = st.point(self.k2, self.sQk)
+            (px, py), armP = _point_and_arm(st, self.k1, self.sPk)
+            (qx, qy), armQ = _point_and_arm(st, self.k2, self.sQk)
+            if armP is not None or armQ is not None:  # for the velocities of P and Q
+                c["arms"] = (armP, armQ)
             dx, dy = qx - px, qy - py
             c["ends"] = (px, py, qx, qy, dx, dy, dx * dx + dy * dy)
         return c["ends"]
@@ -253,8 +266,9 @@ class RRR(Group):
         """v_P and v_Q - v_P (cached)."""
         c = self.cache(st)
         if "dv" not in c:
-            vpx, vpy = st.point_velocity(self.k1, self.sPk)
-            vqx, vqy = st.point_velocity(self.k2, self.sQk)
+            armP, armQ = c["arms"] if "arms" in c else (None, None)
+            vpx, vpy = st.point_velocity(self.k1, self.sPk, arm=armP)
+            vqx, vqy = st.point_velocity(self.k2, self.sQk, arm=armQ)
             c["dv"] = (vpx, vpy, vqx - vpx, vqy - vpy)
         return c["dv"]
 
@@ -268,16 +282,33 @@ class RRR(Group):
             L1, L2 = self.L1, self.L2
             L1s, L2s = L1 * L1, L2 * L2
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                # (in place where the terms are arrays, one temporary ``t``: the same
+                # operations in the same order as the formulas in the comments)
                 inv = 1.0 / D2
-                a = (0.5 * (L1s - L2s)) * inv + 0.5  # along P->Q, fraction of D
-                h2 = L1s * inv - a * a  # (height / D)^2
+                # a = (0.5 (L1^2 - L2^2)) / D^2 + 0.5: along P->Q, fraction of D
+                a = np.multiply(L1s - L2s, 0.5)
+                a = np.multiply(a, inv, out=a if np.ndim(a) else None)
+                a += 0.5
+                h2 = L1s * inv  # h2 = L1^2 / D^2 - a^2: (height / D)^2
+                t = a * a
+                h2 -= t
                 # 16 area^2 of the triangle P-M-Q over (2 L1 L2)^2, written without a
-                # division so that it stays finite where P and Q coincide
-                aD2 = 0.5 * (L1s - L2s + D2)
-                H = (L1s * D2 - aD2 * aD2) * (1.0 / (L1s * L2s))
-                # a toggle position (h = 0) within rounding still closes
-                tol = (1e-12 * self.Lmax2) * inv
-                ok = (h2 >= -tol) & (D2 > 0)
+                # division so that it stays finite where P and Q coincide:
+                # H = (L1^2 D^2 - aD2^2) / (L1^2 L2^2), aD2 = 0.5 (L1^2 - L2^2 + D^2)
+                np.subtract(L1s, L2s, out=t)
+                t += D2
+                t *= 0.5
+                t *= t
+                H = L1s * D2
+                H -= t
+                H *= 1.0 / (L1s * L2s)
+                # a toggle position (h = 0) within rounding still closes:
+                # h2 >= -(1e-12 Lmax^2) / D^2
+                np.multiply(1e-12 * self.Lmax2, inv, out=t)
+                np.negative(t, out=t)
+                ok = h2 >= t
+                ok &= D2 > 0
+                del t
                 coincident = None
                 if self.equal_arms:
                     # P and Q (nearly) coincide: with equal arms every position of M on
@@ -299,10 +330,17 @@ class RRR(Group):
         px, py, qx, qy, dx, dy, D2 = self.ends(st)
         a, h2, ok, H, coincident = self._triangle(st)
         with np.errstate(invalid="ignore", divide="ignore"):
-            hs = np.sqrt(np.maximum(h2, 0.0))
-            h = hs * mode
-            g1x = a * dx - h * dy  # M - P
-            g1y = a * dy + h * dx
+            h = np.maximum(h2, 0.0)
+            np.sqrt(h, out=h)
+            h *= mode
+            # M - P = a (dx, dy) + h (-dy, dx), in place
+            g1x = a * dx
+            t = h * dy
+            g1x -= t
+            g1y = a * dy
+            np.multiply(h, dx, out=t)
+            g1y += t
+            del t
             if coincident is not None:
                 g1x, g1y = self._coincident_pose(st, coincident, mode, g1x, g1y)
         closes = bool(ok.all())
@@ -366,8 +404,14 @@ class RRR(Group):
             _, _, dvx, dvy = self._dv(st)
             H = self._triangle(st)[3]
             L1s, L2s = self.L1**2, self.L2**2
-            dD2 = dx * dvx + dy * dvy  # half the rate of D^2
-            dH = ((L1s + L2s) - D2) * dD2
+            # dH = ((L1^2 + L2^2) - D^2) dD2 / (L1^2 L2^2), dD2 = d . d' (half the
+            # rate of D^2); in place
+            dD2 = dx * dvx
+            dH = dy * dvy
+            dD2 += dH
+            np.subtract(L1s + L2s, D2, out=dH)
+            dH *= dD2
+            del dD2
             dH *= 1.0 / (L1s * L2s)
             c["disc"] = (H, dH)
         return c["disc"]
@@ -383,10 +427,21 @@ class RRR(Group):
     def velocity(self, st: State, drive: Drive) -> None:
         g1x, g1y, g2x, g2y = self._g(st)
         vpx, vpy, dvx, dvy = self._dv(st)
-        inv = 1.0 / (g1x * g2y - g1y * g2x)
+        # inv = 1 / (g1 x g2), w1 = (dv . g2) inv, w2 = (dv . g1) inv; in place
+        inv = g1x * g2y
+        t = g1y * g2x
+        inv -= t
+        np.divide(1.0, inv, out=inv)
         self.cache(st)["inv"] = inv
-        w1 = (dvx * g2x + dvy * g2y) * inv
-        w2 = (dvx * g1x + dvy * g1y) * inv
+        w1 = dvx * g2x
+        np.multiply(dvy, g2y, out=t)
+        w1 += t
+        w1 *= inv
+        w2 = dvx * g1x
+        np.multiply(dvy, g1y, out=t)
+        w2 += t
+        w2 *= inv
+        del t
         body_velocity_from_point(st, self.b1, self.sP1, vpx, vpy, w1)
         body_velocity_from_point(st, self.b2, self.sQ2, vpx + dvx, vpy + dvy, w2)
 
