@@ -369,7 +369,8 @@ def _cycle_torque(an: Analysis, u: np.ndarray, d: int, w: float):
     """``(x, T, on_grid)``: the driving torque along the motion at the speed ``w`` over the
     driver values ``u`` (travel ``x`` from the first), with each angle where a conditional
     load switches added on both sides of it (1e-9 rad apart, located to rounding as the
-    run's summary locates them), so that the torque's jumps fall between samples;
+    run's summary locates them) and each join of a cam program, so that the torque's
+    jumps fall between samples;
     ``on_grid`` marks the samples of ``u``."""
     from mechsolve.core.loads import switch_points
 
@@ -377,7 +378,12 @@ def _cycle_torque(an: Analysis, u: np.ndarray, d: int, w: float):
     if not sol.ok.all():
         raise InputError("the mechanism does not turn fully: a flywheel needs a full cycle")
     f = core.forces(an, sol)
-    extra = [s + h for s in switch_points(an, sol, f) for h in (-1e-9, 1e-9)]
+    jumps = switch_points(an, sol, f)
+    if any(r.constraint.law_breaks(sol.state) is not None for r in an.system.rows):
+        from mechsolve.core.breaks import break_points
+
+        jumps += break_points(an, sol)  # a cam program's joins: the torque jumps there too
+    extra = [s + h for s in jumps for h in (-1e-9, 1e-9)]
     lo, hi = (u[0], u[-1]) if d > 0 else (u[-1], u[0])
     extra = [v for v in extra if lo < v < hi]
     on_grid = np.ones(len(u), bool)
