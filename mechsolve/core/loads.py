@@ -206,17 +206,22 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
     P = len(u_all) // B
     if not args or P < 3:
         return list(sampled)
+    evaluate = _design_evaluator(an, sol) if blocks else _sweep_evaluator(an, sol)
+    if evaluate is None:
+        return list(sampled)
     if an.mech.driver.motion is not None:
         if blocks or not _positions_only(an.mech):
             return list(sampled)
+        turns = _law_turning_points(an.mech.driver.motion, np.asarray(sol.t, float))
+        if turns.size:  # where the law turns back between samples: its reach's ends
+            extra = evaluate(turns[None, :])
+            u_all = np.concatenate([u_all, turns])
+            args = [np.concatenate([np.asarray(q, float), e.ravel()]) for q, e in zip(args, extra)]
         u_all, keep = np.unique(u_all, return_index=True)  # along the driver, each once
         args = [np.asarray(q, float)[keep] for q in args]
         P = len(u_all)
         if P < 3:
             return list(sampled)
-    evaluate = _design_evaluator(an, sol) if blocks else _sweep_evaluator(an, sol)
-    if evaluate is None:
-        return list(sampled)
     u = u_all[:P]
     d = 1.0 if u[-1] >= u[0] else -1.0
     x = d * (u - u[0])  # travel from the first sample, increasing
@@ -236,6 +241,20 @@ def exact_extremes(an: Analysis, sol: Solution, args: list, sampled: list) -> li
         hi = np.where(np.isfinite(hi), hi, np.asarray(shi, float).reshape(-1))
         out.append((lo, hi) if blocks else (float(lo[0]), float(hi[0])))
     return out
+
+
+def _law_turning_points(law, t: np.ndarray) -> np.ndarray:
+    """The driver values where a motion law turns back between its time samples ``t``
+    (its rate changes sign there; located to rounding): the ends of the range of
+    positions it visits, which its samples can fall short of."""
+    from mechsolve.base.numerics import brent_root
+
+    _, ud, _ = law.at(t)
+    out = []
+    for k in np.flatnonzero(ud[:-1] * ud[1:] < 0):
+        tk = brent_root(lambda x: float(law.at(np.array([x]))[1][0]), float(t[k]), float(t[k + 1]))
+        out.append(float(law.at(np.array([tk]))[0][0]))
+    return np.array(out)
 
 
 _SIGN = np.array([-1.0, 1.0])  # min, max: the sign that makes each a maximum
