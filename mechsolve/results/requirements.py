@@ -425,15 +425,8 @@ class _Reducer:
         """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
 
         fine = self.fine
-        an, sol = fine.analysis, fine.solution
-        one = an.solve(x, start=sol.start, near=(sol, near), per_unit_driver=True)
-        ud, udd = sol.driver_rates()
-        m = len(x)
-        rates = np.full(m, ud[near]), np.full(m, udd[near])
-        core.scale_rates(one.state, *rates, sol.has_acceleration)
-        one.ud, one.udd = rates
-        one.has_velocity, one.has_acceleration = sol.has_velocity, sol.has_acceleration
-        one.t = np.zeros(m)
+        an = fine.analysis
+        one = fine.solved_near(x, near)
         f = None
         if fine.forces is not None:
             f = core.forces(an, one, fine.forces.stroke_extremes)

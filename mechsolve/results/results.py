@@ -336,11 +336,11 @@ class Results(Summary):
             raise KeyError("no force analysis was run (the model has no masses or loads)")
         return self.forces.reactions[name]
 
-    def reaction_at(self, name: str, x: np.ndarray, near: int) -> dict[str, np.ndarray]:
-        """Joint ``name``'s reaction components solved at driver values ``x`` next to
-        sample ``near`` of this sweep (on its branches, at its driver's speed there),
-        for locating a figure between the samples; NaN where a position does not solve.
-        Not for a motion law of time (its samples are in time)."""
+    def solved_near(self, x: np.ndarray, near: int):
+        """The positions at driver values ``x`` solved next to sample ``near`` of this
+        sweep (on its branches), their rates scaled to the driver's speed there: where a
+        figure is located between the samples. Not for a motion law of time (its samples
+        are in time)."""
         from mechsolve.core import evaluate as core
 
         an, sol = self.analysis, self.solution
@@ -353,9 +353,18 @@ class Results(Summary):
         one.ud, one.udd = rates
         one.has_velocity, one.has_acceleration = sol.has_velocity, sol.has_acceleration
         one.t = np.zeros(m)
+        return one
+
+    def reaction_at(self, name: str, x: np.ndarray, near: int) -> dict[str, np.ndarray]:
+        """Joint ``name``'s reaction components solved at driver values ``x`` next to
+        sample ``near`` of this sweep (see :meth:`solved_near`); NaN where a position
+        does not solve."""
+        from mechsolve.core import evaluate as core
+
+        one = self.solved_near(x, near)
         extremes = self.forces.stroke_extremes if self.forces is not None else None
         with np.errstate(all="ignore"):
-            r = core.forces(an, one, extremes).reactions[name]
+            r = core.forces(self.analysis, one, extremes).reactions[name]
         bad = ~np.asarray(one.ok, bool)
         return {k: np.where(bad, np.nan, np.asarray(v, float)) for k, v in r.items()}
 
