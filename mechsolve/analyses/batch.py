@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mechsolve.analyses.batch_program import Program, plan_program, run_program
 from mechsolve.base.errors import MechsolveError
 from mechsolve.base.state import State
 from mechsolve.core.branch_choice import _PendingConditions
@@ -102,11 +103,32 @@ class DesignBatch:
         P = len(self.u)
         sl = slice(j * P, (j + 1) * P)
         an = Analysis(self.mechanisms[k], "auto")  # the only method the batch takes
-        sol_b: Solution = b["solution"]
         modes = [float(m) for m in b["modes"][:, j]]
         start = StartAssembly(
             modes, {}, [r[j] for r in b["reasons"]], b["start"].take([j]), b["u0"], modes
         )
+        prog: Program | None = b.get("program")
+        if prog is not None:  # the narrower program's pass: the design's row written out
+            sol = Solution(
+                an,
+                self.u.copy(),
+                b["t"].copy(),
+                prog.state(j),
+                np.ones(P, bool),  # (a kept design closes everywhere)
+                [],
+                prog.indicator(j),
+                np.zeros(P, int),
+                None,
+                None,
+                start,
+                [],
+                b["has_velocity"],
+                False,
+                [],
+                {gi: [] for gi in range(len(an.plan))},
+            )
+            return Results(an, sol, None)
+        sol_b: Solution = b["solution"]
         sol = Solution(
             an,
             self.u.copy(),
@@ -533,6 +555,35 @@ def _solve_alone(out: DesignBatch, alone: dict, step, method, acceleration, forc
             out._separate[k] = exc
 
 
+def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alone) -> None:
+    """The pass of a plan the narrower program takes (:mod:`mechsolve.analyses.batch_program`):
+    kinematics without accelerations, the same designs kept and the same results."""
+    nd = len(inside)
+    prog = run_program(a2.plan, a2.system.nb, nd, u, modes, an0.speed, NEAR)
+    risky = risky | prog.risky
+    for j, k in enumerate(inside):
+        if risky[j]:
+            alone[k] = "its sweep comes near a singular position or does not close"
+    if risky.all():
+        return
+    pi = len(out._passes)
+    has_vel = bool(an0.mech.outputs.velocity)
+    out._passes.append(
+        {
+            "modes": modes,
+            "reasons": reasons,
+            "start": start,
+            "u0": float(u[0]),
+            "program": prog,
+            "t": np.asarray(t, float),
+            "has_velocity": has_vel,
+        }
+    )
+    for j in np.flatnonzero(~risky):  # a design's row in the program is its row here
+        out._where[inside[j]] = (pi, int(j))
+        out.batched[inside[j]] = True
+
+
 def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:
     """Solve the designs ``inside`` (numbers ``X``) as one pass into ``out``; designs that
     leave the closed forms' safe ground go to ``alone``. The velocities are always
@@ -547,6 +598,9 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
         cols2 = np.r_[np.arange(nd), np.arange(nd)]
         a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
         modes, reasons, start_state, risky = _assemble(a2, u0, nd)
+        if not want_forces and not has_acc and plan_program(an0.plan, an0.system.nb):
+            _program_pass(out, an0, a2, inside, modes, reasons, start_state, risky, u, t, alone)
+            return
         # the sweep: one column per position of each design
         ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, per=P)))
         N = nd * P

@@ -1,0 +1,339 @@
+"""A narrower program for a design batch whose plan is a driver link and closed-form dyads.
+
+:func:`mechsolve.analyses.batch.solve_designs` runs the general group solvers over one
+column per position of each design: every design's numbers spread over its columns, every
+body's full state written for every column. When the plan is a crank on the ground turned
+by the driver followed by RRR dyads (the four-bar, and chains of RRR dyads on it), and
+no force analysis is asked for, the pass runs this program instead:
+
+* the designs' numbers are columns ``(D, 1)``, the driver's positions a row ``(1, P)``:
+  every formula broadcasts to ``(D, P)`` (the crank's angle, cosine and sine are one row
+  for every design, a ground point one column);
+* each quantity of a body is kept in the smallest shape that holds it (a float, a row, a
+  column or ``(D, P)``), not spread over a state of ``(11, bodies, D P)``; a design's
+  state is written from them when its results are asked for (:meth:`Program.state`);
+* the screening of the general pass (indicator at least ``sin 5 deg``, the discriminant
+  clear of zero at and between the samples) reads the dyad's own terms, reduced per
+  design; a design that passes it closes at every position, so no per-column flag of
+  closure is kept.
+
+The formulas, and the order of their operations, are those of
+:class:`mechsolve.groups.closed.DriverLink` and :class:`mechsolve.groups.closed.RRR`:
+the states, rates and indicators are those of the general pass.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mechsolve.base.state import State
+from mechsolve.groups import Group
+from mechsolve.groups.closed import RRR, DriverLink
+
+__all__ = ["Program", "plan_program", "run_program"]
+
+NAMES = ("x", "y", "th", "c", "s", "vx", "vy", "w")  # what the program writes per body
+
+
+def _zero(v) -> bool:
+    return isinstance(v, float) and v == 0.0
+
+
+def _mul(a, b):
+    """``a b`` where either may be a float zero (then 0.0: the term is dropped) or one
+    (then the other, not a copy: the program writes in place only what it made)."""
+    if _zero(a) or _zero(b):
+        return 0.0
+    if isinstance(a, float) and a == 1.0:
+        return b
+    if isinstance(b, float) and b == 1.0:
+        return a
+    return a * b
+
+
+def _add(a, b):
+    if _zero(b):
+        return a
+    if _zero(a):
+        return b
+    return a + b
+
+
+def _sub(a, b):
+    if _zero(b):
+        return a
+    if _zero(a):
+        return -b
+    return a - b
+
+
+def plan_program(plan: list[Group], ground: int) -> bool:
+    """Whether the program takes this plan: a crank on the ground whose angle the driver
+    sets from the ground, then RRR dyads only."""
+    if len(plan) < 2 or not isinstance(plan[0], DriverLink):
+        return False
+    g = plan[0]
+    d = g.drv
+    if g.k != ground or (d.a if d.b == g.b else d.b) != ground:
+        return False
+    if np.ndim(d.delta) != 0:
+        return False
+    return all(isinstance(x, RRR) for x in plan[1:])
+
+
+class _Numbers:
+    """A stacked number of the start's analysis (``2 D`` columns: branch + of each design,
+    then branch -) as the program reads it: a float when the same in every design, else
+    the first ``D`` values as a column ``(D, 1)``."""
+
+    def __init__(self, nd: int) -> None:
+        self.nd = nd
+
+    def one(self, v):
+        if np.ndim(v) == 0:
+            return float(v)
+        v = np.asarray(v)[: self.nd]
+        return float(v[0]) if np.all(v == v[0]) else v.reshape(-1, 1)
+
+    def pair(self, s):
+        s = np.asarray(s, float)
+        if s.ndim == 1:
+            return float(s[0]), float(s[1])
+        return self.one(s[0]), self.one(s[1])
+
+
+class Program:
+    """What the program keeps of a pass: per body, each quantity of :data:`NAMES` in its
+    smallest shape (see the module docstring), per group its indicator, and the designs'
+    rows. The design in row ``j`` is written into a state by :meth:`state`; a dyad's
+    indicator is kept as its discriminant ``H`` (:meth:`indicator`)."""
+
+    def __init__(self, nb: int, nd: int, P: int) -> None:
+        self.nb, self.nd, self.P = nb, nd, P
+        self.bodies: dict[int, dict] = {
+            nb: dict.fromkeys(NAMES, 0.0) | {"c": 1.0}  # the ground
+        }
+        self.indicators: list = []
+        self.risky = np.zeros(nd, bool)
+
+    def _rot(self, b: int, s):
+        """Global components of the local vector ``s = (s0, s1)`` on body ``b``."""
+        q = self.bodies[b]
+        c, sn = q["c"], q["s"]
+        s0, s1 = s
+        return _sub(_mul(c, s0), _mul(sn, s1)), _add(_mul(sn, s0), _mul(c, s1))
+
+    def _point(self, b: int, s):
+        q = self.bodies[b]
+        rx, ry = self._rot(b, s)
+        return _add(q["x"], rx), _add(q["y"], ry), rx, ry
+
+    def _velocity(self, b: int, rx, ry):
+        """Velocity of the point of body ``b`` at the arm ``(rx, ry)`` from its frame."""
+        q = self.bodies[b]
+        w = q["w"]
+        return _sub(q["vx"], _mul(w, ry)), _add(q["vy"], _mul(w, rx))
+
+    def state(self, j: int) -> State:
+        """The state of the design in row ``j`` over the sweep (rates per unit time)."""
+        st = State(self.nb, self.P)
+        for b, q in self.bodies.items():
+            if b == self.nb:
+                continue
+            for name in NAMES:
+                v = q[name]
+                if isinstance(v, float):
+                    if v:
+                        getattr(st, name)[b] = v
+                else:
+                    getattr(st, name)[b] = v[j if v.shape[0] > 1 else 0]
+        return st
+
+    def indicator(self, j: int) -> np.ndarray:
+        """The groups' singularity indicators of the design in row ``j``, (groups, P)."""
+        out = np.ones((len(self.indicators), self.P))
+        for row, H in zip(out, self.indicators):
+            if H is not None:  # sin of the angle at M (H > 0 in every kept design)
+                np.minimum(H[j], 1.0, out=row)
+                np.sqrt(row, out=row)
+        return out
+
+
+def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> None:
+    """The crank: its angle, cosine and sine one row for every design."""
+    d = g.drv
+    sign, off = (1.0, -d.delta) if d.b == g.b else (-1.0, d.delta)
+    th = np.multiply(u, sign)
+    if off:
+        th += off
+    th = th.reshape(1, -1)
+    c, s = np.cos(th), np.sin(th)
+    q = {"th": th, "c": c, "s": s, "w": sign}  # w: per unit of the driver coordinate
+    prog.bodies[g.b] = q
+    px, py = num.pair(g.sk)  # the pivot, on the ground
+    rx, ry = prog._rot(g.b, num.pair(g.sp))
+    q["x"], q["y"] = _sub(px, rx), _sub(py, ry)
+    # body_velocity_from_point: the pivot is at rest, v = w k x (frame - pivot)
+    q["vx"], q["vy"] = _mul(sign, ry), _sub(0.0, _mul(sign, rx))
+
+
+def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
+    """``set_pose_from_vectors``: the body's local vector ``sm - s0`` lies along
+    ``(gx, gy)`` and its point ``s0`` at ``(px, py)``."""
+    ex, ey = _sub(sm[0], s0[0]), _sub(sm[1], s0[1])
+    if _zero(ey) and isinstance(ex, float):
+        l2 = ex * ex
+        c, s = np.multiply(gx, ex / l2), np.multiply(gy, ex / l2)
+    elif _zero(ey):  # x along the segment in every design, lengths that differ
+        l2 = ex * ex
+        c = np.multiply(ex, gx)
+        c /= l2
+        s = np.multiply(ex, gy)
+        s /= l2
+    else:
+        l2 = _add(ex * ex, ey * ey)
+        c = (ex * gx + ey * gy) / l2
+        s = (ex * gy - ey * gx) / l2
+    q["c"], q["s"], q["th"] = c, s, np.arctan2(s, c)
+    q["x"] = _sub(px, _sub(_mul(c, s0[0]), _mul(s, s0[1])))
+    q["y"] = _sub(py, _add(_mul(s, s0[0]), _mul(c, s0[1])))
+
+
+def _triangle(L1, L2, D2):
+    """The RRR's triangle (:meth:`RRR._triangle`, the same operations): M's distance
+    along P -> Q as a fraction of |PQ|, its squared height over |PQ|^2, and ``H``."""
+    L1s, L2s = L1 * L1, L2 * L2
+    inv = 1.0 / D2
+    a = np.multiply(L1s - L2s, 0.5)
+    a = np.multiply(a, inv, out=a if np.shape(a) == np.shape(inv) else None)
+    a += 0.5
+    h2 = L1s * inv
+    h2 -= a * a
+    t = np.add(L1s - L2s, D2)
+    t *= 0.5
+    t *= t
+    H = L1s * D2
+    H -= t
+    H *= 1.0 / (L1s * L2s)
+    return a, h2, H
+
+
+def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> None:
+    """One RRR dyad over every design and position, screened as the general pass does."""
+    P = prog.P
+    px, py, rpx, rpy = prog._point(g.k1, num.pair(g.sPk))
+    qx, qy, rqx, rqy = prog._point(g.k2, num.pair(g.sQk))
+    vpx, vpy = prog._velocity(g.k1, rpx, rpy)
+    vqx, vqy = prog._velocity(g.k2, rqx, rqy)
+    dx, dy = _sub(qx, px), _sub(qy, py)
+    D2 = dx * dx + dy * dy
+    L1, L2 = num.one(g.L1), num.one(g.L2)
+    a, h2, H = _triangle(L1, L2, D2)
+    hh = np.maximum(h2, 0.0)
+    np.sqrt(hh, out=hh)
+    hh *= mode
+    g1x = a * dx
+    g1x -= hh * dy
+    g1y = a * dy
+    g1y += hh * dx
+    del a, h2, hh
+    g2x, g2y = g1x - dx, g1y - dy
+    q1, q2 = {}, {}
+    prog.bodies[g.b1], prog.bodies[g.b2] = q1, q2
+    _place(q1, num.pair(g.sP1), num.pair(g.sM1), px, py, g1x, g1y)
+    _place(q2, num.pair(g.sQ2), num.pair(g.sM2), qx, qy, g2x, g2y)
+    prog.indicators.append(H)  # the indicator is sqrt(min(H, 1)) (see Program.indicator)
+    # rates per unit driver coordinate: w1 = (dv . g2) / (g1 x g2), w2 = (dv . g1) / ...
+    dvx, dvy = _sub(vqx, vpx), _sub(vqy, vpy)
+    inv = g1x * g2y
+    inv -= g1y * g2x
+    np.divide(1.0, inv, out=inv)
+    w1 = dvx * g2x + dvy * g2y
+    w1 *= inv
+    w2 = dvx * g1x + dvy * g1y
+    w2 *= inv
+    del inv
+    _rates(prog, q1, num.pair(g.sP1), vpx, vpy, w1)
+    # v_Q = v_P + (v_Q - v_P) as the general dyad writes it: exactly v_Q (0) at rest
+    vqx = vqx if _zero(vqx) else _add(vpx, dvx)
+    vqy = vqy if _zero(vqy) else _add(vpy, dvy)
+    _rates(prog, q2, num.pair(g.sQ2), vqx, vqy, w2)
+    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P)
+
+
+def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
+    """``body_velocity_from_point``: the frame's velocity from its point ``s0``'s."""
+    q["w"] = w
+    if _zero(s0[0]) and _zero(s0[1]):
+        q["vx"], q["vy"] = vpx, vpy
+        return
+    c, s = q["c"], q["s"]
+    rx = _sub(_mul(c, s0[0]), _mul(s, s0[1]))
+    ry = _add(_mul(s, s0[0]), _mul(c, s0[1]))
+    q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
+
+
+def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
+    """The general pass's screening of every position, decided per design from the
+    dyad's own terms (a NaN fails every test):
+
+    * the indicator ``sqrt(min(H, 1))`` above ``near`` at every sample: then ``H > 0``
+      there, the loop closes with a margin far above the closure's tolerance, and
+      ``D2 > 0``;
+    * the discriminant clear of zero within a step, ``H - h |dH| > 0``, and the cubic
+      Hermite interpolant's lower bound on each step,
+      ``min(H_i, H_i+1) - (4/27) (h |dH_i| + h |dH_i+1|) > 0``.
+
+    Rounding is monotonic, so the smallest ``H`` and the largest ``h |dH|`` of a design
+    give the general pass's decisions exactly: ``sqrt`` of the smallest ``min(H, 1)`` is
+    the smallest indicator, and ``min H - max h|dH| > 0`` implies both tests at every
+    sample and step. Only a design where that bound fails is tested sample by sample."""
+    risky = prog.risky
+    Hmin = H.min(axis=1)
+    risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
+    # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
+    # applied to the largest |.| of each design (the same rounding as element-wise)
+    L1s, L2s = L1 * L1, L2 * L2
+    dH = np.subtract(L1s + L2s, D2)
+    dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
+    big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+    big *= np.ravel(1.0 / (L1s * L2s))
+    big *= h
+    unsure = ~risky & ~(Hmin - big > 0)
+    if unsure.any():  # those designs, sample by sample
+        rows = np.flatnonzero(unsure)
+        k = 1.0 / (L1s * L2s)
+        k = k[rows] if np.ndim(k) else k
+        hdH = np.abs(dH[rows])
+        hdH *= k
+        hdH *= h
+        Hr = H[rows]
+        bad = ~((Hr - hdH).min(axis=1) > 0)
+        if P > 1:
+            low = np.minimum(Hr[:, :-1], Hr[:, 1:])
+            low -= (4.0 / 27.0) * (hdH[:, :-1] + hdH[:, 1:])
+            bad |= ~(low.min(axis=1) > 0)
+        risky[rows] |= bad
+
+
+def run_program(
+    plan: list[Group], nb: int, nd: int, u: np.ndarray, modes: np.ndarray, speed: float, near
+) -> Program:
+    """Solve ``nd`` designs over the driver values ``u``: ``plan`` is the start's analysis
+    (its numbers stacked on ``2 nd`` columns, see :class:`_Numbers`), ``modes`` every
+    design's branches (groups, nd). Rates come out per unit time (times ``speed``)."""
+    P = len(u)
+    prog = Program(nb, nd, P)
+    num = _Numbers(nd)
+    h = float(abs(u[1] - u[0])) if P > 1 else 0.0
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        prog.indicators.append(None)  # the driver link's: 1
+        _driver_link(prog, plan[0], num, u)
+        for gi in range(1, len(plan)):
+            _rrr(prog, plan[gi], num, modes[gi].reshape(-1, 1), h, near)
+    if speed != 1.0:  # rates per unit driver coordinate -> time rates
+        for b, q in prog.bodies.items():
+            if b != nb:
+                for name in ("vx", "vy", "w"):
+                    q[name] = _mul(q[name], speed)
+    return prog
