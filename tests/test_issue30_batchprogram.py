@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
+from mechsolve.analyses import batch_program
 from mechsolve.analyses.batch import solve_designs
 from mechsolve.analyses.study.designs import make_study
 from mechsolve.analyses.study.execute import solve_chunk, solve_design
@@ -101,13 +102,20 @@ def _same_state(r1, r2, rel=1e-12):
         assert np.allclose(x, y, rtol=rel, atol=rel * (1 + np.max(np.abs(y)))), name
 
 
-def test_program_equals_designs_solved_one_by_one():
+@pytest.mark.parametrize("block", [None, 3 * 121])
+def test_program_equals_designs_solved_one_by_one(block, monkeypatch):
+    """In one block, and in blocks of 3 designs (the last one shorter)."""
+    if block is not None:
+        monkeypatch.setattr(batch_program, "BLOCK_COLUMNS", block)
     study = _study(
-        ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 62 mm"], "2 rad/s"
+        ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 58, 62 mm"],
+        "2 rad/s",
     )
     mechs = _mechs(study)
     batch = solve_designs(mechs, forces=False, acceleration=False)
     assert batch.batched.all() and _programs(batch) == 1
+    blocks = batch._passes[0]["program"].blocks
+    assert [b.nd for b in blocks] == ([6] if block is None else [3, 3])
     for k, m in enumerate(mechs):
         one = ms.solve(m, acceleration=False)
         got = batch.results(k)

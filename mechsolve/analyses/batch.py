@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mechsolve.analyses.batch_program import Program, plan_program, run_program
+from mechsolve.analyses.batch_program import Programs, plan_program, run_program
 from mechsolve.base.errors import MechsolveError
 from mechsolve.base.state import State
 from mechsolve.core.branch_choice import _PendingConditions
@@ -60,6 +60,10 @@ NEAR = math.sin(math.radians(5.0))  # indicators below this: the design's own sw
 # (90 passes), and 32768, 65536 and 131072 columns take 219, 189 and 177 ms with a peak
 # of 289, 301 and 325 MB (284 MB of it the results kept)
 CHUNK_COLUMNS = 131072
+# the narrower program's passes (mechsolve.analyses.batch_program): it works in blocks of
+# its own and keeps some 13 arrays of its pass's size, not a state of 44, so that one
+# pass takes 8 times the columns; fewer passes, fewer start assemblies
+PROGRAM_COLUMNS = 8 * CHUNK_COLUMNS
 
 
 @dataclass
@@ -107,7 +111,7 @@ class DesignBatch:
         start = StartAssembly(
             modes, {}, [r[j] for r in b["reasons"]], b["start"].take([j]), b["u0"], modes
         )
-        prog: Program | None = b.get("program")
+        prog: Programs | None = b.get("program")
         if prog is not None:  # the narrower program's pass: the design's row written out
             sol = Solution(
                 an,
@@ -525,7 +529,8 @@ def solve_designs(
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
         X = np.array([rows[k] for k in inside], dtype=float)
-        per = max(1, CHUNK_COLUMNS // max(len(u), 1))
+        program = not want_forces and not want_acc and plan_program(an0.plan, an0.system.nb)
+        per = max(1, (PROGRAM_COLUMNS if program else CHUNK_COLUMNS) // max(len(u), 1))
         for i in range(0, len(inside), per):
             todo = (inside[i : i + per], X[i : i + per])
             _solve_pass(out, an0, *todo, u, t, alone, want_forces, want_acc)
