@@ -102,28 +102,62 @@ def _same_state(r1, r2, rel=1e-12):
         assert np.allclose(x, y, rtol=rel, atol=rel * (1 + np.max(np.abs(y)))), name
 
 
-@pytest.mark.parametrize("block", [None, 3 * 121])
-def test_program_equals_designs_solved_one_by_one(block, monkeypatch):
-    """In one block, and in blocks of 3 designs (the last one shorter)."""
+# frames away from the joints: the crank's off its pivot, the coupler's off A, the
+# rocker's x axis not along O4-B (the general placing and the rates' arms)
+ODD = FOURBAR.replace(
+    "crank: {points: {O2: [0, 0], A: [26.5, 0]}}", "crank: {points: {O2: [5, 2], A: [31.5, 2]}}"
+).replace("A: [0, 0], B: [105.6, 0]", "A: [10, -3], B: [115.6, -3]")
+ODD = ODD.replace(
+    "rocker: {points: {O4: [0, 0], B: [59, 0]}}", "rocker: {points: {O4: [1, 1], B: [37, 48]}}"
+)
+ODD_OPTS = ["links.crank.points.A[0]=25.5, 33.5 mm", "links.rocker.points.B[0]=35, 37, 39 mm"]
+
+
+@pytest.mark.parametrize(
+    "text, opts, acceleration, block",
+    [
+        (
+            FOURBAR,
+            ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 58, 62 mm"],
+            False,
+            None,
+        ),
+        (
+            FOURBAR,
+            ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 58, 62 mm"],
+            False,
+            3 * 121,
+        ),
+        (
+            FOURBAR,
+            ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 58, 62 mm"],
+            True,
+            3 * 121,
+        ),
+        (ODD, ODD_OPTS, True, None),
+        (ODD, ODD_OPTS, False, 3 * 121),
+    ],
+)
+def test_program_equals_designs_solved_one_by_one(text, opts, acceleration, block, monkeypatch):
+    """In one block and in blocks of 3 designs, with and without accelerations, frames on
+    the joints or away from them, at -150 rpm."""
     if block is not None:
         monkeypatch.setattr(batch_program, "BLOCK_COLUMNS", block)
-    study = _study(
-        ["links.crank.points.A[0]=20, 28 mm", "links.rocker.points.B[0]=55, 58, 62 mm"],
-        "2 rad/s",
-    )
+    study = _study(opts, "-150 rpm", text=text)
     mechs = _mechs(study)
-    batch = solve_designs(mechs, forces=False, acceleration=False)
+    batch = solve_designs(mechs, forces=False, acceleration=acceleration)
     assert batch.batched.all() and _programs(batch) == 1
     blocks = batch._passes[0]["program"].blocks
     assert [b.nd for b in blocks] == ([6] if block is None else [3, 3])
     for k, m in enumerate(mechs):
-        one = ms.solve(m, acceleration=False)
+        one = ms.solve(m, acceleration=acceleration)
         got = batch.results(k)
         _same_state(got, one)
         assert np.allclose(got.solution.indicator, one.solution.indicator, rtol=0, atol=1e-13)
         assert np.array_equal(got.solution.ok, one.solution.ok)
         assert got.solution.start.modes == one.solution.start.modes
         assert got.solution.has_velocity == one.solution.has_velocity
+        assert got.solution.has_acceleration == one.solution.has_acceleration == acceleration
         lp1, lp2 = got.limit_positions(), one.limit_positions()
         assert [x.name for x in lp1] == [x.name for x in lp2]
         for x, y in zip(lp1, lp2):
@@ -185,9 +219,9 @@ def test_batches_the_program_does_not_take_take_the_general_path():
     assert batch.batched.all() and _programs(batch) == 0
     for k, m in enumerate(mechs):
         _same_state(batch.results(k), ms.solve(m, acceleration=False))
-    # the four-bar asked for accelerations: the general path
+    # the four-bar with forces: the general path
     four = _mechs(_study(["links.crank.points.A[0]=20, 25 mm"]))
-    assert _programs(solve_designs(four, forces=False, acceleration=True)) == 0
+    assert _programs(solve_designs(four, forces=True)) == 0
     # a mixed batch: the second design's structure differs (another assembly branch), it
     # is solved alone and the others by the program
     other = _study(["links.crank.points.A[0]=22 mm"], text=FOURBAR.replace("left of", "right of"))

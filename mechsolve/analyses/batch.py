@@ -127,7 +127,7 @@ class DesignBatch:
                 start,
                 [],
                 b["has_velocity"],
-                False,
+                b["has_acceleration"],
                 [],
                 {gi: [] for gi in range(len(an.plan))},
             )
@@ -529,7 +529,7 @@ def solve_designs(
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
         X = np.array([rows[k] for k in inside], dtype=float)
-        program = not want_forces and not want_acc and plan_program(an0.plan, an0.system.nb)
+        program = not want_forces and plan_program(an0.plan, an0.system.nb)
         per = max(1, (PROGRAM_COLUMNS if program else CHUNK_COLUMNS) // max(len(u), 1))
         for i in range(0, len(inside), per):
             todo = (inside[i : i + per], X[i : i + per])
@@ -560,11 +560,11 @@ def _solve_alone(out: DesignBatch, alone: dict, step, method, acceleration, forc
             out._separate[k] = exc
 
 
-def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alone) -> None:
+def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alone, acc) -> None:
     """The pass of a plan the narrower program takes (:mod:`mechsolve.analyses.batch_program`):
-    kinematics without accelerations, the same designs kept and the same results."""
+    kinematics without forces, the same designs kept and the same results."""
     nd = len(inside)
-    prog = run_program(a2.plan, a2.system.nb, nd, u, modes, an0.speed, NEAR)
+    prog = run_program(a2.plan, a2.system.nb, nd, u, modes, an0.speed, NEAR, acc)
     risky = risky | prog.risky
     for j, k in enumerate(inside):
         if risky[j]:
@@ -572,7 +572,7 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
     if risky.all():
         return
     pi = len(out._passes)
-    has_vel = bool(an0.mech.outputs.velocity)
+    has_vel = bool(acc or an0.mech.outputs.velocity)
     out._passes.append(
         {
             "modes": modes,
@@ -582,6 +582,7 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
             "program": prog,
             "t": np.asarray(t, float),
             "has_velocity": has_vel,
+            "has_acceleration": bool(acc),
         }
     )
     for j in np.flatnonzero(~risky):  # a design's row in the program is its row here
@@ -603,8 +604,9 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
         cols2 = np.r_[np.arange(nd), np.arange(nd)]
         a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
         modes, reasons, start_state, risky = _assemble(a2, u0, nd)
-        if not want_forces and not has_acc and plan_program(an0.plan, an0.system.nb):
-            _program_pass(out, an0, a2, inside, modes, reasons, start_state, risky, u, t, alone)
+        if not want_forces and plan_program(an0.plan, an0.system.nb):
+            todo = (inside, modes, reasons, start_state, risky, u, t, alone, has_acc)
+            _program_pass(out, an0, a2, *todo)
             return
         # the sweep: one column per position of each design
         ab = _analysis_of(an0, _with_numbers(ref, _Columns(X, per=P)))

@@ -33,6 +33,7 @@ from mechsolve.groups.closed import RRR, DriverLink
 __all__ = ["Program", "Programs", "plan_program", "run_program"]
 
 NAMES = ("x", "y", "th", "c", "s", "vx", "vy", "w")  # what the program writes per body
+ACCELERATIONS = ("ax", "ay", "al")  # and with accelerations
 
 
 def _zero(v) -> bool:
@@ -108,10 +109,11 @@ class Program:
     rows. The design in row ``j`` is written into a state by :meth:`state`; a dyad's
     indicator is kept as its discriminant ``H`` (:meth:`indicator`)."""
 
-    def __init__(self, nb: int, nd: int, P: int) -> None:
+    def __init__(self, nb: int, nd: int, P: int, acceleration: bool = False) -> None:
         self.nb, self.nd, self.P = nb, nd, P
+        self.names = NAMES + ACCELERATIONS if acceleration else NAMES
         self.bodies: dict[int, dict] = {
-            nb: dict.fromkeys(NAMES, 0.0) | {"c": 1.0}  # the ground
+            nb: dict.fromkeys(self.names, 0.0) | {"c": 1.0}  # the ground
         }
         self.indicators: list = []
         self.risky = np.zeros(nd, bool)
@@ -128,6 +130,14 @@ class Program:
         rx, ry = self._rot(b, s)
         return _add(q["x"], rx), _add(q["y"], ry), rx, ry
 
+    def _acceleration(self, b: int, rx, ry):
+        """Acceleration of the point of body ``b`` at the arm ``(rx, ry)``."""
+        q = self.bodies[b]
+        al, w = q["al"], q["w"]
+        w2 = _mul(w, w)
+        ax = _sub(_sub(q["ax"], _mul(al, ry)), _mul(w2, rx))
+        return ax, _sub(_add(q["ay"], _mul(al, rx)), _mul(w2, ry))
+
     def _velocity(self, b: int, rx, ry):
         """Velocity of the point of body ``b`` at the arm ``(rx, ry)`` from its frame."""
         q = self.bodies[b]
@@ -140,7 +150,7 @@ class Program:
         for b, q in self.bodies.items():
             if b == self.nb:
                 continue
-            for name in NAMES:
+            for name in self.names:
                 v = q[name]
                 if isinstance(v, float):
                     if v:
@@ -175,6 +185,9 @@ def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> 
     q["x"], q["y"] = _sub(px, rx), _sub(py, ry)
     # body_velocity_from_point: the pivot is at rest, v = w k x (frame - pivot)
     q["vx"], q["vy"] = _mul(sign, ry), _sub(0.0, _mul(sign, rx))
+    if "al" in prog.names:  # the driver's acceleration is zero per unit of its coordinate
+        q["al"] = 0.0
+        q["ax"], q["ay"] = _mul(1.0, rx), _mul(1.0, ry)  # w^2 (frame - pivot), w^2 = 1
 
 
 def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
@@ -254,13 +267,42 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     w1 *= inv
     w2 = dvx * g1x + dvy * g1y
     w2 *= inv
-    del inv
     _rates(prog, q1, num.pair(g.sP1), vpx, vpy, w1)
     # v_Q = v_P + (v_Q - v_P) as the general dyad writes it: exactly v_Q (0) at rest
     vqx = vqx if _zero(vqx) else _add(vpx, dvx)
     vqy = vqy if _zero(vqy) else _add(vpy, dvy)
     _rates(prog, q2, num.pair(g.sQ2), vqx, vqy, w2)
+    if "al" in prog.names:
+        _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
+    del inv
     _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P)
+
+
+def _accelerations(prog: Program, g: RRR, num: _Numbers, arms, gs, inv) -> None:
+    """``RRR.acceleration``: the angular accelerations by the same projections, per unit
+    driver coordinate, with the velocities' ``1 / (g1 x g2)``."""
+    rpx, rpy, rqx, rqy = arms
+    g1x, g1y, g2x, g2y = gs
+    q1, q2 = prog.bodies[g.b1], prog.bodies[g.b2]
+    apx, apy = prog._acceleration(g.k1, rpx, rpy)
+    aqx, aqy = prog._acceleration(g.k2, rqx, rqy)
+    w1s, w2s = q1["w"] * q1["w"], q2["w"] * q2["w"]
+    dax = _add(_sub(_sub(aqx, apx), w2s * g2x), w1s * g1x)
+    day = _add(_sub(_sub(aqy, apy), w2s * g2y), w1s * g1y)
+    a1 = (dax * g2x + day * g2y) * inv
+    a2 = (dax * g1x + day * g1y) * inv
+    for q, s0, ax, ay, al in ((q1, g.sP1, apx, apy, a1), (q2, g.sQ2, aqx, aqy, a2)):
+        q["al"] = al
+        s0 = num.pair(s0)
+        if _zero(s0[0]) and _zero(s0[1]):
+            q["ax"], q["ay"] = ax, ay
+            continue
+        c, s, w = q["c"], q["s"], q["w"]
+        rx = _sub(_mul(c, s0[0]), _mul(s, s0[1]))
+        ry = _add(_mul(s, s0[0]), _mul(c, s0[1]))
+        w2 = w * w
+        q["ax"] = _add(_add(ax, al * ry), w2 * rx)
+        q["ay"] = _add(_sub(ay, al * rx), w2 * ry)
 
 
 def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
@@ -341,7 +383,14 @@ class Programs:
 
 
 def run_program(
-    plan: list[Group], nb: int, nd: int, u: np.ndarray, modes: np.ndarray, speed: float, near
+    plan: list[Group],
+    nb: int,
+    nd: int,
+    u: np.ndarray,
+    modes: np.ndarray,
+    speed: float,
+    near: float,
+    acceleration: bool = False,
 ) -> Programs:
     """Solve ``nd`` designs over the driver values ``u``, block by block: ``plan`` is the
     start's analysis (its numbers stacked on ``2 nd`` columns, see :class:`_Numbers`),
@@ -353,7 +402,7 @@ def run_program(
     blocks = []
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
-        prog = Program(nb, hi - lo, P)
+        prog = Program(nb, hi - lo, P, acceleration)
         num = _Numbers(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1
@@ -365,5 +414,7 @@ def run_program(
                 if b != nb:
                     for name in ("vx", "vy", "w"):
                         q[name] = _mul(q[name], speed)
+                    for name in ACCELERATIONS if acceleration else ():
+                        q[name] = _mul(q[name], speed * speed)
         blocks.append(prog)
     return Programs(blocks, per)
