@@ -110,6 +110,11 @@ ODD = FOURBAR.replace(
 ODD = ODD.replace(
     "rocker: {points: {O4: [0, 0], B: [59, 0]}}", "rocker: {points: {O4: [1, 1], B: [37, 48]}}"
 )
+# the driver's angle measured along the crank's line O2-A, which is off its x axis
+LINE = FOURBAR.replace(
+    "crank: {points: {O2: [0, 0], A: [26.5, 0]}}", "crank: {points: {O2: [0, 0], A: [3, 26.5]}}"
+).replace("driver: {joint: O2,", "driver: {joint: O2, line: [O2, A],")
+LINE_OPTS = ["links.rocker.points.B[0]=57, 60 mm", "links.coupler.points.B[0]=100, 105, 110 mm"]
 ODD_OPTS = ["links.crank.points.A[0]=25.5, 33.5 mm", "links.rocker.points.B[0]=35, 37, 39 mm"]
 
 
@@ -136,11 +141,13 @@ ODD_OPTS = ["links.crank.points.A[0]=25.5, 33.5 mm", "links.rocker.points.B[0]=3
         ),
         (ODD, ODD_OPTS, True, None),
         (ODD, ODD_OPTS, False, 3 * 121),
+        (LINE, LINE_OPTS, True, 3 * 121),
     ],
 )
 def test_program_equals_designs_solved_one_by_one(text, opts, acceleration, block, monkeypatch):
     """In one block and in blocks of 3 designs, with and without accelerations, frames on
-    the joints or away from them, at -150 rpm."""
+    the joints or away from them, a driver measured along a line off the crank's axis,
+    at -150 rpm."""
     if block is not None:
         monkeypatch.setattr(batch_program, "BLOCK_COLUMNS", block)
     study = _study(opts, "-150 rpm", text=text)
