@@ -24,6 +24,11 @@ at the start:
 
 Designs solved either way give the same :class:`~mechsolve.results.results.Results`
 (:meth:`DesignBatch.results`); the tests compare them with separate solves.
+
+A batch without forces whose plan is a crank on the ground and RRR dyads runs a narrower
+program (:mod:`mechsolve.analyses.batch_program`): the designs' numbers as columns against
+the driver's row, only what a design's results are made of, the same screening decided
+per design. Its states, rates and indicators are those of the general pass.
 """
 
 from __future__ import annotations
