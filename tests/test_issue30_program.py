@@ -20,7 +20,9 @@ from mechsolve.core.sweep import Analysis
 from tests import closed_form as cf
 
 
-def _fourbar(a, b, c, d, n=360, step_deg=1.0, side="left", speed=2.0, masses=False):
+def _fourbar(
+    a, b, c, d, n=360, step_deg=1.0, side="left", speed=2.0, masses=False, o2="ground, crank"
+):
     extra = ""
     if masses:
         extra = "gravity: 9.81 m/s^2\nloads:\n  F: {force: [1 N, -2 N], at: P}\n"
@@ -32,7 +34,7 @@ links:
   crank: {{points: {{O2: [0, 0], A: [{a!r}, 0]}}}}
   coupler: {{points: {{A: [0, 0], B: [{b!r}, 0], P: [0.01, 0.005]}}{m}}}
   rocker: {{points: {{O4: [0, 0], B: [{c!r}, 0]}}}}
-joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+joints: {{O2: [{o2}], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
 assembly: ["B {side} of A -> O4"]
 driver: {{joint: O2, speed: {speed} rad/s, start: 0}}
 sweep: {{range: {step_deg * (n - 1)!r} deg, steps: {n - 1}}}
@@ -91,7 +93,8 @@ def _same(r1, r2) -> None:
     """Every array of the two results equal (bit for bit, NaN where NaN), and the same
     start, events, warnings, failures and limits."""
     s1, s2 = r1.solution, r2.solution
-    assert np.array_equal(s1.state.block, s2.state.block, equal_nan=True)
+    # the same bits (the signs of zeros too)
+    assert np.array_equal(s1.state.block.view(np.int64), s2.state.block.view(np.int64))
     for name in ("u", "t", "ok", "indicator", "iterations", "ud", "udd"):
         assert np.array_equal(getattr(s1, name), getattr(s2, name), equal_nan=True), name
     for name in ("failures", "warnings", "events", "flips", "rates_by_limit"):
@@ -146,6 +149,26 @@ def test_right_branch_and_forces_are_those_of_the_general_path(answered):
     th2 = res.u
     _, th4, _, w4, _, _ = cf.fourbar(0.0265, 0.1056, 0.059, 0.0875, th2, 2.0, -1)
     assert np.max(np.abs(_wrap(res.solution.state.th[2] - th4))) < 1e-11
+    _same(res, general)
+
+
+@pytest.mark.parametrize("speed", [2.0, -1.5])
+@pytest.mark.parametrize("o2", ["ground, crank", "crank, ground"])
+def test_driver_either_way_round(answered, speed, o2):
+    """The driver joint written either way round (the crank's angle is +u or -u of the
+    joint's coordinate) and the crank turning either way: Freudenstein at the crank's
+    angle, and the general path's arrays."""
+    a, b, c, d = 0.0265, 0.1056, 0.059, 0.0875
+    res, general = _both(ms.loads(_fourbar(a, b, c, d, speed=speed, o2=o2)))
+    assert answered and answered[0] is True
+    st = res.solution.state
+    th2 = st.th[0]
+    w2 = st.w[0]
+    assert np.allclose(w2, speed if o2 == "ground, crank" else -speed, rtol=0, atol=1e-15)
+    th3, th4, w3, w4, al3, al4 = cf.fourbar(a, b, c, d, th2, w2[0], 1)
+    assert np.max(np.abs(_wrap(st.th[2] - th4))) < 1e-11
+    assert np.max(np.abs(st.w[2] - w4)) <= 1e-9 * np.max(np.abs(w4))
+    assert np.max(np.abs(st.al[2] - al4)) <= 1e-9 * np.max(np.abs(al4))
     _same(res, general)
 
 

@@ -199,8 +199,7 @@ class Program:
                 _finish_lazy_start(an, start, st, conds)
             except AssemblyError:
                 return None
-        speed = an.speed
-        t = (u - start.u0) / speed if speed else np.zeros_like(u)
+        t = None  # (the times: set by the caller, states(), as for the general sweep)
         ok, fl = np.ones(n, bool), {gi: [] for gi in range(ng)}
         vel, acc = velocity, velocity and acceleration
         it = np.zeros(n, int)
@@ -212,6 +211,7 @@ class Program:
         d = an.mech.driver.direction
         n = len(u)
         unit = None
+        units: dict = {}  # driver links of driver_pass turning at +1 per unit driver angle
         for gi, g in enumerate(an.plan):
             kind = self.kinds[gi]
             if conds is not None:
@@ -219,6 +219,8 @@ class Program:
             if kind == "driver":
                 driver_pass(st, g, u, acceleration)
                 inds[gi] = 1.0
+                if g.drv.b == g.b:  # (its angle is +u)
+                    units[g.b] = 1.0
                 if ctx is not None:
                     ctx.extend_grid(gi)
                 continue
@@ -226,7 +228,7 @@ class Program:
             if g.n_modes != 2:
                 inds[gi] = g.position(st, unit)[1]
             else:
-                fused = RRRPass(st, g) if kind == "rrr" else None
+                fused = RRRPass(st, g, units) if kind == "rrr" else None
                 H, dH = fused.ends() if fused is not None else g.disc(st)
                 if ctx is not None:
                     if any(an._branch_events(gi, g, ctx, np.ones(n, bool))):
@@ -266,7 +268,7 @@ def _quiet(an, gi: int, g, st: State, u, start: StartAssembly, d: float, H, dH) 
     to one that is no event (not below zero, not touching it, not below 3 deg)."""
     if not H.min() >= NEAR2:  # (a NaN fails too)
         return False
-    Hs = dH * d  # H' along the sweep
+    Hs = dH if d == 1 else dH * d  # H' along the sweep (dH * 1 is dH)
     turns = Hs[:-1] < 0
     turns &= Hs[1:] > 0
     inside = np.flatnonzero(turns)

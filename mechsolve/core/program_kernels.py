@@ -61,36 +61,48 @@ def driver_pass(st: State, g: DriverLink, u: np.ndarray, acceleration: bool) -> 
         st.ay[b] = 0.0
 
 
-def _point(st: State, i: int, s: np.ndarray, ox: np.ndarray, oy: np.ndarray):
-    """``st.point(i, s)`` written into ``ox, oy`` (a scalar pair for the ground)."""
+def _arm(st: State, i: int, s: np.ndarray):
+    """``st.rotated(i, s)`` of a moving body's point (None for the frame's origin)."""
+    if s[0] == 0.0 and s[1] == 0.0:
+        return None
+    return st.rotated(i, s)
+
+
+def _point(st: State, i: int, s: np.ndarray, arm, ox: np.ndarray, oy: np.ndarray):
+    """``st.point(i, s)`` written into ``ox, oy`` (a scalar pair for the ground), with
+    ``arm`` the point's :func:`_arm`."""
     if i == st.nb:
         return float(s[0]), float(s[1])
-    if s[1] == 0.0:
-        if s[0] == 0.0:
-            ox[...] = st.x[i]
-            oy[...] = st.y[i]
-        else:
-            np.multiply(st.c[i], s[0], out=ox)
-            ox += st.x[i]
-            np.multiply(st.s[i], s[0], out=oy)
-            oy += st.y[i]
-        return ox, oy
-    rx, ry = st.rotated(i, s)
-    np.add(st.x[i], rx, out=ox)
-    np.add(st.y[i], ry, out=oy)
+    if arm is None:
+        ox[...] = st.x[i]
+        oy[...] = st.y[i]
+    else:
+        np.add(st.x[i], arm[0], out=ox)
+        np.add(st.y[i], arm[1], out=oy)
     return ox, oy
 
 
-def _rate(st: State, i: int, s: np.ndarray, ox: np.ndarray, oy: np.ndarray, acc: bool):
+def _rate(st: State, i: int, s: np.ndarray, arm, ox, oy, acc: bool, unit: float):
     """``st.point_velocity(i, s)`` (``point_acceleration`` with ``acc``) written into
-    ``ox, oy``; the ground's (0, 0) as scalars."""
+    ``ox, oy``; the ground's (0, 0) as scalars. ``unit``: 1.0 where body ``i`` is a driver
+    link of :func:`driver_pass` turning at +1 per unit driver angle (its origin at rest,
+    its angular acceleration 0), whose terms in zeros and ones are exact: v = (0 - ry,
+    rx + 0) and a = (0 - rx, 0 - ry), the same values as the general formulas give."""
     if i == st.nb:
         return 0.0, 0.0
-    if s[0] == 0.0 and s[1] == 0.0:
+    if arm is None:
         ox[...] = (st.ax if acc else st.vx)[i]
         oy[...] = (st.ay if acc else st.vy)[i]
         return ox, oy
-    rx, ry = st.rotated(i, s)
+    rx, ry = arm
+    if unit == 1.0:
+        if acc:  # (0 - al ry) - 1 rx and (0 + al rx) - 1 ry with al = 0: exactly these
+            np.subtract(0.0, rx, out=ox)
+            np.subtract(0.0, ry, out=oy)
+        else:  # 0 - 1 ry and 0 + 1 rx
+            np.subtract(0.0, ry, out=ox)
+            np.add(rx, 0.0, out=oy)
+        return ox, oy
     w = st.w[i]
     if not acc:  # vx - w ry, vy + w rx
         np.multiply(w, ry, out=ox)
@@ -113,8 +125,10 @@ class RRRPass:
     """The dyad's pass over one state: :meth:`ends` (P, Q, the discriminant and its
     rate, before the branch is known), then :meth:`pose` and :meth:`rates`."""
 
-    def __init__(self, st: State, g: RRR) -> None:
+    def __init__(self, st: State, g: RRR, units: dict) -> None:
         self.st, self.g = st, g
+        # the bodies of P and Q where they are driver links turning at +1 (see _rate)
+        self.uP, self.uQ = units.get(g.k1, 0.0), units.get(g.k2, 0.0)
         L1s, L2s = g.L1 * g.L1, g.L2 * g.L2
         self.L1s, self.L2s = L1s, L2s
         ex = g.sM1[0] - g.sP1[0]
@@ -129,8 +143,12 @@ class RRRPass:
         _triangle, disc); returns ``H, H'``."""
         st, g = self.st, self.g
         b1, b2 = g.b1, g.b2
-        px, py = _point(st, g.k1, g.sPk, st.x[b1], st.y[b1])
-        qx, qy = _point(st, g.k2, g.sQk, st.x[b2], st.y[b2])
+        nb = st.nb
+        armP = _arm(st, g.k1, g.sPk) if g.k1 != nb else None
+        armQ = _arm(st, g.k2, g.sQk) if g.k2 != nb else None
+        self.arms = armP, armQ
+        px, py = _point(st, g.k1, g.sPk, armP, st.x[b1], st.y[b1])
+        qx, qy = _point(st, g.k2, g.sQk, armQ, st.x[b2], st.y[b2])
         dx = np.subtract(qx, px)
         dy = np.subtract(qy, py)
         D2 = dx * dx
@@ -150,8 +168,8 @@ class RRRPass:
         H -= t
         H *= 1.0 / (L1s * L2s)
         # the rates of P and Q (into the links' velocity rows), and H'
-        vpx, vpy = _rate(st, g.k1, g.sPk, st.vx[b1], st.vy[b1], False)
-        vqx, vqy = _rate(st, g.k2, g.sQk, st.vx[b2], st.vy[b2], False)
+        vpx, vpy = _rate(st, g.k1, g.sPk, armP, st.vx[b1], st.vy[b1], False, self.uP)
+        vqx, vqy = _rate(st, g.k2, g.sQk, armQ, st.vx[b2], st.vy[b2], False, self.uQ)
         dvx = np.subtract(vqx, vpx)
         dvy = np.subtract(vqy, vpy)
         dD2 = dx * dvx
@@ -228,8 +246,9 @@ class RRRPass:
         np.add(vpx, dvx, out=st.vx[b2])
         np.add(vpy, dvy, out=st.vy[b2])
         if acceleration:
-            apx, apy = _rate(st, g.k1, g.sPk, st.ax[b1], st.ay[b1], True)
-            aqx, aqy = _rate(st, g.k2, g.sQk, st.ax[b2], st.ay[b2], True)
+            armP, armQ = self.arms
+            apx, apy = _rate(st, g.k1, g.sPk, armP, st.ax[b1], st.ay[b1], True, self.uP)
+            aqx, aqy = _rate(st, g.k2, g.sQk, armQ, st.ax[b2], st.ay[b2], True, self.uQ)
             w1s = np.square(w1, out=t)
             w2s = w2**2
             dax = np.subtract(aqx, apx)
