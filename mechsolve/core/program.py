@@ -228,6 +228,14 @@ class Program:
             if g.n_modes != 2:
                 inds[gi] = g.position(st, unit)[1]
             else:
+                # the branch at the start first (it solves the group on a state of its
+                # own), then the discriminant on this one: its position reuses what
+                # that computed (an RRP's guide line)
+                if conds is not None:
+                    try:
+                        an._decide_at_start(gi, g, st, start, conds)
+                    except AssemblyError:
+                        return False  # (the general path says why, or starts later)
                 fused = RRRPass(st, g, units) if kind == "rrr" else None
                 H, dH = fused.ends() if fused is not None else g.disc(st)
                 if ctx is not None:
@@ -235,11 +243,6 @@ class Program:
                         return False  # an event or a warning: the general path's
                 elif not _quiet(an, gi, g, st, u, start, d, H, dH):
                     return False
-                if conds is not None:
-                    try:
-                        an._decide_at_start(gi, g, st, start, conds)
-                    except AssemblyError:
-                        return False  # (the general path says why, or starts later)
                 if fused is not None:
                     if not fused.closes():
                         return False
