@@ -8,28 +8,28 @@ followed, rates at singular positions replaced by their limits, unassemblable ra
 located. Each is a few NumPy calls on short arrays and some Python, some 270 us per call
 in all: more than the closed form's own arithmetic over 3600 positions.
 
-A plan made of the driver link on the ground followed by RRR and RRP dyads, each with
-its branch set by an assembly condition that is its own branch statement ("B left of
-A -> O4"), is the usual four-bar, slider-crank, crane. For such a plan
-:class:`Program` (built once per kept analysis, :mod:`mechsolve.core.kept`) solves a
-sweep from the driver's start straight through:
+A plan made of the driver link on the ground followed by RRR and RRP dyads is the usual
+four-bar, slider-crank, crane. For such a plan :class:`Program` (built once per kept
+analysis, :mod:`mechsolve.core.kept`) solves a sweep from the driver's start at the
+file's constant speed straight through:
 
-* the branch of each dyad comes from its condition, read once per set of conditions;
+* the branch of each dyad comes from its condition when that is the dyad's own branch
+  statement ("B left of A -> O4"), read once per list of conditions; other conditions
+  and sketches are decided by the general start's own code, group by group;
 * each group's position, velocity and acceleration are written into the state with the
-  same operations, in the same order, as the groups' own methods (the results are the
-  same bit for bit: the tests compare every array);
-* the checks are fused into one pass over the dyad's discriminant ``H`` and its rate
-  ``H'``, which the dyad computes anyway: where every sample closes, the smallest ``H``
-  of the samples is above ``sin^2(3 deg)``, the samples are at most the branch
-  analysis's grid step apart, and no interval between two samples holds a minimum whose
-  cubic Hermite estimate is below the branch analysis's threshold, there is no branch
-  event, no singular or near-singular position (the indicator is above 1e-3 everywhere,
-  so no rate is replaced by its limit), no unassemblable range and no warning. That is
-  exactly when the general sweep's checks find nothing;
-* anything else (a position that does not close, a minimum to refine, a sample near a
-  toggle, a start on a singular position, samples further apart than 2 deg, a
-  condition that is not a dyad's own statement, a sketch) returns None, and the caller
-  solves the sweep by the general path, which then reports it as before.
+  same operations, in the same order, as the groups' own methods
+  (:mod:`mechsolve.core.program_kernels` for the driver link and the usual RRR; the
+  others by their methods), so the results are the same bit for bit;
+* the checks read the dyad's discriminant ``H`` and its rate ``H'``, which its pass
+  computes anyway: where the smallest ``H`` of the samples is at least ``sin^2(3 deg)``
+  (so every sample closes, with its indicator above 1e-3: no rate is replaced by its
+  limit) and every minimum between two samples that the branch analysis would refine
+  is refined by the analysis's own bisection to one that is no event, there is no
+  branch event, no unassemblable range and no warning. Samples further apart than the
+  analysis's grid step are analysed by the analysis itself, on its grid;
+* anything else (a position that does not close, a sample near a toggle, an event, a
+  start that cannot close) returns None, and the caller solves the sweep by the general
+  path, which then reports it as before.
 
 So the program changes no result: it is the general path's outcome whenever it answers.
 :data:`ENABLED` turns it off (tests compare the two paths).
