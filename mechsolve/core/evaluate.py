@@ -77,31 +77,17 @@ def states(
     u = np.atleast_1d(np.asarray(u, float))
     n = len(u)
     constant = ud is None and udd is None  # the file's constant speed: one scalar to scale by
-    ud = np.broadcast_to(np.asarray(an.speed if ud is None else ud, float), (n,)).copy()
-    udd = np.broadcast_to(np.asarray(0.0 if udd is None else udd, float), (n,)).copy()
-    d = an.mech.driver.direction
-    u0 = an.start_value()
-    travel = d * (u - u0)
-    tol = 1e-12 * (an.scale if an.linear else 1.0)
-    kw = dict(velocity=velocity or acceleration, acceleration=acceleration, per_unit_driver=True)
-    behind = travel < -tol
-    if within is not None and _inside(an, within, travel, tol):
-        out = an.solve(u, start=within.start, near=(within, 0), **kw)
-    elif n and u[0] == u0 and np.all(np.diff(travel) > 0):
-        out = an.solve_sweep(u, **kw)  # a sweep from the start: solved as it is
-    elif not behind.any():
-        out = _on_one_side(an, u, np.maximum(travel, 0.0), u0, d, kw)
+    if constant:
+        ud, udd = np.full(n, float(an.speed)), np.zeros(n)
     else:
-        # positions behind the start are reached by moving the driver the other way
-        ahead = np.flatnonzero(~behind)
-        back = np.flatnonzero(behind)
-        parts = [_on_one_side(an.reversed(), u[back], -travel[back], u0, -d, kw)]
-        if ahead.size:
-            parts.insert(0, _on_one_side(an, u[ahead], np.maximum(travel[ahead], 0), u0, d, kw))
-        order = np.empty(n, int)
-        order[np.r_[ahead, back]] = np.arange(n)
-        out = _take(_concat(parts), order)
-        out.u = u
+        ud = np.broadcast_to(np.asarray(an.speed if ud is None else ud, float), (n,)).copy()
+        udd = np.broadcast_to(np.asarray(0.0 if udd is None else udd, float), (n,)).copy()
+    u0 = an.start_value()
+    kw = dict(velocity=velocity or acceleration, acceleration=acceleration, per_unit_driver=True)
+    prog = an.program if constant and within is None else None
+    out = prog.sweep(an, u, u0, kw["velocity"], acceleration) if prog is not None else None
+    if out is None:  # (else a recognised plan's sweep from the start: mechsolve.core.program)
+        out = _general(an, u, u0, within, kw)
     token = out.state.token
     rates = (np.float64(an.speed), np.float64(0.0)) if constant else (ud, udd)
     scale_rates(out.state, *rates, acceleration)
@@ -110,6 +96,40 @@ def states(
     out.ud, out.udd = ud, udd
     out.has_velocity, out.has_acceleration = velocity, velocity and acceleration
     out.t = np.asarray(t, float) if t is not None else _time(an, u, u0)
+    return out
+
+
+def _general(an: Analysis, u: np.ndarray, u0: float, within: Solution | None, kw) -> Solution:
+    """The positions ``u`` by the general sweep: on the branches of ``within`` where it
+    covers them, as one sweep from the start, else the distinct values in order of their
+    travel from the start (those behind it by moving the driver the other way)."""
+    n = len(u)
+    d = an.mech.driver.direction
+    travel = d * (u - u0)
+    tol = 1e-12 * (an.scale if an.linear else 1.0)
+    behind = travel < -tol
+    if within is not None and _inside(an, within, travel, tol):
+        return an.solve(u, start=within.start, near=(within, 0), **kw)
+    if n and u[0] == u0 and np.all(np.diff(travel) > 0):
+        return an.solve_sweep(u, **kw)  # a sweep from the start: solved as it is
+    if not behind.any():
+        return _on_one_side(an, u, np.maximum(travel, 0.0), u0, d, kw)
+    return _both_sides(an, u, travel, behind, u0, d, kw)
+
+
+def _both_sides(an: Analysis, u, travel, behind, u0: float, d: int, kw) -> Solution:
+    """Positions ahead of the start and behind it (``behind``), those behind reached by
+    moving the driver the other way, in the order given."""
+    n = len(u)
+    ahead = np.flatnonzero(~behind)
+    back = np.flatnonzero(behind)
+    parts = [_on_one_side(an.reversed(), u[back], -travel[back], u0, -d, kw)]
+    if ahead.size:
+        parts.insert(0, _on_one_side(an, u[ahead], np.maximum(travel[ahead], 0), u0, d, kw))
+    order = np.empty(n, int)
+    order[np.r_[ahead, back]] = np.arange(n)
+    out = _take(_concat(parts), order)
+    out.u = u
     return out
 
 

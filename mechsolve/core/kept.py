@@ -28,6 +28,7 @@ from __future__ import annotations
 import pickle
 import threading
 
+from mechsolve.core.program import program_for
 from mechsolve.core.sweep import Analysis
 from mechsolve.groups.closed import RPR, RRP, RRR, DrivenSlider, DriverLink
 from mechsolve.model import Mechanism
@@ -102,6 +103,7 @@ def analysis_for(mech: Mechanism, method: str | None = None) -> Analysis:
         kept = Analysis(mech, method)
         if not _keepable(kept):
             return kept
+        kept.program = program_for(kept)  # a chain of closed forms: its own sweep
         with _LOCK:
             _KEPT[:] = [e for e in _KEPT if e[0] is not mech][-(KEPT_MAX - 1) :]
             _KEPT.append((mech, key, kept))

@@ -68,6 +68,9 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
         ``"auto"`` (default: the file's ``solver.method``) or ``"newton"``.
     """
 
+    # the sweep of a recognised plan (mechsolve.core.program), set on a kept analysis
+    program = None
+
     def __init__(self, mech: Mechanism, method: str | None = None) -> None:
         if mech.driver is None:
             raise mech.error(("driver",), "the mechanism has no driver: add a 'driver' section")

@@ -546,7 +546,14 @@ class RRP(Group):
         )
 
     def _line(self, st: State):
-        """Line traced by M: a point on it and its unit direction (global)."""
+        """Line traced by M: a point on it and its unit direction (global); cached for
+        the state (the discriminant and the position read the same arrays)."""
+        c = self.cache(st)
+        if "line" not in c:
+            c["line"] = self._line_of(st)
+        return c["line"]
+
+    def _line_of(self, st: State):
         sl, g = self.sl, self.g
         ux, uy = st.rotated(g, sl.u_loc)
         ox, oy = st.point(g, sl.o)
