@@ -94,6 +94,8 @@ class DesignBatch:
     _separate: dict = field(default_factory=dict, repr=False)
     _passes: list = field(default_factory=list, repr=False)
     _where: dict = field(default_factory=dict, repr=False)  # design -> (pass, slot)
+    # forces by default: a design without masses or loads gets none, as alone
+    _auto_forces: bool = field(default=False, repr=False)
 
     def __len__(self) -> int:
         return len(self.mechanisms)
@@ -157,7 +159,9 @@ class DesignBatch:
             {gi: [] for gi in range(len(an.plan))},
         )
         f = b["forces"]
-        return Results(an, sol, None if f is None else _slice_forces(f, sl, j))
+        if f is None or (self._auto_forces and not self.mechanisms[k].needs_forces):
+            return Results(an, sol, None)
+        return Results(an, sol, _slice_forces(f, sl, j))
 
 
 def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
@@ -265,13 +269,28 @@ def _stackable(mechs: list[Mechanism], alone: dict[int, str]) -> dict[int, list[
     ``alone``, with the reason."""
     ref_structure, nums = _split(mechs[0])
     rows = {0: nums}
+    ref_line = _driver_line(mechs[0])
     for k in range(1, len(mechs)):
         structure, nums = _split(mechs[k])
-        if structure == ref_structure:
-            rows[k] = nums
-        else:
+        if structure != ref_structure:
             alone[k] = "its structure differs from the first design's"
+        elif _driver_line(mechs[k]) != ref_line:
+            # the driver's angle is measured from a line whose direction is one number of
+            # the constraint system, not a stacked column
+            alone[k] = "the line its driver's angle is measured from differs from the first's"
+        else:
+            rows[k] = nums
     return rows
+
+
+def _driver_line(m: Mechanism) -> tuple[float, ...] | None:
+    """The local coordinates of the two points the driver's angle is measured from, or
+    None when it is measured from the link's own x axis."""
+    d = m.driver
+    if d.line is None or m.joint(d.joint).coordinate == "length":
+        return None
+    b = m.joint(d.joint).b
+    return tuple(float(v) for p in d.line for v in m.local_point(b, p))
 
 
 class _Columns:
@@ -488,7 +507,8 @@ def solve_designs(
     step, method
         As for :func:`mechsolve.solve` (the same for every design).
     forces
-        Run the force analysis (default: when the first design has masses or loads).
+        Run the force analysis (default: for the designs that have masses or loads, as
+        ``mechsolve.solve`` decides for each).
     acceleration
         Compute the accelerations (default: as the first design's outputs ask). The
         force analysis needs them: with forces they are always computed. A caller that
@@ -509,11 +529,13 @@ def solve_designs(
         if not m.__dict__.get("_validated"):
             m.validate()
     nd = len(mechs)
-    out = DesignBatch(mechs, np.zeros(0), np.zeros(nd, bool))
+    out = DesignBatch(mechs, np.zeros(0), np.zeros(nd, bool), _auto_forces=forces is None)
     if not nd:
         return out
     ref = mechs[0]
-    want_forces = ref.needs_forces if forces is None else forces
+    # by default, forces where any design needs them; results(k) gives them to the designs
+    # that do, as mechsolve.solve would
+    want_forces = any(m.needs_forces for m in mechs) if forces is None else forces
     want_acc = bool(
         want_forces or (ref.outputs.acceleration if acceleration is None else acceleration)
     )
@@ -541,7 +563,7 @@ def solve_designs(
             _solve_pass(out, an0, *todo, u, t, alone, want_forces, want_acc)
         for k in alone:
             out._where.pop(k, None)
-    _solve_alone(out, alone, step, method, None if want_forces else acceleration, want_forces)
+    _solve_alone(out, alone, step, method, None if want_forces else acceleration, forces)
     if out.u.size == 0 and out._separate:
         first = next(iter(out._separate.values()))
         if not isinstance(first, BaseException):
