@@ -239,6 +239,12 @@ class Program:
                 fused = RRRPass(st, g, units) if kind == "rrr" else None
                 H, dH = fused.ends() if fused is not None else g.disc(st)
                 if ctx is not None:
+                    # a sample near a singular position (the sweep's first and last too,
+                    # which the events between samples do not look at): its rates are
+                    # the limit along the motion, or undetermined, as the general path
+                    # finds them
+                    if not H.min() >= NEAR2:  # (a NaN fails too)
+                        return False
                     if any(an._branch_events(gi, g, ctx, np.ones(n, bool))):
                         return False  # an event or a warning: the general path's
                 elif not _quiet(an, gi, g, st, u, start, d, H, dH):
