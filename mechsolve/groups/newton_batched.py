@@ -9,6 +9,7 @@ import numpy as np
 
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
+from mechsolve.groups.compiled import kernels
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
 from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
@@ -41,7 +42,8 @@ class BatchedSweep:
         # the coarse pass counts its own positions; prefix() wants the sweep's sample
         sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
         if self.red is not None and self.red.sub.nb <= FLOATS_UP_TO:
-            itc = self._coarse_floats(sub, dsub, q_start, sub_prefix)
+            coarse_pass = self._coarse_compiled if self.compiled else self._coarse_floats
+            itc = coarse_pass(sub, dsub, q_start, sub_prefix)
             if itc is None:
                 return None
         else:
@@ -160,6 +162,91 @@ class BatchedSweep:
                 hu, hq = hu + [ui], hq + [q]
         self._set_q_rows(st, np.array(out))
         return iters
+
+    def _coarse_compiled(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """:meth:`_coarse_floats` with its plain steps in the compiled kernel
+        (:func:`~mechsolve.groups.kernels.coarse_run`: the same predictions, Newton
+        iterations, poses and jump check, in the same arithmetic); any other step goes
+        through :meth:`_advance` (:meth:`_solve_one` at the start) in Python, with the
+        same history, as there. Returns the iterations per position, or None."""
+        kern = kernels(self.compiled)
+        red = self.red
+        Kall = red.known(st)
+        u = np.ascontiguousarray(drive.u, float)
+        Kr, thp = red.reduce(red.with_driver(Kall[0], u))
+        Kr, thp = np.ascontiguousarray(Kr), np.ascontiguousarray(thp)
+        Px, Py = np.ascontiguousarray(Kall[1]), np.ascontiguousarray(Kall[2])
+        plan = self._kernel_plan()
+        n, nq = st.n, self.n
+        q0 = np.array([float(v) for v in q_start])
+        hu, hq, nh = np.zeros(3), np.zeros((3, nq)), 0
+        out = np.empty((n, nq))
+        iters = np.zeros(n, np.int64)
+        i = 0
+        while True:
+            i, nh = kern.coarse_run(i, u, Kr, thp, Px, Py, q0, hu, hq, nh, out, iters, *plan)
+            if i >= n:
+                break
+            # the general step, as _coarse_floats (and sweep_sequential) take it
+            Ki = [k[i : i + 1] for k in Kall]
+            if nh:
+                hul, hqa = hu[:nh].tolist(), [hq[j].copy() for j in range(nh)]
+                qa, stats, good = self._advance(None, float(u[i]), hul, hqa, i - 1, prefix, Ki)
+            else:
+                qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+                good = stats.converged
+            if not good:
+                return None
+            out[i] = qa
+            iters[i] = stats.iterations
+            if nh == 3:
+                hu[:2], hq[:2] = hu[1:].copy(), hq[1:].copy()
+                hu[2], hq[2] = u[i], out[i]
+            else:
+                hu[nh], hq[nh] = u[i], out[i]
+                nh += 1
+            i += 1
+        self._set_q_rows(st, out)
+        return iters.astype(int)
+
+    def _kernel_plan(self) -> tuple:
+        """The group's constants as :func:`~mechsolve.groups.kernels.coarse_run` takes
+        them (after the history): free and fixed angles, the free angles' equations
+        (``M1``, ``M2``, ``M3``, their nonzero entries), the tree's local vectors by link
+        (CSR: ``wptr``, ``wk``, ``wa``, ``wb``), the jump's weights, the tolerance and
+        the iterations' limit."""
+        red = self.red
+        sub = red.sub
+        key = (self.scale, self.atol, self.max_iterations)
+        got = getattr(self, "_kplan_c", None)
+        if got is not None and got[0] == key:
+            return got[1]
+        wptr, wk, wa, wb = [0], [], [], []
+        for terms in red._wterms:
+            for k, a, b in terms:
+                wk.append(k)
+                wa.append(a)
+                wb.append(b)
+            wptr.append(len(wk))
+        jw = np.full(self.n, 1.0 / self.scale)
+        jw[2::3] = 1.0
+        plan = (
+            np.asarray(red.free, np.int64),
+            np.asarray(red.fixed, np.int64),
+            np.ascontiguousarray(sub.M1, float),
+            np.ascontiguousarray(sub.M2, float),
+            np.ascontiguousarray(sub.M3, float),
+            np.ascontiguousarray(sub.nzm, np.bool_),
+            np.array(wptr, np.int64),
+            np.array(wk, np.int64),
+            np.array(wa, float),
+            np.array(wb, float),
+            jw,
+            float(self.atol),
+            int(self.max_iterations),
+        )
+        self._kplan_c = (key, plan)
+        return plan
 
     def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
         """A prediction of the next position from the pose ``q0`` (body coordinates) of

@@ -1,0 +1,375 @@
+"""The Newton groups' compiled kernels (numba): the coarse continuation's plain steps of a
+small revolute group, the same arithmetic in the same order as the Python floats of
+:meth:`~mechsolve.groups.reduced._Eqs.newton_list`,
+:meth:`~mechsolve.groups.reduced._Angles.poses_one` and
+:meth:`~mechsolve.groups.newton_batched.BatchedSweep._coarse_floats` (bit for bit on one
+machine: the same IEEE operations, no reassociation, the same libm ``cos`` and ``sin``).
+
+This module imports numba: only :func:`mechsolve.groups.compiled.kernels` imports it,
+when the compiled path is asked for (see :mod:`mechsolve.groups.compiled`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+MAX_JUMP = 0.05  # as mechsolve.groups.newton_common.MAX_JUMP (checked there by a test)
+
+
+@njit(cache=True)
+def _pymax_abs(v: np.ndarray) -> float:
+    """``max(abs(x) for x in v)`` as Python computes it: a later item replaces the
+    largest so far only if it compares greater (a NaN first stays; a NaN later is
+    skipped)."""
+    m = abs(v[0])
+    for j in range(1, v.shape[0]):
+        a = abs(v[j])
+        if a > m:
+            m = a
+    return m
+
+
+@njit(cache=True)
+def _solve_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
+    """:func:`~mechsolve.groups.reduced._solve_small` into ``dx``; False where ``J`` is
+    exactly singular."""
+    n = f.shape[0]
+    if n == 1:
+        if J[0, 0] == 0:
+            return False
+        dx[0] = -f[0] / J[0, 0]
+        return True
+    if n == 2:
+        a, b, c, d = J[0, 0], J[0, 1], J[1, 0], J[1, 1]
+        det = a * d - b * c
+        if det == 0:
+            return False
+        dx[0] = -(d * f[0] - b * f[1]) / det
+        dx[1] = -(a * f[1] - c * f[0]) / det
+        return True
+    if n == 3:
+        a, b, c = J[0, 0], J[0, 1], J[0, 2]
+        d, e, g = J[1, 0], J[1, 1], J[1, 2]
+        h, i, k = J[2, 0], J[2, 1], J[2, 2]
+        A, B, C = e * k - g * i, g * h - d * k, d * i - e * h
+        det = a * A + b * B + c * C
+        if det == 0:
+            return False
+        D, E, G = c * i - b * k, a * k - c * h, b * h - a * i
+        H, II, L = b * g - c * e, c * d - a * g, a * e - b * d
+        f0, f1, f2 = f[0], f[1], f[2]
+        dx[0] = -(A * f0 + D * f1 + H * f2) / det
+        dx[1] = -(B * f0 + E * f1 + II * f2) / det
+        dx[2] = -(C * f0 + G * f1 + L * f2) / det
+        return True
+    if n == 4:
+        return _solve4(J, f, dx)
+    return _gauss_small(J, f, dx)
+
+
+@njit(cache=True)
+def _solve4(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
+    """:func:`~mechsolve.groups.reduced._solve4`: the adjugate from the 2 x 2 minors."""
+    a00, a01, a02, a03 = J[0, 0], J[0, 1], J[0, 2], J[0, 3]
+    a10, a11, a12, a13 = J[1, 0], J[1, 1], J[1, 2], J[1, 3]
+    a20, a21, a22, a23 = J[2, 0], J[2, 1], J[2, 2], J[2, 3]
+    a30, a31, a32, a33 = J[3, 0], J[3, 1], J[3, 2], J[3, 3]
+    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
+    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
+    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
+    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    if det == 0:
+        return False
+    f0, f1, f2, f3 = f[0], f[1], f[2], f[3]
+    r = -1.0 / det
+    dx[0] = r * (
+        (a11 * c5 - a12 * c4 + a13 * c3) * f0
+        + (-a01 * c5 + a02 * c4 - a03 * c3) * f1
+        + (a31 * s5 - a32 * s4 + a33 * s3) * f2
+        + (-a21 * s5 + a22 * s4 - a23 * s3) * f3
+    )
+    dx[1] = r * (
+        (-a10 * c5 + a12 * c2 - a13 * c1) * f0
+        + (a00 * c5 - a02 * c2 + a03 * c1) * f1
+        + (-a30 * s5 + a32 * s2 - a33 * s1) * f2
+        + (a20 * s5 - a22 * s2 + a23 * s1) * f3
+    )
+    dx[2] = r * (
+        (a10 * c4 - a11 * c2 + a13 * c0) * f0
+        + (-a00 * c4 + a01 * c2 - a03 * c0) * f1
+        + (a30 * s4 - a31 * s2 + a33 * s0) * f2
+        + (-a20 * s4 + a21 * s2 - a23 * s0) * f3
+    )
+    dx[3] = r * (
+        (-a10 * c3 + a11 * c1 - a12 * c0) * f0
+        + (a00 * c3 - a01 * c1 + a02 * c0) * f1
+        + (-a30 * s3 + a31 * s1 - a32 * s0) * f2
+        + (a20 * s3 - a21 * s1 + a22 * s0) * f3
+    )
+    return True
+
+
+@njit(cache=True)
+def _gauss_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
+    """:func:`~mechsolve.groups.reduced._gauss_small`: partial pivoting, then back
+    substitution."""
+    n = f.shape[0]
+    A = np.empty((n, n + 1))
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = J[i, j]
+        A[i, n] = -f[i]
+    for j in range(n):
+        p, big = j, abs(A[j, j])
+        for i in range(j + 1, n):
+            v = abs(A[i, j])
+            if v > big:
+                p, big = i, v
+        if big == 0:
+            return False
+        piv = A[p, j]
+        if p != j:
+            for c in range(n + 1):
+                A[j, c], A[p, c] = A[p, c], A[j, c]
+        for i in range(j + 1, n):
+            m = A[i, j] / piv
+            if m != 0:
+                for c in range(j + 1, n + 1):
+                    A[i, c] -= m * A[j, c]
+    for j in range(n - 1, -1, -1):
+        acc = A[j, n]
+        for c in range(j + 1, n):
+            acc -= A[j, c] * dx[c]
+        dx[j] = acc / A[j, j]
+    return True
+
+
+@njit(cache=True)
+def newton(K, x, M1, M2, M3, nz, atol, max_iterations, predict):
+    """:meth:`~mechsolve.groups.reduced._Eqs.newton_list` on ``x`` in place: returns
+    ``(converged, iterations)``."""
+    nb = x.shape[0]
+    xtol = 1e-3 * atol
+    inf = math.inf
+    last = r = r_prev = inf
+    if nb == 2:  # _newton_list2, unrolled as there
+        a1, a2, a3 = M1[0, 0], M2[0, 0], M3[0, 0]
+        b1, b2, b3 = M1[0, 1], M2[0, 1], M3[0, 1]
+        c1, c2, c3 = M1[1, 0], M2[1, 0], M3[1, 0]
+        d1, d2, d3 = M1[1, 1], M2[1, 1], M3[1, 1]
+        k0, k1 = K[0], K[1]
+        x0, x1 = x[0], x[1]
+        for it in range(max_iterations + 1):
+            C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
+            f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
+            f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
+            r = abs(f0)
+            if abs(f1) > r:
+                r = abs(f1)
+            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):
+                break
+            r_prev = r
+            if r <= atol and (last <= xtol or r == 0.0):
+                x[0], x[1] = x0, x1
+                return True, it
+            if it == max_iterations:
+                break
+            ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+            jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+            det = ja * jd - jb * jc
+            if det == 0:
+                break
+            dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
+            step = abs(dx0)
+            if abs(dx1) > step:
+                step = abs(dx1)
+            if not step <= 1e300:
+                break
+            if r <= atol and step >= last:
+                x[0], x[1] = x0, x1
+                return True, it
+            x0, x1 = x0 + dx0, x1 + dx1
+            if predict and step <= 0.5 * last and 0.5 * last < inf:
+                if 2 * step * step <= xtol * last:
+                    x[0], x[1] = x0, x1
+                    return True, it + 1
+            last = step
+        x[0], x[1] = x0, x1
+        return r <= atol, max_iterations
+    c = np.empty(nb)
+    s = np.empty(nb)
+    f = np.empty(nb)
+    J = np.empty((nb, nb))
+    dx = np.empty(nb)
+    for it in range(max_iterations + 1):
+        for k in range(nb):
+            c[k] = math.cos(x[k])
+            s[k] = math.sin(x[k])
+        for e in range(nb):
+            fe = K[e]
+            for k in range(nb):
+                if nz[e, k]:  # the nonzero terms only, as _Eqs._terms
+                    ck, sk = c[k], s[k]
+                    m1, m2, m3 = M1[e, k], M2[e, k], M3[e, k]
+                    fe += m1 * ck + m2 * sk + m3 * x[k]
+                    J[e, k] = m2 * ck - m1 * sk + m3
+                else:
+                    J[e, k] = 0.0
+            f[e] = fe
+        r = _pymax_abs(f)
+        if not r <= 1e300 or (it > 3 and r > 2 * r_prev):
+            break
+        r_prev = r
+        if r <= atol and (last <= xtol or r == 0.0):
+            return True, it
+        if it == max_iterations:
+            break
+        if not _solve_small(J, f, dx):
+            break
+        step = _pymax_abs(dx)
+        if not step <= 1e300:
+            break
+        if r <= atol and step >= last:
+            return True, it
+        for k in range(nb):
+            x[k] = x[k] + dx[k]
+        if predict and step <= 0.5 * last and 0.5 * last < inf:
+            if 2 * step * step <= xtol * last:
+                return True, it + 1
+        last = step
+    return r <= atol, max_iterations
+
+
+@njit(cache=True)
+def poses(th, Px, Py, wptr, wk, wa, wb, q):
+    """:meth:`~mechsolve.groups.reduced._Angles.poses_one` into ``q`` (x, y, angle of
+    each link in turn)."""
+    nb = th.shape[0]
+    c = np.empty(nb)
+    s = np.empty(nb)
+    for k in range(nb):
+        c[k] = math.cos(th[k])
+        s[k] = math.sin(th[k])
+    for b in range(nb):
+        px, py = Px[b], Py[b]
+        for t in range(wptr[b], wptr[b + 1]):
+            k, a, bb = wk[t], wa[t], wb[t]
+            ck, sk = c[k], s[k]
+            px += ck * a - sk * bb
+            py += sk * a + ck * bb
+        q[3 * b] = px
+        q[3 * b + 1] = py
+        q[3 * b + 2] = th[b]
+
+
+@njit(cache=True)
+def _extrapolate(hu, hq, nh, u, out):
+    """:func:`~mechsolve.groups.newton_common._extrapolate_floats` from the ``nh`` rows
+    of the history into ``out``."""
+    n = out.shape[0]
+    if nh == 1:
+        for j in range(n):
+            out[j] = hq[0, j]
+        return
+    w = np.empty(nh)
+    for i in range(nh):
+        wi = 1.0
+        for j in range(nh):
+            if j != i:
+                den = hu[i] - hu[j]
+                if den == 0:
+                    for m in range(n):
+                        out[m] = hq[nh - 1, m]
+                    return
+                wi *= (u - hu[j]) / den
+        w[i] = wi
+    if nh == 2:
+        for j in range(n):
+            out[j] = w[0] * hq[0, j] + w[1] * hq[1, j]
+    else:
+        for j in range(n):
+            out[j] = w[0] * hq[0, j] + w[1] * hq[1, j] + w[2] * hq[2, j]
+
+
+@njit(cache=True)
+def coarse_run(
+    i0, u, Kr, thp, Px, Py, q_start, hu, hq, nh,
+    out, iters, free, fixed, M1, M2, M3, nz, wptr, wk, wa, wb, jw, atol, max_iterations,
+):  # fmt: skip
+    """The coarse continuation's plain steps from position ``i0``, as
+    :meth:`~mechsolve.groups.newton_batched.BatchedSweep._coarse_floats` takes them:
+    each position predicted (from the start's pose, along the tangent after one
+    position, else by Lagrange extrapolation of the history ``hu``, ``hq``: its ``nh``
+    rows, updated in place), solved by Newton in the free angles, posed, and checked
+    against :data:`MAX_JUMP`; poses into ``out``, iterations into ``iters``. Returns
+    ``(i, nh)``: the first position whose step is not plain (the caller takes it by the
+    general step, then calls again from ``i + 1``), or the number of positions."""
+    n = u.shape[0]
+    nq = out.shape[1]
+    nb = Px.shape[1]
+    nf = free.shape[0]
+    q_pred = np.empty(nq)
+    q = np.empty(nq)
+    th = np.empty(nb)
+    x = np.empty(nf)
+    for i in range(i0, n):
+        ui = u[i]
+        if nh == 0:
+            for j in range(nq):
+                q_pred[j] = q_start[j]
+        elif nh == 1:  # the tangent step (_tangent_floats)
+            for j in range(nf):
+                x[j] = hq[0, 3 * free[j] + 2]
+            newton(Kr[i], x, M1, M2, M3, nz, atol, 1, False)
+            for k in range(nb):
+                th[k] = hq[0, 3 * k + 2]
+            for j in range(nf):
+                th[free[j]] = x[j]
+            for j in range(fixed.shape[0]):
+                th[fixed[j]] = thp[i, j]
+            finite = True
+            for k in range(nb):
+                if not math.isfinite(th[k]):
+                    finite = False
+            if finite:
+                poses(th, Px[i], Py[i], wptr, wk, wa, wb, q_pred)
+            else:
+                for j in range(nq):
+                    q_pred[j] = hq[0, j]
+        else:
+            _extrapolate(hu, hq, nh, ui, q_pred)
+        for j in range(nf):
+            x[j] = q_pred[3 * free[j] + 2]
+        plain, it = newton(Kr[i], x, M1, M2, M3, nz, atol, max_iterations, True)
+        if not plain:
+            return i, nh
+        for j in range(nf):
+            th[free[j]] = x[j]
+        for j in range(fixed.shape[0]):
+            th[fixed[j]] = thp[i, j]
+        poses(th, Px[i], Py[i], wptr, wk, wa, wb, q)
+        if nh:
+            jump = abs(q[0] - q_pred[0]) * jw[0]
+            for j in range(1, nq):
+                d = abs(q[j] - q_pred[j]) * jw[j]
+                if d > jump:
+                    jump = d
+            if not jump <= MAX_JUMP:
+                return i, nh
+        for j in range(nq):
+            out[i, j] = q[j]
+        iters[i] = it
+        if nh == 3:
+            hu[0], hu[1], hu[2] = hu[1], hu[2], ui
+            for j in range(nq):
+                hq[0, j], hq[1, j], hq[2, j] = hq[1, j], hq[2, j], q[j]
+        else:
+            hu[nh] = ui
+            for j in range(nq):
+                hq[nh, j] = q[j]
+            nh += 1
+    return n, nh
