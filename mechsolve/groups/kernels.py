@@ -19,7 +19,7 @@ from numba import njit
 MAX_JUMP = 0.05  # as mechsolve.groups.newton_common.MAX_JUMP (checked there by a test)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pymax_abs(v: np.ndarray) -> float:
     """``max(abs(x) for x in v)`` as Python computes it: a later item replaces the
     largest so far only if it compares greater (a NaN first stays; a NaN later is
@@ -32,7 +32,7 @@ def _pymax_abs(v: np.ndarray) -> float:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _solve_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     """:func:`~mechsolve.groups.reduced._solve_small` into ``dx``; False where ``J`` is
     exactly singular."""
@@ -70,7 +70,7 @@ def _solve_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     return _gauss_small(J, f, dx)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _solve4(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     """:func:`~mechsolve.groups.reduced._solve4`: the adjugate from the 2 x 2 minors."""
     a00, a01, a02, a03 = J[0, 0], J[0, 1], J[0, 2], J[0, 3]
@@ -113,7 +113,7 @@ def _solve4(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _gauss_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     """:func:`~mechsolve.groups.reduced._gauss_small`: partial pivoting, then back
     substitution."""
@@ -148,7 +148,7 @@ def _gauss_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def newton(K, x, M1, M2, M3, nz, atol, max_iterations, predict):
     """:meth:`~mechsolve.groups.reduced._Eqs.newton_list` on ``x`` in place: returns
     ``(converged, iterations)``."""
@@ -244,7 +244,7 @@ def newton(K, x, M1, M2, M3, nz, atol, max_iterations, predict):
     return r <= atol, max_iterations
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def poses(th, Px, Py, wptr, wk, wa, wb, q):
     """:meth:`~mechsolve.groups.reduced._Angles.poses_one` into ``q`` (x, y, angle of
     each link in turn)."""
@@ -266,7 +266,7 @@ def poses(th, Px, Py, wptr, wk, wa, wb, q):
         q[3 * b + 2] = th[b]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _extrapolate(hu, hq, nh, u, out):
     """:func:`~mechsolve.groups.newton_common._extrapolate_floats` from the ``nh`` rows
     of the history into ``out``."""
@@ -295,7 +295,7 @@ def _extrapolate(hu, hq, nh, u, out):
             out[j] = w[0] * hq[0, j] + w[1] * hq[1, j] + w[2] * hq[2, j]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def coarse_run(
     i0, u, Kr, thp, Px, Py, q_start, hu, hq, nh,
     out, iters, free, fixed, M1, M2, M3, nz, wptr, wk, wa, wb, jw, atol, max_iterations,
@@ -373,3 +373,141 @@ def coarse_run(
                 hq[nh, j] = q[j]
             nh += 1
     return n, nh
+
+
+@njit(cache=True, error_model="numpy")
+def _rotate1(C, S, p, D, th):
+    """:func:`~mechsolve.groups.newton_batched._rotate` at position ``p``."""
+    d2 = D * D
+    cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
+    sd = D * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
+    Cp, Sp = C[p], S[p]
+    c = Cp * cd
+    c -= Sp * sd
+    s = Sp * cd
+    s += Cp * sd
+    if not abs(D) < 1e-3:
+        c, s = math.cos(th), math.sin(th)
+    C[p], S[p] = c, s
+
+
+@njit(cache=True, error_model="numpy")
+def _nanmax2(a, b):
+    """``np.maximum(a, b)`` of two floats: NaN if either is."""
+    if a != a or b != b:
+        return math.nan
+    return a if a >= b else b
+
+
+@njit(cache=True, error_model="numpy")
+def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C1, S1):
+    """:meth:`~mechsolve.groups.newton_batched.BatchedSweep._refine2` in one loop per
+    iteration over the positions: the same residual, step (by the adjugate), tests and
+    updates, position by position in the same order of operations as the NumPy
+    path's elementwise arithmetic (whole arrays while at least half the positions
+    iterate, as there: the cosines and sines then kept and turned with every step).
+    ``co``: the loop's coefficients ``a1, a2, a3, b1, b2, b3, c1, c2, c3, d1, d2, d3``.
+    Updates the angles, ``todo`` and ``iters`` in place and the cosines and sines
+    ``C0, S0, C1, S1`` (the state's). Returns whether every position converged."""
+    a1, a2, a3, b1, b2, b3 = co[0], co[1], co[2], co[3], co[4], co[5]
+    c1, c2, c3, d1, d2, d3 = co[6], co[7], co[8], co[9], co[10], co[11]
+    n = x0.shape[0]
+    last = np.full(n, math.inf)
+    tol = 1e-3 * atol
+    have_cs = False
+    for it_k in range(max_iterations):
+        count = 0
+        for p in range(n):
+            if todo[p]:
+                count += 1
+        if count == 0:
+            break
+        whole = 2 * count >= n
+        if whole and not have_cs:
+            for p in range(n):
+                C0[p], S0[p] = math.cos(x0[p]), math.sin(x0[p])
+                C1[p], S1[p] = math.cos(x1[p]), math.sin(x1[p])
+            have_cs = True
+        for p in range(n):
+            tp = todo[p]
+            if not (whole or tp):
+                continue
+            t0, t1 = x0[p], x1[p]
+            if have_cs:
+                cc0, ss0, cc1, ss1 = C0[p], S0[p], C1[p], S1[p]
+            else:
+                cc0, ss0, cc1, ss1 = math.cos(t0), math.sin(t0), math.cos(t1), math.sin(t1)
+            # _newton_step2
+            f0 = K0[p] + a1 * cc0
+            f0 += a2 * ss0
+            f0 += b1 * cc1
+            f0 += b2 * ss1
+            f1 = K1[p] + c1 * cc0
+            f1 += c2 * ss0
+            f1 += d1 * cc1
+            f1 += d2 * ss1
+            ja = a2 * cc0
+            ja -= a1 * ss0
+            jb = b2 * cc1
+            jb -= b1 * ss1
+            jc = c2 * cc0
+            jc -= c1 * ss0
+            jd = d2 * cc1
+            jd -= d1 * ss1
+            if nd:
+                f0 += a3 * t0
+                f0 += b3 * t1
+                f1 += c3 * t0
+                f1 += d3 * t1
+                ja += a3
+                jb += b3
+                jc += c3
+                jd += d3
+            r = _nanmax2(abs(f0), abs(f1))
+            det = ja * jd
+            det -= jb * jc
+            dq0 = jb * f1
+            dq0 -= jd * f0
+            dq1 = jc * f0
+            dq1 -= ja * f1
+            dq0 /= det  # (IEEE: inf or NaN where det is 0, as NumPy gives them)
+            dq1 /= det
+            step = _nanmax2(abs(dq0), abs(dq1)) if det != 0 else math.nan
+            lastk = last[p]
+            small = step <= tol
+            pred = it_k > 0 and 2.0 * step * step <= tol * lastk and step <= 0.5 * lastk
+            done = (r <= atol and (small or step >= lastk)) or pred
+            take = (not done) or small or pred
+            if whole:
+                take = take and tp
+                D0 = dq0 if take else 0.0
+                D1 = dq1 if take else 0.0
+                x0[p] += D0
+                x1[p] += D1
+                if tp:
+                    iters[p] += 1
+                    last[p] = step
+                    if done:
+                        todo[p] = False
+                _rotate1(C0, S0, p, D0, x0[p])
+                _rotate1(C1, S1, p, D1, x1[p])
+            else:
+                iters[p] += 1
+                last[p] = step
+                if done:
+                    todo[p] = False
+                if take:
+                    x0[p] += dq0
+                    x1[p] += dq1
+                    if have_cs:
+                        _rotate1(C0, S0, p, dq0, x0[p])
+                        _rotate1(C1, S1, p, dq1, x1[p])
+    ok = True
+    for p in range(n):
+        if todo[p] or not (math.isfinite(x0[p]) and math.isfinite(x1[p])):
+            ok = False
+    if ok and not have_cs:
+        for p in range(n):
+            C0[p], S0[p] = math.cos(x0[p]), math.sin(x0[p])
+            C1[p], S1[p] = math.cos(x1[p]), math.sin(x1[p])
+    return ok

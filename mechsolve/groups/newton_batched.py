@@ -284,7 +284,8 @@ class BatchedSweep:
         if sub.nb == 0:
             todo[:] = False
         if sub.nb == 2:
-            cs = self._refine2(th, Kr, iters, todo)
+            refine2 = self._refine2_compiled if self.compiled else self._refine2
+            cs = refine2(th, Kr, iters, todo)
             if cs is None:
                 return None
             self._put_angles(st, red.join(th, thp), Px, Py, cs)
@@ -412,6 +413,28 @@ class BatchedSweep:
         if cs is None:  # (no iteration on whole arrays)
             cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
         return [cs[0], cs[2]], [cs[1], cs[3]]
+
+    def _refine2_compiled(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
+        """:meth:`_refine2` in the compiled kernel (:func:`~mechsolve.groups.kernels.
+        refine2`: the same steps, tests and updates, position by position); the same
+        arguments and result."""
+        kern = kernels(self.compiled)
+        n = th.shape[0]
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red.sub._rows
+        co = np.array([a1, a2, a3, b1, b2, b3, c1, c2, c3, d1, d2, d3], float)
+        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
+        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        it = np.zeros(n, np.int64)
+        C0, S0, C1, S1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        ok = kern.refine2(
+            x0, x1, K0, K1, todo, it, co, bool(self.red.sub.nd), float(self.atol),
+            int(self.max_iterations), C0, S0, C1, S1,
+        )  # fmt: skip
+        iters += it
+        th[:, 0], th[:, 1] = x0, x1
+        if not ok:
+            return None
+        return [C0, C1], [S0, S1]
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,
