@@ -11,6 +11,7 @@ call compiles the kernels (numba caches them on disk for later processes).
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
 from types import ModuleType
@@ -54,7 +55,7 @@ def kernels(asked_by: str = ENV) -> ModuleType:
     global _kernels
     if _kernels is None:
         try:
-            from mechsolve.groups import kernels as k
+            k = importlib.import_module("mechsolve.groups.kernels")
         except ImportError as exc:
             raise CompiledUnavailable(
                 f"{asked_by} asks for the compiled Newton sweep, but numba cannot be "

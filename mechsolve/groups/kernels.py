@@ -16,8 +16,6 @@ import math
 import numpy as np
 from numba import njit
 
-MAX_JUMP = 0.05  # as mechsolve.groups.newton_common.MAX_JUMP (checked there by a test)
-
 
 @njit(cache=True, error_model="numpy")
 def _pymax_abs(v: np.ndarray) -> float:
@@ -152,54 +150,69 @@ def _gauss_small(J: np.ndarray, f: np.ndarray, dx: np.ndarray) -> bool:
 def newton(K, x, M1, M2, M3, nz, atol, max_iterations, predict):
     """:meth:`~mechsolve.groups.reduced._Eqs.newton_list` on ``x`` in place: returns
     ``(converged, iterations)``."""
+    if x.shape[0] == 2:
+        return _newton2(K, x, M1, M2, M3, atol, max_iterations, predict)
+    return _newton_n(K, x, M1, M2, M3, nz, atol, max_iterations, predict)
+
+
+@njit(cache=True, error_model="numpy")
+def _newton2(K, x, M1, M2, M3, atol, max_iterations, predict):
+    """:meth:`~mechsolve.groups.reduced._Eqs._newton_list2`, unrolled as there."""
+    xtol = 1e-3 * atol
+    inf = math.inf
+    last = r = r_prev = inf
+    a1, a2, a3 = M1[0, 0], M2[0, 0], M3[0, 0]
+    b1, b2, b3 = M1[0, 1], M2[0, 1], M3[0, 1]
+    c1, c2, c3 = M1[1, 0], M2[1, 0], M3[1, 0]
+    d1, d2, d3 = M1[1, 1], M2[1, 1], M3[1, 1]
+    k0, k1 = K[0], K[1]
+    x0, x1 = x[0], x[1]
+    for it in range(max_iterations + 1):
+        C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
+        f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
+        f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
+        r = abs(f0)
+        if abs(f1) > r:
+            r = abs(f1)
+        if not r <= 1e300 or (it > 3 and r > 2 * r_prev):
+            break
+        r_prev = r
+        if r <= atol and (last <= xtol or r == 0.0):
+            x[0], x[1] = x0, x1
+            return True, it
+        if it == max_iterations:
+            break
+        ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+        jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+        det = ja * jd - jb * jc
+        if det == 0:
+            break
+        dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
+        step = abs(dx0)
+        if abs(dx1) > step:
+            step = abs(dx1)
+        if not step <= 1e300:
+            break
+        if r <= atol and step >= last:
+            x[0], x[1] = x0, x1
+            return True, it
+        x0, x1 = x0 + dx0, x1 + dx1
+        if predict and step <= 0.5 * last and 0.5 * last < inf:
+            if 2 * step * step <= xtol * last:
+                x[0], x[1] = x0, x1
+                return True, it + 1
+        last = step
+    x[0], x[1] = x0, x1
+    return r <= atol, max_iterations
+
+
+@njit(cache=True, error_model="numpy")
+def _newton_n(K, x, M1, M2, M3, nz, atol, max_iterations, predict):
+    """:meth:`~mechsolve.groups.reduced._Eqs.newton_list` for other than two angles."""
     nb = x.shape[0]
     xtol = 1e-3 * atol
     inf = math.inf
     last = r = r_prev = inf
-    if nb == 2:  # _newton_list2, unrolled as there
-        a1, a2, a3 = M1[0, 0], M2[0, 0], M3[0, 0]
-        b1, b2, b3 = M1[0, 1], M2[0, 1], M3[0, 1]
-        c1, c2, c3 = M1[1, 0], M2[1, 0], M3[1, 0]
-        d1, d2, d3 = M1[1, 1], M2[1, 1], M3[1, 1]
-        k0, k1 = K[0], K[1]
-        x0, x1 = x[0], x[1]
-        for it in range(max_iterations + 1):
-            C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
-            f0 = k0 + a1 * C0 + a2 * S0 + a3 * x0 + b1 * C1 + b2 * S1 + b3 * x1
-            f1 = k1 + c1 * C0 + c2 * S0 + c3 * x0 + d1 * C1 + d2 * S1 + d3 * x1
-            r = abs(f0)
-            if abs(f1) > r:
-                r = abs(f1)
-            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):
-                break
-            r_prev = r
-            if r <= atol and (last <= xtol or r == 0.0):
-                x[0], x[1] = x0, x1
-                return True, it
-            if it == max_iterations:
-                break
-            ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
-            jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
-            det = ja * jd - jb * jc
-            if det == 0:
-                break
-            dx0, dx1 = -(jd * f0 - jb * f1) / det, -(ja * f1 - jc * f0) / det
-            step = abs(dx0)
-            if abs(dx1) > step:
-                step = abs(dx1)
-            if not step <= 1e300:
-                break
-            if r <= atol and step >= last:
-                x[0], x[1] = x0, x1
-                return True, it
-            x0, x1 = x0 + dx0, x1 + dx1
-            if predict and step <= 0.5 * last and 0.5 * last < inf:
-                if 2 * step * step <= xtol * last:
-                    x[0], x[1] = x0, x1
-                    return True, it + 1
-            last = step
-        x[0], x[1] = x0, x1
-        return r <= atol, max_iterations
     c = np.empty(nb)
     s = np.empty(nb)
     f = np.empty(nb)
@@ -299,15 +312,17 @@ def _extrapolate(hu, hq, nh, u, out):
 def coarse_run(
     i0, u, Kr, thp, Px, Py, q_start, hu, hq, nh,
     out, iters, free, fixed, M1, M2, M3, nz, wptr, wk, wa, wb, jw, atol, max_iterations,
+    max_jump,
 ):  # fmt: skip
     """The coarse continuation's plain steps from position ``i0``, as
     :meth:`~mechsolve.groups.newton_batched.BatchedSweep._coarse_floats` takes them:
     each position predicted (from the start's pose, along the tangent after one
     position, else by Lagrange extrapolation of the history ``hu``, ``hq``: its ``nh``
     rows, updated in place), solved by Newton in the free angles, posed, and checked
-    against :data:`MAX_JUMP`; poses into ``out``, iterations into ``iters``. Returns
-    ``(i, nh)``: the first position whose step is not plain (the caller takes it by the
-    general step, then calls again from ``i + 1``), or the number of positions."""
+    against ``max_jump`` (:data:`~mechsolve.groups.newton_common.MAX_JUMP`); poses
+    into ``out``, iterations into ``iters``. Returns ``(i, nh)``: the first position
+    whose step is not plain (the caller takes it by the general step, then calls again
+    from ``i + 1``), or the number of positions."""
     n = u.shape[0]
     nq = out.shape[1]
     nb = Px.shape[1]
@@ -358,7 +373,7 @@ def coarse_run(
                 d = abs(q[j] - q_pred[j]) * jw[j]
                 if d > jump:
                     jump = d
-            if not jump <= MAX_JUMP:
+            if not jump <= max_jump:
                 return i, nh
         for j in range(nq):
             out[i, j] = q[j]
@@ -409,8 +424,6 @@ def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C
     ``co``: the loop's coefficients ``a1, a2, a3, b1, b2, b3, c1, c2, c3, d1, d2, d3``.
     Updates the angles, ``todo`` and ``iters`` in place and the cosines and sines
     ``C0, S0, C1, S1`` (the state's). Returns whether every position converged."""
-    a1, a2, a3, b1, b2, b3 = co[0], co[1], co[2], co[3], co[4], co[5]
-    c1, c2, c3, d1, d2, d3 = co[6], co[7], co[8], co[9], co[10], co[11]
     n = x0.shape[0]
     last = np.full(n, math.inf)
     tol = 1e-3 * atol
@@ -437,42 +450,7 @@ def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C
                 cc0, ss0, cc1, ss1 = C0[p], S0[p], C1[p], S1[p]
             else:
                 cc0, ss0, cc1, ss1 = math.cos(t0), math.sin(t0), math.cos(t1), math.sin(t1)
-            # _newton_step2
-            f0 = K0[p] + a1 * cc0
-            f0 += a2 * ss0
-            f0 += b1 * cc1
-            f0 += b2 * ss1
-            f1 = K1[p] + c1 * cc0
-            f1 += c2 * ss0
-            f1 += d1 * cc1
-            f1 += d2 * ss1
-            ja = a2 * cc0
-            ja -= a1 * ss0
-            jb = b2 * cc1
-            jb -= b1 * ss1
-            jc = c2 * cc0
-            jc -= c1 * ss0
-            jd = d2 * cc1
-            jd -= d1 * ss1
-            if nd:
-                f0 += a3 * t0
-                f0 += b3 * t1
-                f1 += c3 * t0
-                f1 += d3 * t1
-                ja += a3
-                jb += b3
-                jc += c3
-                jd += d3
-            r = _nanmax2(abs(f0), abs(f1))
-            det = ja * jd
-            det -= jb * jc
-            dq0 = jb * f1
-            dq0 -= jd * f0
-            dq1 = jc * f0
-            dq1 -= ja * f1
-            dq0 /= det  # (IEEE: inf or NaN where det is 0, as NumPy gives them)
-            dq1 /= det
-            step = _nanmax2(abs(dq0), abs(dq1)) if det != 0 else math.nan
+            r, dq0, dq1, step = _step2(t0, t1, K0[p], K1[p], cc0, ss0, cc1, ss1, co, nd)
             lastk = last[p]
             small = step <= tol
             pred = it_k > 0 and 2.0 * step * step <= tol * lastk and step <= 0.5 * lastk
@@ -511,3 +489,48 @@ def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C
             C0[p], S0[p] = math.cos(x0[p]), math.sin(x0[p])
             C1[p], S1[p] = math.cos(x1[p]), math.sin(x1[p])
     return ok
+
+
+@njit(cache=True, error_model="numpy")
+def _step2(t0, t1, k0, k1, cc0, ss0, cc1, ss1, co, nd):
+    """:func:`~mechsolve.groups.newton_batched._newton_step2` at one position: the
+    residual's size, the step and its size (NaN where the Jacobian is exactly
+    singular), in the same order of operations."""
+    a1, a2, a3, b1, b2, b3 = co[0], co[1], co[2], co[3], co[4], co[5]
+    c1, c2, c3, d1, d2, d3 = co[6], co[7], co[8], co[9], co[10], co[11]
+    f0 = k0 + a1 * cc0
+    f0 += a2 * ss0
+    f0 += b1 * cc1
+    f0 += b2 * ss1
+    f1 = k1 + c1 * cc0
+    f1 += c2 * ss0
+    f1 += d1 * cc1
+    f1 += d2 * ss1
+    ja = a2 * cc0
+    ja -= a1 * ss0
+    jb = b2 * cc1
+    jb -= b1 * ss1
+    jc = c2 * cc0
+    jc -= c1 * ss0
+    jd = d2 * cc1
+    jd -= d1 * ss1
+    if nd:
+        f0 += a3 * t0
+        f0 += b3 * t1
+        f1 += c3 * t0
+        f1 += d3 * t1
+        ja += a3
+        jb += b3
+        jc += c3
+        jd += d3
+    r = _nanmax2(abs(f0), abs(f1))
+    det = ja * jd
+    det -= jb * jc
+    dq0 = jb * f1
+    dq0 -= jd * f0
+    dq1 = jc * f0
+    dq1 -= ja * f1
+    dq0 /= det  # (IEEE: inf or NaN where det is 0, as NumPy gives them)
+    dq1 /= det
+    step = _nanmax2(abs(dq0), abs(dq1)) if det != 0 else math.nan
+    return r, dq0, dq1, step

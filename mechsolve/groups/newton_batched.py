@@ -43,8 +43,7 @@ class BatchedSweep:
         sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
         if self.red is not None and self.red.sub.nb <= FLOATS_UP_TO:
             coarse_pass = self._coarse_compiled if self.compiled else self._coarse_floats
-            itc = coarse_pass(sub, dsub, q_start, sub_prefix)
-            if itc is None:
+            if (itc := coarse_pass(sub, dsub, q_start, sub_prefix)) is None:
                 return None
         else:
             okc, itc, _ = self.sweep_sequential(
@@ -184,7 +183,9 @@ class BatchedSweep:
         iters = np.zeros(n, np.int64)
         i = 0
         while True:
-            i, nh = kern.coarse_run(i, u, Kr, thp, Px, Py, q0, hu, hq, nh, out, iters, *plan)
+            i, nh = kern.coarse_run(
+                i, u, Kr, thp, Px, Py, q0, hu, hq, nh, out, iters, *plan, MAX_JUMP
+            )
             if i >= n:
                 break
             # the general step, as _coarse_floats (and sweep_sequential) take it
