@@ -339,3 +339,22 @@ def test_the_files_key_takes_true_or_false(tmp_path):
     with pytest.raises(ms.InputError, match="true or false"):
         ms.loads(text)
     assert not ms.loads(text.replace("compiled: 1", "compiled: false")).solver.compiled
+
+
+def test_the_bench_prints_the_compiled_rows_beside_the_default_ones():
+    """``mechsolve bench --case newton-groups``: the compiled sweeps' rows, with their
+    accuracy against the same references as the default rows, their ratios, the first
+    call's time and the CPU times."""
+    from mechsolve_bench import case_newton
+
+    case = case_newton(400, 1)
+    rows = {r.setting: r for r in case.rows}
+    for key in ("four-bar: mechsolve split-newton", "triad six-bar: mechsolve auto"):
+        (fast,) = [r for s, r in rows.items() if s.startswith(key) and "compiled" in s]
+        assert fast.seconds > 0 and 0 < fast.error < 1e-12, fast
+    text = "\n".join(case.lines)
+    assert "ratio split-newton compiled / lean by hand (four-bar):" in text
+    assert "ratio auto compiled / lean by hand (triad):" in text
+    assert "compiled path: the first call took" in text
+    (cpu,) = [line for line in case.lines if line.startswith("CPU time (thread_time")]
+    assert "default" in cpu and "compiled" in cpu
