@@ -534,3 +534,35 @@ def _step2(t0, t1, k0, k1, cc0, ss0, cc1, ss1, co, nd):
     dq1 /= det
     step = _nanmax2(abs(dq0), abs(dq1)) if det != 0 else math.nan
     return r, dq0, dq1, step
+
+
+@njit(cache=True, error_model="numpy")
+def hermite(u, coarse, qc, dqc, pred):
+    """:meth:`~mechsolve.groups.newton_batched.BatchedSweep.sweep_batched`'s cubic
+    Hermite prediction into ``pred`` (N, n): each position's segment between the
+    coarse positions ``coarse`` (the last position in the last segment), its polynomial
+    in ``t = (u - u0) / (u1 - u0)`` by Horner, in the NumPy path's order of
+    operations."""
+    n, nq = pred.shape
+    ns = coarse.shape[0] - 1
+    for s in range(ns):
+        p0 = coarse[s]
+        p1 = coarse[s + 1] if s + 1 < ns else n
+        u0 = u[coarse[s]]
+        h = u[coarse[s + 1]] - u0
+        for j in range(nq):
+            m0 = h * dqc[s, j]
+            m1 = h * dqc[s + 1, j]
+            dq = qc[s + 1, j] - qc[s, j]
+            c2 = 3 * dq - 2 * m0 - m1
+            c3 = m0 + m1 - 2 * dq
+            q0 = qc[s, j]
+            for p in range(p0, p1):
+                t = (u[p] - u0) / h
+                v = c3 * t
+                v += c2
+                v *= t
+                v += m0
+                v *= t
+                v += q0
+                pred[p, j] = v

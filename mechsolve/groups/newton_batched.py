@@ -56,11 +56,38 @@ class BatchedSweep:
         dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
             return None
+        u = drive.u
+        pred = self._predict(u, coarse, qc, dqc)
+        if self.red is not None:
+            iters = self._refine_angles(st, u, pred, coarse, qc)
+            if iters is None:
+                return None
+            q = self._q_rows(st)
+        else:
+            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
+            if q is None:
+                return None
+        d = np.abs(q - pred)
+        d[:, 0::3] /= self.scale
+        d[:, 1::3] /= self.scale
+        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
+            return None
+        if self.red is None:
+            self._set_q_rows_into(st, q)
+        iters[coarse] = itc
+        return np.ones(n, bool), iters, "newton (batched)"
+
+    def _predict(self, u: np.ndarray, coarse: np.ndarray, qc: np.ndarray, dqc: np.ndarray):
+        """Every position's prediction (N, n) from the coarse positions ``qc`` and their
+        rates ``dqc``: the cubic Hermite (or with ``predictor`` "linear", the chord)."""
+        if self.compiled and self.predictor != "linear":  # the same, in one loop
+            pred = np.empty((len(u), self.n))
+            kernels(self.compiled).hermite(u, coarse, qc, dqc, pred)
+            return pred
         # cubic Hermite between coarse positions, in the driver coordinate: each
         # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
         # segment are consecutive (the last position belongs to the last segment), so its
         # coefficients are repeated rather than gathered (a fancy index costs 6x more)
-        u = drive.u
         counts = np.diff(coarse)
         counts[-1] += 1
         uc = u[coarse]
@@ -80,24 +107,7 @@ class BatchedSweep:
             for c in (c2, m0, q0):
                 pred *= t
                 pred += np.repeat(c, counts, axis=0)
-        if self.red is not None:
-            iters = self._refine_angles(st, u, pred, coarse, qc)
-            if iters is None:
-                return None
-            q = self._q_rows(st)
-        else:
-            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
-            if q is None:
-                return None
-        d = np.abs(q - pred)
-        d[:, 0::3] /= self.scale
-        d[:, 1::3] /= self.scale
-        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
-            return None
-        if self.red is None:
-            self._set_q_rows_into(st, q)
-        iters[coarse] = itc
-        return np.ones(n, bool), iters, "newton (batched)"
+        return pred
 
     def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
