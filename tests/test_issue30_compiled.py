@@ -35,8 +35,13 @@ def wrap(x):
 @pytest.fixture
 def calls(monkeypatch):
     """How many coarse passes and two-angle refinements went through the kernels."""
-    n = {"coarse": 0, "refine2": 0}
+    n = {"coarse": 0, "refine2": 0, "elim": 0}
     coarse, refine2 = BatchedSweep._coarse_compiled, BatchedSweep._refine2_compiled
+    elim = BatchedSweep._refine_elim_compiled
+
+    def spy_elim(self, *a, **k):
+        n["elim"] += 1
+        return elim(self, *a, **k)
 
     def spy_coarse(self, *a, **k):
         n["coarse"] += 1
@@ -48,6 +53,7 @@ def calls(monkeypatch):
 
     monkeypatch.setattr(BatchedSweep, "_coarse_compiled", spy_coarse)
     monkeypatch.setattr(BatchedSweep, "_refine2_compiled", spy_refine2)
+    monkeypatch.setattr(BatchedSweep, "_refine_elim_compiled", spy_elim)
     return n
 
 
@@ -149,7 +155,7 @@ def test_triad_against_positions_solved_one_by_one(monkeypatch, calls):
     positions, below the batch's minimum: solved one after another by continuation,
     nothing compiled)."""
     plain, fast = both(monkeypatch, TRIAD)
-    assert calls["coarse"] >= 1
+    assert calls["coarse"] >= 1 and calls["elim"] >= 1  # (its residual: to rounding)
     assert [g.kind for g in fast.analysis.plan] == ["driver link", "Newton"]
     assert fast.ok.all() and len(fast.u) == 361
     assert_same(plain, fast)

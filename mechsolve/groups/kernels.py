@@ -390,7 +390,7 @@ def coarse_run(
     return n, nh
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _rotate1(C, S, p, D, th):
     """:func:`~mechsolve.groups.newton_batched._rotate` at position ``p``."""
     d2 = D * D
@@ -406,7 +406,24 @@ def _rotate1(C, S, p, D, th):
     C[p], S[p] = c, s
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
+def _rotate2(C, S, p, k, D, th):
+    """:func:`_rotate1` at ``[p, k]`` of (N, n) arrays (no row views: each costs a
+    reference count)."""
+    d2 = D * D
+    cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
+    sd = D * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
+    Cp, Sp = C[p, k], S[p, k]
+    c = Cp * cd
+    c -= Sp * sd
+    s = Sp * cd
+    s += Cp * sd
+    if not abs(D) < 1e-3:
+        c, s = math.cos(th), math.sin(th)
+    C[p, k], S[p, k] = c, s
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _nanmax2(a, b):
     """``np.maximum(a, b)`` of two floats: NaN if either is."""
     if a != a or b != b:
@@ -415,7 +432,7 @@ def _nanmax2(a, b):
 
 
 @njit(cache=True, error_model="numpy")
-def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C1, S1):
+def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C1, S1, have_cs):
     """:meth:`~mechsolve.groups.newton_batched.BatchedSweep._refine2` in one loop per
     iteration over the positions: the same residual, step (by the adjugate), tests and
     updates, position by position in the same order of operations as the NumPy
@@ -423,11 +440,12 @@ def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C
     iterate, as there: the cosines and sines then kept and turned with every step).
     ``co``: the loop's coefficients ``a1, a2, a3, b1, b2, b3, c1, c2, c3, d1, d2, d3``.
     Updates the angles, ``todo`` and ``iters`` in place and the cosines and sines
-    ``C0, S0, C1, S1`` (the state's). Returns whether every position converged."""
+    ``C0, S0, C1, S1`` (the state's; ``have_cs``: they hold those of the angles
+    already, as NumPy's vectorised ``cos`` and ``sin`` give them at the first iteration
+    over whole arrays). Returns whether every position converged."""
     n = x0.shape[0]
     last = np.full(n, math.inf)
     tol = 1e-3 * atol
-    have_cs = False
     for it_k in range(max_iterations):
         count = 0
         for p in range(n):
@@ -491,7 +509,7 @@ def refine2(x0, x1, K0, K1, todo, iters, co, nd, atol, max_iterations, C0, S0, C
     return ok
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _step2(t0, t1, k0, k1, cc0, ss0, cc1, ss1, co, nd):
     """:func:`~mechsolve.groups.newton_batched._newton_step2` at one position: the
     residual's size, the step and its size (NaN where the Jacobian is exactly
@@ -566,3 +584,149 @@ def hermite(u, coarse, qc, dqc, pred):
                 v *= t
                 v += q0
                 pred[p, j] = v
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _elim_step(p, th, C, S, Kr, M1, M2, M3, nd, priv, rest, V, n2, coef, f, dq, work):
+    """Position ``p``'s residual ``f`` and Newton step ``dq`` (``F_theta dq = -f``) of a
+    group whose ``F_theta`` is eliminated to 2 x 2
+    (:class:`~mechsolve.groups.eliminated.Eliminated`: ``priv`` each loop's own link,
+    ``V`` its local vector and ``n2`` its squared length, ``rest`` the other two angles,
+    ``coef`` the equations' ``(m1, m2, m3)`` over those two); returns the residual's
+    and the step's largest components (NaN if any is)."""
+    nb = th.shape[1]
+    ne = priv.shape[0]
+    for e in range(nb):
+        a = 0.0
+        for k in range(nb):
+            a += C[k] * M1[e, k]
+        b = 0.0
+        for k in range(nb):
+            b += S[k] * M2[e, k]
+        fe = Kr[p, e] + a
+        fe += b
+        if nd:
+            d = 0.0
+            for k in range(nb):
+                d += th[p, k] * M3[e, k]
+            fe += d
+        f[e] = fe
+    r = abs(f[0])
+    for e in range(1, nb):
+        r = _nanmax2(r, abs(f[e]))
+    R, P, g, rhs = work  # (2, 2), (ne, 2), (ne, 2), (2,): room, allocated once
+    for e in range(ne):
+        p = priv[e]
+        gx = V[e, 0] * C[p] - V[e, 1] * S[p]
+        gy = V[e, 1] * C[p] + V[e, 0] * S[p]
+        g[e, 0], g[e, 1] = gx, gy
+        for j in range(2):
+            q = rest[j]
+            jx = coef[e, j, 1] * C[q] - coef[e, j, 0] * S[q] + coef[e, j, 2]
+            jy = coef[ne + e, j, 1] * C[q] - coef[ne + e, j, 0] * S[q] + coef[ne + e, j, 2]
+            R[e, j] = gx * jx + gy * jy
+            P[e, j] = -gy * jx + gx * jy
+        rhs[e] = gx * f[e] + gy * f[ne + e]
+    for r_ in range(2 * ne, nb):  # the drivers' rows: their own entries
+        for j in range(2):
+            q = rest[j]
+            R[r_ - ne, j] = coef[r_, j, 1] * C[q] - coef[r_, j, 0] * S[q] + coef[r_, j, 2]
+        rhs[r_ - ne] = f[r_]
+    a, b, c, d = R[0, 0], R[0, 1], R[1, 0], R[1, 1]
+    det = a * d - b * c
+    x0 = (b * rhs[1] - d * rhs[0]) / det
+    x1 = (c * rhs[0] - a * rhs[1]) / det
+    dq[rest[0]], dq[rest[1]] = x0, x1
+    for e in range(ne):
+        gx, gy = g[e, 0], g[e, 1]
+        t = gx * f[ne + e] - gy * f[e]
+        t += P[e, 0] * x0
+        t += P[e, 1] * x1
+        dq[priv[e]] = t * (-1.0 / n2[e])
+    step = abs(dq[0])  # (inf or NaN where F_theta is exactly singular, as in NumPy)
+    for k in range(1, nb):
+        step = _nanmax2(step, abs(dq[k]))
+    return r, step
+
+
+@njit(cache=True, error_model="numpy")
+def refine_elim(th, Kr, todo, iters, Cf, Sf, have_cs, M1, M2, M3, nd, el, atol, max_iterations):
+    """:meth:`~mechsolve.groups.newton_batched.BatchedSweep._refine_angles` for a group
+    eliminated to 2 x 2 (the Stephenson triad), position by position: the same tests,
+    updates and turned cosines and sines (whole arrays while at least half the
+    positions iterate, as there), the residual and step by :func:`_elim_step` (to
+    rounding those of the NumPy path, whose residual is a matrix product). ``el``:
+    ``(priv, rest, V, n2, coef)``. Updates ``th``, ``todo``, ``iters`` and the cosines
+    and sines ``Cf``, ``Sf`` (N, n) in place (``have_cs``: they hold those of ``th``
+    already, as NumPy's vectorised ``cos`` and ``sin`` give them at the first
+    iteration over whole arrays); returns whether every position converged."""
+    priv, rest, V, n2, coef = el
+    n, nb = th.shape
+    last = np.full(n, math.inf)
+    tol = 1e-3 * atol
+    f = np.empty(nb)
+    dq = np.empty(nb)
+    C = np.empty(nb)
+    S = np.empty(nb)
+    ne = priv.shape[0]
+    work = (np.empty((2, 2)), np.empty((ne, 2)), np.empty((ne, 2)), np.empty(2))
+    for it_k in range(max_iterations):
+        count = 0
+        for p in range(n):
+            if todo[p]:
+                count += 1
+        if count == 0:
+            break
+        whole = 2 * count >= n
+        if whole and not have_cs:
+            for p in range(n):
+                for k in range(nb):
+                    Cf[p, k], Sf[p, k] = math.cos(th[p, k]), math.sin(th[p, k])
+            have_cs = True
+        for p in range(n):
+            tp = todo[p]
+            if not (whole or tp):
+                continue
+            for k in range(nb):
+                if have_cs:
+                    C[k], S[k] = Cf[p, k], Sf[p, k]
+                else:
+                    C[k], S[k] = math.cos(th[p, k]), math.sin(th[p, k])
+            r, step = _elim_step(
+                p, th, C, S, Kr, M1, M2, M3, nd, priv, rest, V, n2, coef, f, dq, work
+            )
+            lastk = last[p]
+            small = step <= tol
+            pred = it_k > 0 and 2.0 * step * step <= tol * lastk and step <= 0.5 * lastk
+            done = (r <= atol and (small or step >= lastk)) or pred
+            take = (not done) or small or pred
+            if whole:
+                take = take and tp
+            else:
+                iters[p] += 1
+                last[p] = step
+                if done:
+                    todo[p] = False
+            if whole and tp:
+                iters[p] += 1
+                last[p] = step
+                if done:
+                    todo[p] = False
+            if take or whole:
+                for k in range(nb):
+                    D = dq[k] if take else 0.0
+                    th[p, k] += D
+                    if have_cs:
+                        _rotate2(Cf, Sf, p, k, D, th[p, k])
+    ok = True
+    for p in range(n):
+        if todo[p]:
+            ok = False
+        for k in range(nb):
+            if not math.isfinite(th[p, k]):
+                ok = False
+    if ok and not have_cs:
+        for p in range(n):
+            for k in range(nb):
+                Cf[p, k], Sf[p, k] = math.cos(th[p, k]), math.sin(th[p, k])
+    return ok

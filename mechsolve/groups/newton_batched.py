@@ -301,6 +301,8 @@ class BatchedSweep:
                 return None
             self._put_angles(st, red.join(th, thp), Px, Py, cs)
             return iters
+        if self.compiled and sub.elim is not None:  # the triad's: in the kernel
+            return self._refine_elim_compiled(st, th, Kr, thp, (Px, Py), iters, todo)
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
@@ -436,16 +438,59 @@ class BatchedSweep:
         x0, x1 = th[:, 0].copy(), th[:, 1].copy()
         K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
         it = np.zeros(n, np.int64)
-        C0, S0, C1, S1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        # the first iteration over whole arrays (as nearly always): their cosines and
+        # sines as the NumPy path takes them (vectorised: a fraction of scalar calls)
+        whole = 2 * np.count_nonzero(todo) >= n
+        if whole:
+            C0, S0, C1, S1 = np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)
+        else:
+            C0, S0, C1, S1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         ok = kern.refine2(
             x0, x1, K0, K1, todo, it, co, bool(self.red.sub.nd), float(self.atol),
-            int(self.max_iterations), C0, S0, C1, S1,
+            int(self.max_iterations), C0, S0, C1, S1, whole,
         )  # fmt: skip
         iters += it
         th[:, 0], th[:, 1] = x0, x1
         if not ok:
             return None
         return [C0, C1], [S0, S1]
+
+    def _refine_elim_compiled(self, st: State, th, Kr, thp, roots, iters, todo):
+        """:meth:`_refine_angles`'s iterations for a group eliminated to 2 x 2 in the
+        compiled kernel (:func:`~mechsolve.groups.kernels.refine_elim`); the poses are
+        written into ``st``. Returns the iterations per position, or None."""
+        kern = kernels(self.compiled)
+        sub = self.red.sub
+        el = sub.elim
+        plan = getattr(self, "_elim_plan", None)
+        if plan is None or plan[0] is not el:
+            coef = np.array(el.coef, float)  # (rows, 2, (m1, m2, m3))
+            arrays = (
+                np.array(el.priv, np.int64),
+                np.array(el.rest, np.int64),
+                np.array(el.V, float).reshape(len(el.priv), 2),
+                np.array(el.n2, float),
+                coef,
+            )
+            plan = self._elim_plan = (el, arrays)
+        n = th.shape[0]
+        th = np.ascontiguousarray(th)
+        it = np.zeros(n, np.int64)
+        whole = 2 * np.count_nonzero(todo) >= n  # (as in _refine2_compiled)
+        if whole:
+            Cf, Sf = np.cos(th), np.sin(th)
+        else:
+            Cf, Sf = np.empty(th.shape), np.empty(th.shape)
+        ok = kern.refine_elim(
+            th, np.ascontiguousarray(Kr), todo, it, Cf, Sf, whole, sub.M1, sub.M2, sub.M3,
+            bool(sub.nd), plan[1], float(self.atol), int(self.max_iterations),
+        )  # fmt: skip
+        if not ok:
+            return None
+        iters += it
+        cs = ([c for c in Cf.T], [s for s in Sf.T])
+        self._put_angles(st, self.red.join(th, thp), roots[0], roots[1], cs)
+        return iters
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,
