@@ -331,6 +331,9 @@ def coarse_run(
     q = np.empty(nq)
     th = np.empty(nb)
     x = np.empty(nf)
+    # (typed variables, not literals: numba compiles a function again for each literal
+    # argument value, which would double the first call's compilation of newton)
+    one, yes = max_iterations // max_iterations, max_iterations > 0
     for i in range(i0, n):
         ui = u[i]
         if nh == 0:
@@ -339,7 +342,7 @@ def coarse_run(
         elif nh == 1:  # the tangent step (_tangent_floats)
             for j in range(nf):
                 x[j] = hq[0, 3 * free[j] + 2]
-            newton(Kr[i], x, M1, M2, M3, nz, atol, 1, False)
+            newton(Kr[i], x, M1, M2, M3, nz, atol, one, not yes)
             for k in range(nb):
                 th[k] = hq[0, 3 * k + 2]
             for j in range(nf):
@@ -359,7 +362,7 @@ def coarse_run(
             _extrapolate(hu, hq, nh, ui, q_pred)
         for j in range(nf):
             x[j] = q_pred[3 * free[j] + 2]
-        plain, it = newton(Kr[i], x, M1, M2, M3, nz, atol, max_iterations, True)
+        plain, it = newton(Kr[i], x, M1, M2, M3, nz, atol, max_iterations, yes)
         if not plain:
             return i, nh
         for j in range(nf):
