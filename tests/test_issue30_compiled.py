@@ -361,6 +361,6 @@ def test_the_bench_prints_the_compiled_rows_beside_the_default_ones():
     text = "\n".join(case.lines)
     assert "ratio split-newton compiled / lean by hand (four-bar):" in text
     assert "ratio auto compiled / lean by hand (triad):" in text
-    assert "compiled path: the first call took" in text
+    assert "compiled path: the first calls took" in text
     (cpu,) = [line for line in case.lines if line.startswith("CPU time (thread_time")]
     assert "default" in cpu and "compiled" in cpu
