@@ -11,8 +11,6 @@ call compiles the kernels (numba caches them on disk for later processes).
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 import os
 from types import ModuleType
 
@@ -37,6 +35,8 @@ def requested() -> bool:
 
 def available() -> bool:
     """Whether numba can be found (without importing it)."""
+    import importlib.util  # (here: a command that never asks pays nothing)
+
     try:
         return importlib.util.find_spec("numba") is not None
     except (ImportError, ValueError):
@@ -54,6 +54,8 @@ def kernels(asked_by: str = ENV) -> ModuleType:
     """
     global _kernels
     if _kernels is None:
+        import importlib
+
         try:
             k = importlib.import_module("mechsolve.groups.kernels")
         except ImportError as exc:

@@ -3,7 +3,6 @@ options (see :mod:`mechsolve.model.parse`)."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from typing import Any
 
@@ -434,6 +433,8 @@ def read_relative(r: Reader, value: Any, path: KeyPath) -> list[tuple[str, str]]
 
 def _numba_found() -> bool:
     """Whether numba can be imported (found, not imported: that costs half a second)."""
+    import importlib.util  # (here: only a file that asks for it pays the import)
+
     try:
         return importlib.util.find_spec("numba") is not None
     except (ImportError, ValueError):
