@@ -364,3 +364,36 @@ def test_the_bench_prints_the_compiled_rows_beside_the_default_ones():
     assert "compiled path: the first calls took" in text
     (cpu,) = [line for line in case.lines if line.startswith("CPU time (thread_time")]
     assert "default" in cpu and "compiled" in cpu
+
+
+def test_six_free_angles_by_elimination_with_pivoting(monkeypatch, calls):
+    """The whole-system ``newton`` method on the triad with a dyad hung from it (seven
+    moving links, the crank's angle fixed by the driver: six free angles, whose coarse
+    steps the kernel solves by Gaussian elimination with pivoting, as the floats path
+    does): the NumPy path's answers, and the ``auto`` method's (a Newton triad and a
+    closed-form dyad) positions."""
+    text = (
+        TRIAD.replace("D: [10, 70]}", "D: [10, 70], F: [30, 30]}")
+        .replace(
+            "  r: {points: {O3: [0, 0], D: [31.6227766, 0]}}\n",
+            "  r: {points: {O3: [0, 0], D: [31.6227766, 0]}}\n"
+            "  s: {points: {F: [0, 0], E: [80, 0]}}\n"
+            "  t: {points: {O4: [0, 0], E: [70, 0]}}\n",
+        )
+        .replace("O3: [60, 120]}", "O3: [60, 120], O4: [120, 120]}")
+        .replace(
+            "  O3: [ground, r]\n",
+            "  O3: [ground, r]\n  F: [tern, s]\n  E: [s, t]\n  O4: [ground, t]\n",
+        )
+        .replace("D: [62, 90]}", "D: [62, 90], E: [170, 72]}")
+    )
+    plain, fast = both(monkeypatch, text, "newton")
+    group = fast.analysis.plan[0]
+    assert group.red is not None and group.red.sub.nb == 6
+    assert calls["coarse"] >= 1
+    assert fast.ok.all() and len(fast.u) == 361
+    assert_same(plain, fast)
+    auto = ms.solve(ms.loads(text))
+    for p in ("B", "C", "D", "E"):
+        np.testing.assert_allclose(fast.point(p).x, auto.point(p).x, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(fast.point(p).y, auto.point(p).y, rtol=0, atol=1e-9)
