@@ -309,6 +309,26 @@ def _extrapolate(hu, hq, nh, u, out):
 
 
 @njit(cache=True, error_model="numpy")
+def _tangent_pose(q0, x, thp, Px, Py, free, fixed, w, th, q_pred):
+    """The rest of :meth:`~mechsolve.groups.newton_batched.BatchedSweep._tangent_floats`
+    into ``q_pred``: the pose whose free angles are the tangent step's ``x``, the fixed
+    ones ``thp``, the others ``q0``'s; ``q0`` itself where an angle is not finite."""
+    nb = th.shape[0]
+    for k in range(nb):
+        th[k] = q0[3 * k + 2]
+    for j in range(free.shape[0]):
+        th[free[j]] = x[j]
+    for j in range(fixed.shape[0]):
+        th[fixed[j]] = thp[j]
+    for k in range(nb):
+        if not math.isfinite(th[k]):
+            for j in range(q_pred.shape[0]):
+                q_pred[j] = q0[j]
+            return
+    poses(th, Px, Py, w[0], w[1], w[2], w[3], q_pred)
+
+
+@njit(cache=True, error_model="numpy")
 def coarse_run(
     i0, u, Kr, thp, Px, Py, q_start, hu, hq, nh,
     out, iters, free, fixed, M1, M2, M3, nz, wptr, wk, wa, wb, jw, atol, max_iterations,
@@ -334,6 +354,7 @@ def coarse_run(
     # (typed variables, not literals: numba compiles a function again for each literal
     # argument value, which would double the first call's compilation of newton)
     one, yes = max_iterations // max_iterations, max_iterations > 0
+    w = (wptr, wk, wa, wb)
     for i in range(i0, n):
         ui = u[i]
         if nh == 0:
@@ -343,21 +364,7 @@ def coarse_run(
             for j in range(nf):
                 x[j] = hq[0, 3 * free[j] + 2]
             newton(Kr[i], x, M1, M2, M3, nz, atol, one, not yes)
-            for k in range(nb):
-                th[k] = hq[0, 3 * k + 2]
-            for j in range(nf):
-                th[free[j]] = x[j]
-            for j in range(fixed.shape[0]):
-                th[fixed[j]] = thp[i, j]
-            finite = True
-            for k in range(nb):
-                if not math.isfinite(th[k]):
-                    finite = False
-            if finite:
-                poses(th, Px[i], Py[i], wptr, wk, wa, wb, q_pred)
-            else:
-                for j in range(nq):
-                    q_pred[j] = hq[0, j]
+            _tangent_pose(hq[0], x, thp[i], Px[i], Py[i], free, fixed, w, th, q_pred)
         else:
             _extrapolate(hu, hq, nh, ui, q_pred)
         for j in range(nf):
