@@ -317,12 +317,12 @@ def no_numba(monkeypatch):
     monkeypatch.setattr(compiled, "_kernels", None)
 
 
-def test_missing_numba_the_environment_variable(monkeypatch, no_numba):
+def test_missing_numba_the_environment_variable(monkeypatch, no_numba, tmp_path):
     monkeypatch.setenv(compiled.ENV, "1")
     with pytest.raises(compiled.CompiledUnavailable, match="MECHSOLVE_COMPILED.*numba"):
         ms.solve(ms.loads(PARALLELOGRAM.replace("STEP", "1")))
-    res = CliRunner().invoke(main, ["run", str(MECH / "fourbar.yaml"), "--no-plots",
-                                    "--method", "split-newton", "-o", "out"])  # fmt: skip
+    args = ["run", str(MECH / "fourbar.yaml"), "--no-plots", "--method", "split-newton"]
+    res = CliRunner().invoke(main, args + ["-o", str(tmp_path / "o")])
     assert res.exit_code == 2, res.output
     assert "MECHSOLVE_COMPILED" in res.output and "numba" in res.output
     assert "Traceback" not in res.output
