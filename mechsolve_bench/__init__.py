@@ -431,6 +431,7 @@ def case_newton(n: int, repeats: int) -> Case:
         u, _ = an.sweep_values(u0)
         runs[key] = (an, u, an.assemble(u0))
     assert [g.kind for g in runs["tr-auto"][0].plan] == ["driver link", "Newton"]
+    first_call = _compiled_runs(runs, fourbar_yaml(n), n)
     fns = {
         "ref-fb": lambda: R.fourbar_newton(th2),
         "ref-tr": lambda: R.triad_newton(tht),
@@ -454,6 +455,7 @@ def case_newton(n: int, repeats: int) -> Case:
             u[1:2], start=start, near=(sol, 0)
         )
     t1 = interleaved(one, repeats)
+    cpu = interleaved_cpu({k: fns[k] for k in _CPU_KEYS if k in fns}, max(repeats, 15))
     want_fb = R.fourbar_textbook(th2)
     fbh = t["ref-fb"][1]
     trh = t["ref-tr"][1]
@@ -573,6 +575,24 @@ def case_newton(n: int, repeats: int) -> Case:
             note("tr-newton", "lean-tr"),
         ),
     ]
+    if first_call is not None:  # the compiled path (numba installed): beside the default
+        case.rows.insert(
+            4,
+            Row(
+                "four-bar: mechsolve split-newton, compiled (solver.compiled)",
+                t["fb-split-c"][0],
+                _compare_fourbar(t["fb-split-c"][1], want_fb),
+                note("fb-split-c", "lean-fb"),
+            ),
+        )
+        case.rows.append(
+            Row(
+                "triad six-bar: mechsolve auto, compiled (solver.compiled)",
+                t["tr-auto-c"][0],
+                errs_tr(t["tr-auto-c"][1].state),
+                note("tr-auto-c", "lean-tr") + "; errors against the earlier reference",
+            )
+        )
 
     def ratio(key, ref_key, target):
         r = t[key][0] / t[ref_key][0]
@@ -583,6 +603,8 @@ def case_newton(n: int, repeats: int) -> Case:
         f"ratio newton / lean by hand (four-bar): {ratio('fb-newton', 'lean-fb', 10)}",
         f"ratio auto / lean by hand (triad): {ratio('tr-auto', 'lean-tr', 3)}",
         f"ratio newton / lean by hand (triad): {ratio('tr-newton', 'lean-tr', 10)}",
+        *_compiled_lines(t, first_call, ratio),
+        _cpu_line(cpu),
         "lean by hand / the shared reference's algorithm: four-bar "
         f"{t['lean-fb'][0] / t['shared-fb'][0]:.2f}, triad "
         f"{t['lean-tr'][0] / t['shared-tr'][0]:.2f} (at most 1: at least as fast)",
@@ -593,6 +615,89 @@ def case_newton(n: int, repeats: int) -> Case:
         f"{_fmt_time(t1['tr-auto'][0])} (by hand {_fmt_time(t1['ref-tr'][0])})",
     ]
     return case
+
+
+_CPU_KEYS = ("lean-fb", "fb-split", "fb-split-c", "lean-tr", "tr-auto", "tr-auto-c")
+
+
+def interleaved_cpu(fns: dict[str, Callable[[], object]], repeats: int) -> dict[str, float]:
+    """Median CPU time of one call of each function (``time.thread_time``: the time
+    this thread ran, which other processes on a loaded machine do not add to), the
+    functions alternating run by run in a shuffled order."""
+    times: dict[str, list[float]] = {k: [] for k in fns}
+    for f in fns.values():
+        f()
+    order = list(fns)
+    rng = random.Random(1)
+    for _ in range(repeats):
+        rng.shuffle(order)
+        for k in order:
+            t0 = time.thread_time()
+            fns[k]()
+            times[k].append(time.thread_time() - t0)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def _compiled_runs(runs: dict, fourbar_text: str, n: int) -> tuple[float, str] | None:
+    """The four-bar's split-newton and the triad's auto with ``solver.compiled`` (the
+    numba kernels) added to ``runs`` beside the default ones; the wall time of their
+    first calls (numba's import, and the kernels' compilation or their load from
+    numba's cache on disk) and which of the two it was, or None when numba is not
+    installed (no compiled rows)."""
+    import mechsolve as ms
+    from mechsolve.core.sweep import Analysis
+    from mechsolve.groups import compiled
+
+    if not compiled.available():
+        return None
+    fourbar, triad = ms.loads(fourbar_text), _triad_mech(n)
+    fourbar.solver.compiled = triad.solver.compiled = True
+    t0 = time.perf_counter()
+    for key, mech, method in (
+        ("fb-split-c", fourbar, "split-newton"),
+        ("tr-auto-c", triad, "auto"),
+    ):
+        an = Analysis(mech, method)
+        u0 = an.start_value()
+        u, _ = an.sweep_values(u0)
+        runs[key] = (an, u, an.assemble(u0))
+        an.solve(u, start=runs[key][2])
+    took = time.perf_counter() - t0
+    kern = compiled.kernels()
+    stats = [getattr(kern, f).stats for f in ("coarse_run", "refine2", "refine_elim")]
+    missed = sum(sum(s.cache_misses.values()) for s in stats)
+    how = "compiled (not in numba's cache yet)" if missed else "loaded from numba's cache"
+    return took, how
+
+
+def _compiled_lines(t: dict, first_call: tuple[float, str] | None, ratio) -> list[str]:
+    if first_call is None:
+        return ["compiled path: numba is not installed (pip install 'mechsolve[fast]')"]
+    took, how = first_call
+    return [
+        f"ratio split-newton compiled / lean by hand (four-bar): "
+        f"{ratio('fb-split-c', 'lean-fb', 3)}",
+        f"ratio auto compiled / lean by hand (triad): {ratio('tr-auto-c', 'lean-tr', 3)}",
+        f"compiled path: the first calls took {took:.2f} s (numba's import, the kernels "
+        f"{how}), not in the times above",
+    ]
+
+
+def _cpu_line(cpu: dict[str, float]) -> str:
+    """The sweeps' CPU times and their ratios to the lean programs."""
+    parts = []
+    for label, lean, keys in (
+        ("four-bar", "lean-fb", ("fb-split", "fb-split-c")),
+        ("triad", "lean-tr", ("tr-auto", "tr-auto-c")),
+    ):
+        got = [
+            f"{'compiled' if k.endswith('-c') else 'default'} {_fmt_time(cpu[k])} "
+            f"= {cpu[k] / cpu[lean]:.2f}x"
+            for k in keys
+            if k in cpu
+        ]
+        parts.append(f"{label}: lean {_fmt_time(cpu[lean])}, " + ", ".join(got))
+    return "CPU time (thread_time, medians of interleaved runs): " + "; ".join(parts)
 
 
 def _errs_ref(vec, n):

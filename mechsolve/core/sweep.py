@@ -112,6 +112,8 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                 g.lref = self.scale
             if hasattr(g, "direction"):
                 g.direction = float(mech.driver.direction)
+            if mech.solver.compiled and hasattr(g, "compiled"):  # the file's key
+                g.compiled = "solver.compiled"
         self.points: dict[str, PointRef] = {}
         nb = self.system.nb
         for p, xy in mech.ground.items():

@@ -17,6 +17,7 @@ import numpy as np
 from mechsolve.base.newton import SolveStats, newton_lean, solve
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive, Group
+from mechsolve.groups.compiled import ENV, requested
 from mechsolve.groups.newton_batched import BatchedSweep
 from mechsolve.groups.newton_common import BATCH_MIN, MAX_DEPTH, MAX_JUMP, _extrapolate
 from mechsolve.groups.newton_rates import NewtonRates
@@ -45,6 +46,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         self.scale = 1.0  # the mechanism's size; the analysis sets it
         self.batched = True
         self.predictor = "hermite"  # batched prediction between coarse positions: or "linear"
+        # what asks for the compiled sweep (mechsolve.groups.compiled), None: NumPy only
+        self.compiled: str | None = ENV if requested() else None
         self.max_iterations = max_iterations
         try:  # revolute groups: the links' angles are the only unknowns of the sweep
             self.red: _Angles | None = _Angles(bodies, constraints) if self.m == self.n else None

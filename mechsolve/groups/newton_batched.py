@@ -9,6 +9,7 @@ import numpy as np
 
 from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
+from mechsolve.groups.compiled import kernels
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
 from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
@@ -41,8 +42,8 @@ class BatchedSweep:
         # the coarse pass counts its own positions; prefix() wants the sweep's sample
         sub_prefix = None if prefix is None else (lambda us, j: prefix(us, int(coarse[j])))
         if self.red is not None and self.red.sub.nb <= FLOATS_UP_TO:
-            itc = self._coarse_floats(sub, dsub, q_start, sub_prefix)
-            if itc is None:
+            coarse_pass = self._coarse_compiled if self.compiled else self._coarse_floats
+            if (itc := coarse_pass(sub, dsub, q_start, sub_prefix)) is None:
                 return None
         else:
             okc, itc, _ = self.sweep_sequential(
@@ -55,11 +56,38 @@ class BatchedSweep:
         dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
             return None
+        u = drive.u
+        pred = self._predict(u, coarse, qc, dqc)
+        if self.red is not None:
+            iters = self._refine_angles(st, u, pred, coarse, qc)
+            if iters is None:
+                return None
+            q = self._q_rows(st)
+        else:
+            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
+            if q is None:
+                return None
+        d = np.abs(q - pred)
+        d[:, 0::3] /= self.scale
+        d[:, 1::3] /= self.scale
+        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
+            return None
+        if self.red is None:
+            self._set_q_rows_into(st, q)
+        iters[coarse] = itc
+        return np.ones(n, bool), iters, "newton (batched)"
+
+    def _predict(self, u: np.ndarray, coarse: np.ndarray, qc: np.ndarray, dqc: np.ndarray):
+        """Every position's prediction (N, n) from the coarse positions ``qc`` and their
+        rates ``dqc``: the cubic Hermite (or with ``predictor`` "linear", the chord)."""
+        if self.compiled and self.predictor != "linear":  # the same, in one loop
+            pred = np.empty((len(u), self.n))
+            kernels(self.compiled).hermite(u, coarse, qc, dqc, pred)
+            return pred
         # cubic Hermite between coarse positions, in the driver coordinate: each
         # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
         # segment are consecutive (the last position belongs to the last segment), so its
         # coefficients are repeated rather than gathered (a fancy index costs 6x more)
-        u = drive.u
         counts = np.diff(coarse)
         counts[-1] += 1
         uc = u[coarse]
@@ -79,24 +107,7 @@ class BatchedSweep:
             for c in (c2, m0, q0):
                 pred *= t
                 pred += np.repeat(c, counts, axis=0)
-        if self.red is not None:
-            iters = self._refine_angles(st, u, pred, coarse, qc)
-            if iters is None:
-                return None
-            q = self._q_rows(st)
-        else:
-            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
-            if q is None:
-                return None
-        d = np.abs(q - pred)
-        d[:, 0::3] /= self.scale
-        d[:, 1::3] /= self.scale
-        if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
-            return None
-        if self.red is None:
-            self._set_q_rows_into(st, q)
-        iters[coarse] = itc
-        return np.ones(n, bool), iters, "newton (batched)"
+        return pred
 
     def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
@@ -161,6 +172,93 @@ class BatchedSweep:
         self._set_q_rows(st, np.array(out))
         return iters
 
+    def _coarse_compiled(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
+        """:meth:`_coarse_floats` with its plain steps in the compiled kernel
+        (:func:`~mechsolve.groups.kernels.coarse_run`: the same predictions, Newton
+        iterations, poses and jump check, in the same arithmetic); any other step goes
+        through :meth:`_advance` (:meth:`_solve_one` at the start) in Python, with the
+        same history, as there. Returns the iterations per position, or None."""
+        kern = kernels(self.compiled)
+        red = self.red
+        Kall = red.known(st)
+        u = np.ascontiguousarray(drive.u, float)
+        Kr, thp = red.reduce(red.with_driver(Kall[0], u))
+        Kr, thp = np.ascontiguousarray(Kr), np.ascontiguousarray(thp)
+        Px, Py = np.ascontiguousarray(Kall[1]), np.ascontiguousarray(Kall[2])
+        plan = self._kernel_plan()
+        n, nq = st.n, self.n
+        q0 = np.array([float(v) for v in q_start])
+        hu, hq, nh = np.zeros(3), np.zeros((3, nq)), 0
+        out = np.empty((n, nq))
+        iters = np.zeros(n, np.int64)
+        i = 0
+        while True:
+            i, nh = kern.coarse_run(
+                i, u, Kr, thp, Px, Py, q0, hu, hq, nh, out, iters, *plan, MAX_JUMP
+            )
+            if i >= n:
+                break
+            # the general step, as _coarse_floats (and sweep_sequential) take it
+            Ki = [k[i : i + 1] for k in Kall]
+            if nh:
+                hul, hqa = hu[:nh].tolist(), [hq[j].copy() for j in range(nh)]
+                qa, stats, good = self._advance(None, float(u[i]), hul, hqa, i - 1, prefix, Ki)
+            else:
+                qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+                good = stats.converged
+            if not good:
+                return None
+            out[i] = qa
+            iters[i] = stats.iterations
+            if nh == 3:
+                hu[:2], hq[:2] = hu[1:].copy(), hq[1:].copy()
+                hu[2], hq[2] = u[i], out[i]
+            else:
+                hu[nh], hq[nh] = u[i], out[i]
+                nh += 1
+            i += 1
+        self._set_q_rows(st, out)
+        return iters.astype(int)
+
+    def _kernel_plan(self) -> tuple:
+        """The group's constants as :func:`~mechsolve.groups.kernels.coarse_run` takes
+        them (after the history): free and fixed angles, the free angles' equations
+        (``M1``, ``M2``, ``M3``, their nonzero entries), the tree's local vectors by link
+        (CSR: ``wptr``, ``wk``, ``wa``, ``wb``), the jump's weights, the tolerance and
+        the iterations' limit."""
+        red = self.red
+        sub = red.sub
+        key = (self.scale, self.atol, self.max_iterations)
+        got = getattr(self, "_kplan_c", None)
+        if got is not None and got[0] == key:
+            return got[1]
+        wptr, wk, wa, wb = [0], [], [], []
+        for terms in red._wterms:
+            for k, a, b in terms:
+                wk.append(k)
+                wa.append(a)
+                wb.append(b)
+            wptr.append(len(wk))
+        jw = np.full(self.n, 1.0 / self.scale)
+        jw[2::3] = 1.0
+        plan = (
+            np.asarray(red.free, np.int64),
+            np.asarray(red.fixed, np.int64),
+            np.ascontiguousarray(sub.M1, float),
+            np.ascontiguousarray(sub.M2, float),
+            np.ascontiguousarray(sub.M3, float),
+            np.ascontiguousarray(sub.nzm, np.bool_),
+            np.array(wptr, np.int64),
+            np.array(wk, np.int64),
+            np.array(wa, float),
+            np.array(wb, float),
+            jw,
+            float(self.atol),
+            int(self.max_iterations),
+        )
+        self._kplan_c = (key, plan)
+        return plan
+
     def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
         """A prediction of the next position from the pose ``q0`` (body coordinates) of
         the previous one: the first Newton iterate from ``q0`` with the next position's
@@ -197,11 +295,14 @@ class BatchedSweep:
         if sub.nb == 0:
             todo[:] = False
         if sub.nb == 2:
-            cs = self._refine2(th, Kr, iters, todo)
+            refine2 = self._refine2_compiled if self.compiled else self._refine2
+            cs = refine2(th, Kr, iters, todo)
             if cs is None:
                 return None
             self._put_angles(st, red.join(th, thp), Px, Py, cs)
             return iters
+        if self.compiled and sub.elim is not None:  # the triad's: in the kernel
+            return self._refine_elim_compiled(st, th, Kr, thp, (Px, Py), iters, todo)
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
@@ -325,6 +426,71 @@ class BatchedSweep:
         if cs is None:  # (no iteration on whole arrays)
             cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
         return [cs[0], cs[2]], [cs[1], cs[3]]
+
+    def _refine2_compiled(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
+        """:meth:`_refine2` in the compiled kernel (:func:`~mechsolve.groups.kernels.
+        refine2`: the same steps, tests and updates, position by position); the same
+        arguments and result."""
+        kern = kernels(self.compiled)
+        n = th.shape[0]
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red.sub._rows
+        co = np.array([a1, a2, a3, b1, b2, b3, c1, c2, c3, d1, d2, d3], float)
+        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
+        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        it = np.zeros(n, np.int64)
+        # the first iteration over whole arrays (as nearly always): their cosines and
+        # sines as the NumPy path takes them (vectorised: a fraction of scalar calls)
+        whole = 2 * np.count_nonzero(todo) >= n
+        if whole:
+            C0, S0, C1, S1 = np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)
+        else:
+            C0, S0, C1, S1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        ok = kern.refine2(
+            x0, x1, K0, K1, todo, it, co, bool(self.red.sub.nd), float(self.atol),
+            int(self.max_iterations), C0, S0, C1, S1, whole,
+        )  # fmt: skip
+        iters += it
+        th[:, 0], th[:, 1] = x0, x1
+        if not ok:
+            return None
+        return [C0, C1], [S0, S1]
+
+    def _refine_elim_compiled(self, st: State, th, Kr, thp, roots, iters, todo):
+        """:meth:`_refine_angles`'s iterations for a group eliminated to 2 x 2 in the
+        compiled kernel (:func:`~mechsolve.groups.kernels.refine_elim`); the poses are
+        written into ``st``. Returns the iterations per position, or None."""
+        kern = kernels(self.compiled)
+        sub = self.red.sub
+        el = sub.elim
+        plan = getattr(self, "_elim_plan", None)
+        if plan is None or plan[0] is not el:
+            coef = np.array(el.coef, float)  # (rows, 2, (m1, m2, m3))
+            arrays = (
+                np.array(el.priv, np.int64),
+                np.array(el.rest, np.int64),
+                np.array(el.V, float).reshape(len(el.priv), 2),
+                np.array(el.n2, float),
+                coef,
+            )
+            plan = self._elim_plan = (el, arrays)
+        n = th.shape[0]
+        th = np.ascontiguousarray(th)
+        it = np.zeros(n, np.int64)
+        whole = 2 * np.count_nonzero(todo) >= n  # (as in _refine2_compiled)
+        if whole:
+            Cf, Sf = np.cos(th), np.sin(th)
+        else:
+            Cf, Sf = np.empty(th.shape), np.empty(th.shape)
+        ok = kern.refine_elim(
+            th, np.ascontiguousarray(Kr), todo, it, Cf, Sf, whole, sub.M1, sub.M2, sub.M3,
+            bool(sub.nd), plan[1], float(self.atol), int(self.max_iterations),
+        )  # fmt: skip
+        if not ok:
+            return None
+        iters += it
+        cs = ([c for c in Cf.T], [s for s in Sf.T])
+        self._put_angles(st, self.red.join(th, thp), roots[0], roots[1], cs)
+        return iters
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,

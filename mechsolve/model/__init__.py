@@ -227,11 +227,14 @@ class SolverOptions:
     ``method``: ``"auto"`` splits the constraints into Assur groups and solves the
     groups it recognises in closed form, the others by Newton-Raphson; ``"newton"``
     solves the whole constraint system by Newton-Raphson at each position.
+    ``compiled``: the Newton groups' batched sweeps take their coarse continuation
+    through numba's compiled kernels (the ``fast`` extra; the same results).
     """
 
     method: Literal["auto", "newton"] = "auto"
     tolerance: float = 1e-10
     max_iterations: int = 30
+    compiled: bool = False
     where: KeyPath = ()
 
 

@@ -239,6 +239,7 @@ SOLVER = Section(
         "method": K(choice(*METHODS), "The method (default auto)."),
         "tolerance": K(number(0, 0.01), "The closure tolerance (relative, below 0.01)."),
         "max_iterations": K(integer(1, 1000), "Newton iterations per position (1..1000)."),
+        "compiled": K(FLAG, "Newton sweeps through numba's compiled kernels (needs numba)."),
     },
 )
 

@@ -431,6 +431,16 @@ def read_relative(r: Reader, value: Any, path: KeyPath) -> list[tuple[str, str]]
     return out
 
 
+def _numba_found() -> bool:
+    """Whether numba can be imported (found, not imported: that costs half a second)."""
+    import importlib.util  # (here: only a file that asks for it pays the import)
+
+    try:
+        return importlib.util.find_spec("numba") is not None
+    except (ImportError, ValueError):
+        return False
+
+
 def read_solver(r: Reader, value: Any) -> SolverOptions:
     path: KeyPath = ("solver",)
     m = r.mapping(value, path, keys.SOLVER.allowed, "'solver'")
@@ -458,4 +468,12 @@ def read_solver(r: Reader, value: Any) -> SolverOptions:
         if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 1000:
             raise r.fail(path + ("max_iterations",), "max_iterations is a whole number 1..1000")
         opts.max_iterations = n
+    if "compiled" in m:
+        opts.compiled = r.flag(m["compiled"], path + ("compiled",))
+        if opts.compiled and not _numba_found():
+            raise r.fail(
+                path + ("compiled",),
+                "the compiled Newton sweep needs numba, which is not installed: "
+                "pip install 'mechsolve[fast]', or remove this key",
+            )
     return opts
