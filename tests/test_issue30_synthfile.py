@@ -323,3 +323,94 @@ def test_three_positions_file_puts_the_line_in_its_first_position(tmp_path):
     P, Q = res.point("P"), res.point("Q")
     assert abs(P.x[0]) < 1e-12 and abs(P.y[0]) < 1e-12  # m
     assert math.atan2(Q.y[0] - P.y[0], Q.x[0] - P.x[0]) == pytest.approx(0.0, abs=1e-12)
+
+
+# -- review 6, item 5: a requirement over a sweep that meets toggles ------------------------
+
+ROCKER_DRIVEN = """\
+name: four-bar driven at the rocker
+units: {length: mm, angle: deg}
+ground: {O2: [0, 0], O4: [87.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [26.5, 0]}, mass: 0.05 kg, uniform_bar: [O2, A]}
+  coupler:
+    points: {A: [0, 0], B: [105.6, 0], P: {length: 60, angle: 30}}
+    mass: 0.2 kg
+    uniform_bar: [A, B]
+  rocker: {points: {O4: [0, 0], B: [59, 0]}, mass: 0.11 kg, uniform_bar: [O4, B]}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly:
+  - A right of O2 -> B
+driver: {joint: O4, speed: 1 rad/s, start: START deg}
+sweep: {range: RANGE deg, step: 1 deg}
+gravity: 9.81 m/s^2
+requirements:
+  t: min(transmission_angle.A) >= 5 deg
+  tq: max(abs(input.torque)) <= 4 N m
+"""
+A_, B_, C_, D_ = 26.5, 105.6, 59.0, 87.5  # crank, coupler, rocker, frame (mm)
+
+
+def _o2b2(theta):
+    """|O2 B|^2 at the rocker's angle theta (rad): B = O4 + c (cos, sin), O4 = (d, 0)."""
+    return D_**2 + C_**2 + 2 * D_ * C_ * np.cos(theta)
+
+
+def _toggles() -> tuple[float, float]:
+    """The rocker angles (deg) where crank and coupler are in line, |O2 B| = b + a and
+    b - a (the law of cosines): loop A closes between them only."""
+    return tuple(
+        math.degrees(math.acos((L**2 - D_**2 - C_**2) / (2 * D_ * C_))) for L in (B_ + A_, B_ - A_)
+    )
+
+
+def _mu(theta):
+    """The transmission angle of loop A (the angle at A between crank and coupler, taken
+    in 0..90 deg), by the law of cosines."""
+    g = np.arccos((A_**2 + B_**2 - _o2b2(theta)) / (2 * A_ * B_))
+    return np.minimum(g, np.pi - g)
+
+
+def test_a_requirement_over_a_toggle_fails_at_the_toggle(tmp_path):
+    """Driven at the rocker from 50 to 120 deg: the loop stops closing at the toggles
+    52.306 and 118.209 deg (law of cosines), where the transmission angle is 0. The
+    minimum used to pass on the samples' 6.23876 deg ('not located'), and the summary's
+    minimum was that sample's; the driving torque, which grows without bound towards a
+    toggle, passed on the samples' 3.58 N m."""
+    from mechsolve.cli.main import run
+    from mechsolve.results.requirements import check_requirements
+
+    t_in, t_out = _toggles()
+    assert t_in == pytest.approx(52.306, abs=1e-3) and t_out == pytest.approx(118.2085, abs=1e-3)
+    f = tmp_path / "rd.yaml"
+    f.write_text(ROCKER_DRIVEN.replace("START", "50").replace("RANGE", "70"))
+    mech = api.load(f)
+    res = api.solve(mech)
+    (tr,) = res.transmission_angles()
+    assert tr.angle == 0.0
+    assert math.degrees(tr.u) == pytest.approx(t_in, abs=1e-7)
+    t, tq = check_requirements(mech, res)
+    assert not t.passed and t.value == 0.0
+    assert f"(at driver angle {t_in:.3f}°)" in t.message
+    assert not tq.passed and math.isinf(tq.value)
+    assert f"towards driver angle {t_out:.3f}°, where the mechanism stops closing" in tq.message
+    r = CliRunner().invoke(run, [str(f), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 5, r.output
+    assert "loop A (crank O2-A, coupler A-B) 0° at driver angle 52.306°" in r.output
+
+
+def test_a_requirement_short_of_the_toggles_passes_on_its_located_minimum(tmp_path):
+    """From 55 to 115 deg the loop closes everywhere: the minimum transmission angle is
+    the law of cosines' over the range (at an end: |O2 B| is monotonic in the angle)."""
+    from mechsolve.results.requirements import check_requirements
+
+    f = tmp_path / "rd.yaml"
+    f.write_text(ROCKER_DRIVEN.replace("START", "55").replace("RANGE", "60"))
+    mech = api.load(f)
+    t, _ = check_requirements(mech, api.solve(mech))
+    want = float(np.min(_mu(np.radians(np.linspace(55, 115, 60001)))))
+    assert t.passed and t.value == pytest.approx(want, abs=1e-12)
