@@ -247,14 +247,16 @@ def _numbers(text: str) -> list[str]:
 
 
 def test_synth_writes_a_mm_problem_in_mm_with_six_digits(tmp_path):
-    """The slider-crank problem (stroke 100 mm, K = 1.4, offset 20 mm, in mm): the file
-    is in mm, its numbers have at most 6 significant digits, and solved by mechsolve it
-    gives the stroke (to the rounding of its lengths) and the offset slider-crank's
-    closed form of its own written lengths."""
+    """The slider-crank problem (stroke 100 mm, K = 1.4, offset 20 mm, in mm), with
+    --digits 6: the file is in mm, its numbers have at most 6 significant digits, and
+    solved by mechsolve it gives the stroke (to the rounding of its lengths) and the
+    offset slider-crank's closed form of its own written lengths."""
     from mechsolve.cli.commands.synth import synth
 
     out = tmp_path / "sc.yaml"
-    r = CliRunner().invoke(synth, [str(MECH / "synth" / "slider-crank.yaml"), "-o", str(out)])
+    r = CliRunner().invoke(
+        synth, [str(MECH / "synth" / "slider-crank.yaml"), "-o", str(out), "--digits", "6"]
+    )
     assert r.exit_code == 0, r.output
     text = out.read_text()
     assert "units: {length: mm, angle: deg}" in text

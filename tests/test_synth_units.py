@@ -58,7 +58,7 @@ def test_path_table_and_check_are_in_the_problems_millimetres(tmp_path):
     dist_mm = np.hypot(p.x - targets[:, 0], p.y - targets[:, 1]) / 1e-3
     np.testing.assert_allclose(shown, dist_mm, rtol=2e-3, atol=1e-9)
     assert float(m.group(2)) == pytest.approx(shown.max(), rel=1e-3)
-    assert "mm^2 (the synthesis' model)" in text
+    assert "mm^2, largest" in text and "numbers as written" in text
 
 
 def _figure_of(monkeypatch, problem: Path, tmp_path: Path, *args: str):

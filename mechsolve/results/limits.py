@@ -348,5 +348,12 @@ def transmission_angles(sol: Solution) -> list[Transmission]:
         for e in sol.events:  # refined minima found by the branch analysis
             if e.group == g.label and e.transmission < best:
                 best, uk = e.transmission, e.u
+        # where the sweep meets a range in which the loop cannot close, it stops closing at
+        # a root of its discriminant (located between the samples): its two links are in
+        # line there, a transmission angle of 0
+        edges = [x for f in sol.failures if f.group == g.label for x in (f.edge_in, f.edge_out)]
+        edges = [x for x in edges if math.isfinite(x)]
+        if edges and best > 0.0:
+            best, uk = 0.0, _in_sweep_order(res, edges)[0]
         out.append(Transmission(g.label, max(best, 0.0), uk))
     return out

@@ -274,9 +274,12 @@ class _Reducer:
     of a cam program's joins) and each extreme is then located between its neighbouring
     samples: the quantity is evaluated on a grid between them, solved there, and the
     grid narrowed around its best point down to 1e-8 of the driver coordinate (a value
-    the quantity takes, so never beyond the true extreme). Where that sweep cannot be
-    had (a motion law of time, a sweep that does not close at its ends) they are the
-    samples' and say so;
+    the quantity takes, so never beyond the true extreme). Next to a range where the
+    mechanism cannot close, the interval reaches the located edge of that range (where
+    a loop stops closing: a toggle, its transmission angle 0, where a driving torque
+    through it grows without bound). A sweep that does not close at its ends is located
+    on its own samples (for the plots' sweep is then the run's). With a motion law of
+    time the extremes are the samples' and say so;
     ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u."""
 
     def __init__(self, results: Results) -> None:
@@ -306,8 +309,8 @@ class _Reducer:
     @staticmethod
     def _fine_sweep(res: Results) -> Results | None:
 
-        if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
-            return for_plots(res.mechanism, res)
+        if res.mechanism.driver.motion is None and len(res.u) > 1 and np.any(res.ok):
+            return for_plots(res.mechanism, res)  # the run itself if its ends do not close
         return None
 
     # -- evaluation -------------------------------------------------------------------
@@ -352,23 +355,28 @@ class _Reducer:
             if self.fine is None and u_hi is not None:
                 self.notes.append(f"range of the {self._samples()} samples, not located")
             else:
-                self._where("max", u_hi, "largest")
-                self._where("min", u_lo, "smallest")
+                self._where("max", u_hi, "largest", hi)
+                self._where("min", u_lo, "smallest", lo)
             return hi - lo
         sense = +1 if func == "max" else -1
         v, u = self.extreme(arg, sense)
-        self._where(func, u, "largest" if sense > 0 else "smallest")
+        self._where(func, u, "largest" if sense > 0 else "smallest", v)
         return v
 
     def _samples(self) -> int:
         return int(np.count_nonzero(self.res.ok))
 
-    def _where(self, func: str, u: float | None, word: str) -> None:
-        """Note where an extreme is (``u``: None for a figure that is one number)."""
+    def _where(self, func: str, u: float | None, word: str, value: float = 0.0) -> None:
+        """Note where an extreme ``value`` is (``u``: None for a figure that is one
+        number)."""
         if u is None:
             return
         if self.fine is None:
             self.notes.append(f"{func} the {word} of the {self._samples()} samples, not located")
+        elif math.isfinite(u) and math.isinf(value):
+            self.notes.append(
+                f"{func} towards {self.res.format_u(u)}, where the mechanism stops closing"
+            )
         elif math.isfinite(u):
             self.notes.append(f"{func} at {self.res.format_u(u)}")
 
@@ -398,8 +406,8 @@ class _Reducer:
         fine = self.fine
         u, ok, n = np.asarray(fine.u, float), fine.ok, len(fine.u)
         gaps = {e.after for e in fine.solution.events if e.kind == "dead zone"}
-        lo = u[k - 1] if k > 0 and ok[k - 1] and k - 1 not in gaps else u[k]
-        hi = u[k + 1] if k < n - 1 and ok[k + 1] and k not in gaps else u[k]
+        lo = u[k - 1] if k > 0 and ok[k - 1] and k - 1 not in gaps else _edge(fine, k, -1)
+        hi = u[k + 1] if k < n - 1 and ok[k + 1] and k not in gaps else _edge(fine, k, +1)
         sides = [(lo, hi, k)]
         if fine.is_full_cycle():  # the last sample is the first: its neighbours too
             if k == 0 and ok[n - 2] and n - 2 not in gaps:
@@ -407,6 +415,11 @@ class _Reducer:
             if k == n - 1 and ok[1] and 0 not in gaps:
                 sides.append((u[0], u[1], 0))
         scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        edges = [
+            e
+            for e, j in ((sides[0][0], k - 1), (sides[0][1], k + 1))
+            if not 0 <= j < n or not ok[j]
+        ]
         for lo, hi, near in sides:
             for _ in range(40):
                 if not abs(hi - lo) > _TOL * scale:
@@ -419,7 +432,27 @@ class _Reducer:
                 if vals[j] > best:
                     best, where = float(vals[j]), float(x[j])
                 lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+        for e in edges:
+            if e != u[k] and abs(where - e) <= _TOL * scale and self._unbounded(arg, sense, k, e):
+                return math.inf, e
         return best, where
+
+    def _unbounded(self, arg, sense: int, k: int, edge: float) -> bool:
+        """Whether ``arg`` grows without bound (in the direction ``sense``) towards the
+        ``edge`` of a range where the mechanism cannot close, beside sample ``k``: its
+        growth over the last decades of the distance from the edge (1e-4, 1e-6, 1e-8 of the
+        driver coordinate) does not die out, as a rate through a toggle (like 1/sqrt(d))
+        does, while a position (like sqrt(d)) or a smooth quantity settles."""
+        fine = self.fine
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        away = 1.0 if float(fine.u[k]) > edge else -1.0
+        d = np.array([1e-4, 1e-6, 1e-8]) * scale
+        if not np.all(d < abs(float(fine.u[k]) - edge)):
+            return False
+        v = sense * self._values(arg, edge + away * d, k)
+        if not np.all(np.isfinite(v)):
+            return False
+        return bool(v[2] - v[1] > 2.0 * (v[1] - v[0]) > 0.0)
 
     def _values(self, arg, x: np.ndarray, near: int) -> np.ndarray:
         """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
@@ -437,6 +470,19 @@ class _Reducer:
         out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
         out[~np.asarray(one.ok, bool)] = np.nan
         return out
+
+
+def _edge(res: Results, k: int, side: int) -> float:
+    """The driver value where the motion from solved sample ``k`` meets a range of the
+    sweep in which the mechanism cannot close, before (``side`` -1) or after (+1) it in
+    the sweep's order: the range's located edge, else ``u[k]`` itself."""
+    x = math.nan
+    for f in res.solution.failures:
+        if side > 0 and f.first == k + 1:
+            x = f.edge_in
+        elif side < 0 and f.last == k - 1:
+            x = f.edge_out
+    return float(x) if math.isfinite(x) else float(res.u[k])
 
 
 _GRID = 65  # points of each narrowing of an extreme's interval (32 times narrower each)
@@ -457,8 +503,10 @@ def _scalar(val: Any, what: str) -> float:
 
 
 def _show(x: float, unit: str) -> str:
-    if not math.isfinite(x):
+    if math.isnan(x):
         return "not determined"
+    if math.isinf(x):  # towards a toggle (see _Reducer._unbounded)
+        return "unbounded" if x > 0 else "unbounded below"
     if unit:
         return f"{x / parse_unit(unit).factor:.6g} {unit}"
     return f"{x:.6g}"
@@ -544,14 +592,14 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
         unit = r.unit or _unit_for(tree.operands[k], red.ctx, fig_dim)
         left, right = (value, limit) if k == 0 else (limit, value)
         ok = bool(
-            math.isfinite(value)
+            not math.isnan(value)
             and Expression._derived(Compare(tree.ops, (Num(left), Num(right))), "", ()).evaluate(
                 red.ctx
             )
         )
         figure = re.split(r"<=|>=|==|!=|<|>", r.text)[k].strip()
         notes = ""
-        if red.notes and math.isfinite(value):
+        if red.notes and not math.isnan(value):
             said = list(red.notes)
             if len(said) == 1 and said[0].split(" ", 1)[0] in ("max", "min"):
                 said = [said[0].split(" ", 1)[1]]  # one extreme: "at driver angle ..."

@@ -393,18 +393,18 @@ def function_yaml(
     b, fr = d.lengths["coupler"], d.lengths["frame"]
     side = "right" if d.extra["sigma"] > 0 else "left"
     direction = "ccw" if spec.phi_range > 0 else "cw"
-    err = math.degrees(d.extra["max_error"])
+    w = as_written(d, spec, f)  # the header's figures: those of the numbers as written
     lines = [
         f"# {name}: four-bar function generator ({spec.description})",
         f"# Written by mechsolve synth (function generation; {d.family}).",
-        f"# Grashof: {d.grashof}; minimum transmission angle over the range "
-        f"{math.degrees(d.min_transmission):.4f} deg.",
+        f"# Grashof: {w.grashof}; minimum transmission angle over the range "
+        f"{math.degrees(w.min_transmission):.4f} deg.",
         f"# Input: the crank O2-A from {math.degrees(d.extra['phi_start']):.6f} deg through "
         f"{math.degrees(spec.phi_range):.6f} deg; output: the rocker's angle (x axis O4 -> B"
         + (", reversed" if c < 0 else "")
         + f") from {math.degrees(d.extra['psi_start']):.6f} deg through "
         f"{math.degrees(spec.psi_range):.6f} deg; angles from the frame line O2 -> O4.",
-        f"# Largest structural error over the range: {err:.6f} deg (the synthesis' model).",
+        *_error_lines(w, spec, f),
         f"name: {name}",
         f.units_line,
         "",
@@ -432,6 +432,46 @@ def function_yaml(
         "",
     ]
     return "\n".join(lines)
+
+
+def as_written(d: Design, spec: FunctionSpec, f) -> Design:
+    """The design ``d`` with the numbers its file holds (``f``: how they are written),
+    evaluated by the synthesis' model: what the file's header states (its largest error,
+    its errors at the precision points, its transmission angle) is the written file's,
+    rounded numbers included. Angles scale with the lengths: the written ones are scaled
+    to the problem's frame."""
+    a, c = d.extra["signed"]
+    k = spec.frame / f.written(d.lengths["frame"])
+    aw, bw, cw = (k * f.written(x) for x in (a, d.lengths["coupler"], c))
+    phi_s = math.radians(f.written_deg(math.degrees(d.extra["phi_start"])))
+    at = d.extra["precision_x"]
+    prob = _Problem(spec)
+    w = _design(prob, d.family, aw, bw, cw, phi_s, d.extra["psi_start"], d.extra["sigma"], at)
+    if at:
+        phi, psi = prob.angles(np.array(at), phi_s, d.extra["psi_start"])
+        w.extra["error_points"] = _wrap(_psi(aw, bw, cw, spec.frame, phi, d.extra["sigma"]) - psi)
+    return w
+
+
+def _error_lines(w: Design, spec: FunctionSpec, f) -> list[str]:
+    """The header's lines of the errors of the written numbers ``w`` (:func:`as_written`)."""
+    what = "every digit written" if f.digits is None else f"{f.digits} significant digits"
+    err = w.extra["max_error"]
+    text = f"{math.degrees(err):.6f} deg" if math.isfinite(err) else "- (the loop does not close)"
+    lines = [
+        f"# Largest structural error over the range: {text} ({spec.samples} positions, the "
+        f"synthesis' model of the numbers as written: {what})."
+    ]
+    if w.extra["precision_x"]:
+        lines.append(
+            "# Error at the precision points: "
+            + ", ".join(
+                f"x = {x:.6g}: {math.degrees(e):.3e} deg"
+                for x, e in zip(w.extra["precision_x"], w.extra["error_points"])
+            )
+            + "."
+        )
+    return lines
 
 
 def _deg(x: float) -> str:

@@ -696,18 +696,39 @@ def path_yaml(d: Design, name: str, spec: PathSpec, digits: int | None = None) -
     travel = TWO_PI if spec.closed else abs(float(u[-1] - u[0]))
     data["sweep"] = {"range": f"{math.degrees(max(travel, 1e-9)):.12g} deg", "step": "1 deg"}
     kind = "four-bar" if spec.chain is None else "linkage"
-    lu = _default_unit(spec.units, "length")
+    body = yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    angles = [g(math.degrees(float(x))) for x in u]  # as written, and solved so below
+    what = "every digit written" if digits is None else f"{digits} significant digits"
     head = [
         f"# {name}: {kind} path generator (mechsolve synth, {d.family})",
-        f"# Template {spec.template.name}; point {n['P']} through "
-        f"{len(spec.targets)} targets: sum of squared distances "
-        f"{d.extra['objective'] / parse_unit(lu).factor ** 2:.6e} {lu}^2 (the synthesis' model).",
-        "# Crank angles at the targets (deg): "
-        + ", ".join(f"{math.degrees(float(x)):.6f}" for x in u),
+        f"# Template {spec.template.name}; point {n['P']} through {len(spec.targets)} targets: "
+        + _written_error(body, spec, [math.radians(float(a)) for a in angles])
+        + f" (mechsolve's solution of the numbers as written: {what}).",
+        "# Crank angles at the targets (deg): " + ", ".join(angles),
     ]
     if spec.chain is None:
         head.append(f"# Grashof: {d.grashof}.")
-    return "\n".join(head) + "\n" + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    return "\n".join(head) + "\n" + body
+
+
+def _written_error(text: str, spec: PathSpec, u: list[float]) -> str:
+    """The sum of squared distances and the largest distance from the targets of the
+    coupler point of the mechanism ``text`` (a written file) at its crank angles ``u``
+    (rad), in the template's length unit."""
+    from mechsolve.analyses.instants import Instant, solve_instants
+    from mechsolve.model.parse import loads
+
+    res = solve_instants(loads(text), [Instant(x, 1.0, 0.0) for x in u], forces=False)
+    p = res.point(spec.names["P"])
+    dist = np.hypot(p.x - spec.targets[:, 0], p.y - spec.targets[:, 1])
+    if not np.all(np.isfinite(dist)):
+        return "the written linkage does not close at every target's crank angle"
+    lu = _default_unit(spec.units, "length")
+    k = parse_unit(lu).factor
+    return (
+        f"sum of squared distances {float(np.sum(dist**2)) / k**2:.6e} {lu}^2, largest "
+        f"{float(np.max(dist)) / k:.6e} {lu}"
+    )
 
 
 @dataclass

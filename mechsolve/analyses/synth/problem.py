@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from mechsolve.analyses.synth.common import RULES, Design, pick
-from mechsolve.analyses.synth.writer import SIGNIFICANT, Numbers
+from mechsolve.analyses.synth.writer import Numbers
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.model.source import Source, load_file
@@ -161,12 +161,13 @@ def solve_problem(
     seed: int | None = 0,
     max_time: float | None = None,
     progress=None,
-    digits: int | None = SIGNIFICANT,
+    digits: int | None = None,
 ) -> Outcome:
     """Read a problem file, solve it, pick a design (by ``rule``, or the ``solution``-th
-    listed, from 1) and write its mechanism text: lengths in the problem's unit, to
-    ``digits`` significant digits (every digit for ``None``; the file's ``round``
-    rounds the lengths instead). ``seed``, ``max_time`` (s) and ``progress`` (called
+    listed, from 1) and write its mechanism text: lengths in the problem's unit, every
+    digit (``None``: the shortest decimal that reads back as the same float, so the file
+    reproduces the design to rounding) or ``digits`` significant digits (the file's
+    ``round`` rounds the lengths instead). ``seed``, ``max_time`` (s) and ``progress`` (called
     with the generation and the best objective) are for the optimising methods
     (function, path)."""
     from mechsolve.analyses.synth.writer import mechanism_yaml

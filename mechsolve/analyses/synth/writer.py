@@ -5,21 +5,19 @@ the limit positions, time ratio and minimum transmission angle that confirm the 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from mechsolve.analyses.synth.common import Design
 from mechsolve.base.units import parse_unit
 
-__all__ = ["SIGNIFICANT", "Numbers", "mechanism_yaml", "num"]
-
-
-SIGNIFICANT = 6  # digits of a written length or angle that no rounding step fixes
+__all__ = ["Numbers", "mechanism_yaml", "num", "read_back"]
 
 
 def num(x: float, round_to: float | None = None, unit: str = "m", digits: int | None = None) -> str:
     """A length (SI, written in ``unit``) or an angle in deg as YAML text: to ``digits``
-    significant digits (full precision when ``None``), or rounded to a multiple of
-    ``round_to`` (m; the seed rounds its lengths to 1 mm)."""
+    significant digits, or rounded to a multiple of ``round_to`` (m; the seed rounds its
+    lengths to 1 mm); when neither is given, the shortest decimal that reads back as the
+    same float (``repr``), so that the file reproduces the design to rounding."""
     scale = parse_unit(unit).factor
     if round_to:
         step = round_to / scale
@@ -34,20 +32,36 @@ def num(x: float, round_to: float | None = None, unit: str = "m", digits: int | 
     return format(float(v), f".{digits}g")
 
 
+def read_back(text: str, unit: str = "m") -> float:
+    """The value (SI for a length in ``unit``) a number written by :func:`num` stands
+    for: what ``mechsolve run`` of the file reads."""
+    return float(text) * parse_unit(unit).factor
+
+
 @dataclass(frozen=True)
 class Numbers:
-    """How a design's file writes its numbers: lengths in ``unit`` (the problem's), to
-    :data:`SIGNIFICANT` digits or rounded to ``round_to`` (m); angles in deg."""
+    """How a design's file writes its numbers: lengths in ``unit`` (the problem's), every
+    digit (``digits`` None, the default), to ``digits`` significant digits or rounded to
+    ``round_to`` (m); angles in deg."""
 
     unit: str = "m"
     round_to: float | None = None
-    digits: int | None = SIGNIFICANT
+    digits: int | None = None
 
     def len(self, x: float) -> str:
         return num(x, self.round_to, self.unit, self.digits)
 
     def ang(self, deg: float) -> str:
         return num(deg, None, "m", self.digits)
+
+    def written(self, x: float) -> float:
+        """The length (m) the file holds for the design's ``x`` (m): ``x`` itself to
+        rounding unless the numbers are rounded."""
+        return read_back(self.len(x), self.unit)
+
+    def written_deg(self, deg: float) -> float:
+        """The angle (deg) the file holds for the design's ``deg``."""
+        return float(self.ang(deg))
 
     def xy(self, p) -> str:
         x, y = (num(c, None, self.unit, self.digits) for c in p[:2])
@@ -78,14 +92,32 @@ def _header(d: Design, title: str, f: Numbers) -> list[str]:
         f"# {title}",
         f"# Written by mechsolve synth ({d.method}; {d.family}).",
         f"# Grashof: {d.grashof}; minimum transmission angle "
-        f"{math.degrees(d.min_transmission):.4f} deg"
-        + (f"; time ratio K = {d.time_ratio:.6f}" if d.time_ratio else "")
+        + (
+            f"{math.degrees(d.min_transmission):.4f} deg"
+            if math.isfinite(d.min_transmission)
+            else "not determined"
+        )
+        + (
+            (
+                f"; time ratio K = {d.time_ratio:.6f}"
+                if math.isfinite(d.time_ratio)
+                else "; time ratio not determined"
+            )
+            if d.time_ratio
+            else ""
+        )
         + ".",
     ]
     if f.round_to:
-        lines.append(f"# Lengths rounded to {f.text(f.round_to)}.")
+        lines.append(
+            f"# Lengths rounded to {f.text(f.round_to)} (the figures above: mechsolve's run "
+            "of the numbers as written)."
+        )
     elif f.digits:
-        lines.append(f"# Lengths and angles to {f.digits} significant digits.")
+        lines.append(
+            f"# Lengths and angles to {f.digits} significant digits (the figures above: "
+            "mechsolve's run of the numbers as written)."
+        )
     lines.append("# `mechsolve run` on this file reports the limit positions it was designed for.")
     return lines
 
@@ -102,6 +134,14 @@ def mechanism_yaml(
     ``digits`` significant digits (full precision for ``None``) or rounded to
     ``round_to`` (m)."""
     f = Numbers(unit, round_to, digits)
+    text = _family(d, name, f, **kw)
+    if f.round_to or f.digits:
+        # rounded numbers: the header's figures are those of the file as written
+        text = _family(_as_written(d, text), name, f, **kw)
+    return text
+
+
+def _family(d: Design, name: str, f: Numbers, **kw) -> str:
     if "crank" in d.lengths and "rocker" in d.lengths:
         return _crank_rocker(d, name, f, **kw)
     if "rod" in d.lengths:
@@ -109,6 +149,22 @@ def mechanism_yaml(
     if "input" in d.lengths:
         return _three_positions(d, name, f)
     return _guide_bar(d, name, f)
+
+
+def _as_written(d: Design, text: str) -> Design:
+    """``d`` with the minimum transmission angle and time ratio of the mechanism file
+    ``text`` (its rounded numbers), by mechsolve's run of it."""
+    from mechsolve.model.parse import loads
+    from mechsolve.results.run import solve
+
+    res = solve(loads(text))
+    mu = [t.angle for t in res.transmission_angles()]
+    k = [lp.time_ratio for lp in res.limit_positions() if lp.time_ratio is not None]
+    return replace(
+        d,
+        min_transmission=min(mu) if mu else math.nan,
+        time_ratio=(k[0] if k else math.nan) if d.time_ratio else d.time_ratio,
+    )
 
 
 def _crank_rocker(
@@ -256,9 +312,12 @@ def _three_positions(d: Design, name: str, f: Numbers) -> str:
     words = {3: "three", 4: "four", 5: "five"}
     out = _header(d, f"{name}: four-bar through {words.get(n, n)} positions of a coupler line",
                   f)  # fmt: skip
+    shown = [f.ang(a) for a in ang]  # as written, and solved so below
     out += [
-        f"# The input {i0n}-{a_name} at {', '.join(f'{a:.6f}' for a in ang)} deg puts the "
+        f"# The input {i0n}-{a_name} at {', '.join(shown)} deg puts the "
         f"coupler line (P, Q) in positions {', '.join(str(i) for i in range(1, n + 1))}.",
+    ]
+    body = [
         f"name: {name}",
         f.units_line,
         "",
@@ -289,4 +348,29 @@ def _three_positions(d: Design, name: str, f: Numbers) -> str:
         "  points: [P, Q]",
         "",
     ]
-    return "\n".join(out)
+    err = _pose_errors("\n".join(body), d, [math.radians(float(a)) for a in shown], f)
+    return "\n".join([*out, err, *body])
+
+
+def _pose_errors(text: str, d: Design, angles: list[float], f: Numbers) -> str:
+    """The header's line of the largest errors of the positions reached by the mechanism
+    ``text`` (the file's numbers as written) at the input ``angles`` (rad): P's distance
+    from the target and the line's angle (P -> Q) from the target's."""
+    from mechsolve.analyses.instants import Instant, solve_instants
+    from mechsolve.model.parse import loads
+
+    res = solve_instants(loads(text), [Instant(a, 1.0, 0.0) for a in angles], forces=False)
+    p, q = res.point("P"), res.point("Q")
+    dist, turn = [], []
+    for i, (pt, phi) in enumerate(d.extra["positions"]):
+        dist.append(math.hypot(p.x[i] - pt[0], p.y[i] - pt[1]))
+        line = math.atan2(q.y[i] - p.y[i], q.x[i] - p.x[i])
+        turn.append(abs((line - phi + math.pi) % (2 * math.pi) - math.pi))
+    if not all(map(math.isfinite, dist + turn)):
+        return "# The file as written does not reach every position (it does not close there)."
+    what = "every digit written" if not (f.digits or f.round_to) else "rounded numbers"
+    return (
+        f"# Largest error of the positions: P {max(dist) / f.factor:.3e} {f.unit}, the line "
+        f"{math.degrees(max(turn)):.3e} deg (mechsolve's solution of the numbers as written: "
+        f"{what})."
+    )

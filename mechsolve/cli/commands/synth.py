@@ -54,10 +54,11 @@ from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
 @click.option(
     "--digits",
     type=click.IntRange(3, 17),
-    default=6,
-    show_default=True,
-    help="Significant digits of the written file's lengths and angles (in the problem's "
-    "units; 17 keeps every digit); a 'round' in FILE rounds the lengths instead.",
+    help="Round the written file's lengths and angles to N significant digits (in the "
+    "problem's units). Default: every digit (the shortest decimal that reads back the "
+    "same), so that the file reproduces the design; 17 does the same. A 'round' in FILE "
+    "rounds the lengths instead. The file's header states the errors of its numbers as "
+    "written.",
 )
 @QUIET
 def synth(file: Path, output, pick, solution, plot, seed, max_time, digits, quiet) -> None:
@@ -98,7 +99,7 @@ def synth(file: Path, output, pick, solution, plot, seed, max_time, digits, quie
             seed=seed,
             max_time=max_time,
             progress=progress,
-            digits=None if digits == 17 else digits,
+            digits=None if digits in (None, 17) else digits,
         )
     finally:
         if bar is not None:
