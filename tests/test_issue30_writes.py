@@ -1,0 +1,183 @@
+"""Issue 30 (review R7), writing what the commands produce and refusing what they cannot:
+
+* an output named through a symbolic link replaces the file the link points to and keeps
+  the link; a pipe (FIFO) or a character device is written through, never replaced by a
+  regular file (a device node of our own in tmp_path, never a real one);
+* a full disk under ``sweep --keep-results`` is exit 2 with the solved rows kept;
+* ``draw``/``polygons --at`` far from the start are refused with the limit named;
+* a motion law that is not finite is named at its own key, with the time;
+* the cam's pressure-angle peaks carry their unit; smaller wording fixes.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import stat
+import threading
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mechsolve.cli.main import main
+
+FIFOS = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+
+
+def _invoke(*args) -> object:
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _leftovers(*folders: Path) -> list[str]:
+    return sorted(p.name for d in folders for p in Path(d).iterdir() if p.name.startswith("."))
+
+
+def _reader(fifo: Path) -> tuple[threading.Thread, list[bytes]]:
+    """A thread reading ``fifo`` to its end (as ``cat fifo`` would)."""
+    got: list[bytes] = []
+
+    def read():
+        with open(fifo, "rb") as fh:
+            got.append(fh.read())
+
+    t = threading.Thread(target=read, daemon=True)
+    t.start()
+    return t, got
+
+
+# --- item 2: symbolic links, pipes and devices ------------------------------------------
+
+
+def test_a_symlink_is_followed_and_its_target_replaced(tmp_path):
+    """The link stays a link; the file it points to (in another folder) gets the new
+    contents, by a rename there (a new inode: never half written); no temporary is left
+    beside the link or beside the target."""
+    from mechsolve.base.atomic import write_text
+
+    (tmp_path / "real").mkdir()
+    target = tmp_path / "real" / "out.csv"
+    target.write_text("old\n")
+    old_inode = target.stat().st_ino
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    write_text(link, "new, complete\n")
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert target.read_text() == "new, complete\n"
+    assert target.stat().st_ino != old_inode  # replaced, not rewritten in place
+    assert _leftovers(tmp_path, tmp_path / "real") == []
+
+
+def test_a_link_to_nothing_yet_creates_its_target(tmp_path):
+    from mechsolve.base.atomic import write_bytes
+
+    link = tmp_path / "link.bin"
+    link.symlink_to(tmp_path / "made.bin")
+    write_bytes(link, b"\x00\x01")
+    assert link.is_symlink() and (tmp_path / "made.bin").read_bytes() == b"\x00\x01"
+
+
+def test_schema_to_a_symlink_writes_the_linked_file(tmp_path):
+    """``schema -o link``: the link is kept, its target holds the whole schema (the same
+    bytes as to a plain file)."""
+    plain = tmp_path / "plain.json"
+    assert _invoke("schema", "-o", plain).exit_code == 0
+    target = tmp_path / "target.json"
+    target.write_text("x")
+    link = tmp_path / "link.json"
+    link.symlink_to(target.name)  # a relative link
+    r = _invoke("schema", "-o", link)
+    assert r.exit_code == 0, r.output
+    assert link.is_symlink()
+    assert target.read_bytes() == plain.read_bytes()
+    json.loads(target.read_text())
+
+
+@FIFOS
+def test_a_fifo_is_written_through_not_replaced(tmp_path, monkeypatch):
+    """``schema -o fifo`` with a process reading it: the reader gets the whole schema
+    and the FIFO is still a FIFO (it used to become a regular file, the reader getting
+    nothing). The temporary (in the temporary folder) is removed."""
+    import tempfile
+
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmpdir))
+    plain = tmp_path / "plain.json"
+    assert _invoke("schema", "-o", plain).exit_code == 0
+    fifo = tmp_path / "out.json"
+    os.mkfifo(fifo)
+    t, got = _reader(fifo)
+    r = _invoke("schema", "-o", fifo)
+    t.join(30)
+    assert r.exit_code == 0, r.output
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert got == [plain.read_bytes()]
+    assert list(tmpdir.iterdir()) == [] and _leftovers(tmp_path) == []
+
+
+@FIFOS
+def test_a_symlink_to_a_fifo_is_written_through(tmp_path):
+    from mechsolve.base.atomic import write_text
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    link = tmp_path / "link"
+    link.symlink_to(fifo)
+    t, got = _reader(fifo)
+    write_text(link, "a,b\n1,2\n" * 20000)  # more than a pipe's buffer
+    t.join(30)
+    assert got == [b"a,b\n1,2\n" * 20000]
+    assert link.is_symlink() and stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+@FIFOS
+def test_a_fifo_nothing_reads_is_refused_not_waited_for(tmp_path, monkeypatch):
+    """Nothing reads the FIFO: exit 2 after the bounded wait, naming the file; the FIFO
+    is left as it was."""
+    import time
+
+    from mechsolve.base import atomic
+
+    monkeypatch.setattr(atomic, "PIPE_WAIT", 0.3)
+    fifo = tmp_path / "out.json"
+    os.mkfifo(fifo)
+    t0 = time.monotonic()
+    r = _invoke("schema", "-o", fifo)
+    assert time.monotonic() - t0 < 20
+    assert r.exit_code == 2, r.output
+    assert f"cannot write {fifo}: it is a pipe (FIFO) that no process reads" in r.output
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+def _device(tmp_path: Path, name: str, minor: int) -> Path:
+    """A character device node of our own in tmp_path (1, minor: 3 null, 7 full), or a
+    skip where one cannot be made or opened (not root, a nodev mount)."""
+    node = tmp_path / name
+    try:
+        os.mknod(node, 0o666 | stat.S_IFCHR, os.makedev(1, minor))
+        os.close(os.open(node, os.O_WRONLY))
+    except (OSError, AttributeError) as exc:
+        pytest.skip(f"no device node of our own here: {exc}")
+    return node
+
+
+def test_a_full_device_is_a_full_disk_and_stays_a_device(tmp_path):
+    """A node like /dev/full (made in tmp_path): exit 2, "No space left on device" with
+    the file named, and the node is still the same character device (it used to be
+    replaced by a 128 kB regular file and the command said "wrote")."""
+    node = _device(tmp_path, "full", 7)
+    r = _invoke("schema", "-o", node)
+    assert r.exit_code == 2, r.output
+    assert f"cannot write {node}: {os.strerror(errno.ENOSPC)}" in r.output
+    st = os.lstat(node)
+    assert stat.S_ISCHR(st.st_mode) and st.st_rdev == os.makedev(1, 7)
+    assert _leftovers(tmp_path) == []
+
+
+def test_a_null_device_takes_the_output_and_stays_a_device(tmp_path):
+    node = _device(tmp_path, "null", 3)
+    r = _invoke("schema", "-o", node)
+    assert r.exit_code == 0, r.output
+    assert stat.S_ISCHR(os.lstat(node).st_mode)
