@@ -11,8 +11,10 @@
 
 from __future__ import annotations
 
+import csv
 import errno
 import json
+import math
 import os
 import stat
 import threading
@@ -181,3 +183,106 @@ def test_a_null_device_takes_the_output_and_stays_a_device(tmp_path):
     r = _invoke("schema", "-o", node)
     assert r.exit_code == 0, r.output
     assert stat.S_ISCHR(os.lstat(node).st_mode)
+
+
+# --- item 1: a full disk under sweep --keep-results -------------------------------------
+
+STUDY = Path(__file__).parent / "data" / "study_fourbar.yaml"  # 3 x 2 designs
+COUPLER, ROCKER = 105.6, 59.0  # mm, the file's b and c
+
+
+def _swing(a: float, d: float) -> float:
+    """The crank-rocker's rocker swing (deg), from the triangle O2-B-O4 at the two limit
+    positions (crank and coupler in line: |O2B| = b + a and b - a)."""
+    b, c = COUPLER, ROCKER
+
+    def at_o4(s: float) -> float:
+        return math.degrees(math.acos((c * c + d * d - s * s) / (2 * c * d)))
+
+    return at_o4(b + a) - at_o4(b - a)
+
+
+def _full_for(monkeypatch, part: str) -> None:
+    """Every flush to the disk of a file whose name contains ``part`` fails as on a full
+    disk (the atomic writer flushes each file before its rename)."""
+    real = os.fsync
+
+    def fsync(fd):
+        try:
+            name = os.readlink(f"/proc/self/fd/{fd}")
+        except OSError:
+            name = ""
+        if part in os.path.basename(name):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize(
+    "jobs, full, kept",
+    [
+        ("1", "design-00002", 3),  # designs 0 and 1 written, 2 solved but not written
+        ("1", "design-00000", 1),  # the first (timed) design's file already
+        ("2", "design-00003", None),  # on a pool: at least the rows before, in order
+    ],
+)
+def test_a_full_disk_stops_the_study_keeping_the_solved_rows(
+    tmp_path, monkeypatch, jobs, full, kept
+):
+    """It used to be exit 0, every row "failed: cannot write ..." without its figures, and
+    "wrote ... 6 design results". Now: exit 2, one error naming the design's file and
+    the disk's reason, the rows solved kept in study.csv with their figures (the swing
+    checked against the closed form), the files written whole and no claim of others."""
+    if not os.path.isdir("/proc/self/fd"):
+        pytest.skip("the injected full disk reads /proc/self/fd")
+    pytest.importorskip("multiprocessing")
+    _full_for(monkeypatch, full)
+    out = tmp_path / "st"
+    r = _invoke("sweep", STUDY, "-o", out, "-j", jobs, "--no-plots", "--keep-results")
+    assert r.exit_code == 2, r.output
+    target = out / "designs" / f"{full}.csv"
+    err = [x for x in r.output.splitlines() if "error" in x]
+    assert err == [f"error: cannot write {target}: {os.strerror(errno.ENOSPC)}"], r.output
+    assert "design results" not in r.output and "Traceback" not in r.output
+    rows = _rows(out / "study.csv")
+    done = [int(row["design [-]"]) for row in rows]
+    stop = int(full[-5:])
+    if kept is not None:
+        assert done == list(range(kept))
+    assert stop in done or jobs != "1"
+    assert f"stopped after {len(rows)} of 6 designs" in r.output
+    for row in rows:
+        assert row["status"] == "ok", row
+        a, d = float(row["links.crank.points.A[0] [mm]"]), float(row["ground.O4[0] [mm]"])
+        assert float(row["rocker.swing [deg]"]) == pytest.approx(_swing(a, d), abs=1e-6)
+    written = sorted(p.name for p in (out / "designs").iterdir())
+    assert f"{full}.csv" not in written
+    assert all(not n.startswith(".") for n in written)  # no temporary left
+    positions = {int(row["design [-]"]): int(row["positions [-]"]) for row in rows}
+    for name in written:  # each whole: a row per position of its design
+        assert len(_rows(out / "designs" / name)) == positions[int(name[7:12])]
+
+
+def test_kept_results_counts_only_the_files_written(tmp_path):
+    """Invalid designs have no results file: the summary counts the files it wrote (2),
+    not the designs (4)."""
+    out = tmp_path / "st"
+    # a crank of 0 mm is an invalid design (its two points coincide)
+    r = _invoke(
+        "sweep", STUDY, "-o", out, "-j", "1", "--no-plots", "--keep-results",
+        "-p", "links.crank.points.A[0]=20, 0 mm",
+    )  # fmt: skip
+    assert r.exit_code in (0, 5), r.output  # 5: no design meets the file's requirements
+    rows = _rows(out / "study.csv")
+    assert [row["status"].split(":")[0] for row in rows] == ["ok", "ok", "invalid", "invalid"]
+    assert sorted(p.name for p in (out / "designs").iterdir()) == [
+        "design-00000.csv",
+        "design-00001.csv",
+    ]
+    assert f"and 2 design results in {out}/designs/" in r.output
