@@ -25,6 +25,8 @@ from click.testing import CliRunner
 
 from mechsolve.cli.main import main
 
+from conftest import MECH
+
 FIFOS = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
 
 
@@ -286,3 +288,59 @@ def test_kept_results_counts_only_the_files_written(tmp_path):
         "design-00001.csv",
     ]
     assert f"and 2 design results in {out}/designs/" in r.output
+
+
+# --- item 5: draw and polygons --at far from the start ----------------------------------
+
+FOURBAR = MECH / "fourbar.yaml"  # driver O2 at 1 rad/s from 0 deg
+
+
+def _with_driver(tmp_path: Path, driver: str, sweep: str, name: str = "m.yaml") -> Path:
+    text = FOURBAR.read_text()
+    old_d, old_s = (
+        "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}",
+        "sweep: {range: 360 deg, step: 2 deg}",
+    )
+    assert old_d in text and old_s in text
+    path = tmp_path / name
+    path.write_text(text.replace(old_d, driver).replace(old_s, sweep))
+    return path
+
+
+@pytest.mark.parametrize("command", ["draw", "polygons"])
+@pytest.mark.parametrize(
+    "at, said",
+    [
+        ("1e7 s", "the driver would travel 1e+07 rad from the start by t = 1e+07 s; "
+                  "mechsolve accepts at most 1e+06 rad"),
+        ("1e9 deg", "too large a number for an angle: mechsolve accepts at most 1e+06 rad"),
+        ("1e9", "give the angle with its unit"),
+    ],
+)  # fmt: skip
+def test_a_far_instant_is_refused_with_the_limit(tmp_path, command, at, said):
+    """It was an internal error (MemoryError: 213 GiB for the grid from the start), exit
+    4, or minutes of solving; now exit 2 at once, naming the limit ``run --at`` has."""
+    out = tmp_path / ("d.svg" if command == "draw" else "pg")
+    r = _invoke(command, FOURBAR, "--at", at, "-o", out)
+    assert r.exit_code == 2, r.output
+    assert f"--at {at!r}: " in r.output and said in r.output, r.output
+    assert "internal error" not in r.output
+    assert not out.exists() or not any(out.iterdir())  # nothing written
+
+
+def test_a_motion_law_far_from_its_start_is_refused(tmp_path):
+    """A law that reaches 2e6 rad at t = 2 s: refused by the same limit."""
+    f = _with_driver(tmp_path, 'driver: {joint: O2, motion: {law: "1e6 * t"}}',
+                     "sweep: {duration: 1 s, steps: 10}")  # fmt: skip
+    r = _invoke("draw", f, "--at", "2 s", "-o", tmp_path / "d.svg")
+    assert r.exit_code == 2, r.output
+    assert "the driver would travel 2e+06 rad from the start by t = 2 s" in r.output
+
+
+def test_an_instant_within_reach_is_drawn_at_its_angle(tmp_path):
+    """100 s at 1 rad/s from 0 deg: the crank at 100 rad = 5729.58 deg, i.e. 329.58 deg
+    into its 16th turn (the closed form of a constant speed)."""
+    r = _invoke("draw", FOURBAR, "--at", "100 s", "-o", tmp_path / "d.svg")
+    assert r.exit_code == 0, r.output
+    want = math.degrees(100.0) % 360.0
+    assert f"(driver angle {want:.6g}°)" in r.output, r.output
