@@ -344,3 +344,39 @@ def test_an_instant_within_reach_is_drawn_at_its_angle(tmp_path):
     assert r.exit_code == 0, r.output
     want = math.degrees(100.0) % 360.0
     assert f"(driver angle {want:.6g}°)" in r.output, r.output
+
+
+# --- item 7: a motion law that is not finite --------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "law, t, which",
+    [
+        ("2 * t + 1/(t - 1)", 1.0, ""),  # a pole at t = 1 s (position and rates)
+        # u(1) = 0, u'(1) = -1/(2 sqrt(0)), u''(1) = -1/(4 (1 - t)^1.5)
+        ("sqrt(1 - t)", 1.0, " (its speed and acceleration)"),
+        ("t*1e300*1e300", 0.0, " (its speed)"),  # u(0) = 0, u' = 1e600 everywhere
+    ],
+)
+def test_a_motion_law_not_finite_is_named_at_its_key_with_the_time(tmp_path, law, t, which):
+    """It was "driver.speed: the driver speed must be a finite number", a key not in the
+    file (the speed derived from the law). The law's own key path, its line (the driver's
+    line, 35) and the time where it is not finite (by hand: the pole, or where the root's
+    derivative is infinite) are named."""
+    f = _with_driver(tmp_path, f'driver: {{joint: O2, motion: {{law: "{law}"}}}}',
+                     "sweep: {duration: 2 s, steps: 20}")  # fmt: skip
+    r = _invoke("check", f)
+    assert r.exit_code == 2, r.output
+    want = f"{f}:35: driver.motion.law: the law is not finite at t = {t:g} s{which}"
+    assert want in r.output, r.output
+    assert "driver.speed" not in r.output
+
+
+def test_a_law_not_finite_only_later_in_the_sweep_is_named_there(tmp_path):
+    """1/(t - 1.5) is finite over the first second (where the law's nominal speed is
+    read) and has its pole at a sample of the sweep, t = 1.5 s."""
+    f = _with_driver(tmp_path, 'driver: {joint: O2, motion: {law: "t + 1/(t - 1.5)"}}',
+                     "sweep: {duration: 2 s, steps: 20}")  # fmt: skip
+    r = _invoke("run", f, "-o", tmp_path / "o", "-q")
+    assert r.exit_code == 2, r.output
+    assert "driver.motion.law: the law is not finite at t = 1.5 s" in r.output, r.output
