@@ -380,3 +380,32 @@ def test_a_law_not_finite_only_later_in_the_sweep_is_named_there(tmp_path):
     r = _invoke("run", f, "-o", tmp_path / "o", "-q")
     assert r.exit_code == 2, r.output
     assert "driver.motion.law: the law is not finite at t = 1.5 s" in r.output, r.output
+
+
+# --- item 8: the cam's pressure-angle peaks carry their unit ----------------------------
+
+
+def test_the_pressure_peaks_are_labelled_with_their_unit(tmp_path, monkeypatch):
+    """The labels of the peaks on pressure.png read "48.3°", not "48.3"; the largest is
+    the largest pressure angle of the profile (read off its own array here)."""
+    import numpy as np
+
+    from mechsolve.analyses.cam import writers
+    from mechsolve.analyses.cam.analysis import analyse
+    from mechsolve.analyses.cam.model import load
+
+    figs: list = []
+
+    def keep(fig, path, plt, tight=False):
+        figs.append(fig)
+        return path
+
+    monkeypatch.setattr(writers, "_save", keep)
+    monkeypatch.setattr(writers, "draw_cam", lambda res, path, positions=4: path)
+    res = analyse(load(MECH / "shaper-cam.yaml", None))
+    writers.write_plots(res, tmp_path)
+    (fig,) = [f for f in figs if "pressure angle" in f.axes[0].get_title()]
+    labels = [t.get_text() for t in fig.axes[0].texts]
+    assert len(labels) >= 2 and all(s.endswith("°") for s in labels), labels
+    peak = float(np.degrees(np.max(res.profile.pressure)))
+    assert max(float(s.rstrip("°")) for s in labels) == pytest.approx(peak, abs=0.05)
