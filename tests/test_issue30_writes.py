@@ -409,3 +409,73 @@ def test_the_pressure_peaks_are_labelled_with_their_unit(tmp_path, monkeypatch):
     assert len(labels) >= 2 and all(s.endswith("°") for s in labels), labels
     peak = float(np.degrees(np.max(res.profile.pressure)))
     assert max(float(s.rstrip("°")) for s in labels) == pytest.approx(peak, abs=0.05)
+
+
+# --- smaller items ----------------------------------------------------------------------
+
+
+def test_flywheel_of_a_change_point_linkage_names_its_branch_change(tmp_path):
+    """A change-point four-bar (s + l = p + q: 40 + 100 = 60 + 80 mm) passes a position
+    with all its links in line every turn and comes back on its other branch: its cycle is
+    two turns. It has no gears, which the note used to give as the cause."""
+    text = FOURBAR.read_text()
+    for old, new in [
+        ("O4: [87.5, 0]", "O4: [80, 0]"),
+        ("A: [26.5, 0]", "A: [40, 0]"),
+        ("B: [105.6, 0]", "B: [100, 0]"),
+        ("B: [59, 0]", "B: [60, 0]"),
+        ("start: 0 deg", "start: 10 deg"),
+    ]:
+        assert old in text, old
+        text = text.replace(old, new)
+    f = tmp_path / "change.yaml"
+    f.write_text(text)
+    r = _invoke("flywheel", f, "--no-check", "-o", tmp_path / "fw")
+    assert r.exit_code == 0, r.output
+    assert "the machine's cycle is 2 turns of the driver (720 deg)" in r.output, r.output
+    assert "gear" not in r.output.replace("no gears", "")
+    assert "changes assembly branch where its links line up" in r.output
+
+
+def test_the_gear_train_still_names_its_gear_ratios():
+    from mechsolve import api
+    from mechsolve.analyses.dynamics.cycle import cycle_cause
+
+    assert cycle_cause(api.load(MECH / "gear-train.yaml")) == "its gear ratios"
+
+
+def test_a_single_position_is_one_sample(tmp_path):
+    """A sweep of range 0: "(1 sample)", not "(1 samples)"."""
+    f = _with_driver(tmp_path, "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}",
+                     "sweep: {range: 0 deg, step: 2 deg}")  # fmt: skip
+    r = _invoke("run", f, "-o", tmp_path / "o", "--no-plots")
+    assert r.exit_code == 0, r.output
+    assert "driving torque (1 sample): " in r.output and "peak reactions (1 sample): " in r.output
+    assert "samples)" not in r.output
+
+
+def test_simulation_plots_place_their_legends_without_a_search(tmp_path, monkeypatch):
+    """A long simulation printed Matplotlib's UserWarning 'Creating legend with
+    loc="best" can be slow with large amounts of data' (the reactions over 200001 time
+    samples): the search for the best place took over a second. Each legend of the
+    simulation's plots is now placed where it is drawn; a clock that makes every search
+    look slow (as 400 s of simulation did) finds none to warn about."""
+    import itertools
+    import warnings
+
+    import matplotlib.legend
+
+    from mechsolve import api
+    from mechsolve.analyses.dynamics import simulate
+    from mechsolve.analyses.dynamics.plots import write_simulation_plots
+
+    sim = simulate(api.load(MECH / "motor-linkage.yaml"))
+    assert sim.forces is not None  # the reactions' plot is drawn
+    clock = itertools.count(0.0, 2.0)  # 2 s between any two readings
+    monkeypatch.setattr(matplotlib.legend.time, "perf_counter", lambda: next(clock))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        files = write_simulation_plots(sim, sim.model, tmp_path)
+    assert "simulation-reactions.png" in [p.name for p in files]
+    slow = [str(w.message) for w in seen if "loc=" in str(w.message)]
+    assert slow == []
