@@ -271,6 +271,57 @@ def test_a_full_disk_stops_the_study_keeping_the_solved_rows(
         assert len(_rows(out / "designs" / name)) == positions[int(name[7:12])]
 
 
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 2 MiB tmpfs (root only; skipped where it cannot be mounted)."""
+    import shutil
+    import subprocess
+
+    if not hasattr(os, "geteuid") or os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("mounting a small tmpfs needs root")
+    mnt = tmp_path / "disk"
+    mnt.mkdir()
+    p = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mnt)],
+                       capture_output=True, text=True)  # fmt: skip
+    if p.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs: {p.stderr.strip()}")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], capture_output=True)
+
+
+def test_a_real_full_disk_under_keep_results(small_disk):
+    """The reviewer's case on a real file system: room for the table and a few designs'
+    results, not for all. Exit 2 naming a design's file, every design finished before it
+    in the table with its figures, its files whole, nothing else claimed."""
+    filler = small_disk / "filler"
+    with open(filler, "wb") as fh:  # fill it to the brim, then free 60 kB
+        try:
+            while True:
+                fh.write(b"\0" * (1 << 16))
+                fh.flush()
+        except OSError as exc:
+            assert exc.errno == errno.ENOSPC
+    os.truncate(filler, filler.stat().st_size - 60_000)
+    out = small_disk / "st"
+    r = _invoke("sweep", STUDY, "-o", out, "-j", "1", "--no-plots", "--keep-results")
+    assert r.exit_code == 2, r.output
+    err = [x for x in r.output.splitlines() if "error" in x]
+    assert len(err) == 1 and os.strerror(errno.ENOSPC) in err[0], r.output
+    assert f"{out}/designs/design-" in err[0]
+    rows = _rows(out / "study.csv")
+    written = sorted(p.name for p in (out / "designs").iterdir())
+    assert 1 <= len(written) < len(rows) <= 6
+    assert [int(row["design [-]"]) for row in rows] == list(range(len(rows)))
+    assert written == [f"design-{k:05d}.csv" for k in range(len(written))]
+    for row in rows:
+        a, d = float(row["links.crank.points.A[0] [mm]"]), float(row["ground.O4[0] [mm]"])
+        assert float(row["rocker.swing [deg]"]) == pytest.approx(_swing(a, d), abs=1e-6)
+    for name in written:
+        assert len(_rows(out / "designs" / name)) == int(rows[0]["positions [-]"])
+
+
 def test_kept_results_counts_only_the_files_written(tmp_path):
     """Invalid designs have no results file: the summary counts the files it wrote (2),
     not the designs (4)."""
