@@ -271,6 +271,21 @@ def test_a_full_disk_stops_the_study_keeping_the_solved_rows(
         assert len(_rows(out / "designs" / name)) == positions[int(name[7:12])]
 
 
+def test_the_stop_crosses_a_process_pool_or_dask_with_its_rows():
+    """A worker's ResultsNotWritten reaches the main process (pickled, as a pool or Dask
+    sends it) with the same message, errno, exit code and the rows finished."""
+    import pickle
+
+    from mechsolve.analyses.study.execute import ResultsNotWritten
+
+    rows = [{"design [-]": 4, "status": "ok", "rocker.swing [deg]": 48.3}]
+    exc = ResultsNotWritten("st/designs/design-00004.csv", OSError(errno.ENOSPC, "full"), rows)
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is ResultsNotWritten and str(back) == str(exc)
+    assert back.errno == errno.ENOSPC and back.exit_code == 2 and back.rows == rows
+    assert str(back) == "cannot write st/designs/design-00004.csv: full"
+
+
 @pytest.fixture
 def small_disk(tmp_path):
     """A 2 MiB tmpfs (root only; skipped where it cannot be mounted)."""
