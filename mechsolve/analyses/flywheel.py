@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.analyses.dynamics import MAX_STEPS, _with_flywheel, simulate, steady_fluctuation
-from mechsolve.analyses.dynamics.cycle import machine_cycle
+from mechsolve.analyses.dynamics.cycle import cycle_cause, machine_cycle
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import _QUANTITY_RE, SI_OUTPUT, OutputUnits, UnitError, parse_unit
 from mechsolve.core import evaluate as core
@@ -264,7 +264,7 @@ def size_flywheel(
     if turns > 1:
         out.notes.append(
             f"the machine's cycle is {turns} turns of the driver ({360 * turns} deg): it "
-            "comes back to its start only then (its gear ratios)"
+            f"comes back to its start only then ({cycle_cause(mech)})"
         )
     if check and mech.motor is not None and mech.simulation is not None and out.J_flywheel > 0:
         _check_by_simulation(out, mech, an)

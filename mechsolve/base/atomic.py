@@ -6,6 +6,14 @@ one folder never share one), flushes it to the disk (``fsync``) and moves it int
 when it is complete, so a half-written CSV, image, report or drawing is never left
 behind; on any failure the temporary is removed and the target is left as it was.
 
+An output named through a symbolic link is written where the link points (the target
+is replaced, the link kept). An output that is a character device or a pipe (FIFO)
+(``/dev/null``, ``/dev/stdout``, a terminal, a process reading a named pipe) is written
+through, as a shell's ``>`` would: it has no contents to replace, and replacing its name
+with a regular file would destroy the device; the data is still complete in a temporary
+before it is sent. A pipe that no process reads is refused after a bounded wait
+(:data:`PIPE_WAIT`) instead of blocking for good; a block device or a socket is refused.
+
 A file that cannot be written (a full disk, a quota, no permission, a read-only file
 system) raises :class:`WriteFailed`: an input error (exit code 2) that names the file
 and gives the system's reason, and an :class:`OSError` with its ``errno`` for callers
@@ -16,7 +24,9 @@ from __future__ import annotations
 
 import errno
 import os
+import stat
 import tempfile
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -26,14 +36,18 @@ from mechsolve.base.errors import InputError
 
 __all__ = [
     "ENVIRONMENT_ERRNOS",
+    "PIPE_WAIT",
     "WriteFailed",
     "commit",
+    "destination",
     "new_temporary",
     "opened",
     "replacing",
     "write_bytes",
     "write_text",
 ]
+
+PIPE_WAIT = 5.0  # s: the longest wait for a process to open a named pipe written to
 
 # errors of the machine, not of mechsolve: the user can act on them (free space, fix the
 # permissions, choose another folder)
@@ -88,21 +102,95 @@ def _unlink(tmp: str) -> None:
         pass
 
 
-def new_temporary(path: str | os.PathLike, suffix: str = ".part") -> tuple[int, str]:
-    """A new, uniquely named temporary file beside ``path``: ``(fd, name)``; the name is
-    ``.<target name>.<random><suffix>``. Raises :class:`WriteFailed`."""
+def destination(path: str | os.PathLike) -> tuple[Path, bool]:
+    """Where writing ``path`` goes: ``(target, through)``.
+
+    ``through`` is True for a character device or a pipe (FIFO), possibly reached through
+    symbolic links: it is written in place (``target`` is ``path`` itself, which the
+    system opens through its links, ``/dev/stdout`` included). Otherwise ``target`` is the
+    file to replace: ``path``, or what it points to when it is a symbolic link (a link to
+    nothing yet names the file to create). A block device or a socket raises
+    :class:`WriteFailed`."""
     path = Path(path)
     try:
-        return tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent or ".")
+        mode = os.stat(path).st_mode
+    except OSError:
+        mode = None  # absent, or a link to nothing: a new file (its folder says if not)
+    if mode is not None and not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        if stat.S_ISCHR(mode) or stat.S_ISFIFO(mode):
+            return path, True
+        what = "a block device (a disk)" if stat.S_ISBLK(mode) else "a socket"
+        raise WriteFailed(
+            path, OSError(errno.EINVAL, f"it is {what}, not a file: give a file to write")
+        )
+    if path.is_symlink():
+        return Path(os.path.realpath(path)), False
+    return path, False
+
+
+def new_temporary(path: str | os.PathLike, suffix: str = ".part") -> tuple[int, str]:
+    """A new, uniquely named temporary file beside ``path`` (beside the file a symbolic
+    link points to; in the system's temporary folder for a device or a pipe, see
+    :func:`destination`): ``(fd, name)``; the name is ``.<target name>.<random><suffix>``.
+    Raises :class:`WriteFailed`."""
+    path = Path(path)
+    target, through = destination(path)
+    folder = tempfile.gettempdir() if through else (target.parent or ".")
+    try:
+        return tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=folder)
     except OSError as exc:
         raise WriteFailed(path, exc) from None
 
 
+def _open_through(target: Path) -> int:
+    """A descriptor to write ``target`` (a character device or a pipe) in place. A pipe
+    is opened without blocking, retried for :data:`PIPE_WAIT` seconds while no process
+    reads it (then ``ENXIO``), and then set to block as usual."""
+    if not stat.S_ISFIFO(os.stat(target).st_mode) or not hasattr(os, "O_NONBLOCK"):
+        return os.open(target, os.O_WRONLY)
+    deadline = time.monotonic() + PIPE_WAIT
+    while True:
+        try:
+            fd = os.open(target, os.O_WRONLY | os.O_NONBLOCK)
+            break
+        except OSError as exc:
+            if exc.errno != errno.ENXIO:
+                raise
+            if time.monotonic() > deadline:
+                raise OSError(
+                    errno.ENXIO,
+                    f"it is a pipe (FIFO) that no process reads (waited {PIPE_WAIT:g} s)",
+                ) from None
+            time.sleep(0.02)
+    os.set_blocking(fd, True)
+    return fd
+
+
+def _write_through(tmp: str, target: Path) -> None:
+    """Send the finished temporary ``tmp`` to the device or pipe ``target``."""
+    fd = _open_through(target)
+    try:
+        with open(tmp, "rb") as src:
+            while chunk := src.read(1 << 16):
+                view = memoryview(chunk)
+                while view:
+                    view = view[os.write(fd, view) :]
+    finally:
+        os.close(fd)
+
+
 def commit(tmp: str, path: str | os.PathLike) -> None:
-    """Flush the finished temporary ``tmp`` to the disk and move it onto ``path`` with
-    the mode a new file would get; on failure remove it and raise :class:`WriteFailed`."""
+    """Flush the finished temporary ``tmp`` to the disk and move it onto ``path`` (onto
+    the file a symbolic link ``path`` points to) with the mode a new file would get; a
+    character device or a pipe is written through instead (see :func:`destination`).
+    On failure remove the temporary and raise :class:`WriteFailed` about ``path``."""
     path = Path(path)
     try:
+        target, through = destination(path)
+        if through:
+            _write_through(tmp, target)
+            _unlink(tmp)
+            return
         fd = os.open(tmp, os.O_RDONLY)
         try:
             os.fsync(fd)  # the data is on the disk before the name points at it
@@ -111,14 +199,14 @@ def commit(tmp: str, path: str | os.PathLike) -> None:
         mask = os.umask(0)  # mkstemp makes the file private; give it the usual mode
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except BaseException as exc:
         _unlink(tmp)
         if isinstance(exc, OSError):
             raise _failed(path, exc, tmp) from None
         raise
     try:  # and the rename itself survives a crash (not every file system allows this)
-        dfd = os.open(path.parent or ".", os.O_RDONLY)
+        dfd = os.open(target.parent or ".", os.O_RDONLY)
     except OSError:
         return
     try:
@@ -133,10 +221,11 @@ def commit(tmp: str, path: str | os.PathLike) -> None:
 def replacing(path: str | Path, suffix: str = ".part") -> Iterator[str]:
     """A temporary file name beside ``path`` to write to; when the block ends without an
     error it is flushed to the disk and moved onto ``path`` (with the mode a new file
-    would get), otherwise it is removed. The name is unique (two runs writing the same
-    file never share it) and ends in ``suffix`` (``.part``: give writers the format
-    explicitly; or the target's own suffix for tools that go by it). A failure to write
-    (a full disk, permissions) is raised as :class:`WriteFailed`."""
+    would get; onto the file a symbolic link points to; a device or a pipe is written
+    through: see :func:`destination`), otherwise it is removed. The name is unique (two
+    runs writing the same file never share it) and ends in ``suffix`` (``.part``: give
+    writers the format explicitly; or the target's own suffix for tools that go by it).
+    A failure to write (a full disk, permissions) is raised as :class:`WriteFailed`."""
     path = Path(path)
     fd, tmp = new_temporary(path, suffix)
     os.close(fd)

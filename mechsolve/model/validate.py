@@ -238,6 +238,8 @@ def _check_driver(mech: Mechanism, names: set[str]) -> None:
             p1 = mech.local_point(j.b, d.line[1])
             if math.dist(p0, p1) == 0:
                 raise mech.error(d.where + ("line",), "the driver's line needs two distinct points")
+        if d.motion is not None:  # its speed is derived from the law: the law is named
+            _check_motion(mech, d)
         if not math.isfinite(d.speed):
             raise mech.error(d.where + ("speed",), "the driver speed must be a finite number")
         if j.coordinate is None:
@@ -252,6 +254,33 @@ def _check_driver(mech: Mechanism, names: set[str]) -> None:
             _in_range(mech, d.where + ("start",), "length" if linear else "angle", d.start)
         if isinstance(d.start, Limit):
             check_refs(mech, d.start.quantity, d.where + ("start",))
+
+
+def _check_motion(mech: Mechanism, d) -> None:
+    """A motion law finite, with its rates, at the times read from it: those its nominal
+    speed and direction are read at (its natural duration, or 1 s, in 256 steps) and the
+    samples of a sweep in time. A failure names the law's key and the first such time."""
+    import numpy as np
+
+    from mechsolve.model.motion import ExpressionMotion
+
+    law = d.motion
+    t = np.linspace(0.0, law.duration or 1.0, 257)
+    sw = mech.sweep
+    if sw is not None and sw.duration is not None and sw.time_step:
+        n = max(0, math.ceil(sw.duration / sw.time_step - 1e-9))
+        if n < MAX_POSITIONS:
+            t = np.union1d(t, np.minimum(np.arange(n + 1) * sw.time_step, sw.duration))
+    with np.errstate(all="ignore"):
+        vals = [np.isfinite(v) for v in law.at(t)]
+    bad = ~(vals[0] & vals[1] & vals[2])
+    if not bad.any():
+        return
+    k = int(np.argmax(bad))
+    names = [w for w, v in zip(("position", "speed", "acceleration"), vals) if not v[k]]
+    which = "" if "position" in names else f" (its {' and '.join(names)})"
+    key = ("motion", "law") if isinstance(law, ExpressionMotion) else ("motion",)
+    raise mech.error(d.where + key, f"the law is not finite at t = {t[k]:.6g} s{which}")
 
 
 def _check_sweep(mech: Mechanism) -> None:

@@ -146,7 +146,7 @@ class Summary:
             lines.append(
                 f"  instantaneous efficiency (the driving {self.effort_name[0]} without "
                 f"friction over the {self.effort_name[0]} with it, where the driver delivers "
-                f"power): smallest of the {self.sample_spacing()} samples "
+                f"power): smallest of the {self.samples()} "
                 f"{_or_zero(eta[i], 1.0):.4g} at "
                 f"{self.describe_u(i)}"
             )
@@ -157,7 +157,7 @@ class Summary:
                 where += f" to {self.describe_u(int(locked[-1]))}"
             lines.append(
                 f"  self-locking at {locked.size} of {len(self.u)} positions "
-                f"({self.sample_spacing()} samples), {where}: no finite driving effort "
+                f"({self.samples()}), {where}: no finite driving effort "
                 "moves the mechanism in the drive direction there"
             )
             self.warnings.append(
@@ -250,6 +250,10 @@ class Summary:
             lines.append("  warning: " + w)
         return "\n".join(lines)
 
+    def samples(self) -> str:
+        """``'2° samples'``, ``'0.05 s samples'``, or ``'1 sample'`` for a single one."""
+        return "1 sample" if len(self.u) < 2 else f"{self.sample_spacing()} samples"
+
     def sample_spacing(self) -> str:
         """The spacing of the sweep's samples, as text ('1°', '2 mm'); a motion law's
         samples are even in time, not along the driver: their time step ('0.05 s')."""
@@ -303,7 +307,7 @@ class Summary:
             lines.append(f"  driving {kind}: none ({idle})")
         else:
             lines.append(
-                f"  driving {kind} ({src.sample_spacing()} samples): "
+                f"  driving {kind} ({src.samples()}): "
                 f"max {e[imax] / scale:.6g} {unit} at {src.describe_u(imax)}, "
                 f"min {e[imin] / scale:.6g} {unit} at {src.describe_u(imin)}, "
                 f"RMS {rms / scale:.6g} {unit}, {what} {mean / scale:.6g} {unit}"
@@ -621,7 +625,7 @@ def _peak_reactions(src, joints, fscale: float, funit: str) -> str:
         m = _or_zero(m, top)
         where = f" at {src.describe_u(i)}" if m else ""  # zero throughout: no place
         peaks.append(f"{j.name} {m / fscale:.4g} {funit}{note}{where}")
-    return f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks)
+    return f"  peak reactions ({src.samples()}): " + "; ".join(peaks)
 
 
 def _or_zero(x: float, scale: float) -> float:

@@ -188,7 +188,7 @@ def write_plots(res: CamResult, outdir: Path) -> list[Path]:
     for k, (a, t) in ex.items():
         if k != "dwell":
             ax.annotate(
-                f"{math.degrees(a):.1f}",
+                f"{math.degrees(a):.1f}°",  # the unit, as the summary gives it
                 (math.degrees(t), math.degrees(a)),
                 textcoords="offset points",
                 xytext=(0, 4),

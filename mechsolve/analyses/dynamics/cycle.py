@@ -23,7 +23,7 @@ from mechsolve.core import evaluate as core
 from mechsolve.core.solution import Solution
 from mechsolve.core.sweep import Analysis
 
-__all__ = ["MAX_CYCLE_TURNS", "Cycle", "machine_cycle"]
+__all__ = ["MAX_CYCLE_TURNS", "Cycle", "cycle_cause", "machine_cycle"]
 
 # the most turns of the crank a cycle is looked for over (a gear pair of coprime tooth
 # counts z1, z2 repeats after z2 turns of the pinion z1: a hunting-tooth pair of up to
@@ -55,10 +55,14 @@ class Cycle:
         if self.turns is None:
             text = f"the mechanism does not turn fully: {what} needs a full cycle of the crank"
         elif self.turns == 0:
+            why = (
+                cycle_cause(mech)
+                if mech is not None
+                else "its gear ratios, or a linkage that changes branch every turn"
+            )
             text = (
                 f"the machine does not come back to its starting position within "
-                f"{MAX_CYCLE_TURNS} turns of the driver (its gear ratios, or a linkage that "
-                f"changes branch every turn, give it no shorter cycle): {what} needs the "
+                f"{MAX_CYCLE_TURNS} turns of the driver ({why}): {what} needs the "
                 "machine's cycle"
             )
         else:
@@ -66,6 +70,23 @@ class Cycle:
         if mech is not None and getattr(mech, "source", None) is not None:
             raise mech.error(("driver",), text)
         raise InputError(text)
+
+
+def cycle_cause(mech) -> str:
+    """What makes the cycle of ``mech`` longer than a turn of its crank, in words: its
+    gears (a gear pair or a rack), or else, in a linkage of pivots and sliders alone, a
+    change of assembly branch (the positions of such a linkage are fixed by the crank's
+    angle and the branch: back at the start angle but not at the start, it is on another
+    branch, which it reaches through a change point, where its links line up)."""
+    kinds = {getattr(j, "kind", None) for j in getattr(mech, "joints", ())}
+    if kinds & {"gear_pair", "rack"}:
+        return "its gear ratios"
+    if kinds <= {"revolute", "slider"}:
+        return (
+            "no gears: its linkage changes assembly branch where its links line up, at a "
+            "change point, and is back at its start only on the same branch"
+        )
+    return "its gears, cams or a change of branch of its linkage"
 
 
 def machine_cycle(

@@ -31,6 +31,12 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
+# a legend beside the axes, at their top right: it hides no curve, and it is placed at
+# once (loc="best" searches the curves for a free corner, which over the hundreds of
+# thousands of samples of a long simulation takes seconds and makes Matplotlib warn)
+_BESIDE = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0}
+
+
 def revolution_means(t: np.ndarray, phi: np.ndarray, w: np.ndarray):
     """(t, mean speed) over each full revolution of the driver (time mean)."""
     turns = np.floor(np.abs(phi - phi[0]) / (2 * math.pi))
@@ -100,7 +106,7 @@ def write_simulation_plots(
         ax.set_ylabel("reduced moment of inertia J [kg*m^2], J' [kg*m^2/rad]")
         ax.set_title(f"{name}: reduced moment of inertia over a turn")
         ax.grid(alpha=0.3)
-        ax.legend()
+        ax.legend(**_BESIDE)
         fig.tight_layout()
         out.append(_save(fig, outdir / "simulation-inertia.png"))
         plt.close(fig)
@@ -116,7 +122,7 @@ def write_simulation_plots(
         ax.set_ylabel(f"reaction magnitude [{shown(U, 0.0, 'N')[1]}]")
         ax.set_title(f"{name}: joint reactions along the motion")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, ncol=4)
+        ax.legend(fontsize=8, **_BESIDE)
         fig.tight_layout()
         out.append(_save(fig, outdir / "simulation-reactions.png"))
         plt.close(fig)

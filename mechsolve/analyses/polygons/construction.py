@@ -16,7 +16,7 @@ from mechsolve.analyses.instants import Instant, solve_instants
 from mechsolve.analyses.polygons.dyads import DyadConstructions
 from mechsolve.analyses.polygons.vectors import Arrow, _k_cross
 from mechsolve.base.errors import InputError, SolverError
-from mechsolve.base.units import SI_OUTPUT, OutputUnits, UnitError, parse_quantity
+from mechsolve.base.units import LIMITS, SI_OUTPUT, OutputUnits, UnitError, parse_quantity
 from mechsolve.core.sweep import Analysis
 from mechsolve.joints.revolute import RevoluteConstraint
 from mechsolve.joints.slider import SliderConstraint
@@ -413,6 +413,7 @@ def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:
                 "instant as a time from the start, e.g. '0.5 s'"
             ) from None
         u, ud, udd = (float(np.asarray(v).ravel()[0]) for v in law.at(np.array([t])))
+        _within_reach(an, u - float(law.at(np.array([0.0]))[0][0]), text, t)
         return Instant(u, ud, udd, f"t = {t:g} s")
     u0 = an.start_value()
     if not math.isfinite(u0):
@@ -440,29 +441,61 @@ def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:
             f"({an.format_u(u)}, t = {t:.6g} s from position 1)",
         )
     kind = "length" if an.linear else "angle"
+    if _bare_number(text):
+        raise InputError(
+            f"{where} {text!r}: give the {kind} with its unit ('{text} "
+            f"{'mm' if an.linear else 'deg'}'); a bare whole number is a position number"
+        )
     try:
         val = parse_quantity(text, kind)
-    except UnitError:
+    except UnitError as exc:
+        bad = exc
         try:
             t = parse_quantity(text, "time")
-        except UnitError:
+        except UnitError as exc2:
+            for e in (bad, exc2):  # a number out of range: say that, not "expected ..."
+                if "too large" in str(e) or "not a finite" in str(e):
+                    raise InputError(f"{where} {text!r}: {e}") from None
             raise InputError(
                 f"{where} {text!r}: expected a position number (1 to {per_turn}), a driver "
                 f"{'position such as 20 mm' if an.linear else 'angle such as 196.8 deg'}, or "
                 "a time from the start such as 0.5 s"
             ) from None
+        _within_reach(an, d.speed * t, text, t)
         u = u0 + d.speed * t
         return Instant(u, d.speed, 0.0, f"t = {t:g} s from the start ({an.format_u(u)})")
-    if not re.search(r"[A-Za-z°]", text):
-        raise InputError(
-            f"{where} {text!r}: give the {kind} with its unit ('{text} "
-            f"{'mm' if an.linear else 'deg'}'); a bare whole number is a position number"
-        )
     if an.linear:
         u = val
     else:  # the same angle reached from the start along the driver's direction
         u = u0 + d.direction * ((d.direction * (val - u0)) % (2 * math.pi))
     return Instant(u, d.speed, 0.0, an.format_u(u))
+
+
+def _bare_number(text: str) -> bool:
+    """Whether ``text`` is a number without a unit (``'1.5'``, ``'1e9'``)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _within_reach(an: Analysis, travel: float, text: str, t: float) -> None:
+    """Refuse an instant whose driver travel from the start (rad, or m for a linear
+    driver) is beyond what mechsolve accepts as a position (as ``run --at`` does): the
+    instant is reached by solving along the motion from the start, whose size grows with
+    the travel (1e9 rad asked for hundreds of GB)."""
+    kind, unit = ("length", "m") if an.linear else ("angle", "rad")
+    limit = LIMITS[kind]
+    if not math.isfinite(travel):
+        raise InputError(f"--at {text!r}: the driver's motion is not finite at t = {t:g} s")
+    if not abs(travel) <= limit:
+        raise InputError(
+            f"--at {text!r}: the driver would travel {abs(travel):.6g} {unit} from the "
+            f"start by t = {t:g} s; mechsolve accepts at most {limit:g} {unit} in magnitude "
+            f"for {'a length' if an.linear else 'an angle'}: give an earlier time, or the "
+            f"driver {'position' if an.linear else 'angle'} itself"
+        )
 
 
 def build_polygons(

@@ -3,7 +3,9 @@
 Designs go out in chunks (a few tens at most), so that what each task costs to send and
 to start is small beside the solving; every executor runs the same function on the same
 designs, so the table does not depend on which one ran it. Rows come back as chunks
-finish; Ctrl-C stops the study and keeps the rows already finished.
+finish; Ctrl-C stops the study and keeps the rows already finished. A design's results
+file that cannot be written (``--keep-results`` on a full disk) stops the study the same
+way (:class:`ResultsNotWritten`): the rows solved are kept, the error is the file's.
 """
 
 from __future__ import annotations
@@ -21,11 +23,33 @@ from typing import Any
 from mechsolve.analyses.batch import solve_designs
 from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.figures import Row, design_row
+from mechsolve.base.atomic import WriteFailed
 from mechsolve.base.errors import AssemblyError, InputError, MechsolveError
 from mechsolve.results.requirements import check_requirements, evaluate_figure
 from mechsolve.results.run import solve as solve_sweep
 
 SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
+
+
+class ResultsNotWritten(WriteFailed):
+    """A design's results file could not be written (a full disk, a quota, permissions):
+    the study stops. ``rows`` are the rows finished before it in its chunk, that design's
+    included (it was solved: its figures are right, only its file is missing)."""
+
+    def __init__(self, path: str | os.PathLike, cause: OSError, rows=()) -> None:
+        super().__init__(path, cause)
+        self.rows = list(rows)
+
+    def __reduce__(self):  # through a process pool or Dask, with its rows
+        return (type(self), (self.filename, OSError(self.errno, self.strerror), self.rows))
+
+
+def results_kept(rows: list[Row]) -> int:
+    """How many of ``rows`` had their results file written (``--keep-results``): those
+    solved (with their counts of positions) whose file did not fail."""
+    return sum(
+        "positions [-]" in r and not str(r.get("status", "")).startswith("failed") for r in rows
+    )
 
 
 def status_of(row: Row, res=None) -> str:
@@ -74,8 +98,6 @@ def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
             warnings.simplefilter("ignore")
             res = solved()
             fig = design_row(res, mech, figures)
-            if results_dir is not None:
-                res.to_csv(Path(results_dir) / f"design-{k:05d}.csv", study.units)
     except AssemblyError as exc:
         row["status"] = f"not assemblable: {exc}"
         row["assembles [-]"] = False
@@ -88,7 +110,36 @@ def _fill(study: Study, row: Row, mech, solved, results_dir: str | None) -> Row:
         return row
     row["status"] = status_of(fig, res)
     row.update(fig)
+    if results_dir is not None:
+        _keep_results(res, Path(results_dir) / f"design-{k:05d}.csv", study, row)
     return row
+
+
+def _keep_results(res, path: Path, study: Study, row: Row) -> None:
+    """Write a solved design's results to ``path``; a file the system refuses (a full
+    disk) stops the study (:class:`ResultsNotWritten`, carrying ``row``)."""
+    import numpy as np
+
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res.to_csv(path, study.units)
+    except WriteFailed as exc:
+        raise ResultsNotWritten(exc.filename, exc.cause, [row]) from None
+    except Exception as exc:  # noqa: BLE001 - one design's bug must not end the study
+        row["status"] = f"failed: its results were not written: {type(exc).__name__}: {exc}"
+
+
+def _in_order(indices: list[int], one: Callable[[int], Row]) -> list[Row]:
+    """``[one(k) for k in indices]``; a :class:`ResultsNotWritten` carries the rows
+    finished before it too."""
+    rows: list[Row] = []
+    for k in indices:
+        try:
+            rows.append(one(k))
+        except ResultsNotWritten as exc:
+            raise ResultsNotWritten(exc.filename, exc.cause, rows + exc.rows) from None
+    return rows
 
 
 def solve_design(study: Study, k: int, results_dir: str | None = None) -> Row:
@@ -169,7 +220,7 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
         except InputError as exc:
             heads[k]["status"] = f"invalid: {exc}"
     if len(mechs) < 2:
-        return [solve_design(study, k, results_dir) for k in indices]
+        return _in_order(indices, lambda k: solve_design(study, k, results_dir))
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -180,15 +231,23 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
                 acceleration=_rows_acceleration(study, next(iter(mechs.values())), results_dir),
             )
     except Exception:  # noqa: BLE001 - then each design is solved on its own, as always
-        return [solve_design(study, k, results_dir) for k in indices]
+        return _in_order(indices, lambda k: solve_design(study, k, results_dir))
     slot = {k: j for j, k in enumerate(mechs)}
-    for k, mech in mechs.items():
-        _fill(study, heads[k], mech, lambda j=slot[k]: batch.results(j), results_dir)
-    return [heads[k] for k in indices]
+
+    def one(k: int) -> Row:
+        if k not in mechs:  # invalid: its row says why
+            return heads[k]
+        return _fill(study, heads[k], mechs[k], lambda: batch.results(slot[k]), results_dir)
+
+    return _in_order(indices, one)
 
 
 class Estimate:
-    """What a study will cost, from its first chunk of designs solved and timed here."""
+    """What a study will cost, from its first chunk of designs solved and timed here.
+    ``unwritten``: the error that stopped the study in that chunk, if one did (see
+    :class:`ResultsNotWritten`; ``rows`` are then those finished)."""
+
+    unwritten: ResultsNotWritten | None = None
 
     def __init__(self, rows: list[Row], seconds: float, n: int, workers: int) -> None:
         self.rows = rows
@@ -252,7 +311,12 @@ def time_first_chunk(
         return Estimate([], 0.0, 0, workers)
     rd = None if results_dir is None else str(results_dir)
     t0 = time.perf_counter()
-    rows = solve_chunk(study, todo[0], rd)
+    try:
+        rows = solve_chunk(study, todo[0], rd)
+    except ResultsNotWritten as exc:
+        est = Estimate(exc.rows, time.perf_counter() - t0, n, workers)
+        est.unwritten = exc
+        return est
     return Estimate(rows, time.perf_counter() - t0, n, workers)
 
 
@@ -295,13 +359,22 @@ def cpu_count() -> int:
 
 
 class Outcome:
-    """The rows of a study, in design order, and whether it was interrupted."""
+    """The rows of a study, in design order, whether it was interrupted, and the error
+    that stopped it (``unwritten``: a design's results file not written), if any."""
 
-    def __init__(self, rows: list[Row], total: int, interrupted: bool, executor: str) -> None:
+    def __init__(
+        self,
+        rows: list[Row],
+        total: int,
+        interrupted: bool,
+        executor: str,
+        unwritten: ResultsNotWritten | None = None,
+    ) -> None:
         self.rows = sorted(rows, key=lambda r: r["design [-]"])
         self.total = total
         self.interrupted = interrupted
         self.executor = executor
+        self.unwritten = unwritten
 
 
 def execute(
@@ -370,6 +443,8 @@ def _run_here(
                 progress(len(idx))
     except KeyboardInterrupt:
         return Outcome(rows, n, True, "this process")
+    except ResultsNotWritten as exc:
+        return Outcome(rows + exc.rows, n, False, "this process", exc)
     return Outcome(rows, n, False, "this process")
 
 
@@ -391,6 +466,7 @@ def _run_pool(
     # run to its end (a minute or more of a large study) before the process can exit
     pool = multiprocessing.get_context().Pool(workers, _init_worker, (study,))
     interrupted = False
+    unwritten = None
     try:
         todo = [(idx, rd) for idx in todo_chunks]
         for got in pool.imap_unordered(_pool_chunk_args, todo):
@@ -400,12 +476,15 @@ def _run_pool(
         pool.close()
     except KeyboardInterrupt:
         interrupted = True
+    except ResultsNotWritten as exc:  # the disk is full: the other workers are ended
+        rows += exc.rows
+        unwritten = exc
     except BaseException:
         pool.terminate()
         pool.join()
         raise
     try:
-        if interrupted:
+        if interrupted or unwritten is not None:
             with _ctrl_c_held():  # pressed again: the workers are being ended already
                 _end_pool(pool)
         else:
@@ -414,7 +493,7 @@ def _run_pool(
         interrupted = True
         with _ctrl_c_held():
             _end_pool(pool)
-    return Outcome(rows, n, interrupted, f"a pool of {workers} processes")
+    return Outcome(rows, n, interrupted, f"a pool of {workers} processes", unwritten)
 
 
 def _pool_chunk_args(args: tuple[list[int], str | None]) -> list[Row]:
@@ -477,6 +556,7 @@ def _run_dask(study, jobs, scheduler, processes, todo_chunks, done, progress, rd
     cluster = client = None
     rows: list[Row] = list(done)
     interrupted = False
+    unwritten = None
     futures: list = []
     if scheduler is None:
         try:
@@ -516,27 +596,33 @@ def _run_dask(study, jobs, scheduler, processes, todo_chunks, done, progress, rd
                 progress(len(got))
     except KeyboardInterrupt:
         interrupted = True
+    except ResultsNotWritten as exc:  # the disk is full: the other chunks are cancelled
+        rows += exc.rows
+        unwritten = exc
     finally:
         # a Ctrl-C pressed again while the cluster closes would leave it half closed for
         # Dask's exit handler to fail on (with tracebacks): the close is not interrupted
         with _ctrl_c_held():
-            if interrupted and client is not None and futures:
+            if (interrupted or unwritten is not None) and client is not None and futures:
                 client.cancel(futures)
             if client is not None:
                 client.close()
             if cluster is not None:
                 cluster.close()
-    return Outcome(rows, n, interrupted, where if client is not None else "Dask")
+    executor = where if client is not None else "Dask"
+    return Outcome(rows, n, interrupted, executor, unwritten)
 
 
 __all__ = [
     "Estimate",
     "Outcome",
+    "ResultsNotWritten",
     "chunks",
     "connect",
     "cpu_count",
     "execute",
     "precheck",
+    "results_kept",
     "solve_chunk",
     "solve_design",
     "status_of",

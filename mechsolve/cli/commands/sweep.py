@@ -164,7 +164,7 @@ def sweep(
     import numpy as np
 
     from mechsolve import api
-    from mechsolve.analyses.study.execute import precheck, time_first_chunk
+    from mechsolve.analyses.study.execute import precheck, results_kept, time_first_chunk
 
     np.seterr(divide="ignore", invalid="ignore", over="ignore")
     limit_s = _check_options(jobs, use_dask, scheduler, max_designs, max_time)
@@ -185,14 +185,15 @@ def sweep(
     # the first chunk of designs, solved here and timed: what the rest will cost
     workers, where = _workers(n, jobs, use_dask, scheduler)
     est = time_first_chunk(study, workers, results_dir=results_dir)
-    if est.timed < n:
+    if est.timed < n and est.unwritten is None:
         _check_estimate(est, n, where, max_designs, max_time, limit_s, quiet)
     output_folder(outdir)
     outcome = _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet)
     written, pick = _write_outputs(study, outcome, outdir, fmt, no_plots)
     counts = _Counts(outcome.rows, n)
     if not quiet:
-        _echo_outcome(study, outcome, counts, pick, written, outdir, keep_results)
+        kept = results_kept(outcome.rows) if keep_results else None
+        _echo_outcome(study, outcome, counts, pick, written, outdir, kept)
     clikit.finish(
         check_failed=counts.has_req and counts.passing == 0,
         warning=f"{n - counts.ok} of {n} designs are invalid or do not assemble at every "
@@ -285,9 +286,12 @@ def _check_estimate(est, n: int, where: str, max_designs, max_time, limit_s, qui
 
 
 def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
-    """Solve the designs not yet timed, with a progress bar that starts at the timed ones."""
-    from mechsolve.analyses.study.execute import execute
+    """Solve the designs not yet timed, with a progress bar that starts at the timed ones
+    (none when a results file could not be written in those: the study stops there)."""
+    from mechsolve.analyses.study.execute import Outcome, execute
 
+    if est.unwritten is not None:
+        return Outcome(est.rows, len(study), False, "this process", est.unwritten)
     bar = _bar(len(study), quiet)
     if bar is not None:
         bar.update(est.timed)
@@ -307,8 +311,9 @@ def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
 
 
 def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
-    """Write the table (then exit 130 if the study was interrupted), the best design and
-    the plots; return the files written and the best design's pick (or None)."""
+    """Write the table (then exit 130 if the study was interrupted, 2 if a design's results
+    could not be written), the best design and the plots; return the files written and
+    the best design's pick (or None)."""
     from mechsolve.analyses.study.best import pick_best, write_best
     from mechsolve.analyses.study.table import rows_in_units, write_table
 
@@ -321,6 +326,13 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
             err=True,
         )
         clikit.interrupted()
+    if outcome.unwritten is not None:  # a full disk: the error names the design's file
+        click.echo(
+            f"stopped after {len(rows)} of {len(study)} designs: a design's results could "
+            f"not be written; the rows of the designs solved are in {written[0]}",
+            err=True,
+        )
+        raise outcome.unwritten
     pick = pick_best(study, rows) if study.best is not None else None
     if pick is not None:
         written.append(write_best(study, pick, outdir / "best.yaml"))
@@ -342,8 +354,9 @@ class _Counts:
         self.passing = sum(r.get("requirements.pass [-]") is True for r in rows)
 
 
-def _echo_outcome(study, outcome, counts: _Counts, pick, written, outdir, keep_results) -> None:
-    """The closing lines: designs that assemble, requirements met, the best design, files."""
+def _echo_outcome(study, outcome, counts: _Counts, pick, written, outdir, kept) -> None:
+    """The closing lines: designs that assemble, requirements met, the best design, files
+    (``kept``: how many designs' results were written, None without --keep-results)."""
     n, ok, invalid = counts.n, counts.ok, counts.invalid
     click.echo(
         f"  solved on {outcome.executor}: {ok} of {n} designs assemble at every "
@@ -366,5 +379,5 @@ def _echo_outcome(study, outcome, counts: _Counts, pick, written, outdir, keep_r
     click.echo(
         f"  wrote {len(written)} file(s) to {outdir}/: "
         + ", ".join(p.name for p in written)
-        + (f" and {n} design results in {outdir}/designs/" if keep_results else "")
+        + (f" and {kept} design results in {outdir}/designs/" if kept is not None else "")
     )
