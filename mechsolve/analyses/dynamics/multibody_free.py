@@ -419,6 +419,8 @@ class FreeResults:
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
                 "all coordinates, each step projected onto the constraints)"
             )
+        if tr.undetermined_text():
+            lines.append(tr.undetermined_text())
         if tr.early:
             lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")
         elif tr.stopped:
@@ -426,4 +428,4 @@ class FreeResults:
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return False
+        return bool(self.trajectory.undetermined.size)
