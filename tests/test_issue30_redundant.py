@@ -153,11 +153,16 @@ def test_redundant_parallelogram_passes_its_singular_positions_as_one_pendulum()
     _check_motion(res, 1e-6, 1e-7)
     ix = mb.system.index
     blank = ~np.isfinite(tr.qdd).all(axis=1)
+    # the CSV's reactions (the force analysis of the motion), joint by joint in the
+    # file's order: two equations each
+    printed = [c.values for c in res.columns() if c.header.endswith(".F [N] (minimum-norm)")]
+    assert len(printed) == 6
     for i in range(len(tr.t)):
         th, w = tr.q[i, 3 * ix["c1"] + 2], tr.qd[i, 3 * ix["c1"] + 2]
         q, qd, qdd = _exact_rows(mb, th, w)
         if blank[i]:  # only at a flat position, and its reactions too
             assert abs(math.sin(th)) < 1e-3 and np.isnan(tr.lam[i]).all()
+            assert all(np.isnan(F[i]) for F in printed)
             continue
         assert np.abs(tr.qdd[i] - qdd).max() <= 1e-6 * MGL / I_O, tr.t[i]
         J = mb.jacobian(tr.q[i])
@@ -167,6 +172,8 @@ def test_redundant_parallelogram_passes_its_singular_positions_as_one_pendulum()
         Q, _, _ = mb.forces(st, 0.0)
         ref = np.linalg.lstsq(mb.jacobian(q).T, Q - mb.mass_matrix(st) @ qdd, rcond=1e-10)[0]
         assert np.abs(tr.lam[i] - ref).max() <= 1e-5 * max(np.abs(ref).max(), 1.0), tr.t[i]
+        for k, F in enumerate(printed):
+            assert abs(F[i] - math.hypot(*ref[2 * k : 2 * k + 2])) <= 1e-6 * max(F[i], 1.0)
     assert blank.sum() <= 4
     text = res.summary()
     for t in tr.t[blank]:
