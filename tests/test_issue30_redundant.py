@@ -203,3 +203,37 @@ def test_cli_says_on_stderr_which_rows_are_left_blank(tmp_path):
         assert "are not determined" in r.stdout
     peak = max(abs(float(row.split(",")[k])) for row in rows[1:] if row.split(",")[k] != "")
     assert peak <= 1.0001 * math.degrees(MGL / I_O)  # |alpha| <= its amplitude
+
+
+def test_unequal_cranks_and_another_output_step_follow_the_pendulum_too():
+    """Item 1, unequal crank masses (1, 3, 0.5 kg: at the flat position the equations
+    alone would let the coupler turn; the motion does not) and outputs every 0.0069 s
+    (rows at other distances from the flat positions): the pendulum of those masses."""
+    text = (
+        PARALLELOGRAM.read_text()
+        .replace("B: [0.4, 0]}, mass: 1 kg", "B: [0.4, 0]}, mass: 3 kg")
+        .replace("E: [0.4, 0]}, mass: 1 kg", "E: [0.4, 0]}, mass: 0.5 kg")
+        .replace("step: 0.01 s", "step: 0.0069 s")
+    )
+    res = simulate(loads(text))
+    tr, mb = res.trajectory, res.multibody
+    ix = mb.system.index
+    inertia = (1 + 3 + 0.5) * 0.4**2 / 3 + 2.0 * 0.4**2
+    moment = 9.81 * ((1 + 3 + 0.5) * 0.2 + 2.0 * 0.4)
+    ref = solve_ivp(
+        lambda _, y: [y[1], -moment / inertia * math.cos(y[0])],
+        (0.0, float(tr.t[-1])),
+        [math.radians(60.0), 0.0],
+        t_eval=tr.t,
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-14,
+    ).y[0]
+    th = tr.q[:, 3 * ix["c1"] + 2]
+    assert np.abs((th - ref + math.pi) % (2 * math.pi) - math.pi).max() <= math.radians(1e-6)
+    assert np.abs(tr.energy_residual).max() <= 1e-7
+    ok = np.isfinite(tr.qdd).all(axis=1)
+    al = -moment / inertia * np.cos(th[ok])
+    for link in ("c1", "c2", "c3"):
+        assert np.abs(tr.qdd[ok, 3 * ix[link] + 2] - al).max() <= 1e-6 * moment / inertia
+    assert np.abs(tr.qdd[ok, 3 * ix["cp"] + 2]).max() <= 1e-6 * moment / inertia

@@ -680,7 +680,15 @@ class Multibody:
         for b in range(nb):
             Linv[3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = inv[b]
         Jh = Jq @ Linv.T  # J L^-T
-        dh, *_ = np.linalg.lstsq(Jh, r, rcond=RATES_RCOND)
+        if self.rank is None:
+            dh, *_ = np.linalg.lstsq(Jh, r, rcond=RATES_RCOND)
+        else:
+            # redundant equations: the run's rank, down to S_SOLVE next to a singular
+            # position (left there, the direction it is about to lose kept a bridge's
+            # RK4 combination of turning tangents: 4.6e-6 J in T)
+            U, S, Vt = np.linalg.svd(Jh, full_matrices=False)
+            k = min(self.rank, int(np.sum(S > S_SOLVE * S[0])))
+            dh = Vt[:k].T @ ((U[:, :k].T @ r) / S[:k])
         # (in this metric the kinetic energy changes only to second order in r, however
         # ill-conditioned J is next to a singular position)
         return qd + Linv.T @ dh

@@ -472,40 +472,7 @@ def _adaptive(run: _Run, times, y0):
     position. Returns the outputs and the event that ended it, ``(kind, t, y)``."""
     from scipy.integrate import solve_ivp
 
-    mb, part = run.mb, run.part
-    fn = len(part.ind)
-
-    def closed(t, y):
-        return mb.close(part, y[part.ind], t, y[: mb.nq])
-
-    def conditioning(t, y):
-        """Phi_d's reciprocal condition (1-norm estimate) falls below 0.1 of its value
-        when the partition was chosen: at a step's end that of the step's last
-        evaluation (the same state), elsewhere (the event's root) from a closure."""
-        if fn == 0 or len(part.dep) == 0:
-            return 1.0
-        last = run.last_rc
-        if last is not None and last[0] == t and np.array_equal(last[1], y):
-            rc = last[2]
-        else:
-            rc = _lu(mb.jacobian(closed(t, y))[part.dd])[1]
-        return rc - 0.1 * part.rcond1
-
-    events: list = [conditioning]
-    kinds = ["conditioning"]
-    if run.stop is not None:
-
-        def stop(t, y):
-            q = closed(t, y)
-            qd, _ = mb.rates(part, q, y[mb.nq + part.ind], t)
-            return run.g(t, q, qd)
-
-        stop.direction = -1
-        events.append(stop)
-        kinds.append("stop")
-    if run.singular != "pass" or mb.rank is not None:
-        events.append(lambda t, y: singular_measure(mb, closed(t, y), run.rank) - S_NEAR)
-        kinds.append("near")
+    events, kinds = _events(run)
     for e in events:
         e.terminal = True
     # a stretch that goes on from where the last one ended (no event between) starts
@@ -544,6 +511,56 @@ def _adaptive(run: _Run, times, y0):
     if fired is not None and fired[0] == "stop" and ts and ts[-1] >= fired[1]:
         ts, ys = ts[:-1], ys[:-1]  # the event's own row replaces an output at its time
     return ts, ys, fired
+
+
+def _events(run: _Run):
+    """The terminal events of :func:`_adaptive` and their kinds."""
+    mb, part = run.mb, run.part
+    fn = len(part.ind)
+
+    def closed(t, y):
+        return mb.close(part, y[part.ind], t, y[: mb.nq])
+
+    def conditioning(t, y):
+        """Phi_d's reciprocal condition (1-norm estimate) falls below 0.1 of its value
+        when the partition was chosen: at a step's end that of the step's last
+        evaluation (the same state), elsewhere (the event's root) from a closure."""
+        if fn == 0 or len(part.dep) == 0:
+            return 1.0
+        last = run.last_rc
+        if last is not None and last[0] == t and np.array_equal(last[1], y):
+            rc = last[2]
+        else:
+            rc = _lu(mb.jacobian(closed(t, y))[part.dd])[1]
+        return rc - 0.1 * part.rcond1
+
+    events: list = [conditioning]
+    kinds = ["conditioning"]
+    if mb.rank is not None and fn and len(part.dep):
+
+        def better(t, y):
+            """Redundant equations: a partition chosen afresh would be 10x better
+            conditioned (the one chosen where the motion left a singular position
+            closes the equation it sets aside 1e-5 off where the cranks stand up)."""
+            q = closed(t, y)
+            return _lu(mb.jacobian(q)[part.dd])[1] - 0.1 * mb.partition(q).rcond1
+
+        events.append(better)
+        kinds.append("conditioning")
+    if run.stop is not None:
+
+        def stop(t, y):
+            q = closed(t, y)
+            qd, _ = mb.rates(part, q, y[mb.nq + part.ind], t)
+            return run.g(t, q, qd)
+
+        stop.direction = -1
+        events.append(stop)
+        kinds.append("stop")
+    if run.singular != "pass" or mb.rank is not None:
+        events.append(lambda t, y: singular_measure(mb, closed(t, y), run.rank) - S_NEAR)
+        kinds.append("near")
+    return events, kinds
 
 
 def _stepper(run: _Run):
