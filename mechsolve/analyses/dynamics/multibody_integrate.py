@@ -95,8 +95,8 @@ class _Run:
         mb.rank = None
         self.part = mb.partition(self.q)
         self.rank = len(self.part.rows)
-        if self.rank < mb.nc:  # redundant equations: this rank at every state
-            mb.rank = self.rank
+        if self.rank < mb.nc and _persists(mb, self.q, self.rank):
+            mb.rank = self.rank  # redundant equations: this rank at every state
         self.partitions, self.bridges = 1, 0
         self.stopped, self.early, self.event = "", False, ""
         self.stop: Stop | None = None
@@ -415,6 +415,18 @@ class _Run:
             partitions=self.partitions,
             bridges=self.bridges,
         )
+
+
+def _persists(mb: Multibody, q: np.ndarray, rank: int) -> bool:
+    """The equations keep their rank ``rank`` (below their number) next to ``q``: they
+    are redundant, not only at a singular position where the motion starts. Checked
+    at a configuration closed from ``q`` moved by 1e-3 of the mechanism's size along
+    the equations' null space."""
+    _, _, Vt = np.linalg.svd(mb.jacobian(q))
+    if Vt.shape[0] <= rank:
+        return True
+    moved = project(mb, 0.0, q + 1e-3 * mb.scale * Vt[rank], np.zeros(mb.nq), NEWTON_ITERATIONS)
+    return moved is not None and len(mb.partition(moved[0]).rows) == rank
 
 
 def _redundant(mb: Multibody, q: np.ndarray) -> bool:
