@@ -28,6 +28,9 @@ def test_check_every_example(name):
     if name == "shaper-scheme3.yaml":  # a redundant link (seed 001): F = 3*6 - 2*9 + 1
         assert "degrees of freedom: 0 by Grübler" in r.output
         assert "redundant constraints: 1 of the 19 equations" in r.output
+    elif name == "parallelogram-redundant-crank.yaml":  # a third crank: 3*4 - 2*6
+        assert "degrees of freedom: 0 by Grübler" in r.output
+        assert "redundant constraints: 1 of the 13 equations" in r.output
     else:
         assert "degrees of freedom: 1 by Grübler" in r.output
     assert "1 by the rank of the constraint Jacobian" in r.output

@@ -55,6 +55,7 @@ if TYPE_CHECKING:
 
 RECONDITION = 1e-3  # repartition when Phi_d's reciprocal condition falls below this
 NEWTON_ITERATIONS = 25
+S_SOLVE = 1e-8  # below this r-th relative singular value: the least-squares accelerations
 RATES_RCOND = 1e-6  # consistent rates: singular directions below this of the largest are kept
 
 
@@ -146,6 +147,26 @@ class Trajectory:
     u: np.ndarray | None = None
     ud: np.ndarray | None = None
     udd: np.ndarray | None = None
+
+    @property
+    def undetermined(self) -> np.ndarray:
+        """The times of the rows whose accelerations and multipliers the equations do
+        not determine (at or next to a singular position): left empty (NaN)."""
+        return self.t[~np.isfinite(self.qdd).all(axis=1)]
+
+    def undetermined_text(self) -> str:
+        """A summary line for :attr:`undetermined` ("" where there are none)."""
+        ts = self.undetermined
+        if not ts.size:
+            return ""
+        at = ", ".join(f"{t:.6g}" for t in ts[:8]) + (
+            f" and {ts.size - 8} more" if ts.size > 8 else ""
+        )
+        return (
+            f"  warning: the accelerations and reactions at t = {at} s are not determined "
+            "(at or next to a singular position the equations give them only to worse "
+            "than 1e-6 of their size): left blank in the CSV"
+        )
 
     @property
     def energy_residual(self) -> np.ndarray:
@@ -243,6 +264,12 @@ class Multibody:
         )
         self._ev = None  # the last evaluation of accelerations(), for output()
         self.rc = 1.0  # Phi_d's reciprocal condition (1-norm) at the last rates()
+        # the number of independent equations where some are redundant (set by the run
+        # from its start): the rank of every partition and of the solves on every
+        # equation (see multibody_full); None where they are all independent
+        self.rank: int | None = None
+        self.weights = np.ones(self.nq)  # the angle columns weighed by the size
+        self.weights[2::3] = 1.0 / self.scale
 
     # -- states ---------------------------------------------------------------------
     def state(self, q: np.ndarray, qd=None, qdd=None) -> State:
@@ -319,6 +346,8 @@ class Multibody:
         _, R, p = qr(Js.T, pivoting=True, mode="economic")
         d = np.abs(np.diag(R))
         rank = int(np.sum(d > 1e-9 * max(d[0], 1e-300)))
+        if self.rank is not None:  # the run's rank, also next to a singular position
+            rank = self.rank
         rows = np.sort(p[:rank])
         _, R2, p2 = qr(Js[rows], pivoting=True, mode="economic")
         dep = np.sort(p2[:rank])
@@ -387,7 +416,13 @@ class Multibody:
         again while it is still well posed."""
         if len(part.dep) == 0:
             return False
-        return _rcond(self.jacobian(q)[part.dd]) < 0.1 * part.rcond
+        rc = _rcond(self.jacobian(q)[part.dd])
+        if self.rank is not None and rc < 0.1 * self.partition(q).rcond:
+            # redundant equations: a partition chosen next to a singular position is
+            # ill-conditioned from the start; away from it one that is 10x better
+            # closes the set-aside equations closer (their rates came 1e-9 off)
+            return True
+        return rc < 0.1 * part.rcond
 
     # -- mass and forces ----------------------------------------------------------------
     def mass_matrix(self, st: State) -> np.ndarray:
@@ -534,23 +569,34 @@ class Multibody:
         self._ev = (q, qd, t, part, x, M, V, Jq)  # for output() at the same state
         return x[: self.nq], x[self.nq :], P, V
 
-    def free_accelerations(self, q, qd, t: float):
-        """``(q'', P_nc)`` by least squares on the augmented system with every equation
-        (for the steps across a singular position)."""
-        self.nfev += 1
+    def terms(self, q, qd, t: float):
+        """``(Phi_q, M, Q, P_nc, V, gamma)`` at a state, on every equation."""
         Jq = self.jacobian(q)
         if self.lite:
             th = q[2::3]
             c, s = np.cos(th), np.sin(th)
             arm = self._arm(c, s)
             M = self._mass(c, s, arm)
-            Q, P, _ = self._forces_lite(q, qd, c, s, arm)
-            g = self.pins.gamma(th, qd[2::3])
-        else:
-            st = self.state(q, qd)
-            M = self.mass_matrix(st)
-            Q, P, _ = self.forces(st, t)
-            g = self._nu_gamma(st, t, gamma=True)
+            Q, P, V = self._forces_lite(q, qd, c, s, arm)
+            return Jq, M, Q, P, V, self.pins.gamma(th, qd[2::3])
+        st = self.state(q, qd)
+        M = self.mass_matrix(st)
+        Q, P, V = self.forces(st, t)
+        return Jq, M, Q, P, V, self._nu_gamma(st, t, gamma=True)
+
+    def free_accelerations(self, q, qd, t: float):
+        """``(q'', P_nc)`` by least squares on the augmented system with every equation
+        (for the steps across a singular position); with redundant equations on the
+        run's rank (:func:`rank_solve`) but at the singular position."""
+        self.nfev += 1
+        Jq, M, Q, P, _, g = self.terms(q, qd, t)
+        if self.rank is not None and self.friction is None:
+            try:
+                qdd, _, s = rank_solve(Jq, M, Q, g, self.rank, self.weights)
+                if s >= S_SOLVE:
+                    return qdd, P
+            except np.linalg.LinAlgError:
+                pass
         nc = Jq.shape[0]
         A = np.zeros((self.nq + nc, self.nq + nc))
         A[: self.nq, : self.nq] = M
@@ -558,6 +604,7 @@ class Multibody:
         A[self.nq :, : self.nq] = Jq
         b = np.concatenate([Q, g])
         if self.friction is not None:
+            st = self.state(q, qd)
             x, Pf = self.friction.solve(st, A, b, np.arange(nc), Jq, M, _free_least_squares, qd, t)
             P += Pf
         else:
@@ -633,7 +680,15 @@ class Multibody:
         for b in range(nb):
             Linv[3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = inv[b]
         Jh = Jq @ Linv.T  # J L^-T
-        dh, *_ = np.linalg.lstsq(Jh, r, rcond=RATES_RCOND)
+        if self.rank is None:
+            dh, *_ = np.linalg.lstsq(Jh, r, rcond=RATES_RCOND)
+        else:
+            # redundant equations: the run's rank, down to S_SOLVE next to a singular
+            # position (left there, the direction it is about to lose kept a bridge's
+            # RK4 combination of turning tangents: 4.6e-6 J in T)
+            U, S, Vt = np.linalg.svd(Jh, full_matrices=False)
+            k = min(self.rank, int(np.sum(S > S_SOLVE * S[0])))
+            dh = Vt[:k].T @ ((U[:, :k].T @ r) / S[:k])
         # (in this metric the kinetic energy changes only to second order in r, however
         # ill-conditioned J is next to a singular position)
         return qd + Linv.T @ dh
@@ -670,6 +725,33 @@ def free_context(mech) -> SimpleNamespace:
         for p, xy in lk.points.items():
             points.setdefault(p, PointRef(system.index[lk.name], np.asarray(xy, float)))
     return SimpleNamespace(mech=mech, system=system, scale=_scale(mech), points=points)
+
+
+def rank_solve(Jq: np.ndarray, M: np.ndarray, Q: np.ndarray, g: np.ndarray, rank: int, w):
+    """``(q'', lambda, s)`` on every equation, ``rank`` of them independent (redundant
+    equations; see :mod:`.multibody_full`).
+
+    ``Phi_q q'' = gamma`` by least squares on the ``rank`` largest singular values of
+    ``Phi_q W`` (``W = diag(w)``: the angle columns weighed by the mechanism's size), so
+    that only the redundant directions are set aside, however small the ``rank``-th
+    (next to a singular position); ``M q'' + Phi_q^T lambda = Q`` projected on the
+    other directions (those of the motion) gives their part of ``q''``; ``lambda`` is
+    the minimum-norm solution of ``Phi_q^T lambda = Q - M q''`` on the same ``rank``
+    directions. ``s``: the ``rank``-th singular value of ``Phi_q W`` over the largest."""
+    Js = Jq * w
+    U, S, Vt = np.linalg.svd(Js)
+    if rank == 0 or S[0] <= 0:
+        qdd = np.linalg.solve(M, Q)
+        return qdd, np.zeros(Jq.shape[0]), 1.0
+    s = float(S[rank - 1] / S[0])
+    Ur, Sr, Vr = U[:, :rank], S[:rank], Vt[:rank].T
+    qc = w * (Vr @ ((Ur.T @ g) / Sr))  # the equations' part of q''
+    N = w[:, None] * Vt[rank:].T  # the directions of the motion
+    qdd = qc
+    if N.shape[1]:
+        qdd = qc + N @ np.linalg.solve(N.T @ M @ N, N.T @ (Q - M @ qc))
+    lam = Ur @ ((Vr.T @ (w * (Q - M @ qdd))) / Sr)
+    return qdd, lam, s
 
 
 def _linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -18,13 +18,14 @@ import math
 
 import numpy as np
 
-from mechsolve.analyses.dynamics.multibody import Stop
+from mechsolve.analyses.dynamics.multibody import NEWTON_ITERATIONS, Stop
 from mechsolve.core.loads import stroke_function
 
 S_NEAR = 1e-2  # below this relative singular value the run looks for a singular position
 S_SINGULAR = 1e-5  # a minimum of s below this is a singular position
 SUBSTEPS = 64  # RK4 steps per span when looking for it
 SPANS = 4  # how many spans (the output step) ahead it looks
+ROUNDING = 1e-15  # the closures here go on to this of the mechanism's size
 GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
@@ -51,12 +52,22 @@ def rk4(rhs, t0: float, y0: np.ndarray, h: float) -> np.ndarray:
 
 
 def all_coordinates(mb):
-    """d/dt (q, q', W) on all the coordinates (least-squares accelerations)."""
+    """d/dt (q, q', W) on all the coordinates (least-squares accelerations). With
+    redundant equations every stage's state is first closed onto the constraints (to
+    rounding): next to a singular position the equation that fixes the motion there is
+    nearly lost, and a stage's departure from the constraints (the square of the
+    step) changed the motion by 0.3 deg and T + V by 0.05 J in one step."""
     nq = mb.nq
 
     def f(t, y):
-        qdd, P = mb.free_accelerations(y[:nq], y[nq : 2 * nq], t)
-        return np.concatenate([y[nq : 2 * nq], qdd, [P]])
+        q, qd = y[:nq], y[nq : 2 * nq]
+        if mb.rank is not None:
+            got = project(mb, t, q.copy(), qd, NEWTON_ITERATIONS)
+            if got is None:
+                raise np.linalg.LinAlgError("a stage does not close")
+            q, qd = got
+        qdd, P = mb.free_accelerations(q, qd, t)
+        return np.concatenate([qd, qdd, [P]])
 
     return f
 
@@ -65,17 +76,37 @@ def project(mb, t: float, q: np.ndarray, qd: np.ndarray, iterations: int):
     """``(q, q')`` moved onto ``Phi = 0`` (minimum-norm Newton) and ``Phi_q q' = nu``;
     None where Newton does not converge."""
     q1 = q.copy()
+    last = np.inf
     for _ in range(iterations):
         phi = mb.residual(q1, t)
-        if np.max(np.abs(phi), initial=0.0) <= mb.tol:
-            break
-        q1 -= np.linalg.lstsq(mb.jacobian(q1), phi, rcond=1e-12)[0]
+        size = np.max(np.abs(phi), initial=0.0)
+        if size <= mb.tol and (
+            mb.rank is None or size >= 0.5 * last or size <= ROUNDING * mb.scale
+        ):
+            break  # with redundant equations: on to rounding (see multibody_full)
+        last = size
+        q1 -= _newton_step(mb, q1, phi)
     else:
-        return None
+        if not last <= mb.tol:
+            return None
     qd1 = mb.consistent_rates(q1, qd, t)
     if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(qd1))):
         return None
     return q1, qd1
+
+
+def _newton_step(mb, q: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """The minimum-norm Newton step: singular values below 1e-12 of the largest set
+    aside, and with redundant equations all but the run's rank largest. (Off the
+    constraints by ``d``, the redundant direction's singular value is about ``d``, not
+    zero: divided by it, the residual's part along it moved a closed parallelogram by
+    1.5e-6 m and changed its energy by 2e-5 J.)"""
+    J = mb.jacobian(q)
+    if mb.rank is None:
+        return np.linalg.lstsq(J, phi, rcond=1e-12)[0]
+    U, S, Vt = np.linalg.svd(J, full_matrices=False)
+    k = min(mb.rank, int(np.sum(S > 1e-12 * S[0])))
+    return Vt[:k].T @ ((U[:, :k].T @ phi) / S[:k])
 
 
 def locate_singular(

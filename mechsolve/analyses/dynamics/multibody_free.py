@@ -27,7 +27,9 @@ from mechsolve.base.atomic import replacing
 from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import GROUND, Mechanism
 
-RATE_RTOL = 1e-6  # how far given rates may be from consistent before it is an error
+# how far given rates may be from consistent before it is an error: a value written to
+# 6 significant digits (5e-6 of its size at most) passes
+RATE_RTOL = 1e-5
 RATE_ATOL = 1e-9
 
 
@@ -138,22 +140,51 @@ def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:
     qd_p = np.linalg.lstsq(Jq, nu, rcond=1e-12)[0] if Jq.size else np.zeros(mb.nq)
     if not rows:
         return qd_p
-    C = np.array(rows)
     # a particular solution of Phi_q q' = nu (the prescribed motions' rates), then the
-    # free part fitted to the given rates
-    a, *_ = np.linalg.lstsq(C @ N, np.array(targets) - C @ qd_p, rcond=1e-12)
-    qd = qd_p + N @ a
-    got = C @ qd
+    # free part fitted to the given rates, the driver's `from` held as given
+    fixed = np.array([path == ("simulate", "from") for _, path in where])
+    qd = qd_p + N @ _fit(np.array(rows) @ N, np.array(targets) - np.array(rows) @ qd_p, fixed)
+    got = np.array(rows) @ qd
     for (j, path), x, y in zip(where, targets, got):
         if abs(y - x) > RATE_RTOL * max(abs(x), abs(y)) + RATE_ATOL:
-            consistent = ", ".join(f"{jj}: {v:.6g}" for (jj, _), v in zip(where, got))
+            unit = {jj: _rate_unit(mech, jj) for jj, _ in where}
+            consistent = ", ".join(f"{jj}: {v:.10g} {unit[jj]}" for (jj, _), v in zip(where, got))
+            k = int(np.argmax(fixed))
+            held = (
+                f" with the driver's from {targets[k]:.10g} {unit[where[k][0]]}"
+                if fixed.any() and not fixed[where.index((j, path))]
+                else ""
+            )
             raise mech.error(
                 path,
                 f"the initial rates are not consistent with the constraints: {j}'s rate "
-                f"{x:.6g} would have to be {y:.6g} (the nearest consistent rates: "
-                f"{consistent}, in rad/s or m/s); give rates that the mechanism allows",
+                f"{x:.10g} {unit[j]} would have to be {y:.10g} {unit[j]}{held} (the "
+                f"consistent rates: {consistent}); give rates that the mechanism allows",
             )
     return qd
+
+
+def _rate_unit(mech: Mechanism, joint: str) -> str:
+    return "m/s" if mech.joint(joint).coordinate == "length" else "rad/s"
+
+
+def _fit(C: np.ndarray, r: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """The free part ``a`` of the rates: ``C[fixed] a = r[fixed]`` exactly where it can
+    be met (the driver's ``from``, as given), the other rows by least squares in what
+    it leaves free; all rows by least squares where the fixed ones cannot be met."""
+    a, *_ = np.linalg.lstsq(C, r, rcond=1e-12)
+    if not fixed.any() or fixed.all():
+        return a
+    Cf = C[fixed]
+    a0 = np.linalg.lstsq(Cf, r[fixed], rcond=1e-12)[0]
+    if np.abs(Cf @ a0 - r[fixed]).max() > 1e-12 * max(1.0, float(np.abs(r[fixed]).max())):
+        return a  # the driver's rate alone is not allowed here: the nearest rates
+    _, sv, Vt = np.linalg.svd(Cf)
+    K = Vt[int(np.sum(sv > 1e-12 * sv[0])) :].T  # what the fixed rows leave free
+    if K.shape[1] == 0:
+        return a0
+    b, *_ = np.linalg.lstsq(C[~fixed] @ K, r[~fixed] - C[~fixed] @ a0, rcond=1e-12)
+    return a0 + K @ b
 
 
 def _prescribed(mech: Mechanism, system) -> list[Prescribed]:
@@ -388,6 +419,8 @@ class FreeResults:
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
                 "all coordinates, each step projected onto the constraints)"
             )
+        if tr.undetermined_text():
+            lines.append(tr.undetermined_text())
         if tr.early:
             lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")
         elif tr.stopped:
@@ -395,4 +428,4 @@ class FreeResults:
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return False
+        return bool(self.trajectory.undetermined.size)

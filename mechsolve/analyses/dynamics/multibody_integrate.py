@@ -42,6 +42,7 @@ from mechsolve.analyses.dynamics.multibody_events import (
     rk4,
     singular_measure,
 )
+from mechsolve.analyses.dynamics.multibody_full import full_output
 from mechsolve.analyses.dynamics.multibody_lite import LiteEquations
 from mechsolve.analyses.dynamics.multibody_rows import close_rows
 
@@ -91,8 +92,11 @@ class _Run:
         self.substeps = bridge_substeps(method, rtol)
         self.rec: dict[str, list] = {k: [] for k in self.KEYS}
         self.q, self.qd, self.W = q0.astype(float).copy(), qd0.astype(float).copy(), 0.0
+        mb.rank = None
         self.part = mb.partition(self.q)
         self.rank = len(self.part.rows)
+        if self.rank < mb.nc and _persists(mb, self.q, self.rank):
+            mb.rank = self.rank  # redundant equations: this rank at every state
         self.partitions, self.bridges = 1, 0
         self.stopped, self.early, self.event = "", False, ""
         self.stop: Stop | None = None
@@ -122,7 +126,10 @@ class _Run:
             mb._last = (t, q.copy(), qd.copy(), done[0])
             return
         mb._ev = self.evaluated.pop(id(q), None)
-        qdd, lam, T, V = mb.output(self.part, q, qd, t)
+        if mb.rank is not None and mb.friction is None:  # redundant equations
+            qdd, lam, T, V = full_output(mb, q, qd, t)
+        else:
+            qdd, lam, T, V = mb.output(self.part, q, qd, t)
         # pins: nu = 0 (no state to build for it)
         nu = 0.0 if mb.pins is not None else mb._nu_gamma(mb.state(q), t, gamma=False)
         for key, value in (
@@ -205,7 +212,9 @@ class _Run:
         if self.method == "rk4":
             ts, ys = [self.times[k]], [rk4(self.rhs, t0, y0, self.times[k] - t0)]
         else:
-            window = self.times[k - 1 : k + CHUNK]
+            # (redundant equations: the partition is checked against a fresh one
+            # every few outputs, see Multibody._needs_repartition)
+            window = self.times[k - 1 : k + (CHUNK if mb.rank is None else CHUNK_REDUNDANT)]
             ts, ys, fired = _adaptive(self, window, y0)
         if not ts and (fired is None or fired[0] == "conditioning"):
             raise Repartition  # the conditioning event at once: no partition here
@@ -252,16 +261,15 @@ class _Run:
                 if self.stopped:
                     return
                 continue
+            near = self._near()
             try:
-                if self.event_fired and singular_measure(mb, self.q, self.rank) < S_NEAR:
-                    # a new partition next to a singular position is ill-conditioned
-                    # itself (integrating on it loses energy): bridged until clear
+                if near:
                     raise Repartition
                 out = self.outputs(k)
             except Repartition:
                 # at or next to a singular position no partition describes the motion:
                 # the step is bridged on all the coordinates, then projected
-                retries += 1
+                retries += 0 if near and mb.rank is not None else 1
                 t0 = times[k - 1]
                 bridged = retries <= BRIDGE_LIMIT and _bridge(
                     mb, t0, times[k], self.q, self.qd, self.W, self.substeps
@@ -295,6 +303,19 @@ class _Run:
             if max_steps is not None and k > max_steps:
                 self.halt("max steps", f"stopped after {max_steps} steps (--max-steps)")
                 return
+
+    def _near(self) -> bool:
+        """The next output step is bridged at once: after an event next to a singular
+        position (a new partition there is ill-conditioned itself: integrating on it
+        loses energy) and, with redundant equations, wherever the motion is next to
+        one (a partition there closes the state on its own equations only, and the
+        state drifts off the set-aside one by tol / sigma; see multibody_full)."""
+        redundant = self.mb.rank is not None
+        if not (self.event_fired or redundant):
+            return False
+        if redundant and self.event_fired == "near":
+            return True
+        return singular_measure(self.mb, self.q, self.rank) < S_NEAR
 
     def q_time(self) -> float:
         return float(self.rec["t"][-1])
@@ -396,6 +417,18 @@ class _Run:
         )
 
 
+def _persists(mb: Multibody, q: np.ndarray, rank: int) -> bool:
+    """The equations keep their rank ``rank`` (below their number) next to ``q``: they
+    are redundant, not only at a singular position where the motion starts. Checked
+    at a configuration closed from ``q`` moved by 1e-3 of the mechanism's size along
+    the equations' null space."""
+    _, _, Vt = np.linalg.svd(mb.jacobian(q))
+    if Vt.shape[0] <= rank:
+        return True
+    moved = project(mb, 0.0, q + 1e-3 * mb.scale * Vt[rank], np.zeros(mb.nq), NEWTON_ITERATIONS)
+    return moved is not None and len(mb.partition(moved[0]).rows) == rank
+
+
 def _redundant(mb: Multibody, q: np.ndarray) -> bool:
     return len(mb.partition(q).rows) < mb.nc
 
@@ -441,6 +474,7 @@ def _bridge(mb: Multibody, t0: float, t1: float, q, qd, W: float, substeps: int)
 
 
 CHUNK = 50  # outputs per call of solve_ivp: what a failed stage can cost
+CHUNK_REDUNDANT = 5  # with redundant equations
 
 
 def _adaptive(run: _Run, times, y0):
@@ -450,40 +484,7 @@ def _adaptive(run: _Run, times, y0):
     position. Returns the outputs and the event that ended it, ``(kind, t, y)``."""
     from scipy.integrate import solve_ivp
 
-    mb, part = run.mb, run.part
-    fn = len(part.ind)
-
-    def closed(t, y):
-        return mb.close(part, y[part.ind], t, y[: mb.nq])
-
-    def conditioning(t, y):
-        """Phi_d's reciprocal condition (1-norm estimate) falls below 0.1 of its value
-        when the partition was chosen: at a step's end that of the step's last
-        evaluation (the same state), elsewhere (the event's root) from a closure."""
-        if fn == 0 or len(part.dep) == 0:
-            return 1.0
-        last = run.last_rc
-        if last is not None and last[0] == t and np.array_equal(last[1], y):
-            rc = last[2]
-        else:
-            rc = _lu(mb.jacobian(closed(t, y))[part.dd])[1]
-        return rc - 0.1 * part.rcond1
-
-    events: list = [conditioning]
-    kinds = ["conditioning"]
-    if run.stop is not None:
-
-        def stop(t, y):
-            q = closed(t, y)
-            qd, _ = mb.rates(part, q, y[mb.nq + part.ind], t)
-            return run.g(t, q, qd)
-
-        stop.direction = -1
-        events.append(stop)
-        kinds.append("stop")
-    if run.singular != "pass":
-        events.append(lambda t, y: singular_measure(mb, closed(t, y), run.rank) - S_NEAR)
-        kinds.append("near")
+    events, kinds = _events(run)
     for e in events:
         e.terminal = True
     # a stretch that goes on from where the last one ended (no event between) starts
@@ -522,6 +523,56 @@ def _adaptive(run: _Run, times, y0):
     if fired is not None and fired[0] == "stop" and ts and ts[-1] >= fired[1]:
         ts, ys = ts[:-1], ys[:-1]  # the event's own row replaces an output at its time
     return ts, ys, fired
+
+
+def _events(run: _Run):
+    """The terminal events of :func:`_adaptive` and their kinds."""
+    mb, part = run.mb, run.part
+    fn = len(part.ind)
+
+    def closed(t, y):
+        return mb.close(part, y[part.ind], t, y[: mb.nq])
+
+    def conditioning(t, y):
+        """Phi_d's reciprocal condition (1-norm estimate) falls below 0.1 of its value
+        when the partition was chosen: at a step's end that of the step's last
+        evaluation (the same state), elsewhere (the event's root) from a closure."""
+        if fn == 0 or len(part.dep) == 0:
+            return 1.0
+        last = run.last_rc
+        if last is not None and last[0] == t and np.array_equal(last[1], y):
+            rc = last[2]
+        else:
+            rc = _lu(mb.jacobian(closed(t, y))[part.dd])[1]
+        return rc - 0.1 * part.rcond1
+
+    events: list = [conditioning]
+    kinds = ["conditioning"]
+    if mb.rank is not None and fn and len(part.dep):
+
+        def better(t, y):
+            """Redundant equations: a partition chosen afresh would be 10x better
+            conditioned (the one chosen where the motion left a singular position
+            closes the equation it sets aside 1e-5 off where the cranks stand up)."""
+            q = closed(t, y)
+            return _lu(mb.jacobian(q)[part.dd])[1] - 0.1 * mb.partition(q).rcond1
+
+        events.append(better)
+        kinds.append("conditioning")
+    if run.stop is not None:
+
+        def stop(t, y):
+            q = closed(t, y)
+            qd, _ = mb.rates(part, q, y[mb.nq + part.ind], t)
+            return run.g(t, q, qd)
+
+        stop.direction = -1
+        events.append(stop)
+        kinds.append("stop")
+    if run.singular != "pass" or mb.rank is not None:
+        events.append(lambda t, y: singular_measure(mb, closed(t, y), run.rank) - S_NEAR)
+        kinds.append("near")
+    return events, kinds
 
 
 def _stepper(run: _Run):

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.analyses.dynamics.multibody import NEWTON_ITERATIONS, RECONDITION
+from mechsolve.analyses.dynamics.multibody_events import S_NEAR
 
 
 @dataclass
@@ -132,9 +133,15 @@ def _dynamics(mb, part, q, qd, arms, phi, Jq) -> Rows | None:
     qdd = x[:, :nq]
     if r == mb.nc:  # every equation independent: its multipliers are unique
         lam = x[:, nq:]
-    else:  # redundant equations: the multipliers of least norm
-        rhs = Q - (M @ qdd[:, :, None])[..., 0]
-        lam = (np.linalg.pinv(Jq.transpose(0, 2, 1), rcond=1e-10) @ rhs[:, :, None])[..., 0]
+    else:  # redundant equations: the multipliers of least norm on the run's rank
+        w = mb.weights
+        U, S, Vt = np.linalg.svd(Jq * w)
+        if not (S[:, r - 1] >= S_NEAR * S[:, 0]).all():
+            return None  # next to a singular position: on every equation, row by row
+        rhs = w * (Q - (M @ qdd[:, :, None])[..., 0])
+        lam = np.einsum(
+            "nkr,nr->nk", U[:, :, :r], np.einsum("nrj,nj->nr", Vt[:, :r], rhs) / S[:, :r]
+        )
     T = 0.5 * np.einsum("ni,nij,nj->n", qd, M, qd)
     vviol = np.abs(Jq @ qd[:, :, None]).max(axis=(1, 2), initial=0.0)
     viol = np.abs(phi).max(axis=1, initial=0.0)

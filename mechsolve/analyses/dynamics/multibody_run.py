@@ -351,6 +351,8 @@ class MultibodyResults(Results):
                 f"  {tr.bridges} output step(s) bridged across singular positions (RK4 on "
                 "all coordinates, each step projected onto the constraints)"
             )
+        if tr.undetermined_text():
+            lines.append(tr.undetermined_text())
         if tr.early:
             lines.append(
                 f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}; the motion up to "
@@ -361,4 +363,4 @@ class MultibodyResults(Results):
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return not self.ok.all()
+        return not self.ok.all() or bool(self.trajectory.undetermined.size)
