@@ -485,16 +485,41 @@ class Results(Summary):
 
     def mean_effort(self) -> tuple[float, str]:
         """The driver's mean effort and what it is: the work over the travel when the
-        motion has no gaps (the exact mean over the sweep, between samples too), else
-        the average of the solved samples, said so."""
+        motion has no gaps and goes one way (the exact mean over the sweep, between
+        samples too), else the average of the solved samples, said so.
+
+        A motion law that turns back (an oscillation, one that returns to its start) has
+        no mean over the travel: the travel may be zero to rounding (``sin(t)`` over
+        ``2 pi``: ``W / 2.4e-16``) and the angle is passed more than once. There the mean
+        is over time, ``integral of T dt / duration`` (trapezoidal rule on the solved
+        samples, as the RMS), said ``time mean``."""
+        u = np.asarray(self.u, float)
+        du = np.diff(u)
+        tol = 1e-12 * float(np.sum(np.abs(du)))  # rounding, against the path
+        turns_back = bool(np.any(du > tol) and np.any(du < -tol))
+        if self.mechanism.driver.motion is not None and (turns_back or abs(u[-1] - u[0]) <= tol):
+            return self._time_mean_effort()
         work = self.work()
-        travel = self.u[-1] - self.u[0]
+        travel = u[-1] - u[0]
         if math.isfinite(work) and travel != 0:
             return work / travel, "mean"
         e = np.where(self.forces.ok, self.forces.effort, np.nan)
         if not np.any(np.isfinite(e)):
             return float("nan"), "mean"
         return float(np.nanmean(e)), "mean of the solved positions"
+
+    def _time_mean_effort(self) -> tuple[float, str]:
+        """The driving effort's mean over time along a motion law (see
+        :meth:`mean_effort`): over the intervals whose two samples are solved."""
+        e = self.driving_effort
+        ok = np.isfinite(e)
+        both = ok[1:] & ok[:-1]
+        dt = np.diff(np.asarray(self.t, float))[both]
+        span = float(np.sum(dt))
+        what = "time mean" if ok.all() else "time mean of the solved positions"
+        if not span > 0:
+            return float("nan"), what
+        return float(np.sum(0.5 * (e[1:][both] + e[:-1][both]) * dt) / span), what
 
     def is_full_cycle(self) -> bool:
 
