@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 import mechsolve as ms
@@ -66,3 +67,148 @@ def test_mean_torque_of_a_one_way_law_is_still_the_work_over_the_travel():
     mean, what = res.mean_effort()
     assert what == "mean"
     assert abs(mean) < 1e-9
+
+
+# A change-point four-bar (Grashof sum equal: crank 40 + coupler 100 = rocker 60 + frame
+# 80, mm): at crank angle 0 all four links are collinear and its two branches cross.
+CHANGE = """
+name: changepoint
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [80, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [40, 0]}}, mass: 0.05 kg, uniform_bar: [O2, A]}}
+  coupler: {{points: {{A: [0, 0], B: [100, 0]}}, mass: 0.2 kg, uniform_bar: [A, B]}}
+  rocker: {{points: {{O4: [0, 0], B: [60, 0]}}, mass: 0.11 kg, uniform_bar: [O4, B]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly:
+  - B left of A -> O4
+driver: {{joint: O2, speed: 1 rad/s, start: {start} deg}}
+sweep: {{range: {range} deg, step: {step} deg}}
+gravity: 9.81 m/s^2
+"""
+
+
+def change_point_rocker(th2, sigma):
+    """The change-point four-bar's rocker angle and its rate per unit crank rate on the
+    smooth branch ``sigma`` (+-1) through the change point, in closed form.
+
+    Freudenstein's half-angle solution (Norton 4.10): ``th4 = 2 atan2(-B -+ sqrt(B^2 -
+    4AC), 2A)`` with ``K1 = d/a = 2``, ``K2 = d/c = 4/3``, ``K3 = (a^2 - b^2 + c^2 +
+    d^2) / (2ac) = 1/3``: ``A = -(cos th2 + 5)/3``, ``B = -2 sin th2``, ``C = 7 (1 -
+    cos th2) / 3``, so ``B^2 - 4AC = 4 (1 - cos th2)(44 + 16 cos th2)/9 = (2 k
+    sin(th2/2))^2`` with ``k = sqrt(2 (44 + 16 cos th2)) / 3``. The root that is smooth
+    through th2 = 0 takes ``sin(th2/2)`` with its sign (not its modulus): ``th4 = 2
+    atan2(N, A)``, ``N = sin th2 - sigma k sin(th2/2)``, whose derivative has no 0/0."""
+    c2, s2 = np.cos(th2), np.sin(th2)
+    root = np.sqrt(2.0 * (44.0 + 16.0 * c2))
+    k = root / 3.0
+    dk = -16.0 * s2 / (3.0 * root)
+    A, dA = -(c2 + 5.0) / 3.0, s2 / 3.0
+    N = s2 - sigma * k * np.sin(th2 / 2)
+    dN = c2 - sigma * (dk * np.sin(th2 / 2) + 0.5 * k * np.cos(th2 / 2))
+    th4 = 2.0 * np.arctan2(N, A)
+    return th4, 2.0 * (A * dN - N * dA) / (N * N + A * A)
+
+
+def _change_point_reference(res):
+    """The closed form's rocker rates on the branch the sweep starts on (picked by the
+    start's pose, which is not in question)."""
+    th4 = res.link("rocker").angle
+    for sigma in (1.0, -1.0):
+        ref4, w4 = change_point_rocker(res.u, sigma)
+        if abs(np.angle(np.exp(1j * (ref4[0] - th4[0])))) < 1e-9:
+            h = 1e-5  # the acceleration: a central difference of the exact rate
+            a4 = (
+                change_point_rocker(res.u + h, sigma)[1] - change_point_rocker(res.u - h, sigma)[1]
+            ) / (2 * h)
+            return w4, a4
+    raise AssertionError("the start pose is on neither branch of the closed form")
+
+
+def test_change_point_closed_form_matches_a_sweep_through_the_toggle():
+    """The reference itself: a sweep through the change point (the reviewer's 0.2 deg) and
+    a coarse one follow the smooth branch of the closed form."""
+    for start, rng, step in ((359.9, 0.2, 0.001), (300, 120, 1)):
+        res = ms.solve(ms.loads(CHANGE.format(start=start, range=rng, step=step)))
+        w4, _ = _change_point_reference(res)
+        omega = res.link("rocker").omega
+        assert np.all(np.isfinite(omega))
+        np.testing.assert_allclose(omega, w4, rtol=1e-6)
+
+
+def test_rates_next_to_a_change_point_where_the_sweep_stops_short_of_it():
+    """A fine sweep that stops 0.001 deg before the change point: the rates of the
+    positions next to it (77 rows said 'singular') were the other branch's, from side
+    samples 0.29 deg past the sweep's end (rocker +47.31 deg/s against -161.90 deg/s),
+    with status ok. They are the followed branch's or blank."""
+    res = ms.solve(ms.loads(CHANGE.format(start=359.9, range=0.099, step=0.001)))
+    w4, a4 = _change_point_reference(res)
+    omega, alpha = res.link("rocker").omega, res.link("rocker").alpha
+    shown = np.isfinite(omega)
+    assert shown.sum() >= len(omega) - 5
+    np.testing.assert_allclose(omega[shown], w4[shown], rtol=1e-6)
+    shown = np.isfinite(alpha)
+    np.testing.assert_allclose(alpha[shown], a4[shown], rtol=0, atol=1e-5)
+    status = res.status()
+    blank = ~np.isfinite(omega) | ~np.isfinite(alpha)
+    assert all(s != "ok" for s, b in zip(status, blank) if b)
+
+
+def _peak_line(res) -> str:
+    return next(ln for ln in res.summary().splitlines() if "peak reactions" in ln)
+
+
+def test_reaction_growing_without_bound_at_a_change_point_has_no_peak():
+    """At the change point the coupler and rocker are collinear: the moment of the loads
+    on the rocker about O4 is carried by the coupler's force along A-B, whose arm c sin g
+    vanishes with the transmission angle g, so the reactions grow as 1/g, the largest
+    sample being set by how close a sample lands (119 N at 1 deg, 1193 N at 0.1 deg).
+    The summary says where they grow without bound instead of a 'peak'."""
+    res = ms.solve(ms.loads(CHANGE.format(start=10, range=360, step=2)))
+    line = _peak_line(res)
+    assert "grow without bound towards the singular position at driver angle 0°" in line
+    assert " N at " not in line  # no number that is only the nearest sample's
+    # the claim, independently: the reaction scales as 1 / (distance to the toggle)
+    near = [
+        float(
+            np.nanmax(
+                np.abs(
+                    ms.solve(ms.loads(CHANGE.format(start=s, range=0, step=1))).reaction("O4")["F"]
+                )
+            )
+        )
+        for s in (359.0, 359.9, 359.99)
+    ]
+    assert near[1] / near[0] == pytest.approx(10.0, rel=0.02)
+    assert near[2] / near[1] == pytest.approx(10.0, rel=0.02)
+    # a fine sweep stopping short of it, whose last rows' reactions are not determined
+    res = ms.solve(ms.loads(CHANGE.format(start=359.9, range=0.099, step=0.001)))
+    line = _peak_line(res)
+    assert "grow without bound towards the singular position at about driver angle 360°" in line
+    assert " N at " not in line
+
+
+def test_sweep_stopping_short_of_a_toggle_keeps_its_peak_at_its_end():
+    """A sweep that ends 1 deg before the change point: its largest reaction is at its
+    end, a figure of the sweep (not of a sample that happens to land near the toggle)."""
+    res = ms.solve(ms.loads(CHANGE.format(start=300, range=59, step=1)))
+    line = _peak_line(res)
+    assert "without bound" not in line
+    f = np.abs(res.reaction("O2")["F"])
+    assert f"O2 {float(np.nanmax(f)):.4g} N at driver angle 359°" in line
+
+
+@pytest.mark.parametrize("at", [359.99, 359.999, 0.01])
+def test_rates_at_one_position_next_to_a_change_point(at):
+    """One position next to the change point (``run --at``, a drawing): its rates are its
+    branch's, by a limit from the side that does not cross the change point (the side
+    samples across it lie on the other branch: +47.31 deg/s for -161.90 deg/s)."""
+    res = ms.solve(ms.loads(CHANGE.format(start=at, range=0, step=1)))
+    w4, a4 = _change_point_reference(res)
+    assert res.link("rocker").omega[0] == pytest.approx(w4[0], rel=1e-7)
+    # (a one-sided limit: good to about 1e-6 of the natural size, 1 rad/s^2 at 1 rad/s)
+    assert res.link("rocker").alpha[0] == pytest.approx(a4[0], abs=3e-6)

@@ -533,6 +533,9 @@ class Results(Summary):
                 # (a sweep that stopped following a branch: not known to be unassemblable)
                 what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
                 out[i] = f"{what}: " + f.group
+        for i in self.solution.rates_undetermined:  # blank velocities or accelerations
+            if out[i] == "ok":
+                out[i] = "singular: rates not determined (rounding near a singular position)"
         if self.forces is not None:
             for i, label in self.forces.singular:
                 if out[i] == "ok":
