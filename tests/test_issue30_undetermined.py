@@ -212,3 +212,92 @@ def test_rates_at_one_position_next_to_a_change_point(at):
     assert res.link("rocker").omega[0] == pytest.approx(w4[0], rel=1e-7)
     # (a one-sided limit: good to about 1e-6 of the natural size, 1 rad/s^2 at 1 rad/s)
     assert res.link("rocker").alpha[0] == pytest.approx(a4[0], abs=3e-6)
+
+
+# -- expressions that are not finite (division by zero) -------------------------------
+
+FOURBAR = """name: fourbar
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [87.5, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [26.5, 0]}}, mass: 0.05 kg, uniform_bar: [O2, A]}}
+  coupler:
+    points: {{A: [0, 0], B: [105.6, 0], P: {{length: 60, angle: 30}}}}
+    mass: 0.2 kg
+    uniform_bar: [A, B]
+  rocker: {{points: {{O4: [0, 0], B: [59, 0]}}, mass: 0.11 kg, uniform_bar: [O4, B]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly:
+  - B left of A -> O4
+{driver}
+gravity: 9.81 m/s^2
+loads:
+  pull:
+    force: [0, -2 N]
+    at: P
+    when: {when}
+"""
+STEADY = "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}\nsweep: {range: 360 deg, step: 2 deg}"
+
+
+def _run(tmp_path, text: str, *args: str, name: str = "m.yaml"):
+    f = tmp_path / name
+    f.write_text(text)
+    out = CliRunner().invoke(main, [*args, str(f), "-o", str(tmp_path / "out")])
+    return out, f
+
+
+def _line(text: str, key: str) -> int:
+    return next(i for i, ln in enumerate(text.splitlines(), 1) if ln.lstrip().startswith(key))
+
+
+def test_condition_dividing_by_zero_is_refused(tmp_path):
+    """``when: 1/(P.vx - P.vx) > 0`` is 1/0 = inf > 0 at every position: the load acted
+    everywhere, silently. It is refused, naming file, line, key and where."""
+    text = FOURBAR.format(driver=STEADY, when="1/(P.vx - P.vx) > 0")
+    out, f = _run(tmp_path, text, "run")
+    assert out.exit_code == 2, out.output
+    assert f"m.yaml:{_line(text, 'when:')}: loads.pull.when:" in out.output
+    assert "'1 / (P.vx - P.vx)' is not finite" in out.output and "driver angle 0°" in out.output
+    assert "Traceback" not in out.output
+    # a condition that divides by something that is never zero is kept
+    ok, _ = _run(tmp_path, FOURBAR.format(driver=STEADY, when="P.vx / (1 + P.y^2) > 0"), "run")
+    assert ok.exit_code == 0, ok.output
+
+
+def test_motion_law_with_a_pole_between_samples_is_refused(tmp_path):
+    """``t + 1/(t - 1.05)`` sampled every 0.1 s: finite at every sample, the driver jumped
+    through infinity between 1.0 and 1.1 s. Refused at the pole, t = 1.05 s (the zero of
+    t - 1.05); a removable singularity between samples is not a pole."""
+    law = 'driver: {{joint: O2, motion: {{law: "{}"}}}}\nsweep: {{duration: 2 s, steps: 20}}'
+    text = FOURBAR.format(driver=law.format("t + 1/(t - 1.05)"), when="P.vx > 0")
+    out, f = _run(tmp_path, text, "run", "--no-plots")
+    assert out.exit_code == 2, out.output
+    assert f"m.yaml:{_line(text, 'driver:')}: driver.motion.law:" in out.output
+    assert "t = 1.05 s" in out.output and "without bound" in out.output
+    for fine in ("t + sin(t - 1.05) / (t - 1.05)", "t + 1/sign(t - 1.05)", "t + 1/(1 + t^2)"):
+        text = FOURBAR.format(driver=law.format(fine), when="P.vx > 0")
+        ok, _ = _run(tmp_path, text, "run", "--no-plots")
+        assert ok.exit_code == 0, (fine, ok.output)
+
+
+def test_flywheel_torque_law_with_a_pole_between_samples_is_refused(tmp_path):
+    """``150 sin(2 angle) / (angle - 1)`` has a pole at angle = 1 rad, between the
+    36001 samples of the cycle: the energy excursion printed (1293 J) was the samples'."""
+    text = (
+        "name: law\n"
+        'torque: {law: "200 + 150 * sin(2 * angle) / (angle - 1)", cycle: 360 deg}\n'
+        "resisting: mean\nspeed: 3000 rpm\ndelta: 1/80\n"
+    )
+    f = tmp_path / "fw.yaml"
+    f.write_text(text)
+    out = CliRunner().invoke(main, ["flywheel", str(f)])
+    assert out.exit_code == 2, out.output
+    assert "fw.yaml:2: torque.law:" in out.output and "angle = 1 rad" in out.output
+    f.write_text(text.replace("(angle - 1)", "(angle + 1)"))
+    ok = CliRunner().invoke(main, ["flywheel", str(f)])
+    assert ok.exit_code == 0, ok.output
