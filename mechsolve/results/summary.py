@@ -409,10 +409,13 @@ def _singular_rate_lines(res) -> list[str]:
         if idx:
             where = ", ".join(res.describe_u(i) for i in idx[:5])
             more = f" and {len(idx) - 5} more" if len(idx) > 5 else ""
-            lines.append(
-                f"  velocities and accelerations at {len(idx)} singular position(s) "
-                f"{what}: {where}{more}"
-            )
+            rates = "velocities and accelerations"
+            if idx is sol.rates_undetermined:  # near, not at, a singular position: may be
+                vel = np.isfinite(sol.state.block[5:8, :, idx]).all(axis=(0, 1))  # only some
+                if vel.any():
+                    rates = "accelerations" if vel.all() else "velocities or accelerations"
+                    what = what[:-1] + ": the pose's rounding would show)"
+            lines.append(f"  {rates} at {len(idx)} singular position(s) {what}: {where}{more}")
     rc = np.where(res.ok, res.jacobian_rcond(), np.nan)
     if np.any(np.isfinite(rc)):
         i = int(np.nanargmin(rc))
