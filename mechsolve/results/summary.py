@@ -230,6 +230,9 @@ class Summary:
         U = self._shown
         unit = "m" if self.linear else "deg"
         dv = self.driver_value
+        if n:  # an end that is rounding (sin(2 pi) = -2.4e-16 rad) is 0, not -1.4e-14 deg
+            top = float(np.nanmax(np.abs(dv))) if np.isfinite(dv).any() else 0.0
+            dv = np.r_[_or_zero(float(dv[0]), top), dv[1:-1], _or_zero(float(dv[-1]), top)][:n]
         span = f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}"
         if not U.is_si and n:
             span = f"from {U.text(dv[0], unit)} to {U.text(dv[-1], unit)}"
