@@ -303,3 +303,17 @@ def test_flywheel_torque_law_with_a_pole_between_samples_is_refused(tmp_path):
     f.write_text(text.replace("(angle - 1)", "(angle + 1)"))
     ok = CliRunner().invoke(main, ["flywheel", str(f)])
     assert ok.exit_code == 0, ok.output
+
+
+def test_compare_gives_no_peak_reaction_for_a_change_point(tmp_path):
+    """``compare`` printed 1193.1 N at 0.1 deg for the change-point linkage: its nearest
+    sample to the toggle. It says 'unbounded' (blank in its CSV) and where."""
+    a = tmp_path / "change.yaml"
+    a.write_text(CHANGE.format(start=10, range=360, step=2))
+    b = tmp_path / "fourbar.yaml"
+    b.write_text(FOURBAR.format(driver=STEADY, when="P.vx > 0"))
+    out = CliRunner().invoke(main, ["compare", str(a), str(b), "--output", "B.x"])
+    assert out.exit_code == 0, out.output
+    row = next(ln for ln in out.output.splitlines() if ln.startswith("peak joint reaction"))
+    assert row.split()[3] == "unbounded" and row.split()[4] != "unbounded"
+    assert "grow without bound towards the singular" in out.output
