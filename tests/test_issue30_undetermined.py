@@ -297,11 +297,11 @@ def test_flywheel_torque_law_with_a_pole_between_samples_is_refused(tmp_path):
     )
     f = tmp_path / "fw.yaml"
     f.write_text(text)
-    out = CliRunner().invoke(main, ["flywheel", str(f)])
+    out = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "fw")])
     assert out.exit_code == 2, out.output
     assert "fw.yaml:2: torque.law:" in out.output and "angle = 1 rad" in out.output
     f.write_text(text.replace("(angle - 1)", "(angle + 1)"))
-    ok = CliRunner().invoke(main, ["flywheel", str(f)])
+    ok = CliRunner().invoke(main, ["flywheel", str(f), "-o", str(tmp_path / "fw")])
     assert ok.exit_code == 0, ok.output
 
 
@@ -312,7 +312,8 @@ def test_compare_gives_no_peak_reaction_for_a_change_point(tmp_path):
     a.write_text(CHANGE.format(start=10, range=360, step=2))
     b = tmp_path / "fourbar.yaml"
     b.write_text(FOURBAR.format(driver=STEADY, when="P.vx > 0"))
-    out = CliRunner().invoke(main, ["compare", str(a), str(b), "--output", "B.x"])
+    args = ["compare", str(a), str(b), "--output", "B.x", "-o", str(tmp_path / "cmp")]
+    out = CliRunner().invoke(main, args)
     assert out.exit_code == 0, out.output
     row = next(ln for ln in out.output.splitlines() if ln.startswith("peak joint reaction"))
     assert row.split()[3] == "unbounded" and row.split()[4] != "unbounded"
