@@ -318,3 +318,21 @@ def test_compare_gives_no_peak_reaction_for_a_change_point(tmp_path):
     row = next(ln for ln in out.output.splitlines() if ln.startswith("peak joint reaction"))
     assert row.split()[3] == "unbounded" and row.split()[4] != "unbounded"
     assert "grow without bound towards the singular" in out.output
+
+
+def test_driving_torque_through_dead_centres_has_no_peak_nor_time_mean(tmp_path):
+    """The rocker driven by a sine law through both dead centres of the crank (crank and
+    coupler collinear): the torque on the rocker grows as 1/s there, so its largest sample
+    (4528 N mm, 0.005 deg from the dead centre) and its mean over time are set by where
+    the samples land. The summary and the plot say so; the work stays (energy method)."""
+    drive = (
+        'driver: {joint: O4, motion: {law: "1.488019985597753 + 0.575107925126888 * '
+        'sin(t)"}}\nsweep: {duration: 6.283185307179586 s, steps: 360}'
+    )
+    res = ms.solve(ms.loads(FOURBAR.format(driver=drive, when="P.vx > 0")))
+    mean, what = res.mean_effort()
+    assert what == "time mean" and math.isnan(mean)
+    line = next(ln for ln in res.summary().splitlines() if ln.startswith("  driving torque"))
+    assert "max: grows without bound towards the singular position at driver angle" in line
+    assert "RMS not determined" in line and "time mean not determined" in line
+    assert math.isfinite(res.work())

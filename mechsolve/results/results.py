@@ -23,7 +23,7 @@ from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
 from mechsolve.core.work import driver_work_why
 from mechsolve.model import GROUND, Mechanism
 from mechsolve.results.csv import write_csv
-from mechsolve.results.summary import Summary
+from mechsolve.results.summary import Summary, unbounded_towards
 
 
 @dataclass
@@ -513,6 +513,9 @@ class Results(Summary):
         :meth:`mean_effort`): over the intervals whose two samples are solved."""
         e = self.driving_effort
         ok = np.isfinite(e)
+        for i, sign in ((int(np.nanargmax(e)), 1.0), (int(np.nanargmin(e)), -1.0)):
+            if ok.any() and unbounded_towards(self, sign * e, i) is not None:
+                return float("nan"), "time mean"  # infinite: it grows without bound
         both = ok[1:] & ok[:-1]
         dt = np.diff(np.asarray(self.t, float))[both]
         span = float(np.sum(dt))

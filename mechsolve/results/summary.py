@@ -307,9 +307,7 @@ class Summary:
         else:
             lines.append(
                 f"  driving {kind} ({src.sample_spacing()} samples): "
-                f"max {e[imax] / scale:.6g} {unit} at {src.describe_u(imax)}, "
-                f"min {e[imin] / scale:.6g} {unit} at {src.describe_u(imin)}, "
-                f"RMS {rms / scale:.6g} {unit}, {what} {mean / scale:.6g} {unit}"
+                + _effort_figures(src, e, (imax, imin), scale, unit, rms, (mean, what))
             )
         lines.append("  " + src.work_text())
         lines += src.friction_lines()
@@ -639,6 +637,33 @@ def _peak_reactions(src, joints, fscale: float, funit: str) -> str:
     return f"  peak reactions ({src.sample_spacing()} samples): " + "; ".join(peaks)
 
 
+def _effort_figures(src, e: np.ndarray, at: tuple[int, int], scale, unit, rms, mean) -> str:
+    """The driving effort's max, min, RMS and mean; where it grows without bound towards
+    a singular position (a rocker driven through a dead centre), that instead of the
+    sample nearest it, and the RMS and a mean over time, which it makes infinite, blank."""
+    imax, imin = at
+    parts, unbounded = [], False
+    for name, i, sign in (("max", imax, 1.0), ("min", imin, -1.0)):
+        toward = unbounded_towards(src, sign * e, i)
+        if toward is not None:
+            parts.append(f"{name}: grows without bound towards {toward}")
+            unbounded = True
+        else:
+            parts.append(f"{name} {e[i] / scale:.6g} {unit} at {src.describe_u(i)}")
+    value, what = mean
+    value = _or_zero(value, float(np.nanmax(np.abs(e))))  # rounding of a zero mean is 0
+    if unbounded:
+        parts.append("RMS not determined (unbounded)")
+        if what != "mean":  # the work over the travel stays exact (the energy method)
+            value, what = math.nan, what
+    else:
+        parts.append(f"RMS {rms / scale:.6g} {unit}")
+    parts.append(
+        f"{what} {value / scale:.6g} {unit}" if math.isfinite(value) else f"{what} not determined"
+    )
+    return ", ".join(parts)
+
+
 def unbounded_towards(src, values: np.ndarray, i: int) -> str | None:
     """Where ``values`` (a reaction's magnitude, NaN where not determined) grow without
     bound, in words, if their largest sample ``i`` is only the sample nearest a singular
@@ -657,7 +682,7 @@ def unbounded_towards(src, values: np.ndarray, i: int) -> str | None:
     largest value at its end: that is a figure of the sweep, and given."""
     rc = np.where(src.ok, src.jacobian_rcond(), np.nan)
     s_i = float(rc[i])
-    if not (s_i < NEAR_SINGULAR_TOGGLE) or not values[i] > 0:
+    if not (0 < s_i < NEAR_SINGULAR_TOGGLE) or not values[i] > 0:  # (at 0: its limit)
         return None
     far = np.flatnonzero((rc >= 2.0 * s_i) & np.isfinite(values) & (values > 0))
     if not far.size:
