@@ -37,6 +37,7 @@ from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 from mechsolve.model.expr import ExprError, Expression
+from mechsolve.model.expr.poles import first_pole
 from mechsolve.model.machine import Flywheel
 from mechsolve.model.parse import Reader, read_units
 
@@ -710,6 +711,9 @@ def _power_law(r, law, q: tuple, span: float) -> PowerCurve:
         raise r.fail(q, str(exc)) from None
     if not np.all(np.isfinite(y)):
         raise r.fail(q, "the law is not finite over the cycle")
+    pole = first_pole(e, "angle", x)
+    if pole is not None:  # finite samples on both sides of a pole
+        raise r.fail(q, f"the law grows without bound at angle = {pole:.6g} rad")
     return PowerCurve("linear", x=x, y=np.array(y, float))
 
 

@@ -135,8 +135,18 @@ def condition_masks(
     for load in an.mech.loads:
         if load.when is None:
             continue
+        faults: list = []
         with np.errstate(invalid="ignore"):
-            val = load.when.evaluate(view, funcs)
+            val = load.when.evaluate(view, funcs, faults)
+        if faults:  # 1/0 (inf) compares as a number: a condition not determined there
+            part, k = faults[0]
+            k = int(np.unravel_index(k, np.broadcast_shapes(np.shape(val), (n,)))[-1])
+            raise an.mech.error(
+                load.where + ("when",),
+                f"the condition is not determined at {an.format_u(float(sol.u[k]))}: "
+                f"{part!r} is not finite there (a division by zero, or a function outside "
+                "its domain)",
+            )
         out[load.name] = np.broadcast_to(np.asarray(val, bool), (n,)) & sol.ok
     return out
 

@@ -89,11 +89,12 @@ class SingularRates:
             one_sided = n > 1 and i in (0, n - 1)
             if one_sided:
                 r = self._samples_on_one_side(sol, i, d, bool(newton[i]), kw)
-            else:
+            else:  # (past the sweep's ends too: a branch it did not follow is not smooth)
                 r = self._samples_on_both_sides(sol, i, d, bool(newton[i]), kw)
             bodies = sorted(set().union(*(down[gi] for gi in groups)))
+            blank = (sol, i, rows, bodies, bool(deep[i]), self._transmission(sol, groups, i), kind)
             if r is None:
-                self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+                self._undetermined(*blank)
                 continue
             self._pose_by_limit(st, i, r[:3], one_sided)
             r = r[rows]
@@ -101,13 +102,13 @@ class SingularRates:
                 if self._cubic_limit(st, i, r, rows, kind):
                     sol.rates_by_limit.append(int(i))
                 else:  # not smooth there: the rates grow without bound (a limit position)
-                    self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+                    self._undetermined(*blank)
                 continue
             if not self._two_sided_limit(sol, i, r, rows, kind, bool(deep[i])):
-                if not newton[i] and self._one_sided(sol, i, d, rows, kind, kw):
+                if not newton[i] and self._one_sided(sol, i, d, rows, kind, kw, blank[5]):
                     sol.rates_by_limit.append(int(i))
                 else:
-                    self._undetermined(sol, i, rows, bodies, bool(deep[i]))
+                    self._undetermined(*blank)
         st.token = State.new_token()
 
     def _singular_positions(
@@ -146,7 +147,7 @@ class SingularRates:
         rounding."""
         ws = (1.0 if per_unit_driver else abs(self.speed)) / (self.scale if self.linear else 1.0)
         kind = np.array([self.scale * ws, self.scale * ws, ws] + [self.scale * ws * ws] * 2)
-        return np.append(kind, ws * ws)[rows, None]
+        return np.append(kind, ws * ws)[rows.start - 5 : rows.stop - 5, None]  # rows 5.. of a block
 
     def _samples_on_one_side(
         self, sol: Solution, i: int, d: float, newton: bool, kw
@@ -155,6 +156,9 @@ class SingularRates:
         blocks at ``u + d ... u + 4d`` into the sweep (nearest first), or None."""
         ui = float(sol.u[i])
         into = math.copysign(1.0, sol.u[1] - sol.u[0]) * (1 if i == 0 else -1)
+        d = _within(sol, i, d, 4.0, (into,))
+        if d is None:
+            return None
         x = ui + into * d * np.arange(1.0, 5.0)
         if newton:
             k = i + 1 if i == 0 else i - 1  # continue from the neighbour inward
@@ -180,24 +184,61 @@ class SingularRates:
         near = self.solve(ui + d * np.array([-1.0, 1.0, -2.0, 2.0]), near=(sol, i), **kw)
         return near.state.block if near.ok.all() else None
 
+    def _transmission(self, sol: Solution, groups: list[int], i: int) -> float | None:
+        """The smallest indicator (the sine of a loop's transmission angle) of the closed-form
+        ``groups`` at position ``i``; None if none of them is a closed form."""
+        ind = sol.indicator
+        s = [float(ind[g][i]) for g in groups if self.plan[g].n_modes == 2 and g < len(ind)]
+        return min(s) if s else None
+
     @staticmethod
-    def _undetermined(sol: Solution, i: int, rows: slice, bodies: list[int], deep: bool) -> None:
-        """No limit: near a singular position the computed rates are right (and large);
-        at it (to rounding) they are noise and left blank."""
+    def _undetermined(
+        sol: Solution,
+        i: int,
+        rows: slice,
+        bodies: list[int],
+        deep: bool,
+        s: float | None = None,
+        kind: np.ndarray | None = None,
+    ) -> None:
+        """No limit: near a singular position the computed rates are right (and large)
+        unless the pose's rounding, amplified by ``1/s^2`` in velocities and ``1/s^3`` in
+        accelerations (``s`` the loop's transmission sine), exceeds 1e-6 of their size
+        (the larger of the rate and its natural size ``kind``); those, and all of them at
+        the singular position (to rounding), are left blank."""
         if deep:
             sol.state.block[rows, bodies, i] = np.nan
+            sol.rates_undetermined.append(int(i))
+            return
+        if s is None or kind is None or not s > 0:
+            return
+        blk = sol.state.block[rows, :, i][:, bodies]
+        power = np.array([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])[: blk.shape[0], None]
+        sizes = np.asarray(kind, float).reshape(-1, 1)
+        rounding = np.finfo(float).eps * sizes / s**power
+        bad = ~(rounding <= 1e-6 * np.maximum(np.abs(blk), sizes))
+        if bad.any():
+            blk[bad] = np.nan
+            sol.state.block[rows, bodies, i] = blk
             sol.rates_undetermined.append(int(i))
 
     @staticmethod
     def _cubic_limit(st: State, i: int, r: np.ndarray, rows: slice, kind: np.ndarray) -> bool:
         """The rates at ``i`` by cubic extrapolation from ``r`` (the rates at ``u + d ...
         u + 4d`` on one side), if it agrees with the quadratic one; False if not."""
+        est = SingularRates._cubic(r, kind)
+        if est is None:
+            return False
+        st.block[rows, :, i] = est
+        return True
+
+    @staticmethod
+    def _cubic(r: np.ndarray, kind: np.ndarray) -> np.ndarray | None:
+        """The cubic extrapolation of ``r`` (the rates at ``u + d ... u + 4d``) to ``u``,
+        None where it disagrees with the quadratic one."""
         est = r @ np.array([4.0, -6.0, 4.0, -1.0])
         quad = r[:, :, :3] @ np.array([3.0, -3.0, 1.0])
-        if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind):
-            st.block[rows, :, i] = est
-            return True
-        return False
+        return est if np.all(np.abs(est - quad) <= 1e-3 * np.abs(est) + 1e-6 * kind) else None
 
     @staticmethod
     def _two_sided_limit(
@@ -232,19 +273,32 @@ class SingularRates:
             sol.rates_by_limit.append(int(i))
         return True
 
-    def _one_sided(self, sol: Solution, i: int, d: float, rows, kind, kw) -> bool:
+    def _one_sided(self, sol: Solution, i: int, d: float, rows, kind, kw, s=None) -> bool:
         """The rates at position ``i`` as their limit from one side, the side the sweep
-        comes from, else the one it goes to (a sample next to the sweep's last one, where
-        the motion beyond it is on a branch the sweep did not follow): cubic
-        extrapolation from ``u -+ d ... 4d``, checked against the quadratic one."""
+        comes from, else the one it goes to: cubic extrapolation from ``u -+ dd ... 4dd``,
+        checked against the quadratic one, with ``dd`` = ``d``, or ``d/2``, ``d/4`` where
+        the motion changes too fast for ``d`` (next to a change point). The side samples
+        stay within the sweep (see :func:`_within`), and where the computed velocities at
+        ``i`` are good (``s``, the loop's transmission sine, not singular to rounding) the
+        limit's must agree with them: a side that crosses a change point lies on the
+        branch the motion does not follow, smooth there but with other rates."""
         st = sol.state
         ui = float(sol.u[i])
         back = -math.copysign(1.0, sol.u[-1] - sol.u[0])
         for side in (back, -back):
-            near = self.solve(ui + side * d * np.arange(1.0, 5.0), near=(sol, int(i)), **kw)
-            if not near.ok.all():
-                continue
-            if self._cubic_limit(st, i, near.state.block[rows], rows, kind):
+            for dd in (d, d / 2, d / 4):
+                dd = _within(sol, i, dd, 4.0, (side,), d)
+                if dd is None:
+                    break
+                near = self.solve(ui + side * dd * np.arange(1.0, 5.0), near=(sol, int(i)), **kw)
+                if not near.ok.all():
+                    break
+                est = self._cubic(near.state.block[rows], kind)
+                if est is None:
+                    continue
+                if not _agrees(st.block[5:8, :, i], est[:3], kind[:3], s):
+                    break  # the other branch: so are the shorter spacings
+                st.block[rows, :, i] = est
                 return True
         return False
 
@@ -275,3 +329,41 @@ class SingularRates:
         if not near.ok.all():
             return None
         return near.state.take(np.arange(1, len(x) + 1))
+
+
+# the shortest spacing of the side samples of a limit, as a fraction of the usual one:
+# the rounding of the rates next to a singular point grows as the spacing shrinks (about
+# eps / d^3 in accelerations), 125 times at a fifth
+SHORTEST_SPACING = 0.2
+
+
+def _agrees(comp: np.ndarray, est: np.ndarray, kind: np.ndarray, s: float | None) -> bool:
+    """Whether the limit ``est`` of the velocities agrees with those computed at the
+    position, ``comp``, to within their rounding (``eps / s^2`` of their size ``kind``,
+    ``s`` the transmission sine) and 1e-3; True where they are not known well enough to
+    tell (singular to rounding, or ``s`` not known)."""
+    if s is None or not s > SINGULAR_INDICATOR:
+        return True
+    size = np.maximum(np.abs(est), kind)
+    return bool(np.all(np.abs(est - comp) <= (1e-3 + 100 * np.finfo(float).eps / s**2) * size))
+
+
+def _within(
+    sol: Solution, i: int, d: float, reach: float, sides, d0: float | None = None
+) -> float | None:
+    """The spacing of the side samples of a limit at position ``i`` that reach ``reach``
+    spacings towards each of ``sides`` (-1: smaller driver values, +1: larger): ``d``, or
+    less so that they stay within the sweep's motion, or None where that would be below
+    ``SHORTEST_SPACING d``.
+
+    Past the sweep's ends the sweep has not followed the motion: past a change point the
+    solution on the same assembly branch is the other branch, not the continuation (a
+    sweep stopping 0.001 deg short of a four-bar's change point took the rates of the
+    branch it does not follow for 77 positions)."""
+    u = np.asarray(sol.u, float)[np.asarray(sol.ok, bool)]
+    if len(sol.u) < 2:
+        return d  # one position: no sweep to stay within
+    ui = float(sol.u[i])
+    room = {-1.0: ui - float(u.min()), 1.0: float(u.max()) - ui}
+    dd = min([d] + [room[float(s)] / reach for s in sides])
+    return dd if dd >= SHORTEST_SPACING * (d0 or d) else None

@@ -41,6 +41,8 @@ from mechsolve.core.solution import (
 from mechsolve.groups import Drive, Group, NewtonGroup, build_plan
 from mechsolve.model import MAX_POSITIONS, Limit, Mechanism
 from mechsolve.model.expr import Ref
+from mechsolve.model.expr.poles import first_pole
+from mechsolve.model.motion import ExpressionMotion
 from mechsolve.system.constraints import ConstraintSystem
 from mechsolve.system.structure import RedundantStructure
 
@@ -169,6 +171,13 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             k = int(np.argmax(bad))
             raise self.mech.error(
                 ("driver", "motion"), f"the motion law is not finite at t = {t[k]:.6g} s"
+            )
+        pole = first_pole(law.expr, "t", t) if isinstance(law, ExpressionMotion) else None
+        if pole is not None:  # finite samples on both sides of a pole: no motion
+            raise self.mech.error(
+                ("driver", "motion", "law"),
+                f"the law grows without bound at t = {pole:.6g} s, between the samples (a "
+                "division by zero)",
             )
         return u, t, ud, udd
 

@@ -49,6 +49,9 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
     st = sol.state
     energy = fr.kinetic + fr.potential
     work = energy[-1] - energy[0]
+    if not np.isfinite(work):
+        why = "the energies at the sweep's ends are not determined next to a singular position"
+        return float("nan"), why
     integrated = []  # loads whose work is the integral of their power
     for load in mech.loads:
         # "pos" is the load's potential-like function: its work is a difference of it;

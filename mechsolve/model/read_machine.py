@@ -9,6 +9,7 @@ from typing import Any
 from mechsolve.base.errors import InputError
 from mechsolve.model import Driver, keys
 from mechsolve.model.expr import ExprError, Expression
+from mechsolve.model.expr.poles import first_pole
 from mechsolve.model.read_geometry import read_units
 from mechsolve.model.read_motion import _law_kind
 from mechsolve.model.reader import Reader
@@ -344,6 +345,9 @@ def read_torque_problem(src: Source) -> dict:
             raise r.fail(path + ("law",), str(exc)) from None
         if not np.all(np.isfinite(T)):
             raise r.fail(path + ("law",), "the law is not finite over the cycle")
+        pole = first_pole(e, "angle", x)
+        if pole is not None:  # finite samples on both sides of a pole
+            raise r.fail(path + ("law",), f"the law grows without bound at angle = {pole:.6g} rad")
     res = m.get("resisting", "mean")
     resisting = None if res == "mean" else r.quantity(res, ("resisting",), "torque")
     delta = None

@@ -30,7 +30,7 @@ from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import solve_frames
 from mechsolve.results.requirements import check_requirements
-from mechsolve.results.summary import places
+from mechsolve.results.summary import places, unbounded_towards
 from mechsolve.writers.plots import draw_start, write_plots
 
 PLOT_TITLES = {
@@ -500,12 +500,18 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
                 sc, unit = sc * 1e3, "k" + unit
             unit = unit.replace("*", " ")
             imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
-            for what, i in (("largest", imax), ("smallest", imin)):
-                rows.append(
-                    [f"{what} driving {kind}", f"{num(e[i] / sc, 6)} {unit}", res.describe_u(i)]
-                )
+            unbounded = False
+            for what, i, sign in (("largest", imax, 1.0), ("smallest", imin, -1.0)):
+                toward = unbounded_towards(res, sign * e, i)  # no peak at a dead centre
+                unbounded |= toward is not None
+                value = f"{num(e[i] / sc, 6)} {unit}" if toward is None else "unbounded"
+                where = res.describe_u(i) if toward is None else f"grows towards {toward}"
+                rows.append([f"{what} driving {kind}", value, where])
             mean, what = res.mean_effort()
-            rows.append([f"{what} driving {kind}", f"{num(mean / sc, 6)} {unit}", ""])
+            if unbounded and what != "mean":  # a mean over time of an unbounded effort
+                mean = math.nan
+            text = f"{num(mean / sc, 6)} {unit}" if math.isfinite(mean) else "not determined"
+            rows.append([f"{what} driving {kind}", text, ""])
         rows.append(["work of the driver", res.work_text().split(": ", 1)[-1],
                      "per cycle" if res.is_full_cycle() else "over the sweep"])  # fmt: skip
         resid = np.where(f.ok, f.residual, np.nan)

@@ -23,7 +23,7 @@ from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
 from mechsolve.core.work import driver_work_why
 from mechsolve.model import GROUND, Mechanism
 from mechsolve.results.csv import write_csv
-from mechsolve.results.summary import Summary
+from mechsolve.results.summary import Summary, unbounded_towards
 
 
 @dataclass
@@ -485,16 +485,44 @@ class Results(Summary):
 
     def mean_effort(self) -> tuple[float, str]:
         """The driver's mean effort and what it is: the work over the travel when the
-        motion has no gaps (the exact mean over the sweep, between samples too), else
-        the average of the solved samples, said so."""
+        motion has no gaps and goes one way (the exact mean over the sweep, between
+        samples too), else the average of the solved samples, said so.
+
+        A motion law that turns back (an oscillation, one that returns to its start) has
+        no mean over the travel: the travel may be zero to rounding (``sin(t)`` over
+        ``2 pi``: ``W / 2.4e-16``) and the angle is passed more than once. There the mean
+        is over time, ``integral of T dt / duration`` (trapezoidal rule on the solved
+        samples, as the RMS), said ``time mean``."""
+        u = np.asarray(self.u, float)
+        du = np.diff(u)
+        tol = 1e-12 * float(np.sum(np.abs(du)))  # rounding, against the path
+        turns_back = bool(np.any(du > tol) and np.any(du < -tol))
+        if self.mechanism.driver.motion is not None and (turns_back or abs(u[-1] - u[0]) <= tol):
+            return self._time_mean_effort()
         work = self.work()
-        travel = self.u[-1] - self.u[0]
+        travel = u[-1] - u[0]
         if math.isfinite(work) and travel != 0:
             return work / travel, "mean"
         e = np.where(self.forces.ok, self.forces.effort, np.nan)
         if not np.any(np.isfinite(e)):
             return float("nan"), "mean"
         return float(np.nanmean(e)), "mean of the solved positions"
+
+    def _time_mean_effort(self) -> tuple[float, str]:
+        """The driving effort's mean over time along a motion law (see
+        :meth:`mean_effort`): over the intervals whose two samples are solved."""
+        e = self.driving_effort
+        ok = np.isfinite(e)
+        for i, sign in ((int(np.nanargmax(e)), 1.0), (int(np.nanargmin(e)), -1.0)):
+            if ok.any() and unbounded_towards(self, sign * e, i) is not None:
+                return float("nan"), "time mean"  # infinite: it grows without bound
+        both = ok[1:] & ok[:-1]
+        dt = np.diff(np.asarray(self.t, float))[both]
+        span = float(np.sum(dt))
+        what = "time mean" if ok.all() else "time mean of the solved positions"
+        if not span > 0:
+            return float("nan"), what
+        return float(np.sum(0.5 * (e[1:][both] + e[:-1][both]) * dt) / span), what
 
     def is_full_cycle(self) -> bool:
 
@@ -508,6 +536,9 @@ class Results(Summary):
                 # (a sweep that stopped following a branch: not known to be unassemblable)
                 what = "not solved" if "cannot be followed" in f.reason else "unassemblable"
                 out[i] = f"{what}: " + f.group
+        for i in self.solution.rates_undetermined:  # blank velocities or accelerations
+            if out[i] == "ok":
+                out[i] = "singular: rates not determined (rounding near a singular position)"
         if self.forces is not None:
             for i, label in self.forces.singular:
                 if out[i] == "ok":

@@ -555,13 +555,13 @@ def plot_effort(res: Results, path: Path, U: OutputUnits = SI_OUTPUT) -> Path:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     bx, be = _broken(res, xs, e / sc)
     ax.plot(bx, be, lw=1.6, label=f"driving {kind}")
-    ax.axhline(
-        mean / sc,
-        ls="--",
-        color="C3",
-        lw=1.2,
-        label=f"{what} {mean / sc:.6g} {su}; {res.work_text(U).replace('of the driver ', '')}",
-    )
+    work = res.work_text(U).replace("of the driver ", "")
+    if math.isfinite(mean):  # (not determined where the effort grows without bound)
+        ax.axhline(
+            mean / sc, ls="--", color="C3", lw=1.2, label=f"{what} {mean / sc:.6g} {su}; {work}"
+        )
+    else:
+        ax.plot([], [], ls="--", color="C3", label=f"{what} not determined; {work}")
     ax.axhline(0, color="0.5", lw=0.8)
     ax.set_xlabel(xlabel)
     driven = res.mechanism.joint(res.mechanism.driver.joint).b

@@ -65,6 +65,7 @@ from mechsolve.model import GROUND, Mechanism
 from mechsolve.model.validate import suggest
 from mechsolve.results.results import Results
 from mechsolve.results.run import for_plots, solve
+from mechsolve.results.summary import unbounded_towards
 
 STEP = math.radians(0.1)  # the comparison's sweep
 TWO_PI = 2 * math.pi
@@ -573,7 +574,9 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
                 fig.torque_mean = float(d * mean)
     _contact_pressure(fig, fine, x, start)
     best = None
-    skipped = []
+    skipped: list[str] = []
+    unbounded: list[str] = []
+    towards: dict[str, list[str]] = {}
     for j in fine.mechanism.joints:
         r = f.reactions[j.name]
         comp = j.magnitude  # the joint's own: F (pin), N (slider, cam), Fn (gear, rack)
@@ -583,8 +586,16 @@ def _forces(fig: SchemeFigures, fine: Results, x_all: np.ndarray, start: float) 
         mag = np.where(f.ok, np.abs(r[comp]), np.nan)
         if np.any(np.isfinite(mag)):
             i = int(np.nanargmax(mag))
-            if best is None or mag[i] > best[0]:
+            toward = unbounded_towards(fine, mag, i)
+            if toward is not None:  # its largest sample is only the one nearest a toggle
+                unbounded.append(j.name)
+                towards.setdefault(toward, []).append(j.name)
+            elif best is None or mag[i] > best[0]:
                 best = (float(mag[i]), j.name, float((x[i] - start) % TWO_PI))
+    if unbounded:  # no peak: "unbounded" in the table, blank in the CSV
+        best = (math.inf, ", ".join(unbounded), math.nan)
+    for toward, names in towards.items():
+        fig.notes.append(f"the reactions at {', '.join(names)} grow without bound towards {toward}")
     if best is not None:
         fig.reaction_peak, fig.reaction_joint, fig.reaction_at = best
     if skipped:

@@ -35,6 +35,8 @@ def _deg(x: float, digits: int = 5, u: OutputUnits | None = None) -> str:
 
 
 def _force(x: float, u: OutputUnits | None = None) -> str:
+    if x == math.inf:  # grows without bound towards a toggle (the notes say where)
+        return "unbounded"
     if not math.isfinite(x):
         return "–"
     if u is None or u.force == "N":  # N, or kN from 10 kN on

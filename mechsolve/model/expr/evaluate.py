@@ -106,11 +106,35 @@ def _combine(n: Any, vals: list[Any], funcs: dict[str, Callable[..., Any]]) -> A
     raise AssertionError(f"unknown node {type(n).__name__}")
 
 
-def _eval(tree: Any, leaf: Callable[[Any], Any], funcs: dict[str, Callable[..., Any]]) -> Any:
+def _new_not_finite(out: Any, args: list[Any]) -> int | None:
+    """The first element where ``out`` is not finite though every operand is (a division
+    by zero, an overflow, a function outside its domain), or None."""
+    o = np.asarray(out)
+    if o.dtype.kind not in "fc":
+        return None
+    bad = ~np.isfinite(o)
+    if not bad.any():
+        return None
+    for a in args:
+        a = np.asarray(a)
+        if a.dtype.kind in "fc":
+            bad = bad & np.isfinite(a)
+    bad = np.asarray(bad)
+    return int(np.flatnonzero(bad.ravel())[0]) if bad.any() else None
+
+
+def _eval(
+    tree: Any,
+    leaf: Callable[[Any], Any],
+    funcs: dict[str, Callable[..., Any]],
+    faults: list[tuple[Any, int]] | None = None,
+) -> Any:
     """Evaluate a tree bottom-up with an explicit stack (no recursion).
 
     A node shared by several parents (derivatives share sub-trees) is evaluated once; its
-    value is kept only until its last parent has used it.
+    value is kept only until its last parent has used it. With ``faults`` (a list), the
+    first node whose value is not finite where its operands are (``1/0``, ``log(0)``,
+    ``1e300 * 1e300``) is appended to it with the element where that happens.
     """
     uses: dict[int, int] = {}  # parents of each node, counted per link
     for n in walk(tree):
@@ -137,6 +161,10 @@ def _eval(tree: Any, leaf: Callable[[Any], Any], funcs: dict[str, Callable[..., 
             args = vals[-k:]
             del vals[-k:]
             vals.append(_combine(n, args, funcs))
+            if faults is not None and not faults and not isinstance(n, (Compare, BoolOp, Not)):
+                k = _new_not_finite(vals[-1], args)
+                if k is not None:
+                    faults.append((n, k))
         else:
             stack.append((n, True))
             stack.extend((kid, False) for kid in reversed(kids))

@@ -108,15 +108,29 @@ class Expression:
             }
         )
 
-    def evaluate(self, ctx: Context, functions: dict[str, Callable[..., Any]] | None = None) -> Any:
-        """Evaluate over the arrays the context provides (element-wise)."""
+    def evaluate(
+        self,
+        ctx: Context,
+        functions: dict[str, Callable[..., Any]] | None = None,
+        faults: list[tuple[str, int]] | None = None,
+    ) -> Any:
+        """Evaluate over the arrays the context provides (element-wise).
+
+        With ``faults`` (a list), the first part of the expression that is not finite
+        where what it is made of is (a division by zero, ``log(0)``, an overflow) is
+        appended to it as (its text, the element where it happens)."""
         funcs = functions or {}
 
         def leaf(n: Any) -> Any:
             return _leaf(n, ctx)
 
+        found: list[tuple[Any, int]] | None = [] if faults is not None else None
         with np.errstate(all="ignore"):  # inf and nan follow IEEE rules; no warnings
-            return _eval(self.tree, leaf, funcs)
+            out = _eval(self.tree, leaf, funcs, found)
+        if found:
+            node, k = found[0]
+            faults.append((to_text(node, 200) or self.text, k))  # type: ignore[union-attr]
+        return out
 
     def evaluate_at(self, values: dict[str, Any]) -> np.ndarray:
         """Evaluate with the variables bound to arrays (element-wise, no context).

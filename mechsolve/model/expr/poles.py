@@ -1,0 +1,90 @@
+"""Poles of a law between its samples (see :mod:`mechsolve.model.expr`).
+
+A law of one variable (a driver's ``u(t)``, a torque curve of ``angle``) is sampled at
+finitely many values, so a pole between two samples (``t + 1/(t - 1.05)`` sampled every
+0.1 s) gives finite samples on both sides and a law that jumps through infinity between
+them. It is found where it must come from: a part of a denominator (or the base of a
+power, or the cosine of ``tan``'s argument) that changes sign between two samples. The
+zero is located by bisection and the law is evaluated beside it: a pole grows without
+bound as the zero is approached (at 1e-4 and 1e-8 of the interval from it, a simple pole
+grows 1e4 times), a removable singularity (``sin(t)/t`` at 0, ``(t - 1)/(t - 1)``) or a
+jump of a denominator that does not pass through zero (``1/sign(t - 1)``) does not.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mechsolve.model.expr.tree import Binary, Call, Chain, walk
+
+# how much faster than at 1e-4 of the interval the law must be at 1e-8 of it to be a pole
+# (a simple pole: 1e4, a double one 1e8; a bounded law: about 1)
+POLE_GROWTH = 100.0
+
+
+def _candidates(tree: Any) -> list[Any]:
+    """The parts whose zeros may be poles: every node of a divisor, the bases of powers
+    and the cosines of ``tan``'s arguments."""
+    roots: list[Any] = []
+    for n in walk(tree):
+        if isinstance(n, Chain):
+            roots += [b for op, b in zip(n.ops, n.operands[1:]) if op == "/"]
+        elif isinstance(n, Binary):
+            roots.append(n.left)
+        elif isinstance(n, Call) and n.func == "tan":
+            roots.append(Call("cos", n.args))
+    out, seen = [], set()
+    for r in roots:
+        for n in walk(r):
+            if id(n) not in seen and (n.__class__ is not Call or n.func != "tan"):
+                seen.add(id(n))
+                out.append(n)
+    return out
+
+
+def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
+    """The smallest value of ``var`` between consecutive samples ``x`` (ascending) where
+    ``expr`` (an :class:`~mechsolve.model.expr.Expression` of ``var`` alone) grows without
+    bound, or None. The samples themselves are not examined (a law that is not finite at
+    a sample is found by evaluating it there)."""
+    x = np.asarray(x, float)
+    if x.size < 2:
+        return None
+
+    def at(tree: Any, v: np.ndarray) -> np.ndarray:
+        e = type(expr)._derived(tree, "", expr.variables)
+        return np.broadcast_to(np.asarray(e.evaluate_at({var: v}), float), v.shape)
+
+    found: list[float] = []
+    for part in _candidates(expr.tree):
+        d = at(part, x)
+        sign = np.sign(d)
+        for k in np.flatnonzero(sign[:-1] * sign[1:] < 0):
+            z = _bisect(lambda v, part=part: float(at(part, np.array([v]))[0]), x[k], x[k + 1])
+            if found and z >= min(found):
+                continue
+            h = (x[k + 1] - x[k]) * np.array([1e-4, 1e-8])
+            near = np.abs(at(expr.tree, np.r_[z - h, z + h]))
+            far, close = near[[0, 2]], near[[1, 3]]
+            if not np.all(np.isfinite(close)) or np.max(close) > POLE_GROWTH * np.max(far):
+                found.append(float(z))
+    return min(found) if found else None
+
+
+def _bisect(f, a: float, b: float) -> float:
+    """A zero of ``f`` between ``a`` and ``b``, where it changes sign (to rounding)."""
+    fa = f(a)
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        if m in (a, b):
+            break
+        fm = f(m)
+        if fm == 0:
+            return m
+        if (fm > 0) == (fa > 0):
+            a, fa = m, fm
+        else:
+            b = m
+    return 0.5 * (a + b)
