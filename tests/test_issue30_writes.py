@@ -268,7 +268,11 @@ def test_a_full_disk_stops_the_study_keeping_the_solved_rows(
     assert all(not n.startswith(".") for n in written)  # no temporary left
     positions = {int(row["design [-]"]): int(row["positions [-]"]) for row in rows}
     for name in written:  # each whole: a row per position of its design
-        assert len(_rows(out / "designs" / name)) == positions[int(name[7:12])]
+        # (on a pool, another worker may finish and write a design whose row reaches the
+        # main process after the stop, as on Ctrl-C: its file is whole too; every design
+        # of this study has the same sweep)
+        want = positions.get(int(name[7:12]), next(iter(positions.values())))
+        assert len(_rows(out / "designs" / name)) == want
 
 
 def test_the_stop_crosses_a_process_pool_or_dask_with_its_rows():

@@ -486,13 +486,13 @@ def _run_pool(
     try:
         if interrupted or unwritten is not None:
             with _ctrl_c_held():  # pressed again: the workers are being ended already
-                _end_pool(pool)
+                _end_pool(pool, rd)
         else:
             pool.join()
     except KeyboardInterrupt:  # Ctrl-C while the workers end: the rows are kept
         interrupted = True
         with _ctrl_c_held():
-            _end_pool(pool)
+            _end_pool(pool, rd)
     return Outcome(rows, n, interrupted, f"a pool of {workers} processes", unwritten)
 
 
@@ -500,12 +500,17 @@ def _pool_chunk_args(args: tuple[list[int], str | None]) -> list[Row]:
     return _pool_chunk(*args)
 
 
-def _end_pool(pool) -> None:
+def _end_pool(pool, rd: str | None = None) -> None:
     """End the workers of an interrupted pool now: they are computing chunks whose rows
     are not wanted any more. ``terminate`` sends each SIGTERM (which ends a worker at
-    once: see :func:`_init_worker`) and waits for them."""
+    once: see :func:`_init_worker`) and waits for them. A worker ended while it wrote a
+    design's results leaves the atomic writer's temporary (never a part-written result):
+    those of the results folder ``rd`` are removed."""
     pool.terminate()
     pool.join()
+    if rd is not None:
+        for tmp in Path(rd).glob(".design-*.part"):
+            tmp.unlink(missing_ok=True)
 
 
 def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
