@@ -76,3 +76,89 @@ def test_polygons_moving_guide_point_formula_names_the_pivot_acceleration(tmp_pa
     total = sum(r.arrow(t).vec for t in terms)
     np.testing.assert_allclose(total, a.vec, rtol=1e-12, atol=1e-12 * np.hypot(*ref))
     assert "a_O43 " in r.text() and "= a_A + a^n_O43A + a^t_O43A" in r.text()
+
+
+# -- report: the tooth forces of a gear mesh ------------------------------------------------
+# mechanisms/gear-train.yaml: the pinion (driver, 300 rpm, r1 = 40 mm, 20° pressure angle)
+# turns at a constant speed with its centre of mass on its axis, so its moment balance is
+# T = Ft r1; the torque by the energy rate of the rod and the ram (the wheel turns at a
+# constant -omega / 3 with its centre of mass on its axis), the cutting force's power out.
+GT_R, GT_L, GT_ROD, GT_RAM, GT_G = 0.06, 0.26, 1.5, 12.0, 9.81
+GT_OMEGA = 300 * 2 * math.pi / 60
+
+
+def _gt_torque(theta: float) -> float:
+    """The pinion's driving torque (N m) at pinion angle ``theta`` (rad), by hand."""
+    phi, w = -theta / 3.0, -GT_OMEGA / 3.0
+    ay = GT_R * math.sin(phi)
+    ax1, ay1 = -GT_R * math.sin(phi) * w, GT_R * math.cos(phi) * w
+    ax2, ay2 = -GT_R * math.cos(phi) * w * w, -GT_R * math.sin(phi) * w * w
+    s = math.sqrt(GT_L**2 - ay * ay)  # B.x - A.x
+    s1 = -ay * ay1 / s
+    s2 = -(ay1 * ay1 + ay * ay2 + s1 * s1) / s
+    bx1, bx2 = ax1 + s1, ax2 + s2
+    gx1, gx2, gy1, gy2 = 0.5 * (ax1 + bx1), 0.5 * (ax2 + bx2), 0.5 * ay1, 0.5 * ay2
+    b1 = -ay1 / s  # the rod's angle: sin(beta) = -A.y / L
+    b2 = -(ay2 * s - ay1 * s1) / (s * s)
+    dke = GT_RAM * bx1 * bx2 + GT_ROD * (gx1 * gx2 + gy1 * gy2) + GT_ROD * GT_L**2 / 12 * b1 * b2
+    dpe = GT_ROD * GT_G * gy1
+    bx = 0.16 + GT_R * math.cos(phi) + s
+    p_load = 1200.0 * bx1 if bx1 < 0 and 0.372 < bx < 0.468 else 0.0
+    return (dke + dpe - p_load) / GT_OMEGA
+
+
+def _printed_within(text: str, ref: float, rel: float = 2e-4) -> bool:
+    """``text`` (a table cell) is ``ref`` to its printed digits (or ``rel``)."""
+    v = float(text)
+    decimals = len(text.partition(".")[2])
+    return abs(v - ref) <= max(0.51 * 10.0**-decimals, rel * abs(ref))
+
+
+def test_report_reaction_table_has_the_tooth_forces():
+    """The report's "Driving effort and joint reactions" table gives the mesh's tooth
+    forces Ft, Fr and Fn in N, as the CSV does (it gave only Fx, Fy): Ft = T / r1, Fn =
+    |Ft| / cos 20°, |Fr| = |Ft| tan 20°, T by the energy rate (closed form)."""
+    from mechsolve.report.build import position_tables
+
+    res = ms.solve(ms.load(MECH / "gear-train.yaml"))
+    (table,) = [
+        t for t in position_tables(res) if t.caption == "Driving effort and joint reactions"
+    ]
+    head = table.header
+    col = {h: k for k, h in enumerate(head)}
+    for q in ("Ft", "Fr", "Fn"):
+        assert f"mesh(pinion->wheel).{q} [N]" in col, head
+    alpha = math.radians(20.0)
+    checked = 0
+    for row in table.rows:
+        theta = math.radians(float(row[col["input.angle [deg]"]]))
+        ft = _gt_torque(theta) / 0.040
+        if abs(ft) < 1.0:
+            continue  # a cell of 2 or 3 digits: not a check of the relation
+        assert _printed_within(row[col["mesh(pinion->wheel).Ft [N]"]], ft), (row, ft)
+        assert _printed_within(row[col["mesh(pinion->wheel).Fn [N]"]], abs(ft) / math.cos(alpha))
+        assert _printed_within(
+            row[col["mesh(pinion->wheel).Fr [N]"]].lstrip("-"), abs(ft) * math.tan(alpha)
+        )
+        checked += 1
+    assert checked > 150
+
+
+def test_report_reaction_table_has_the_rack_tooth_forces():
+    """The rack of shaper-scheme2 too: its Ft, Fr, Fn columns, Fn = hypot(Fx, Fy) (the
+    tooth force along the line of action) and Fn = |Ft| / cos 20° at every row."""
+    from mechsolve.report.build import position_tables
+
+    res = ms.solve(ms.load(MECH / "shaper-scheme2.yaml"))
+    (table,) = [
+        t for t in position_tables(res) if t.caption == "Driving effort and joint reactions"
+    ]
+    col = {h: k for k, h in enumerate(table.header)}
+    lab = "rack(ram->guide_bar)"
+    for q in ("Ft", "Fr", "Fn"):
+        assert f"{lab}.{q} [N]" in col, table.header
+    for row in table.rows:
+        fx, fy = (float(row[col[f"{lab}.{q} [N]"]]) for q in ("Fx", "Fy"))
+        fn, ft = float(row[col[f"{lab}.Fn [N]"]]), float(row[col[f"{lab}.Ft [N]"]])
+        assert abs(fn - math.hypot(fx, fy)) <= 2e-3 * max(fn, 1.0), row
+        assert abs(fn - abs(ft) / math.cos(math.radians(20.0))) <= 2e-3 * max(fn, 1.0), row

@@ -523,6 +523,12 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
     return rows
 
 
+# a joint's reaction columns in the report's table: a pin's Fx, Fy, F; a slider's N, M;
+# a gear mesh's or rack's tooth forces Ft (tangential, the one that sizes the teeth), Fr
+# (radial) and Fn (along the line of action, the whole tooth force)
+REACTIONS = ("Fx", "Fy", "F", "N", "M", "Ft", "Fr", "Fn")
+
+
 def _groups(res) -> dict[str, list]:
     """The columns of ``res`` sorted into the tables a printed report has."""
     pts = set(res.point_names())
@@ -553,7 +559,7 @@ def _groups(res) -> dict[str, list]:
             out["sliders"].append(c)
         elif c.name.startswith("input.torque") or c.name.startswith("input.force"):
             out["forces"].insert(0, c)
-        elif q in ("Fx", "Fy", "F", "N", "M") and "(" in head:
+        elif q in REACTIONS and "(" in head:
             out["forces"].append(c)
     return out
 
