@@ -13,8 +13,10 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import mechsolve as ms
+from mechsolve import api
 from mechsolve.analyses.polygons import build_polygons
 
 MECH = Path(__file__).parents[1] / "mechanisms"
@@ -162,3 +164,76 @@ def test_report_reaction_table_has_the_rack_tooth_forces():
         fn, ft = float(row[col[f"{lab}.Fn [N]"]]), float(row[col[f"{lab}.Ft [N]"]])
         assert abs(fn - math.hypot(fx, fy)) <= 2e-3 * max(fn, 1.0), row
         assert abs(fn - abs(ft) / math.cos(math.radians(20.0))) <= 2e-3 * max(fn, 1.0), row
+
+
+# -- report: the driving effort's extremes, located ---------------------------------------
+def _torque_search(mech, lo_deg: float, hi_deg: float, largest: bool) -> tuple[float, float]:
+    """The driving torque's largest (smallest) value between driver angles ``lo_deg`` and
+    ``hi_deg`` and where (deg), by ``run --at`` at the file's speed on a grid narrowed
+    three times (0.002° at last): independent of the sweep and of the report's locator."""
+    from mechsolve.analyses.instants import Instant, parse_instant, solve_instants
+
+    rates = parse_instant(mech, f"theta={lo_deg} deg")
+    sense = 1.0 if largest else -1.0
+    for _ in range(3):
+        grid = np.linspace(lo_deg, hi_deg, 201)
+        inst = [Instant(math.radians(a), rates.ud, rates.udd) for a in grid]
+        e = sense * solve_instants(mech, inst).driving_effort
+        k = int(np.nanargmax(e))
+        step = grid[1] - grid[0]
+        lo_deg, hi_deg = grid[k] - step, grid[k] + step
+    return sense * float(e[k]), float(grid[k])
+
+
+def _figures(mech):
+    from mechsolve.report.build import figures_table
+
+    res = ms.solve(mech)
+    return {r[0]: r for r in figures_table(api.for_plots(mech, res)).rows}
+
+
+@pytest.mark.parametrize(
+    "name, what, lo, hi, value, angle",
+    [
+        # the reviewer's bisection with run --at: 107416 N mm at 245.2°, -849454 at 91.15°
+        ("shaper", "largest", 243.0, 247.0, 107.416, 245.2),
+        ("shaper", "smallest", 89.0, 93.0, -849.454, 91.15),
+        ("crane", "largest", 225.0, 229.0, 293.497e3, 227.17),
+    ],
+)
+def test_report_driving_torque_extremes_are_located(name, what, lo, hi, value, angle):
+    """The report's figures table gives the driving torque's extremes where they are,
+    between the 1° samples (it printed the samples to 6 digits: 107393 N mm at 244.83°,
+    off in the 4th digit): the value equals a fine run --at search to its 6 printed
+    digits, at the angle the search finds (0.01°)."""
+    mech = ms.load(MECH / f"{name}.yaml")
+    ref, at = _torque_search(mech, lo, hi, what == "largest")
+    assert ref == pytest.approx(value, rel=1e-5)  # the reviewer's numbers (SI)
+    assert at == pytest.approx(angle, abs=0.03)
+    row = _figures(mech)[f"{what} driving torque"]
+    printed, unit = row[1].split()[:2]
+    scale = {"N": 1.0, "kN": 1e3}[unit]
+    assert abs(float(printed) * scale - ref) <= 0.51 * 10 ** (math.floor(math.log10(abs(ref))) - 5)
+    shown = float(row[2].removeprefix("driver angle ").removesuffix("°"))
+    assert shown == pytest.approx(at, abs=0.01), row
+    assert "samples" not in row[2]
+
+
+def test_report_driving_torque_of_a_motion_law_says_it_is_a_sample():
+    """A motion law of time has no sweep to locate in: the row says it is the largest of
+    the samples (and the sample's value)."""
+    y = (MECH / "slider-crank.yaml").read_text()
+    head, _, rest = y.partition("driver:")
+    rest = rest.split("\n", 2)[2]
+    law = (
+        "driver:\n  joint: O\n  direction: ccw\n  start: 0 deg\n  motion:\n"
+        "    from: 0 rpm\n    segments:\n      - {accelerate: 0.5 s, to: 60 rpm}\n"
+        "      - {run: 1 s}\nsweep: {duration: 1.5 s, time_step: 0.05 s}\n"
+    )
+    mech = ms.loads(head + law + rest)
+    res = ms.solve(mech)
+    rows = _figures(mech)
+    e = res.driving_effort
+    row = rows["largest driving torque"]
+    assert "(largest of the 0.05 s samples)" in row[2], row
+    assert float(row[1].split()[0]) == pytest.approx(float(np.nanmax(e)), rel=1e-5)

@@ -29,7 +29,7 @@ from mechsolve.base.units import SI_OUTPUT, OutputUnits, parse_quantity
 from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import solve_frames
-from mechsolve.results.requirements import check_requirements
+from mechsolve.results.requirements import check_requirements, located_extreme
 from mechsolve.results.summary import places
 from mechsolve.writers.plots import draw_start, write_plots
 
@@ -499,11 +499,9 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
             if unit in ("N", "N*m") and np.nanmax(np.abs(e)) * k >= 1e4:
                 sc, unit = sc * 1e3, "k" + unit
             unit = unit.replace("*", " ")
-            imax, imin = int(np.nanargmax(e)), int(np.nanargmin(e))
-            for what, i in (("largest", imax), ("smallest", imin)):
-                rows.append(
-                    [f"{what} driving {kind}", f"{num(e[i] / sc, 6)} {unit}", res.describe_u(i)]
-                )
+            for what, largest in (("largest", True), ("smallest", False)):
+                value, where = _effort_extreme(res, largest)
+                rows.append([f"{what} driving {kind}", f"{num(value / sc, 6)} {unit}", where])
             mean, what = res.mean_effort()
             rows.append([f"{what} driving {kind}", f"{num(mean / sc, 6)} {unit}", ""])
         rows.append(["work of the driver", res.work_text().split(": ", 1)[-1],
@@ -527,6 +525,25 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
 # a gear mesh's or rack's tooth forces Ft (tangential, the one that sizes the teeth), Fr
 # (radial) and Fn (along the line of action, the whole tooth force)
 REACTIONS = ("Fx", "Fy", "F", "N", "M", "Ft", "Fr", "Fn")
+
+
+def _effort_extreme(res, largest: bool) -> tuple[float, str]:
+    """The driving effort's largest (or smallest) value over ``res`` (the figures'
+    sweep) and where, in words: located between its neighbouring samples as the
+    requirements locate ``max()`` and ``min()`` (solved there, :func:`located_extreme`).
+    A motion law of time, or a sweep whose ends do not close, has no such sweep: its
+    largest sample, said so."""
+    e = res.driving_effort
+    i = int(np.nanargmax(e) if largest else np.nanargmin(e))
+    # as the requirements' reducer decides (a sweep to locate in: _Reducer._fine_sweep)
+    if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
+        if getattr(res, "_plots_sweep", None) is None:
+            res._plots_sweep = (res.mechanism, res)  # the figures' sweep is its own
+        value, u = located_extreme(f"input.{res.effort_name[0]}", res, largest)
+        if math.isfinite(value) and math.isfinite(u):
+            return value, res.format_u(u)
+    word = "largest" if largest else "smallest"
+    return float(e[i]), f"{res.describe_u(i)} ({word} of the {res.sample_spacing()} samples)"
 
 
 def _groups(res) -> dict[str, list]:
