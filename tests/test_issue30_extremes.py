@@ -237,3 +237,94 @@ def test_report_driving_torque_of_a_motion_law_says_it_is_a_sample():
     row = rows["largest driving torque"]
     assert "(largest of the 0.05 s samples)" in row[2], row
     assert float(row[1].split()[0]) == pytest.approx(float(np.nanmax(e)), rel=1e-5)
+
+
+# -- the summary's point ranges, located ----------------------------------------------------
+def _shaper_ranges() -> dict[str, tuple[float, ...]]:
+    """mechanisms/shaper.yaml by hand (mm): crank r = 110 about O2 (0, 380); the guide bar
+    (B at 540 from O4 at the origin) swings +-beta, sin(beta) = 110 / 380, upright when A
+    is on top; the rod B-C (135) drives C along y = 528.44 on the side C.x > B.x: C.x is
+    extreme with the bar (B still at its limit)."""
+    sb = 110 / 380
+    cb = math.sqrt(1 - sb * sb)
+    bx, by_low = 540 * sb, 540 * cb
+    dc = math.sqrt(135**2 - (528.44 - by_low) ** 2)
+    return {
+        "A": (-110, 110, 270, 490),
+        "B": (-bx, bx, by_low, 540),
+        "C": (-bx + dc, bx + dc, 528.44, 528.44),
+    }
+
+
+def _slider_crank_ranges() -> dict[str, tuple[float, ...]]:
+    """mechanisms/slider-crank.yaml by hand (mm): crank r = 50, rod l = 200, offset e =
+    10: the piston C between sqrt((l -+ r)^2 - e^2) on y = 10; the crank pin on its
+    circle."""
+    r, ln, e = 50, 200, 10
+    return {
+        "A": (-r, r, -r, r),
+        "C": (math.sqrt((ln - r) ** 2 - e**2), math.sqrt((ln + r) ** 2 - e**2), e, e),
+    }
+
+
+def _summary_ranges(text: str) -> dict[str, tuple[list[float], str]]:
+    """Each point's ``x lo .. hi, y lo .. hi`` of a summary, in mm, and what follows."""
+    import re
+
+    out = {}
+    pat = r"^  (\w+): x (\S+) \.\. (\S+) (mm|m), y (\S+) \.\. (\S+) (?:mm|m)([^,\n]*)"
+    for m in re.finditer(pat, text, re.M):
+        k = 1.0 if m[4] == "mm" else 1e3
+        out[m[1]] = ([float(m[i]) * k for i in (2, 3, 5, 6)], m[7])
+    return out
+
+
+def _same6(value: float, ref: float) -> bool:
+    """``value`` (printed to 6 significant digits) is ``ref`` rounded."""
+    if ref == 0:
+        return value == 0
+    return abs(value - ref) <= 0.51 * 10 ** (math.floor(math.log10(abs(ref))) - 5)
+
+
+@pytest.mark.parametrize(
+    "name, ref, figures",
+    [
+        ("shaper", _shaper_ranges, True),
+        ("shaper", _shaper_ranges, False),  # from the 5° table alone (the API's summary())
+        ("slider-crank", _slider_crank_ranges, True),
+    ],
+)
+def test_summary_point_ranges_are_located(name, ref, figures):
+    """The summary's `C: x -21.8116 .. 290.778 mm` was the 5° table's samples beside the
+    limit position 290.82 mm of the same summary: each end is now where it is, the
+    closed form's to 6 digits (and B.x 156.316, A.x +-110, A.y 270 .. 490)."""
+    mech = ms.load(MECH / f"{name}.yaml")
+    res = ms.solve(mech)
+    text = res.summary(figures=api.for_plots(mech, res) if figures else None)
+    found = _summary_ranges(text)
+    for p, want in ref().items():
+        got, rest = found[p]
+        assert "samples" not in rest, (p, rest)
+        for g, w in zip(got, want):
+            assert _same6(g, w), (p, got, want)
+    if name == "shaper":
+        assert "0.29082 m at" in text  # the limit position's line agrees
+
+
+def test_summary_point_ranges_of_a_motion_law_are_located():
+    """Driven by a motion law of time from rest (samples 0.05 s apart, uneven in the
+    crank's angle), the slider-crank's piston range is still the closed form's."""
+    y = (MECH / "slider-crank.yaml").read_text()
+    head, _, rest = y.partition("driver:")
+    rest = rest.split("\n", 2)[2]
+    law = (
+        "driver:\n  joint: O\n  direction: ccw\n  start: 0 deg\n  motion:\n"
+        "    from: 0 rpm\n    segments:\n      - {accelerate: 0.5 s, to: 60 rpm}\n"
+        "      - {run: 1 s}\nsweep: {duration: 1.5 s, time_step: 0.05 s}\n"
+    )
+    res = ms.solve(ms.loads(head + law + rest))
+    found = _summary_ranges(res.summary())
+    got, extra = found["C"]
+    want = _slider_crank_ranges()["C"]
+    assert "samples" not in extra
+    assert all(_same6(g, w) for g, w in zip(got, want)), (got, want)
