@@ -328,3 +328,47 @@ def test_summary_point_ranges_of_a_motion_law_are_located():
     want = _slider_crank_ranges()["C"]
     assert "samples" not in extra
     assert all(_same6(g, w) for g, w in zip(got, want)), (got, want)
+
+
+# -- animate: the paths from a fine sweep, whatever the number of frames ---------------------
+def _off_circle(x: np.ndarray, y: np.ndarray, r: float) -> float:
+    """The largest distance (m) from the circle of radius ``r`` about the origin of the
+    polyline through (x, y): at its vertices and the middles of its segments."""
+    mx, my = 0.5 * (x[1:] + x[:-1]), 0.5 * (y[1:] + y[:-1])
+    px, py = np.r_[x, mx], np.r_[y, my]
+    return float(np.max(np.abs(np.hypot(px, py) - r)))
+
+
+@pytest.mark.parametrize("frames", [13, 7])
+def test_animate_paths_come_from_a_fine_sweep(frames):
+    """mechanisms/fourbar.yaml with --frames 13: the crank pin's path was a 12-gon through
+    the frames, 0.9 mm inside A's circle (r = 26.5 mm about O2 at the origin); drawn from
+    the 1° sweep it is within r (1 - cos 0.5°) = 1.0 um of the circle, and each frame's
+    traced part runs from the start (0°) to the frame's position."""
+    import importlib
+
+    animate = importlib.import_module("mechsolve.report.animate")
+    r = 0.0265
+    fr = animate.solve_frames(ms.load(MECH / "fourbar.yaml"), frames)
+    assert len(fr) == frames
+    chord = r * (1 - math.cos(math.pi / (frames - 1)))  # what a polygon through the frames is off
+    assert chord > 5e-4
+    sag = r * (1 - math.cos(math.radians(0.5)))
+    x, y = fr.path("A")
+    assert _off_circle(x, y, r) <= 1.01 * sag
+    for i in (1, frames // 2, frames - 1):
+        tx, ty = fr.trace("A", i)
+        assert _off_circle(tx, ty, r) <= 1.01 * sag, i
+        assert (tx[0], ty[0]) == pytest.approx((r, 0.0), abs=1e-12)  # the start, 0°
+        angle = math.degrees(math.atan2(ty[-1], tx[-1])) % 360 or 360.0
+        assert angle == pytest.approx(360.0 * i / (frames - 1), abs=1e-9)  # the frame's own
+        swept = np.unwrap(np.arctan2(ty, tx))
+        assert np.all(np.diff(swept) > 0) and math.degrees(swept[-1] - swept[0]) == pytest.approx(
+            360.0 * i / (frames - 1), abs=1e-9
+        )
+    # the report's player reads the same paths (rounded to 5 digits of the drawing's
+    # 0.2 m: 1e-5 m), not the frames' polygon (``chord`` off)
+    data = fr.to_json()
+    jx, jy = (np.array(v, float) for v in data["traces"]["A"])
+    assert _off_circle(jx, jy, r) <= sag + 1e-5 < chord
+    assert len(data["trace_upto"]) == frames and data["trace_upto"][-1] == len(jx) - 1
