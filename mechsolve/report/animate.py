@@ -4,11 +4,13 @@ or handed to the report's HTML player as plain numbers.
 The frames come from their own sweep, 1 degree apart by default (a 360th of a linear
 driver's travel, or of a sweep in time), whatever step the file tabulates, so that the
 motion is smooth. Each frame draws the links to scale, the ground pivots and guides, the
-paths of the output points traced so far, the driver's value and the time, and the
-file's point loads as labelled arrows (where they act); with ``forces`` also the reaction
-at each joint as a labelled arrow (the force on the joint's second link by its first, the
-convention of the CSV). All arrows are on one scale, drawn as a scale bar that reads two round
-numbers (1, 2 or 5 times a power of ten): ``5 m = 200 kN``.
+paths of the output points traced so far (from that 1-degree sweep when fewer frames are
+asked for, so that a path is not a polygon through the frames), the driver's value and
+the time, and the file's point loads as labelled arrows (where they act); with
+``forces`` also the reaction at each joint as a labelled arrow (the force on the joint's
+second link by its first, the convention of the CSV). All arrows are on one scale, drawn
+as a scale bar that reads two round numbers (1, 2 or 5 times a power of ten):
+``5 m = 200 kN``.
 
 The axes, the scale bar, the driver's value and the loads' sizes are in the units of the
 file (an :class:`~mechsolve.base.units.OutputUnits`: a file in mm is drawn with its axes in
@@ -99,6 +101,25 @@ class Frames:
     load_points: dict[str, str] = field(default_factory=dict)  # load -> its point
     bar: float = 0.0  # the scale bar's length (m), 1, 2 or 5 times a power of ten (shown)
     units: OutputUnits = SI_OUTPUT  # what the axes and the texts are shown in
+    # the paths drawn from a sweep finer than the frames (few frames): point -> (x, y),
+    # and per frame how many of its samples the motion has passed by then
+    traces: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    trace_upto: np.ndarray | None = None
+
+    def path(self, p: str) -> tuple[np.ndarray, np.ndarray]:
+        """The whole path of point ``p`` (m): from the fine sweep where the frames are
+        fewer than its samples, else through the frames."""
+        return self.traces.get(p, self.points[p])
+
+    def trace(self, p: str, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """The path of ``p`` traced by frame ``i``: the fine sweep's samples passed by
+        then, and the frame's own position at its end."""
+        x, y = self.points[p]
+        if p not in self.traces or self.trace_upto is None:
+            return x[: i + 1], y[: i + 1]
+        tx, ty = self.traces[p]
+        k = int(self.trace_upto[i])
+        return np.append(tx[:k], x[i]), np.append(ty[:k], y[i])
 
     @property
     def bar_text(self) -> str:
@@ -197,6 +218,9 @@ class Frames:
             "paths": self.paths,
             "guides": [list(g) for g in self.guides],
         }
+        if self.traces and self.trace_upto is not None:  # the paths from a finer sweep
+            out["traces"] = {p: [arr(x), arr(y)] for p, (x, y) in self.traces.items()}
+            out["trace_upto"] = [int(k) for k in self.trace_upto]
         if self.forces:
             out["forces"] = {
                 j: {
@@ -432,6 +456,7 @@ def solve_frames(
             f"--forces: {mech.name} has no masses or loads, so no joint forces to draw"
         )
     step, _ = fine_step(mech, count)
+    fine, _ = fine_step(mech, None)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         res = api.solve(
             mech,
@@ -441,7 +466,38 @@ def solve_frames(
             acceleration=False,
             forces=forces or _has_point_loads(mech),
         )
-        return frames_of(res, forces, units)
+        fr = frames_of(res, forces, units)
+        if step is not None and fine is not None and step > fine * (1 + 1e-9):
+            # fewer frames than the default's: the paths from the default's sweep
+            path = api.solve(
+                mech, step=fine, method=method, velocity=False, acceleration=False, forces=False
+            )
+            add_traces(fr, res, path)
+        return fr
+
+
+def add_traces(fr: Frames, res: Results, path: Results) -> None:
+    """Draw ``fr``'s paths (the frames of ``res``) from the finer sweep ``path`` of the
+    same motion: each point's positions there, and per frame the samples passed before
+    it (in time for a motion law, else along the driver's travel)."""
+    timed = res.mechanism.driver.motion is not None
+
+    def along(r: Results) -> np.ndarray:
+        return np.asarray(r.t if timed else np.abs(r.u - r.u[0]), float)
+
+    a, b = along(path), along(res)
+    tol = 1e-9 * max(float(np.max(np.abs(a))), 1e-30)
+    fr.trace_upto = np.searchsorted(a, b - tol, side="right")  # before the frame's own
+    st = path.solution.state
+    ok = np.asarray(path.ok, bool)
+    n = len(path.u)
+    for p in fr.paths:
+        ref = path.analysis.points[p]
+        x, y = st.point(ref.body, ref.local)
+        fr.traces[p] = (
+            np.where(ok, np.broadcast_to(x, (n,)), np.nan),
+            np.where(ok, np.broadcast_to(y, (n,)), np.nan),
+        )
 
 
 def _has_point_loads(mech: Mechanism) -> bool:
@@ -490,7 +546,7 @@ def _render(fr: Frames, fig):
         x, y = fr.points[p]
         ax.plot(x[:1], y[:1], marker="^", ms=11, color="0.3", zorder=3)
     for k, p in enumerate(fr.paths):
-        x, y = fr.points[p]
+        x, y = fr.path(p)
         ax.plot(x, y, "-", lw=0.6, color=f"C{k % 10}", alpha=0.3)  # the whole path, faint
     if fr.force_scale > 0:
         _scale_bar(ax, fr)
@@ -549,8 +605,7 @@ def _render(fr: Frames, fig):
             if good:
                 lab.set_position((float(np.mean(o.x[i])), float(np.mean(o.y[i]))))
         for p, tr in traces.items():
-            x, y = fr.points[p]
-            tr.set_data(x[: i + 1], y[: i + 1])
+            tr.set_data(*fr.trace(p, i))
         pins.set_data(
             [fr.points[p][0][i] for p in fr.joints + fr.ground],
             [fr.points[p][1][i] for p in fr.joints + fr.ground],

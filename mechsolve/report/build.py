@@ -29,7 +29,7 @@ from mechsolve.base.units import SI_OUTPUT, OutputUnits, parse_quantity
 from mechsolve.model import Damper, Limit, PointForce, Spring, Torque
 from mechsolve.model.source import load_file
 from mechsolve.report.animate import solve_frames
-from mechsolve.results.requirements import check_requirements
+from mechsolve.results.requirements import check_requirements, located_extreme
 from mechsolve.results.summary import places, unbounded_towards
 from mechsolve.writers.plots import draw_start, write_plots
 
@@ -503,10 +503,12 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
             unbounded = False
             for what, i, sign in (("largest", imax, 1.0), ("smallest", imin, -1.0)):
                 toward = unbounded_towards(res, sign * e, i)  # no peak at a dead centre
-                unbounded |= toward is not None
-                value = f"{num(e[i] / sc, 6)} {unit}" if toward is None else "unbounded"
-                where = res.describe_u(i) if toward is None else f"grows towards {toward}"
-                rows.append([f"{what} driving {kind}", value, where])
+                if toward is not None:
+                    unbounded = True
+                    rows.append([f"{what} driving {kind}", "unbounded", f"grows towards {toward}"])
+                    continue
+                value, where = _effort_extreme(res, sign > 0)
+                rows.append([f"{what} driving {kind}", f"{num(value / sc, 6)} {unit}", where])
             mean, what = res.mean_effort()
             if unbounded and what != "mean":  # a mean over time of an unbounded effort
                 mean = math.nan
@@ -527,6 +529,31 @@ def _force_figure_rows(res, U: OutputUnits) -> list[list[str]]:
                 ]
             )
     return rows
+
+
+# a joint's reaction columns in the report's table: a pin's Fx, Fy, F; a slider's N, M;
+# a gear mesh's or rack's tooth forces Ft (tangential, the one that sizes the teeth), Fr
+# (radial) and Fn (along the line of action, the whole tooth force)
+REACTIONS = ("Fx", "Fy", "F", "N", "M", "Ft", "Fr", "Fn")
+
+
+def _effort_extreme(res, largest: bool) -> tuple[float, str]:
+    """The driving effort's largest (or smallest) value over ``res`` (the figures'
+    sweep) and where, in words: located between its neighbouring samples as the
+    requirements locate ``max()`` and ``min()`` (solved there, :func:`located_extreme`).
+    A motion law of time, or a sweep whose ends do not close, has no such sweep: its
+    largest sample, said so."""
+    e = res.driving_effort
+    i = int(np.nanargmax(e) if largest else np.nanargmin(e))
+    # as the requirements' reducer decides (a sweep to locate in: _Reducer._fine_sweep)
+    if res.mechanism.driver.motion is None and len(res.u) > 1 and np.all(res.ok[[0, -1]]):
+        if getattr(res, "_plots_sweep", None) is None:
+            res._plots_sweep = (res.mechanism, res)  # the figures' sweep is its own
+        value, u = located_extreme(f"input.{res.effort_name[0]}", res, largest)
+        if math.isfinite(value) and math.isfinite(u):
+            return value, res.format_u(u)
+    word = "largest" if largest else "smallest"
+    return float(e[i]), f"{res.describe_u(i)} ({word} of the {res.sample_spacing()} samples)"
 
 
 def _groups(res) -> dict[str, list]:
@@ -559,7 +586,7 @@ def _groups(res) -> dict[str, list]:
             out["sliders"].append(c)
         elif c.name.startswith("input.torque") or c.name.startswith("input.force"):
             out["forces"].insert(0, c)
-        elif q in ("Fx", "Fy", "F", "N", "M") and "(" in head:
+        elif q in REACTIONS and "(" in head:
             out["forces"].append(c)
     return out
 

@@ -11,6 +11,7 @@ import numpy as np
 from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.sweep import angle_deg
 from mechsolve.model.motion import describe
+from mechsolve.results.ranges import point_ranges
 
 
 def shown(res) -> OutputUnits:
@@ -244,7 +245,7 @@ class Summary:
         )
         lines += self.motion_summary()
         lines += _start_and_failure_lines(self)
-        lines += _point_lines(self)
+        lines += _point_lines(self, figures)
         lines += _solver_lines(self)
         lines += self.design_summary(figures)
         if self.forces is not None:
@@ -507,21 +508,30 @@ def _start_and_failure_lines(res) -> list[str]:
     return lines
 
 
-def _point_lines(res) -> list[str]:
-    """The ranges of the first twelve points (and their largest speed)."""
+def _point_lines(res, figures=None) -> list[str]:
+    """The ranges of the first twelve points, each end located between the samples of
+    ``figures`` (the finer sweep of the same motion; else of ``res``: see
+    :func:`~mechsolve.results.ranges.point_ranges`; an end that is a sample's says so),
+    and their largest speed (of the samples)."""
     lines = []
     U = shown(res)
     k, unit = U.convert("m")
     unit = pretty_unit(unit)
-    for p in res.point_names()[:12]:
+    src = res if figures is None or len(figures.u) < 2 else figures
+    names = res.point_names()[:12]
+    ranges = point_ranges(src, names)
+    for p in names:
         m = res.point(p)
-        if np.any(np.isfinite(m.x)):
+        if p in ranges:
+            rx, ry = ranges[p]
             speed = np.hypot(m.vx, m.vy) if res.view.has_velocity else None
             # no speed where none was determined (a singular start: its rates are not)
             known = speed is not None and bool(np.any(np.isfinite(speed)))
+            sampled = "" if rx.located and ry.located else f" ({src.sample_spacing()} samples)"
             lines.append(
-                f"  {p}: x {np.nanmin(m.x) * k:.6g} .. {np.nanmax(m.x) * k:.6g} {unit}, "
-                f"y {np.nanmin(m.y) * k:.6g} .. {np.nanmax(m.y) * k:.6g} {unit}"
+                f"  {p}: x {rx.low * k:.6g} .. {rx.high * k:.6g} {unit}, "
+                f"y {ry.low * k:.6g} .. {ry.high * k:.6g} {unit}"
+                + sampled
                 + (f", |v| max {U.text(np.nanmax(speed), 'm/s', '.4g')}" if known else "")
             )
     if len(res.point_names()) > 12:

@@ -309,7 +309,9 @@ class DyadConstructions:
             )
         )
         ta = self.ap.add(Arrow(f"a^t_{r4}", nn, key4, al * e, "tangential", f"⟂ {qn}{an_}"))
-        self.absolute(self.ap, key4, f"a_{a4}", f"= a^n_{r4} + a^t_{r4}")
+        # the bar's point is the pivot's acceleration plus the rotation terms about it
+        pivot = "" if gq else f"a_{qn} + "
+        self.absolute(self.ap, key4, f"a_{a4}", f"= {pivot}a^n_{r4} + a^t_{r4}")
         self.ap.add(
             Arrow(f"a^k_{rs}", key4, kk, cor, "coriolis", f"= 2 ω{self.num[bar]} v_{rs}, ⟂ {joint}")
         )

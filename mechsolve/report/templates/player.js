@@ -53,12 +53,20 @@
       ctx.beginPath(); ctx.moveTo(X(g[0]), Y(g[1])); ctx.lineTo(X(g[2]), Y(g[3])); ctx.stroke();
     });
     ctx.setLineDash([]);
-    // paths: the whole path faint, the part travelled so far strong
+    // paths: the whole path faint, the part travelled so far strong; with few frames
+    // from a finer sweep (traces: its samples, trace_upto: how many each frame passed)
     data.paths.forEach(function (p, j) {
-      var xy = data.points[p];
+      var xy = data.points[p], tr = data.traces ? data.traces[p] : null;
       ctx.strokeStyle = colors[j % colors.length];
-      ctx.globalAlpha = 0.25; ctx.lineWidth = 1; path(xy[0], xy[1], 0, n - 1); ctx.stroke();
-      ctx.globalAlpha = 1; ctx.lineWidth = 2; path(xy[0], xy[1], 0, f); ctx.stroke();
+      ctx.globalAlpha = 0.25; ctx.lineWidth = 1;
+      if (tr) { path(tr[0], tr[1], 0, tr[0].length - 1); } else { path(xy[0], xy[1], 0, n - 1); }
+      ctx.stroke();
+      ctx.globalAlpha = 1; ctx.lineWidth = 2;
+      if (tr) {
+        var k = data.trace_upto[f];
+        path(tr[0].slice(0, k).concat([xy[0][f]]), tr[1].slice(0, k).concat([xy[1][f]]), 0, k);
+      } else { path(xy[0], xy[1], 0, f); }
+      ctx.stroke();
     });
     // links
     data.outlines.forEach(function (o) {
