@@ -133,3 +133,15 @@ def test_start_inside_an_unassemblable_range(tmp_path):
         assert np.hypot(bx - 87.5, by) == pytest.approx(8.4001, abs=1e-9)
         ax, ay = 26.5 * np.cos(th[closes]), 26.5 * np.sin(th[closes])
         assert np.hypot(bx - ax, by - ay) == pytest.approx(105.6, abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["newton", "split-newton"])
+def test_bifurcation_on_the_overlap_sample_is_counted(method, tmp_path):
+    """Chunks of 171 positions: the second chunk starts on the bifurcation at crank 180
+    deg (the overlap sample, the first chunk's last); it is counted once, as the other
+    three: four events, as in the closed form."""
+    summary, _ = ms.stream(ms.loads(parallelogram(method)), tmp_path / "s.csv", chunk=171)
+    rocker = column(tmp_path / "s.csv", "rocker.angle [deg]")
+    crank = column(tmp_path / "s.csv", "input.angle [deg]")
+    assert np.max(np.abs(rocker - crank)) < 1e-5
+    assert summary.events == 4
