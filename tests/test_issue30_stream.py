@@ -145,3 +145,17 @@ def test_bifurcation_on_the_overlap_sample_is_counted(method, tmp_path):
     crank = column(tmp_path / "s.csv", "input.angle [deg]")
     assert np.max(np.abs(rocker - crank)) < 1e-5
     assert summary.events == 4
+
+
+def test_effort_next_to_singular_positions(tmp_path):
+    """Started 7e-5 deg past 10 deg, the samples at 180 and 360 deg lie next to the
+    bifurcations: the driving torque there is the limit along the motion, 29.43
+    cos(crank) N*mm (the closed form above), and the summary says so."""
+    text = parallelogram("newton", "360 deg", masses=True)
+    text = text.replace("start: 10 deg", "start: 10.00007 deg")
+    summary, coarse = ms.stream(ms.loads(text), tmp_path / "s.csv", chunk=100)
+    crank = np.radians(column(tmp_path / "s.csv", "input.angle [deg]"))
+    torque = column(tmp_path / "s.csv", "input.torque [N*m]")
+    assert torque == pytest.approx(9.81 * 3.0e-3 * np.cos(crank), rel=1e-7, abs=1e-12)
+    assert summary.effort_near_limit == 2
+    assert "at 2 position(s) next to a singular one is its limit" in summary.text(coarse)

@@ -50,6 +50,7 @@ class StreamSummary:
     undetermined: int = 0  # positions whose rates are not determined (left blank)
     forces_singular: int = 0  # positions whose reactions are indeterminate (left blank)
     effort_by_limit: int = 0  # of them, where the driving effort is its limit
+    effort_near_limit: int = 0  # positions next to one where the effort is its limit
     events: int = 0
     warnings: list[str] = field(default_factory=list)
     design: list[str] = field(default_factory=list)
@@ -101,6 +102,12 @@ class StreamSummary:
             lines.append(
                 f"  the driving {res.effort_name[0]} at {self.effort_by_limit} of them is its "
                 "limit along the motion (smooth through the position)"
+            )
+        if self.effort_near_limit:
+            lines.append(
+                f"  the driving {res.effort_name[0]} at {self.effort_near_limit} position(s) "
+                "next to a singular one is its limit along the motion (computed there, it "
+                "would carry the pose's rounding amplified by the near-singular loop)"
             )
         for w in self.all_warnings():
             lines.append("  warning: " + w)
@@ -274,6 +281,7 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
     if res.forces is not None:
         s.forces_singular += len({i for i, _ in res.forces.singular if i >= skip})
         s.effort_by_limit += sum(1 for i in res.forces.effort_by_limit if i >= skip)
+        s.effort_near_limit += sum(1 for i in res.forces.effort_near_limit if i >= skip)
     for w in res.warnings:
         if w not in s.warnings:
             s.warnings.append(w)
