@@ -133,6 +133,13 @@ def test_start_inside_an_unassemblable_range(tmp_path):
         assert np.hypot(bx - 87.5, by) == pytest.approx(8.4001, abs=1e-9)
         ax, ay = 26.5 * np.cos(th[closes]), 26.5 * np.sin(th[closes])
         assert np.hypot(bx - ax, by - ay) == pytest.approx(105.6, abs=1e-9)
+        # the edges: |A O4| = 105.6 - 8.4001 mm
+        c = (87.5**2 + 26.5**2 - (105.6 - 8.4001) ** 2) / (2 * 87.5 * 26.5)
+        edge = math.acos(c)
+        (f0, f1) = summary.failures
+        assert math.isnan(f0.edge_in) and f0.edge_out == pytest.approx(edge, abs=1e-9)
+        assert f1.edge_in == pytest.approx(2 * math.pi - edge, abs=1e-9)
+        assert math.isnan(f1.edge_out)
 
 
 @pytest.mark.parametrize("method", ["newton", "split-newton"])

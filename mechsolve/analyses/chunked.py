@@ -72,6 +72,16 @@ class StreamSummary:
                 f"  {what} at {res.format_u(f.u_first)} to "
                 f"{res.format_u(f.u_last)} ({f.last - f.first + 1} position(s)): "
                 f"{f.reason}"
+                + (
+                    f"; it stops closing at {res.format_u(f.edge_in)}"
+                    if f.edge_in == f.edge_in
+                    else ""
+                )
+                + (
+                    f"; it closes again from {res.format_u(f.edge_out)}"
+                    if f.edge_out == f.edge_out
+                    else ""
+                )
             )
         for p, (x0, x1, y0, y1) in list(self.ranges.items())[:12]:
             lines.append(
@@ -194,6 +204,7 @@ def stream(
                 u, start = sol.u, sol.start
             else:
                 sol = an.solve(u, start=start, velocity=vel, acceleration=acc, follow=prev)
+                an.locate_edges(sol)  # where its unassemblable ranges begin and end
             fr = solve_forces(an, sol, stroke_extremes=extremes) if forces else None
             res = Results(an, sol, fr)
             if prev_res is not None:  # continue the link angles' unwrapping
@@ -262,6 +273,8 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
                 a + first, f.last + first, f.group, f.reason, float(res.u[a]), float(res.u[f.last])
             )
         )
+        s.failures[-1].edge_in = f.edge_in if f.first >= skip else math.nan
+        s.failures[-1].edge_out = f.edge_out
     for p in res.point_names():
         m = res.point(p)
         x, y = m.x[skip:], m.y[skip:]
@@ -311,6 +324,7 @@ def _merge(failures: list[Failure]) -> list[Failure]:
         if out and out[-1].last + 1 >= f.first and out[-1].group == f.group:
             out[-1].last = max(out[-1].last, f.last)
             out[-1].u_last = f.u_last
+            out[-1].edge_out = f.edge_out
         else:
             out.append(f)
     return out
