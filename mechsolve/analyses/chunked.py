@@ -17,12 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from mechsolve.base.errors import CannotCloseAtStart
 from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
-from mechsolve.core.kinetostatics import solve_forces
-from mechsolve.core.sweep import Analysis, Failure
+from mechsolve.core.evaluate import forces as solve_forces
+from mechsolve.core.sweep import Analysis, Failure, Solution
 from mechsolve.model import Mechanism
 from mechsolve.results.csv import CsvStream, in_units
 from mechsolve.results.results import Results
+from mechsolve.results.summary import rms_over
 
 CHUNK = 50_000
 
@@ -40,11 +42,15 @@ class StreamSummary:
     effort_peak: tuple[float, float] = (math.inf, -math.inf)
     effort_sq: float = 0.0
     effort_count: int = 0
+    effort_area: float = 0.0  # integral of effort^2 over the driver travel (trapezoidal)
+    effort_travel: float = 0.0  # the driver travel of that integral
     work: float = 0.0
     power_residual: float = 0.0
     power_scale: float = 0.0  # the largest power term: the scale of the balance check
     undetermined: int = 0  # positions whose rates are not determined (left blank)
-    forces_singular: int = 0  # positions whose forces are indeterminate (left blank)
+    forces_singular: int = 0  # positions whose reactions are indeterminate (left blank)
+    effort_by_limit: int = 0  # of them, where the driving effort is its limit
+    effort_near_limit: int = 0  # positions next to one where the effort is its limit
     events: int = 0
     warnings: list[str] = field(default_factory=list)
     design: list[str] = field(default_factory=list)
@@ -66,6 +72,16 @@ class StreamSummary:
                 f"  {what} at {res.format_u(f.u_first)} to "
                 f"{res.format_u(f.u_last)} ({f.last - f.first + 1} position(s)): "
                 f"{f.reason}"
+                + (
+                    f"; it stops closing at {res.format_u(f.edge_in)}"
+                    if f.edge_in == f.edge_in
+                    else ""
+                )
+                + (
+                    f"; it closes again from {res.format_u(f.edge_out)}"
+                    if f.edge_out == f.edge_out
+                    else ""
+                )
             )
         for p, (x0, x1, y0, y1) in list(self.ranges.items())[:12]:
             lines.append(
@@ -74,7 +90,7 @@ class StreamSummary:
         lines.append(f"  max constraint residual {U.text(self.max_residual, 'm', '.2g')}")
         if self.effort_count:
             kind, unit = res.effort_name
-            rms = math.sqrt(self.effort_sq / self.effort_count)
+            rms = self.rms_effort()
             lo, hi = self.effort_peak
             lines.append(
                 f"  driving {kind}: min {U.text(lo, unit)}, max {U.text(hi, unit)}, "
@@ -90,11 +106,30 @@ class StreamSummary:
         if self.forces_singular:
             lines.append(
                 f"  forces indeterminate at {self.forces_singular} singular position(s) "
-                "(left blank)"
+                "(reactions left blank)"
+            )
+        if self.effort_by_limit:
+            lines.append(
+                f"  the driving {res.effort_name[0]} at {self.effort_by_limit} of them is its "
+                "limit along the motion (smooth through the position)"
+            )
+        if self.effort_near_limit:
+            lines.append(
+                f"  the driving {res.effort_name[0]} at {self.effort_near_limit} position(s) "
+                "next to a singular one is its limit along the motion (computed there, it "
+                "would carry the pose's rounding amplified by the near-singular loop)"
             )
         for w in self.all_warnings():
             lines.append("  warning: " + w)
         return "\n".join(lines)
+
+    def rms_effort(self) -> float:
+        """The RMS of the driving effort over the motion, as the one-piece summary's
+        (:func:`~mechsolve.results.summary.rms_over`: trapezoidal over the driver travel;
+        the plain mean of the squares where the driver does not move)."""
+        if self.effort_travel > 0:
+            return math.sqrt(self.effort_area / self.effort_travel)
+        return math.sqrt(self.effort_sq / self.effort_count) if self.effort_count else math.nan
 
     def all_warnings(self) -> list[str]:
         """The chunks' warnings, and the power balance checked against the largest power
@@ -148,8 +183,7 @@ def stream(
     travel = abs(u_all[-1] - u_all[0])
     coarse_step = min(math.radians(1.0), travel / 1000) if not an.linear else travel / 1000
     uc, _ = an.sweep_values(u0, step=coarse_step or None, travel=travel)
-    start = an.assemble(float(u_all[0]))
-    coarse_sol = an.solve(uc, start=start, velocity=vel, acceleration=acc)
+    coarse_sol = an.solve_sweep(uc, velocity=vel, acceleration=acc)
     coarse_forces = solve_forces(an, coarse_sol) if forces else None
     coarse = Results(an, coarse_sol, coarse_forces)
     extremes = coarse_forces.stroke_extremes if coarse_forces is not None else None
@@ -166,9 +200,11 @@ def stream(
             first = offset if prev is None else offset - 1  # overlap one position
             u = u_all[first : offset + chunk]
             if prev is None:
-                sol = an.solve(u, start=start, velocity=vel, acceleration=acc)
+                sol = _first_chunk(an, u_all, chunk, vel, acc)
+                u, start = sol.u, sol.start
             else:
                 sol = an.solve(u, start=start, velocity=vel, acceleration=acc, follow=prev)
+                an.locate_edges(sol)  # where its unassemblable ranges begin and end
             fr = solve_forces(an, sol, stroke_extremes=extremes) if forces else None
             res = Results(an, sol, fr)
             if prev_res is not None:  # continue the link angles' unwrapping
@@ -196,6 +232,22 @@ def stream(
     return summary, coarse
 
 
+def _first_chunk(an: Analysis, u_all: np.ndarray, chunk: int, vel: bool, acc: bool) -> Solution:
+    """The first chunk, solved as the one-piece sweep is
+    (:meth:`~mechsolve.core.failures.FailureReports.solve_sweep`): where the mechanism
+    cannot close at the start, from the first position that closes, the positions
+    skipped kept as unassemblable rows; the chunk is lengthened (doubled) until it holds
+    a position that closes (none in the whole sweep: the error, as the one-piece's)."""
+    end = min(chunk, len(u_all))
+    while True:
+        try:
+            return an.solve_sweep(u_all[:end], velocity=vel, acceleration=acc)
+        except CannotCloseAtStart:
+            if end >= len(u_all):
+                raise
+            end = min(len(u_all), 2 * end)
+
+
 def _stopped(s: StreamSummary, res: Results, u_all: np.ndarray, offset: int) -> None:
     """A chunk whose branch could not be followed: the next one would start from a pose
     before the break, on a branch not known; the rest (from ``offset``) is not solved
@@ -221,6 +273,8 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
                 a + first, f.last + first, f.group, f.reason, float(res.u[a]), float(res.u[f.last])
             )
         )
+        s.failures[-1].edge_in = f.edge_in if f.first >= skip else math.nan
+        s.failures[-1].edge_out = f.edge_out
     for p in res.point_names():
         m = res.point(p)
         x, y = m.x[skip:], m.y[skip:]
@@ -238,16 +292,25 @@ def _accumulate(s: StreamSummary, res: Results, first: int, skip: int) -> None:
         s.max_residual = max(s.max_residual, float(np.nanmax(resid)))
     s.undetermined += sum(1 for i in res.solution.rates_undetermined if i >= skip)
     if res.forces is not None:
-        s.forces_singular += sum(1 for i, _ in res.forces.singular if i >= skip)
+        s.forces_singular += len({i for i, _ in res.forces.singular if i >= skip})
+        s.effort_by_limit += sum(1 for i in res.forces.effort_by_limit if i >= skip)
+        s.effort_near_limit += sum(1 for i in res.forces.effort_near_limit if i >= skip)
     for w in res.warnings:
         if w not in s.warnings:
             s.warnings.append(w)
     f = res.forces
     if f is not None and np.any(f.ok[skip:]):
-        e = f.effort[skip:][f.ok[skip:]]
+        ea = res.driving_effort  # at a singular position its limit along the motion
+        e = ea[skip:][np.isfinite(ea[skip:])]
         s.effort_peak = (min(s.effort_peak[0], e.min()), max(s.effort_peak[1], e.max()))
         s.effort_sq += float(np.sum(e * e))
         s.effort_count += e.size
+        # the intervals of this chunk (from the previous chunk's last position on)
+        both = np.isfinite(ea[1:]) & np.isfinite(ea[:-1])
+        travel = float(np.sum(np.abs(np.diff(res.u))[both]))
+        if travel > 0:
+            s.effort_area += rms_over(res.u, ea) ** 2 * travel
+            s.effort_travel += travel
         s.work += res.work()
         pr = np.abs(f.residual[skip:][f.ok[skip:]])
         s.power_residual = max(s.power_residual, float(pr.max()))
@@ -261,6 +324,7 @@ def _merge(failures: list[Failure]) -> list[Failure]:
         if out and out[-1].last + 1 >= f.first and out[-1].group == f.group:
             out[-1].last = max(out[-1].last, f.last)
             out[-1].u_last = f.u_last
+            out[-1].edge_out = f.edge_out
         else:
             out.append(f)
     return out

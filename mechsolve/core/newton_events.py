@@ -68,8 +68,9 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
     cross = np.flatnonzero(good[:-1] & good[1:] & (sign[:-1] * sign[1:] < 0))
     if cross.size and g.gaps:  # (not crossed continuously: not a bifurcation)
         cross = cross[~np.isin(cross, [k for k, _ in g.gaps])]
+    first = _at_continued_start(gi, g, ctx, det, good)
     if not cross.size:
-        return []
+        return first
     ends = np.unique(np.r_[cross, cross + 1])
     singular = np.zeros(st.n, bool)
     singular[ends] = rcond(g.jacobian(st.take(ends))) <= SIGN_RCOND
@@ -92,7 +93,29 @@ def _bifurcations(gi: int, g: NewtonGroup, ctx: _Context, ok: np.ndarray) -> lis
             events.append(Event("bifurcation", g.label, float(u[j]), j - 1, 0.0))
             continue
         events.append(Event("bifurcation", g.label, _crossing(gi, g, ctx, a, det), a, 0.0))
-    return events
+    return first + events
+
+
+def _at_continued_start(gi: int, g: NewtonGroup, ctx: _Context, det, good) -> list[Event]:
+    """A chunk that continues a sweep (``ctx.history``: the previous chunk's poses before
+    its first sample) whose first sample is on a singular position: passed when the pose
+    before it and the sample after it are regular with determinants of opposite signs,
+    as for a sample inside a sweep (the previous chunk, whose last sample it is, cannot
+    tell)."""
+    hist = getattr(ctx, "history", {}).get(gi)
+    st = ctx.st
+    if not hist or st.n < 3 or not (good[0] and good[1]):
+        return []
+    rc = rcond(g.jacobian(st.take([0, 1])))
+    if not (rc[0] <= SIGN_RCOND < rc[1]):
+        return []
+    u_prev, q_prev = float(hist[0][-1]), hist[1][-1]
+    st1 = ctx.prefix(gi, [u_prev], 0)
+    g.set_q(st1, 0, q_prev)
+    d_prev = g._det(st1, np.array([u_prev]), q_prev)
+    if d_prev * det[1] >= 0 or rcond(g.jacobian(st1))[0] <= SIGN_RCOND:
+        return []
+    return [Event("bifurcation", g.label, float(ctx.u[0]), 0, 0.0)]
 
 
 def _crossing(gi: int, g: NewtonGroup, ctx: _Context, a: int, det: np.ndarray) -> float:

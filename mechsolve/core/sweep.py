@@ -321,8 +321,9 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
         written = (5 + 3 * derivs + 3 * (derivs and acceleration)) if closed else 0
         st = State(self.system.nb, n, written)
         unit = Drive(u, np.ones(n), np.zeros(n))  # derivatives per unit driver coordinate
-        q_start, flips = self._continued_from(start, near, follow)
+        q_start, flips, history = self._continued_from(start, near, follow)
         ctx = self._context(st, u, start, flips, q_start, near is None and follow is None, analyse)
+        ctx.history = history
         with np.errstate(invalid="ignore", divide="ignore"):
             ok_all, oks, inds, iters, methods, events, warnings = self._solve_groups(
                 ctx, unit, conds if lazy else None, derivs, acceleration, analyse
@@ -385,6 +386,7 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                     ok_all,
                     prefix=lambda uu, k, gi=gi: ctx.prefix(gi, uu, k),
                     restart=lambda i, g=g: _restart_guess(self, g, float(u[i]), start),
+                    history=ctx.history.get(gi) if hasattr(ctx, "history") else None,
                 )
                 iters = np.maximum(iters, it)
                 methods.merge(meth)
@@ -412,21 +414,33 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
 
     def _continued_from(
         self, start: StartAssembly, near: tuple[Solution, int] | None, follow: Solution | None
-    ) -> tuple[dict, dict]:
+    ) -> tuple[dict, dict, dict]:
         """The Newton groups' first guesses and the branches' flips: the start's, or those
         of a solved sweep at sample ``near[1]`` (single positions next to it) or at the last
-        solved position of ``follow`` (the next chunk of a sweep, on its branches)."""
+        solved position of ``follow`` (the next chunk of a sweep, on its branches). With
+        ``follow``, also each Newton group's history: the driver values and poses of the
+        (up to two) solved samples just before that one, so that the chunk's continuation
+        goes on in the same direction (next to a bifurcation one pose cannot tell)."""
         q_start = dict(start.q_start)
         if near is None and follow is None:
-            return q_start, {gi: [] for gi in range(len(self.plan))}
+            return q_start, {gi: [] for gi in range(len(self.plan))}, {}
         sol0 = near[0] if near is not None else follow
         solved = np.flatnonzero(sol0.ok)
         i0 = near[1] if near is not None else (int(solved[-1]) if solved.size else -1)
         flips = {gi: list(v) for gi, v in sol0.flips.items()}
+        back = [j for j in (i0 - 2, i0 - 1) if follow is not None and j >= 0]
+        while back and not sol0.ok[back[0] : i0].all():
+            back = back[1:]
+        history = {}
         for gi, g in enumerate(self.plan):
             if isinstance(g, NewtonGroup) and i0 >= 0:
                 q_start[gi] = g.get_q(sol0.state, i0)
-        return q_start, flips
+                if back:
+                    history[gi] = (
+                        [float(sol0.u[j]) for j in back],
+                        [g.get_q(sol0.state, j) for j in back],
+                    )
+        return q_start, flips, history
 
     def _context(self, st, u, start, flips, q_start, is_start: bool, analyse: bool) -> _Context:
         """The branch analysis's context, with its grid between samples when a group has

@@ -359,11 +359,14 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         ok_in: np.ndarray,
         prefix=None,
         restart=None,
+        history=None,
     ):
         """Solve positions 0..N-1: batched when possible (:meth:`sweep_batched`), else by
         continuation (:meth:`sweep_sequential`). Returns ``ok``, ``iterations``, ``methods``
         (the text of each position, or one text when every position has it: an array of
-        text costs ~0.1 ms to build and to compare on a sweep of thousands)."""
+        text costs ~0.1 ms to build and to compare on a sweep of thousands).
+        ``history``: the driver values and poses solved before position 0 (a chunk that
+        continues a sweep), so that its first steps continue the same motion."""
         self.gaps, self.stopped = [], None
         if self.red is not None and self.red.sub.nb == 0:
             return self._sweep_fixed(st, drive, ok_in)
@@ -371,9 +374,29 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             out = self.sweep_batched(st, drive, q_start, prefix)
             # (a singular position passed: whether a bifurcation or a range where the
             # group cannot close stepped over, the sequential sweep tells them apart)
-            if out is not None and not self._sign_changes(st, out[0]):
+            if (
+                out is not None
+                and not self._sign_changes(st, out[0])
+                and self._continues(st, drive, q_start, prefix, history)
+            ):
                 return out
-        return self.sweep_sequential(st, drive, q_start, ok_in, prefix, restart)
+        return self.sweep_sequential(st, drive, q_start, ok_in, prefix, restart, history)
+
+    def _continues(self, st: State, drive: Drive, q_start, prefix, history) -> bool:
+        """Whether the batched sweep's first positions (started from one pose) are those
+        that continuation from ``history`` reaches: next to a bifurcation a start from
+        one pose cannot tell the direction of the motion."""
+        if not history:
+            return True
+        k = min(st.n, 4)
+        sub = st.take(np.arange(k))
+        ok, _, _ = self.sweep_sequential(
+            sub, drive.take(np.arange(k)), q_start, np.ones(k, bool), prefix, None, history
+        )
+        self.gaps, self.stopped = [], None
+        return bool(ok.all()) and all(
+            self._jump(self.get_q(sub, i), self.get_q(st, i)) < 1e-6 for i in range(k)
+        )
 
     def _sweep_fixed(self, st: State, drive: Drive, ok_in: np.ndarray):
         """A group whose every angle a driver fixes alone (a driven crank): its poses
@@ -428,8 +451,10 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         ok_in: np.ndarray,
         prefix=None,
         restart=None,
+        history=None,
     ):
-        """Solve positions 0..N-1 in order by continuation from ``q_start`` at position 0.
+        """Solve positions 0..N-1 in order by continuation from ``q_start`` at position 0
+        (after the driver values and poses ``history``, lists, when given).
 
         Each step predicts from the previous solutions (Lagrange extrapolation) and corrects
         by Newton-Raphson (scipy when Newton fails). A step is accepted when the correction
@@ -440,8 +465,7 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         the user's branches; ``False`` when those cannot close there: the position is then
         unassemblable), else from the last solution; likewise where position i is not
         reached continuously from i - 1 (see :meth:`_start_again`). Returns ``ok``,
-        ``iterations`` and ``methods`` over the positions.
-        """
+        ``iterations`` and ``methods`` over the positions."""
         n = st.n
         self.gaps, self.stopped, crossed = [], None, False
         ok = np.zeros(n, bool)
@@ -492,6 +516,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                 # started again on a limit position (the edge of a range where it cannot
                 # close), where both branches meet: the next position starts again too
                 edge = fresh and i > 0 and restart is not None and abs(det) < DET_SIGN
+                if i == 0 and history:  # a chunk continuing a sweep: the motion so far
+                    hu, hq = history
                 hu, hq = ([], []) if edge else ((hu + [ui])[-3:], (hq + [q])[-3:])
             else:
                 self._nan(st, i)
