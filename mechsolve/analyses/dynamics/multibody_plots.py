@@ -1,7 +1,9 @@
 """Plots of a motion integrated in body coordinates (``mechsolve simulate``'s general
 path): the driver coordinate and its rate, the energies with their balance, and the
 constraint violation over time; every axis in the units of the command's table (an
-:class:`~mechsolve.base.units.OutputUnits`, SI by default)."""
+:class:`~mechsolve.base.units.OutputUnits`, SI by default). Legends stand beside their
+axes, placed at once: Matplotlib's ``loc="best"`` searched a long simulation's samples
+for a free corner, which took seconds and printed its UserWarning on stderr."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.plots import _BESIDE
 from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.writers.fonts import pyplot
 from mechsolve.writers.plots import shown
@@ -42,7 +45,7 @@ def write_multibody_plots(
             axes[0].plot(t, shown(U, np.degrees(tr.q[:, k]), "deg")[0], lw=1.2, label=lk.name)
             axes[1].plot(t, shown(U, tr.qd[:, k], "rad/s")[0], lw=1.2)
             axes[2].plot(t, shown(U, tr.qdd[:, k], "rad/s^2")[0], lw=1.0)
-        axes[0].legend(fontsize=8)
+        axes[0].legend(fontsize=8, **_BESIDE)
         axes[0].set_ylabel(f"link angle [{shown(U, 0.0, 'deg')[1]}]")
         axes[1].set_ylabel(f"angular speed [{shown(U, 0.0, 'rad/s')[1]}]")
         axes[2].set_ylabel(f"angular acceleration [{shown(U, 0.0, 'rad/s^2')[1]}]")
@@ -60,6 +63,7 @@ def write_multibody_plots(
     axes[0].set_title(f"{name}: motion (multibody)")
     for ax in axes:
         ax.grid(alpha=0.3)
+    fig.tight_layout()  # room for the legend beside the axes
     path = outdir / "simulation-motion.png"
     save_figure(fig, path, 100)
     plt.close(fig)
@@ -71,7 +75,7 @@ def write_multibody_plots(
     axes[0].plot(t, (tr.potential - tr.potential[0]) * kE, label="potential V - V0")
     axes[0].plot(t, tr.work * kE, label="work of the other forces W")
     axes[0].set_ylabel(f"energy [{eu}]")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=8, **_BESIDE)
     axes[1].plot(t, tr.energy_residual * kE, color="C3")
     axes[1].set_ylabel(f"T + V - W - (T0 + V0) [{eu}]")
     pos, pu = shown(U, np.maximum(tr.violation, 1e-300), "m")
@@ -79,11 +83,12 @@ def write_multibody_plots(
     axes[2].semilogy(t, pos, label=f"position [{pu}]")
     axes[2].semilogy(t, vel, label=f"velocity [{vu}]")
     axes[2].set_ylabel("largest constraint violation")
-    axes[2].legend(fontsize=8)
+    axes[2].legend(fontsize=8, **_BESIDE)
     axes[2].set_xlabel(f"t [{tu}]")
     axes[0].set_title(f"{name}: energy balance and constraints")
     for ax in axes:
         ax.grid(alpha=0.3)
+    fig.tight_layout()
     path = outdir / "simulation-energy.png"
     save_figure(fig, path, 100)
     plt.close(fig)

@@ -464,11 +464,19 @@ def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:
         _within_reach(an, d.speed * t, text, t)
         u = u0 + d.speed * t
         return Instant(u, d.speed, 0.0, f"t = {t:g} s from the start ({an.format_u(u)})")
-    if an.linear:
-        u = val
-    else:  # the same angle reached from the start along the driver's direction
-        u = u0 + d.direction * ((d.direction * (val - u0)) % (2 * math.pi))
+    u = val if an.linear else _on_its_turn(val, u0, d.direction)
     return Instant(u, d.speed, 0.0, an.format_u(u))
+
+
+def _on_its_turn(val: float, u0: float, direction: int) -> float:
+    """The driver angle ``val`` ahead of the start ``u0`` as written, on the turn it names
+    (solved within the machine's cycle: 400 deg of a 20-tooth pinion driving a 60-tooth
+    wheel is not 40 deg, nor is 390 deg of a four-bar that changes branch at a change
+    point); behind it, the same angle reached from the start along the driver's
+    ``direction``, on its first turn."""
+    if direction * (val - u0) >= 0:
+        return val
+    return u0 + direction * ((direction * (val - u0)) % (2 * math.pi))
 
 
 def _bare_number(text: str) -> bool:
