@@ -204,8 +204,9 @@ class SingularRates:
         """No limit: near a singular position the computed rates are right (and large)
         unless the pose's rounding, amplified by ``1/s^2`` in velocities and ``1/s^3`` in
         accelerations (``s`` the loop's transmission sine), exceeds 1e-6 of their size
-        (the larger of the rate and its natural size ``kind``); those, and all of them at
-        the singular position (to rounding), are left blank."""
+        (each body's largest rate of that order, in its natural size ``kind``, or that
+        size); those, and all of them at the singular position (to rounding), are left
+        blank."""
         if deep:
             sol.state.block[rows, bodies, i] = np.nan
             sol.rates_undetermined.append(int(i))
@@ -216,7 +217,18 @@ class SingularRates:
         power = np.array([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])[: blk.shape[0], None]
         sizes = np.asarray(kind, float).reshape(-1, 1)
         rounding = np.finfo(float).eps * sizes / s**power
-        bad = ~(rounding <= 1e-6 * np.maximum(np.abs(blk), sizes))
+        # against the size of the body's rates of that order (its velocities, or its
+        # accelerations: the rounding is the body's motion's, and a frame origin on a
+        # ground pivot, at rest, or a small component is right to the digits of the
+        # largest; each in its natural size)
+        rel = np.abs(blk) / sizes
+        bad = np.zeros(blk.shape, bool)
+        for order in (slice(0, 3), slice(3, 6)):
+            part = rel[order]
+            if not part.size:
+                continue
+            big = np.maximum(np.max(part, axis=0, initial=0.0), 1.0)  # (nan: blank)
+            bad[order] = ~(rounding[order] <= 1e-6 * big * sizes[order])
         if bad.any():
             blk[bad] = np.nan
             sol.state.block[rows, bodies, i] = blk
