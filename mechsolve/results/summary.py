@@ -512,7 +512,7 @@ def _point_lines(res, figures=None) -> list[str]:
     """The ranges of the first twelve points, each end located between the samples of
     ``figures`` (the finer sweep of the same motion; else of ``res``: see
     :func:`~mechsolve.results.ranges.point_ranges`; an end that is a sample's says so),
-    and their largest speed (of the samples)."""
+    and their largest speed (of the samples, said so)."""
     lines = []
     U = shown(res)
     k, unit = U.convert("m")
@@ -532,7 +532,11 @@ def _point_lines(res, figures=None) -> list[str]:
                 f"  {p}: x {rx.low * k:.6g} .. {rx.high * k:.6g} {unit}, "
                 f"y {ry.low * k:.6g} .. {ry.high * k:.6g} {unit}"
                 + sampled
-                + (f", |v| max {U.text(np.nanmax(speed), 'm/s', '.4g')}" if known else "")
+                + (
+                    f", |v| max {U.text(np.nanmax(speed), 'm/s', '.4g')} (of the {res.samples()})"
+                    if known
+                    else ""
+                )
             )
     if len(res.point_names()) > 12:
         lines.append(f"  ... and {len(res.point_names()) - 12} more points in the CSV")
