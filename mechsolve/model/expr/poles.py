@@ -5,7 +5,7 @@ finitely many values, so a pole between two samples (``t + 1/(t - 1.05)`` sample
 0.1 s) gives finite samples on both sides and a law that jumps through infinity between
 them. It is found where it must come from: a part of a denominator (or the base of a
 power, or the cosine of ``tan``'s argument) that changes sign between two samples. The
-zero is located by bisection and the law is evaluated beside it: a pole grows without
+zero is located to rounding and the law is evaluated beside it: a pole grows without
 bound as the zero is approached (at 1e-4 and 1e-8 of the interval from it, a simple pole
 grows 1e4 times), a removable singularity (``sin(t)/t`` at 0, ``(t - 1)/(t - 1)``) or a
 jump of a denominator that does not pass through zero (``1/sign(t - 1)``) does not.
@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from mechsolve.base.numerics import brent_root
 from mechsolve.model.expr.tree import Binary, Call, Chain, walk
 
 # how much faster than at 1e-4 of the interval the law must be at 1e-8 of it to be a pole
@@ -62,7 +63,14 @@ def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
         d = at(part, x)
         sign = np.sign(d)
         for k in np.flatnonzero(sign[:-1] * sign[1:] < 0):
-            z = _bisect(lambda v, part=part: float(at(part, np.array([v]))[0]), x[k], x[k + 1])
+            z = brent_root(  # the zero to rounding (the law is read at 1e-8 of the step from it)
+                lambda v, part=part: float(at(part, np.array([v]))[0]),
+                float(x[k]),
+                float(x[k + 1]),
+                xtol=1e-300,
+                fa=float(d[k]),
+                fb=float(d[k + 1]),
+            )
             if found and z >= min(found):
                 continue
             h = (x[k + 1] - x[k]) * np.array([1e-4, 1e-8])
@@ -71,20 +79,3 @@ def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
             if not np.all(np.isfinite(close)) or np.max(close) > POLE_GROWTH * np.max(far):
                 found.append(float(z))
     return min(found) if found else None
-
-
-def _bisect(f, a: float, b: float) -> float:
-    """A zero of ``f`` between ``a`` and ``b``, where it changes sign (to rounding)."""
-    fa = f(a)
-    for _ in range(200):
-        m = 0.5 * (a + b)
-        if m in (a, b):
-            break
-        fm = f(m)
-        if fm == 0:
-            return m
-        if (fm > 0) == (fa > 0):
-            a, fa = m, fm
-        else:
-            b = m
-    return 0.5 * (a + b)
