@@ -63,14 +63,17 @@ def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
         d = at(part, x)
         sign = np.sign(d)
         for k in np.flatnonzero(sign[:-1] * sign[1:] < 0):
-            z = brent_root(  # the zero to rounding (the law is read at 1e-8 of the step from it)
-                lambda v, part=part: float(at(part, np.array([v]))[0]),
-                float(x[k]),
-                float(x[k + 1]),
-                xtol=1e-300,
-                fa=float(d[k]),
-                fb=float(d[k + 1]),
-            )
+            try:  # the zero to rounding (the law is read at 1e-8 of the step from it)
+                z = brent_root(
+                    lambda v, part=part: float(at(part, np.array([v]))[0]),
+                    float(x[k]),
+                    float(x[k + 1]),
+                    xtol=1e-300,
+                    fa=float(d[k]),
+                    fb=float(d[k + 1]),
+                )
+            except (ValueError, RuntimeError):  # the part is not finite between: no zero
+                continue
             if found and z >= min(found):
                 continue
             h = (x[k + 1] - x[k]) * np.array([1e-4, 1e-8])
