@@ -4,8 +4,10 @@ A law of one variable (a driver's ``u(t)``, a torque curve of ``angle``) is samp
 finitely many values, so a pole between two samples (``t + 1/(t - 1.05)`` sampled every
 0.1 s) gives finite samples on both sides and a law that jumps through infinity between
 them. It is found where it must come from: a part of a denominator (or the base of a
-power, or the cosine of ``tan``'s argument) that changes sign between two samples. The
-zero is located to rounding and the law is evaluated beside it: a pole grows without
+power, or the cosine of ``tan``'s argument) that changes sign between two samples, or
+that touches zero between them without changing sign (``1/(t^2 - 2.1 t + 1.1025)``,
+``1/(1 + cos(t))``: a local minimum of its magnitude, located by bounded minimisation).
+The zero is located to rounding and the law is evaluated beside it: a pole grows without
 bound as the zero is approached (at 1e-4 and 1e-8 of the interval from it, a simple pole
 grows 1e4 times), a removable singularity (``sin(t)/t`` at 0, ``(t - 1)/(t - 1)``) or a
 jump of a denominator that does not pass through zero (``1/sign(t - 1)``) does not.
@@ -45,6 +47,11 @@ def _candidates(tree: Any) -> list[Any]:
     return out
 
 
+# at most this many local minima of a part's magnitude are examined (the smallest first),
+# so that a denominator that oscillates over many samples does not cost a minimisation each
+MAX_TOUCHES = 32
+
+
 def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
     """The smallest value of ``var`` between consecutive samples ``x`` (ascending) where
     ``expr`` (an :class:`~mechsolve.model.expr.Expression` of ``var`` alone) grows without
@@ -58,27 +65,61 @@ def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
         e = type(expr)._derived(tree, "", expr.variables)
         return np.broadcast_to(np.asarray(e.evaluate_at({var: v}), float), v.shape)
 
+    def grows(z: float, step: float) -> bool:
+        """The law beside ``z`` (at 1e-4 and 1e-8 of the samples' step from it) grows
+        without bound: a pole, not a removable singularity or a bounded jump."""
+        h = step * np.array([1e-4, 1e-8])
+        near = np.abs(at(expr.tree, np.r_[z - h, z + h]))
+        far, close = near[[0, 2]], near[[1, 3]]
+        return not np.all(np.isfinite(close)) or np.max(close) > POLE_GROWTH * np.max(far)
+
     found: list[float] = []
     for part in _candidates(expr.tree):
         d = at(part, x)
-        sign = np.sign(d)
-        for k in np.flatnonzero(sign[:-1] * sign[1:] < 0):
-            try:  # the zero to rounding (the law is read at 1e-8 of the step from it)
-                z = brent_root(
-                    lambda v, part=part: float(at(part, np.array([v]))[0]),
-                    float(x[k]),
-                    float(x[k + 1]),
-                    xtol=1e-300,
-                    fa=float(d[k]),
-                    fb=float(d[k + 1]),
-                )
-            except (ValueError, RuntimeError):  # the part is not finite between: no zero
-                continue
-            if found and z >= min(found):
-                continue
-            h = (x[k + 1] - x[k]) * np.array([1e-4, 1e-8])
-            near = np.abs(at(expr.tree, np.r_[z - h, z + h]))
-            far, close = near[[0, 2]], near[[1, 3]]
-            if not np.all(np.isfinite(close)) or np.max(close) > POLE_GROWTH * np.max(far):
-                found.append(float(z))
+        for z, step in _zeros(lambda v, part=part: float(at(part, np.array([v]))[0]), x, d):
+            if (not found or z < min(found)) and grows(z, step):
+                found.append(z)
     return min(found) if found else None
+
+
+def _zeros(f: Any, x: np.ndarray, d: np.ndarray) -> list[tuple[float, float]]:
+    """Where the part ``f`` (sampled: ``d`` at ``x``) may be zero between two samples, each
+    with the step of the samples around it: located to rounding where it changes sign,
+    and at the smallest magnitude where it touches zero without changing sign (a local
+    minimum of ``|d|`` among the samples: an even-order zero or ``abs``)."""
+    out: list[tuple[float, float]] = []
+    sign = np.sign(d)
+    for k in np.flatnonzero(sign[:-1] * sign[1:] < 0):
+        try:  # the zero to rounding (the law is read at 1e-8 of the step from it)
+            z = brent_root(
+                f, float(x[k]), float(x[k + 1]), xtol=1e-300, fa=float(d[k]), fb=float(d[k + 1])
+            )
+        except (ValueError, RuntimeError):  # the part is not finite between: no zero
+            continue
+        out.append((z, float(x[k + 1] - x[k])))
+    a = np.abs(d)
+    with np.errstate(invalid="ignore"):
+        dips = (
+            np.flatnonzero(
+                (a[1:-1] < a[:-2])
+                & (a[1:-1] <= a[2:])
+                & (sign[1:-1] * sign[:-2] > 0)
+                & (sign[1:-1] * sign[2:] > 0)
+            )
+            + 1
+        )
+    if dips.size == 0:
+        return out
+    from scipy.optimize import minimize_scalar  # only a law whose part dips toward zero
+
+    for k in dips[np.argsort(a[dips] / max(float(np.nanmax(a)), 1e-300))][:MAX_TOUCHES]:
+        lo, hi = float(x[k - 1]), float(x[k + 1])
+        r = minimize_scalar(
+            lambda v: abs(f(v)),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-14 * max(abs(lo), abs(hi), hi - lo)},
+        )
+        if np.isfinite(r.fun) and r.fun < a[k]:
+            out.append((float(r.x), 0.5 * (hi - lo)))
+    return out
