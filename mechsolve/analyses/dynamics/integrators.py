@@ -14,6 +14,7 @@ from mechsolve.analyses.dynamics.model import ReducedModel, _LeftRange, drive_to
 from mechsolve.analyses.dynamics.tables import _rows
 from mechsolve.base.errors import InputError
 from mechsolve.model import Mechanism
+from mechsolve.model.expr.poles import first_pole_along
 
 
 class _MotorNotFinite(Exception):
@@ -40,25 +41,33 @@ class _End:
     error: InputError | None = None
 
 
+def motor_end(
+    mech: Mechanism, lin: bool, omega: float, t: float, value: float, pole: bool = False
+) -> _End:
+    """The end of a motion whose motor law gives ``value`` (inf, nan) at the speed
+    ``omega`` along the driver and the time ``t``, or has a ``pole`` there that the motion
+    passed between two steps: the file's input error, naming the motor's key."""
+    speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
+    law = mech.motor.describe(lin, units=False) if mech.motor is not None else "the motor's law"
+    gives = "grows without bound" if pole else f"gives {value:g}"
+    text = (
+        f"the motor's law {law} {gives} at {speed} = {omega:.6g} {unit}, "
+        f"t = {t:.6g} s: it must give a finite {'force' if lin else 'torque'} at "
+        "every speed and time the motion reaches"
+    )
+    raw = mech.source.data.get("motor") if mech.source is not None else None
+    keys = [k for k in ("torque", "force") if isinstance(raw, dict) and k in raw]
+    key = keys[0] if keys else ("force" if lin else "torque")
+    return _End(text, early=True, error=mech.error(("motor", key), text))
+
+
 def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) -> _End:
     """The end of an integration that cannot go on because of ``exc`` (one of
     :data:`_STOPS`); ``step``: the fixed step of RK4."""
     if isinstance(exc, _LeftRange):
         return _End(_left_text(model, exc.phi), early=True)
     if isinstance(exc, _MotorNotFinite):
-        mech = model.mech
-        lin = model.an.linear
-        speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
-        law = mech.motor.describe(lin, units=False) if mech.motor is not None else "the motor's law"
-        text = (
-            f"the motor's law {law} gives {exc.value:g} at {speed} = {exc.omega:.6g} {unit}, "
-            f"t = {exc.t:.6g} s: it must give a finite {'force' if lin else 'torque'} at "
-            "every speed and time the motion reaches"
-        )
-        raw = mech.source.data.get("motor") if mech.source is not None else None
-        keys = [k for k in ("torque", "force") if isinstance(raw, dict) and k in raw]
-        key = keys[0] if keys else ("force" if lin else "torque")
-        return _End(text, early=True, error=mech.error(("motor", key), text))
+        return motor_end(model.mech, model.an.linear, exc.omega, exc.t, exc.value)
     if step is not None:
         return _End(
             f"the step {step:.6g} s is too large for this motion (the driver would turn more "
@@ -274,8 +283,27 @@ def integrate(
         ts, ys, end = _adaptive(model, sim, accel, (phi0, w0), turns, limit)
     ts = np.array(ts)
     Y = np.array(ys, float).reshape(-1, 2)
+    pole = _motor_pole(model, motor, d, ts, Y)
+    if pole is not None:
+        ts, Y, end = pole
     eps, J = _along(model, motor, d, ts, Y)
     return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, end.reason, model.nfev, end.early, end.error)
+
+
+def _motor_pole(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
+    """A motor law with a pole the motion passed between two of its samples (finite at
+    every sample: the step jumped through infinity, and the motion after it is not the
+    law's): ``(ts, Y, end)`` with the motion kept up to the sample before the pole and the
+    law refused as the file's error; None where the law stays finite along the motion."""
+    if motor is None or motor.kind != "law" or len(ts) < 2:
+        return None
+    w = d * Y[:, 1]  # the law is written along the driver's direction
+    hit = first_pole_along(motor.expr, {"omega": w, "v": w, "t": ts})
+    if hit is None:
+        return None
+    k, at = hit
+    end = motor_end(model.mech, model.an.linear, at["omega"], at["t"], math.inf, pole=True)
+    return ts[: k + 1], Y[: k + 1], end
 
 
 def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):

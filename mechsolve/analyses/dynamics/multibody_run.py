@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 
 import numpy as np
 
 from mechsolve.analyses.dynamics.cycle import machine_cycle
-from mechsolve.analyses.dynamics.integrators import _with_flywheel
+from mechsolve.analyses.dynamics.integrators import _with_flywheel, motor_end
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
     Multibody,
@@ -32,6 +33,7 @@ from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
+from mechsolve.model.expr.poles import first_pole_along
 from mechsolve.results.results import Column, Results
 
 
@@ -141,9 +143,43 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         singular=sim.singular,
         branch=branches(an, mb) if sim.singular == "keep branch" else None,
     )
-    sol = _solution(an, start, mb, drv, tr)
+    tr, sol = _solved_motion(mech, an, start, mb, drv, tr)
     forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
     return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def _solved_motion(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
+    """The trajectory and its :class:`Solution`; cut at the motor law's pole where the
+    motion passed one (kept up to there, as the reduced path keeps it)."""
+    sol = _solution(an, start, mb, drv, tr)
+    cut = _motor_pole_cut(mech, an, tr)
+    if cut is None:
+        return tr, sol
+    return cut, _solution(an, start, mb, drv, cut)
+
+
+# the trajectory's rows, one per output time
+_ALONG = ("t", "q", "qd", "qdd", "lam", "kinetic", "potential", "work", "violation")
+
+
+def _motor_pole_cut(mech: Mechanism, an: Analysis, tr: Trajectory) -> Trajectory | None:
+    """The trajectory up to the output before the motor law's pole, where the motion
+    passed one between two outputs (the law finite at both: the integrator stepped
+    through infinity, and the motion after it is not the law's), with the file's error;
+    None where the law stays finite along the motion."""
+    motor = mech.motor
+    if motor is None or motor.kind != "law" or len(tr.t) < 2 or tr.ud is None:
+        return None
+    w = mech.driver.direction * tr.ud  # the law is written along the driver's direction
+    hit = first_pole_along(motor.expr, {"omega": w, "v": w, "t": tr.t})
+    if hit is None:
+        return None
+    k, at = hit
+    end = motor_end(mech, an.linear, at["omega"], at["t"], math.inf, pole=True)
+    rows = {f: getattr(tr, f)[: k + 1] for f in (*_ALONG, "velocity_violation")}
+    return dataclasses.replace(
+        tr, **rows, stopped=end.reason, early=True, event="", error=end.error
+    )
 
 
 def branches(an: Analysis, mb: Multibody):

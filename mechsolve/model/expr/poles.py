@@ -58,12 +58,38 @@ def first_pole(expr: Any, var: str, x: np.ndarray) -> float | None:
     bound, or None. The samples themselves are not examined (a law that is not finite at
     a sample is found by evaluating it there)."""
     x = np.asarray(x, float)
+    return _first_pole(expr, x, lambda v: {var: v})
+
+
+def first_pole_along(expr: Any, samples: dict[str, np.ndarray]) -> tuple[int, dict] | None:
+    """The first pole of ``expr`` (of several variables) along a path given by its
+    samples (``{variable: values}``, all the same length), followed straight from one
+    sample to the next: ``(k, values)`` with the pole between samples ``k`` and ``k + 1``
+    and every variable's value there, or None. A motion that passes continuously from
+    one sample to the next passes the zero of a denominator that changes sign between
+    them, wherever the motion went in between."""
+    names = list(samples)
+    cols = [np.asarray(samples[n], float) for n in names]
+    idx = np.arange(len(cols[0]), dtype=float)
+
+    def point(v: np.ndarray) -> dict:
+        return {n: np.interp(v, idx, c) for n, c in zip(names, cols)}
+
+    z = _first_pole(expr, idx, point)
+    if z is None:
+        return None
+    return min(int(z), len(idx) - 2), {n: float(a) for n, a in point(np.array(z)).items()}
+
+
+def _first_pole(expr: Any, x: np.ndarray, point: Any) -> float | None:
+    """:func:`first_pole` over the parameter ``x`` of the path ``point(v)`` (the variables'
+    values at the parameter values ``v``)."""
     if x.size < 2:
         return None
 
     def at(tree: Any, v: np.ndarray) -> np.ndarray:
         e = type(expr)._derived(tree, "", expr.variables)
-        return np.broadcast_to(np.asarray(e.evaluate_at({var: v}), float), v.shape)
+        return np.broadcast_to(np.asarray(e.evaluate_at(point(v)), float), v.shape)
 
     def grows(z: float, step: float) -> bool:
         """The law beside ``z`` (at 1e-4 and 1e-8 of the samples' step from it) grows
