@@ -1,0 +1,64 @@
+"""The shared root finders that replaced code written twice, against closed forms."""
+
+import math
+
+import pytest
+
+from mechsolve.base.numerics import illinois_root
+
+WALLIS = 2.0945514815423265  # the real root of x^3 - 2x - 5 (Wallis; Newton's example)
+DOTTIE = 0.7390851332151607  # cos x = x
+
+
+def _counted(f):
+    calls = []
+
+    def g(x):
+        calls.append(x)
+        return f(x)
+
+    return g, calls
+
+
+def test_illinois_root_finds_known_roots_superlinearly():
+    f, calls = _counted(lambda x: x**3 - 2 * x - 5)
+    r = illinois_root(f, 2.0, 3.0, -1.0, 16.0, ftol=1e-14)
+    assert r.finite and r.x is not None
+    assert abs(r.x - WALLIS) <= 1e-14 / 11.0 + 4e-16  # |f'| > 11 near the root
+    # plain regula falsi keeps the end at 3 and converges linearly: 33 evaluations to
+    # |f| <= 1e-14; the Illinois modification halves the kept end's value: 8
+    assert len(calls) <= 9
+    assert all(2.0 < x < 3.0 for x in calls)  # only strictly inside the bracket
+
+
+def test_illinois_root_either_order_and_to_rounding():
+    g = lambda x: math.cos(x) - x  # noqa: E731
+    r = illinois_root(g, 1.0, 0.0, g(1.0), g(0.0), xrel=1e-15)
+    assert r.x == pytest.approx(DOTTIE, abs=2e-15)
+    # without a tolerance, where no float is an exact zero (x^2 = 2), it narrows the
+    # bracket to two neighbouring floats and says it found no point
+    r = illinois_root(lambda x: x * x - 2.0, 0.0, 2.0, -2.0, 2.0, maxiter=200)
+    assert r.x is None and r.finite
+    s2 = math.sqrt(2.0)  # correctly rounded, and above the root: s2^2 > 2
+    assert s2 * s2 > 2.0
+    assert (r.lo, r.hi) == (math.nextafter(s2, 0.0), s2)
+
+
+def test_illinois_root_stops_where_f_is_not_finite_with_the_bracket_so_far():
+    # not defined just beyond the root (a position that does not close): the third
+    # point (0.7415) is there; the bracket narrowed by the first two is kept
+    g = lambda x: (math.cos(x) - x) if x < 0.7391 else math.nan  # noqa: E731
+    r = illinois_root(g, 0.0, 1.0, 1.0, math.cos(1.0) - 1.0)
+    assert not r.finite and r.x is None
+    assert 0.73 < r.lo < DOTTIE < r.hi == 1.0
+    assert r.f_lo == pytest.approx(math.cos(r.lo) - r.lo, rel=1e-15)
+
+
+def test_illinois_root_refuses_a_bracket_without_a_sign_change():
+    with pytest.raises(ValueError, match="different signs"):
+        illinois_root(lambda x: x * x + 1, -1.0, 2.0, 2.0, 5.0)
+    with pytest.raises(ValueError, match="not finite"):
+        illinois_root(lambda x: x, -1.0, 2.0, -1.0, math.inf)
+    # an end where f is zero is the root, found without evaluating f
+    r = illinois_root(lambda x: 1 / 0, 0.5, 2.0, 0.0, 3.0)
+    assert r.x == 0.5
