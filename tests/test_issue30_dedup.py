@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from mechsolve.base.numerics import illinois_root
@@ -62,3 +63,48 @@ def test_illinois_root_refuses_a_bracket_without_a_sign_change():
     # an end where f is zero is the root, found without evaluating f
     r = illinois_root(lambda x: 1 / 0, 0.5, 2.0, 0.0, 3.0)
     assert r.x == 0.5
+
+
+class _Rows:
+    """A simulated motion's rows: times, driver values and the driver's rates."""
+
+    def __init__(self, law, d1, d2, t):
+        self.t = np.asarray(t, float)
+        self.u = law(self.t)
+        self._rates = d1(self.t), d2(self.t)
+
+    def driver_rates(self):
+        return self._rates
+
+
+QUINTIC = (
+    lambda t: t**5 - t**3 + 2 * t,  # the quintic Hermite interpolant is exact for it
+    lambda t: 5 * t**4 - 3 * t**2 + 2,  # > 0: one crossing of each level
+    lambda t: 20 * t**3 - 6 * t,
+)
+
+
+@pytest.mark.parametrize("tau", [0.5, 0.5000001, 0.5731, 0.6 - 1e-9])
+def test_time_at_a_driver_value_of_a_simulated_motion(tau):
+    """The time at which a simulated motion passes a driver value (where a conditional
+    load switches) is found on the rows' quintic interpolant to rounding: the closed
+    time of a quintic motion."""
+    from mechsolve.core.work import _time_at
+
+    rows = _Rows(*QUINTIC, [0.4, 0.5, 0.6, 0.7])
+    got = _time_at(rows, 1, float(QUINTIC[0](tau)))
+    assert got == pytest.approx(tau, abs=4e-16)
+
+
+def test_time_at_a_constant_acceleration_and_a_level_not_passed():
+    from mechsolve.core.work import _time_at
+
+    law = (lambda t: 0.3 + 2 * t + 1.5 * t * t, lambda t: 2 + 3 * t, lambda t: 3 + 0 * t)
+    rows = _Rows(*law, [0.0, 0.1, 0.2])
+    us = 0.7
+    want = (-2 + math.sqrt(4 + 6 * (us - 0.3))) / 3  # 1.5 t^2 + 2 t - 0.4 = 0
+    assert _time_at(rows, 1, us) == pytest.approx(want, abs=1e-16)
+    # a level beyond the rows (the interpolant does not pass it): linear in time
+    u1, u2 = rows.u[1], rows.u[2]
+    beyond = u2 + 0.5 * (u2 - u1)
+    assert _time_at(rows, 1, beyond) == pytest.approx(0.25, abs=1e-15)
