@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from mechsolve.base.numerics import illinois_root
+from mechsolve.base.numerics import bisect_edge, illinois_root
 
 WALLIS = 2.0945514815423265  # the real root of x^3 - 2x - 5 (Wallis; Newton's example)
 DOTTIE = 0.7390851332151607  # cos x = x
@@ -108,3 +108,27 @@ def test_time_at_a_constant_acceleration_and_a_level_not_passed():
     u1, u2 = rows.u[1], rows.u[2]
     beyond = u2 + 0.5 * (u2 - u1)
     assert _time_at(rows, 1, beyond) == pytest.approx(0.25, abs=1e-15)
+
+
+def test_bisect_edge_to_neighbouring_floats_either_order():
+    """The edge of x^2 <= 2 is sqrt(2): the last float that holds and the first that
+    does not, whichever side the holding end is on."""
+    s2 = math.sqrt(2.0)  # correctly rounded, above the edge: s2^2 > 2
+    below = math.nextafter(s2, 0.0)
+    assert below * below <= 2.0 < s2 * s2
+    assert bisect_edge(lambda x: x * x <= 2.0, 0.0, 2.0) == (below, s2)
+    assert bisect_edge(lambda x: x * x > 2.0, 2.0, 0.0) == (s2, below)
+
+
+def test_bisect_edge_stops_at_a_width_and_a_count():
+    calls = []
+
+    def holds(x):
+        calls.append(x)
+        return x < 0.3
+
+    good, bad = bisect_edge(holds, 0.0, 1.0, width=1e-6)
+    assert good < 0.3 <= bad and bad - good < 1e-6
+    assert len(calls) == 20  # 2^-20 < 1e-6 < 2^-19: twenty halvings of the unit interval
+    good, bad = bisect_edge(lambda x: x < 0.3, 0.0, 1.0, maxiter=3)
+    assert (good, bad) == (0.25, 0.375)

@@ -5,11 +5,12 @@ import scipy (half a second of start-up) for them.
 Minimization without Derivatives*, 1973, ch. 4: the ``zeroin`` algorithm), as
 ``scipy.optimize.brentq``; :func:`illinois_root` is the Illinois regula falsi, for a
 function that may fail inside the bracket (a position that does not close), whose
-caller then wants the bracket narrowed so far; :func:`simpson` is the composite Simpson
-rule on samples with uneven spacing, as ``scipy.integrate.simpson`` (with its treatment
-of an odd number of intervals). ``tests/test_numerics.py`` checks brent_root and
-simpson against scipy, ``tests/test_issue30_dedup.py`` illinois_root against closed
-forms.
+caller then wants the bracket narrowed so far; :func:`bisect_edge` is bisection on a
+condition that holds on one side of an edge and not on the other; :func:`simpson` is
+the composite Simpson rule on samples with uneven spacing, as
+``scipy.integrate.simpson`` (with its treatment of an odd number of intervals).
+``tests/test_numerics.py`` checks brent_root and simpson against scipy,
+``tests/test_issue30_dedup.py`` illinois_root and bisect_edge against closed forms.
 """
 
 from __future__ import annotations
@@ -168,6 +169,32 @@ def illinois_root(
                 f_lo *= 0.5
             side = +1
     return Bracket(None, lo, hi, f_lo, f_hi, True)
+
+
+def bisect_edge(
+    holds: Callable[[float], bool],
+    good: float,
+    bad: float,
+    maxiter: int = 200,
+    width: float = 0.0,
+) -> tuple[float, float]:
+    """``(good, bad)`` narrowed by bisection about the edge where ``holds`` stops holding:
+    it holds at ``good`` and not at ``bad`` (either order) and at each step the midpoint
+    replaces the end it agrees with. Stops when the two are closer than ``width``, after
+    ``maxiter`` steps, or when they are neighbouring floats (the midpoint is one of them).
+    For a condition, not a sign: where the edge matters as the last point that holds (a
+    pose that still closes) or the first that does not (a load that has switched)."""
+    for _ in range(maxiter):
+        mid = 0.5 * (good + bad)
+        if mid in (good, bad):
+            break
+        if holds(mid):
+            good = mid
+        else:
+            bad = mid
+        if abs(good - bad) < width:
+            break
+    return good, bad
 
 
 def limit_from_both_sides(lo1, hi1, lo2, hi2):
