@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.base.errors import InputError
+from mechsolve.base.numerics import bisect_edge
 from mechsolve.base.units import OutputUnits, UnitError, parse_quantity
 from mechsolve.core import evaluate as core
 from mechsolve.core.loads import stroke_extremes, stroke_function
@@ -339,14 +340,8 @@ def _first_time(mech: Mechanism, law, u: float, period: float | None) -> tuple[f
         return None
     a, b = t[change[0]], t[change[0] + 1]
     first = sides[0]
-    for _ in range(80):  # bisection to the first time the side changes
-        mid = 0.5 * (a + b)
-        if not a < mid < b:
-            break
-        if side(np.array([mid]))[0] == first:
-            a = mid
-        else:
-            b = mid
+    # bisection to the first time the side changes
+    b = bisect_edge(lambda mid: side(np.array([mid]))[0] == first, a, b, 80)[1]
     after = int(side(np.array([b]))[0])
     # on a level, or past one: the level between the two sides
     k = after // 2 if after % 2 == 0 else max(int(first), after) // 2
@@ -375,15 +370,8 @@ def _settle(law, b: float, sense: float, tol: float) -> float:
     hi = b + 8 * reach
     if sense * float(law.at(np.array([hi]))[1][0]) > 0:
         return b  # still moving on
-    for _ in range(80):  # bisection to the first time the speed vanishes
-        mid = 0.5 * (b + hi)
-        if not b < mid < hi:
-            break
-        if sense * float(law.at(np.array([mid]))[1][0]) > 0:
-            b = mid
-        else:
-            hi = mid
-    return hi
+    # bisection to the first time the speed vanishes
+    return bisect_edge(lambda mid: sense * float(law.at(np.array([mid]))[1][0]) > 0, b, hi, 80)[1]
 
 
 def solve_instants(

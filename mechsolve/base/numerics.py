@@ -1,16 +1,22 @@
-"""Two small numerical routines used on every run, kept here so that a run does not
+"""Small numerical routines used on every run, kept here so that a run does not
 import scipy (half a second of start-up) for them.
 
 :func:`brent_root` is Brent's root bracketing method (R. P. Brent, *Algorithms for
 Minimization without Derivatives*, 1973, ch. 4: the ``zeroin`` algorithm), as
-``scipy.optimize.brentq``; :func:`simpson` is the composite Simpson rule on samples
-with uneven spacing, as ``scipy.integrate.simpson`` (with its treatment of an odd
-number of intervals). ``tests/test_numerics.py`` checks both against scipy.
+``scipy.optimize.brentq``; :func:`illinois_root` is the Illinois regula falsi, for a
+function that may fail inside the bracket (a position that does not close), whose
+caller then wants the bracket narrowed so far; :func:`bisect_edge` is bisection on a
+condition that holds on one side of an edge and not on the other; :func:`simpson` is
+the composite Simpson rule on samples with uneven spacing, as
+``scipy.integrate.simpson`` (with its treatment of an odd number of intervals).
+``tests/test_numerics.py`` checks brent_root and simpson against scipy,
+``tests/test_issue30_dedup.py`` illinois_root and bisect_edge against closed forms.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -90,6 +96,105 @@ def brent_root(
         if not np.isfinite(fb):
             raise ValueError(f"f is not finite at {b!r}")
     raise RuntimeError(f"Brent's method did not converge in {maxiter} iterations")
+
+
+class Bracket(NamedTuple):
+    """What :func:`illinois_root` found: the root ``x`` (None where it was not reached),
+    the last bracket ``lo, hi`` with the values it kept there (``f``, an end kept twice
+    running halved), and whether ``f`` stayed finite."""
+
+    x: float | None
+    lo: float
+    hi: float
+    f_lo: float
+    f_hi: float
+    finite: bool
+
+
+def illinois_root(
+    f: Callable[[float], float],
+    lo: float,
+    hi: float,
+    f_lo: float,
+    f_hi: float,
+    *,
+    ftol: float = 0.0,
+    xrel: float = 0.0,
+    maxiter: int = 60,
+) -> Bracket:
+    """A root of ``f`` between ``lo`` and ``hi`` (either order), where ``f_lo = f(lo)``
+    and ``f_hi = f(hi)`` differ in sign (an end where it is zero is the root): regula
+    falsi with the Illinois modification (the end kept twice running has its value
+    halved), so that it converges
+    superlinearly from both sides (M. Dowell and P. Jarratt, BIT 11, 1971, 168-174).
+
+    It stops at a point ``x`` where ``|f(x)| <= ftol``, or where the bracket that held
+    ``x`` was no wider than ``xrel max(1, |x|)``: ``x`` is the root. It stops without one
+    (``x`` None) when the next point would not lie strictly inside the bracket (it is as
+    narrow as rounding allows), after ``maxiter`` points, or where ``f`` is not finite
+    (``finite`` False: the bracket is the one before that point). ``f`` is evaluated only
+    strictly inside the bracket.
+
+    Raises
+    ------
+    ValueError
+        When ``f_lo`` and ``f_hi`` have the same sign or are not finite.
+    """
+    if f_lo == 0.0 or f_hi == 0.0:
+        return Bracket(lo if f_lo == 0.0 else hi, lo, hi, f_lo, f_hi, True)
+    if not (np.isfinite(f_lo) and np.isfinite(f_hi)):
+        raise ValueError("f is not finite at the ends of the bracket")
+    if (f_lo > 0) == (f_hi > 0):
+        raise ValueError("f(lo) and f(hi) must have different signs")
+    side = 0
+    for _ in range(maxiter):
+        x = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if not (min(lo, hi) < x < max(lo, hi)):
+            x = 0.5 * (lo + hi)
+            if x in (lo, hi):
+                break
+        fx = f(x)
+        if not np.isfinite(fx):
+            return Bracket(None, lo, hi, f_lo, f_hi, False)
+        if abs(fx) <= ftol or abs(hi - lo) <= xrel * max(1.0, abs(x)):
+            return Bracket(x, lo, hi, f_lo, f_hi, True)
+        if (fx < 0) == (f_lo < 0):
+            lo, f_lo = x, fx
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        else:
+            hi, f_hi = x, fx
+            if side == +1:
+                f_lo *= 0.5
+            side = +1
+    return Bracket(None, lo, hi, f_lo, f_hi, True)
+
+
+def bisect_edge(
+    holds: Callable[[float], bool],
+    good: float,
+    bad: float,
+    maxiter: int = 200,
+    width: float = 0.0,
+) -> tuple[float, float]:
+    """``(good, bad)`` narrowed by bisection about the edge where ``holds`` stops holding:
+    it holds at ``good`` and not at ``bad`` (either order) and at each step the midpoint
+    replaces the end it agrees with. Stops when the two are closer than ``width``, after
+    ``maxiter`` steps, or when they are neighbouring floats (the midpoint is one of them).
+    For a condition, not a sign: where the edge matters as the last point that holds (a
+    pose that still closes) or the first that does not (a load that has switched)."""
+    for _ in range(maxiter):
+        mid = 0.5 * (good + bad)
+        if mid in (good, bad):
+            break
+        if holds(mid):
+            good = mid
+        else:
+            bad = mid
+        if abs(good - bad) < width:
+            break
+    return good, bad
 
 
 def limit_from_both_sides(lo1, hi1, lo2, hi2):

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from mechsolve.base.numerics import illinois_root
 from mechsolve.core.sweep import Analysis, Solution
 
 
@@ -42,37 +43,23 @@ def break_points(an: Analysis, sol: Solution) -> list[float]:
 
 def _locate(an: Analysis, sol: Solution, ri: int, k_row: int, k: int) -> float:
     """The driver value between samples k and k+1 where row ``k_row`` of constraint
-    ``ri``'s breaks changes sign, to rounding: regula falsi (Illinois) on positions solved
-    one at a time next to sample k (the distance is smooth in the driver: a few solves)."""
+    ``ri``'s breaks changes sign, to rounding: regula falsi (Illinois,
+    :func:`~mechsolve.base.numerics.illinois_root`) on positions solved one at a time next
+    to sample k (the distance is smooth in the driver: a few solves); where one does not
+    close, the end of the bracket so far nearer the break."""
     c = an.system.rows[ri].constraint
     g0 = c.law_breaks(sol.state)[k_row]
-    lo, hi = float(sol.u[k]), float(sol.u[k + 1])
-    g_lo, g_hi = float(g0[k]), float(g0[k + 1])
-    side = 0
-    for _ in range(_ROUNDS):
-        x = hi - g_hi * (hi - lo) / (g_hi - g_lo)
-        if not (min(lo, hi) < x < max(lo, hi)):
-            x = 0.5 * (lo + hi)
-            if x in (lo, hi):
-                break
+
+    def g(x: float) -> float:
         one = an.solve(np.array([x]), start=sol.start, near=(sol, k), velocity=False,
                        acceleration=False)  # fmt: skip
-        if not one.ok[0]:
-            break
-        gx = float(c.law_breaks(one.state)[k_row, 0])
-        if abs(gx) <= _EXACT:
-            return x
-        if (gx < 0) == (g_lo < 0):
-            lo, g_lo = x, gx
-            if side == -1:
-                g_hi *= 0.5
-            side = -1
-        else:
-            hi, g_hi = x, gx
-            if side == +1:
-                g_lo *= 0.5
-            side = +1
-    return lo if abs(g_lo) < abs(g_hi) else hi
+        return float(c.law_breaks(one.state)[k_row, 0]) if one.ok[0] else math.nan
+
+    lo, hi = float(sol.u[k]), float(sol.u[k + 1])
+    r = illinois_root(g, lo, hi, float(g0[k]), float(g0[k + 1]), ftol=_EXACT, maxiter=_ROUNDS)
+    if r.x is not None:
+        return r.x
+    return r.lo if abs(r.f_lo) < abs(r.f_hi) else r.hi
 
 
 _ROUNDS = 60

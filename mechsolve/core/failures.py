@@ -16,6 +16,7 @@ import numpy as np
 
 from mechsolve.base.errors import AssemblyError, CannotCloseAtStart
 from mechsolve.base.newton import solve as newton_solve
+from mechsolve.base.numerics import bisect_edge
 from mechsolve.base.state import State
 from mechsolve.core.branches import TOUCH, _Context
 from mechsolve.core.solution import Failure, Solution
@@ -196,15 +197,7 @@ class FailureReports:
         a, b = float(ctx.u[good]), float(ctx.u[bad])
         if not (H(a) >= -TOUCH and H(b) < -TOUCH):
             return math.nan
-        for _ in range(200):
-            m = 0.5 * (a + b)
-            if m in (a, b):
-                break
-            if H(m) >= 0.0:
-                a = m
-            else:
-                b = m
-        return a
+        return bisect_edge(lambda m: H(m) >= 0.0, a, b)[0]
 
     def _failures(self, st: State, oks, ok, st_u) -> list[Failure]:
         out: list[Failure] = []

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.base.numerics import EPS, brent_root
 from mechsolve.core.force_result import ForceResult
 from mechsolve.core.loads import _Q, _switch, apply_loads, states_between, stroke_function
 from mechsolve.core.sweep import StateView
@@ -329,7 +330,8 @@ def hermite5(t, u, ud, udd, tau: np.ndarray, ks: np.ndarray):
 def _time_at(sol: Solution, k: int, us: float) -> float:
     """The time between rows ``k`` and ``k + 1`` at which the driver is at ``us``:
     linear in time at a constant speed; on the quintic Hermite interpolant of a
-    simulated motion (bisection), else linear."""
+    simulated motion (Brent's method, :func:`~mechsolve.base.numerics.brent_root`, to
+    rounding), else (the interpolant does not pass ``us`` there) linear."""
     t = np.asarray(sol.t, float)
     u = np.asarray(sol.u, float)
     a, b = float(t[k]), float(t[k + 1])
@@ -342,16 +344,7 @@ def _time_at(sol: Solution, k: int, us: float) -> float:
     def f(tau: float) -> float:
         return float(hermite5(t, u, ud, udd, np.array([tau]), ks)[0][0]) - us
 
-    fa = f(a)
-    if fa * f(b) > 0:
+    try:
+        return brent_root(f, a, b, xtol=EPS * (b - a))
+    except ValueError:  # no change of sign between the rows (or not finite)
         return linear
-    for _ in range(60):
-        m = 0.5 * (a + b)
-        fm = f(m)
-        if fm == 0:
-            return m
-        if (fm > 0) == (fa > 0):
-            a, fa = m, fm
-        else:
-            b = m
-    return 0.5 * (a + b)

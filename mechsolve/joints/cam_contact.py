@@ -72,6 +72,7 @@ from mechsolve.base.cam.curves import (
 )
 from mechsolve.base.errors import suggest
 from mechsolve.base.keyspec import ANGLE, ANY, K, Key, choice, name, names
+from mechsolve.base.numerics import illinois_root
 from mechsolve.base.state import State
 from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader
 
@@ -653,29 +654,11 @@ def _cross(
         return (lo if q_lo == 0.0 else hi), True
     if f is None:
         return lo + (hi - lo) * q_lo / (q_lo - q_hi), False
-    side = 0
-    for _ in range(60):  # regula falsi, Illinois: q is smooth between the samples
-        x = hi - q_hi * (hi - lo) / (q_hi - q_lo)
-        if not (min(lo, hi) < x < max(lo, hi)):
-            x = 0.5 * (lo + hi)
-            if x in (lo, hi):
-                break
-        qx = float(f(np.array([x]), i)[0])
-        if not math.isfinite(qx):
-            return lo + (hi - lo) * q_lo / (q_lo - q_hi), False
-        if qx == 0.0 or abs(hi - lo) <= 1e-13 * max(1.0, abs(x)):
-            return x, True
-        if (qx < 0) == (q_lo < 0):
-            lo, q_lo = x, qx
-            if side == -1:
-                q_hi *= 0.5
-            side = -1
-        else:
-            hi, q_hi = x, qx
-            if side == +1:
-                q_lo *= 0.5
-            side = +1
-    return 0.5 * (lo + hi), True
+    # regula falsi (Illinois): q is smooth between the samples
+    r = illinois_root(lambda x: float(f(np.array([x]), i)[0]), lo, hi, q_lo, q_hi, xrel=1e-13)
+    if not r.finite:  # interpolated in the bracket narrowed so far
+        return r.lo + (r.hi - r.lo) * r.f_lo / (r.f_lo - r.f_hi), False
+    return (r.x, True) if r.x is not None else (0.5 * (r.lo + r.hi), True)
 
 
 def _extreme(

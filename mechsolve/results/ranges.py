@@ -14,6 +14,21 @@ an extreme at the edge of an unassemblable range; a step out of the neighbours'
 interval) the extreme is the sample's, and said to be (``located`` False). A sweep that
 is not a full cycle keeps an extreme at its first or last position as it is: there the
 coordinate's rate need not vanish.
+
+Why not the requirements' locator (:class:`mechsolve.results.requirements._Reducer`,
+which also locates an extreme of a sampled quantity between its neighbouring samples):
+the two were weighed for one locator and kept apart. That one narrows a grid of 65
+positions, solved there, 32 times a round down to 1e-8 of the driver coordinate: it
+needs no rate, so it serves any expression (a reaction, ``abs(..)``, a product), a kink
+or a join, and an extreme that grows without bound at the edge of a range that does not
+close. Here a point's coordinate has its first and second rates from the solved state,
+so Newton's method settles it in two or three steps of one batched solve for all points
+and both senses. The same figures by the grid cost 518 ms against 17 ms for the crane's
+points, 283 against 2 ms for the four-bar's and 203 against 11 ms for the six-bar's
+(one run on a shared 2-core machine; the figures agree to 1e-13 of the mechanism's
+size): the summary would be 20 to 150 times slower. Newton in turn cannot serve a
+requirement: its quantities have no second rate, and are not smooth at their extremes in
+general.
 """
 
 from __future__ import annotations

@@ -280,7 +280,11 @@ class _Reducer:
     through it grows without bound). A sweep that does not close at its ends is located
     on its own samples (for the plots' sweep is then the run's). With a motion law of
     time the extremes are the samples' and say so;
-    ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u."""
+    ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u.
+
+    The points' ranges of the summary are located otherwise, by Newton's method on a
+    coordinate's rates (:mod:`mechsolve.results.ranges`, whose docstring says why the two
+    locators are not one)."""
 
     def __init__(self, results: Results) -> None:
         self.res = results

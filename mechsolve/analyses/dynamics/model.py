@@ -18,7 +18,7 @@ from mechsolve.analyses.dynamics.tables import (
     _Table,
 )
 from mechsolve.base.errors import InputError, SolverError
-from mechsolve.base.numerics import limit_from_both_sides
+from mechsolve.base.numerics import bisect_edge, limit_from_both_sides
 from mechsolve.base.state import State
 from mechsolve.core import evaluate as core
 from mechsolve.core.friction import frictional
@@ -249,15 +249,11 @@ class ReducedModel:
                 switches = []
                 for i in np.flatnonzero(m0 != np.roll(m0, -1)):  # switches in (x_i, x_i+1]
                     lo, hi = float(x[i]), float(x[i + 1]) if i + 1 < n else 2 * math.pi
-                    for _ in range(60):
-                        mid = 0.5 * (lo + hi)
-                        if mid in (lo, hi):
-                            break
-                        now = acts(np.array([mid]), s, 0.0)[k]
-                        if bool(now[0]) == bool(m0[i]):
-                            lo = mid
-                        else:
-                            hi = mid
+
+                    def same(mid, k=k, s=s, was=bool(m0[i])):
+                        return bool(acts(np.array([mid]), s, 0.0)[k][0]) == was
+
+                    hi = bisect_edge(same, lo, hi, 60)[1]
                     switches.append(hi)  # the first angle where the load has switched
                 out[ld.name, s] = (bool(m0[0]), np.array(sorted(switches)))
         return out

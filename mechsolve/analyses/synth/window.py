@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mechsolve.base.errors import InputError
+from mechsolve.base.numerics import bisect_edge
 from mechsolve.model import Mechanism
 
 MEASURES = ("y-range", "straightness")
@@ -117,15 +118,7 @@ class _Path:
 
 def _edge(path: _Path, good: float, bad: float) -> float:
     """Bisection between a driver value where the mechanism closes and one where not."""
-    for _ in range(60):
-        mid = 0.5 * (good + bad)
-        if path.at([mid])[0][0]:
-            good = mid
-        else:
-            bad = mid
-        if abs(good - bad) < 1e-10:
-            break
-    return good
+    return bisect_edge(lambda mid: bool(path.at([mid])[0][0]), good, bad, 60, 1e-10)[0]
 
 
 def closing_range(path: _Path, within: tuple[float, float] | None):
