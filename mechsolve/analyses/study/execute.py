@@ -218,7 +218,10 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     :mod:`mechsolve.analyses.study.family`), the designs are not parsed: the batch stacks the
     file's numbers with the designs' values, and a design the parser would refuse is
     parsed on its own for its message. The rows are the same."""
-    fam = study_family(study, indices)
+    try:
+        fam = study_family(study, indices)
+    except Exception:  # noqa: BLE001 - then every design is parsed, as before the family
+        fam = None
     if fam is not None:
         return _family_chunk(study, fam, indices, results_dir)
     import numpy as np
