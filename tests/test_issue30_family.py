@@ -148,6 +148,16 @@ def test_refused_design_has_the_parsers_message_and_row():
         with pytest.raises(InputError, match="coincide"):
             batch.results(k)
     assert batch.batched[[0, 3]].all()
+    # around the parser's coincidence test (distance <= 1e-9 x the link's largest point,
+    # here P at 60 mm: B within 6e-8 mm of A): the family refuses exactly what it refuses
+    near = [5.9e-8, 6e-8, 6.0000001e-8, 6.1e-8, 2.3e-7, 2.5e-7, 1.0]
+    values = {"links.coupler.points.B[0]": near}
+    fam = design_family(base, values, {"links.coupler.points.B[0]": "mm"})
+    fam.prepare()
+    parsed = _parsed(FOURBAR, values, {"links.coupler.points.B[0]": "mm"})
+    refused = [k for k, m in enumerate(parsed) if isinstance(m, InputError)]
+    assert 0 < len(refused) < len(near)
+    assert sorted(fam.invalid) == refused
     # a value out of the parser's range: refused with its message
     fam = design_family(base, {"ground.O4[0]": [87.5, 1e30, 90.0]})
     fam.prepare()
