@@ -27,6 +27,8 @@ _API = {
     "check": "api",
     "stream": "api",
     "solve_designs": "analyses.batch",
+    "design_family": "analyses.study.family",
+    "solve_family": "analyses.study.family",
     "Mechanism": "model",
     "Link": "model",
     "PinJoint": "model",

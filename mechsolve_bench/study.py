@@ -14,10 +14,16 @@ kinematics and forces). Measured in one run:
   hand-written closed form of what such a study reads (angles, rates, the transmission
   angle: ``fourbar_batch.kinematics_only``);
 
+* the batch from the study's values (:func:`mechsolve.analyses.study.family.solve_family`):
+  the study's file parsed once, each call stacks the designs' numbers from their values,
+  no design parsed or read back. This is how a study solves its designs, so the targets
+  are read on these rows; the rows of parsed designs are kept beside them.
+
 The targets printed: the batch at most 1.5x its closed form with forces, at most 1.2x
 kinematics only. The separate solves' ratio is information only.
 * the study's executor (each design's row: its figures, exact limit positions and
-  work included) in this process, on the local pool with 1 and 2 workers, and on a
+  work included) in this process (and, for comparison, with every design parsed as
+  before the design family), on the local pool with 1 and 2 workers, and on a
   Dask local cluster when dask is installed (its overhead over the pool). The rows of
   every executor are compared: the same table, whichever runs it.
 """
@@ -132,12 +138,32 @@ def _kinematic_errors(batch, kin: dict, n: int) -> dict[str, float]:
     return out
 
 
+def _same(a: list[dict], b: list[dict]) -> bool:
+    """Two studies' rows equal to the last bit (blank figures alike)."""
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        if list(x) != list(y):
+            return False
+        for key, v in x.items():
+            w = y[key]
+            if isinstance(v, float) and isinstance(w, float):
+                if not (math.isnan(v) and math.isnan(w)) and (
+                    np.float64(v).view(np.int64) != np.float64(w).view(np.int64)
+                ):
+                    return False
+            elif v != w:
+                return False
+    return True
+
+
 def case_study(quick: bool = False, designs: int | None = None):
     """Designs per second: the batch, separate solves, the hand-written closed form, and
     the study's executors (see the module's docstring)."""
     import mechsolve as ms
     from mechsolve.analyses.batch import solve_designs
     from mechsolve.analyses.study import execute as ex
+    from mechsolve.analyses.study.family import DesignFamily, solve_family
     from mechsolve_bench import Case, Row
     from mechsolve_bench.fourbar_batch import kinematics, kinematics_only, kinetostatics
 
@@ -165,23 +191,54 @@ def case_study(quick: bool = False, designs: int | None = None):
     def batch_kin():
         return solve_designs(mechs, forces=False, acceleration=False)
 
+    # the design family: the study's file parsed once (as a study's process does), each
+    # call stacks the designs' numbers from the values (no design parsed or read)
+    base = DesignFamily(study.source, study.params, vals[:0]).base
+    table = np.array([study.values(k) for k in range(nb_)])
+
+    def family():
+        return DesignFamily(study.source, study.params, table, base=base)
+
+    def fam_forces():
+        return solve_family(family())
+
+    def fam_kin():
+        return solve_family(family(), forces=False, acceleration=False)
+
     # one call first: imports, and the allocator's first large arrays (a process's first
     # batch costs up to twice as much: the memory's pages are mapped as it goes)
     solve_designs(mechs)
     batch_kin()
-    # interleaved, so that all four see the same moments of a shared machine
-    t_cfs, t_bs, t_cks, t_bks = [], [], [], []
+    fam_forces()
+    fam_kin()
+    # interleaved in a shuffled order, so that all six see the same moments of a shared
+    # machine and none always follows the same one (what the one before freed decides
+    # whether a call's arrays fault their pages in anew)
+    times: dict[str, list[float]] = {}
+    got: dict[str, object] = {}
+    calls = {
+        "closed": closed,
+        "batch": lambda: solve_designs(mechs),
+        "closed_kin": closed_kin,
+        "batch_kin": batch_kin,
+        "fam": fam_forces,
+        "fam_kin": fam_kin,
+    }
+    order = list(calls)
+    rng = np.random.default_rng(0)
     for _ in range(reps):
-        t, (kin, frc) = _median(closed, 1)
-        t_cfs.append(t)
-        t, batch = _median(lambda: solve_designs(mechs), 1)
-        t_bs.append(t)
-        t, kin_only = _median(closed_kin, 1)
-        t_cks.append(t)
-        t, batch_k = _median(batch_kin, 1)
-        t_bks.append(t)
+        rng.shuffle(order)
+        for name in order:
+            t, got[name] = _median(calls[name], 1)
+            times.setdefault(name, []).append(t)
+    t_cfs, t_bs, t_cks = times["closed"], times["batch"], times["closed_kin"]
+    t_bks, t_fs, t_fks = times["batch_kin"], times["fam"], times["fam_kin"]
+    kin, frc = got["closed"]
+    batch, kin_only, batch_k = got["batch"], got["closed_kin"], got["batch_kin"]
+    fam_b, fam_k = got["fam"], got["fam_kin"]
     t_cf, t_b = statistics.median(t_cfs), statistics.median(t_bs)
     t_ck, t_bk = statistics.median(t_cks), statistics.median(t_bks)
+    t_f, t_fk = statistics.median(t_fs), statistics.median(t_fks)
     t_sep, _ = _median(lambda: [ms.solve(m) for m in mechs], 1)
     case.rows.append(
         Row(
@@ -218,6 +275,24 @@ def case_study(quick: bool = False, designs: int | None = None):
         )
     )
     case.rows.append(
+        Row(
+            "mechsolve batch from the study's values (no parsed designs), with forces",
+            t_f,
+            _force_errors(fam_b, kin, frc, nb_),
+            f"{nb_ / t_f:.0f} designs/s; {int(fam_b.batched.sum())} of {nb_} in the batch; "
+            "what a study solves (solve_family); errors against the closed form",
+        )
+    )
+    case.rows.append(
+        Row(
+            "mechsolve batch from the study's values (no parsed designs), kinematics only",
+            t_fk,
+            _kinematic_errors(fam_k, kin_only, nb_),
+            f"{nb_ / t_fk:.0f} designs/s; {int(fam_k.batched.sum())} of {nb_} in the "
+            "batch; errors against the closed form",
+        )
+    )
+    case.rows.append(
         Row("mechsolve.solve once per design", t_sep, {}, f"{nb_ / t_sep:.0f} designs/s")
     )
     lines = [
@@ -225,6 +300,12 @@ def case_study(quick: bool = False, designs: int | None = None):
         f"{'met' if t_b <= 1.5 * t_cf else 'NOT met'})",
         f"ratio batch / closed form, kinematics only: {t_bk / t_ck:.2f} (target: at most "
         f"1.2: {'met' if t_bk <= 1.2 * t_ck else 'NOT met'})",
+        f"ratio batch from the study's values / closed form, with forces: {t_f / t_cf:.2f} "
+        f"(target 3, read on this row: a study solves its designs so; at most 1.5: "
+        f"{'met' if t_f <= 1.5 * t_cf else 'NOT met'})",
+        f"ratio batch from the study's values / closed form, kinematics only: "
+        f"{t_fk / t_ck:.2f} (target 3, read on this row: at most 1.2: "
+        f"{'met' if t_fk <= 1.2 * t_ck else 'NOT met'})",
         f"separate solves / batch: {t_sep / t_b:.1f}; separate solves / closed form: "
         f"{t_sep / t_cf:.1f} (information only: {1e3 * t_sep / nb_:.2f} ms a design)",
     ]
@@ -245,6 +326,23 @@ def case_study(quick: bool = False, designs: int | None = None):
     t_p2, rows_p2 = _median(lambda: ex.execute(study, jobs=2).rows, 1)
     case.rows.append(
         Row("the same study on a pool of 2 processes", t_p2, {}, f"{n / t_p2:.1f} designs/s")
+    )
+    ex.FAMILY = False  # every design parsed and read back: the study before the family
+    try:
+        t_old, rows_old = _median(lambda: ex.execute(study, jobs=1).rows, 1)
+    finally:
+        ex.FAMILY = True
+    case.rows.append(
+        Row(
+            "the same study, every design parsed (before the design family)",
+            t_old,
+            {},
+            f"{n / t_old:.1f} designs/s",
+        )
+    )
+    lines.append(
+        f"study in this process: {n / t_old:.1f} -> {n / t_one:.1f} designs/s with the design "
+        f"family ({t_old / t_one:.2f}x); same rows: {'yes' if _same(rows_old, rows_one) else 'NO'}"
     )
     same = [r["status"] for r in rows_p2] == [r["status"] for r in rows_one]
     lines.append(

@@ -168,13 +168,18 @@ def test_a_kinematics_study_reads_no_accelerations_and_its_figures_are_right(mon
     import mechsolve.analyses.study.execute as ex
 
     asked = []
-    real = ex.solve_designs
+    real, real_family = ex.solve_designs, ex.solve_family
 
     def spy(mechs, **kw):
         asked.append(kw.get("acceleration"))
         return real(mechs, **kw)
 
+    def spy_family(fam, **kw):  # a study's designs as a design family
+        asked.append(kw.get("acceleration"))
+        return real_family(fam, **kw)
+
     monkeypatch.setattr(ex, "solve_designs", spy)
+    monkeypatch.setattr(ex, "solve_family", spy_family)
     study = _study(KIN_FOURBAR, step="1 deg")
     rows = execute(study, jobs=1, chunk=len(study)).rows  # one batch
     assert asked and all(a is False for a in asked)

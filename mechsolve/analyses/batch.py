@@ -55,7 +55,7 @@ from mechsolve.results.results import Results
 from mechsolve.results.run import solve as solve_sweep
 from mechsolve.system.constraints import ConstraintSystem
 
-__all__ = ["DesignBatch", "solve_designs"]
+__all__ = ["DesignBatch", "number_index", "solve_designs"]
 
 NEAR = math.sin(math.radians(5.0))  # indicators below this: the design's own sweep
 
@@ -87,7 +87,7 @@ class DesignBatch:
         For each design solved on its own: why the batch did not take it.
     """
 
-    mechanisms: list[Mechanism]
+    mechanisms: Sequence[Mechanism]
     u: np.ndarray
     batched: np.ndarray
     why: dict[int, str] = field(default_factory=dict)
@@ -257,6 +257,32 @@ def _split(m: Mechanism) -> tuple[tuple, list[float]]:
         tuple([c.text for c in m.assembly.conditions]),
     )
     return structure, nums  # numbers: np.array(..., float) makes them floats
+
+
+def number_index(m: Mechanism) -> dict[tuple, int]:
+    """Where each number of a design's geometry and masses sits among the stacked
+    numbers (:func:`_split`'s order): ``("ground", P, i)``, ``("point", LINK, P, i)``,
+    ``("mass", LINK)``, ``("inertia", LINK)``, ``("com", LINK, i)``. The numbers after
+    them (joints' geometry, loads) are not named."""
+    out: dict[tuple, int] = {}
+    n = 0
+    for p in m.ground:
+        out["ground", p, 0], out["ground", p, 1] = n, n + 1
+        n += 2
+    for lk in m.links:
+        for p in lk.points:
+            out["point", lk.name, p, 0], out["point", lk.name, p, 1] = n, n + 1
+            n += 2
+        if lk.mass is not None:
+            out["mass", lk.name] = n
+            n += 1
+        if lk.inertia is not None:
+            out["inertia", lk.name] = n
+            n += 1
+        if lk.com is not None:
+            out["com", lk.name, 0], out["com", lk.name, 1] = n, n + 1
+            n += 2
+    return out
 
 
 def _numbers(m: Mechanism) -> list[float]:
@@ -532,30 +558,61 @@ def solve_designs(
     out = DesignBatch(mechs, np.zeros(0), np.zeros(nd, bool), _auto_forces=forces is None)
     if not nd:
         return out
-    ref = mechs[0]
     # by default, forces where any design needs them; results(k) gives them to the designs
     # that do, as mechsolve.solve would
     want_forces = any(m.needs_forces for m in mechs) if forces is None else forces
+    return solve_stacked(out, None, {}, want_forces, step, method, forces, acceleration)
+
+
+def solve_stacked(
+    out: DesignBatch,
+    rows: dict[int, Sequence[float]] | np.ndarray | None,
+    alone: dict[int, str],
+    want_forces: bool,
+    step: float | None,
+    method: str | None,
+    forces: bool | None,
+    acceleration: bool | None,
+) -> DesignBatch:
+    """Solve the designs of ``out`` (its ``mechanisms``, a sequence that builds a design
+    when asked for it) into ``out``. ``rows``: every design's stacked numbers
+    (:func:`_split`'s order), by design or as an array (designs, numbers) whose row ``k``
+    is design ``k``'s, given by a caller that knows every design has the first one's
+    structure (:mod:`mechsolve.analyses.study.family`); None reads them from the designs.
+    ``alone``: designs the caller already knows go on their own (with the reason); the
+    first design not among them is the batch's reference."""
+    mechs = out.mechanisms
+    nd = len(mechs)
+    first = next((k for k in range(nd) if k not in alone), None)
+    if first is None:
+        _solve_alone(out, alone, step, method, acceleration, forces)
+        return out
+    ref = mechs[first]
     want_acc = bool(
         want_forces or (ref.outputs.acceleration if acceleration is None else acceleration)
     )
-    alone: dict[int, str] = {}
     try:
         an0 = Analysis(ref, method)
         why = _not_batchable(ref, an0, method)
     except MechsolveError as exc:
         an0, why = None, str(exc)
     if why is not None:
-        alone = dict.fromkeys(range(nd), why)
-        rows = {}
-    else:
-        rows = _stackable(mechs, alone)
+        alone.update((k, why) for k in range(nd) if k not in alone)
+    elif rows is None:
+        todo = [k for k in range(nd) if k not in alone]
+        alone_sub: dict[int, str] = {}
+        got = _stackable([mechs[k] for k in todo], alone_sub)
+        alone.update((todo[j], r) for j, r in alone_sub.items())
+        rows = {todo[j]: v for j, v in got.items()}
     inside = [k for k in range(nd) if k not in alone]
     if inside:
         u0 = an0.start_value()
         u, t = an0.sweep_values(u0, step=step)
         out.u = u
-        X = np.array([rows[k] for k in inside], dtype=float)
+        if isinstance(rows, np.ndarray):
+            X = rows if len(inside) == nd else rows[inside]
+        else:
+            X = np.array([rows[k] for k in inside], dtype=float)
         program = not want_forces and plan_program(an0.plan, an0.system.nb)
         per = max(1, (PROGRAM_COLUMNS if program else CHUNK_COLUMNS) // max(len(u), 1))
         for i in range(0, len(inside), per):
@@ -565,15 +622,17 @@ def solve_designs(
             out._where.pop(k, None)
     _solve_alone(out, alone, step, method, None if want_forces else acceleration, forces)
     if out.u.size == 0 and out._separate:
-        first = next(iter(out._separate.values()))
-        if not isinstance(first, BaseException):
-            out.u = first.u
+        first_res = next(iter(out._separate.values()))
+        if not isinstance(first_res, BaseException):
+            out.u = first_res.u
     return out
 
 
 def _solve_alone(out: DesignBatch, alone: dict, step, method, acceleration, forces) -> None:
     """The designs the batch did not take, each solved on its own (its error kept)."""
     for k, reason in alone.items():
+        if k in out._separate:  # (given by the caller: an invalid design's error)
+            continue
         out.why[k] = reason
         try:
             out._separate[k] = solve_sweep(

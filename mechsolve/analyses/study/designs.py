@@ -82,6 +82,13 @@ class Study:
     variant: str | None = None
     units: OutputUnits | None = None  # the units of the table and the designs' CSVs
 
+    def __getstate__(self) -> dict:
+        # without the design family cached by a process (analyses.study.execute): each
+        # process that solves designs parses the file once for itself
+        state = dict(self.__dict__)
+        state.pop("_family", None)
+        return state
+
     @property
     def file(self) -> str:
         return self.source.file or "mechanism"

@@ -22,12 +22,16 @@ from typing import Any
 
 from mechsolve.analyses.batch import solve_designs
 from mechsolve.analyses.study.designs import Study
+from mechsolve.analyses.study.family import DesignFamily, solve_family
 from mechsolve.analyses.study.figures import Row, design_row
 from mechsolve.base.atomic import WriteFailed
 from mechsolve.base.errors import AssemblyError, InputError, MechsolveError
 from mechsolve.results.requirements import check_requirements, evaluate_figure
 from mechsolve.results.run import solve as solve_sweep
 
+# solve a study's designs as a design family where its parameters allow (False: parse
+# every design, as before it; the benchmark's comparison)
+FAMILY = True
 SCHEDULER_TIMEOUT = 3.0  # seconds: a Dask scheduler that does not answer by then is reported
 
 
@@ -208,7 +212,18 @@ def _rows_acceleration(study: Study, mech, results_dir: str | None) -> bool | No
 def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None) -> list[Row]:
     """The rows of designs ``indices``, as :func:`solve_design` gives them; the valid
     designs are solved as one batch (:func:`mechsolve.analyses.batch.solve_designs`, the same
-    results as separate solves), then each row's figures come from its own results."""
+    results as separate solves), then each row's figures come from its own results.
+
+    When the study's parameters are numbers the analysis reads as they are (see
+    :mod:`mechsolve.analyses.study.family`), the designs are not parsed: the batch stacks the
+    file's numbers with the designs' values, and a design the parser would refuse is
+    parsed on its own for its message. The rows are the same."""
+    try:
+        fam = study_family(study, indices)
+    except Exception:  # noqa: BLE001 - then every design is parsed, as before the family
+        fam = None
+    if fam is not None:
+        return _family_chunk(study, fam, indices, results_dir)
     import numpy as np
 
     heads: dict[int, Row] = {}
@@ -238,6 +253,69 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
         if k not in mechs:  # invalid: its row says why
             return heads[k]
         return _fill(study, heads[k], mechs[k], lambda: batch.results(slot[k]), results_dir)
+
+    return _in_order(indices, one)
+
+
+def study_family(study: Study, indices: list[int]) -> DesignFamily | None:
+    """The designs ``indices`` of ``study`` as a design family, or None when its
+    parameters need each design parsed (:attr:`DesignFamily.why_not`). The file is
+    parsed once per study and process."""
+    if not FAMILY:
+        return None
+    cache = study.__dict__.get("_family")
+    if cache is None:
+        import numpy as np
+
+        whole = DesignFamily(study.source, study.params, np.zeros((0, len(study.params))))
+        whole.prepare()
+        cache = study.__dict__["_family"] = whole
+    if cache.why_not is not None:
+        return None
+    import numpy as np
+
+    n = len(study.params)
+    table = np.zeros((len(indices), n))
+    given = np.zeros((len(indices), n), bool)
+    for j, k in enumerate(indices):
+        for i, x in study.designs[k].items():
+            table[j, i] = x
+            given[j, i] = True
+    return cache.with_values(table, None if given.all() else given)
+
+
+def _family_chunk(
+    study: Study, fam: DesignFamily, indices: list[int], results_dir: str | None
+) -> list[Row]:
+    """:func:`solve_chunk` on a design family: the same rows, no design parsed but those
+    the parser might refuse."""
+    import numpy as np
+
+    fam.prepare()
+    heads = {k: _head(study, k) for k in indices}
+    for j, exc in fam.invalid.items():
+        heads[indices[j]]["status"] = f"invalid: {exc}"
+    valid = [j for j in range(len(indices)) if j not in fam.invalid]
+    if len(valid) < 2:
+        return _in_order(indices, lambda k: solve_design(study, k, results_dir))
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            batch = solve_family(
+                fam,
+                step=study.step,
+                method=study.method,
+                acceleration=_rows_acceleration(study, fam.mechanism(valid[0]), results_dir),
+            )
+    except Exception:  # noqa: BLE001 - then each design is solved on its own, as always
+        return _in_order(indices, lambda k: solve_design(study, k, results_dir))
+    slot = {k: j for j, k in enumerate(indices)}
+
+    def one(k: int) -> Row:
+        j = slot[k]
+        if j in fam.invalid:  # its row says why
+            return heads[k]
+        return _fill(study, heads[k], fam.mechanism(j), lambda: batch.results(j), results_dir)
 
     return _in_order(indices, one)
 
@@ -631,5 +709,6 @@ __all__ = [
     "solve_chunk",
     "solve_design",
     "status_of",
+    "study_family",
     "time_first_chunk",
 ]
