@@ -22,18 +22,18 @@ ROOT = Path(__file__).resolve().parent.parent
 FOURBAR = ROOT / "mechanisms" / "fourbar.yaml"
 COMMANDS_DIR = ROOT / "mechsolve" / "cli" / "commands"
 
-# run as `python -m mechsolve ...` does, then list what the process imported
+# run as `python -m mechsolve ...` does, then list what the process imported (from an
+# atexit handler: the program ends through it as usual when one is registered)
 _PROBE = """
-import json, runpy, sys
+import atexit, json, runpy, sys
+def report():
+    sys.stdout.flush()
+    print(json.dumps(sorted(sys.modules)))
+atexit.register(report)
 sys.argv = ["mechsolve"] + {args!r}
-code = 0
-try:
-    runpy.run_module("mechsolve", run_name="__main__")
-except SystemExit as exc:
-    code = exc.code
-sys.stdout.flush()
-print(json.dumps([code, sorted(sys.modules)]))
+runpy.run_module("mechsolve", run_name="__main__")
 """
+
 
 # packages a run without plots never needs (each costs 10 ms to 0.5 s to import)
 NOT_NEEDED = (
@@ -57,10 +57,9 @@ def _modules_after(args: list[str]) -> tuple[int, set[str]]:
         capture_output=True,
         text=True,
         cwd=ROOT,
-        check=True,
     )
-    code, mods = json.loads(out.stdout.strip().splitlines()[-1])
-    return code, set(mods)
+    mods = json.loads(out.stdout.strip().splitlines()[-1])
+    return out.returncode, set(mods)
 
 
 def _loaded(mods: set[str], package: str) -> list[str]:
@@ -145,3 +144,86 @@ def test_help_imports_no_numpy():
         sorted(m.rsplit(".", 1)[1] for m in mods if m.startswith("mechsolve.cli.commands."))
         == _command_modules()
     )
+
+
+# -- the end of the process ---------------------------------------------------------
+# `mechsolve` (the console script and `python -m mechsolve`) ends with os._exit once its
+# output is flushed, skipping the interpreter's teardown, unless an atexit handler or
+# another thread still has work to do.
+
+_ENTRY = """
+import sys
+{setup}
+sys.argv = ["mechsolve"] + {args!r}
+from mechsolve.cli.main import entry
+entry()
+"""
+
+
+def _entry(args: list[str], setup: str = "") -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-c", _ENTRY.format(setup=setup, args=args)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+
+
+def test_console_script_is_the_entry():
+    import tomllib
+
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    assert scripts["mechsolve"] == "mechsolve.cli.main:entry"
+    assert "entry()" in (ROOT / "mechsolve" / "__main__.py").read_text()
+
+
+def test_entry_skips_the_teardown_but_keeps_the_output(tmp_path):
+    """An object freed only by the interpreter's teardown is never finalised (the
+    teardown is skipped), while the summary printed before it reaches the pipe whole and
+    the CSV is complete: a header and one row per position of the 2-degree sweep."""
+    setup = (
+        "class Late:\n"
+        "    def __del__(self):\n"
+        "        print('torn down', flush=True)\n"
+        "keep = Late()\n"
+    )
+    p = _entry(["run", str(FOURBAR), "--no-plots", "-o", str(tmp_path)], setup)
+    assert p.returncode == 0, p.stderr
+    assert "torn down" not in p.stdout
+    lines = p.stdout.splitlines()
+    assert lines[0].startswith("four-bar crank-rocker: 181 of 181 positions solved")
+    assert lines[-1].strip() == f"wrote 1 file(s) to {tmp_path}/: results.csv"
+    rows = (tmp_path / "results.csv").read_text().splitlines()
+    assert len(rows) == 1 + 360 // 2 + 1
+
+
+def test_entry_runs_atexit_handlers_and_keeps_the_exit_code(tmp_path):
+    """With an atexit handler registered (coverage, a pool, Dask), Python ends as usual:
+    the handler runs, and the teardown too; the exit code is the command's."""
+    setup = (
+        "import atexit\n"
+        "atexit.register(lambda: print('handler ran', flush=True))\n"
+        "class Late:\n"
+        "    def __del__(self):\n"
+        "        print('torn down', flush=True)\n"
+        "keep = Late()\n"
+    )
+    p = _entry(["run", str(tmp_path / "missing.yaml"), "-o", str(tmp_path / "o")], setup)
+    assert p.returncode == 2
+    assert "no such file" in p.stderr
+    assert "handler ran" in p.stdout and "torn down" in p.stdout
+
+
+def test_entry_keeps_every_exit_code(tmp_path):
+    """0 done, 2 bad input, 5 a requirement failed (the study's four-bar asks for more
+    than it gives: its requirements' own verdicts), and a large output piped whole."""
+    study = ROOT / "mechanisms" / "studies" / "fourbar-study.yaml"
+    p = _entry(["run", str(study), "--no-plots", "-o", str(tmp_path / "s")])
+    assert p.returncode == 5, p.stderr
+    assert "FAIL" in p.stdout
+    assert _entry(["run", "--step", "bogus", str(FOURBAR), "-o", str(tmp_path)]).returncode == 2
+    import json
+
+    p = _entry(["schema"])
+    assert p.returncode == 0
+    assert json.loads(p.stdout)["type"] == "object"
