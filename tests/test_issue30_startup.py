@@ -46,6 +46,7 @@ NOT_NEEDED = (
     "tqdm",
     "numpy.ma",
     "importlib.metadata",
+    "traceback",  # only to print a bug's traceback (MECHSOLVE_DEBUG)
 )
 
 

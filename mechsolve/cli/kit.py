@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
-import traceback
 import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -127,6 +126,8 @@ def fail(exc: BaseException, outdir: Path | None = None) -> NoReturn:
         click.echo(f"error: {where}{exc.strerror or exc}", err=True)
         sys.exit(EXIT_INPUT)
     if os.environ.get("MECHSOLVE_DEBUG"):
+        import traceback  # only for a bug's report: not imported by every start
+
         traceback.print_exc()
     else:
         click.echo(
