@@ -1,3 +1,3 @@
-from mechsolve.cli.main import main
+from mechsolve.cli.main import entry
 
-main()
+entry()

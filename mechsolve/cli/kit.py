@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
-import traceback
 import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -127,6 +126,8 @@ def fail(exc: BaseException, outdir: Path | None = None) -> NoReturn:
         click.echo(f"error: {where}{exc.strerror or exc}", err=True)
         sys.exit(EXIT_INPUT)
     if os.environ.get("MECHSOLVE_DEBUG"):
+        import traceback  # only for a bug's report: not imported by every start
+
         traceback.print_exc()
     else:
         click.echo(
@@ -304,6 +305,34 @@ def watch(file: Path, job: Any, outdir: Path | None = None) -> NoReturn:
     sys.exit(EXIT_OK)
 
 
+def end_process(code: object) -> NoReturn:
+    """End the process with exit code ``code`` once a command has returned (see
+    :func:`mechsolve.cli.main.entry`): at once with :func:`os._exit` after flushing
+    standard output and error, unless an ``atexit`` handler or another thread still has
+    work to do, or the code is not a number; then by :func:`sys.exit`, as Python
+    ends."""
+    if code is None:
+        code = 0
+    if not isinstance(code, int) or not _nothing_left_at_exit():
+        sys.exit(code)
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (OSError, ValueError, AttributeError):  # a closed or broken stream, or none:
+        sys.exit(code)  # Python's own exit deals with it, as before
+    os._exit(code)
+
+
+def _nothing_left_at_exit() -> bool:
+    """No ``atexit`` handler registered and no other Python thread alive (CPython's
+    ``atexit._ncallbacks``; elsewhere, assume there is)."""
+    import atexit
+    import threading
+
+    count = getattr(atexit, "_ncallbacks", None)
+    return count is not None and count() == 0 and threading.active_count() == 1
+
+
 def _guarded(invoke: Any, ctx: click.Context) -> Any:
     """``invoke(ctx)`` under the rules every command shares, in one place, and the one
     mapping of errors to exit codes (:func:`fail`), so that no command catches errors
@@ -407,6 +436,7 @@ __all__ = [
     "Command",
     "Group",
     "broken_pipe",
+    "end_process",
     "fail",
     "finish",
     "interrupt_on_sigterm",

@@ -201,12 +201,12 @@ def _run_job(
 
 def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
     """Check the file's requirements on the run (and write the JUnit report)."""
-    from mechsolve.results.requirements import check_requirements, junit_xml
-
     if not mech.requirements:
         if junit is not None:
             raise InputError(f"--junit {junit}: the file has no 'requirements' section")
         return []
+    from mechsolve.results.requirements import check_requirements, junit_xml
+
     if streamed:
         raise InputError(
             "the requirements are checked on a run held in memory; this sweep is long "
