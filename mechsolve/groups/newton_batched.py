@@ -413,34 +413,35 @@ class BatchedSweep:
 
     def _refine2(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo: np.ndarray):
         """:meth:`_refine_angles`'s iterations for two angles (the four-bar's loop), on
-        each angle's own 1-D array: the same residual, step (by the adjugate), tests and
-        updates, without the (N, 2) products and reductions, which cost more than the
-        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place. Returns the
-        angles' cosines and sines, turned with every step taken (the state's: see
-        :meth:`_put_angles`), as ``([cos x0, cos x1], [sin x0, sin x1])``; False when a
-        position does not converge."""
+        a (2, N) array of the angles (each angle's row contiguous): the same residual,
+        step (by the adjugate), tests and updates, without the (N, 2) products and
+        reductions, which cost more than the arithmetic; the steps and the turned
+        cosines and sines of both angles in one pass. Updates ``th`` (N, 2), ``iters``
+        and ``todo`` in place. Returns the angles' cosines and sines, turned with every
+        step taken (the state's: see :meth:`_put_angles`), as ``([cos x0, cos x1],
+        [sin x0, sin x1])``; False when a position does not converge."""
         n = th.shape[0]
         rows = self.red.sub._rows
         nd = self.red.sub.nd
-        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
+        X = np.ascontiguousarray(th.T)  # (2, N): the angles, a row each
         K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
-        cs = None  # cos and sin of x0 and x1 everywhere, turned with their small steps
+        C = S = None  # cos and sin of X everywhere, turned with their small steps
         for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
             if 2 * count >= n:  # most positions still iterate: whole arrays, masked
-                idx, t0, t1, k0, k1, lastk = None, x0, x1, K0, K1, last
-                if cs is None:
-                    cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
-                csk = cs
+                idx, t, k0, k1, lastk = None, X, K0, K1, last
+                if C is None:
+                    C, S = np.cos(X), np.sin(X)
+                c, s = C, S
             else:
                 idx = np.flatnonzero(todo)
-                t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
-                csk = None if cs is None else [a[idx] for a in cs]
-            r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1, csk)
+                t, k0, k1, lastk = X[:, idx], K0[idx], K1[idx], last[idx]
+                c, s = (None, None) if C is None else (C[:, idx], S[:, idx])
+            r, dq, step = _newton_step2(rows, nd, t, k0, k1, c, s)
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken;
             # or when this step leaves an error predicted below tol (_converges_next)
@@ -450,33 +451,30 @@ class BatchedSweep:
             take = ~done | small | pred
             if idx is None:
                 take &= todo
-                D0, D1 = np.where(take, dq0, 0.0), np.where(take, dq1, 0.0)
-                x0 += D0
-                x1 += D1
+                skip = ~take
+                dq[0, skip] = 0.0
+                dq[1, skip] = 0.0
+                X += dq
                 iters += todo
-                last = np.where(todo, step, last)
+                np.copyto(last, step, where=todo)
                 todo &= ~done
-                _rotate(cs[0], cs[1], D0, x0)  # (after the last iteration too: the
-                _rotate(cs[2], cs[3], D1, x1)  # state's cosines and sines)
+                _rotate(C, S, dq, X)  # (after the last iteration too: the state's)
             else:
-                it, D0, D1 = idx[take], dq0[take], dq1[take]
-                x0[it] += D0
-                x1[it] += D1
+                it, D = idx[take], dq[:, take]
+                X[:, it] += D
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-                if cs is not None:
-                    c = [a[take] for a in csk]
-                    _rotate(c[0], c[1], D0, x0[it])
-                    _rotate(c[2], c[3], D1, x1[it])
-                    for a, b in zip(cs, c):
-                        a[it] = b
-        th[:, 0], th[:, 1] = x0, x1
-        if todo.any() or not (np.isfinite(x0).all() and np.isfinite(x1).all()):
+                if C is not None:
+                    c, s = c[:, take], s[:, take]
+                    _rotate(c, s, D, X[:, it])
+                    C[:, it], S[:, it] = c, s
+        th[:] = X.T
+        if todo.any() or not np.isfinite(X).all():
             return False
-        if cs is None:  # (no iteration on whole arrays)
-            cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
-        return [cs[0], cs[2]], [cs[1], cs[3]]
+        if C is None:  # (no iteration on whole arrays)
+            C, S = np.cos(X), np.sin(X)
+        return [C[0], C[1]], [S[0], S[1]]
 
     def _refine_elim(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
         """:meth:`_refine_angles`'s iterations for a group eliminated to 2 x 2 (the
@@ -687,60 +685,82 @@ def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None
     S *= cd
     S += C * sd
     C[...] = c
-    big = ~(np.abs(D) < 1e-3)
-    if big.any():
+    if not np.abs(D).max(initial=0.0) < 1e-3:  # (NaN too)
+        big = ~(np.abs(D) < 1e-3)
         C[big] = np.cos(th[big])
         S[big] = np.sin(th[big])
 
 
-def _newton_step2(rows, nd, t0, t1, k0, k1, cs=None):
-    """One Newton step of the two-angle loop at the angles ``t0``, ``t1`` (1-D arrays):
-    the residual's size, the step (by the adjugate of the 2 x 2 Jacobian) and its size
-    (NaN where the Jacobian is exactly singular). ``rows``: the loop's coefficients
-    ((a, b), (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the
-    constant terms; ``cs``: the angles' cosines and sines when known. In-place
-    arithmetic: no (N, 2) products or reductions."""
+def _jac2(m2: float, C: np.ndarray, m1: float, S: np.ndarray) -> np.ndarray:
+    """``m2 C - m1 S``, a zero coefficient's product left out (a zero product changes
+    no bit of the difference but a zero's sign)."""
+    if m2 and m1:
+        j = m2 * C
+        j -= m1 * S
+        return j
+    if m2:
+        return m2 * C
+    if m1:
+        return S * -m1
+    return np.zeros_like(C)
+
+
+def _sum_terms(k: np.ndarray, terms) -> np.ndarray:
+    """``k + m v + ...`` over the ``(m, v)`` of ``terms`` in their order, the zero
+    coefficients' products left out (adding a zero changes no bit but a zero's
+    sign)."""
+    f = None
+    for m, v in terms:
+        if m:
+            t = m * v
+            if f is None:
+                f = k + t
+            else:
+                f += t
+    return k.copy() if f is None else f
+
+
+def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
+    """One Newton step of the two-angle loop at the angles ``t`` (2, N): the residual's
+    size, the step (2, N) (by the adjugate of the 2 x 2 Jacobian) and its size (NaN
+    where the Jacobian is exactly singular). ``rows``: the loop's coefficients ((a, b),
+    (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the constant
+    terms; ``C``, ``S`` (2, N): the angles' cosines and sines when known. In-place
+    arithmetic on the rows, the products of zero coefficients left out (a four-bar's
+    loop has four): no (N, 2) products or reductions."""
     ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
-    cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
-    C0, S0, C1, S1 = (cos(t0), sin(t0), cos(t1), sin(t1)) if cs is None else cs
-    f0 = k0 + a1 * C0
-    f0 += a2 * S0
-    f0 += b1 * C1
-    f0 += b2 * S1
-    f1 = k1 + c1 * C0
-    f1 += c2 * S0
-    f1 += d1 * C1
-    f1 += d2 * S1
-    ja = a2 * C0
-    ja -= a1 * S0
-    jb = b2 * C1
-    jb -= b1 * S1
-    jc = c2 * C0
-    jc -= c1 * S0
-    jd = d2 * C1
-    jd -= d1 * S1
+    absolute, maximum = np.abs, np.maximum
+    if C is None:
+        C, S = np.cos(t), np.sin(t)
+    C0, C1, S0, S1 = C[0], C[1], S[0], S[1]
+    t0, t1 = t[0], t[1]
+    ends = ((a3, t0), (b3, t1)) if nd else ()
+    f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
+    ends = ((c3, t0), (d3, t1)) if nd else ()
+    f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
+    ja, jb = _jac2(a2, C0, a1, S0), _jac2(b2, C1, b1, S1)
+    jc, jd = _jac2(c2, C0, c1, S0), _jac2(d2, C1, d1, S1)
     if nd:
-        f0 += a3 * t0
-        f0 += b3 * t1
-        f1 += c3 * t0
-        f1 += d3 * t1
         ja += a3
         jb += b3
         jc += c3
         jd += d3
     r = maximum(absolute(f0), absolute(f1))
+    dq = np.empty(t.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         det = ja * jd
         det -= jb * jc
-        dq0 = jb * f1
+        dq0, dq1 = dq
+        np.multiply(jb, f1, out=dq0)
         dq0 -= jd * f0
         dq0 /= det
-        dq1 = jc * f0
+        np.multiply(jc, f0, out=dq1)
         dq1 -= ja * f1
         dq1 /= det
     step = maximum(absolute(dq0), absolute(dq1))
-    step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
-    return r, dq0, dq1, step
+    if not det.all():
+        step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
+    return r, dq, step
 
 
 def _elim_step(sub, t: list, k: list, cs=None):
