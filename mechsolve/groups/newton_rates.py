@@ -102,8 +102,10 @@ class NewtonRates:
                 w1 = a * r1
                 w1 -= c * r0
                 w1 /= det
-            out = np.stack([w0, w1], axis=1)
             sing = ~np.isfinite(nf)
+            if not sing.any():  # (nothing to stack for least squares)
+                return [w0, w1]
+            out = np.stack([w0, w1], axis=1)
             out[sing] = np.nan
         else:
             inv = self._angle_inverse(st)
