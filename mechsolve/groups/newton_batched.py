@@ -100,27 +100,29 @@ class BatchedSweep:
         # cubic Hermite between coarse positions, in the driver coordinate: each
         # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
         # segment are consecutive (the last position belongs to the last segment), so its
-        # coefficients are repeated rather than gathered (a fancy index costs 6x more)
+        # coefficients are repeated rather than gathered (a fancy index costs 6x more);
+        # on (k, N) rows, handed out transposed: a product of (N, k) rows of a few
+        # entries by t (N, 1) costs several times one over rows of N
         counts = np.diff(coarse)
         counts[-1] += 1
         uc = u[coarse]
-        hc = (uc[1:] - uc[:-1])[:, None]
-        q0, q1 = qc[:-1], qc[1:]
-        t = ((u - np.repeat(uc[:-1], counts)) / np.repeat(hc[:, 0], counts))[:, None]
+        hc = uc[1:] - uc[:-1]
+        q0, q1 = qc[:-1].T, qc[1:].T
+        t = (u - np.repeat(uc[:-1], counts)) / np.repeat(hc, counts)
         if self.predictor == "linear":  # first order: the chord between coarse positions
-            pred = np.repeat(q1 - q0, counts, axis=0)
+            pred = np.repeat(q1 - q0, counts, axis=1)
             pred *= t
-            pred += np.repeat(q0, counts, axis=0)
+            pred += np.repeat(q0, counts, axis=1)
         else:  # q0 + t (m0 + t (3 (q1 - q0) - 2 m0 - m1 + t (2 (q0 - q1) + m0 + m1)))
-            m0, m1 = hc * dqc[:-1], hc * dqc[1:]
+            m0, m1 = hc * dqc[:-1].T, hc * dqc[1:].T
             dq = q1 - q0
             c2 = 3 * dq - 2 * m0 - m1
             c3 = m0 + m1 - 2 * dq
-            pred = np.repeat(c3, counts, axis=0)
+            pred = np.repeat(c3, counts, axis=1)
             for c in (c2, m0, q0):
                 pred *= t
-                pred += np.repeat(c, counts, axis=0)
-        return pred
+                pred += np.repeat(c, counts, axis=1)
+        return pred.T
 
     def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
@@ -327,7 +329,7 @@ class BatchedSweep:
         n = st.n
         K, Px, Py = red.known(st)
         Kr, thp = red.reduce(red.with_driver(K, u))
-        th = pred.copy()
+        th = pred.copy(order="K")  # (columns contiguous as the prediction's)
         th[coarse] = qc
         iters = np.zeros(n, int)
         todo = np.ones(n, bool)
