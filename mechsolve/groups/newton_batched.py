@@ -146,18 +146,19 @@ class BatchedSweep:
         hi: list[int] = []  # the history's positions ...
         ha: list[list[float]] = []  # ... and their free angles
         pred = [float(q_start[3 * k + 2]) for k in free]
-        iters = np.zeros(st.n, int)
+        iters: list[int] = []
         out: list[list[float]] = []
         atol, its = self.atol, self.max_iterations
+        # newton_list's own loop for the group's size (the angles and terms are floats)
+        newton = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
         for i, ui in enumerate(u.tolist()):
             if len(ha) == 1:  # the first step: along the tangent, not from the start's pose
                 pred = self._tangent_floats(ha[0], Kr[i], thp[i])
             elif ha:
                 pred = _extrapolate_floats(hu, ha, ui)
-            thf, plain, it, _, _ = sub.newton_list(Kr[i], pred, atol, its, predict=True)
+            thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
             if plain and ha:
-                jump = max(abs(a - b) * w for a, b, w in zip(thf, pred, wj))
-                plain = jump <= MAX_JUMP
+                plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
                 Ki = [k[i : i + 1] for k in Kall]
                 if ha:
@@ -171,7 +172,7 @@ class BatchedSweep:
                 thf = [float(qa[3 * k + 2]) for k in free]
                 it = stats.iterations
             out.append(thf)
-            iters[i] = it
+            iters.append(it)
             if len(ha) == 3:
                 hu, hi, ha = [hu[1], hu[2], ui], [hi[1], hi[2], i], [ha[1], ha[2], thf]
             else:
@@ -181,7 +182,7 @@ class BatchedSweep:
         if fixed:
             th[:, red.fixed] = thp
         self._put_angles(st, th, Kall[1], Kall[2])
-        return iters
+        return np.array(iters)
 
     def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:
         """The group's body coordinates at position ``i`` of the coarse pass from its
@@ -426,7 +427,7 @@ class BatchedSweep:
         rows = self.red.sub._rows
         nd = self.red.sub.nd
         X = np.ascontiguousarray(th.T)  # (2, N): the angles, a row each
-        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        K0, K1 = np.ascontiguousarray(Kr[:, 0]), np.ascontiguousarray(Kr[:, 1])
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
         C = S = None  # cos and sin of X everywhere, turned with their small steps
@@ -490,7 +491,7 @@ class BatchedSweep:
         sub = self.red.sub
         n, nb = th.shape
         x = [th[:, k].copy() for k in range(nb)]
-        K = [Kr[:, e].copy() for e in range(nb)]
+        K = [np.ascontiguousarray(Kr[:, e]) for e in range(nb)]
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
         cs = None  # cos and sin of every angle everywhere, turned with their small steps

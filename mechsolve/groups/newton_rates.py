@@ -384,6 +384,8 @@ class NewtonRates:
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    """Equal arrays, NaN equal to NaN (the exact test first: the one with NaN costs
-    more)."""
-    return bool(np.array_equal(a, b) or np.array_equal(a, b, equal_nan=True))
+    """Equal arrays, NaN equal to NaN (the exact test first, by one comparison: the
+    one with NaN costs more)."""
+    if a.shape != b.shape:
+        return False
+    return bool((a == b).all() or np.array_equal(a, b, equal_nan=True))
