@@ -51,9 +51,10 @@ class BatchedSweep:
             )
             if not okc.all() or self.gaps:
                 return None
-        self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
+        ones = Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse)))
         u = drive.u
         if self.red is not None:  # the free angles alone: the frames follow from them
+            self._angle_rates(sub, ones, 1, frames=False)
             fb = [self.bodies[k] for k in self.red.free.tolist()]
             qc = np.stack([sub.th[b] for b in fb], axis=1)
             dqc = np.stack([sub.w[b] for b in fb], axis=1)
@@ -72,6 +73,7 @@ class BatchedSweep:
                 return None
             iters[coarse] = itc
             return np.ones(n, bool), iters, "newton (batched)"
+        self.velocity(sub, ones)
         qc = self._q_rows(sub)
         dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
@@ -131,9 +133,10 @@ class BatchedSweep:
         less than :data:`MAX_JUMP` from it (weighted by :meth:`_angle_jump_weights`) is
         taken as the general code would take it; any other goes through
         :meth:`_advance` (its substeps, scipy, its error) with the same history (the
-        poses of its positions placed then). The poses are written into ``st`` at the
-        end, all positions at once. Returns the iterations per position, or None when a
-        position fails."""
+        poses of its positions placed then). The angles (with their cosines and sines)
+        are written into ``st`` at the end, all positions at once; not the frames, which
+        nothing reads at the coarse positions (the batch places every position's).
+        Returns the iterations per position, or None when a position fails."""
         red = self.red
         sub = red.sub
         Kall = red.known(st)
@@ -181,7 +184,8 @@ class BatchedSweep:
         th[:, red.free] = out
         if fixed:
             th[:, red.fixed] = thp
-        self._put_angles(st, th, Kall[1], Kall[2])
+        for b, k in self.col.items():  # (the frames: no reader of the coarse positions')
+            st.set_angle(b, th[:, k])
         return np.array(iters)
 
     def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:

@@ -170,7 +170,9 @@ class NewtonRates:
         self._entries2_cache = (st.token, (th0.copy(), th1.copy()), out)
         return out
 
-    def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
+    def _angle_rates(self, st: State, drive: Drive, order: int, frames: bool = True) -> None:
+        """The angles' rates of ``order`` (1, 2) into ``st``, and with ``frames`` the
+        frames' (the coarse positions of a batched sweep need the angles' alone)."""
         red = self.red
         nb = red.nb
         if st.n == 1 and nb <= FLOATS_UP_TO:  # (a driven crank too: F_theta = +-1)
@@ -201,6 +203,8 @@ class NewtonRates:
             out = (st.ax, st.ay, st.al)
         for b, k in self.col.items():
             out[2][b] = w[k]
+        if not frames:
+            return
         terms = red.wr_terms()
         if not any(terms):  # every frame at a solved body's point (the four-bar's)
             for b, k in self.col.items():
