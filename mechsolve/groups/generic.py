@@ -244,6 +244,10 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         where that one does, at a fraction of its cost."""
         red = self.red
         sub = red.sub
+        if sub is red and red.nb == 2 and ok.all():  # the entries kept for the rates
+            det = self._angle_entries2(st)[4]  # (and the bound): the same products
+            good = np.isfinite(det)  # (NaN where a cosine or sine is not finite)
+            return (det, good) if good.all() else (np.where(good, det, np.nan), good)
         bodies = [self.bodies[k] for k in red.free.tolist()]
         C, S = st.c[bodies].T, st.s[bodies].T
         det = np.full(st.n, np.nan)

@@ -51,126 +51,180 @@ class BatchedSweep:
             )
             if not okc.all() or self.gaps:
                 return None
-        self.velocity(sub, Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse))))
+        ones = Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse)))
+        u = drive.u
+        if self.red is not None:  # the free angles alone: the frames follow from them
+            self._angle_rates(sub, ones, 1, frames=False)
+            fb = [self.bodies[k] for k in self.red.free.tolist()]
+            qc = np.stack([sub.th[b] for b in fb], axis=1)
+            dqc = np.stack([sub.w[b] for b in fb], axis=1)
+            if not np.all(np.isfinite(dqc)):
+                return None
+            pred = self._predict(u, coarse, qc, dqc)
+            got = self._refine_angles(st, u, pred, coarse, qc)
+            if got is None:
+                return None
+            iters, th = got
+            d = np.abs(th - pred)
+            wj = self._angle_jump_weights()
+            if any(w != 1.0 for w in wj):
+                d *= wj
+            if d.size and not np.max(d) <= MAX_JUMP:  # (NaN too)
+                return None
+            iters[coarse] = itc
+            return np.ones(n, bool), iters, "newton (batched)"
+        self.velocity(sub, ones)
         qc = self._q_rows(sub)
         dqc = self._q_rows(sub, rates=True)
         if not np.all(np.isfinite(dqc)):
             return None
-        u = drive.u
         pred = self._predict(u, coarse, qc, dqc)
-        if self.red is not None:
-            iters = self._refine_angles(st, u, pred, coarse, qc)
-            if iters is None:
-                return None
-            q = self._q_rows(st)
-        else:
-            q, iters = self._refine_bodies(st, u, pred, coarse, qc)
-            if q is None:
-                return None
+        q, iters = self._refine_bodies(st, u, pred, coarse, qc)
+        if q is None:
+            return None
         d = np.abs(q - pred)
         d[:, 0::3] /= self.scale
         d[:, 1::3] /= self.scale
         if np.max(d) > MAX_JUMP or not np.all(np.isfinite(q)):
             return None
-        if self.red is None:
-            self._set_q_rows_into(st, q)
+        self._set_q_rows_into(st, q)
         iters[coarse] = itc
         return np.ones(n, bool), iters, "newton (batched)"
 
     def _predict(self, u: np.ndarray, coarse: np.ndarray, qc: np.ndarray, dqc: np.ndarray):
-        """Every position's prediction (N, n) from the coarse positions ``qc`` and their
+        """Every position's prediction (N, k) from the coarse positions ``qc`` (a
+        revolute group's free angles, else its body coordinates: (coarse, k)) and their
         rates ``dqc``: the cubic Hermite (or with ``predictor`` "linear", the chord)."""
         if self.compiled and self.predictor != "linear":  # the same, in one loop
-            pred = np.empty((len(u), self.n))
+            pred = np.empty((len(u), qc.shape[1]))
             kernels(self.compiled).hermite(u, coarse, qc, dqc, pred)
             return pred
         # cubic Hermite between coarse positions, in the driver coordinate: each
         # segment's polynomial in t = (u - u0) / (u1 - u0), by Horner; the positions of a
         # segment are consecutive (the last position belongs to the last segment), so its
-        # coefficients are repeated rather than gathered (a fancy index costs 6x more)
+        # coefficients are repeated rather than gathered (a fancy index costs 6x more);
+        # on (k, N) rows, handed out transposed: a product of (N, k) rows of a few
+        # entries by t (N, 1) costs several times one over rows of N
         counts = np.diff(coarse)
         counts[-1] += 1
         uc = u[coarse]
-        hc = (uc[1:] - uc[:-1])[:, None]
-        q0, q1 = qc[:-1], qc[1:]
-        t = ((u - np.repeat(uc[:-1], counts)) / np.repeat(hc[:, 0], counts))[:, None]
+        hc = uc[1:] - uc[:-1]
+        q0, q1 = qc[:-1].T, qc[1:].T
+        t = (u - np.repeat(uc[:-1], counts)) / np.repeat(hc, counts)
         if self.predictor == "linear":  # first order: the chord between coarse positions
-            pred = np.repeat(q1 - q0, counts, axis=0)
+            pred = np.repeat(q1 - q0, counts, axis=1)
             pred *= t
-            pred += np.repeat(q0, counts, axis=0)
+            pred += np.repeat(q0, counts, axis=1)
         else:  # q0 + t (m0 + t (3 (q1 - q0) - 2 m0 - m1 + t (2 (q0 - q1) + m0 + m1)))
-            m0, m1 = hc * dqc[:-1], hc * dqc[1:]
+            m0, m1 = hc * dqc[:-1].T, hc * dqc[1:].T
             dq = q1 - q0
             c2 = 3 * dq - 2 * m0 - m1
             c3 = m0 + m1 - 2 * dq
-            pred = np.repeat(c3, counts, axis=0)
+            pred = np.repeat(c3, counts, axis=1)
             for c in (c2, m0, q0):
                 pred *= t
-                pred += np.repeat(c, counts, axis=0)
-        return pred
+                pred += np.repeat(c, counts, axis=1)
+        return pred.T
 
     def _coarse_floats(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`sweep_sequential` over all positions of ``st`` for a small revolute
-        group, its plain steps in floats: a step that converges by Newton from the
-        extrapolated prediction and moves less than :data:`MAX_JUMP` from it is taken as
-        the general code would take it; any other goes through :meth:`_advance` (its
-        substeps, scipy, its error) with the same history. Returns the iterations per
-        position (the poses written into ``st``), or None when a position fails."""
+        group, its plain steps in floats and in the free angles alone: a step that
+        converges by Newton from the extrapolated prediction and whose free angles move
+        less than :data:`MAX_JUMP` from it (weighted by :meth:`_angle_jump_weights`) is
+        taken as the general code would take it; any other goes through
+        :meth:`_advance` (its substeps, scipy, its error) with the same history (the
+        poses of its positions placed then). The angles (with their cosines and sines)
+        are written into ``st`` at the end, all positions at once; not the frames, which
+        nothing reads at the coarse positions (the batch places every position's).
+        Returns the iterations per position, or None when a position fails."""
         red = self.red
         sub = red.sub
         Kall = red.known(st)
         u = drive.u
         Kr, thp = red.reduce(red.with_driver(Kall[0], u))
         Kr, thp = Kr.tolist(), thp.tolist()
-        Px, Py = Kall[1].tolist(), Kall[2].tolist()
-        free, fixed, nb = red.free.tolist(), red.fixed.tolist(), red.nb
-        inv_scale = 1.0 / self.scale
+        free, fixed = red.free.tolist(), red.fixed.tolist()
+        wj = self._angle_jump_weights()
         hu: list[float] = []
-        hq: list[list[float]] = []
-        q_pred = [float(v) for v in q_start]
-        iters = np.zeros(st.n, int)
-        th = [0.0] * nb
-        jw = [1.0 if j % 3 == 2 else inv_scale for j in range(self.n)]  # the jump's weights
+        hi: list[int] = []  # the history's positions ...
+        ha: list[list[float]] = []  # ... and their free angles
+        pred = [float(q_start[3 * k + 2]) for k in free]
+        iters: list[int] = []
         out: list[list[float]] = []
         atol, its = self.atol, self.max_iterations
+        # newton_list's own loop for the group's size (the angles and terms are floats)
+        newton = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
         for i, ui in enumerate(u.tolist()):
-            if len(hq) == 1:  # the first step: along the tangent, not from the start's pose
-                q_pred = self._tangent_floats(hq[0], Kr[i], thp[i], Px[i], Py[i])
-            elif hq:
-                q_pred = _extrapolate_floats(hu, hq, ui)
-            thf, plain, it, _, _ = sub.newton_list(
-                Kr[i], [q_pred[3 * k + 2] for k in free], atol, its, predict=True
-            )
-            if plain:
-                for j, k in enumerate(free):
-                    th[k] = thf[j]
-                for j, k in enumerate(fixed):
-                    th[k] = thp[i][j]
-                xs, ys = red.poses_one(th, Px[i], Py[i])
-                q = [v for k in range(nb) for v in (xs[k], ys[k], th[k])]
-                if hq:
-                    jump = max(abs(a - b) * w for a, b, w in zip(q, q_pred, jw))
-                    plain = jump <= MAX_JUMP
+            if len(ha) == 1:  # the first step: along the tangent, not from the start's pose
+                pred = self._tangent_floats(ha[0], Kr[i], thp[i])
+            elif ha:
+                pred = _extrapolate_floats(hu, ha, ui)
+            thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
+            if plain and ha:
+                plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
                 Ki = [k[i : i + 1] for k in Kall]
-                if hq:
-                    hqa = [np.array(v) for v in hq]
+                if ha:
+                    hqa = [self._pose_floats(j, a, thp, Kall) for j, a in zip(hi, ha)]
                     qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
                 else:
                     qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
                     good = stats.converged
                 if not good:
                     return None
-                q = qa.tolist()
+                thf = [float(qa[3 * k + 2]) for k in free]
                 it = stats.iterations
-            out.append(q)
-            iters[i] = it
-            if len(hq) == 3:
-                hu, hq = [hu[1], hu[2], ui], [hq[1], hq[2], q]
+            out.append(thf)
+            iters.append(it)
+            if len(ha) == 3:
+                hu, hi, ha = [hu[1], hu[2], ui], [hi[1], hi[2], i], [ha[1], ha[2], thf]
             else:
-                hu, hq = hu + [ui], hq + [q]
-        self._set_q_rows(st, np.array(out))
-        return iters
+                hu, hi, ha = hu + [ui], hi + [i], ha + [thf]
+        th = np.empty((st.n, red.nb))
+        th[:, red.free] = out
+        if fixed:
+            th[:, red.fixed] = thp
+        for b, k in self.col.items():  # (the frames: no reader of the coarse positions')
+            st.set_angle(b, th[:, k])
+        return np.array(iters)
+
+    def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:
+        """The group's body coordinates at position ``i`` of the coarse pass from its
+        free angles ``thf`` (the fixed ones ``thp[i]``), as :meth:`_solve_one` places
+        them."""
+        red = self.red
+        th = [0.0] * red.nb
+        for j, k in enumerate(red.free.tolist()):
+            th[k] = thf[j]
+        for j, k in enumerate(red.fixed.tolist()):
+            th[k] = thp[i][j]
+        q = np.empty(self.n)
+        q[2::3] = th
+        q[0::3], q[1::3] = red.poses_one(th, Kall[1][i], Kall[2][i])
+        return q
+
+    def _angle_jump_weights(self) -> list[float]:
+        """The weights of the free angles' moves in a jump check that reads the free
+        angles alone (radians, in the order of ``red.free``): ``max(1, max_b |W[b, k]| /
+        size)`` for angle ``k``, over the links ``b`` (``W[b, k]``: the tree's vector of
+        link ``b``'s frame on angle ``k``'s link). A link's frame is ``P_b + sum_k
+        A(theta_k) W[b, k]`` with the solved bodies' ``P_b`` fixed at a position, so
+        that an angle's weighted move below :data:`MAX_JUMP` moves no frame by more
+        than :data:`MAX_JUMP` of the mechanism's size through that link; and a jump to
+        another branch moves the angles, the frames following from them."""
+        got = getattr(self, "_angle_w", None)
+        if got is not None and got[0] == self.scale:
+            return got[1]
+        red = self.red
+        w = [
+            max(
+                1.0,
+                max(math.hypot(red._wx[b][k], red._wy[b][k]) for b in range(red.nb)) / self.scale,
+            )
+            for k in red.free.tolist()
+        ]
+        self._angle_w = (self.scale, w)
+        return w
 
     def _coarse_compiled(self, st: State, drive: Drive, q_start: np.ndarray, prefix=None):
         """:meth:`_coarse_floats` with its plain steps in the compiled kernel
@@ -239,8 +293,8 @@ class BatchedSweep:
                 wa.append(a)
                 wb.append(b)
             wptr.append(len(wk))
-        jw = np.full(self.n, 1.0 / self.scale)
-        jw[2::3] = 1.0
+        jw = np.zeros(self.n)  # the free angles alone, as _coarse_floats checks them
+        jw[3 * red.free + 2] = self._angle_jump_weights()
         plan = (
             np.asarray(red.free, np.int64),
             np.asarray(red.fixed, np.int64),
@@ -259,50 +313,56 @@ class BatchedSweep:
         self._kplan_c = (key, plan)
         return plan
 
-    def _tangent_floats(self, q0: list, Kr: list, thp: list, Px: list, Py: list) -> list:
-        """A prediction of the next position from the pose ``q0`` (body coordinates) of
-        the previous one: the first Newton iterate from ``q0`` with the next position's
+    def _tangent_floats(self, th0: list, Kr: list, thp: list) -> list:
+        """A prediction of the next position's free angles from those of the previous
+        one, ``th0``: the first Newton iterate from ``th0`` with the next position's
         constant part ``Kr`` (the tangent step, ``-F_theta^-1 dF``, with the driver's
-        increment of the solved bodies' terms), the frames placed from those angles.
-        ``q0`` itself when that step cannot be taken (an exactly singular Jacobian)."""
-        red = self.red
-        free, fixed = red.free.tolist(), red.fixed.tolist()
-        th0 = [q0[3 * k + 2] for k in free]
-        thf = red.sub.newton_list(Kr, th0, self.atol, 1)[0]
-        th = [q0[3 * k + 2] for k in range(red.nb)]
-        for j, k in enumerate(free):
-            th[k] = thf[j]
-        for j, k in enumerate(fixed):
-            th[k] = thp[j]
-        if not all(math.isfinite(v) for v in th):
-            return list(q0)
-        xs, ys = red.poses_one(th, Px, Py)
-        return [v for k in range(red.nb) for v in (xs[k], ys[k], th[k])]
+        increment of the solved bodies' terms). ``th0`` itself when that step cannot be
+        taken (an exactly singular Jacobian) or the angles are not finite (with the
+        fixed ones ``thp``)."""
+        thf = self.red.sub.newton_list(Kr, th0, self.atol, 1)[0]
+        if not all(math.isfinite(v) for v in thf) or not all(math.isfinite(v) for v in thp):
+            return list(th0)
+        return thf
 
     def _refine_angles(self, st: State, u, pred, coarse, qc):
-        """Batched Newton in the links' angles from the prediction; the poses are written
-        into ``st``. Returns the iterations per position, or None."""
+        """Batched Newton in the free angles from their prediction ``pred`` (N, free),
+        those of the coarse positions ``qc`` kept; the poses are written into ``st``.
+        Returns the iterations per position and the free angles (N, free), or None."""
         red = self.red
         sub = red.sub
         n = st.n
         K, Px, Py = red.known(st)
         Kr, thp = red.reduce(red.with_driver(K, u))
-        th = pred[:, 2::3][:, red.free]
-        th[coarse] = qc[:, 2::3][:, red.free]
+        th = pred.copy(order="K")  # (columns contiguous as the prediction's)
+        th[coarse] = qc
         iters = np.zeros(n, int)
         todo = np.ones(n, bool)
         todo[coarse] = False
         if sub.nb == 0:
             todo[:] = False
-        if sub.nb == 2:
-            refine2 = self._refine2_compiled if self.compiled else self._refine2
-            cs = refine2(th, Kr, iters, todo)
-            if cs is None:
-                return None
-            self._put_angles(st, red.join(th, thp), Px, Py, cs)
-            return iters
         if self.compiled and sub.elim is not None:  # the triad's: in the kernel
             return self._refine_elim_compiled(st, th, Kr, thp, (Px, Py), iters, todo)
+        if sub.nb == 2:
+            refine = self._refine2_compiled if self.compiled else self._refine2
+        elif sub.elim is not None:  # the triad's: each angle on its own 1-D array
+            refine = self._refine_elim
+        else:
+            refine = self._refine_stacked
+        cs = refine(th, Kr, iters, todo)
+        if cs is False:
+            return None
+        self._put_angles(st, red.join(th, thp), Px, Py, cs)
+        return iters, th
+
+    def _refine_stacked(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
+        """:meth:`_refine_angles`'s iterations on the (N, n) arrays of the angles, by
+        the stacked elimination (LAPACK where it must): updates ``th``, ``iters`` and
+        ``todo`` in place. Returns the cosines and sines of the angles turned with the
+        steps (lists of 1-D arrays, None when no iteration took whole arrays), or False
+        when a position does not converge."""
+        sub = self.red.sub
+        n = th.shape[0]
         last = np.full(n, np.inf)
         J = np.empty((n, sub.nb, sub.nb))
         tol = 1e-3 * self.atol
@@ -326,7 +386,7 @@ class BatchedSweep:
             r = _rowmax_abs(f)
             dq = _newton_step(sub, C, S, f, J[: t.shape[0]])
             if dq is None:
-                return None
+                return False
             step = _rowmax_abs(dq)
             # as below: converged when the residual is small and the step tiny or no
             # longer shrinking (the rounding level); that last step is not taken; or
@@ -355,41 +415,40 @@ class BatchedSweep:
                     _rotate(Ci, Si, D, th[it])
                     Cf[it], Sf[it] = Ci, Si
         if todo.any() or not np.all(np.isfinite(th)):
-            return None
-        cs = None if Cf is None else ([c for c in Cf.T], [s for s in Sf.T])
-        self._put_angles(st, red.join(th, thp), Px, Py, cs)
-        return iters
+            return False
+        return None if Cf is None else ([c for c in Cf.T], [s for s in Sf.T])
 
     def _refine2(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo: np.ndarray):
         """:meth:`_refine_angles`'s iterations for two angles (the four-bar's loop), on
-        each angle's own 1-D array: the same residual, step (by the adjugate), tests and
-        updates, without the (N, 2) products and reductions, which cost more than the
-        arithmetic. Updates ``th`` (N, 2), ``iters`` and ``todo`` in place. Returns the
-        angles' cosines and sines, turned with every step taken (the state's: see
-        :meth:`_put_angles`), as ``([cos x0, cos x1], [sin x0, sin x1])``; None when a
-        position does not converge."""
+        a (2, N) array of the angles (each angle's row contiguous): the same residual,
+        step (by the adjugate), tests and updates, without the (N, 2) products and
+        reductions, which cost more than the arithmetic; the steps and the turned
+        cosines and sines of both angles in one pass. Updates ``th`` (N, 2), ``iters``
+        and ``todo`` in place. Returns the angles' cosines and sines, turned with every
+        step taken (the state's: see :meth:`_put_angles`), as ``([cos x0, cos x1],
+        [sin x0, sin x1])``; False when a position does not converge."""
         n = th.shape[0]
         rows = self.red.sub._rows
         nd = self.red.sub.nd
-        x0, x1 = th[:, 0].copy(), th[:, 1].copy()
-        K0, K1 = Kr[:, 0].copy(), Kr[:, 1].copy()
+        X = np.ascontiguousarray(th.T)  # (2, N): the angles, a row each
+        K0, K1 = np.ascontiguousarray(Kr[:, 0]), np.ascontiguousarray(Kr[:, 1])
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
-        cs = None  # cos and sin of x0 and x1 everywhere, turned with their small steps
+        C = S = None  # cos and sin of X everywhere, turned with their small steps
         for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
             if 2 * count >= n:  # most positions still iterate: whole arrays, masked
-                idx, t0, t1, k0, k1, lastk = None, x0, x1, K0, K1, last
-                if cs is None:
-                    cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
-                csk = cs
+                idx, t, k0, k1, lastk = None, X, K0, K1, last
+                if C is None:
+                    C, S = np.cos(X), np.sin(X)
+                c, s = C, S
             else:
                 idx = np.flatnonzero(todo)
-                t0, t1, k0, k1, lastk = x0[idx], x1[idx], K0[idx], K1[idx], last[idx]
-                csk = None if cs is None else [a[idx] for a in cs]
-            r, dq0, dq1, step = _newton_step2(rows, nd, t0, t1, k0, k1, csk)
+                t, k0, k1, lastk = X[:, idx], K0[idx], K1[idx], last[idx]
+                c, s = (None, None) if C is None else (C[:, idx], S[:, idx])
+            r, dq, step = _newton_step2(rows, nd, t, k0, k1, c, s)
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken;
             # or when this step leaves an error predicted below tol (_converges_next)
@@ -399,33 +458,96 @@ class BatchedSweep:
             take = ~done | small | pred
             if idx is None:
                 take &= todo
-                D0, D1 = np.where(take, dq0, 0.0), np.where(take, dq1, 0.0)
-                x0 += D0
-                x1 += D1
+                skip = ~take
+                dq[0, skip] = 0.0
+                dq[1, skip] = 0.0
+                X += dq
                 iters += todo
-                last = np.where(todo, step, last)
+                np.copyto(last, step, where=todo)
                 todo &= ~done
-                _rotate(cs[0], cs[1], D0, x0)  # (after the last iteration too: the
-                _rotate(cs[2], cs[3], D1, x1)  # state's cosines and sines)
+                _rotate(C, S, dq, X)  # (after the last iteration too: the state's)
             else:
-                it, D0, D1 = idx[take], dq0[take], dq1[take]
-                x0[it] += D0
-                x1[it] += D1
+                it, D = idx[take], dq[:, take]
+                X[:, it] += D
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-                if cs is not None:
-                    c = [a[take] for a in csk]
-                    _rotate(c[0], c[1], D0, x0[it])
-                    _rotate(c[2], c[3], D1, x1[it])
-                    for a, b in zip(cs, c):
-                        a[it] = b
-        th[:, 0], th[:, 1] = x0, x1
-        if todo.any() or not (np.isfinite(x0).all() and np.isfinite(x1).all()):
-            return None
+                if C is not None:
+                    c, s = c[:, take], s[:, take]
+                    _rotate(c, s, D, X[:, it])
+                    C[:, it], S[:, it] = c, s
+        th[:] = X.T
+        if todo.any() or not np.isfinite(X).all():
+            return False
+        if C is None:  # (no iteration on whole arrays)
+            C, S = np.cos(X), np.sin(X)
+        return [C[0], C[1]], [S[0], S[1]]
+
+    def _refine_elim(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
+        """:meth:`_refine_angles`'s iterations for a group eliminated to 2 x 2 (the
+        Stephenson triad), on each angle's and each equation's own 1-D array, as
+        :meth:`_refine2` for two angles: the residual from the equations' nonzero
+        coefficients (in the order of the compiled kernel's sums, not a matrix product
+        over the (N, n) arrays), the step by the elimination, the same tests and
+        updates. Updates ``th`` (N, n), ``iters`` and ``todo`` in place. Returns the
+        angles' cosines and sines, turned with every step taken, as ``([cos x_k],
+        [sin x_k])``; False when a position does not converge."""
+        sub = self.red.sub
+        n, nb = th.shape
+        x = [th[:, k].copy() for k in range(nb)]
+        K = [np.ascontiguousarray(Kr[:, e]) for e in range(nb)]
+        last = np.full(n, np.inf)
+        tol = 1e-3 * self.atol
+        cs = None  # cos and sin of every angle everywhere, turned with their small steps
+        for it_k in range(self.max_iterations):
+            count = np.count_nonzero(todo)
+            if count == 0:
+                break
+            if 2 * count >= n:  # most positions still iterate: whole arrays, masked
+                idx, t, k, lastk = None, x, K, last
+                if cs is None:
+                    cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
+                csk = cs
+            else:
+                idx = np.flatnonzero(todo)
+                t, k, lastk = [v[idx] for v in x], [v[idx] for v in K], last[idx]
+                csk = None if cs is None else ([c[idx] for c in cs[0]], [s[idx] for s in cs[1]])
+            r, dq, step = _elim_step(sub, t, k, csk)
+            # as _refine_angles: converged when the residual is small and the step tiny
+            # or no longer shrinking (the rounding level); that last step is not taken;
+            # or when this step leaves an error predicted below tol (_converges_next)
+            small = step <= tol
+            pred = _converges_next(step, lastk, tol) if it_k else False
+            done = ((r <= self.atol) & (small | (step >= lastk))) | pred
+            take = ~done | small | pred
+            if idx is None:
+                take &= todo
+                for j in range(nb):
+                    D = np.where(take, dq[j], 0.0)
+                    x[j] += D
+                    _rotate(cs[0][j], cs[1][j], D, x[j])  # (after the last iteration
+                iters += todo  # too: the state's cosines and sines)
+                last = np.where(todo, step, last)
+                todo &= ~done
+            else:
+                it = idx[take]
+                for j in range(nb):
+                    D = dq[j][take]
+                    x[j][it] += D
+                    if cs is not None:
+                        c, s = csk[0][j][take], csk[1][j][take]
+                        _rotate(c, s, D, x[j][it])
+                        cs[0][j][it], cs[1][j][it] = c, s
+                iters[idx] += 1
+                last[idx] = step
+                todo[idx[done]] = False
+        for j in range(nb):
+            th[:, j] = x[j]
+        if todo.any() or not all(np.isfinite(v).all() for v in x):
+            return False
         if cs is None:  # (no iteration on whole arrays)
-            cs = [np.cos(x0), np.sin(x0), np.cos(x1), np.sin(x1)]
-        return [cs[0], cs[2]], [cs[1], cs[3]]
+            cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
+        return cs
 
     def _refine2_compiled(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
         """:meth:`_refine2` in the compiled kernel (:func:`~mechsolve.groups.kernels.
@@ -452,13 +574,14 @@ class BatchedSweep:
         iters += it
         th[:, 0], th[:, 1] = x0, x1
         if not ok:
-            return None
+            return False
         return [C0, C1], [S0, S1]
 
     def _refine_elim_compiled(self, st: State, th, Kr, thp, roots, iters, todo):
         """:meth:`_refine_angles`'s iterations for a group eliminated to 2 x 2 in the
         compiled kernel (:func:`~mechsolve.groups.kernels.refine_elim`); the poses are
-        written into ``st``. Returns the iterations per position, or None."""
+        written into ``st``. Returns the iterations per position and the free angles,
+        or None."""
         kern = kernels(self.compiled)
         sub = self.red.sub
         el = sub.elim
@@ -490,7 +613,7 @@ class BatchedSweep:
         iters += it
         cs = ([c for c in Cf.T], [s for s in Sf.T])
         self._put_angles(st, self.red.join(th, thp), roots[0], roots[1], cs)
-        return iters
+        return iters, th
 
     def _refine_bodies(self, st: State, u, pred, coarse, qc):
         """Batched Newton in body coordinates from the prediction. Returns ``(q,
@@ -569,60 +692,131 @@ def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None
     S *= cd
     S += C * sd
     C[...] = c
-    big = ~(np.abs(D) < 1e-3)
-    if big.any():
+    if not np.abs(D).max(initial=0.0) < 1e-3:  # (NaN too)
+        big = ~(np.abs(D) < 1e-3)
         C[big] = np.cos(th[big])
         S[big] = np.sin(th[big])
 
 
-def _newton_step2(rows, nd, t0, t1, k0, k1, cs=None):
-    """One Newton step of the two-angle loop at the angles ``t0``, ``t1`` (1-D arrays):
-    the residual's size, the step (by the adjugate of the 2 x 2 Jacobian) and its size
-    (NaN where the Jacobian is exactly singular). ``rows``: the loop's coefficients
-    ((a, b), (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the
-    constant terms; ``cs``: the angles' cosines and sines when known. In-place
-    arithmetic: no (N, 2) products or reductions."""
+def _jac2(m2: float, C: np.ndarray, m1: float, S: np.ndarray) -> np.ndarray:
+    """``m2 C - m1 S``, a zero coefficient's product left out (a zero product changes
+    no bit of the difference but a zero's sign)."""
+    if m2 and m1:
+        j = m2 * C
+        j -= m1 * S
+        return j
+    if m2:
+        return m2 * C
+    if m1:
+        return S * -m1
+    return np.zeros_like(C)
+
+
+def _sum_terms(k: np.ndarray, terms) -> np.ndarray:
+    """``k + m v + ...`` over the ``(m, v)`` of ``terms`` in their order, the zero
+    coefficients' products left out (adding a zero changes no bit but a zero's
+    sign)."""
+    f = None
+    for m, v in terms:
+        if m:
+            t = m * v
+            if f is None:
+                f = k + t
+            else:
+                f += t
+    return k.copy() if f is None else f
+
+
+def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
+    """One Newton step of the two-angle loop at the angles ``t`` (2, N): the residual's
+    size, the step (2, N) (by the adjugate of the 2 x 2 Jacobian) and its size (NaN
+    where the Jacobian is exactly singular). ``rows``: the loop's coefficients ((a, b),
+    (c, d)) of cos, sin and (``nd``) the angle itself; ``k0``, ``k1`` the constant
+    terms; ``C``, ``S`` (2, N): the angles' cosines and sines when known. In-place
+    arithmetic on the rows, the products of zero coefficients left out (a four-bar's
+    loop has four): no (N, 2) products or reductions."""
     ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = rows
-    cos, sin, absolute, maximum = np.cos, np.sin, np.abs, np.maximum
-    C0, S0, C1, S1 = (cos(t0), sin(t0), cos(t1), sin(t1)) if cs is None else cs
-    f0 = k0 + a1 * C0
-    f0 += a2 * S0
-    f0 += b1 * C1
-    f0 += b2 * S1
-    f1 = k1 + c1 * C0
-    f1 += c2 * S0
-    f1 += d1 * C1
-    f1 += d2 * S1
-    ja = a2 * C0
-    ja -= a1 * S0
-    jb = b2 * C1
-    jb -= b1 * S1
-    jc = c2 * C0
-    jc -= c1 * S0
-    jd = d2 * C1
-    jd -= d1 * S1
+    absolute, maximum = np.abs, np.maximum
+    if C is None:
+        C, S = np.cos(t), np.sin(t)
+    C0, C1, S0, S1 = C[0], C[1], S[0], S[1]
+    t0, t1 = t[0], t[1]
+    ends = ((a3, t0), (b3, t1)) if nd else ()
+    f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
+    ends = ((c3, t0), (d3, t1)) if nd else ()
+    f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
+    ja, jb = _jac2(a2, C0, a1, S0), _jac2(b2, C1, b1, S1)
+    jc, jd = _jac2(c2, C0, c1, S0), _jac2(d2, C1, d1, S1)
     if nd:
-        f0 += a3 * t0
-        f0 += b3 * t1
-        f1 += c3 * t0
-        f1 += d3 * t1
         ja += a3
         jb += b3
         jc += c3
         jd += d3
     r = maximum(absolute(f0), absolute(f1))
+    dq = np.empty(t.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         det = ja * jd
         det -= jb * jc
-        dq0 = jb * f1
+        dq0, dq1 = dq
+        np.multiply(jb, f1, out=dq0)
         dq0 -= jd * f0
         dq0 /= det
-        dq1 = jc * f0
+        np.multiply(jc, f0, out=dq1)
         dq1 -= ja * f1
         dq1 /= det
     step = maximum(absolute(dq0), absolute(dq1))
-    step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
-    return r, dq0, dq1, step
+    if not det.all():
+        step[det == 0] = np.nan  # exactly singular: never converged (the caller fails it)
+    return r, dq, step
+
+
+def _elim_step(sub, t: list, k: list, cs=None):
+    """One Newton step of a group eliminated to 2 x 2 (``sub.elim``) at the angles
+    ``t`` (a 1-D array per angle), ``k`` the equations' constant terms (one per
+    equation), ``cs`` the angles' cosines and sines when known: the residual's largest
+    component, the step (a 1-D array per angle: inf or NaN where ``F_theta`` is exactly
+    singular) and its largest component. Each equation's residual sums its nonzero
+    terms ``K + sum m1 cos + sum m2 sin (+ sum m3 theta)`` in that order, as the
+    compiled kernel does."""
+    C, S = ([np.cos(v) for v in t], [np.sin(v) for v in t]) if cs is None else cs
+    f = []
+    for e, terms in enumerate(sub._terms):
+        a = b = d = None
+        for j, m1, m2, m3 in terms:
+            a = _acc(a, C[j], m1)
+            b = _acc(b, S[j], m2)
+            if sub.nd:
+                d = _acc(d, t[j], m3)
+        fe = k[e] if a is None else k[e] + a
+        if b is not None:
+            fe = fe + b if fe is k[e] else _iadd(fe, b)
+        if d is not None:
+            fe = fe + d if fe is k[e] else _iadd(fe, d)
+        f.append(fe)
+    r = np.abs(f[0])
+    for fe in f[1:]:
+        np.maximum(r, np.abs(fe), out=r)
+    dq = sub.elim.parts(C, S).solve(f)
+    step = np.abs(dq[0])
+    for v in dq[1:]:
+        np.maximum(step, np.abs(v), out=step)
+    return r, dq, step
+
+
+def _acc(total, a: np.ndarray, m: float):
+    """``total + a * m`` (``total`` None: ``a * m``; ``m`` zero: ``total``)."""
+    if not m:
+        return total
+    t = a * m
+    if total is None:
+        return t
+    total += t
+    return total
+
+
+def _iadd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    a += b
+    return a
 
 
 def _newton_step(sub, C: np.ndarray, S: np.ndarray, f: np.ndarray, J: np.ndarray):

@@ -29,17 +29,29 @@ def _lagrange_weights(us: list[float], u: float) -> list[float] | None:
 
 
 def _extrapolate_floats(us: list[float], qs: list[list[float]], u: float) -> list[float]:
-    """:func:`_extrapolate` on lists of floats."""
+    """:func:`_extrapolate` on lists of floats: the weights of
+    :func:`_lagrange_weights` written out for two and three points (the same
+    operations in the same order: ``w_i = prod_j (u - u_j) / (u_i - u_j)`` from 1.0)."""
     k = len(qs)
     if k == 1:
         return list(qs[0])
-    ws = _lagrange_weights(us[:k], u)
-    if ws is None:
-        return list(qs[-1])
     if k == 2:
-        (w0, w1), (q0, q1) = ws, qs
+        u0, u1 = us[0], us[1]
+        d01, d10 = u0 - u1, u1 - u0
+        if d01 == 0:
+            return list(qs[-1])
+        w0, w1 = (u - u1) / d01, (u - u0) / d10
+        q0, q1 = qs
         return [w0 * a + w1 * b for a, b in zip(q0, q1)]
-    (w0, w1, w2), (q0, q1, q2) = ws, qs
+    u0, u1, u2 = us[0], us[1], us[2]
+    d01, d02, d12 = u0 - u1, u0 - u2, u1 - u2
+    if d01 == 0 or d02 == 0 or d12 == 0:
+        return list(qs[-1])
+    a0, a1, a2 = u - u0, u - u1, u - u2
+    w0 = (a1 / d01) * (a2 / d02)
+    w1 = (a0 / (u1 - u0)) * (a2 / d12)
+    w2 = (a0 / (u2 - u0)) * (a1 / (u2 - u1))
+    q0, q1, q2 = qs
     return [w0 * a + w1 * b + w2 * c for a, b, c in zip(q0, q1, q2)]
 
 

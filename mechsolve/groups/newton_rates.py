@@ -102,8 +102,10 @@ class NewtonRates:
                 w1 = a * r1
                 w1 -= c * r0
                 w1 /= det
-            out = np.stack([w0, w1], axis=1)
             sing = ~np.isfinite(nf)
+            if not sing.any():  # (nothing to stack for least squares)
+                return [w0, w1]
+            out = np.stack([w0, w1], axis=1)
             out[sing] = np.nan
         else:
             inv = self._angle_inverse(st)
@@ -168,7 +170,9 @@ class NewtonRates:
         self._entries2_cache = (st.token, (th0.copy(), th1.copy()), out)
         return out
 
-    def _angle_rates(self, st: State, drive: Drive, order: int) -> None:
+    def _angle_rates(self, st: State, drive: Drive, order: int, frames: bool = True) -> None:
+        """The angles' rates of ``order`` (1, 2) into ``st``, and with ``frames`` the
+        frames' (the coarse positions of a batched sweep need the angles' alone)."""
         red = self.red
         nb = red.nb
         if st.n == 1 and nb <= FLOATS_UP_TO:  # (a driven crank too: F_theta = +-1)
@@ -199,6 +203,8 @@ class NewtonRates:
             out = (st.ax, st.ay, st.al)
         for b, k in self.col.items():
             out[2][b] = w[k]
+        if not frames:
+            return
         terms = red.wr_terms()
         if not any(terms):  # every frame at a solved body's point (the four-bar's)
             for b, k in self.col.items():
@@ -382,6 +388,8 @@ class NewtonRates:
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    """Equal arrays, NaN equal to NaN (the exact test first: the one with NaN costs
-    more)."""
-    return bool(np.array_equal(a, b) or np.array_equal(a, b, equal_nan=True))
+    """Equal arrays, NaN equal to NaN (the exact test first, by one comparison: the
+    one with NaN costs more)."""
+    if a.shape != b.shape:
+        return False
+    return bool((a == b).all() or np.array_equal(a, b, equal_nan=True))

@@ -69,6 +69,8 @@ class _Eqs:
         cos, sin = math.cos, math.sin
         if nb == 2:  # unrolled: the four-bar's loop, the commonest group
             return self._newton_list2(K, x, atol, max_iterations, predict)
+        if nb == 4:  # unrolled: the Stephenson triad's four angles
+            return self._newton_list4(K, x, atol, max_iterations, predict)
         terms = self._terms
         for it in range(max_iterations + 1):
             c = [cos(v) for v in x]
@@ -143,6 +145,80 @@ class _Eqs:
                 return [x0, x1], True, it + 1, r, it + 1
             last = step
         return [x0, x1], r <= atol, max_iterations, r, max_iterations
+
+    def _newton_list4(self, K, x, atol: float, max_iterations: int, predict: bool):
+        """:meth:`newton_list` for four angles, unrolled: every coefficient a local,
+        the residual's terms added in the order of :meth:`newton_list` (a term of zero
+        coefficients adds a zero: no bit changes but a zero's sign), the step by
+        :func:`_solve4`."""
+        (
+            ((p00, q00, r00), (p01, q01, r01), (p02, q02, r02), (p03, q03, r03)),
+            ((p10, q10, r10), (p11, q11, r11), (p12, q12, r12), (p13, q13, r13)),
+            ((p20, q20, r20), (p21, q21, r21), (p22, q22, r22), (p23, q23, r23)),
+            ((p30, q30, r30), (p31, q31, r31), (p32, q32, r32), (p33, q33, r33)),
+        ) = self._rows
+        xtol = 1e-3 * atol
+        last = r = r_prev = math.inf
+        cos, sin = math.cos, math.sin
+        k0, k1, k2, k3 = K
+        x0, x1, x2, x3 = x
+        for it in range(max_iterations + 1):
+            c0, c1, c2, c3 = cos(x0), cos(x1), cos(x2), cos(x3)
+            s0, s1, s2, s3 = sin(x0), sin(x1), sin(x2), sin(x3)
+            f0 = k0 + (p00 * c0 + q00 * s0 + r00 * x0)
+            f0 += p01 * c1 + q01 * s1 + r01 * x1
+            f0 += p02 * c2 + q02 * s2 + r02 * x2
+            f0 += p03 * c3 + q03 * s3 + r03 * x3
+            f1 = k1 + (p10 * c0 + q10 * s0 + r10 * x0)
+            f1 += p11 * c1 + q11 * s1 + r11 * x1
+            f1 += p12 * c2 + q12 * s2 + r12 * x2
+            f1 += p13 * c3 + q13 * s3 + r13 * x3
+            f2 = k2 + (p20 * c0 + q20 * s0 + r20 * x0)
+            f2 += p21 * c1 + q21 * s1 + r21 * x1
+            f2 += p22 * c2 + q22 * s2 + r22 * x2
+            f2 += p23 * c3 + q23 * s3 + r23 * x3
+            f3 = k3 + (p30 * c0 + q30 * s0 + r30 * x0)
+            f3 += p31 * c1 + q31 * s1 + r31 * x1
+            f3 += p32 * c2 + q32 * s2 + r32 * x2
+            f3 += p33 * c3 + q33 * s3 + r33 * x3
+            r = max(abs(f0), abs(f1), abs(f2), abs(f3))
+            if not r <= 1e300 or (it > 3 and r > 2 * r_prev):  # not finite, diverging
+                break
+            r_prev = r
+            if r <= atol and (last <= xtol or r == 0.0):
+                return [x0, x1, x2, x3], True, it, r, it + 1
+            if it == max_iterations:
+                break
+            a00, a01 = q00 * c0 - p00 * s0 + r00, q01 * c1 - p01 * s1 + r01
+            a02, a03 = q02 * c2 - p02 * s2 + r02, q03 * c3 - p03 * s3 + r03
+            a10, a11 = q10 * c0 - p10 * s0 + r10, q11 * c1 - p11 * s1 + r11
+            a12, a13 = q12 * c2 - p12 * s2 + r12, q13 * c3 - p13 * s3 + r13
+            a20, a21 = q20 * c0 - p20 * s0 + r20, q21 * c1 - p21 * s1 + r21
+            a22, a23 = q22 * c2 - p22 * s2 + r22, q23 * c3 - p23 * s3 + r23
+            a30, a31 = q30 * c0 - p30 * s0 + r30, q31 * c1 - p31 * s1 + r31
+            a32, a33 = q32 * c2 - p32 * s2 + r32, q33 * c3 - p33 * s3 + r33
+            dx = _solve4(
+                (
+                    (a00, a01, a02, a03),
+                    (a10, a11, a12, a13),
+                    (a20, a21, a22, a23),
+                    (a30, a31, a32, a33),
+                ),
+                (f0, f1, f2, f3),
+            )
+            if dx is None:
+                break
+            dx0, dx1, dx2, dx3 = dx
+            step = max(abs(dx0), abs(dx1), abs(dx2), abs(dx3))
+            if not step <= 1e300:
+                break
+            if r <= atol and step >= last:  # converged already: rounding level
+                return [x0, x1, x2, x3], True, it, r, it + 1
+            x0, x1, x2, x3 = x0 + dx0, x1 + dx1, x2 + dx2, x3 + dx3
+            if predict and step <= 0.5 * last < math.inf and 2 * step * step <= xtol * last:
+                return [x0, x1, x2, x3], True, it + 1, r, it + 1
+            last = step
+        return [x0, x1, x2, x3], r <= atol, max_iterations, r, max_iterations
 
     def entries(self, C, S) -> list:
         """``F_theta``'s entries as :class:`_StackedLU` takes them: 1-D arrays over the
@@ -438,21 +514,28 @@ class _Angles(_Eqs):
         kc, pxc, pyc, points, kmov, dmov, pmov = self._known_plan(st.nb)
         n, ne = st.n, self.ne
         pts = [f(body, s) for body, s in points]  # each moving point once
-        K = np.empty((n, self.nb))
-        K[:] = kc if order == 0 else 0.0
+        # (N, n) arrays whose columns are contiguous (transposed (n, N) blocks): each
+        # term is added into, and each reader takes, one column at a time; a row of
+        # constants broadcast over (N, n) rows of a few entries costs some 15 us
+        nb = self.nb
+        Kt, Pxt, Pyt = np.empty((nb, n)), np.empty((nb, n)), np.empty((nb, n))
+        if order == 0:
+            Kt[:] = kc[:, None]
+            Pxt[:] = pxc[:, None]
+            Pyt[:] = pyc[:, None]
+        else:
+            Kt.fill(0.0)
+            Pxt.fill(0.0)
+            Pyt.fill(0.0)
         for e, sign, j in kmov:
             px, py = pts[j]
-            K[:, e] += sign * px
-            K[:, ne + e] += sign * py
+            Kt[e] += sign * px
+            Kt[ne + e] += sign * py
         for col, sign, body in dmov:
-            K[:, col] += sign * ang[body]
-        Px = np.empty((n, self.nb))
-        Py = np.empty((n, self.nb))
-        Px[:] = pxc if order == 0 else 0.0
-        Py[:] = pyc if order == 0 else 0.0
+            Kt[col] += sign * ang[body]
         for kb, j in pmov:
-            Px[:, kb], Py[:, kb] = pts[j]
-        return K, Px, Py
+            Pxt[kb], Pyt[kb] = pts[j]
+        return Kt.T, Pxt.T, Pyt.T
 
     def known_one(self, st: State, order: int = 0) -> tuple[list, list, list]:
         """:meth:`known` at the one position of ``st`` as lists of floats (``K``, ``Px``,
