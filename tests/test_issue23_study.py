@@ -217,8 +217,8 @@ def test_design_that_assembles_in_part_has_blank_figures_and_no_pass(tmp_path):
     figures = [
         "rocker.swing [deg]",
         "min(transmission_angle.B) [deg]",
-        "max(abs(input.torque)) [N*mm]",  # the file's units: mm
-        "max(O2.F) [N]",
+        "max(abs(input.torque)) (samples) [N*mm]",  # the file's units: mm
+        "max(O2.F) (samples) [N]",
         "cycle.work [J]",
         "req.transmission [deg]",
         "req.swing [deg]",

@@ -229,7 +229,7 @@ def test_sweep_writes_the_file_units(tmp_path):
                 assert r[k] == s[k]
             else:  # 10 significant digits each
                 assert float(r[k]) == pytest.approx(float(s[k]) * f, rel=1e-9)
-    assert "range(B.y) [mm]" in h and "max(abs(input.torque)) [N*mm]" in h
+    assert "range(B.y) [mm]" in h and "max(abs(input.torque)) (samples) [N*mm]" in h
     assert "req.swing [deg]" in h  # the requirement's own unit
     head = (tmp_path / "file" / "designs" / "design-00000.csv").read_text().splitlines()[0]
     assert "B.y [mm]" in head and "rocker.omega [deg/s]" in head

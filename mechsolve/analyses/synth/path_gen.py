@@ -642,12 +642,18 @@ def _design(batch: Batch, names: list[str], x: np.ndarray, family: str) -> Desig
     lo, hi = (0.0, TWO_PI) if spec.closed else (u[0] + off, u[-1] + off)
     mus = [m for m in np.linspace(0, math.pi / 2, 901)
            if _margin(a, b, c, d, lo, hi, m) > 0]  # fmt: skip
+    kind = grashof_type(a, b, c, d)
+    # the type asked, as the row names it: a margin of rounding is a change point
+    asked = {"crank-rocker": "crank-rocker", "double-crank": "double crank"}.get(spec.grashof)
+    notes = [] if asked is None or kind.startswith(asked) else [f"not a {spec.grashof}: {kind}"]
     return Design(
         method="path generation",
         family=family,
         lengths={"crank": a, "coupler": b, "rocker": c, "frame": d},
         ground={"O2": _pt(g2), "O4": _pt(g4)},
-        grashof=grashof_type(a, b, c, d),
+        grashof=kind,
+        valid=not notes,
+        notes=notes,
         min_transmission=float(mus[-1]) if mus else 0.0,
         extra={"x": dict(zip(names, map(float, x))), "sigma": sigma,
                "objective": float(np.sum(dist**2)), "distances": dist, "u": u},
@@ -787,5 +793,6 @@ def describe_rows(out: Any) -> list[str]:
             f" {mark}{i:<2} {d.family:<13} {d.extra['objective'] / k**2:<21.6e} "
             f"{float(np.max(d.extra['distances'])) / k:<21.6e} {L['crank']:<10.6f} "
             f"{L['coupler']:<10.6f} {L['rocker']:<10.6f} {L['frame']:<10.6f} {d.grashof}"
+            + ("" if d.valid else "  INVALID: " + "; ".join(d.notes))
         )
     return rows
