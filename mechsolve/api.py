@@ -177,8 +177,7 @@ def _kinds_of(mech: Mechanism, pair: str) -> str:
 
 def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     """Validate, count degrees of freedom, and assemble the start position."""
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
+    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
     an = Analysis(mech, method)
     u0 = an.start_value()
     asm = an.assemble(u0)

@@ -171,8 +171,7 @@ def stream(
     sweep of the same range (for plots and the design figures).
     """
 
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
+    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
     an = Analysis(mech, method)
     u0 = an.start_value()
     u_all, _ = an.sweep_values(u0, step=step)

@@ -66,7 +66,8 @@ def solve(
     Parameters
     ----------
     mech
-        A mechanism from :func:`load`, or built in code (validated here if it was not).
+        A mechanism from :func:`load`, or built in code: validated here if it was not,
+        or was edited since it was validated.
     step
         Override the sweep step (rad, or m for a linear driver).
     method
@@ -76,8 +77,7 @@ def solve(
     forces
         Run the force analysis (default: when the model has masses or loads).
     """
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
+    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
     an = analysis_for(mech, method)  # kept between solves of an unchanged model
     ud = udd = None
     if mech.driver.motion is not None:  # a motion law of time
