@@ -97,3 +97,123 @@ def test_a_valid_edit_is_solved_and_an_unchanged_model_not_checked_again(monkeyp
     np.testing.assert_allclose(np.diff(res.u), math.radians(10), rtol=1e-12)
     ms.solve(m)
     assert len(calls) == n0 + 1
+
+
+# -- 2. solve's step and method are checked as the command line checks them -----------
+
+
+@pytest.mark.parametrize(
+    "step", [-math.radians(2), 0.0, float("inf"), float("nan"), -0.0, True, [1.0]]
+)
+def test_solve_refuses_a_step_that_is_not_positive(step):
+    """The CLI's --step refuses these (exit 2); solve gave one position (negative,
+    infinite), a ZeroDivisionError (0) or a message about 'nan positions'."""
+    m = ms.load(FOURBAR)
+    with pytest.raises(ms.InputError, match=r"step=.*(positive|number)"):
+        ms.solve(m, step=step)
+
+
+@pytest.mark.parametrize(
+    ("text", "step_deg"), [("2 deg", 2.0), ("3", 3.0), ("0.5 s", math.degrees(0.5))]
+)
+def test_solve_takes_a_step_as_the_command_line_writes_it(text, step_deg):
+    """A text step is read as --step reads it: an angle (degrees when bare), or a time at
+    the driver's 1 rad/s (0.5 s is 0.5 rad); the sweep is then 360 deg / step intervals."""
+    res = ms.solve(ms.load(FOURBAR), step=text)
+    d = np.diff(res.u)
+    np.testing.assert_allclose(d[:-1], math.radians(step_deg), rtol=1e-12)
+    assert len(res) == math.ceil(360 / step_deg - 1e-9) + 1
+
+
+def test_solve_refuses_a_text_step_of_the_wrong_kind():
+    with pytest.raises(ms.InputError, match=r"step='2 mm'.*an angle"):
+        ms.solve(ms.load(FOURBAR), step="2 mm")
+    with pytest.raises(ms.InputError, match=r"step='-2 deg'.*positive"):
+        ms.solve(ms.load(FOURBAR), step="-2 deg")
+
+
+@pytest.mark.parametrize("method", ["foo", "Newton", 3])
+def test_solve_and_check_refuse_an_unknown_method(method):
+    m = ms.load(FOURBAR)
+    with pytest.raises(ms.InputError, match=r"method=.*'auto', 'newton', 'split-newton'"):
+        ms.solve(m, method=method)
+    with pytest.raises(ms.InputError, match=r"method=.*'auto', 'newton', 'split-newton'"):
+        ms.check(m, method=method)
+
+
+def test_a_model_built_with_an_unknown_solver_method_is_refused():
+    m = ms.load(FOURBAR)
+    m.solver.method = "foo"
+    with pytest.raises(ms.InputError, match=r"solver\.method.*'foo'"):
+        ms.solve(m)
+
+
+def test_stream_refuses_a_negative_step(tmp_path):
+    with pytest.raises(ms.InputError, match=r"step=.*positive"):
+        ms.stream(ms.load(FOURBAR), tmp_path / "s.csv", step=-0.1)
+
+
+# -- 3. a motion law swept over driver positions takes the step override --------------
+
+ACCELERATE = FOURBAR.read_text().replace(
+    "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}",
+    "driver: {joint: O2, start: 20 deg, motion: {accelerate: 4 rad/s^2, from: 1.5 rad/s}}",
+)
+LAW_IN_TIME = FOURBAR.read_text().replace(
+    "driver: {joint: O2, speed: 1 rad/s, start: 0 deg}",
+    'driver: {joint: O2, motion: {law: "0.3 + 2 * t + 0.5 * sin(3 * t)"}}',
+)
+
+
+def _accelerating(sweep: str):
+    text = ACCELERATE.replace("sweep: {range: 360 deg, step: 2 deg}", sweep)
+    assert "accelerate" in text and sweep in text
+    return text
+
+
+@pytest.mark.parametrize("step", [math.radians(1), "1 deg"])
+def test_a_law_swept_over_positions_takes_the_step(step):
+    """Constant acceleration from 1.5 rad/s at 4 rad/s^2 over 90 deg: 1 deg steps are 91
+    positions (not the file's 19), each at the time the closed form gives,
+    t = (sqrt(w0^2 + 2 a (u - u0)) - w0) / a."""
+    m = ms.loads(_accelerating("sweep: {range: 90 deg, step: 5 deg}"))
+    assert len(ms.solve(m)) == 19
+    res = ms.solve(m, step=step)
+    assert len(res) == 91
+    du = res.u - math.radians(20)
+    np.testing.assert_allclose(du, np.radians(np.arange(91.0)), atol=1e-12)
+    t = (np.sqrt(1.5**2 + 2 * 4 * du) - 1.5) / 4
+    np.testing.assert_allclose(res.t, t, atol=1e-12)
+    np.testing.assert_allclose(res.link("crank").omega, 1.5 + 4 * t, rtol=1e-10)
+
+
+def test_the_cli_takes_the_step_of_a_law_swept_over_positions(tmp_path):
+    from click.testing import CliRunner
+
+    from mechsolve.cli.main import main
+
+    path = tmp_path / "acc.yaml"
+    path.write_text(_accelerating("sweep: {range: 90 deg, step: 5 deg}"), encoding="utf-8")
+    out = tmp_path / "out"
+    r = CliRunner().invoke(
+        main, ["run", str(path), "--step", "1 deg", "-o", str(out), "--no-plots", "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    rows = (out / "results.csv").read_text(encoding="utf-8").strip().splitlines()
+    assert len(rows) == 1 + 91
+
+
+def test_a_law_in_time_refuses_a_negative_time_step():
+    """In time (duration 2 s) a step of -0.05 s gave one position; 0.1 s gives 21."""
+    m = ms.loads(
+        LAW_IN_TIME.replace(
+            "sweep: {range: 360 deg, step: 2 deg}", "sweep: {duration: 2 s, time_step: 0.05 s}"
+        )
+    )
+    assert len(ms.solve(m)) == 41
+    res = ms.solve(m, step=0.1)
+    np.testing.assert_allclose(res.t, np.arange(21) * 0.1, atol=1e-12)
+    t = res.t
+    np.testing.assert_allclose(res.u, 0.3 + 2 * t + 0.5 * np.sin(3 * t), atol=1e-12)
+    with pytest.raises(ms.InputError, match=r"step=.*positive"):
+        ms.solve(m, step=-0.05)
