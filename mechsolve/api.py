@@ -23,6 +23,7 @@ from mechsolve.model.parse import load, loads
 from mechsolve.results.results import Results
 from mechsolve.results.run import (  # noqa: F401
     PLOT_STEP,
+    checked_mechanism,
     checked_method,
     for_plots,
     parse_step,
@@ -184,7 +185,7 @@ def _kinds_of(mech: Mechanism, pair: str) -> str:
 
 def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     """Validate, count degrees of freedom, and assemble the start position."""
-    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
+    checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
     an = Analysis(mech, checked_method(method))
     u0 = an.start_value()
     asm = an.assemble(u0)

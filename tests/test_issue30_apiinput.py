@@ -217,3 +217,126 @@ def test_a_law_in_time_refuses_a_negative_time_step():
     np.testing.assert_allclose(res.u, 0.3 + 2 * t + 0.5 * np.sin(3 * t), atol=1e-12)
     with pytest.raises(ms.InputError, match=r"step=.*positive"):
         ms.solve(m, step=-0.05)
+
+
+# -- 4. reaction() returns the caller's own arrays -------------------------------------
+
+
+def _column(path, header):
+    import csv
+
+    with open(path, encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    j = rows[0].index(header)
+    return np.array([float(r[j]) if r[j] else np.nan for r in rows[1:]])
+
+
+def test_editing_a_reaction_in_place_leaves_the_results_alone(tmp_path):
+    """A user converting to mN (``Fx *= 1000``) changed the CSV and the summary written
+    afterwards. The CSV's reactions must still balance the crank (a uniform bar O2-A of
+    0.05 kg, gravity along y only, no load on it): Newton along x,
+    O2.Fx - A.Fx = m a_Gx with a_G = a_A / 2."""
+    res = ms.run(FOURBAR)
+    r = res.reaction("A")
+    peak = float(np.nanmax(r["F"]))
+    r["Fx"] *= 1000
+    r["F"][:] = 0.0
+    res.reaction("O2")["Fx"][:] = np.nan
+    path = res.to_csv(tmp_path / "r.csv")
+    fa = _column(path, "A(crank->coupler).Fx [N]")
+    fo = _column(path, "O2(ground->crank).Fx [N]")
+    ax = _column(path, "A.ax [m/s^2]")
+    np.testing.assert_allclose(fo - fa, 0.05 * ax / 2, atol=1e-12)
+    assert float(np.nanmax(res.reaction("A")["F"])) == peak
+    line = next(ln for ln in res.summary().splitlines() if "peak reactions" in ln)
+    assert f"A {peak:.4g} N" in line
+
+
+# -- 5. a user's mistake through the Results is an InputError -------------------------
+
+NO_MASS = "\n".join(
+    ln
+    for ln in FOURBAR.read_text().splitlines()
+    if not ln.strip().startswith(("mass:", "uniform_bar:", "gravity:"))
+).split("\nloads:")[0]
+
+
+@pytest.mark.parametrize(
+    ("ask", "message"),
+    [
+        (lambda r: r.reaction("Q"), r"no joint named 'Q'"),
+        (lambda r: r.point("Z"), r"no point named 'Z'"),
+        (lambda r: r.link("crank2"), r"no link named 'crank2'"),
+        (lambda r: r.slider("s"), r"no slider named 's'"),
+        (lambda r: r.relative("crank", "Z"), r"no link named 'Z'"),
+    ],
+)
+def test_an_unknown_name_is_an_input_error_and_still_a_key_error(ask, message):
+    res = ms.run(FOURBAR)
+    with pytest.raises(ms.InputError, match=message):
+        ask(res)
+    with pytest.raises(KeyError):  # callers that catch KeyError keep working
+        ask(res)
+
+
+def test_reaction_at_checks_its_arguments():
+    """``near`` outside the sweep was an IndexError and a scalar x a TypeError. A scalar
+    is a driver value like any other: the reaction there equals the sampled one when it
+    is a sample's driver value."""
+    res = ms.run(FOURBAR)
+    with pytest.raises(ms.InputError, match=r"near=1000.*0 \.\. 180"):
+        res.reaction_at("A", np.array([0.1]), 1000)
+    with pytest.raises(ms.InputError, match=r"no joint named 'Q'"):
+        res.reaction_at("Q", np.array([0.1]), 0)
+    k = 17
+    one = res.reaction_at("A", float(res.u[k]), k)
+    assert one["Fx"].shape == (1,)
+    np.testing.assert_allclose(one["Fx"][0], res.reaction("A")["Fx"][k], rtol=1e-9, atol=1e-12)
+
+
+def test_to_csv_takes_units_as_the_command_line_writes_them(tmp_path):
+    """``units`` may be what --units takes; a length in mm is the SI column times 1000."""
+    res = ms.run(FOURBAR)
+    si = res.to_csv(tmp_path / "si.csv")
+    mm = res.to_csv(tmp_path / "mm.csv", units="length=mm")
+    np.testing.assert_allclose(
+        _column(mm, "A.x [mm]"), 1000 * _column(si, "A.x [m]"), rtol=1e-9, atol=1e-9
+    )
+    with pytest.raises(ms.InputError, match=r"units='mm'.*KEY=UNIT"):
+        res.to_csv(tmp_path / "bad.csv", units="mm")
+    with pytest.raises(ms.InputError, match=r"units=3"):
+        res.to_csv(tmp_path / "bad.csv", units=3)
+    assert not (tmp_path / "bad.csv").exists()
+
+
+@pytest.mark.parametrize("entry", ["solve", "check"])
+def test_solve_given_a_path_says_to_load_it(entry):
+    with pytest.raises(ms.InputError, match=r"ms\.load\(path\)"):
+        getattr(ms, entry)(str(FOURBAR))
+
+
+def test_a_model_without_force_analysis_says_so():
+    """Without masses or loads no force analysis runs (the command line prints no torque,
+    no work): every force figure gives the one InputError, also still a KeyError where
+    driving_effort's KeyError was; with forces=True the figures are there and are zero
+    (no mass, no load, no friction: no force anywhere)."""
+    m = ms.loads(NO_MASS)
+    assert not m.needs_forces
+    res = ms.solve(m)
+    asks = [
+        lambda: res.work(),
+        lambda: res.mean_effort(),
+        lambda: res.efficiency,
+        lambda: res.driving_effort,
+        lambda: res.reaction("A"),
+        lambda: res.reaction_at("A", np.array([0.1]), 0),
+    ]
+    for ask in asks:
+        with pytest.raises(ms.InputError, match="no force analysis was run"):
+            ask()
+    with pytest.raises(KeyError):
+        _ = res.driving_effort
+    forced = ms.solve(m, forces=True)
+    assert forced.work() == 0.0
+    np.testing.assert_array_equal(forced.driving_effort, 0.0)
+    np.testing.assert_array_equal(forced.reaction_at("A", np.array([0.1]), 0)["F"], 0.0)

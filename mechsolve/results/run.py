@@ -55,6 +55,19 @@ def parse_step(mech: Mechanism, text: str | float, option: str = "--step ") -> f
     return val
 
 
+def checked_mechanism(mech: object) -> Mechanism:
+    """``mech`` itself when it is a :class:`Mechanism`, else an :class:`InputError` that
+    says how to get one (a path is loaded first)."""
+    if not isinstance(mech, Mechanism):
+        shown = repr(mech)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise InputError(
+            f"expected a Mechanism, got {type(mech).__name__} {shown}: load the file first "
+            "with ms.load(path), or load and solve it in one call with ms.run(path)"
+        )
+    return mech
+
+
 def checked_step(mech: Mechanism, step: object) -> float | None:
     """:func:`solve`'s ``step``, checked as ``--step`` is: None (the file's), a positive
     finite number in the driver's SI unit (rad; m for a linear driver; s for a sweep in
@@ -107,7 +120,7 @@ def solve(
     forces
         Run the force analysis (default: when the model has masses or loads).
     """
-    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
+    checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
     step, method = checked_step(mech, step), checked_method(method)
     an = analysis_for(mech, method)  # kept between solves of an unchanged model
     ud = udd = None
