@@ -21,7 +21,15 @@ from mechsolve.joints.registry import KINDS
 from mechsolve.model import Mechanism
 from mechsolve.model.parse import load, loads
 from mechsolve.results.results import Results
-from mechsolve.results.run import PLOT_STEP, for_plots, parse_step, positions, solve  # noqa: F401
+from mechsolve.results.run import (  # noqa: F401
+    PLOT_STEP,
+    checked_mechanism,
+    checked_method,
+    for_plots,
+    parse_step,
+    positions,
+    solve,
+)
 from mechsolve.system.structure import grubler
 
 if TYPE_CHECKING:
@@ -177,9 +185,8 @@ def _kinds_of(mech: Mechanism, pair: str) -> str:
 
 def check(mech: Mechanism, method: str | None = None) -> CheckReport:
     """Validate, count degrees of freedom, and assemble the start position."""
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
-    an = Analysis(mech, method)
+    checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
+    an = Analysis(mech, checked_method(method))
     u0 = an.start_value()
     asm = an.assemble(u0)
     st = asm.state

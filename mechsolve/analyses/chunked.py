@@ -24,6 +24,7 @@ from mechsolve.core.sweep import Analysis, Failure, Solution
 from mechsolve.model import Mechanism
 from mechsolve.results.csv import CsvStream, in_units
 from mechsolve.results.results import Results
+from mechsolve.results.run import checked_mechanism, checked_method, checked_step
 from mechsolve.results.summary import rms_over
 
 CHUNK = 50_000
@@ -171,8 +172,8 @@ def stream(
     sweep of the same range (for plots and the design figures).
     """
 
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
+    checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
+    step, method = checked_step(mech, step), checked_method(method)
     an = Analysis(mech, method)
     u0 = an.start_value()
     u_all, _ = an.sweep_values(u0, step=step)

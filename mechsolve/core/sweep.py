@@ -144,12 +144,13 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
     def motion_values(self, time_step: float | None = None):
         """``(u, t, u', u'')`` of the sweep of a driver with a motion law: at time steps
         over the sweep's duration, or (constant acceleration over an angle range) at the
-        sweep's driver steps, each at the time the law reaches it."""
+        sweep's driver steps, each at the time the law reaches it. ``time_step``
+        overrides the file's step: in s, or in the driver's unit for a range."""
         d = self.mech.driver
         law = d.motion
         sw = self.mech.sweep
         if sw.duration is None:
-            u, _ = self.sweep_values(float(d.start))
+            u, _ = self.sweep_values(float(d.start), step=time_step)
             t = law.time_at(d.direction * (u - float(d.start)))
             reach = np.isfinite(t)
             if not reach.all():

@@ -63,6 +63,7 @@ def validate(mech: Mechanism) -> None:
     _check_joint_points_distinct(mech)
     _check_driver(mech, names)
     _check_sweep(mech)
+    _check_solver(mech)
     _check_loads(mech, links)
     _check_requirements(mech)
     _check_references(mech, links, owners)
@@ -298,6 +299,24 @@ def _check_sweep(mech: Mechanism) -> None:
             f"{MAX_POSITIONS:,} mechsolve solves in one run: use a larger step or a smaller "
             "range",
         )
+
+
+def _check_solver(mech: Mechanism) -> None:
+    """The solver options as the file reader takes them (a model built in code too)."""
+    from mechsolve.model.keys import METHODS
+
+    opts, where = mech.solver, mech.solver.where or ("solver",)
+    if not isinstance(opts.method, str) or opts.method not in METHODS:
+        raise mech.error(
+            where + ("method",),
+            f"method is {', '.join(repr(x) for x in METHODS)}, got {opts.method!r}",
+        )
+    t = opts.tolerance
+    if isinstance(t, bool) or not isinstance(t, (int, float)) or not 0 < t < 1e-2:
+        raise mech.error(where + ("tolerance",), "the tolerance must be between 0 and 0.01")
+    n = opts.max_iterations
+    if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 1000:
+        raise mech.error(where + ("max_iterations",), "max_iterations is a whole number 1..1000")
 
 
 def _check_loads(mech: Mechanism, links: dict[str, Link]) -> None:

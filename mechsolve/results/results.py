@@ -12,18 +12,32 @@ unwrapped along the sweep so that they change continuously, with the first value
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from mechsolve.base.units import OutputUnits
+from mechsolve.base.errors import InputError
+from mechsolve.base.units import OutputUnits, UnitError, parse_output_units
 from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
 from mechsolve.core.work import driver_work_why
 from mechsolve.model import GROUND, Mechanism
 from mechsolve.results.csv import write_csv
 from mechsolve.results.summary import Summary, unbounded_towards
+
+
+class NotInResults(InputError, KeyError):
+    """What was asked of the results is not in them: a point, link, slider or joint they
+    do not have, or forces where no force analysis ran. An :class:`InputError`, and a
+    :class:`KeyError` for the callers that catch that."""
+
+
+NO_FORCES = (
+    "no force analysis was run: the model has no masses or loads (solve(mech, "
+    "forces=True) runs it; a massless, unloaded linkage then needs no force)"
+)
 
 
 @dataclass
@@ -172,7 +186,7 @@ class Results(Summary):
     def point(self, name: str) -> PointMotion:
         """Kinematics of a named point."""
         if name not in self.analysis.points:
-            raise KeyError(f"no point named {name!r}")
+            raise NotInResults(f"no point named {name!r}")
         v = self.view
         x, y = v.quantity(name, "x"), v.quantity(name, "y")
         if v.has_velocity:
@@ -190,7 +204,7 @@ class Results(Summary):
     def link(self, name: str) -> LinkMotion:
         """Kinematics of a link (its frame's x axis)."""
         if name == GROUND or name not in self.analysis.system.index:
-            raise KeyError(f"no link named {name!r}")
+            raise NotInResults(f"no link named {name!r}")
         b = self.analysis.system.index[name]
         st = self.solution.state
         om = st.w[b] if self.view.has_velocity else self._nan()
@@ -202,7 +216,7 @@ class Results(Summary):
     def slider(self, name: str) -> SliderMotion:
         """Relative motion of a slider along its guide."""
         if name not in [j.name for j in self.mechanism.sliders]:
-            raise KeyError(f"no slider named {name!r}")
+            raise NotInResults(f"no slider named {name!r}")
         v = self.view
         s = v.quantity(name, "s")
         sv = v.quantity(name, "v") if v.has_velocity else self._nan()
@@ -275,7 +289,7 @@ class Results(Summary):
                 rows.append((zero, zero, zero))
                 continue
             if ln not in self.analysis.system.index:
-                raise KeyError(f"no link named {ln!r}")
+                raise NotInResults(f"no link named {ln!r}")
             k = self.analysis.system.index[ln]
             st = self.solution.state
             om = st.w[k] if self.view.has_velocity else self._nan()
@@ -330,11 +344,22 @@ class Results(Summary):
         j = self.mechanism.joint(name)
         return f"{name}({j.links[0]}->{j.links[1]})"
 
-    def reaction(self, name: str) -> dict[str, np.ndarray]:
-        """Reaction components of a joint: Fx, Fy, F (revolute) or N, M, Fx, Fy (slider)."""
+    def _with_forces(self):
+        """The force analysis, or the :class:`NotInResults` that says none ran."""
         if self.forces is None:
-            raise KeyError("no force analysis was run (the model has no masses or loads)")
-        return self.forces.reactions[name]
+            raise NotInResults(NO_FORCES)
+        return self.forces
+
+    def reaction(self, name: str) -> dict[str, np.ndarray]:
+        """Reaction components of a joint: Fx, Fy, F (revolute) or N, M, Fx, Fy (slider);
+        the caller's own copies."""
+        return {k: np.array(v, float) for k, v in self._reactions_of(name).items()}
+
+    def _reactions_of(self, name: str) -> dict:
+        r = self._with_forces().reactions
+        if name not in r:
+            raise NotInResults(f"no joint named {name!r} (joints: {', '.join(r)})")
+        return r[name]
 
     def solved_near(self, x: np.ndarray, near: int):
         """The positions at driver values ``x`` solved next to sample ``near`` of this
@@ -356,13 +381,24 @@ class Results(Summary):
         return one
 
     def reaction_at(self, name: str, x: np.ndarray, near: int) -> dict[str, np.ndarray]:
-        """Joint ``name``'s reaction components solved at driver values ``x`` next to
-        sample ``near`` of this sweep (see :meth:`solved_near`); NaN where a position
-        does not solve."""
+        """Joint ``name``'s reaction components solved at driver values ``x`` (one value or
+        a 1-D array) next to sample ``near`` of this sweep (its index; see
+        :meth:`solved_near`); arrays as long as ``x``, NaN where a position does not
+        solve."""
         from mechsolve.core import evaluate as core
 
-        one = self.solved_near(x, near)
-        extremes = self.forces.stroke_extremes if self.forces is not None else None
+        self._reactions_of(name)  # forces, and a joint of that name
+        n = len(self.u)
+        if isinstance(near, bool) or not isinstance(near, numbers.Integral) or not -n <= near < n:
+            raise InputError(f"near={near!r}: the index of a sample of this sweep, 0 .. {n - 1}")
+        try:
+            x = np.atleast_1d(np.asarray(x, float))
+        except (TypeError, ValueError):
+            raise InputError(f"x={x!r}: expected driver values (numbers)") from None
+        if x.ndim != 1:
+            raise InputError(f"x: expected one driver value or a 1-D array, got shape {x.shape}")
+        one = self.solved_near(x, int(near) % n)
+        extremes = self.forces.stroke_extremes
         with np.errstate(all="ignore"):
             r = core.forces(self.analysis, one, extremes).reactions[name]
         bad = ~np.asarray(one.ok, bool)
@@ -371,9 +407,7 @@ class Results(Summary):
     @property
     def driving_effort(self) -> np.ndarray:
         """The driving torque (N m) or force (N) the driver applies to the driven link."""
-        if self.forces is None:
-            raise KeyError("no force analysis was run (the model has no masses or loads)")
-        f = self.forces
+        f = self._with_forces()
         ok = f.ok.copy()
         ok[f.effort_by_limit] = True  # its limit along the motion at a singular position
         return np.where(ok, f.effort, np.nan)
@@ -438,7 +472,7 @@ class Results(Summary):
         same motion and loads. Given where the driver delivers power both with and without
         friction (elsewhere the loads or the stored energy drive the mechanism and the
         ratio is not an efficiency): empty there."""
-        f = self.forces
+        f = self._with_forces()
         if f.friction is None:
             return np.full(len(self.u), np.nan)
         p_in = np.where(f.ok, f.power_input, np.nan)
@@ -468,6 +502,7 @@ class Results(Summary):
         :func:`mechsolve.core.work.driver_work_why`), computed once."""
 
         if not hasattr(self, "_work"):
+            self._with_forces()
             self._work = driver_work_why(self.analysis, self.solution, self.forces)
         return self._work
 
@@ -493,6 +528,7 @@ class Results(Summary):
         ``2 pi``: ``W / 2.4e-16``) and the angle is passed more than once. There the mean
         is over time, ``integral of T dt / duration`` (trapezoidal rule on the solved
         samples, as the RMS), said ``time mean``."""
+        self._with_forces()
         u = np.asarray(self.u, float)
         du = np.diff(u)
         tol = 1e-12 * float(np.sum(np.abs(du)))  # rounding, against the path
@@ -558,7 +594,17 @@ class Results(Summary):
 
     def to_csv(self, path, units: OutputUnits | None = None) -> Path:
         """Write the table as CSV (see :mod:`mechsolve.results.csv`) in ``units`` (SI
-        when not given; ``self.mechanism.output_units()`` for the file's); return the
+        when not given; ``self.mechanism.output_units()`` for the file's, or a text as
+        ``--units`` takes it: ``"SI"``, ``"file"``, ``"length=mm,force=kN"``); return the
         path."""
-
+        if isinstance(units, str):
+            try:
+                units = parse_output_units(units, self.mechanism.output_units())
+            except UnitError as exc:
+                raise InputError(f"units={units!r}: {exc}") from None
+        elif units is not None and not isinstance(units, OutputUnits):
+            raise InputError(
+                f"units={units!r}: expected res.mechanism.output_units(), an OutputUnits, or "
+                "a text as --units takes it ('SI', 'file', 'length=mm,force=kN')"
+            )
         return write_csv(self, path, units)

@@ -7,6 +7,7 @@ gives the finer sweep that plots, summaries and requirement checks read their fi
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
 
@@ -15,23 +16,25 @@ from mechsolve.base.units import UnitError, parse_quantity
 from mechsolve.core import evaluate as core
 from mechsolve.core.kept import analysis_for
 from mechsolve.model import Mechanism
+from mechsolve.model.keys import METHODS
 from mechsolve.results.results import Results
 
 
-def parse_step(mech: Mechanism, text: str | float) -> float:
+def parse_step(mech: Mechanism, text: str | float, option: str = "--step ") -> float:
     """A sweep step from the command line: an angle (``"5 deg"``), a length for a linear
-    driver (``"2 mm"``) or a time (``"0.01 s"``), converted to the driver's coordinate."""
+    driver (``"2 mm"``) or a time (``"0.01 s"``), converted to the driver's coordinate.
+    ``option`` names it in the messages (``"step="`` for :func:`solve`'s argument)."""
     linear = mech.driver is not None and mech.joint(mech.driver.joint).coordinate == "length"
     if mech.driver is not None and mech.sweep.duration is not None:  # swept in time
         try:
             val = parse_quantity(text, "time")
         except UnitError:
             raise InputError(
-                f"--step {text!r}: this driver follows a motion law of time: give a time "
+                f"{option}{text!r}: this driver follows a motion law of time: give a time "
                 "step such as '0.01 s'"
             ) from None
         if not val > 0:
-            raise InputError(f"--step {text!r}: the step must be positive")
+            raise InputError(f"{option}{text!r}: the step must be positive")
         return val
     kind = "length" if linear else "angle"
     default = mech.length_unit if linear else "deg"
@@ -41,15 +44,53 @@ def parse_step(mech: Mechanism, text: str | float) -> float:
         try:
             val = parse_quantity(text, "time") * abs(mech.driver.speed)
             if val == 0:
-                raise InputError("--step: a driver at rest (speed 0) has no time step")
+                raise InputError(f"{option}{text!r}: a driver at rest (speed 0) has no time step")
         except UnitError:
             raise InputError(
-                f"--step {text!r}: expected {'a length' if linear else 'an angle'} such as "
+                f"{option}{text!r}: expected {'a length' if linear else 'an angle'} such as "
                 f"{'2 mm' if linear else '5 deg'}, or a time such as '0.01 s'"
             ) from None
     if not val > 0:
-        raise InputError(f"--step {text!r}: the step must be positive")
+        raise InputError(f"{option}{text!r}: the step must be positive")
     return val
+
+
+def checked_mechanism(mech: object) -> Mechanism:
+    """``mech`` itself when it is a :class:`Mechanism`, else an :class:`InputError` that
+    says how to get one (a path is loaded first)."""
+    if not isinstance(mech, Mechanism):
+        shown = repr(mech)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise InputError(
+            f"expected a Mechanism, got {type(mech).__name__} {shown}: load the file first "
+            "with ms.load(path), or load and solve it in one call with ms.run(path)"
+        )
+    return mech
+
+
+def checked_step(mech: Mechanism, step: object) -> float | None:
+    """:func:`solve`'s ``step``, checked as ``--step`` is: None (the file's), a positive
+    finite number in the driver's SI unit (rad; m for a linear driver; s for a sweep in
+    time), or a text such as ``"2 deg"`` read as the command line reads it."""
+    if step is None:
+        return None
+    if isinstance(step, str):
+        return parse_step(mech, step, "step=")
+    if isinstance(step, bool) or not isinstance(step, numbers.Real):
+        raise InputError(
+            f"step={step!r}: expected a number (rad, m for a linear driver, s for a sweep in "
+            "time) or a text such as '2 deg'"
+        )
+    if not (step > 0 and math.isfinite(step)):
+        raise InputError(f"step={step!r}: the step must be a positive finite number")
+    return float(step)
+
+
+def checked_method(method: object) -> str | None:
+    """:func:`solve`'s ``method``: None (the file's) or one of ``--method``'s choices."""
+    if method is not None and (not isinstance(method, str) or method not in METHODS):
+        raise InputError(f"method={method!r}: the method is one of {', '.join(map(repr, METHODS))}")
+    return method
 
 
 def solve(
@@ -66,22 +107,25 @@ def solve(
     Parameters
     ----------
     mech
-        A mechanism from :func:`load`, or built in code (validated here if it was not).
+        A mechanism from :func:`load`, or built in code: validated here if it was not,
+        or was edited since it was validated.
     step
-        Override the sweep step (rad, or m for a linear driver).
+        Override the sweep step: rad, or m for a linear driver, or s for a sweep in time
+        (a motion law with a ``duration``); or a text as ``--step`` takes it (``"2 deg"``,
+        ``"0.01 s"``). Positive and finite, else an :class:`InputError`.
     method
-        ``"auto"`` or ``"newton"``; default from the file.
+        ``"auto"``, ``"newton"`` or ``"split-newton"``; default from the file.
     velocity, acceleration
         Override the file's ``outputs.quantities``.
     forces
         Run the force analysis (default: when the model has masses or loads).
     """
-    if not mech.__dict__.get("_validated"):  # built in code: check it first
-        mech.validate()
+    checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
+    step, method = checked_step(mech, step), checked_method(method)
     an = analysis_for(mech, method)  # kept between solves of an unchanged model
     ud = udd = None
-    if mech.driver.motion is not None:  # a motion law of time
-        u, t, ud, udd = an.motion_values(step if mech.sweep.duration is not None else None)
+    if mech.driver.motion is not None:  # a motion law: in time, or over driver positions
+        u, t, ud, udd = an.motion_values(step)
     else:
         u, t = an.sweep_values(an.start_value(), step=step)
     vel = mech.outputs.velocity if velocity is None else velocity

@@ -517,8 +517,7 @@ def build_polygons(
 ) -> PolygonResult:
     """Construct the polygons of ``mech`` at ``at`` (see :func:`resolve_at`) and check
     them against the analytic solution; nothing is drawn."""
-    if not mech.__dict__.get("_validated"):
-        mech.validate()
+    mech.ensure_valid()  # built in code, or edited since it was loaded: check it first
     for name, val in (("--scale-v", scale_v), ("--scale-a", scale_a)):
         if val is not None and not (val > 0 and math.isfinite(val)):
             raise InputError(f"{name} {val!r}: a scale is a positive number of units per mm")
