@@ -421,21 +421,53 @@ class _Reducer:
             if not 0 <= j < n or not ok[j]
         ]
         for lo, hi, near in sides:
-            for _ in range(40):
-                if not abs(hi - lo) > _TOL * scale:
-                    break
-                x = np.linspace(lo, hi, _GRID)
-                vals = sense * self._values(arg, x, near)
-                if not np.any(np.isfinite(vals)):
-                    break
-                j = int(np.nanargmax(vals))
-                if vals[j] > best:
-                    best, where = float(vals[j]), float(x[j])
-                lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+            best, where = self._narrow(arg, sense, lo, hi, near, best, where)
         for e in edges:
             if e != u[k] and abs(where - e) <= _TOL * scale and self._unbounded(arg, sense, k, e):
                 return math.inf, e
+        for near, e, away in _gap_sides(fine):  # up to each edge of a range not closing
+            best, where = self._towards_edge(arg, sense, (near, away), e, best, where)
+            if math.isinf(best):
+                break
         return best, where
+
+    def _narrow(self, arg, sense: int, lo: float, hi: float, near: int, best, where):
+        """The best of ``sense * arg`` between ``lo`` and ``hi`` (solved next to sample
+        ``near``) and where it is, if better than ``best``: a grid narrowed around its
+        best point down to :data:`_TOL`."""
+        fine = self.fine
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        for _ in range(40):
+            if not abs(hi - lo) > _TOL * scale:
+                break
+            x = np.linspace(lo, hi, _GRID)
+            vals = sense * self._values(arg, x, near)
+            if not np.any(np.isfinite(vals)):
+                break
+            j = int(np.nanargmax(vals))
+            if vals[j] > best:
+                best, where = float(vals[j]), float(x[j])
+            lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+        return best, where
+
+    def _towards_edge(self, arg, sense: int, side: tuple[int, int], edge: float, best, where):
+        """``(best, where)`` with the interval from solved sample ``k`` to the ``edge``
+        of a range where the mechanism cannot close searched too (an extreme next to a
+        dead zone between two samples lies there, not at a sample): ``(inf, edge)``
+        where ``arg`` grows without bound towards the edge. A sample at the edge itself
+        (the plots' sweep has one) is searched from the sample before it (``side``: ``k``
+        and the step of the index away from the range)."""
+        fine = self.fine
+        k, away = side
+        u, ok = np.asarray(fine.u, float), fine.ok
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        if abs(u[k] - edge) <= _TOL * scale:
+            k = k + away
+            if not (0 <= k < len(u) and ok[k]):
+                return best, where
+        if self._unbounded(arg, sense, k, edge):
+            return math.inf, edge
+        return self._narrow(arg, sense, float(u[k]), edge, k, best, where)
 
     def _unbounded(self, arg, sense: int, k: int, edge: float) -> bool:
         """Whether ``arg`` grows without bound (in the direction ``sense``) towards the
@@ -483,6 +515,22 @@ def _edge(res: Results, k: int, side: int) -> float:
         elif side < 0 and f.last == k - 1:
             x = f.edge_out
     return float(x) if math.isfinite(x) else float(res.u[k])
+
+
+def _gap_sides(res: Results) -> list[tuple[int, float, int]]:
+    """(solved sample, driver value of the edge, the step of the index away from the
+    range) for each side of each range where the
+    mechanism cannot close, where the edge is located: the ranges of unsolved positions
+    and the dead zones the sweep steps over between two samples."""
+    sol, ok, n = res.solution, res.ok, len(res.u)
+    out = []
+    for f in sol.failures:
+        out += [(f.first - 1, f.edge_in, -1), (f.last + 1, f.edge_out, 1)]
+    for e in sol.events:
+        if e.kind == "dead zone":
+            j = next((i for i in range(e.after + 1, n) if ok[i]), n)
+            out += [(e.after, e.edge_in, -1), (j, e.edge_out, 1)]
+    return [(k, float(x), a) for k, x, a in out if 0 <= k < n and ok[k] and math.isfinite(x)]
 
 
 _GRID = 65  # points of each narrowing of an extreme's interval (32 times narrower each)
@@ -553,6 +601,40 @@ def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[
     return value, (math.nan if where is None else where)
 
 
+def _closes(r: Requirement, results: Results) -> Verdict:
+    """The verdict of ``full turn``: every position solved over a full turn, and no
+    dead zone stepped over between two samples (the loop cannot close there, so the
+    crank does not turn fully even though every sample closes)."""
+    n = len(results.u)
+    solved = int(np.count_nonzero(results.ok))
+    zones = [e for e in results.solution.events if e.kind == "dead zone"]
+    full = bool(results.is_full_cycle()) and solved == n and not zones
+    if full:
+        msg = f"assembles over the whole turn ({solved} of {n} positions): pass"
+    elif zones:
+        e = zones[0]
+        fu = results.format_u
+        span = (
+            f"between {fu(e.edge_in)} and {fu(e.edge_out)}"
+            if math.isfinite(e.edge_in) and math.isfinite(e.edge_out)
+            else f"near {fu(e.u)}"
+        )
+        more = f" (and {len(zones) - 1} more such range(s))" if len(zones) > 1 else ""
+        k = min(e.after + 1, n - 1)
+        msg = (
+            f"{e.group} cannot close {span}{more} (a range the sweep steps over, between "
+            f"its samples at {fu(float(results.u[e.after]))} and {fu(float(results.u[k]))})"
+            ": the crank does not turn fully: FAIL"
+        )
+    else:
+        msg = (
+            f"assembles at {solved} of {n} positions"
+            + ("" if results.is_full_cycle() else "; the sweep is not a full turn")
+            + ": FAIL"
+        )
+    return Verdict(r.name, r.text, float(solved), float(n), "", full, msg)
+
+
 def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     """Check every requirement of ``mech`` on ``results`` (``[]`` when there are none).
     A requirement that reads something the run does not have, or mixes kinds of
@@ -564,17 +646,7 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     out = []
     for r in reqs:
         if r.expr is None or red is None:
-            n = len(results.u)
-            solved = int(np.count_nonzero(results.ok))
-            full = bool(results.is_full_cycle()) and solved == n
-            msg = (
-                f"assembles over the whole turn ({solved} of {n} positions): pass"
-                if full
-                else f"assembles at {solved} of {n} positions"
-                + ("" if results.is_full_cycle() else "; the sweep is not a full turn")
-                + ": FAIL"
-            )
-            out.append(Verdict(r.name, r.text, float(solved), float(n), "", full, msg))
+            out.append(_closes(r, results))
             continue
         tree = r.expr.tree
         red.notes = []
