@@ -48,6 +48,8 @@ assembly:
 driver: {joint: O2, speed: 1 rad/s, start: START deg}
 sweep: {range: 360 deg, step: 2 deg}
 gravity: 9.81 m/s^2
+loads:
+  pull: {force: [0, -2 N], at: P, when: P.vx > 0}
 requirements:
   transmission: min(transmission_angle.B) >= 0 deg
   torque: max(abs(input.torque)) <= 0.3 N m
@@ -145,3 +147,23 @@ def test_study_row_of_a_dead_zone_design_is_not_ok():
     status = status_of(row, res)
     assert status.startswith("not assemblable between driver angle 359.18")
     assert np.isfinite(row["solved [-]"])
+
+
+def test_compare_names_the_dead_zone_not_a_still_output():
+    # before: "the output P.x does not move over the turn" (P.x travels about 88 mm)
+    from mechsolve.analyses.compare.figures import scheme_figures
+    from mechsolve.base.errors import InputError
+
+    te = edge_deg(31.50001)
+    for output in ("P.x", "rocker"):
+        try:
+            scheme_figures(_mech(31.50001, 0.05), name="tiny", output=output)
+        except InputError as exc:
+            msg = str(exc)
+        else:
+            raise AssertionError("compare accepted a crank that does not turn fully")
+        assert "does not move" not in msg
+        assert "cannot close between driver angle" in msg
+        assert "compare needs a crank that turns fully" in msg
+        shown = [float(x) for x in re.findall(r"driver angle ([0-9.e+-]+)°", msg)]
+        assert abs(shown[0] - (360 - te)) < 6e-4 and abs(shown[1] - te) < 1e-5
