@@ -167,3 +167,49 @@ def test_compare_names_the_dead_zone_not_a_still_output():
         assert "compare needs a crank that turns fully" in msg
         shown = [float(x) for x in re.findall(r"driver angle ([0-9.e+-]+)°", msg)]
         assert abs(shown[0] - (360 - te)) < 6e-4 and abs(shown[1] - te) < 1e-5
+
+
+# -- where an extreme is stated -----------------------------------------------------------
+def _variant(crank: float, coupler: float, start: float, step: float, reqs: str, span=360.0):
+    text = TEMPLATE.replace("CRANK", repr(crank)).replace("START", repr(start))
+    text = text.replace("range: 360 deg", f"range: {span!r} deg")
+    text = text.replace("B: [115, 0]", f"B: [{coupler!r}, 0]")
+    text = text.replace("step: 2 deg", f"step: {step!r} deg")
+    text = text[: text.index("requirements:")] + "requirements:\n" + reqs
+    return ms.loads(text)
+
+
+def test_transmission_zero_is_placed_at_the_dead_zones_edge_not_inside_it():
+    # 30 deg step: the loop cannot close for |theta| < 8.091 deg (closed form); before,
+    # "min(transmission_angle.B) = 0 deg (at driver angle 0 deg)", where it does not close
+    mech = _variant(32.0, 115.0, 15.0, 30.0, "  t: min(transmission_angle.B) >= 30 deg\n")
+    res = ms.solve(mech)
+    (v,) = check_requirements(mech, res)
+    te = math.degrees(math.acos((32.0**2 + D * D - (115.0 - C) ** 2) / (2 * 32.0 * D)))
+    assert abs(te - 8.091) < 1e-3
+    assert v.value == 0.0
+    (at,) = [float(x) for x in re.findall(r"driver angle ([0-9.e+-]+)°", v.message)]
+    assert min(abs(at - (360 - te)), abs(at - te)) < 6e-4
+
+
+def test_change_point_extreme_is_the_limit_where_it_holds():
+    # s + l = p + q (32 + 114.5 = 87.5 + 59): a change point at theta = 0, where the
+    # driving torque jumps (another branch on each side). Before, the limit from below
+    # 360 deg was printed "at driver angle 3.815e-06 deg", where the torque is 0.10667 N m
+    mech = _variant(32.0, 114.5, 0.0, 2.0, "  torque: max(abs(input.torque)) <= 0.07 N m\n")
+    res = ms.solve(mech)
+    (v,) = check_requirements(mech, res)
+    assert "e-06" not in v.message and "towards driver angle 360°" in v.message
+    assert "limit" in v.message
+
+    # the reference, as the review's: 0.001 deg sweeps either side of the change point
+    # (the last thousandths of a degree before it are left blank: singular to rounding)
+    def torque(start: float) -> tuple[np.ndarray, np.ndarray]:
+        r = ms.solve(_variant(32.0, 114.5, start, 0.001, "  c: full turn\n", span=0.099))
+        e = np.abs(r.driving_effort)
+        return np.degrees(r.u)[np.isfinite(e)], e[np.isfinite(e)]
+
+    (ub, below), (_, above) = torque(359.9), torque(0.0001)
+    limit = np.polyval(np.polyfit(ub - 360.0, below, 2), 0.0)  # extrapolated to 360 deg
+    assert abs(v.value - limit) < 1e-5 * limit
+    assert abs(above[0] - 0.10667) < 1e-5  # the torque just after 0 deg: not that value

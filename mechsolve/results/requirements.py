@@ -291,6 +291,7 @@ class _Reducer:
         if self.fine is not None:
             self.fctx = RunContext(self.fine, figures=False, of=self.ctx)
         self.notes: list[str] = []
+        self.jumps = False  # whether the last quantity's ends differ (see extreme)
 
     @classmethod
     def of(cls, results: Results) -> _Reducer:
@@ -378,7 +379,28 @@ class _Reducer:
                 f"{func} towards {self.res.format_u(u)}, where the mechanism stops closing"
             )
         elif math.isfinite(u):
-            self.notes.append(f"{func} at {self.res.format_u(u)}")
+            self.notes.append(f"{func} {self._place(u)}")
+
+    def _place(self, u: float) -> str:
+        """Where an extreme at the driver value ``u`` is, in words. Where the quantity
+        jumps where a full turn closes (a change point: its ends differ), an extreme at
+        an end is that end's (the end of the turn is 360°, not its start again) and, at
+        a singular position where the rates and efforts are their limits along the
+        motion, said to be that limit (the value from the other side differs)."""
+        fine = self.fine
+        n = len(fine.u)
+        at = self.res.format_u(u)
+        if not (self.jumps and u in (float(fine.u[0]), float(fine.u[-1]))):
+            return f"at {at}"
+        k = 0 if u == float(fine.u[0]) else n - 1
+        if k == n - 1:  # the end of a full turn: 360°, not its start again
+            at = fine.describe_u(k).split(" (")[0]
+        limits = set(fine.solution.rates_by_limit)
+        if fine.forces is not None:
+            limits |= set(fine.forces.effort_by_limit)
+        if k in limits:
+            return f"as its limit along the motion towards {at}, a singular position"
+        return f"at {at}"
 
     def extreme(self, arg, sense: int) -> tuple[float, float | None]:
         """(the largest (sense +1) or smallest value of ``arg`` over the run, the driver
@@ -393,6 +415,11 @@ class _Reducer:
             return math.nan, math.nan
         k = int(np.nanargmax(s))
         best, where = float(s[k]), float(ctx.res.u[k])
+        # a full turn whose ends differ: the quantity jumps where the turn closes (a
+        # change point), its value at either end is the limit from that end's side
+        self.jumps = bool(
+            ctx.res.is_full_cycle() and arr.size > 1 and not np.isclose(arr[0], arr[-1])
+        )
         if self.fine is not None:
             best, where = self._locate(arg, sense, k, best, where)
         if sense < 0:  # transmission angles: the exact minimum the run located
@@ -437,14 +464,20 @@ class _Reducer:
         best point down to :data:`_TOL`."""
         fine = self.fine
         scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        anchor = min(max(float(fine.u[near]), min(lo, hi)), max(lo, hi))
         for _ in range(40):
             if not abs(hi - lo) > _TOL * scale:
                 break
             x = np.linspace(lo, hi, _GRID)
-            vals = sense * self._values(arg, x, near)
+            closed = np.ones(_GRID, bool)
+            vals = sense * self._values(arg, x, near, closed)
+            # only the motion from the anchor: past a point that does not close (a dead
+            # zone to rounding at a change point) the solve may be on the other branch
+            vals = _joined(vals, closed, int(np.argmin(np.abs(x - anchor))))
             if not np.any(np.isfinite(vals)):
                 break
             j = int(np.nanargmax(vals))
+            anchor = float(x[j])
             if vals[j] > best:
                 best, where = float(vals[j]), float(x[j])
             lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
@@ -486,8 +519,9 @@ class _Reducer:
             return False
         return bool(v[2] - v[1] > 2.0 * (v[1] - v[0]) > 0.0)
 
-    def _values(self, arg, x: np.ndarray, near: int) -> np.ndarray:
-        """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
+    def _values(self, arg, x: np.ndarray, near: int, closed: np.ndarray | None = None):
+        """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep
+        (``closed``, if given, is set to where the mechanism closes)."""
 
         fine = self.fine
         an = fine.analysis
@@ -501,7 +535,22 @@ class _Reducer:
             q = _evaluate(arg, RunContext(type(fine)(an, one, f), figures=False, of=self.ctx))
         out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
         out[~np.asarray(one.ok, bool)] = np.nan
+        if closed is not None:
+            closed[:] = np.asarray(one.ok, bool)
         return out
+
+
+def _joined(vals: np.ndarray, closed: np.ndarray, c: int) -> np.ndarray:
+    """``vals`` with NaN at the grid points not joined to point ``c`` by points where
+    the mechanism closes (``closed``) and the value is determined."""
+    keep = closed & np.isfinite(vals)
+    gaps = np.flatnonzero(~keep)
+    before, after = gaps[gaps < c], gaps[gaps > c]
+    if before.size:
+        keep[: before[-1]] = False
+    if after.size:
+        keep[after[0] :] = False
+    return np.where(keep, vals, np.nan)
 
 
 def _edge(res: Results, k: int, side: int) -> float:
