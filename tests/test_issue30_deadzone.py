@@ -213,3 +213,17 @@ def test_change_point_extreme_is_the_limit_where_it_holds():
     limit = np.polyval(np.polyfit(ub - 360.0, below, 2), 0.0)  # extrapolated to 360 deg
     assert abs(v.value - limit) < 1e-5 * limit
     assert abs(above[0] - 0.10667) < 1e-5  # the torque just after 0 deg: not that value
+
+
+def test_summary_gives_no_peak_next_to_a_dead_zone():
+    # before: "peak reactions (1° samples): O2 129.1 N at driver angle 359°" and a torque
+    # "min -202.957 N·mm", finite samples of quantities unbounded towards 359.183 deg
+    res = ms.solve(_mech(31.505, 1.0))
+    text = res.summary()
+    te = edge_deg(31.505)
+    (peaks,) = [line for line in text.splitlines() if "peak reactions" in line]
+    assert "grow without bound towards the edge" in peaks and "129.1" not in peaks
+    (torque,) = [line for line in text.splitlines() if "driving torque" in line]
+    assert "-202.957" not in torque and "RMS not determined" in torque
+    shown = [float(x) for x in re.findall(r"driver angle ([0-9.e+-]+)°", torque)]
+    assert abs(shown[0] - (360 - te)) < 6e-4 and abs(shown[1] - te) < 1e-5

@@ -52,6 +52,7 @@ import numpy as np
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_unit
 from mechsolve.core import evaluate as core
+from mechsolve.core.solution import gap_sides
 from mechsolve.model.expr import (
     Binary,
     BoolOp,
@@ -452,7 +453,7 @@ class _Reducer:
         for e in edges:
             if e != u[k] and abs(where - e) <= _TOL * scale and self._unbounded(arg, sense, k, e):
                 return math.inf, e
-        for near, e, away in _gap_sides(fine):  # up to each edge of a range not closing
+        for near, e, away in gap_sides(fine.solution):  # up to each edge of a range not closing
             best, where = self._towards_edge(arg, sense, (near, away), e, best, where)
             if math.isinf(best):
                 break
@@ -564,22 +565,6 @@ def _edge(res: Results, k: int, side: int) -> float:
         elif side < 0 and f.last == k - 1:
             x = f.edge_out
     return float(x) if math.isfinite(x) else float(res.u[k])
-
-
-def _gap_sides(res: Results) -> list[tuple[int, float, int]]:
-    """(solved sample, driver value of the edge, the step of the index away from the
-    range) for each side of each range where the
-    mechanism cannot close, where the edge is located: the ranges of unsolved positions
-    and the dead zones the sweep steps over between two samples."""
-    sol, ok, n = res.solution, res.ok, len(res.u)
-    out = []
-    for f in sol.failures:
-        out += [(f.first - 1, f.edge_in, -1), (f.last + 1, f.edge_out, 1)]
-    for e in sol.events:
-        if e.kind == "dead zone":
-            j = next((i for i in range(e.after + 1, n) if ok[i]), n)
-            out += [(e.after, e.edge_in, -1), (j, e.edge_out, 1)]
-    return [(k, float(x), a) for k, x, a in out if 0 <= k < n and ok[k] and math.isfinite(x)]
 
 
 _GRID = 65  # points of each narrowing of an extreme's interval (32 times narrower each)
