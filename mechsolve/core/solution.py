@@ -119,6 +119,10 @@ class Event:
     u: float
     after: int  # the event lies after sample ``after`` (between it and the next one)
     transmission: float  # transmission angle at the event (rad)
+    # a dead zone's edges: where the loop stops closing after sample ``after`` and closes
+    # again before the next solved sample (roots of its discriminant), NaN where not known
+    edge_in: float = math.nan
+    edge_out: float = math.nan
 
 
 @dataclass
@@ -186,3 +190,19 @@ def angle_deg(u: float) -> float:
 def full_cycle(linear: bool, u) -> bool:
     """Does a sweep of driver values ``u`` cover exactly one turn of a crank?"""
     return (not linear) and len(u) > 0 and abs(abs(u[-1] - u[0]) - 2 * math.pi) < 1e-9
+
+
+def gap_sides(sol: Solution) -> list[tuple[int, float, int]]:
+    """(solved sample, driver value of the edge, the step of the index away from the
+    range) for each side of each range where the mechanism cannot close, where the edge
+    is located: the ranges of unsolved positions and the dead zones the sweep steps over
+    between two samples."""
+    ok, n = np.asarray(sol.ok, bool), len(sol.u)
+    out = []
+    for f in sol.failures:
+        out += [(f.first - 1, f.edge_in, -1), (f.last + 1, f.edge_out, 1)]
+    for e in sol.events:
+        if e.kind == "dead zone":
+            j = next((i for i in range(e.after + 1, n) if ok[i]), n)
+            out += [(e.after, e.edge_in, -1), (j, e.edge_out, 1)]
+    return [(k, float(x), a) for k, x, a in out if 0 <= k < n and ok[k] and math.isfinite(x)]

@@ -23,6 +23,18 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     return driver_work_why(an, sol, fr)[0]
 
 
+def _no_motion(sol: Solution) -> str:
+    """Why the sweep is not one continuous motion to take the work over, else ""."""
+    if len(sol.u) < 2:
+        return "not enough positions"
+    if not np.all(sol.ok):
+        return f"{int(np.sum(~sol.ok))} position(s) not solved"
+    zones = [e for e in sol.events if e.kind == "dead zone"]
+    if zones:  # every sample closes, but the motion between two of them is not continuous
+        return f"{zones[0].group} cannot close between two samples"
+    return ""
+
+
 def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float, str]:
     """Work done by the driver over the sweep (J), by the energy method, and why it is
     not defined when it is NaN (else "").
@@ -41,11 +53,9 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
     (singular) do not matter; if the mechanism could not be solved at some position, the
     work is not defined (NaN).
     """
-    if len(sol.u) < 2:
-        return float("nan"), "not enough positions"
-    if not np.all(sol.ok):
-        missing = int(np.sum(~sol.ok))
-        return float("nan"), f"{missing} position(s) not solved"
+    why = _no_motion(sol)
+    if why:
+        return float("nan"), why
     mech, sys_ = an.mech, an.system
     st = sol.state
     energy = fr.kinetic + fr.potential

@@ -347,7 +347,9 @@ def transmission_angles(sol: Solution) -> list[Transmission]:
                 uk = float(res.u[k] + t * (res.u[k + 1] - res.u[k]))
         for e in sol.events:  # refined minima found by the branch analysis
             if e.group == g.label and e.transmission < best:
-                best, uk = e.transmission, e.u
+                # a dead zone's deepest point does not close: its 0 is at its edge
+                at = [x for x in (e.edge_in, e.edge_out) if math.isfinite(x)]
+                best, uk = e.transmission, at[0] if e.kind == "dead zone" and at else e.u
         # where the sweep meets a range in which the loop cannot close, it stops closing at
         # a root of its discriminant (located between the samples): its two links are in
         # line there, a transmission angle of 0

@@ -52,6 +52,7 @@ import numpy as np
 from mechsolve.base.errors import InputError
 from mechsolve.base.units import UnitError, parse_unit
 from mechsolve.core import evaluate as core
+from mechsolve.core.solution import gap_sides
 from mechsolve.model.expr import (
     Binary,
     BoolOp,
@@ -295,6 +296,7 @@ class _Reducer:
         if self.fine is not None:
             self.fctx = RunContext(self.fine, figures=False, of=self.ctx)
         self.notes: list[str] = []
+        self.jumps = False  # whether the last quantity's ends differ (see extreme)
 
     @classmethod
     def of(cls, results: Results) -> _Reducer:
@@ -382,7 +384,28 @@ class _Reducer:
                 f"{func} towards {self.res.format_u(u)}, where the mechanism stops closing"
             )
         elif math.isfinite(u):
-            self.notes.append(f"{func} at {self.res.format_u(u)}")
+            self.notes.append(f"{func} {self._place(u)}")
+
+    def _place(self, u: float) -> str:
+        """Where an extreme at the driver value ``u`` is, in words. Where the quantity
+        jumps where a full turn closes (a change point: its ends differ), an extreme at
+        an end is that end's (the end of the turn is 360°, not its start again) and, at
+        a singular position where the rates and efforts are their limits along the
+        motion, said to be that limit (the value from the other side differs)."""
+        fine = self.fine
+        n = len(fine.u)
+        at = self.res.format_u(u)
+        if not (self.jumps and u in (float(fine.u[0]), float(fine.u[-1]))):
+            return f"at {at}"
+        k = 0 if u == float(fine.u[0]) else n - 1
+        if k == n - 1:  # the end of a full turn: 360°, not its start again
+            at = fine.describe_u(k).split(" (")[0]
+        limits = set(fine.solution.rates_by_limit)
+        if fine.forces is not None:
+            limits |= set(fine.forces.effort_by_limit)
+        if k in limits:
+            return f"as its limit along the motion towards {at}, a singular position"
+        return f"at {at}"
 
     def extreme(self, arg, sense: int) -> tuple[float, float | None]:
         """(the largest (sense +1) or smallest value of ``arg`` over the run, the driver
@@ -397,6 +420,11 @@ class _Reducer:
             return math.nan, math.nan
         k = int(np.nanargmax(s))
         best, where = float(s[k]), float(ctx.res.u[k])
+        # a full turn whose ends differ: the quantity jumps where the turn closes (a
+        # change point), its value at either end is the limit from that end's side
+        self.jumps = bool(
+            ctx.res.is_full_cycle() and arr.size > 1 and not np.isclose(arr[0], arr[-1])
+        )
         if self.fine is not None:
             best, where = self._locate(arg, sense, k, best, where)
         if sense < 0:  # transmission angles: the exact minimum the run located
@@ -425,21 +453,59 @@ class _Reducer:
             if not 0 <= j < n or not ok[j]
         ]
         for lo, hi, near in sides:
-            for _ in range(40):
-                if not abs(hi - lo) > _TOL * scale:
-                    break
-                x = np.linspace(lo, hi, _GRID)
-                vals = sense * self._values(arg, x, near)
-                if not np.any(np.isfinite(vals)):
-                    break
-                j = int(np.nanargmax(vals))
-                if vals[j] > best:
-                    best, where = float(vals[j]), float(x[j])
-                lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+            best, where = self._narrow(arg, sense, lo, hi, near, best, where)
         for e in edges:
             if e != u[k] and abs(where - e) <= _TOL * scale and self._unbounded(arg, sense, k, e):
                 return math.inf, e
+        for near, e, away in gap_sides(fine.solution):  # up to each edge of a range not closing
+            best, where = self._towards_edge(arg, sense, (near, away), e, best, where)
+            if math.isinf(best):
+                break
         return best, where
+
+    def _narrow(self, arg, sense: int, lo: float, hi: float, near: int, best, where):
+        """The best of ``sense * arg`` between ``lo`` and ``hi`` (solved next to sample
+        ``near``) and where it is, if better than ``best``: a grid narrowed around its
+        best point down to :data:`_TOL`."""
+        fine = self.fine
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        anchor = min(max(float(fine.u[near]), min(lo, hi)), max(lo, hi))
+        for _ in range(40):
+            if not abs(hi - lo) > _TOL * scale:
+                break
+            x = np.linspace(lo, hi, _GRID)
+            closed = np.ones(_GRID, bool)
+            vals = sense * self._values(arg, x, near, closed)
+            # only the motion from the anchor: past a point that does not close (a dead
+            # zone to rounding at a change point) the solve may be on the other branch
+            vals = _joined(vals, closed, int(np.argmin(np.abs(x - anchor))))
+            if not np.any(np.isfinite(vals)):
+                break
+            j = int(np.nanargmax(vals))
+            anchor = float(x[j])
+            if vals[j] > best:
+                best, where = float(vals[j]), float(x[j])
+            lo, hi = x[max(j - 1, 0)], x[min(j + 1, _GRID - 1)]
+        return best, where
+
+    def _towards_edge(self, arg, sense: int, side: tuple[int, int], edge: float, best, where):
+        """``(best, where)`` with the interval from solved sample ``k`` to the ``edge``
+        of a range where the mechanism cannot close searched too (an extreme next to a
+        dead zone between two samples lies there, not at a sample): ``(inf, edge)``
+        where ``arg`` grows without bound towards the edge. A sample at the edge itself
+        (the plots' sweep has one) is searched from the sample before it (``side``: ``k``
+        and the step of the index away from the range)."""
+        fine = self.fine
+        k, away = side
+        u, ok = np.asarray(fine.u, float), fine.ok
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        if abs(u[k] - edge) <= _TOL * scale:
+            k = k + away
+            if not (0 <= k < len(u) and ok[k]):
+                return best, where
+        if self._unbounded(arg, sense, k, edge):
+            return math.inf, edge
+        return self._narrow(arg, sense, float(u[k]), edge, k, best, where)
 
     def _unbounded(self, arg, sense: int, k: int, edge: float) -> bool:
         """Whether ``arg`` grows without bound (in the direction ``sense``) towards the
@@ -458,8 +524,9 @@ class _Reducer:
             return False
         return bool(v[2] - v[1] > 2.0 * (v[1] - v[0]) > 0.0)
 
-    def _values(self, arg, x: np.ndarray, near: int) -> np.ndarray:
-        """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep."""
+    def _values(self, arg, x: np.ndarray, near: int, closed: np.ndarray | None = None):
+        """``arg`` at driver values ``x``, solved next to sample ``near`` of the sweep
+        (``closed``, if given, is set to where the mechanism closes)."""
 
         fine = self.fine
         an = fine.analysis
@@ -473,7 +540,22 @@ class _Reducer:
             q = _evaluate(arg, RunContext(type(fine)(an, one, f), figures=False, of=self.ctx))
         out = np.broadcast_to(np.asarray(q, float), x.shape).copy()
         out[~np.asarray(one.ok, bool)] = np.nan
+        if closed is not None:
+            closed[:] = np.asarray(one.ok, bool)
         return out
+
+
+def _joined(vals: np.ndarray, closed: np.ndarray, c: int) -> np.ndarray:
+    """``vals`` with NaN at the grid points not joined to point ``c`` by points where
+    the mechanism closes (``closed``) and the value is determined."""
+    keep = closed & np.isfinite(vals)
+    gaps = np.flatnonzero(~keep)
+    before, after = gaps[gaps < c], gaps[gaps > c]
+    if before.size:
+        keep[: before[-1]] = False
+    if after.size:
+        keep[after[0] :] = False
+    return np.where(keep, vals, np.nan)
 
 
 def _edge(res: Results, k: int, side: int) -> float:
@@ -557,6 +639,40 @@ def located_extreme(text: str, results: Results, largest: bool = True) -> tuple[
     return value, (math.nan if where is None else where)
 
 
+def _closes(r: Requirement, results: Results) -> Verdict:
+    """The verdict of ``full turn``: every position solved over a full turn, and no
+    dead zone stepped over between two samples (the loop cannot close there, so the
+    crank does not turn fully even though every sample closes)."""
+    n = len(results.u)
+    solved = int(np.count_nonzero(results.ok))
+    zones = [e for e in results.solution.events if e.kind == "dead zone"]
+    full = bool(results.is_full_cycle()) and solved == n and not zones
+    if full:
+        msg = f"assembles over the whole turn ({solved} of {n} positions): pass"
+    elif zones:
+        e = zones[0]
+        fu = results.format_u
+        span = (
+            f"between {fu(e.edge_in)} and {fu(e.edge_out)}"
+            if math.isfinite(e.edge_in) and math.isfinite(e.edge_out)
+            else f"near {fu(e.u)}"
+        )
+        more = f" (and {len(zones) - 1} more such range(s))" if len(zones) > 1 else ""
+        k = min(e.after + 1, n - 1)
+        msg = (
+            f"{e.group} cannot close {span}{more} (a range the sweep steps over, between "
+            f"its samples at {fu(float(results.u[e.after]))} and {fu(float(results.u[k]))})"
+            ": the crank does not turn fully: FAIL"
+        )
+    else:
+        msg = (
+            f"assembles at {solved} of {n} positions"
+            + ("" if results.is_full_cycle() else "; the sweep is not a full turn")
+            + ": FAIL"
+        )
+    return Verdict(r.name, r.text, float(solved), float(n), "", full, msg)
+
+
 def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     """Check every requirement of ``mech`` on ``results`` (``[]`` when there are none).
     A requirement that reads something the run does not have, or mixes kinds of
@@ -568,17 +684,7 @@ def check_requirements(mech: Mechanism, results: Results) -> list[Verdict]:
     out = []
     for r in reqs:
         if r.expr is None or red is None:
-            n = len(results.u)
-            solved = int(np.count_nonzero(results.ok))
-            full = bool(results.is_full_cycle()) and solved == n
-            msg = (
-                f"assembles over the whole turn ({solved} of {n} positions): pass"
-                if full
-                else f"assembles at {solved} of {n} positions"
-                + ("" if results.is_full_cycle() else "; the sweep is not a full turn")
-                + ": FAIL"
-            )
-            out.append(Verdict(r.name, r.text, float(solved), float(n), "", full, msg))
+            out.append(_closes(r, results))
             continue
         tree = r.expr.tree
         red.notes = []

@@ -404,6 +404,17 @@ class Results(Summary):
         bad = ~np.asarray(one.ok, bool)
         return {k: np.where(bad, np.nan, np.asarray(v, float)) for k, v in r.items()}
 
+    def effort_at(self, x: np.ndarray, near: int) -> np.ndarray:
+        """The driving effort at driver values ``x`` solved next to sample ``near`` (see
+        :meth:`solved_near`); NaN where a position does not solve."""
+        from mechsolve.core import evaluate as core
+
+        one = self.solved_near(x, near)
+        extremes = self.forces.stroke_extremes if self.forces is not None else None
+        with np.errstate(all="ignore"):
+            e = np.asarray(core.forces(self.analysis, one, extremes).effort, float)
+        return np.where(np.asarray(one.ok, bool), e, np.nan)
+
     @property
     def driving_effort(self) -> np.ndarray:
         """The driving torque (N m) or force (N) the driver applies to the driven link."""

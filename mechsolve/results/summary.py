@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
+from mechsolve.core.solution import gap_sides
 from mechsolve.core.sweep import angle_deg
 from mechsolve.model.motion import describe
 from mechsolve.results.ranges import point_ranges
@@ -643,6 +644,10 @@ def _peak_reactions(src, joints, fscale: float, funit: str) -> str:
         note = f" ({j.magnitude_note.strip()})" if j.magnitude_note else ""
         mag = np.where(g.ok, np.abs(g.reactions[j.name][j.magnitude]), np.nan)
         toward = unbounded_towards(src, mag, i)
+        if toward is None:  # towards the edge of a range where it cannot close
+            toward = edge_growth(
+                src, lambda x, k, j=j: np.abs(src.reaction_at(j.name, x, k)[j.magnitude])
+            )
         if toward is not None:  # no peak: the largest sample is only the nearest one
             unbounded.setdefault(toward, []).append(j.name + note)
             continue
@@ -663,6 +668,8 @@ def _effort_figures(src, e: np.ndarray, at: tuple[int, int], scale, unit, rms, m
     parts, unbounded = [], False
     for name, i, sign in (("max", imax, 1.0), ("min", imin, -1.0)):
         toward = unbounded_towards(src, sign * e, i)
+        if toward is None:  # towards the edge of a range where it cannot close
+            toward = edge_growth(src, lambda x, k, sign=sign: sign * src.effort_at(x, k))
         if toward is not None:
             parts.append(f"{name}: grows without bound towards {toward}")
             unbounded = True
@@ -726,6 +733,34 @@ def unbounded_towards(src, values: np.ndarray, i: int) -> str | None:
         if min(u_i, u_k) < u_s < max(u_i, u_k) and _reaches_singular(src, i, u_k, u_s):
             return f"the singular position at about {src.format_u(u_s)} (no peak)"
     return None  # the largest value over the sweep (at its end, short of the position)
+
+
+def edge_growth(src, probe) -> str | None:
+    """Where a quantity grows without bound towards the edge of a range where the
+    mechanism cannot close (a dead zone, also one stepped over between two samples), in
+    words; else None. ``probe(x, k)``: its values at driver values ``x`` solved next to
+    sample ``k``. Its growth over the last decades of the distance from the edge (1e-4,
+    1e-6, 1e-8 of the driver coordinate) does not die out, as a rate through a toggle
+    (like 1/sqrt(d)) does (the test of the requirements' extremes): its largest sample
+    is then not a peak, wherever it is."""
+    if src.mechanism.driver.motion is not None or src.forces is None:
+        return None
+    scale = src.analysis.scale if src.analysis.linear else 1.0
+    d = np.array([1e-4, 1e-6, 1e-8]) * scale
+    for k, edge, away in gap_sides(src.solution):
+        if abs(float(src.u[k]) - edge) <= 1e-8 * scale:  # a sample at the edge itself
+            k += away
+            if not (0 <= k < len(src.u) and src.ok[k]):
+                continue
+        side = 1.0 if float(src.u[k]) > edge else -1.0
+        if not np.all(d < abs(float(src.u[k]) - edge)):
+            continue
+        with np.errstate(all="ignore"):
+            v = np.asarray(probe(edge + side * d, k), float)
+        if np.all(np.isfinite(v)) and v[2] - v[1] > 2.0 * (v[1] - v[0]) > 0.0:
+            where = src.format_u(edge)
+            return f"the edge of a range where the mechanism cannot close, at {where} (no peak)"
+    return None
 
 
 def _reaches_singular(src, i: int, u_k: float, u_s: float) -> bool:

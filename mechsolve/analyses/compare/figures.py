@@ -402,6 +402,29 @@ class _Cycle:
 
 
 # -- one scheme ---------------------------------------------------------------------------
+def _turns_fully(name: str, res) -> None:
+    """An :class:`InputError` unless the mechanism closes over the whole turn of ``res``:
+    at every sample and between them (a dead zone the sweep steps over between two
+    samples is a range where it cannot close, though every sample does)."""
+    why = ""
+    if not np.all(res.ok):
+        bad = res.failures[0]
+        why = f"{bad.reason} at {res.describe_u(bad.first)}"
+    else:
+        zones = [e for e in res.solution.events if e.kind == "dead zone"]
+        if zones:
+            e, fu = zones[0], res.format_u
+            span = f"near {fu(e.u)}"
+            if math.isfinite(e.edge_in) and math.isfinite(e.edge_out):
+                span = f"between {fu(e.edge_in)} and {fu(e.edge_out)}"
+            why = f"{e.group} cannot close {span}, a dead zone between two samples"
+    if why:
+        raise InputError(
+            f"{name}: the mechanism cannot close over the whole turn ({why}): compare "
+            "needs a crank that turns fully"
+        )
+
+
 def scheme_figures(
     mech: Mechanism,
     *,
@@ -419,13 +442,9 @@ def scheme_figures(
     solved, ties = without_ties(mech)
     turn = full_turn(solved)
     res = solve(turn, step=STEP, method=method, velocity=True, acceleration=True)
-    if not np.all(res.ok):
-        bad = res.failures[0]
-        raise InputError(
-            f"{name}: the mechanism cannot close over the whole turn ({bad.reason} at "
-            f"{res.describe_u(bad.first)}): compare needs a crank that turns fully"
-        )
+    _turns_fully(name, res)
     fine = for_plots(turn, res, method)
+    _turns_fully(name, fine)
     d = turn.driver.direction
     x_all = d * (fine.u - fine.u[0])  # crank travel from the sweep's start (rad)
     if out.kind == "point" and not out.component:  # the coordinate that travels further

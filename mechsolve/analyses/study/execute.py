@@ -62,6 +62,18 @@ def status_of(row: Row, res=None) -> str:
     n, solved = row.get("positions [-]"), row.get("solved [-]")
     if n is None:
         return "ok"
+    zones = [
+        e for e in getattr(getattr(res, "solution", None), "events", ()) if e.kind == "dead zone"
+    ]
+    if solved == n and zones:  # every sample closes, the motion between two does not
+        e, fu = zones[0], res.analysis.format_u
+        span = f"between {fu(e.edge_in)} and {fu(e.edge_out)}"
+        if not (math.isfinite(e.edge_in) and math.isfinite(e.edge_out)):
+            span = f"near {fu(e.u)}"
+        return (
+            f"not assemblable {span} ({e.group} cannot close there, a range between two "
+            "samples): figures not computed"
+        )
     if solved == n:
         return "ok"
     if solved == 0:

@@ -57,7 +57,8 @@ def kinematic_figures(res) -> Row:
     solved = int(np.sum(res.ok))
     row["positions [-]"] = n
     row["solved [-]"] = solved
-    row["assembles [-]"] = bool(solved == n and not res.failures)
+    zones = [e for e in res.solution.events if e.kind == "dead zone"]  # between samples
+    row["assembles [-]"] = bool(solved == n and not res.failures and not zones)
     for lp in res.limit_positions():
         if lp.kind == "rocker":
             row[f"{lp.name}.swing [deg]"] = math.degrees(lp.swing)
