@@ -170,8 +170,11 @@ class FailureReports:
     def locate_edges(self, sol: Solution) -> None:
         """Where each unassemblable range truly begins and ends: the root of the failing
         loop's discriminant between the last position that closes and the first that does
-        not (bisection to rounding, the end kept on the side that closes)."""
-        if not sol.failures:
+        not (bisection to rounding, the end kept on the side that closes); and those of
+        each dead zone the sweep stepped over between two solved samples (from the
+        zone's deepest point, ``Event.u``, to the samples on either side)."""
+        zones = [e for e in sol.events if e.kind == "dead zone"]
+        if not sol.failures and not zones:
             return
         ctx = _Context(self, sol.state, sol.u, sol.start, sol.flips, {})
         ctx.is_start = False
@@ -186,15 +189,29 @@ class FailureReports:
                     f.edge_in = self._edge(ctx, gi, f.first - 1, f.first)
                 if f.last < n - 1 and sol.ok[f.last + 1]:
                     f.edge_out = self._edge(ctx, gi, f.last + 1, f.last)
+            for e in zones:
+                gi = labels.get(e.group)
+                k = e.after
+                if gi is None or self.plan[gi].n_modes != 2 or not 0 <= k < n - 1:
+                    continue
+                if sol.ok[k]:
+                    e.edge_in = self._edge(ctx, gi, k, k, bad_u=e.u)
+                if sol.ok[k + 1]:
+                    e.edge_out = self._edge(ctx, gi, k + 1, k, bad_u=e.u)
 
-    def _edge(self, ctx: _Context, gi: int, good: int, bad: int) -> float:
+    def _edge(
+        self, ctx: _Context, gi: int, good: int, bad: int, bad_u: float | None = None
+    ) -> float:
+        """The root of group ``gi``'s discriminant between sample ``good`` (where it
+        closes) and sample ``bad`` (or the driver value ``bad_u``, where it does not),
+        kept on the side that closes; NaN where they do not bracket it."""
         g = self.plan[gi]
         near = min(good, bad)
 
         def H(x: float) -> float:
             return float(g.disc(ctx.prefix(gi, np.array([x]), near))[0][0])
 
-        a, b = float(ctx.u[good]), float(ctx.u[bad])
+        a, b = float(ctx.u[good]), float(ctx.u[bad] if bad_u is None else bad_u)
         if not (H(a) >= -TOUCH and H(b) < -TOUCH):
             return math.nan
         return bisect_edge(lambda m: H(m) >= 0.0, a, b)[0]

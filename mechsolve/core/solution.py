@@ -119,6 +119,10 @@ class Event:
     u: float
     after: int  # the event lies after sample ``after`` (between it and the next one)
     transmission: float  # transmission angle at the event (rad)
+    # a dead zone's edges: where the loop stops closing after sample ``after`` and closes
+    # again before the next solved sample (roots of its discriminant), NaN where not known
+    edge_in: float = math.nan
+    edge_out: float = math.nan
 
 
 @dataclass

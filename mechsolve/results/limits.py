@@ -112,12 +112,12 @@ def _rate_root(res: _Sweep, k: int, value_rate):
     return x, float(value_rate(one.state)[0][0])
 
 
-def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool):
+def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool, x: float = math.nan):
     """(driver value, value) where the motion next to solved sample ``k`` meets an
-    unassemblable range: at the range's exact edge when known, else at the sample."""
+    unassemblable range: at the range's exact edge when known (``x``, else that of the
+    unsolved run next to ``k``), else at the sample."""
     sol = res.solution
-    x = math.nan
-    for f in sol.failures:
+    for f in sol.failures if not np.isfinite(x) else ():
         if f.first == k + 1 and np.isfinite(f.edge_in):
             x = f.edge_in
         elif f.last == k - 1 and np.isfinite(f.edge_out):
@@ -253,13 +253,20 @@ def _rate_roots(res: _Sweep, vr, val: np.ndarray, sgn: np.ndarray, angle: bool) 
 def _edges(res: _Sweep, vr, val: np.ndarray, angle: bool, extremes: list) -> list:
     """Where the sweep meets an unassemblable range the motion stops at a toggle position:
     there (located exactly, see Analysis.locate_edges; else at the solved sample next to
-    it) the swing is bounded too. Adds the edges that bound it to ``extremes``."""
+    it) the swing is bounded too. The same at a dead zone stepped over between two
+    solved samples: the motion stops at its edge after the one and starts again at its
+    edge before the other. Adds the edges that bound it to ``extremes``."""
     ok = res.ok
     edges = []
     for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
         if 0 < k < len(ok) - 1 or not ok.all():
             if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
                 edges.append(_edge_value(res, int(k), vr, float(val[k]), angle))
+    for e in res.events:
+        k = e.after
+        if e.kind == "dead zone" and 0 <= k < len(ok) - 1 and ok[k] and ok[k + 1]:
+            edges.append(_edge_value(res, k, vr, float(val[k]), angle, e.edge_in))
+            edges.append(_edge_value(res, k + 1, vr, float(val[k + 1]), angle, e.edge_out))
     if edges and extremes:
         vals = [e[1] for e in extremes] + [e[1] for e in edges]
         top, bottom = max(vals), min(vals)
@@ -345,14 +352,18 @@ def transmission_angles(sol: Solution) -> list[Transmission]:
                 t = 0.5 * (a - c) / den
                 best = float(b - 0.25 * (a - c) * t)
                 uk = float(res.u[k] + t * (res.u[k + 1] - res.u[k]))
+        zones = [e for e in sol.events if e.group == g.label and e.kind == "dead zone"]
         for e in sol.events:  # refined minima found by the branch analysis
-            if e.group == g.label and e.transmission < best:
+            if e.group == g.label and e.kind != "dead zone" and e.transmission < best:
                 best, uk = e.transmission, e.u
-        # where the sweep meets a range in which the loop cannot close, it stops closing at
-        # a root of its discriminant (located between the samples): its two links are in
-        # line there, a transmission angle of 0
+        # where the sweep meets a range in which the loop cannot close (a run of unsolved
+        # samples, or a dead zone stepped over between two), it stops closing at a root of
+        # its discriminant (located between the samples): its two links are in line
+        # there, a transmission angle of 0 (a dead zone not located: at its deepest point)
         edges = [x for f in sol.failures if f.group == g.label for x in (f.edge_in, f.edge_out)]
+        edges += [x for e in zones for x in (e.edge_in, e.edge_out)]
         edges = [x for x in edges if math.isfinite(x)]
+        edges = edges or [e.u for e in zones]
         if edges and best > 0.0:
             best, uk = 0.0, _in_sweep_order(res, edges)[0]
         out.append(Transmission(g.label, max(best, 0.0), uk))

@@ -485,8 +485,9 @@ class Results(Summary):
 
     def mean_effort(self) -> tuple[float, str]:
         """The driver's mean effort and what it is: the work over the travel when the
-        motion has no gaps and goes one way (the exact mean over the sweep, between
-        samples too), else the average of the solved samples, said so.
+        motion has no gaps (no unsolved positions, no dead zone stepped over between two
+        samples) and goes one way (the exact mean over the sweep, between samples too),
+        else the average of the solved samples, said so.
 
         A motion law that turns back (an oscillation, one that returns to its start) has
         no mean over the travel: the travel may be zero to rounding (``sin(t)`` over
@@ -517,9 +518,12 @@ class Results(Summary):
             if ok.any() and unbounded_towards(self, sign * e, i) is not None:
                 return float("nan"), "time mean"  # infinite: it grows without bound
         both = ok[1:] & ok[:-1]
+        for e in self.events:  # not across a dead zone stepped over between two samples
+            if e.kind == "dead zone" and 0 <= e.after < len(both):
+                both[e.after] = False
         dt = np.diff(np.asarray(self.t, float))[both]
         span = float(np.sum(dt))
-        what = "time mean" if ok.all() else "time mean of the solved positions"
+        what = "time mean" if both.all() else "time mean of the solved positions"
         if not span > 0:
             return float("nan"), what
         return float(np.sum(0.5 * (e[1:][both] + e[:-1][both]) * dt) / span), what
