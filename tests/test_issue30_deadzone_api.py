@@ -165,3 +165,53 @@ def test_the_command_line_says_so_too(tmp_path):
     assert "work of the driver per cycle: 0 J" not in r.output
     assert ", mean 0 " not in r.output
     assert "limit positions: rocker rocker 66.4235" in r.output, r.output
+
+
+# -- a sweep at rest (speed 0, quasi-static) ---------------------------------------------
+
+FA, FB, FC, FD = 26.5, 105.6, 59.0, 87.5  # the docs' four-bar crank-rocker (mm)
+
+AT_REST = f"""
+name: four-bar at rest
+units: {{length: mm, angle: deg}}
+ground: {{O2: [0, 0], O4: [{FD}, 0]}}
+links:
+  crank: {{points: {{O2: [0, 0], A: [{FA}, 0]}}, mass: 0.05 kg, uniform_bar: [O2, A]}}
+  coupler: {{points: {{A: [0, 0], B: [{FB}, 0]}}, mass: 0.2 kg, uniform_bar: [A, B]}}
+  rocker: {{points: {{O4: [0, 0], B: [{FC}, 0]}}, mass: 0.11 kg, uniform_bar: [O4, B]}}
+joints: {{O2: [ground, crank], A: [crank, coupler], B: [coupler, rocker], O4: [ground, rocker]}}
+assembly: [B left of A -> O4]
+driver: {{joint: O2, speed: SPEED, start: 0 deg}}
+sweep: {{range: 360 deg, step: 2 deg}}
+gravity: 9.81 m/s^2
+"""
+
+
+def _toggle(r: float) -> tuple[float, float]:
+    """(crank angle, rocker angle) where |O2 B| = r (crank and coupler in line), B above."""
+    x = (r * r - FC * FC + FD * FD) / (2 * FD)
+    y = math.sqrt(r * r - x * x)
+    return math.atan2(y, x), math.atan2(y, x - FD)
+
+
+def test_a_sweep_at_rest_has_the_geometrys_limit_positions():
+    th_ext, psi_ext = _toggle(FA + FB)  # extended: the rocker's smallest angle
+    th_fold, psi_fold = _toggle(FB - FA)  # folded: its largest; the crank points away
+    th_fold += math.pi
+    for speed in ("0 rad/s", "1 rad/s"):
+        res = ms.solve(ms.loads(AT_REST.replace("SPEED", speed)))
+        (lp,) = res.limit_positions()
+        assert lp.name == "rocker"
+        assert abs(lp.low - psi_ext) < 1e-9 and _on_turn(lp.u_low, th_ext) < 1e-7, speed
+        assert abs(lp.high - psi_fold) < 1e-9 and _on_turn(lp.u_high, th_fold) < 1e-7, speed
+        fwd = (th_fold - th_ext) % (2 * math.pi)
+        assert abs(lp.time_ratio - fwd / (2 * math.pi - fwd)) < 1e-7, speed
+
+
+def test_the_command_line_gives_them_at_rest_too(tmp_path):
+    f = tmp_path / "rest.yaml"
+    f.write_text(AT_REST.replace("SPEED", "0 rad/s"), encoding="utf-8")
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "out"), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    psi = math.degrees(_toggle(FA + FB)[1])
+    assert f"limit positions: rocker rocker {psi:.5g}°" in r.output, r.output

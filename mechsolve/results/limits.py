@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.base.numerics import brent_root
+from mechsolve.core.loads import states_between
 from mechsolve.core.solution import full_cycle
 from mechsolve.model import GROUND
 
@@ -160,8 +161,10 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
     out = []
     ok = res.ok
     full = res.is_full_cycle()
+    moving = _moving_state(res)
     for name, kind, vr, grounded in items:
         val, rate = vr(res.solution.state)
+        rate = vr(moving)[1]
         val = np.where(ok, val, np.nan)
         if kind == "rocker":
             # unwrapped over the solved samples only (a filler across a gap would add
@@ -204,6 +207,18 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
             lp.time_ratio = max(fwd, back) / min(fwd, back)
         out.append(lp)
     return out
+
+
+def _moving_state(res: _Sweep):
+    """A state whose rates tell which way each output moves along the sweep: the sweep's
+    own; for a sweep at rest (speed 0, quasi-static: its rates are all zero) the same
+    positions with their rates per unit driver coordinate, so that the limit positions
+    are the geometry's, as at any speed."""
+    sol = res.solution
+    ud = sol.driver_rates()[0]
+    if sol.analysis.mech.driver.motion is not None or np.any(ud[res.ok] != 0):
+        return sol.state
+    return states_between(res.analysis, sol, sol.u, 1.0, 0.0)[0]
 
 
 def _outputs(mech, sys_, driven) -> list:
