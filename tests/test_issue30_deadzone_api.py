@@ -215,3 +215,47 @@ def test_the_command_line_gives_them_at_rest_too(tmp_path):
     assert r.exit_code == 0, r.output
     psi = math.degrees(_toggle(FA + FB)[1])
     assert f"limit positions: rocker rocker {psi:.5g}°" in r.output, r.output
+
+
+# -- the driver's travel: the distance travelled ------------------------------------------
+
+OSCILLATING = AT_REST.replace(
+    "driver: {joint: O2, speed: SPEED, start: 0 deg}\nsweep: {range: 360 deg, step: 2 deg}",
+    'driver: {joint: O2, motion: {law: "0.5 * sin(2 * t)"}}\n'
+    "sweep: {duration: 3 s, time_step: 0.1 s}",
+)
+
+
+def _travelled(t: float) -> float:
+    """The distance (rad) the law 0.5 sin(2 t) has travelled by time t <= 3 s: it turns
+    back at pi/4 (u = 0.5) and 3 pi/4 (u = -0.5)."""
+    s = 0.5 * math.sin(2 * t)
+    if t <= math.pi / 4:
+        return s
+    if t <= 3 * math.pi / 4:
+        return 1.0 - s
+    return 2.0 + s
+
+
+def test_the_travel_of_a_motion_that_turns_back_is_the_distance_travelled(tmp_path):
+    assert "motion:" in OSCILLATING
+    res = ms.solve(ms.loads(OSCILLATING))
+    t = np.asarray(res.t, float)
+    assert len(t) == 31 and abs(t[-1] - 3.0) < 1e-12
+    expected = np.degrees([_travelled(x) for x in t])
+    travel = np.asarray(res.driver_travel)
+    assert np.max(np.abs(travel - expected)) < 1e-9, travel - expected
+    assert np.all(np.diff(travel) > 0)
+    # the CSV's input.travel column is the same (deg)
+    path = res.to_csv(tmp_path / "osc.csv")
+    lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln and ln[0] != "#"]
+    head = lines[0].split(",")
+    col = head.index("input.travel [deg]")
+    got = np.array([float(ln.split(",")[col]) for ln in lines[1:]])
+    assert np.max(np.abs(got - expected)) < 1e-6
+
+
+def test_the_travel_of_a_sweep_one_way_is_its_distance_from_the_start():
+    res = ms.solve(ms.loads(AT_REST.replace("SPEED", "-1 rad/s")))  # clockwise
+    k = np.arange(len(res.u))
+    assert np.max(np.abs(np.asarray(res.driver_travel) - 2.0 * k)) < 1e-9
