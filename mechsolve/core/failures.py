@@ -170,7 +170,9 @@ class FailureReports:
     def locate_edges(self, sol: Solution) -> None:
         """Where each unassemblable range truly begins and ends: the root of the failing
         loop's discriminant between the last position that closes and the first that does
-        not (bisection to rounding, the end kept on the side that closes)."""
+        not (bisection to rounding, the end kept on the side that closes); and those of
+        each dead zone the sweep stepped over between two solved samples (from the
+        zone's deepest point, ``Event.u``, to the samples on either side)."""
         zones = [e for e in sol.events if e.kind == "dead zone"]
         if not sol.failures and not zones:
             return

@@ -23,18 +23,6 @@ def driver_work(an: Analysis, sol: Solution, fr: ForceResult) -> float:
     return driver_work_why(an, sol, fr)[0]
 
 
-def _no_motion(sol: Solution) -> str:
-    """Why the sweep is not one continuous motion to take the work over, else ""."""
-    if len(sol.u) < 2:
-        return "not enough positions"
-    if not np.all(sol.ok):
-        return f"{int(np.sum(~sol.ok))} position(s) not solved"
-    zones = [e for e in sol.events if e.kind == "dead zone"]
-    if zones:  # every sample closes, but the motion between two of them is not continuous
-        return f"{zones[0].group} cannot close between two samples"
-    return ""
-
-
 def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float, str]:
     """Work done by the driver over the sweep (J), by the energy method, and why it is
     not defined when it is NaN (else "").
@@ -50,10 +38,12 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
     relative 1e-11: not a rule on the samples, so it does not depend on the step either.
     The joints' friction losses are added (:func:`friction_work`, a rule on the samples).
     The energies need only the motion, so positions where the forces are indeterminate
-    (singular) do not matter; if the mechanism could not be solved at some position, the
-    work is not defined (NaN).
+    (singular) do not matter; if the mechanism could not be solved at some position, or
+    cannot close somewhere between two solved positions (a dead zone the sweep stepped
+    over, whose edges are toggle positions where the rates, and so the kinetic energy and
+    the driving effort, grow without bound), the work is not defined (NaN).
     """
-    why = _no_motion(sol)
+    why = motion_gap(an, sol)
     if why:
         return float("nan"), why
     mech, sys_ = an.mech, an.system
@@ -113,6 +103,27 @@ def driver_work_why(an: Analysis, sol: Solution, fr: ForceResult) -> tuple[float
             return float("nan"), why
         work += w_friction
     return float(work), ""
+
+
+def motion_gap(an: Analysis, sol: Solution) -> str:
+    """Why the motion of ``sol`` is not one continuous motion over its positions (too
+    few of them, some not solved, or a dead zone the sweep stepped over between two),
+    in words; "" when it is."""
+    if len(sol.u) < 2:
+        return "not enough positions"
+    if not np.all(sol.ok):
+        return f"{int(np.sum(~sol.ok))} position(s) not solved"
+    zone = next((e for e in sol.events if e.kind == "dead zone"), None)
+    if zone is None:
+        return ""
+    k = zone.after
+    lo = zone.edge_in if np.isfinite(zone.edge_in) else float(sol.u[k])
+    hi = zone.edge_out if np.isfinite(zone.edge_out) else float(sol.u[k + 1])
+    return (
+        f"{zone.group} cannot close between {an.format_u(lo)} and {an.format_u(hi)}, a "
+        "dead zone the sweep stepped over: the driving effort grows without bound at its "
+        "edges"
+    )
 
 
 def friction_work(sol: Solution, fr: ForceResult) -> tuple[float, str]:

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechsolve.base.numerics import brent_root
+from mechsolve.core.loads import states_between
 from mechsolve.core.solution import full_cycle
 from mechsolve.model import GROUND
 
@@ -112,12 +113,12 @@ def _rate_root(res: _Sweep, k: int, value_rate):
     return x, float(value_rate(one.state)[0][0])
 
 
-def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool):
+def _edge_value(res: _Sweep, k: int, value_rate, vk: float, angle: bool, x: float = math.nan):
     """(driver value, value) where the motion next to solved sample ``k`` meets an
-    unassemblable range: at the range's exact edge when known, else at the sample."""
+    unassemblable range: at the range's exact edge when known (``x``, else that of the
+    unsolved run next to ``k``), else at the sample."""
     sol = res.solution
-    x = math.nan
-    for f in sol.failures:
+    for f in sol.failures if not np.isfinite(x) else ():
         if f.first == k + 1 and np.isfinite(f.edge_in):
             x = f.edge_in
         elif f.last == k - 1 and np.isfinite(f.edge_out):
@@ -160,8 +161,10 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
     out = []
     ok = res.ok
     full = res.is_full_cycle()
+    moving = _moving_state(res)
     for name, kind, vr, grounded in items:
         val, rate = vr(res.solution.state)
+        rate = vr(moving)[1]
         val = np.where(ok, val, np.nan)
         if kind == "rocker":
             # unwrapped over the solved samples only (a filler across a gap would add
@@ -204,6 +207,18 @@ def limit_positions(sol: Solution) -> list[LimitPositions]:
             lp.time_ratio = max(fwd, back) / min(fwd, back)
         out.append(lp)
     return out
+
+
+def _moving_state(res: _Sweep):
+    """A state whose rates tell which way each output moves along the sweep: the sweep's
+    own; for a sweep at rest (speed 0, quasi-static: its rates are all zero) the same
+    positions with their rates per unit driver coordinate, so that the limit positions
+    are the geometry's, as at any speed."""
+    sol = res.solution
+    ud = sol.driver_rates()[0]
+    if sol.analysis.mech.driver.motion is not None or np.any(ud[res.ok] != 0):
+        return sol.state
+    return states_between(res.analysis, sol, sol.u, 1.0, 0.0)[0]
 
 
 def _outputs(mech, sys_, driven) -> list:
@@ -253,13 +268,20 @@ def _rate_roots(res: _Sweep, vr, val: np.ndarray, sgn: np.ndarray, angle: bool) 
 def _edges(res: _Sweep, vr, val: np.ndarray, angle: bool, extremes: list) -> list:
     """Where the sweep meets an unassemblable range the motion stops at a toggle position:
     there (located exactly, see Analysis.locate_edges; else at the solved sample next to
-    it) the swing is bounded too. Adds the edges that bound it to ``extremes``."""
+    it) the swing is bounded too. The same at a dead zone stepped over between two
+    solved samples: the motion stops at its edge after the one and starts again at its
+    edge before the other. Adds the edges that bound it to ``extremes``."""
     ok = res.ok
     edges = []
     for k in np.flatnonzero(ok & ~np.r_[ok[1:], True] | ok & ~np.r_[True, ok[:-1]]):
         if 0 < k < len(ok) - 1 or not ok.all():
             if (k > 0 and not ok[k - 1]) or (k < len(ok) - 1 and not ok[k + 1]):
                 edges.append(_edge_value(res, int(k), vr, float(val[k]), angle))
+    for e in res.events:
+        k = e.after
+        if e.kind == "dead zone" and 0 <= k < len(ok) - 1 and ok[k] and ok[k + 1]:
+            edges.append(_edge_value(res, k, vr, float(val[k]), angle, e.edge_in))
+            edges.append(_edge_value(res, k + 1, vr, float(val[k + 1]), angle, e.edge_out))
     if edges and extremes:
         vals = [e[1] for e in extremes] + [e[1] for e in edges]
         top, bottom = max(vals), min(vals)
@@ -345,16 +367,18 @@ def transmission_angles(sol: Solution) -> list[Transmission]:
                 t = 0.5 * (a - c) / den
                 best = float(b - 0.25 * (a - c) * t)
                 uk = float(res.u[k] + t * (res.u[k + 1] - res.u[k]))
+        zones = [e for e in sol.events if e.group == g.label and e.kind == "dead zone"]
         for e in sol.events:  # refined minima found by the branch analysis
-            if e.group == g.label and e.transmission < best:
-                # a dead zone's deepest point does not close: its 0 is at its edge
-                at = [x for x in (e.edge_in, e.edge_out) if math.isfinite(x)]
-                best, uk = e.transmission, at[0] if e.kind == "dead zone" and at else e.u
-        # where the sweep meets a range in which the loop cannot close, it stops closing at
-        # a root of its discriminant (located between the samples): its two links are in
-        # line there, a transmission angle of 0
+            if e.group == g.label and e.kind != "dead zone" and e.transmission < best:
+                best, uk = e.transmission, e.u
+        # where the sweep meets a range in which the loop cannot close (a run of unsolved
+        # samples, or a dead zone stepped over between two), it stops closing at a root of
+        # its discriminant (located between the samples): its two links are in line
+        # there, a transmission angle of 0 (a dead zone not located: at its deepest point)
         edges = [x for f in sol.failures if f.group == g.label for x in (f.edge_in, f.edge_out)]
+        edges += [x for e in zones for x in (e.edge_in, e.edge_out)]
         edges = [x for x in edges if math.isfinite(x)]
+        edges = edges or [e.u for e in zones]
         if edges and best > 0.0:
             best, uk = 0.0, _in_sweep_order(res, edges)[0]
         out.append(Transmission(g.label, max(best, 0.0), uk))

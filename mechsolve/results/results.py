@@ -4,9 +4,12 @@
 over the positions of the sweep; unsolved positions hold NaN and are listed in
 :attr:`Results.failures`.
 
-Conventions: SI units (m, m/s, m/s^2, rad/s, rad/s^2); angles are reported in degrees,
-unwrapped along the sweep so that they change continuously, with the first value in
-[0, 360). Angles are counter-clockwise from +x.
+Conventions: SI units (m, m/s, m/s^2, rad/s, rad/s^2); the arrays give angles in radians
+(:meth:`Results.link`, :meth:`Results.relative`, :meth:`Results.limit_positions`,
+:meth:`Results.transmission_angles`, :attr:`Results.u`), counter-clockwise from +x, a
+link's unwrapped along the sweep so that it changes continuously, with the first value in
+[0, 2 pi). The CSV table (:meth:`Results.columns`, :meth:`Results.to_csv`),
+:attr:`Results.driver_value` and :attr:`Results.driver_travel` give them in degrees.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mechsolve.base.errors import InputError
+from mechsolve.base.numerics import brent_root
 from mechsolve.base.units import OutputUnits, UnitError, parse_output_units
 from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
@@ -110,6 +114,30 @@ def unwrap_angle(th: np.ndarray, near: float | None = None) -> np.ndarray:
     return out
 
 
+def distance_travelled(u: np.ndarray, u0: float, t: np.ndarray, ud: np.ndarray, law=None):
+    """The distance the driver has travelled from ``u0`` at each position (rad or m):
+    ``|u - u0|`` for a motion that goes one way; for one that turns back, the sum of the
+    legs between its turning points. With a motion law ``law`` a turn between two rows
+    (where ``u'`` changes sign) is located on the law (Brent's method on ``u'(t)``), so
+    the distance is exact; without one (a simulated motion) the rows are joined
+    straight."""
+    u = np.asarray(u, float)
+    du = np.diff(u)
+    if not (np.any(du > 0) and np.any(du < 0)):  # one way: the distance from the start
+        return np.abs(u - u0)
+    ud = np.asarray(ud, float)
+    legs = np.abs(du)
+    for k in np.flatnonzero(ud[:-1] * ud[1:] < 0) if law is not None else ():
+        a, b = float(t[k]), float(t[k + 1])
+        try:
+            tk = brent_root(lambda x: float(law.at(np.array([x]))[1][0]), a, b)
+        except ValueError:  # not bracketed after all (a row's rate rounded): straight
+            continue
+        turn = float(law.at(np.array([tk]))[0][0])
+        legs[k] = abs(turn - u[k]) + abs(u[k + 1] - turn)
+    return abs(u[0] - u0) + np.r_[0.0, np.cumsum(legs)]
+
+
 class Results(Summary):
     """The solved sweep of a mechanism.
 
@@ -157,8 +185,13 @@ class Results(Summary):
 
     @property
     def driver_travel(self) -> np.ndarray:
-        """Distance travelled by the driver from the start (deg or m), always increasing."""
-        d = np.abs(self.u - self.solution.start.u0)
+        """Distance travelled by the driver from the start (deg or m), never decreasing:
+        ``|u - u0|`` while it goes one way; a motion that turns back adds the way back
+        (see :func:`distance_travelled`)."""
+        sol = self.solution
+        d = distance_travelled(
+            self.u, sol.start.u0, self.t, sol.driver_rates()[0], self.mechanism.driver.motion
+        )
         return d if self.linear else np.degrees(d)
 
     def point_names(self) -> list[str]:
@@ -531,8 +564,9 @@ class Results(Summary):
 
     def mean_effort(self) -> tuple[float, str]:
         """The driver's mean effort and what it is: the work over the travel when the
-        motion has no gaps and goes one way (the exact mean over the sweep, between
-        samples too), else the average of the solved samples, said so.
+        motion has no gaps (no unsolved positions, no dead zone stepped over between two
+        samples) and goes one way (the exact mean over the sweep, between samples too),
+        else the average of the solved samples, said so.
 
         A motion law that turns back (an oscillation, one that returns to its start) has
         no mean over the travel: the travel may be zero to rounding (``sin(t)`` over
@@ -564,9 +598,12 @@ class Results(Summary):
             if ok.any() and unbounded_towards(self, sign * e, i) is not None:
                 return float("nan"), "time mean"  # infinite: it grows without bound
         both = ok[1:] & ok[:-1]
+        for e in self.events:  # not across a dead zone stepped over between two samples
+            if e.kind == "dead zone" and 0 <= e.after < len(both):
+                both[e.after] = False
         dt = np.diff(np.asarray(self.t, float))[both]
         span = float(np.sum(dt))
-        what = "time mean" if ok.all() else "time mean of the solved positions"
+        what = "time mean" if both.all() else "time mean of the solved positions"
         if not span > 0:
             return float("nan"), what
         return float(np.sum(0.5 * (e[1:][both] + e[:-1][both]) * dt) / span), what

@@ -180,7 +180,8 @@ class Summary:
             deg = 360.0  # the end of a full turn, not its start again
         text = f"driver angle {U.text(deg, 'deg')}"
         if self.u[0] != 0 or self.mechanism.driver.direction < 0:
-            text += f" ({U.text(float(self.driver_travel[i]), 'deg')} from the start)"
+            away = math.degrees(abs(u - float(self.solution.start.u0)))  # not the way back
+            text += f" ({U.text(away, 'deg')} from the start)"
         return text
 
     def motion_events(self) -> list[tuple[float, float, float]]:
