@@ -212,3 +212,33 @@ def test_simulate_driver_work_and_friction_losses_by_hand(tmp_path):
     assert m
     assert float(m.group(1)) + float(m.group(2)) == pytest.approx(loss, abs=0.1)
     assert np.isfinite(loss)
+
+
+def test_motor_work_of_a_sloped_law_by_the_energy_balance(tmp_path):
+    """Without friction and with a motor 0.8 N m - 0.002 N m s omega, the change of
+    kinetic energy less the push's work (both from the motion alone) is the motor's work
+    (conservation of energy): the motor's work on the 0.01 s rows is within its error
+    estimate of it, and with friction the summary prints only the digits that estimate
+    allows (their last digit's unit at least twice the estimate)."""
+    text = SC_COAST.replace("stall: 0.5 N m, slope: 0 N m s", "stall: 0.8 N m, slope: 0.002 N m s")
+    tight = text.replace("rtol: 1e-7, atol: 1e-9", "rtol: 1e-11, atol: 1e-12")
+    plain = tight.replace("{revolute: [ground, crank], friction: {coefficient: 0.1, "
+                         "journal radius: 10 mm}}", "[ground, crank]")  # fmt: skip
+    plain = plain.replace(",\n             friction: {coefficient: 0.15}}", "}")
+    assert "friction" not in plain
+    from mechsolve.analyses.dynamics import simulate
+
+    f = tmp_path / "sc.yaml"
+    f.write_text(plain)
+    res = simulate(api.load(f))
+    _, dT, push = _hand(res)
+    err = res.motor_work_error()
+    assert 0 < abs(res.motor_work() - (dT - push)) <= err < 1e-3 * (dT - push)
+    f.write_text(text)
+    res = simulate(api.load(f))
+    _, dT, push = _hand(res)
+    m = re.search(r"work of the driver over the sweep: ([0-9.]+) J", res.summary())
+    assert m and "." in m.group(1)
+    unit = 10.0 ** -len(m.group(1).split(".")[1])
+    assert unit >= 2 * res.motor_work_error()
+    assert abs(float(m.group(1)) - res.motor_work()) <= 0.5 * unit + 1e-12
