@@ -35,7 +35,7 @@ from mechsolve.base.errors import InputError
 from mechsolve.base.units import _QUANTITY_RE, SI_OUTPUT, OutputUnits, UnitError, parse_unit
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
-from mechsolve.model import Mechanism
+from mechsolve.model import GROUND, Mechanism
 from mechsolve.model.expr import ExprError, Expression
 from mechsolve.model.expr.poles import first_pole
 from mechsolve.model.machine import Flywheel
@@ -99,6 +99,11 @@ class FlywheelSizing:
     power: tuple | None = None  # (driving, resisting, cycle, mean power) of a power diagram
     torque_label: str = "driving torque at the mean speed"  # of ``torque``, for the plot
     constant_label: str = "motor (constant)"  # of ``motor_torque``, for the plot
+    # the shaft J_F is sized for: the driver's ("O1, link 'pinion'"; '' for a
+    # torque curve), and the shafts geared to it at a constant speed ratio: (joint,
+    # link, omega_shaft / omega_driver)
+    shaft: str = ""
+    geared: list[tuple[str, str, float]] = field(default_factory=list)
 
     def check_missed(self) -> bool:
         """True when the simulation with the flywheel reached a coefficient of fluctuation
@@ -117,9 +122,10 @@ class FlywheelSizing:
         if self.power is not None:
             return self._power_text(U)
         n = self.omega_mean * 30 / math.pi
+        on = f" on the driver's shaft ({self.shaft})" if self.shaft else ""
         lines = [
-            f"flywheel by the energy method: mean speed {self.omega_mean * kw:.6g} {wu} "
-            f"({n:.6g} rpm), delta = {self.delta:.6g}",
+            f"flywheel by the energy method{on}: mean speed "
+            f"{self.omega_mean * kw:.6g} {wu} ({n:.6g} rpm), delta = {self.delta:.6g}",
             f"  {'resisting' if self.source == 'torque curve' else 'motor'} torque "
             f"(constant over the cycle): {self.motor_torque * kt:.6g} {tu}",
             f"  largest energy excursion dE_max = {self.energy_max:.6g} J (the range of the "
@@ -130,7 +136,8 @@ class FlywheelSizing:
             f"(students' form 900 dE_max / (pi^2 n^2 delta) = "
             f"{900 * self.energy_max / (math.pi**2 * n * n * self.delta):.6g})",
             f"  mean reduced inertia of the mechanism J_mean = {self.J_mean:.6g} kg*m^2",
-            f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (on the crank's shaft)",
+            f"  flywheel J_F = {self.J_flywheel:.6g} kg*m^2 (on the driver's shaft, "
+            f"{self.shaft}, at {n:.6g} rpm)",
         ]
         if self.source == "torque curve":
             lines[-2:] = [
@@ -143,6 +150,7 @@ class FlywheelSizing:
                 f"  energy-mass (Wittenbauer) method with the varying J(phi): J_F = "
                 f"{self.J_exact:.6g} kg*m^2"
             )
+            lines += self._geared_lines(n)
         if self.none_needed:
             lines = lines[:3] + [
                 "  no flywheel is needed: the driving torque does not fluctuate over the "
@@ -172,6 +180,19 @@ class FlywheelSizing:
         elif self.check_note:
             lines.append(f"  not checked by simulation: {self.check_note}")
         return "\n".join(lines)
+
+    def _geared_lines(self, n: float) -> list[str]:
+        """The same flywheel on each shaft geared to the driver's (``n``: its rpm): its
+        kinetic energy is the same at (omega_driver / omega_shaft)^2 times J_F."""
+        lines = []
+        for joint, link, ratio in self.geared:
+            k = 1.0 / (ratio * ratio)
+            lines.append(
+                f"  the same flywheel on the shaft of {joint} (link '{link}', at "
+                f"{n * abs(ratio):.6g} rpm) is J_F x {k:.6g} = {self.J_flywheel * k:.6g} "
+                "kg*m^2 (J_F times the square of the driver's speed over that shaft's)"
+            )
+        return lines
 
     def _power_text(self, U: OutputUnits = SI_OUTPUT) -> str:
         assert self.power is not None
@@ -246,15 +267,17 @@ def size_flywheel(
                 "'inertia') and the loads the machine works against",
             )
         out = FlywheelSizing(w, delta, M, 0.0, J_mean, 0.0, u0 + d * xe, work, Te,
-                             none_needed=True)  # fmt: skip
+                             none_needed=True, shaft=_shaft_text(mech))  # fmt: skip
         out.J_exact = 0.0
         return out
     need = dE / (w * w * delta)
     out = FlywheelSizing(w, delta, M, dE, J_mean, max(0.0, need - J_mean), u0 + d * xe, work, Te)
+    out.shaft = _shaft_text(mech)
+    out.geared = _geared_shafts(mech, an, u[on_grid])
     if not mech.has_masses and mech.flywheel is None:
         out.notes.append(
             "the file gives no masses: the machine's own inertia is taken as zero and "
-            "J_F is the whole inertia the crank's shaft needs"
+            f"J_F is the whole inertia the driver's shaft ({out.shaft}) needs"
         )
     elif out.J_flywheel == 0.0:
         out.notes.append(
@@ -271,6 +294,46 @@ def size_flywheel(
         _check_by_simulation(out, mech, an)
     elif check and mech.motor is not None and mech.simulation is None:
         out.check_note = "the file has no 'simulate:' section"
+    return out
+
+
+def _driver_link(mech: Mechanism) -> str | None:
+    """The link the driver turns about the ground (None: a driver between two moving
+    links)."""
+    moving = [ln for ln in mech.joint(mech.driver.joint).links if ln != GROUND]
+    return moving[0] if len(moving) == 1 else None
+
+
+def _shaft_text(mech: Mechanism) -> str:
+    """The shaft a flywheel is sized for, in words: ``O1, link 'pinion'``."""
+    link = _driver_link(mech)
+    joint = mech.driver.joint
+    if link is None:
+        a, b = mech.joint(joint).links
+        return f"{joint}, between links '{a}' and '{b}'"
+    return f"{joint}, link '{link}'"
+
+
+def _geared_shafts(mech: Mechanism, an: Analysis, u: np.ndarray) -> list[tuple[str, str, float]]:
+    """The other links turning about a ground pin at a constant ratio of the driver's
+    speed over the cycle (a gear wheel, not a rocker): (joint, link, ratio), the ratio
+    omega_link / omega_driver from the velocity analysis at the positions ``u``."""
+    driver = _driver_link(mech)
+    if driver is None:
+        return []
+    sol = core.states(an, u, float(mech.driver.direction), 0.0, acceleration=False)
+    w = sol.state.w
+    w0 = w[an.system.index[driver]]
+    out = []
+    for j in mech.joints:
+        if getattr(j, "kind", "") != "revolute" or GROUND not in j.links:
+            continue
+        link = next(ln for ln in j.links if ln != GROUND)
+        if link == driver:
+            continue
+        r = w[an.system.index[link]] / w0
+        if np.all(np.isfinite(r)) and abs(r[0]) > 1e-9 and np.ptp(r) <= 1e-9 * abs(r[0]):
+            out.append((j.name, link, float(np.mean(r))))
     return out
 
 
@@ -328,12 +391,11 @@ def _check_by_simulation(out: FlywheelSizing, mech: Mechanism, an: Analysis) -> 
     and record the fluctuation it reaches (or why the check fell short)."""
 
     w = out.omega_mean
-    crank = an.system.body_names[an.plan[0].bodies[0]]
-    machine = copy.copy(mech)
-    have = mech.flywheel.inertia if mech.flywheel is not None else 0.0
-    if mech.flywheel is not None:
-        crank = mech.flywheel.link
-    machine.flywheel = Flywheel(crank, have + out.J_flywheel)
+    # J_F on the driver's shaft, for which it is sized; the file's own flywheel stays on
+    # its link (another shaft maybe, at another speed)
+    shaft = _driver_link(mech) or an.system.body_names[an.plan[0].bodies[0]]
+    machine = copy.copy(_with_flywheel(mech))
+    machine.flywheel = Flywheel(shaft, out.J_flywheel)
     # to steady state: many time constants J / (-dM/domega) of the machine
     lo, hi = mech.motor.torque(np.array([w - 1e-3, w + 1e-3]))
     slope = float(lo - hi) / 2e-3  # -dM/domega along the motion

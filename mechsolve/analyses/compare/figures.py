@@ -45,7 +45,7 @@ Definitions (the same for every scheme, so that the columns compare):
   constraints leave indeterminate are left out (said so).
 * **Flywheel** for a coefficient of fluctuation delta, by the energy method of
   :func:`mechsolve.analyses.flywheel.size_flywheel` at the driver's speed (all schemes at
-  the same speed): the largest energy excursion dE_max, the inertia the crank's shaft
+  the same speed): the largest energy excursion dE_max, the inertia the driver's shaft
   needs, dE_max / (omega^2 delta), and the flywheel beyond the machine's own mean inertia.
   Not checked by simulation here (``mechsolve flywheel`` does that).
 """

@@ -13,6 +13,7 @@ from mechsolve.analyses.dynamics.integrators import _STOPS, Trajectory
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.solution import angle_deg
+from mechsolve.core.work import hermite5
 from mechsolve.results.results import Column, Results
 from mechsolve.results.summary import _kilo, shown
 
@@ -63,6 +64,116 @@ class SimulationResults(Results):
         work = np.concatenate([[0.0], np.cumsum(0.5 * (P[1:] + P[:-1]) * np.diff(t))])
         E = f.kinetic + f.potential
         return work - (E - E[0])
+
+    def motor_work(self) -> float:
+        """The motor's work along the motion (J), ``integral of M(omega, t) omega dt``:
+        5-point Gauss-Legendre between the rows on the quintic Hermite interpolant of the
+        driver's angle through its angle, speed and acceleration at both rows (its speed
+        a quartic: a constant torque gives M times the travel to rounding; a law of the
+        speed carries the interpolant's error, O(h^5) in the speed, see
+        :meth:`motor_work_error`); NaN where the motion is not finite."""
+        return self._motor_work()[0]
+
+    def motor_work_error(self) -> float:
+        """An estimate of :meth:`motor_work`'s error (J): its difference from the same
+        rule on the cubic Hermite interpolant through the angles and speeds alone (a
+        lower order: an upper estimate; zero to rounding for a constant torque)."""
+        return self._motor_work()[1]
+
+    def _motor_work(self) -> tuple[float, float]:
+        if hasattr(self, "_motor_work_cache"):
+            return self._motor_work_cache
+        tr = self.trajectory
+        t, phi, w, eps = tr.t, tr.phi, tr.omega, tr.eps
+        out = (math.nan, math.nan)
+        if len(t) >= 2 and all(np.all(np.isfinite(a)) for a in (t, phi, w, eps)):
+            h = np.diff(t)
+            ks = np.flatnonzero(h > 0)
+            x, wt = np.polynomial.legendre.leggauss(5)
+            s = np.tile(0.5 * (x + 1.0), len(ks))
+            kk = np.repeat(ks, len(x))
+            tau = t[kk] + h[kk] * s
+            v5 = hermite5(t, phi, w, eps, tau, kk)[1]
+            # the cubic Hermite's speed through (phi, omega) at both rows
+            dp = (phi[kk + 1] - phi[kk]) / h[kk]
+            v3 = (
+                6 * (s - s * s) * dp
+                + (3 * s * s - 4 * s + 1) * w[kk]
+                + (3 * s * s - 2 * s) * w[kk + 1]
+            )
+            d = self.mechanism.driver.direction
+            work = []
+            for v in (v5, v3):
+                with np.errstate(all="ignore"):
+                    P = drive_torque(self.motor, d, v, tau) * v
+                work.append(float(np.sum((P.reshape(-1, len(x)) @ wt) * 0.5 * h[ks])))
+            if all(math.isfinite(a) for a in work):
+                out = (work[0], abs(work[0] - work[1]))
+        self._motor_work_cache = out
+        return out
+
+    def work_text(self, units: OutputUnits | None = None) -> str:
+        """With joint friction, the motor's work (:meth:`_work_why`) to the digits its
+        error estimate allows (at most 6)."""
+        text = super().work_text(units)
+        err = self.motor_work_error()
+        work = self.work()
+        if getattr(self.forces, "friction", None) is None or not err > 0 or "not" in text:
+            return text
+        fmt = _digits(work, err, 6)
+        if fmt == ".6g":
+            return text
+        U = units or shown(self)
+        per = "per cycle" if self.is_full_cycle() else "over the sweep"
+        return (
+            f"work of the driver {per}: {U.text(work, 'J', fmt)} (the motor's, to the "
+            "digits its output rows allow)"
+        )
+
+    def _work_why(self) -> tuple[float, str]:
+        """The driver's work. With joint friction the motor's (:meth:`motor_work`; the
+        driver's effort is the motor's along the motion), not the energy method's, whose
+        friction part is a rule on the rows; without, the energy method's (exact on the
+        rows: a difference of energies and the loads' work)."""
+        fr = getattr(self.forces, "friction", None)
+        if not hasattr(self, "_work") and fr is not None:
+            w = self.motor_work()
+            if math.isfinite(w):
+                self._work = (w, "")
+        return super()._work_why()
+
+    def friction_lines(self) -> list[str]:
+        """The friction losses from the energy balance, the motor's work (exact along the
+        motion) less the change of energy and the loads' work; the split by joint is the
+        trapezoid rule on the rows, said so, to the digits that rule's error allows (its
+        total's difference from the balance)."""
+        lines = super().friction_lines()
+        head = "  friction losses over the sweep: "
+        if not lines or not lines[0].startswith(head) or self.forces.friction is None:
+            return lines
+        from mechsolve.core.work import driver_work_why, friction_work
+        from mechsolve.results.summary import _Only
+
+        sol, f = self.solution, self.forces
+        rule, why = friction_work(sol, f)
+        energy, why2 = driver_work_why(self.analysis, sol, f)  # dE - W_loads + rule
+        motor = self.motor_work()
+        loss = motor - (energy - rule)
+        if why or why2 or not math.isfinite(loss):
+            return lines
+        U = shown(self)
+        err = abs(loss - rule) + self.motor_work_error()
+        parts = []
+        for name, p in f.friction.loss.items():
+            w = friction_work(sol, _Only(f, p))[0]
+            parts.append(f"{name} {U.text(w, 'J', _digits(w, err))}")
+        total = U.text(loss, "J", _digits(loss, self.motor_work_error(), 6))
+        lines[0] = (
+            f"{head}{total} (the motor's work less the change of energy and the "
+            f"loads' work; by joint, the trapezoid rule on the {len(self.t)} rows: "
+            f"{', '.join(parts)})"
+        )
+        return lines
 
     def summary(self, figures=None, units: OutputUnits | None = None) -> str:
         """The sweep's summary and the simulation's figures, in ``units`` (default SI)."""
@@ -288,6 +399,15 @@ class SimulationResults(Results):
     def incomplete(self) -> bool:
         """Also when the motion stopped before what was asked (see :class:`Trajectory`)."""
         return super().incomplete() or self.trajectory.early
+
+
+def _digits(value: float, err: float, most: int = 4) -> str:
+    """A format with the significant digits of ``value`` that an error ``err`` leaves
+    (its last digit's unit at least twice the error; ``most`` at most, 1 at least)."""
+    if not (err > 0 and value):
+        return f".{most}g"
+    last = math.ceil(math.log10(2 * err))  # the last digit's decimal place
+    return f".{min(most, max(1, math.floor(math.log10(abs(value))) - last + 1))}g"
 
 
 def steady_fluctuation(tr: Trajectory, turns: int = 1):

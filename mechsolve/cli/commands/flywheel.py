@@ -40,7 +40,7 @@ from mechsolve.cli.kit import (
 @click.option("--no-check", is_flag=True, help="Do not verify the flywheel by simulation.")
 @UNITS
 def flywheel(file: Path, delta_given, speed, outdir, variant, no_check, units) -> None:
-    """Size a flywheel on the crank's shaft for a coefficient of fluctuation DELTA, by the
+    """Size a flywheel on the driver's shaft for a coefficient of fluctuation DELTA, by the
     energy method over the steady cycle (with a motor and a simulate: section, checked by
     simulating the machine with it); FILE is a mechanism, or a torque curve over a cycle
     as textbook flywheel problems give it (a 'torque:' section, no links), or a power
