@@ -233,7 +233,14 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             raise self.mech.error(
                 d.where + ("start",), "a limit start needs a revolute driver; give a number"
             )
-        return self.find_limit(d.start)
+        # solved once per analysis (a sweep's values and its states both ask for it; an
+        # edited model gets an analysis of its own, see core.kept)
+        key = (d.start.quantity.text, d.start.extreme)
+        kept = self.__dict__.get("_limit_start")
+        if kept is None or kept[0] != key:
+            kept = (key, self.find_limit(d.start))
+            self._limit_start = kept
+        return kept[1]
 
     def find_limit(self, lim: Limit, u_from: float = 0.0) -> float:
         """Driver angle at which ``lim.quantity`` is extreme over one turn."""
