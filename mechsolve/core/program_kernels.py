@@ -49,16 +49,16 @@ def driver_pass(st: State, g: DriverLink, u: np.ndarray, acceleration: bool) -> 
         th += off
     np.cos(th, out=st.c[b])
     np.sin(th, out=st.s[b])
-    # its origin is the ground point it is pinned at (the local point is its origin)
-    st.x[b] = g.sk[0] - 0.0
-    st.y[b] = g.sk[1] - 0.0
-    st.w[b] = st.w[nb, 0] + sign * 1.0  # (the ground's rate, 0, plus the driver's)
-    st.vx[b] = 0.0
-    st.vy[b] = 0.0
+    # its origin is the ground point it is pinned at (the local point is its origin);
+    # its rates: the ground's (0) plus the driver's. The constant rows in two writes
+    # (rows x, y and vx, vy, w, ax, ay, al of the state's block, in that order)
+    blk = st.block
+    blk[0:2, b] = np.array([[g.sk[0] - 0.0], [g.sk[1] - 0.0]])
+    w = st.w[nb, 0] + sign * 1.0
     if acceleration:
-        st.al[b] = st.al[nb, 0] + sign * 0.0
-        st.ax[b] = 0.0
-        st.ay[b] = 0.0
+        blk[5:11, b] = np.array([[0.0], [0.0], [w], [0.0], [0.0], [st.al[nb, 0] + sign * 0.0]])
+    else:
+        blk[5:8, b] = np.array([[0.0], [0.0], [w]])
 
 
 def _arm(st: State, i: int, s: np.ndarray):
