@@ -131,6 +131,7 @@ class RRRPass:
         self.uP, self.uQ = units.get(g.k1, 0.0), units.get(g.k2, 0.0)
         L1s, L2s = g.L1 * g.L1, g.L2 * g.L2
         self.L1s, self.L2s = L1s, L2s
+        self.half = (L1s - L2s) * 0.5  # (in floats: the same double as the group forms)
         ex = g.sM1[0] - g.sP1[0]
         ey = g.sM1[1] - g.sP1[1]
         self.f1 = ex / (ex * ex + ey * ey)  # set_pose_from_vectors' factor of each link
@@ -156,7 +157,7 @@ class RRRPass:
         D2 += t
         L1s, L2s = self.L1s, self.L2s
         inv = np.divide(1.0, D2)
-        a = np.multiply(np.multiply(L1s - L2s, 0.5), inv)
+        a = np.multiply(self.half, inv)
         a += 0.5
         h2 = L1s * inv
         np.multiply(a, a, out=t)
