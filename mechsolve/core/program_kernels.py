@@ -252,12 +252,14 @@ class RRRPass:
             aqx, aqy = _rate(st, g.k2, g.sQk, armQ, st.ax[b2], st.ay[b2], True, self.uQ)
             w1s = np.square(w1, out=t)
             w2s = w2**2
+            p = np.empty_like(w2s)  # (each product into it: no temporary per term)
             dax = np.subtract(aqx, apx)
-            dax -= w2s * g2x
-            dax += w1s * g1x
+            dax -= np.multiply(w2s, g2x, out=p)
+            dax += np.multiply(w1s, g1x, out=p)
             day = np.subtract(aqy, apy)
-            day -= w2s * g2y
-            day += w1s * g1y
+            day -= np.multiply(w2s, g2y, out=p)
+            day += np.multiply(w1s, g1y, out=p)
+            del p
             a1 = np.multiply(dax, g2x, out=st.al[b1])
             np.multiply(day, g2y, out=w2s)
             a1 += w2s
