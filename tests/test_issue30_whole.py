@@ -97,3 +97,26 @@ def test_an_unchanged_model_gets_the_method_it_asks_for():
             "newton" in str(m) for m in res.solution.methods
         )
         assert newton == (method is not None)
+
+
+def test_forgetting_one_model_keeps_the_others(monkeypatch):
+    from mechsolve.system import constraints
+
+    built = [0]
+    real = constraints.ConstraintSystem.__init__
+
+    def counting(self, *args, **kwargs):
+        built[0] += 1
+        real(self, *args, **kwargs)
+
+    monkeypatch.setattr(constraints.ConstraintSystem, "__init__", counting)
+    u = np.radians(np.arange(360.0))
+    m1, m2 = ms.loads(_yaml()), ms.loads(_yaml())
+    ms.solve(m1, forces=False)
+    ms.solve(m2, forces=False)
+    assert built[0] == 2
+    kept.forget(m1)
+    _check(ms.solve(m2, forces=False), u)  # still kept
+    assert built[0] == 2
+    _check(ms.solve(m1, forces=False), u)  # built again
+    assert built[0] == 3

@@ -131,7 +131,11 @@ def analysis_for(mech: Mechanism, method: str | None = None, checked: bool = Fal
     return _per_call(kept)
 
 
-def forget() -> None:
-    """Drop every kept analysis (tests, and a program that wants the memory back)."""
+def forget(mech: Mechanism | None = None) -> None:
+    """Drop every kept analysis (tests, and a program that wants the memory back), or
+    only that of ``mech`` (a model solved once, whose analysis would push out another's)."""
     with _LOCK:
-        _KEPT.clear()
+        if mech is None:
+            _KEPT.clear()
+        else:
+            _KEPT[:] = [e for e in _KEPT if e[0] is not mech]
