@@ -35,7 +35,8 @@ from mechsolve.model import Mechanism
 
 KEPT_MAX = 4  # analyses kept (the most recently solved models)
 
-_KEPT: list[tuple[Mechanism, tuple, Analysis]] = []  # most recent last
+# (model, content key, kept analysis, the model's validated snapshot it was last found by)
+_KEPT: list[list] = []  # most recent last
 _LOCK = threading.Lock()
 _GROUPS = (DriverLink, DrivenSlider, RRR, RRP, RPR)
 
@@ -91,26 +92,50 @@ def _per_call(an: Analysis) -> Analysis:
     return out
 
 
-def analysis_for(mech: Mechanism, method: str | None = None) -> Analysis:
+def analysis_for(mech: Mechanism, method: str | None = None, checked: bool = False) -> Analysis:
     """The analysis of ``mech`` for one call: a copy of the kept one when ``mech`` is the
-    model last solved with the same content, else a new one (kept when it can be)."""
+    model last solved with the same content, else a new one (kept when it can be).
+
+    ``checked``: the caller has just run ``mech.ensure_valid()``, so the model's validated
+    snapshot (everything the content key holds, and more) is its current content. When
+    it is the very snapshot object the kept analysis was last found by, nothing was
+    edited since, and the content key is not computed again (``ensure_valid`` keeps that
+    object while the content is unchanged and makes a new one after any edit)."""
+    snap = mech.__dict__.get("_validated") if checked else None
+    if not isinstance(snap, tuple):
+        snap = None
+    if snap is not None:
+        with _LOCK:
+            kept = next(
+                (e[2] for e in _KEPT if e[0] is mech and e[3] is snap and e[1][0] == method),
+                None,
+            )
+        if kept is not None:
+            return _per_call(kept)
     key = content_key(mech, method)
     if key is None:
         return Analysis(mech, method)
     with _LOCK:
-        kept = next((an for m, k, an in _KEPT if m is mech and k == key), None)
-    if kept is None:
-        kept = Analysis(mech, method)
-        if not _keepable(kept):
-            return kept
-        kept.program = program_for(kept)  # a chain of closed forms: its own sweep
-        with _LOCK:
-            _KEPT[:] = [e for e in _KEPT if e[0] is not mech][-(KEPT_MAX - 1) :]
-            _KEPT.append((mech, key, kept))
+        entry = next((e for e in _KEPT if e[0] is mech and e[1] == key), None)
+        if entry is not None:
+            entry[3] = snap
+    if entry is not None:
+        return _per_call(entry[2])
+    kept = Analysis(mech, method)
+    if not _keepable(kept):
+        return kept
+    kept.program = program_for(kept)  # a chain of closed forms: its own sweep
+    with _LOCK:
+        _KEPT[:] = [e for e in _KEPT if e[0] is not mech][-(KEPT_MAX - 1) :]
+        _KEPT.append([mech, key, kept, snap])
     return _per_call(kept)
 
 
-def forget() -> None:
-    """Drop every kept analysis (tests, and a program that wants the memory back)."""
+def forget(mech: Mechanism | None = None) -> None:
+    """Drop every kept analysis (tests, and a program that wants the memory back), or
+    only that of ``mech`` (a model solved once, whose analysis would push out another's)."""
     with _LOCK:
-        _KEPT.clear()
+        if mech is None:
+            _KEPT.clear()
+        else:
+            _KEPT[:] = [e for e in _KEPT if e[0] is not mech]

@@ -224,7 +224,8 @@ class Program:
                 if ctx is not None:
                     ctx.extend_grid(gi)
                 continue
-            unit = unit or Drive(u, np.ones(n), np.zeros(n))
+            if kind != "rrr":  # (the fused pass needs no Drive)
+                unit = unit or Drive(u, np.ones(n), np.zeros(n))
             if g.n_modes != 2:
                 inds[gi] = g.position(st, unit)[1]
             else:
@@ -280,9 +281,9 @@ def _quiet(an, gi: int, g, st: State, u, start: StartAssembly, d: float, H, dH) 
     Hs = dH if d == 1 else dH * d  # H' along the sweep (dH * 1 is dH)
     turns = Hs[:-1] < 0
     turns &= Hs[1:] > 0
-    inside = np.flatnonzero(turns)
-    if not inside.size:
+    if not turns.any():  # (one reduction; the indices only where there is a turn)
         return True
+    inside = np.flatnonzero(turns)
     h = np.abs(u[inside + 1] - u[inside])
     est = _hermite_min(H[inside], H[inside + 1], Hs[inside] * h, Hs[inside + 1] * h)
     cand = inside[est < EVENT_CHECK]  # (a NaN estimate is not refined either)

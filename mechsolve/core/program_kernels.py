@@ -49,16 +49,16 @@ def driver_pass(st: State, g: DriverLink, u: np.ndarray, acceleration: bool) -> 
         th += off
     np.cos(th, out=st.c[b])
     np.sin(th, out=st.s[b])
-    # its origin is the ground point it is pinned at (the local point is its origin)
-    st.x[b] = g.sk[0] - 0.0
-    st.y[b] = g.sk[1] - 0.0
-    st.w[b] = st.w[nb, 0] + sign * 1.0  # (the ground's rate, 0, plus the driver's)
-    st.vx[b] = 0.0
-    st.vy[b] = 0.0
+    # its origin is the ground point it is pinned at (the local point is its origin);
+    # its rates: the ground's (0) plus the driver's. The constant rows in two writes
+    # (rows x, y and vx, vy, w, ax, ay, al of the state's block, in that order)
+    blk = st.block
+    blk[0:2, b] = np.array([[g.sk[0] - 0.0], [g.sk[1] - 0.0]])
+    w = st.w[nb, 0] + sign * 1.0
     if acceleration:
-        st.al[b] = st.al[nb, 0] + sign * 0.0
-        st.ax[b] = 0.0
-        st.ay[b] = 0.0
+        blk[5:11, b] = np.array([[0.0], [0.0], [w], [0.0], [0.0], [st.al[nb, 0] + sign * 0.0]])
+    else:
+        blk[5:8, b] = np.array([[0.0], [0.0], [w]])
 
 
 def _arm(st: State, i: int, s: np.ndarray):
@@ -131,6 +131,7 @@ class RRRPass:
         self.uP, self.uQ = units.get(g.k1, 0.0), units.get(g.k2, 0.0)
         L1s, L2s = g.L1 * g.L1, g.L2 * g.L2
         self.L1s, self.L2s = L1s, L2s
+        self.half = (L1s - L2s) * 0.5  # (in floats: the same double as the group forms)
         ex = g.sM1[0] - g.sP1[0]
         ey = g.sM1[1] - g.sP1[1]
         self.f1 = ex / (ex * ex + ey * ey)  # set_pose_from_vectors' factor of each link
@@ -156,7 +157,7 @@ class RRRPass:
         D2 += t
         L1s, L2s = self.L1s, self.L2s
         inv = np.divide(1.0, D2)
-        a = np.multiply(np.multiply(L1s - L2s, 0.5), inv)
+        a = np.multiply(self.half, inv)
         a += 0.5
         h2 = L1s * inv
         np.multiply(a, a, out=t)
@@ -251,12 +252,14 @@ class RRRPass:
             aqx, aqy = _rate(st, g.k2, g.sQk, armQ, st.ax[b2], st.ay[b2], True, self.uQ)
             w1s = np.square(w1, out=t)
             w2s = w2**2
+            p = np.empty_like(w2s)  # (each product into it: no temporary per term)
             dax = np.subtract(aqx, apx)
-            dax -= w2s * g2x
-            dax += w1s * g1x
+            dax -= np.multiply(w2s, g2x, out=p)
+            dax += np.multiply(w1s, g1x, out=p)
             day = np.subtract(aqy, apy)
-            day -= w2s * g2y
-            day += w1s * g1y
+            day -= np.multiply(w2s, g2y, out=p)
+            day += np.multiply(w1s, g1y, out=p)
+            del p
             a1 = np.multiply(dax, g2x, out=st.al[b1])
             np.multiply(day, g2y, out=w2s)
             a1 += w2s

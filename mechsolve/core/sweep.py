@@ -78,6 +78,9 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
             raise mech.error(("driver",), "the mechanism has no driver: add a 'driver' section")
         self.mech = mech
         self.system = ConstraintSystem(mech)
+        # sweep values by (start, step, travel, direction, speed): shared by the per-call
+        # copies of a kept analysis (mechsolve.core.kept)
+        self._values: dict = {}
         self.scale = _scale(mech)
         self.atol = mech.solver.tolerance * self.scale
         self.method = method or mech.solver.method
@@ -212,12 +215,20 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
                 f"the sweep has {ratio:.3g} positions, more than the {MAX_POSITIONS:,} "
                 "mechsolve solves in one run: use a larger step or a smaller range",
             )
-        n = max(0, math.ceil(ratio - 1e-9))
-        k = np.arange(n + 1, dtype=float)
-        dist = np.minimum(k * step, travel)
-        u = u0 + self.mech.driver.direction * dist
-        t = dist / abs(self.speed) if self.speed else np.zeros_like(dist)
-        return u, t
+        # kept per analysis (an unchanged model solved again asks for the same values):
+        # each call gets its own copies
+        key = (u0, step, travel, self.mech.driver.direction, self.speed)
+        got = self._values.get(key)
+        if got is None:
+            n = max(0, math.ceil(ratio - 1e-9))
+            k = np.arange(n + 1, dtype=float)
+            dist = np.minimum(k * step, travel)
+            u = u0 + self.mech.driver.direction * dist
+            t = dist / abs(self.speed) if self.speed else np.zeros_like(dist)
+            if len(self._values) >= 8:
+                self._values.clear()
+            self._values[key] = got = (u, t)
+        return got[0].copy(), got[1].copy()
 
     def _file(self) -> str:
         src = self.mech.source

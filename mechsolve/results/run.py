@@ -122,7 +122,7 @@ def solve(
     """
     checked_mechanism(mech).ensure_valid()  # built in code, or edited since: check it
     step, method = checked_step(mech, step), checked_method(method)
-    an = analysis_for(mech, method)  # kept between solves of an unchanged model
+    an = analysis_for(mech, method, checked=True)  # kept between solves of an unchanged model
     ud = udd = None
     if mech.driver.motion is not None:  # a motion law: in time, or over driver positions
         u, t, ud, udd = an.motion_values(step)
