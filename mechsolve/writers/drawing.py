@@ -24,8 +24,7 @@ from mechsolve.base.atomic import replacing
 from mechsolve.base.units import parse_unit
 
 DXF_HINT = 'the DXF needs ezdxf: pip install "mechsolve[cad]" (or pip install ezdxf)'
-# DXF's $INSUNITS codes of the length units a file may use
-DXF_UNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7, "yd": 10, "um": 13, "dm": 14}
+DIMSTYLE = "MECHSOLVE"  # the drawing's dimension style: it measures in the drawing's unit
 LAYERS = {  # name: AutoCAD colour index
     "LINKS": 7,
     "PINS": 1,
@@ -344,13 +343,17 @@ def write_dxf(sh: Sheet, path: Path) -> Path:
     Raises ImportError when ezdxf is not installed."""
     import ezdxf
 
-    doc = ezdxf.new("R2010", setup=True)
-    code = DXF_UNITS.get(sh.unit)
+    # the line types and text styles only: ezdxf's own dimension styles measure a drawing
+    # in metres as centimetres (a length factor of 100)
+    doc = ezdxf.new("R2010", setup=["linetypes", "styles"])
+    code = dxf_unit_code(sh.unit)
     doc.units = code if code is not None else 0  # 0: unitless (a unit DXF does not name)
+    doc.header["$MEASUREMENT"] = 0 if code in _imperial() else 1
+    h = TEXT * sh.size
+    _dimstyle(doc, sh.unit, h)
     for name, color in LAYERS.items():
         doc.layers.add(name, color=color)
     msp = doc.modelspace()
-    h = TEXT * sh.size
 
     def poly(pts: np.ndarray, layer: str, closed: bool = False) -> None:
         msp.add_lwpolyline(np.asarray(pts, float).tolist(), close=closed,
@@ -376,26 +379,73 @@ def write_dxf(sh: Sheet, path: Path) -> Path:
     for line in sh.envelope:
         poly(line, "ENVELOPE")
     for d in sh.dimensions:
+        # the text is the measurement ("<>", kept live by CAD) and the unit (the
+        # style's suffix), to six significant digits
         dim = msp.add_aligned_dim(
             p1=tuple(d.p),
             p2=tuple(d.q),
             distance=d.offset,
-            text=d.text,
+            dimstyle=DIMSTYLE,
             dxfattribs={"layer": "DIMENSIONS"},
-            override={
-                "dimtxt": h,
-                "dimasz": h,
-                "dimexo": 0.3 * h,
-                "dimexe": 0.5 * h,
-                "dimgap": 0.3 * h,
-                "dimtad": 1,
-                "dimdec": 4,
-            },  # fmt: skip
+            # the suffix also on each dimension: ezdxf leaves it out of an R2007+ style
+            override={"dimdec": _decimals(d.length), "dimpost": f"<> {sh.unit}"},
         )
         dim.render()
     with replacing(path) as tmp:
         doc.saveas(tmp)
     return path
+
+
+def dxf_unit_code(unit: str) -> int | None:
+    """The DXF ``$INSUNITS`` code of the length unit ``unit`` (as a file writes it:
+    ``mm``, ``inch``, ``µm``, ``in*in/mm``), found by its size against ezdxf's table of
+    the codes' units; None where DXF has no code for it."""
+    from ezdxf.units import METER_FACTOR
+
+    per_metre = 1.0 / parse_unit(unit).factor
+    for code, factor in enumerate(METER_FACTOR):
+        if factor and math.isclose(factor, per_metre, rel_tol=1e-8):
+            return code
+    return None
+
+
+def _imperial() -> set[int]:
+    from ezdxf.units import IMPERIAL_UNITS
+
+    return {int(u) for u in IMPERIAL_UNITS}
+
+
+def _decimals(length: float) -> int:
+    """The decimals that show ``length`` to six significant digits (as the SVG does)."""
+    if not (math.isfinite(length) and length):
+        return 0
+    return int(min(8, max(0, 5 - math.floor(math.log10(abs(length))))))
+
+
+def _dimstyle(doc: Any, unit: str, h: float) -> None:
+    """The drawing's dimension style :data:`DIMSTYLE`, also its current one (the header's
+    ``$DIM...`` variables): a length factor of 1 (a dimension reads the drawing's own
+    unit), text and arrows of height ``h``, trailing zeros dropped, the unit after the
+    measurement."""
+    attrs = {
+        "dimlfac": 1.0,
+        "dimscale": 1.0,
+        "dimtxt": h,
+        "dimasz": h,
+        "dimexo": 0.3 * h,
+        "dimexe": 0.5 * h,
+        "dimgap": 0.3 * h,
+        "dimtad": 1,
+        "dimdec": 4,
+        "dimzin": 8,
+        "dimlunit": 2,
+        "dimdsep": ord("."),
+        "dimpost": f"<> {unit}",
+    }
+    doc.dimstyles.new(DIMSTYLE, dxfattribs=dict(attrs))
+    doc.header["$DIMSTYLE"] = DIMSTYLE
+    for key, value in attrs.items():
+        doc.header["$" + key.upper()] = value
 
 
 # -- SVG and PDF ------------------------------------------------------------------------

@@ -6,7 +6,16 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from mechsolve.cli.kit import (
+    EPILOG_NO_CHECK,
+    FILE_ARG,
+    QUIET,
+    VARIANT,
+    Command,
+    finish,
+    warn,
+    writes_to,
+)
 
 SUFFIXES = (".dxf", ".svg", ".pdf")
 ENVELOPE_POSITIONS = 36
@@ -92,6 +101,14 @@ def draw(file: Path, output, at, per_turn, envelope, variant, quiet) -> None:
     )
     if suffix == ".dxf":
         drawing.write_dxf(sh, output)
+        if drawing.dxf_unit_code(sh.unit) is None:
+            from mechsolve.base.units import parse_unit
+
+            warn(
+                f"DXF has no unit code for {sh.unit!r} (1 {sh.unit} = "
+                f"{parse_unit(sh.unit).factor:.6g} m): {output} is unitless ($INSUNITS 0); "
+                f"its dimensions name the unit"
+            )
     else:
         drawing.write_figure(sh, output)
     if not quiet:

@@ -1,0 +1,135 @@
+"""Issue 30: the DXF of ``mechsolve draw`` (dimensions that measure true, the units
+header, the motion envelope), ``run --watch``'s stale marker and changed figures, and
+texts in the user's units.
+
+The DXF is read back with ezdxf and checked against the files' own numbers (a crank of
+50 mm, a rod of 200 mm) and ezdxf's table of units; the envelope against the extent of
+a fine sweep's points; the watch's figures against the run's own summary text."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from click.testing import CliRunner
+
+from mechsolve.cli.main import main
+
+from conftest import MECH
+
+ezdxf = pytest.importorskip("ezdxf")
+
+SC = MECH / "slider-crank.yaml"  # crank O-A 50 mm, rod A-C 200 mm
+
+
+def draw(*args):
+    return CliRunner().invoke(main, ["draw", *map(str, args)])
+
+
+def _lfac(doc, dim) -> float:
+    """The length factor a CAD program applies to ``dim``'s measurement: its own
+    override, else its style's."""
+    style = doc.dimstyles.get(dim.dxf.dimstyle)
+    return float(dim.override().get("dimlfac", style.dxf.get("dimlfac", 1.0)))
+
+
+def _block_texts(doc, dim) -> list[str]:
+    block = doc.blocks.get(dim.dxf.geometry)
+    return [e.plain_text() for e in block if e.dxftype() == "MTEXT"] + [
+        e.dxf.text for e in block if e.dxftype() == "TEXT"
+    ]
+
+
+def test_dimensions_measure_true_in_the_drawing_unit(tmp_path):
+    out = tmp_path / "sc.dxf"
+    r = draw(SC, "-o", out, "--at", "40 deg")
+    assert r.exit_code == 0, r.output
+    doc = ezdxf.readfile(out)
+    # no scale between the drawing's unit and what its dimensions read
+    assert doc.header["$DIMLFAC"] == 1.0
+    current = doc.dimstyles.get(doc.header["$DIMSTYLE"])
+    assert current.dxf.get("dimlfac", 1.0) == 1.0
+    msp = doc.modelspace()
+    dims = list(msp.query("DIMENSION"))
+    shown = sorted(d.get_measurement() * _lfac(doc, d) for d in dims)
+    assert shown == pytest.approx([50.0, 200.0], abs=1e-9)
+    for d in dims:
+        # the text is the measurement (associative), not a typed-in override
+        assert d.dxf.get("text", "") in ("", "<>")
+        want = f"{d.get_measurement() * _lfac(doc, d):g} mm"
+        assert _block_texts(doc, d) == [want]
+    # a new dimension of the 50 mm crank in the drawing's current style reads 50 (the
+    # unit's suffix is the header's $DIMPOST, which ezdxf does not read)
+    assert doc.header["$DIMPOST"] == "<> mm"
+    a = (50 * math.cos(math.radians(40)), 50 * math.sin(math.radians(40)))
+    new = msp.add_aligned_dim(p1=(0, 0), p2=a, distance=5, dimstyle=doc.header["$DIMSTYLE"])
+    new.render()
+    (text,) = _block_texts(doc, new.dimension)
+    assert float(text.split()[0]) == pytest.approx(50.0, abs=1e-9)
+
+
+def _sc_in(tmp_path, unit: str, scale: float):
+    """The slider-crank with ``units.length: unit``, its lengths the same in metres."""
+    text = SC.read_text()
+    text = text.replace("length: mm", f"length: {unit}")
+    src = tmp_path / "sc.yaml"
+    # the crank 50 mm and rod 200 mm written in the unit
+    text = text.replace("A: [50, 0]", f"A: [{50 * scale:.12g}, 0]")
+    text = text.replace("C: [200, 0]", f"C: [{200 * scale:.12g}, 0]")
+    text = text.replace("G: [60, 0]", f"G: [{60 * scale:.12g}, 0]")
+    text = text.replace("G1: [-5, 0]", f"G1: [{-5 * scale:.12g}, 0]")
+    text = text.replace("through: [0, 10]", f"through: [0, {10 * scale:.12g}]")
+    src.write_text(text, encoding="utf-8")
+    return src
+
+
+# each unit the parser takes for lengths, with its metres (written here by hand) and
+# the name of its $INSUNITS code in ezdxf's table (ezdxf.units.unit_name)
+UNITS = [
+    ("mm", 1e-3, "Millimeters"),
+    ("cm", 1e-2, "Centimeters"),
+    ("dm", 1e-1, "Decimeters"),
+    ("m", 1.0, "Meters"),
+    ("km", 1e3, "Kilometers"),
+    ("um", 1e-6, "Microns"),
+    ("µm", 1e-6, "Microns"),
+    ("in", 0.0254, "Inches"),
+    ("inch", 0.0254, "Inches"),
+    ("ft", 0.3048, "Feet"),
+    ("yd", 0.9144, "Yards"),
+]
+
+
+@pytest.mark.parametrize("unit, metres, name", UNITS)
+def test_units_header_names_the_files_length_unit(tmp_path, unit, metres, name):
+    from ezdxf.units import IMPERIAL_UNITS, InsertUnits, unit_name
+
+    src = _sc_in(tmp_path, unit, 1e-3 / metres)
+    out = tmp_path / "u.dxf"
+    r = draw(src, "-o", out)
+    assert r.exit_code == 0, r.output
+    doc = ezdxf.readfile(out)
+    code = doc.header["$INSUNITS"]
+    assert unit_name(code) == name
+    imperial = InsertUnits(code) in IMPERIAL_UNITS
+    assert doc.header["$MEASUREMENT"] == (0 if imperial else 1)
+    assert imperial == (unit in ("in", "inch", "ft", "yd"))
+    # the crank and the rod measure 50 and 200 mm in the drawing's unit
+    dims = sorted(doc.modelspace().query("DIMENSION"), key=lambda d: d.get_measurement())
+    want = [0.05 / metres, 0.2 / metres]
+    assert [d.get_measurement() for d in dims] == pytest.approx(want, rel=1e-9)
+    for d, length in zip(dims, want):  # the text: the measurement and the file's unit
+        ((number, suffix),) = [t.split(" ", 1) for t in _block_texts(doc, d)]
+        assert float(number) == pytest.approx(length, rel=1e-5)
+        assert suffix == unit
+
+
+def test_a_unit_dxf_has_no_code_for_is_said(tmp_path):
+    # 1 in*in/mm = 0.64516 m: a length the parser takes and DXF has no code for
+    src = _sc_in(tmp_path, "in*in/mm", 1e-3 / 0.64516)
+    out = tmp_path / "u.dxf"
+    r = draw(src, "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "no unit code for 'in*in/mm'" in r.output and "0.64516 m" in r.output
+    doc = ezdxf.readfile(out)
+    assert doc.header["$INSUNITS"] == 0
