@@ -133,3 +133,42 @@ def test_a_unit_dxf_has_no_code_for_is_said(tmp_path):
     assert "no unit code for 'in*in/mm'" in r.output and "0.64516 m" in r.output
     doc = ezdxf.readfile(out)
     assert doc.header["$INSUNITS"] == 0
+
+
+def _overall(out):
+    """The envelope's two overall dimensions (the last two), as measured."""
+    doc = ezdxf.readfile(out)
+    dims = list(doc.modelspace().query("DIMENSION"))
+    return sorted(d.get_measurement() for d in dims[-2:])
+
+
+def test_envelope_is_the_motions_extent_at_any_drawn_position(tmp_path):
+    import numpy as np
+
+    from mechsolve import api
+    from mechsolve.writers.drawing import BAR, BLOCK
+
+    got = []
+    for at in ("0 deg", "90 deg", "233 deg"):
+        out = tmp_path / "env.dxf"
+        r = draw(SC, "-o", out, "--at", at, "--envelope")
+        assert r.exit_code == 0, r.output
+        got.append(_overall(out))
+    # the extent over a 0.25 deg sweep of the links' points (mm): the bars' outlines
+    # reach their radius past the points, the piston's block (on a horizontal guide)
+    # its half length along and 0.6 of it across
+    mech = api.load(SC)
+    fine = api.solve(mech, step="0.25 deg", forces=False, velocity=False, acceleration=False)
+    size = fine.analysis.scale * 1e3
+    r, h = BAR * size, BLOCK * size
+    xs = np.concatenate([fine.point(p).x for p in ("O", "A", "G1", "C", "G")]) * 1e3
+    ys = np.concatenate([fine.point(p).y for p in ("O", "A", "G1", "C", "G")]) * 1e3
+    c = fine.point("C")
+    x_lo, x_hi = min(xs.min() - r, c.x.min() * 1e3 - h), max(xs.max() + r, c.x.max() * 1e3 + h)
+    y_lo = min(ys.min() - r, c.y.min() * 1e3 - 0.6 * h)
+    y_hi = max(ys.max() + r, c.y.max() * 1e3 + 0.6 * h)
+    want = sorted([x_hi - x_lo, y_hi - y_lo])
+    # the crank reaches 50 mm above and below O: the height is 100 mm and two radii
+    assert want[0] == pytest.approx(100 + 2 * r, abs=1e-6)
+    for g in got:
+        assert g == pytest.approx(want, abs=1e-3)

@@ -315,18 +315,28 @@ def sheet(
 
 def _envelope(out: Sheet, an: Any, sweep: Any, count: int, k: float, sliding: set[str]) -> None:
     """Outlines of the links at ``count`` positions spread evenly over the sweep, and the
-    overall extent of the linkage in motion with its two dimensions."""
+    overall extent of the linkage in motion with its two dimensions: the box around the
+    moving links' outlines at every position of the sweep (not the dimension lines,
+    hatching and guides on the sheet, so not the position drawn)."""
     n = sweep.th.shape[1]
-    idx = np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int))
+    idx = set(np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int)).tolist())
     size = out.size
-    for j in idx:
-        for _name, pts, block in _link_shapes(an, sweep, int(j), k):
+    lo = np.full(2, np.inf)
+    hi = np.full(2, -np.inf)
+    for j in range(n):
+        for _name, pts, block in _link_shapes(an, sweep, j, k):
             if block and _name in sliding:
                 b = an.system.index[_name]
-                out.envelope.append(_block(pts[0], float(sweep.th[b, j]), BLOCK * size))
-            else:
-                out.envelope.append(rounded_hull(pts, BAR * size, arc=4))
-    lo, hi = out.extent()
+                shape = _block(pts[0], float(sweep.th[b, j]), BLOCK * size)
+                lo, hi = np.minimum(lo, shape.min(axis=0)), np.maximum(hi, shape.max(axis=0))
+            else:  # the rounded outline's box: its points' box grown by the bar's radius
+                r = BAR * size
+                lo, hi = np.minimum(lo, pts.min(axis=0) - r), np.maximum(hi, pts.max(axis=0) + r)
+                shape = rounded_hull(pts, r, arc=4) if j in idx else None
+            if j in idx and shape is not None:
+                out.envelope.append(shape)
+    if not np.all(np.isfinite([lo, hi])):
+        return
     box = np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]], lo])
     out.envelope.append(box)
     for p, q in ((box[0], box[1]), (box[1], box[2])):
