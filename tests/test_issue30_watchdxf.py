@@ -172,3 +172,87 @@ def test_envelope_is_the_motions_extent_at_any_drawn_position(tmp_path):
     assert want[0] == pytest.approx(100 + 2 * r, abs=1e-6)
     for g in got:
         assert g == pytest.approx(want, abs=1e-3)
+
+
+# -- run --watch ------------------------------------------------------------------------
+def _fake_watchfiles(monkeypatch, saves):
+    """``watchfiles.watch`` replaced by one that makes each save of ``saves`` (a function
+    that edits the file) and reports it, as the real one does after a save."""
+    import sys
+    import types
+
+    def watch(folder, **kw):
+        for save in saves:
+            save()
+            yield {("modified", str(folder))}
+
+    monkeypatch.setitem(sys.modules, "watchfiles", types.SimpleNamespace(watch=watch))
+
+
+def _watch(tmp_path, monkeypatch, text, saves, no_plots=True, units=None):
+    """``run FILE --watch`` in this process on a file holding ``text``, making ``saves``;
+    its lines."""
+    from mechsolve.cli.commands.run import _run_job
+    from mechsolve.cli.watch import watch_file
+
+    f = tmp_path / "m.yaml"
+    f.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    _fake_watchfiles(monkeypatch, [lambda s=s: s(f) for s in saves])
+    lines: list[str] = []
+
+    def job():
+        return _run_job(f, out, None, None, no_plots, None, (), None, False, "png", units)
+
+    watch_file(f, job, echo=lines.append, outdir=out)
+    return f, out, lines
+
+
+SC30 = SC.read_text().replace("step: 5 deg", "step: 30 deg")
+BAD_REQUIREMENT = "requirements:\n  stroke ok: stroke(cylinderx) > 90 mm\n"
+
+
+def _longer_crank_and_bad_requirement(f):
+    f.write_text(f.read_text().replace("A: [50, 0]", "A: [60, 0]") + BAD_REQUIREMENT)
+
+
+def test_watch_files_written_before_a_failed_check_are_not_called_stale(
+    tmp_path, monkeypatch, capsys
+):
+    f, out, lines = _watch(tmp_path, monkeypatch, SC30, [_longer_crank_and_bad_requirement])
+    text = "\n".join(lines)
+    assert "cylinderx" in text  # the failure, named
+    # the table is the save's: the crank pin A at 60 mm at the start
+    header, first = (out / "results.csv").read_text().splitlines()[:2]
+    col = header.split(",").index(next(h for h in header.split(",") if h.startswith("A.x")))
+    assert float(first.split(",")[col]) == 60.0
+    assert f"this save's run wrote results.csv in {out}/ before it failed" in text
+    assert "from the last good run" not in text
+    assert not (out / "STALE.txt").exists()  # every file there is the save's
+
+
+def test_watch_marker_names_only_the_files_the_failed_save_left_old(tmp_path, monkeypatch):
+    withinst = SC30 + "instants: [{theta: 30 deg, omega: 157 rad/s}]\n"
+    seen = {}
+
+    def drop_instants_bad_requirement(f):
+        f.write_text(
+            f.read_text().replace("instants: [{theta: 30 deg, omega: 157 rad/s}]\n", "")
+            + BAD_REQUIREMENT
+        )
+
+    def parse_error(f):  # (and what the save before it left)
+        seen["stale"] = (f.parent / "out" / "STALE.txt").read_text()
+        f.write_text(f.read_text().replace("joints:", "joints: [", 1))
+
+    f, out, lines = _watch(
+        tmp_path, monkeypatch, withinst, [drop_instants_bad_requirement, parse_error]
+    )
+    # the failed save wrote results.csv, not instants.csv (the file has none now)
+    first = seen["stale"]
+    assert "not from the file as\nit is now: instants.csv." in first
+    assert "The others (results.csv) were written by its last save" in first
+    assert "cylinderx" in first
+    # a save that cannot be run at all: every file is the last good run's
+    stale = (out / "STALE.txt").read_text()
+    assert "could not be run" in stale and "last good run" in stale

@@ -6,7 +6,10 @@ it are seen too), prints the summary and the figures that moved since the last g
 and on a mistake in the file prints the message (file, key path, line) and keeps waiting:
 a user's error never ends the watch; Ctrl-C does (exit 130). While the file is broken,
 the output folder holds ``STALE.txt`` (the error, and when the last good run was), so
-the plots there are never taken for the file as it is; the next good run removes it.
+the plots there are never taken for the file as it is; the next good run removes it. A
+save whose run fails after writing some files (a requirement that cannot be checked
+comes after the table and the plots) says which files it wrote, and the marker names
+only the files it left from an earlier run (there is none when it rewrote them all).
 File events come from ``watchfiles`` (an optional dependency: ``pip install
 "mechsolve[watch]"``), not from a polling loop.
 """
@@ -15,13 +18,21 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from mechsolve.base.errors import InputError, MechsolveError
 
-__all__ = ["STALE", "changes", "clear_stale", "figures_of", "mark_stale", "watch_file"]
+__all__ = [
+    "STALE",
+    "changes",
+    "clear_stale",
+    "figures_of",
+    "files_of",
+    "mark_stale",
+    "watch_file",
+]
 
 
 def figures_of(res: Any) -> dict[str, tuple[float, str]]:
@@ -83,26 +94,63 @@ def changes(before: dict, after: dict, rel: float = 1e-9) -> list[str]:
 STALE = "STALE.txt"  # in the output folder while the file is broken
 
 
-def mark_stale(outdir: Path, path: Path, error: str, good: str | None) -> Path | None:
+def mark_stale(
+    outdir: Path, path: Path, error: str, good: str | None, written: Sequence[str] = ()
+) -> Path | None:
     """Write ``outdir/STALE.txt``: the files beside it are not from ``path`` as it is
     now (its last save failed with ``error``); ``good`` is when the last good run was.
-    Returns the marker, or None when there is no folder to mark (nothing was written)."""
+
+    ``written``: the files the failed save's run did write before it failed (a run whose
+    requirements cannot be checked writes its table and plots first); those are from the
+    file as it is, and the marker names only the others, or is removed when there are
+    none. Returns the marker, or None when there is none (no folder, nothing old)."""
     from mechsolve.base.atomic import write_text
 
     outdir = Path(outdir)
     if not outdir.is_dir():
         return None
     since = f"the last good run ({good})" if good else "an earlier run"
-    text = (
-        f"The files in this folder are from {since} of {path}, not from the file as it\n"
-        "is now: its last save could not be run. They are replaced, and this file is\n"
-        "removed, by the next run that succeeds.\n\n"
-        f"{error}\n"
-    )
+    if written:
+        old = sorted(
+            p.name for p in outdir.iterdir() if p.is_file() and p.name not in (STALE, *written)
+        )
+        if not old:
+            clear_stale(outdir)
+            return None
+        text = (
+            f"These files in this folder are from {since} of {path}, not from the file as\n"
+            f"it is now: {', '.join(old)}.\n"
+            f"The others ({', '.join(written)}) were written by its last save, whose run then\n"
+            "failed. This file is removed by the next run that succeeds.\n\n"
+            f"{error}\n"
+        )
+    else:
+        text = (
+            f"The files in this folder are from {since} of {path}, not from the file as it\n"
+            "is now: its last save could not be run. They are replaced, and this file is\n"
+            "removed, by the next run that succeeds.\n\n"
+            f"{error}\n"
+        )
     try:
         return write_text(outdir / STALE, text)
     except OSError:  # a full disk: the terminal line still says it
         return None
+
+
+def files_of(outdir: Path | None) -> dict[str, tuple[int, int, int]]:
+    """The files in ``outdir`` (not :data:`STALE`) with what tells a rewritten one apart:
+    inode, modification time and size (a file written in place or replaced changes one)."""
+    out: dict[str, tuple[int, int, int]] = {}
+    if outdir is None or not Path(outdir).is_dir():
+        return out
+    for p in Path(outdir).iterdir():
+        try:
+            st = p.stat()
+        except OSError:
+            continue
+        if p.is_file() and p.name != STALE:
+            out[p.name] = (st.st_ino, st.st_mtime_ns, st.st_size)
+    return out
 
 
 def clear_stale(outdir: Path | None) -> None:
@@ -113,6 +161,27 @@ def clear_stale(outdir: Path | None) -> None:
         (Path(outdir) / STALE).unlink()
     except FileNotFoundError:
         pass
+
+
+def _say_what_is_stale(
+    echo: Callable[[str], None], outdir: Path, path: Path, message: str, good: str | None,
+    before: dict[str, tuple[int, int, int]],
+) -> None:  # fmt: skip
+    """After a save's run failed with ``message``: mark the files in ``outdir`` it did not
+    write (``before``: the folder's files before it ran) as stale, and say which are
+    whose."""
+    written = sorted(n for n, key in files_of(outdir).items() if before.get(n) != key)
+    marker = mark_stale(outdir, path, message, good, written)
+    since = f"the last good run ({good})" if good else "an earlier run"
+    if written:
+        echo(
+            f"this save's run wrote {', '.join(written)} in {outdir}/ before it failed "
+            "(above): those are from the file as it is now"
+        )
+        if marker is not None:
+            echo(f"the other files there are from {since}: see {marker}")
+    elif marker is not None:
+        echo(f"the files in {outdir}/ are from {since}, not from this save: see {marker}")
 
 
 def watch_file(
@@ -143,30 +212,28 @@ def watch_file(
     last: dict[str, tuple[float, str]] | None = None
     good: str | None = None  # when the last run that succeeded ended
 
-    def broken(message: str) -> None:
+    def broken(message: str, before: dict) -> None:
         echo(message)
         if outdir is not None:
-            marker = mark_stale(outdir, path, message, good)
-            if marker is not None:
-                since = f"the last good run ({good})" if good else "an earlier run"
-                echo(f"the files in {outdir}/ are from {since}, not from this save: see {marker}")
+            _say_what_is_stale(echo, outdir, path, message, good, before)
 
     def once() -> None:
         nonlocal last, good
+        before = files_of(outdir)
         try:
             code, res = job()
         except KeyboardInterrupt:
             raise
         except MechsolveError as exc:
-            broken(f"error: {exc}")
+            broken(f"error: {exc}", before)
             echo(f"watching {path}: fix it and save")
             return
         except OSError as exc:
-            broken(f"error: {exc.strerror or exc}: {exc.filename or path}")
+            broken(f"error: {exc.strerror or exc}: {exc.filename or path}", before)
             echo(f"watching {path}: fix it and save")
             return
         except Exception as exc:  # noqa: BLE001 - a bug must not end the user's session
-            broken(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)")
+            broken(f"internal error: {type(exc).__name__}: {exc} (a bug in mechsolve)", before)
             echo(f"watching {path}")
             return
         clear_stale(outdir)
