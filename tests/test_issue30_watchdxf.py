@@ -9,6 +9,7 @@ a fine sweep's points; the watch's figures against the run's own summary text.""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 from click.testing import CliRunner
@@ -256,3 +257,48 @@ def test_watch_marker_names_only_the_files_the_failed_save_left_old(tmp_path, mo
     # a save that cannot be run at all: every file is the last good run's
     stale = (out / "STALE.txt").read_text()
     assert "could not be run" in stale and "last good run" in stale
+
+
+def _longer_crank(f):
+    f.write_text(f.read_text().replace("A: [50, 0]", "A: [60, 0]"))
+
+
+def _after(lines, name):
+    """The new value and unit of figure ``name`` in the watch's "changed" lines."""
+    for line in lines:
+        m = re.match(rf"  {re.escape(name)}: \S+ -> (\S+?)(°| \S+)?( \(|$)", line)
+        if m:
+            return float(m.group(1)), (m.group(2) or "").strip()
+    raise AssertionError(f"no {name!r} in\n" + "\n".join(lines))
+
+
+def _last(text, pattern):
+    return re.findall(pattern, text)[-1]
+
+
+@pytest.mark.parametrize(
+    "units, mm, torque", [(None, 1.0, "N·mm"), ("length=in,force=lbf", 25.4, "lbf·in")]
+)
+def test_watch_changes_are_the_summarys_figures_in_its_units(
+    tmp_path, monkeypatch, capsys, units, mm, torque
+):
+    f, out, lines = _watch(tmp_path, monkeypatch, SC30, [_longer_crank], units=units)
+    summary = capsys.readouterr().out
+    unit = "mm" if mm == 1.0 else "in"
+    # the stroke of the offset slider-crank (crank 60, rod 200, offset 10 mm) by hand
+    stroke = (math.sqrt(260**2 - 10**2) - math.sqrt(140**2 - 10**2)) / mm
+    assert _after(lines, "cylinder stroke") == (pytest.approx(stroke, rel=5e-6), unit)
+    s = _last(summary, rf"\(stroke (\S+) {unit}\)")
+    assert float(s) == pytest.approx(stroke, rel=5e-6)
+    # the driving torque's max, the work and the peak reactions: the summary's numbers
+    tmax = _last(summary, rf"driving torque \(1° samples\): max (\S+) {torque}")
+    assert _after(lines, "driving torque, max") == (pytest.approx(float(tmax), rel=1e-6), torque)
+    tmin = _last(summary, rf", min (\S+) {torque}")
+    assert _after(lines, "driving torque, min") == (pytest.approx(float(tmin), rel=1e-6), torque)
+    work, wunit = _last(summary, r"work of the driver per cycle: (\S+) (\S+)")
+    assert _after(lines, "work of the driver") == (pytest.approx(float(work), rel=1e-6), wunit)
+    force = "N" if units is None else "lbf"
+    peaks = _last(summary, r"peak reactions \(1° samples\): (.*)")
+    for joint in ("O", "A", "C"):
+        v = re.search(rf"(?:^|; ){joint} (\S+) {force} ", peaks).group(1)
+        assert _after(lines, f"peak reaction {joint}") == (pytest.approx(float(v), rel=1e-3), force)

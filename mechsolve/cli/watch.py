@@ -35,46 +35,99 @@ __all__ = [
 ]
 
 
-def figures_of(res: Any) -> dict[str, tuple[float, str]]:
-    """The figures a designer watches, ``{name: (value, unit)}`` in display units:
-    positions solved, each rocker's swing and slider's stroke, time ratios, each loop's
-    smallest transmission angle, the peak driving effort, the work per cycle, the peak
-    reaction of each joint."""
+def figures_of(res: Any, units: Any = None) -> dict[str, tuple[float, str]]:
+    """The figures a designer watches, ``{name: (value, unit)}``, as the run's summary
+    gives them: from the sweep its figures come from (:func:`mechsolve.api.for_plots`,
+    1 degree or finer with the exact limit positions; the file's step only for the count
+    of positions) and in the units it prints (``units``, an
+    :class:`~mechsolve.base.units.OutputUnits`; default: the ones the summary was printed
+    in, else the file's). Positions solved, each rocker's swing and slider's stroke, time
+    ratios, each loop's smallest transmission angle, the driving effort's largest and
+    smallest values, the work per cycle, each joint's peak reaction; a figure the summary
+    says grows without bound (a toggle) is left out."""
     out: dict[str, tuple[float, str]] = {}
     if res is None:
         return out
+    from mechsolve.base.units import pretty_unit
+    from mechsolve.results.run import for_plots
+
+    U = units or getattr(res, "_shown", None) or res.mechanism.output_units()
+    src = for_plots(res.mechanism, res)
     out["positions solved"] = (float(sum(bool(x) for x in res.ok)), "")
-    for lp in res.limit_positions():
+    for lp in src.limit_positions():
         if lp.travels:
-            out[f"{lp.name} stroke"] = ((lp.high - lp.low) * 1e3, "mm")
+            v, unit = U.show(lp.swing, "m")
+            out[f"{lp.name} stroke"] = (float(v), pretty_unit(unit))
         else:
-            out[f"{lp.name} swing"] = (math.degrees(lp.high - lp.low), "deg")
+            v, unit = U.show(math.degrees(lp.swing), "deg")
+            out[f"{lp.name} swing"] = (float(v), pretty_unit(unit))
         if lp.time_ratio is not None:
             out[f"{lp.name} time ratio"] = (lp.time_ratio, "")
-    for t in res.transmission_angles():
-        out[f"min transmission angle, {t.group}"] = (math.degrees(t.angle), "deg")
-    if res.forces is not None:
-        import numpy as np
+    for t in src.transmission_angles():
+        v, unit = U.show(math.degrees(t.angle), "deg")
+        out[f"min transmission angle, {t.group}"] = (float(v), pretty_unit(unit))
+    if res.forces is not None and src.forces is not None:
+        out.update(_force_figures(res, src, U))
+    return out
 
-        e = np.asarray(res.driving_effort, float)
-        if np.any(np.isfinite(e)):
-            kind, unit = res.effort_name
-            out[f"peak driving {kind}"] = (float(np.nanmax(np.abs(e))), unit)
-        out["work of the driver"] = (float(res.work()), "J")
-        for c in res.force_columns() if hasattr(res, "force_columns") else []:
-            name = getattr(c, "name", "")
-            if name.endswith(".F"):
-                v = np.asarray(c.values, float)
-                if np.any(np.isfinite(v)):
-                    out[f"peak reaction {name[:-2]}"] = (float(np.nanmax(v)), c.unit)
+
+def _force_figures(res: Any, src: Any, U: Any) -> dict[str, tuple[float, str]]:
+    """The driving effort's max and min, the work and the peak reactions of ``src`` (the
+    summary's sweep) as :meth:`~mechsolve.results.summary.Summary.force_summary` prints
+    them: the same scale (kN and kN*m for large SI values) and units."""
+    import numpy as np
+
+    from mechsolve.base.units import pretty_unit
+    from mechsolve.results.summary import _kilo, _or_zero, edge_growth, unbounded_towards
+
+    out: dict[str, tuple[float, str]] = {}
+    kind, unit = res.effort_name
+    e = np.asarray(src.driving_effort, float)
+    if not np.any(np.isfinite(e)):
+        return out
+    scale, unit = _kilo(e, unit, U)
+    if not res.idle_driver():
+        for name, sign in (("max", 1.0), ("min", -1.0)):
+            i = int(np.nanargmax(sign * e))
+            if unbounded_towards(src, sign * e, i) is None and (
+                edge_growth(src, lambda x, k, s=sign: s * src.effort_at(x, k)) is None
+            ):
+                out[f"driving {kind}, {name}"] = (float(e[i] / scale), pretty_unit(unit))
+    work, _why = src._work_why()
+    if math.isfinite(work):
+        if U.energy == "J":
+            big = abs(work) >= 1e4
+            out["work of the driver"] = (work / (1e3 if big else 1.0), "kJ" if big else "J")
+        else:
+            v, wunit = U.show(work, "J")
+            out["work of the driver"] = (float(v), pretty_unit(wunit))
+    kf = U.convert("N")[0]
+    kilo = unit in ("kN", "kN*m") and U.force == "N"
+    fscale, funit = (1e3 / kf, "kN") if kilo else (1.0 / kf, U.force)
+    g = src.forces
+    peaks = []
+    for j in res.mechanism.joints:
+        mag = np.where(g.ok, np.abs(g.reactions[j.name][j.magnitude]), np.nan)
+        if np.any(np.isfinite(mag)):
+            peaks.append((j, mag, int(np.nanargmax(mag))))
+    top = max((float(m[i]) for _, m, i in peaks), default=0.0)
+    for j, mag, i in peaks:
+        if unbounded_towards(src, mag, i) is None and (
+            edge_growth(src, lambda x, k, j=j: np.abs(src.reaction_at(j.name, x, k)[j.magnitude]))
+            is None
+        ):
+            value = _or_zero(float(mag[i]), top) / fscale
+            out[f"peak reaction {j.name}"] = (value, pretty_unit(funit))
     return out
 
 
 def changes(before: dict, after: dict, rel: float = 1e-9) -> list[str]:
     """Lines saying which figures moved, by how much, and which appeared or went."""
     lines = []
+    from mechsolve.base.units import spaced
+
     for name, (v, unit) in after.items():
-        u = f" {unit}" if unit else ""
+        u = spaced(unit)
         if name not in before:
             lines.append(f"  new: {name} = {v:.6g}{u}")
             continue
@@ -221,7 +274,7 @@ def watch_file(
         nonlocal last, good
         before = files_of(outdir)
         try:
-            code, res = job()
+            code, res, *shown = job()  # (and the units the run printed in)
         except KeyboardInterrupt:
             raise
         except MechsolveError as exc:
@@ -238,7 +291,7 @@ def watch_file(
             return
         clear_stale(outdir)
         good = time.strftime("%H:%M:%S")
-        figs = figures_of(res)
+        figs = figures_of(res, shown[0] if shown else None)
         if last is not None and figs:
             moved = changes(last, figs)
             echo("changed since the last run:" if moved else "no figure changed")
