@@ -302,3 +302,37 @@ def test_watch_changes_are_the_summarys_figures_in_its_units(
     for joint in ("O", "A", "C"):
         v = re.search(rf"(?:^|; ){joint} (\S+) {force} ", peaks).group(1)
         assert _after(lines, f"peak reaction {joint}") == (pytest.approx(float(v), rel=1e-3), force)
+
+
+# -- texts in the user's units ------------------------------------------------------------
+BAR_ON_MOTOR = """
+name: bar on a motor
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], A: [0.8, 0]}, mass: 3 kg, uniform_bar: [O, A]}
+joints: {O: [ground, bar]}
+driver: {joint: O, start: 0 deg}
+gravity: 9.81 m/s^2
+motor: {stall: 50 N m, slope: 3 N m s}
+simulate: {duration: 0.5 s, step: 0.002 s, method: rk4, from: rest}
+"""
+
+
+def test_simulate_says_its_times_in_the_time_unit_asked_for(tmp_path):
+    f = tmp_path / "bar.yaml"
+    f.write_text(BAR_ON_MOTOR)
+    texts = []
+    for units in ([], ["--units", "time=ms"]):
+        r = CliRunner().invoke(
+            main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots", *units]
+        )
+        assert r.exit_code == 0, r.output
+        texts.append(r.output)
+    si, ms = texts
+    seconds = [float(x) for x in re.findall(r"t = (\S+) s\b", si)]
+    assert len(seconds) >= 5  # where the extremes are, the fastest, the end
+    assert not re.findall(r"t = \S+ s\b", ms)
+    assert [float(x) for x in re.findall(r"t = (\S+) ms\b", ms)] == pytest.approx(
+        [1e3 * x for x in seconds], rel=1e-6
+    )
+    assert "250 steps of 2 ms to t = 500 ms" in ms  # 0.002 s each, to the 0.5 s asked for
