@@ -336,3 +336,38 @@ def test_simulate_says_its_times_in_the_time_unit_asked_for(tmp_path):
         [1e3 * x for x in seconds], rel=1e-6
     )
     assert "250 steps of 2 ms to t = 500 ms" in ms  # 0.002 s each, to the 0.5 s asked for
+
+
+def _is_125(x: float) -> bool:
+    e = math.floor(math.log10(x) + 1e-12)
+    return any(math.isclose(x, b * 10.0**e, rel_tol=1e-9) for b in (1, 2, 5))
+
+
+@pytest.mark.parametrize("units", ["length=in,force=lbf", "force=kgf", "force=kN"])
+def test_animation_scale_bar_reads_round_numbers_in_the_shown_units(units):
+    from mechsolve import api
+    from mechsolve.base.units import parse_output_units
+    from mechsolve.report.animate import solve_frames
+
+    mech = api.load(SC)
+    U = parse_output_units(units, mech.output_units())
+    fr = solve_frames(mech, count=24, forces=True, units=U)
+    length, force = fr.bar_text.split(" = ")
+    (lv, lu), (fv, fu) = length.split(" "), force.split(" ")
+    assert (lu, fu) == (U.length, U.force)
+    assert _is_125(float(lv)) and _is_125(float(fv)), fr.bar_text
+    # what the bar reads is what it draws: its length over the arrows' m per N
+    assert float(lv) == pytest.approx(U.show(fr.bar, "m")[0], rel=1e-9)
+    assert float(fv) == pytest.approx(U.show(fr.bar / fr.force_scale, "N")[0], rel=1e-9)
+
+
+def test_animation_time_label_tells_frames_apart_at_1500_rpm():
+    from mechsolve import api
+    from mechsolve.report.animate import solve_frames
+
+    fr = solve_frames(api.load(SC))  # 1 deg a frame: 1/9000 s at 1500 rpm
+    assert fr.t[1] - fr.t[0] == pytest.approx(1 / 9000, rel=1e-9)
+    times = [re.search(r"t = (\S+) s$", fr.label(i)).group(1) for i in range(len(fr))]
+    assert len(set(times)) == len(times)  # no two frames read the same time
+    for text, t in zip(times, fr.t):  # each the frame's time, to its last digit
+        assert abs(float(text) - t) <= 0.5 * 10.0 ** -len(text.split(".")[1]) + 1e-15
