@@ -371,3 +371,47 @@ def test_animation_time_label_tells_frames_apart_at_1500_rpm():
     assert len(set(times)) == len(times)  # no two frames read the same time
     for text, t in zip(times, fr.t):  # each the frame's time, to its last digit
         assert abs(float(text) - t) <= 0.5 * 10.0 ** -len(text.split(".")[1]) + 1e-15
+
+
+def test_check_prints_the_start_in_the_files_length_unit():
+    r = CliRunner().invoke(main, ["check", str(SC)])
+    assert r.exit_code == 0, r.output
+    assert "global coordinates [mm]:" in r.output
+    # crank 50 mm along x; the piston on y = 10 mm, 200 mm from A
+    c = re.search(r"\n\s+C: \((\S+), (\S+)\)", r.output)
+    assert float(c.group(1)) == pytest.approx(50 + math.sqrt(200**2 - 10**2), rel=1e-5)
+    assert float(c.group(2)) == pytest.approx(10.0, abs=1e-9)
+    assert re.search(r"\n\s+A: \(50, 0\)", r.output)
+
+
+LINEAR_MM = """
+name: lin
+units: {length: mm, angle: deg}
+ground: {O: [0, 0]}
+links:
+  crank: {points: {O: [0, 0], A: [50, 0]}}
+  rod: {points: {A: [0, 0], C: [200, 0]}}
+  piston: {points: {C: [0, 0]}}
+joints:
+  O: [ground, crank]
+  A: [crank, rod]
+  C: [rod, piston]
+  cylinder: {slider: [ground, piston], point: C, line: {through: [0, 0], angle: 0}}
+assembly: [A.y > 0]
+driver: {joint: cylinder, speed: 0.5 m/s, start: 240}
+sweep: {range: 80, step: 10}
+"""
+
+
+def test_draw_at_a_linear_position_says_it_in_the_users_unit(tmp_path):
+    f = tmp_path / "lin.yaml"
+    f.write_text(LINEAR_MM)
+    out = tmp_path / "l.dxf"
+    r = draw(f, "-o", out, "--at", "200 mm")
+    assert r.exit_code == 0, r.output
+    assert "drawn at driver position 200 mm" in r.output
+    # C beyond crank + rod (250 mm) cannot close: said at the user's 300 mm, not 0.3 m
+    r = draw(f, "-o", out, "--at", "300 mm")
+    assert r.exit_code != 0
+    assert "--at '300 mm'" in r.output and "driver position 300 mm" in r.output
+    assert "0.3 m" not in r.output
