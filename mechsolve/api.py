@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechsolve.base.units import pretty_unit
 from mechsolve.core.sweep import Analysis, StartAssembly
 from mechsolve.joints.registry import KINDS
 from mechsolve.model import Mechanism
@@ -159,9 +160,14 @@ class CheckReport:
             lines.append("  groups, solved in this order:")
         for k, (g, b) in enumerate(zip(self.groups, self.branches), 1):
             lines.append(f"    {k}. {g}" + (f": {b}" if b else ""))
-        lines.append(f"  start position ({an.format_u(self.start_u)}), global coordinates [m]:")
+        # in the file's length unit, as its results are
+        k, unit = mech.output_units().convert("m")
+        unit = pretty_unit(unit)
+        lines.append(
+            f"  start position ({an.format_u(self.start_u)}), global coordinates [{unit}]:"
+        )
         for p, (x, y) in self.start_points.items():
-            lines.append(f"    {p:>8s}: ({x:.6g}, {y:.6g})")
+            lines.append(f"    {p:>8s}: ({x * k:.6g}, {y * k:.6g})")
         red = self.analysis.redundancy
         if red is not None:
             lines.append(

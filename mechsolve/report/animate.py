@@ -19,6 +19,7 @@ mm, ``50 mm = 20 N``); the coordinates stay metres inside, as the HTML player's 
 
 from __future__ import annotations
 
+import functools
 import math
 import shutil
 from dataclasses import dataclass, field
@@ -184,8 +185,20 @@ class Frames:
         fmt = (".1f" if U.angle == "deg" else ".4g") if self.u_unit == "deg" else ".4g"
         text = f"driver {self.driver} = {U.text(u, self.u_unit, fmt)}"
         if self.timed:
-            text += f", t = {U.text(float(self.t[i]), 's', '.3f')}"
+            text += f", t = {U.text(float(self.t[i]), 's', self.time_format)}"
         return text
+
+    @functools.cached_property
+    def time_format(self) -> str:
+        """The format of the frames' times in the shown unit: three decimals, or as many
+        as tell two frames apart (``.4f`` s at 1500 rpm, 0.11 ms a frame)."""
+        k = self.units.convert("s")[0]
+        dt = np.diff(np.asarray(self.t, float)) * k
+        dt = dt[np.isfinite(dt) & (dt > 0)]
+        if not dt.size:
+            return ".3f"
+        places = math.ceil(-math.log10(float(dt.min())) - 1e-9)  # its last place <= a step
+        return f".{max(3, places)}f"
 
     def to_json(self, digits: int = 5) -> dict[str, Any]:
         """The frames as plain lists for the report's player (coordinates rounded to
@@ -417,9 +430,11 @@ def _add_forces(fr: Frames, res: Results, points: dict, reactions: bool) -> None
         if np.any(np.isfinite(mag)):
             big = max(big, float(np.nanmax(mag)))
     x0, x1, y0, y1 = fr.bounds(0.0)
-    k = fr.units.convert("m")[0]  # round numbers in the shown length unit
-    per_n, bar = arrow_scale(big, k * max(x1 - x0, y1 - y0))
-    fr.force_scale, fr.bar = per_n / k, bar / k
+    # round numbers in the shown length and force units (1 in = 200 lbf, not 224.8)
+    k = fr.units.convert("m")[0]
+    kf = fr.units.convert("N")[0]
+    per, bar = arrow_scale(big * kf, k * max(x1 - x0, y1 - y0))
+    fr.force_scale, fr.bar = per * kf / k, bar / k
 
 
 def arrow_scale(big: float, size: float) -> tuple[float, float]:

@@ -24,8 +24,7 @@ from mechsolve.base.atomic import replacing
 from mechsolve.base.units import parse_unit
 
 DXF_HINT = 'the DXF needs ezdxf: pip install "mechsolve[cad]" (or pip install ezdxf)'
-# DXF's $INSUNITS codes of the length units a file may use
-DXF_UNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7, "yd": 10, "um": 13, "dm": 14}
+DIMSTYLE = "MECHSOLVE"  # the drawing's dimension style: it measures in the drawing's unit
 LAYERS = {  # name: AutoCAD colour index
     "LINKS": 7,
     "PINS": 1,
@@ -316,18 +315,28 @@ def sheet(
 
 def _envelope(out: Sheet, an: Any, sweep: Any, count: int, k: float, sliding: set[str]) -> None:
     """Outlines of the links at ``count`` positions spread evenly over the sweep, and the
-    overall extent of the linkage in motion with its two dimensions."""
+    overall extent of the linkage in motion with its two dimensions: the box around the
+    moving links' outlines at every position of the sweep (not the dimension lines,
+    hatching and guides on the sheet, so not the position drawn)."""
     n = sweep.th.shape[1]
-    idx = np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int))
+    idx = set(np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int)).tolist())
     size = out.size
-    for j in idx:
-        for _name, pts, block in _link_shapes(an, sweep, int(j), k):
+    lo = np.full(2, np.inf)
+    hi = np.full(2, -np.inf)
+    for j in range(n):
+        for _name, pts, block in _link_shapes(an, sweep, j, k):
             if block and _name in sliding:
                 b = an.system.index[_name]
-                out.envelope.append(_block(pts[0], float(sweep.th[b, j]), BLOCK * size))
-            else:
-                out.envelope.append(rounded_hull(pts, BAR * size, arc=4))
-    lo, hi = out.extent()
+                shape = _block(pts[0], float(sweep.th[b, j]), BLOCK * size)
+                lo, hi = np.minimum(lo, shape.min(axis=0)), np.maximum(hi, shape.max(axis=0))
+            else:  # the rounded outline's box: its points' box grown by the bar's radius
+                r = BAR * size
+                lo, hi = np.minimum(lo, pts.min(axis=0) - r), np.maximum(hi, pts.max(axis=0) + r)
+                shape = rounded_hull(pts, r, arc=4) if j in idx else None
+            if j in idx and shape is not None:
+                out.envelope.append(shape)
+    if not np.all(np.isfinite([lo, hi])):
+        return
     box = np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]], lo])
     out.envelope.append(box)
     for p, q in ((box[0], box[1]), (box[1], box[2])):
@@ -344,13 +353,17 @@ def write_dxf(sh: Sheet, path: Path) -> Path:
     Raises ImportError when ezdxf is not installed."""
     import ezdxf
 
-    doc = ezdxf.new("R2010", setup=True)
-    code = DXF_UNITS.get(sh.unit)
+    # the line types and text styles only: ezdxf's own dimension styles measure a drawing
+    # in metres as centimetres (a length factor of 100)
+    doc = ezdxf.new("R2010", setup=["linetypes", "styles"])
+    code = dxf_unit_code(sh.unit)
     doc.units = code if code is not None else 0  # 0: unitless (a unit DXF does not name)
+    doc.header["$MEASUREMENT"] = 0 if code in _imperial() else 1
+    h = TEXT * sh.size
+    _dimstyle(doc, sh.unit, h)
     for name, color in LAYERS.items():
         doc.layers.add(name, color=color)
     msp = doc.modelspace()
-    h = TEXT * sh.size
 
     def poly(pts: np.ndarray, layer: str, closed: bool = False) -> None:
         msp.add_lwpolyline(np.asarray(pts, float).tolist(), close=closed,
@@ -376,26 +389,73 @@ def write_dxf(sh: Sheet, path: Path) -> Path:
     for line in sh.envelope:
         poly(line, "ENVELOPE")
     for d in sh.dimensions:
+        # the text is the measurement ("<>", kept live by CAD) and the unit (the
+        # style's suffix), to six significant digits
         dim = msp.add_aligned_dim(
             p1=tuple(d.p),
             p2=tuple(d.q),
             distance=d.offset,
-            text=d.text,
+            dimstyle=DIMSTYLE,
             dxfattribs={"layer": "DIMENSIONS"},
-            override={
-                "dimtxt": h,
-                "dimasz": h,
-                "dimexo": 0.3 * h,
-                "dimexe": 0.5 * h,
-                "dimgap": 0.3 * h,
-                "dimtad": 1,
-                "dimdec": 4,
-            },  # fmt: skip
+            # the suffix also on each dimension: ezdxf leaves it out of an R2007+ style
+            override={"dimdec": _decimals(d.length), "dimpost": f"<> {sh.unit}"},
         )
         dim.render()
     with replacing(path) as tmp:
         doc.saveas(tmp)
     return path
+
+
+def dxf_unit_code(unit: str) -> int | None:
+    """The DXF ``$INSUNITS`` code of the length unit ``unit`` (as a file writes it:
+    ``mm``, ``inch``, ``µm``, ``in*in/mm``), found by its size against ezdxf's table of
+    the codes' units; None where DXF has no code for it."""
+    from ezdxf.units import METER_FACTOR
+
+    per_metre = 1.0 / parse_unit(unit).factor
+    for code, factor in enumerate(METER_FACTOR):
+        if factor and math.isclose(factor, per_metre, rel_tol=1e-8):
+            return code
+    return None
+
+
+def _imperial() -> set[int]:
+    from ezdxf.units import IMPERIAL_UNITS
+
+    return {int(u) for u in IMPERIAL_UNITS}
+
+
+def _decimals(length: float) -> int:
+    """The decimals that show ``length`` to six significant digits (as the SVG does)."""
+    if not (math.isfinite(length) and length):
+        return 0
+    return int(min(8, max(0, 5 - math.floor(math.log10(abs(length))))))
+
+
+def _dimstyle(doc: Any, unit: str, h: float) -> None:
+    """The drawing's dimension style :data:`DIMSTYLE`, also its current one (the header's
+    ``$DIM...`` variables): a length factor of 1 (a dimension reads the drawing's own
+    unit), text and arrows of height ``h``, trailing zeros dropped, the unit after the
+    measurement."""
+    attrs = {
+        "dimlfac": 1.0,
+        "dimscale": 1.0,
+        "dimtxt": h,
+        "dimasz": h,
+        "dimexo": 0.3 * h,
+        "dimexe": 0.5 * h,
+        "dimgap": 0.3 * h,
+        "dimtad": 1,
+        "dimdec": 4,
+        "dimzin": 8,
+        "dimlunit": 2,
+        "dimdsep": ord("."),
+        "dimpost": f"<> {unit}",
+    }
+    doc.dimstyles.new(DIMSTYLE, dxfattribs=dict(attrs))
+    doc.header["$DIMSTYLE"] = DIMSTYLE
+    for key, value in attrs.items():
+        doc.header["$" + key.upper()] = value
 
 
 # -- SVG and PDF ------------------------------------------------------------------------

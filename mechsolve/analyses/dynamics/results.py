@@ -185,17 +185,20 @@ class SimulationResults(Results):
         ka, au = U.convert("m/s^2" if lin else "rad/s^2")
         sim = self.mechanism.simulation
         how = (
-            f"rk4, {len(tr.t) - 1} steps of {sim.step:.6g} s"
+            f"rk4, {len(tr.t) - 1} steps of {U.text(sim.step, 's')}"
             if sim.method == "rk4"
             else f"{sim.method}, {len(tr.t)} output rows"
         )
-        lines.append(f"  simulation: {how} to t = {tr.t[-1]:.6g} s; motor {self._motor_text()}")
+        lines.append(
+            f"  simulation: {how} to t = {U.text(tr.t[-1], 's')}; motor {self._motor_text()}"
+        )
         parts = []
         if np.any(np.isfinite(tr.omega)):
             k = int(np.nanargmax(np.abs(tr.omega)))  # the fastest, either way
             parts.append(
                 f"fastest |{'v' if lin else 'omega'}| = {abs(tr.omega[k]) * kw:.6g} {wu} at "
-                f"t = {tr.t[k]:.6g} s" + (f", {self._sense(tr.omega[k])}" if tr.omega[k] else "")
+                f"t = {U.text(tr.t[k], 's')}"
+                + (f", {self._sense(tr.omega[k])}" if tr.omega[k] else "")
             )
         if np.any(np.isfinite(tr.eps)):
             parts.append(
@@ -297,8 +300,9 @@ class SimulationResults(Results):
         from the start)``)."""
         t = float(self.trajectory.t[i])
         u = float(self.u[i])
+        at = f"t = {shown(self).text(t, 's')}"  # in the summary's time unit
         if self.linear:
-            return f"t = {t:.6g} s ({self.analysis.format_u(u)})"
+            return f"{at} ({self.analysis.format_u(u)})"
         d = self.mechanism.driver.direction
         travel = math.degrees(d * (u - float(self.u[0])))
         turns, part = divmod(abs(travel), 360.0)
@@ -312,7 +316,7 @@ class SimulationResults(Results):
             where += f", {n} + {part:.6g}°{back} from the start"
         elif travel and not plain:
             where += f", {abs(travel):.6g}°{back} from the start"
-        return f"t = {t:.6g} s ({where})"
+        return f"{at} ({where})"
 
     def stall(self) -> str:
         """``stalled at …`` when the machine comes to rest and stays (a motor too weak to

@@ -6,7 +6,16 @@ from pathlib import Path
 
 import click
 
-from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, VARIANT, Command, finish, writes_to
+from mechsolve.cli.kit import (
+    EPILOG_NO_CHECK,
+    FILE_ARG,
+    QUIET,
+    VARIANT,
+    Command,
+    finish,
+    warn,
+    writes_to,
+)
 
 SUFFIXES = (".dxf", ".svg", ".pdf")
 ENVELOPE_POSITIONS = 36
@@ -92,6 +101,14 @@ def draw(file: Path, output, at, per_turn, envelope, variant, quiet) -> None:
     )
     if suffix == ".dxf":
         drawing.write_dxf(sh, output)
+        if drawing.dxf_unit_code(sh.unit) is None:
+            from mechsolve.base.units import parse_unit
+
+            warn(
+                f"DXF has no unit code for {sh.unit!r} (1 {sh.unit} = "
+                f"{parse_unit(sh.unit).factor:.6g} m): {output} is unitless ($INSUNITS 0); "
+                f"its dimensions name the unit"
+            )
     else:
         drawing.write_figure(sh, output)
     if not quiet:
@@ -104,14 +121,22 @@ def draw(file: Path, output, at, per_turn, envelope, variant, quiet) -> None:
 
 
 def _instant(mech, at: str, per_turn: int):
-    """The analysis, the state, its index and the words of the position ``--at``."""
+    """The analysis, the state, its index and the words of the position ``--at`` (in the
+    file's units: a linear driver's position in its length unit)."""
     from mechsolve.analyses.instants import solve_instants
     from mechsolve.analyses.polygons.construction import resolve_at
     from mechsolve.base.errors import SolverError
     from mechsolve.core.sweep import Analysis
 
-    inst = resolve_at(Analysis(mech), at, per_turn)
+    an = Analysis(mech)
+    inst = resolve_at(an, at, per_turn)
+    label = inst.label
+    if an.linear:  # the words hold the position in m: in the file's unit instead
+        shown = f"driver position {mech.output_units().text(inst.u, 'm')}"
+        label = label.replace(an.format_u(inst.u), shown)
     res = solve_instants(mech, [inst], forces=False)
     if not res.ok[0]:
-        raise SolverError(f"draw: the mechanism cannot close at {inst.label}: {res.status()[0]}")
-    return res.analysis, res.solution.state, 0, f"at {inst.label}"
+        raise SolverError(
+            f"draw --at {at!r}: the mechanism cannot close at {label}: {res.status()[0]}"
+        )
+    return res.analysis, res.solution.state, 0, f"at {label}"

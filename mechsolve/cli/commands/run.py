@@ -94,7 +94,7 @@ def run(
     if watch:
         _watch(file, lambda: _run_job(*args), outdir=outdir)
     try:
-        code, _ = _run_job(*args)
+        code = _run_job(*args)[0]
     except SolverError as exc:  # raised deep in a solver, which does not know the file
         raise SolverError(f"{file}: {exc}") from None
     sys.exit(code)
@@ -113,8 +113,8 @@ def _run_job(
     fmt="png",
     units: str | None = None,
 ):
-    """One run: solve, write, print; ``(exit code, results or None)``: 5 when a
-    requirement failed, else 0 (with a warning on stderr when the results lack
+    """One run: solve, write, print; ``(exit code, results or None, the units shown)``:
+    5 when a requirement failed, else 0 (with a warning on stderr when the results lack
     something). Errors raise."""
     import numpy as np
 
@@ -146,7 +146,7 @@ def _run_job(
         if at:  # only the instants asked for
             if instants_failed:
                 warn(INCOMPLETE_INSTANTS)
-            return EXIT_OK, None
+            return EXIT_OK, None, shown
     if n > _stream_above() and mech.driver.motion is None:
         # a long sweep: solved chunk by chunk, the CSV streamed, plots from a coarse
         # sweep of the same range; a bar on a terminal, moved on after each chunk
@@ -193,10 +193,10 @@ def _run_job(
 
         click.echo(pretty_text(verdict_table(verdicts)))
     if any(not v.passed for v in verdicts):
-        return EXIT_CHECK_FAILED, res
+        return EXIT_CHECK_FAILED, res, shown
     if failed or instants_failed:
         warn(INCOMPLETE)
-    return EXIT_OK, res
+    return EXIT_OK, res, shown
 
 
 def _requirements(mech, res, junit: Path | None, streamed: bool) -> list:
