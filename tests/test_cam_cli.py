@@ -151,3 +151,34 @@ def test_no_cam_section(tmp_path):
     assert r.exit_code == 2
     assert "no 'cam:' section" in r.output
     assert math.isfinite(1.0)
+
+
+def test_dxf_in_inch_and_micrometre(tmp_path):
+    """A cam file in inch (or µm) gets a DXF in that unit, named in its header (1 inch,
+    13 micron; imperial measurement for inch), its numbers the CSV's: the base circle of
+    the same cam given in mm is 25.4 times the inch one's."""
+    pytest.importorskip("ezdxf")
+    import ezdxf
+
+    text = (DATA / "cam_translating.yaml").read_text()
+    radii = {}
+    for unit, code, measurement, per_mm in (("inch", 1, 0, 1 / 25.4), ("µm", 13, 1, 1000.0),
+                                            ("mm", 4, 1, 1.0)):  # fmt: skip
+        f = tmp_path / f"cam_{code}.yaml"
+        f.write_text(text.replace("length: mm", f"length: {unit}"), encoding="utf-8")
+        out = tmp_path / f"out_{code}"
+        r = run([f, "-o", out, "--no-plots"])
+        assert r.exit_code == 0, r.output
+        doc = ezdxf.readfile(out / "cam_profile.dxf")
+        assert doc.header["$INSUNITS"] == code
+        assert doc.header["$MEASUREMENT"] == measurement
+        base = [e for e in doc.modelspace() if e.dxftype() == "CIRCLE" and e.dxf.layer == "BASE"]
+        radii[unit] = base[0].dxf.radius / per_mm  # back in mm
+        prof = [e for e in doc.modelspace() if e.dxf.layer == "PROFILE"][0]
+        key = {"inch": "in", "µm": "µm", "mm": "mm"}[unit]
+        pts = rows(out / "cam_profile.csv")
+        col = [c for c in pts[0] if c.startswith("profile x [")][0]
+        assert key in col or unit in col, col
+        assert float(pts[10][col]) == pytest.approx(prof[10][0], rel=1e-9)
+    assert radii["inch"] == pytest.approx(radii["mm"], rel=1e-9)
+    assert radii["µm"] == pytest.approx(radii["mm"], rel=1e-9)

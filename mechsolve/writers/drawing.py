@@ -358,7 +358,7 @@ def write_dxf(sh: Sheet, path: Path) -> Path:
     doc = ezdxf.new("R2010", setup=["linetypes", "styles"])
     code = dxf_unit_code(sh.unit)
     doc.units = code if code is not None else 0  # 0: unitless (a unit DXF does not name)
-    doc.header["$MEASUREMENT"] = 0 if code in _imperial() else 1
+    doc.header["$MEASUREMENT"] = 0 if code in imperial_codes() else 1
     h = TEXT * sh.size
     _dimstyle(doc, sh.unit, h)
     for name, color in LAYERS.items():
@@ -419,7 +419,8 @@ def dxf_unit_code(unit: str) -> int | None:
     return None
 
 
-def _imperial() -> set[int]:
+def imperial_codes() -> set[int]:
+    """The DXF ``$INSUNITS`` codes of imperial units (``$MEASUREMENT`` 0 for them)."""
     from ezdxf.units import IMPERIAL_UNITS
 
     return {int(u) for u in IMPERIAL_UNITS}

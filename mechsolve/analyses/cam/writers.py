@@ -92,11 +92,14 @@ def write_dxf(res: CamResult, path: Path) -> Path | None:
         import ezdxf
     except ImportError:
         return None
+    from mechsolve.writers.drawing import dxf_unit_code, imperial_codes
+
     L = res.model.unit
-    code = DXF_UNITS.get(L.name)
+    code = dxf_unit_code(L.name)  # by the unit's size: "inch" and "µm" are named too
     k = 1.0 / L.factor if code is not None else MM  # a unit DXF does not name: mm
     doc = ezdxf.new("R2010")
     doc.units = code if code is not None else ezdxf.units.MM
+    doc.header["$MEASUREMENT"] = 0 if code in imperial_codes() else 1
     msp = doc.modelspace()
     for name, color in (("PROFILE", 7), ("PITCH", 3), ("BASE", 8), ("PRIME", 5), ("CENTRE", 1)):
         doc.layers.add(name, color=color)
@@ -113,10 +116,6 @@ def write_dxf(res: CamResult, path: Path) -> Path | None:
     with replacing(path) as tmp:
         doc.saveas(tmp)
     return path
-
-
-# DXF's $INSUNITS codes of the length units a file may use
-DXF_UNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7, "yd": 10, "um": 13, "dm": 14}
 
 
 def _base_circle(res: CamResult) -> float:
