@@ -191,13 +191,15 @@ def case_study(quick: bool = False, designs: int | None = None):
     def batch_kin():
         return solve_designs(mechs, forces=False, acceleration=False)
 
-    # the design family: the study's file parsed once (as a study's process does), each
-    # call stacks the designs' numbers from the values (no design parsed or read)
-    base = DesignFamily(study.source, study.params, vals[:0]).base
+    # the design family as a study's chunk gets it (execute.study_family): the study's
+    # file parsed once per study and process, and a family of the chunk's values made
+    # from it (with_values: the parsed file and the values' conversions to SI shared);
+    # each call stacks the designs' numbers from the values (no design parsed or read)
+    whole = DesignFamily(study.source, study.params, vals[:0]).prepare()
     table = np.array([study.values(k) for k in range(nb_)])
 
     def family():
-        return DesignFamily(study.source, study.params, table, base=base)
+        return whole.with_values(table)
 
     def fam_forces():
         return solve_family(family())

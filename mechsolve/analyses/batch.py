@@ -652,9 +652,9 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
     nd = len(inside)
     prog = run_program(a2.plan, a2.system.nb, nd, u, modes, an0.speed, NEAR, acc)
     risky = risky | prog.risky
-    for j, k in enumerate(inside):
-        if risky[j]:
-            alone[k] = "its sweep comes near a singular position or does not close"
+    why = "its sweep comes near a singular position or does not close"
+    for j in np.flatnonzero(risky).tolist():
+        alone[inside[j]] = why
     if risky.all():
         return
     pi = len(out._passes)
@@ -671,9 +671,10 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
             "has_acceleration": bool(acc),
         }
     )
-    for j in np.flatnonzero(~risky):  # a design's row in the program is its row here
-        out._where[inside[j]] = (pi, int(j))
-        out.batched[inside[j]] = True
+    kept = np.flatnonzero(~risky).tolist()  # a design's row in the program is its row here
+    ks = [inside[j] for j in kept]
+    out._where.update(zip(ks, [(pi, j) for j in kept]))
+    out.batched[ks] = True
 
 
 def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:
