@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -330,12 +331,14 @@ class _Columns:
     def __init__(self, X: np.ndarray, design_of_column=None, *, per: int = 0) -> None:
         self.X, self.cols, self.k, self.per = X, design_of_column, 0, per
         self.n = X.shape[0] * per if per else len(design_of_column)
+        # the numbers equal in every design (np.all(col == col[0]) per column, at once)
+        self.same = (X == X[:1]).all(axis=0).tolist() if X.shape[0] else []
 
     def _next(self):
         """The next number: a float when every design has the same, else its column."""
-        col = self.X[:, self.k]
+        k = self.k
         self.k += 1
-        return float(col[0]) if np.all(col == col[0]) else col
+        return float(self.X[0, k]) if self.same[k] else self.X[:, k]
 
     def _spread(self, col: np.ndarray, out: np.ndarray) -> np.ndarray:
         if self.per:
@@ -604,7 +607,7 @@ def solve_stacked(
         got = _stackable([mechs[k] for k in todo], alone_sub)
         alone.update((todo[j], r) for j, r in alone_sub.items())
         rows = {todo[j]: v for j, v in got.items()}
-    inside = [k for k in range(nd) if k not in alone]
+    inside = [k for k in range(nd) if k not in alone] if alone else list(range(nd))
     if inside:
         u0 = an0.start_value()
         u, t = an0.sweep_values(u0, step=step)
@@ -672,8 +675,8 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
         }
     )
     kept = np.flatnonzero(~risky).tolist()  # a design's row in the program is its row here
-    ks = [inside[j] for j in kept]
-    out._where.update(zip(ks, [(pi, j) for j in kept]))
+    ks = inside if len(kept) == nd else [inside[j] for j in kept]
+    out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
     out.batched[ks] = True
 
 

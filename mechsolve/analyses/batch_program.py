@@ -95,6 +95,7 @@ class _Numbers:
         self.nd = nd
         self.lo, self.hi = 0, nd
         self._seen: dict = {}  # (id, row) -> (the object, values, changes so far)
+        self.made: dict = {}  # what the pass derives from its numbers once
 
     def block(self, lo: int, hi: int) -> _Numbers:
         self.lo, self.hi = lo, hi
@@ -150,6 +151,7 @@ class Program:
         self.risky = np.zeros(nd, bool)
         self.full = (nd, P)  # the shape of a quantity that varies with design and position
         self._tmp: np.ndarray | None = None
+        self.crank: tuple | None = None  # the driven crank (see _dH_bound)
         self._negated: dict = {}  # id(-x) -> (-x, x)
 
     def tmp(self) -> np.ndarray:
@@ -240,6 +242,7 @@ def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> 
     q = {"th": th, "c": c, "s": s, "w": sign}  # w: per unit of the driver coordinate
     prog.bodies[g.b] = q
     px, py = num.pair(g.sk)  # the pivot, on the ground
+    prog.crank = (g, sign)  # for the dyads' screening bound (_dH_bound)
     rx, ry = prog._rot(g.b, num.pair(g.sp))
     q["x"], q["y"] = _sub(px, rx), _sub(py, ry)
     # body_velocity_from_point: the pivot is at rest, v = w k x (frame - pivot)
@@ -320,7 +323,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     a, h2, H, t = _triangle(L1, L2, D2, tmp)
     hh = np.maximum(h2, 0.0, out=h2)
     np.sqrt(hh, out=hh)
-    hh *= mode
+    if not (isinstance(mode, float) and mode == 1.0):  # (x * 1.0 is x)
+        hh *= mode
     g1x = _times(a, dx, t)  # (t is read no more)
     g1x -= _times(hh, dy, tmp)
     g1y = np.multiply(a, dy, out=a)  # (a is read no more)
@@ -351,7 +355,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
     del inv, g1x, g1y, g2x, g2y
-    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P)
+    bound = _dH_bound(prog, g, num, L1, L2)
+    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound)
 
 
 def _dot(ax, bx, ay, by, tmp: np.ndarray):
@@ -402,7 +407,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
+def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -416,19 +421,29 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
     Rounding is monotonic, so the smallest ``H`` and the largest ``h |dH|`` of a design
     give the general pass's decisions exactly: ``sqrt`` of the smallest ``min(H, 1)`` is
     the smallest indicator, and ``min H - max h|dH| > 0`` implies both tests at every
-    sample and step. Only a design where that bound fails is tested sample by sample."""
+    sample and step. Only a design where that bound fails is tested sample by sample.
+
+    ``bound``: per design, a number at least the largest ``|dH|`` the general pass forms
+    (:func:`_dH_bound`), or None. With it ``dH`` is formed only for the designs where
+    ``min H - h k bound > 0`` fails, and they are tested sample by sample: the sample by
+    sample test is what the general pass decides (its shortcut above never passes a
+    design the test fails), so the decisions are the same."""
     risky = prog.risky
     Hmin = H.min(axis=1)
     risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
     L1s, L2s = L1 * L1, L2 * L2
-    dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
-    if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
-        dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
+    if bound is None:
+        dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
+        if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
+            dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
+        else:
+            dH *= _dot(dx, dvx, dy, dvy, prog.tmp())
+        big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
     else:
-        dH *= _dot(dx, dvx, dy, dvy, prog.tmp())
-    big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+        dH = None
+        big = np.array(np.broadcast_to(np.ravel(bound), Hmin.shape))
     big *= np.ravel(1.0 / (L1s * L2s))
     big *= h
     unsure = ~risky & ~(Hmin - big > 0)
@@ -436,7 +451,14 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
         rows = np.flatnonzero(unsure)
         k = 1.0 / (L1s * L2s)
         k = k[rows] if np.ndim(k) else k
-        hdH = np.abs(dH[rows])
+        if dH is None:  # the general pass's dH of these designs, the same operations
+            S = L1s + L2s
+            S = S[rows] if np.ndim(S) else S
+            dH = np.subtract(S, D2[rows])
+            dH *= _add(_mul(*_rows(prog, rows, dx, dvx)), _mul(*_rows(prog, rows, dy, dvy)))
+            hdH = np.abs(dH)
+        else:
+            hdH = np.abs(dH[rows])
         hdH *= k
         hdH *= h
         Hr = H[rows]
@@ -446,6 +468,62 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
             low -= (4.0 / 27.0) * (hdH[:, :-1] + hdH[:, 1:])
             bad |= ~(low.min(axis=1) > 0)
         risky[rows] |= bad
+
+
+def _rows(prog: Program, rows: np.ndarray, *xs):
+    """The designs ``rows`` of each quantity (a float stays a float)."""
+    return [x if isinstance(x, float) else np.broadcast_to(x, prog.full)[rows] for x in xs]
+
+
+def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
+    """For a dyad between the driven crank and the ground, a bound per design of the
+    ``|dH|`` the general pass forms, from the design's numbers only (no array of the
+    block's size), or None for any other dyad. Made once per pass (its designs' numbers
+    as columns), each block reads its rows.
+
+    With P on the crank at the distance ``r`` from its ground pivot O and Q on the
+    ground at the distance ``e`` from O (or the other way round), at every position
+    ``|e - r| <= |d| <= e + r`` and ``|d'| = |w| r``, so that
+    ``|dH| <= max|L1^2 + L2^2 - D^2| (e + r) |w| r``. The computed positions differ from
+    these by a few units of rounding of the coordinates involved: the bound is widened
+    by a relative ``1e-12`` and by ``1e-12`` times the sum of their sizes, some hundred
+    times more than the rounding. A design it does not clear is tested with the dyad's
+    own ``dH`` (:func:`_screen`)."""
+    crank = prog.crank
+    if crank is None or {g.k1, g.k2} != {crank[0].b, prog.nb} or g.k1 == g.k2:
+        return None
+    key = ("bound", id(g))
+    got = num.made.get(key)
+    if got is None or got[0] is not g:
+        lo, hi = num.lo, num.hi
+        num.block(0, num.nd)
+        got = num.made[key] = (g, _crank_bound(crank, g, num))
+        num.block(lo, hi)
+    b = got[1]
+    return b if np.ndim(b) == 0 else b[num.lo : num.hi]
+
+
+def _crank_bound(crank: tuple, g: RRR, num: _Numbers):
+    """:func:`_dH_bound` over every design of the pass: an array (designs,) or a float."""
+    g0, w = crank
+    ox, oy = num.pair(g0.sk)  # the crank's pivot on the ground
+    cx, cy = num.pair(g0.sp)  # and on the crank
+    on_crank = g.k1 == g0.b
+    sx, sy = num.pair(g.sPk if on_crank else g.sQk)
+    qx, qy = num.pair(g.sQk if on_crank else g.sPk)  # on the ground
+    L1, L2 = num.one(g.L1), num.one(g.L2)
+    eps = 1e-12
+    r = np.hypot(np.subtract(sx, cx), np.subtract(sy, cy))
+    e = np.hypot(np.subtract(qx, ox), np.subtract(qy, oy))
+    size = sum(np.abs(v) for v in (ox, oy, cx, cy, sx, sy, qx, qy))
+    delta = eps * size
+    hi = (e + r + delta) * (1.0 + eps)
+    lo = np.maximum(np.abs(e - r) - delta, 0.0) * (1.0 - eps)
+    S = L1 * L1 + L2 * L2
+    span = np.maximum(np.abs(S - lo * lo * (1.0 - eps)), np.abs(S - hi * hi * (1.0 + eps)))
+    v = abs(w) * (r + delta) * (1.0 + eps)
+    out = span * (1.0 + eps) * hi * v * (1.0 + eps)
+    return float(out) if np.ndim(out) == 0 else np.ravel(out)
 
 
 # designs per block of the program: its temporaries (some 20 arrays of the block's size)
@@ -497,7 +575,9 @@ def run_program(
             prog.indicators.append(None)  # the driver link's: 1
             _driver_link(prog, plan[0], num, u)
             for gi in range(1, len(plan)):
-                _rrr(prog, plan[gi], num, modes[gi, lo:hi].reshape(-1, 1), h, near)
+                m = modes[gi, lo:hi]  # the branches: one float when the same in the block
+                mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
+                _rrr(prog, plan[gi], num, mode, h, near)
         if speed != 1.0:  # rates per unit driver coordinate -> time rates
             for b, q in prog.bodies.items():
                 if b != nb:

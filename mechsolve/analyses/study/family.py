@@ -278,6 +278,8 @@ def _distinct_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     them as records, some fifty times slower for a study's thousand designs)."""
     key = np.zeros(A.shape[0], np.int64)
     for col in A.T:
+        if np.all(col == col[:1]):  # (the same in every row: one value, code 0)
+            continue
         vals, code = np.unique(col, return_inverse=True)
         key = key * vals.size + np.ravel(code)
     _, first, inv = np.unique(key, return_index=True, return_inverse=True)
@@ -510,7 +512,7 @@ def solve_family(
         for k in alone:
             out.why[k] = alone[k]
         return out
-    valid = [k for k in range(nd) if k not in alone]
+    valid = [k for k in range(nd) if k not in alone] if alone else list(range(nd))
     if forces is not None:
         want_forces = forces
     elif family.why_not is None:  # masses and loads are the base's in every design
