@@ -514,7 +514,7 @@ def _assemble(ab, u0: float, nd: int):
     for _, cond in conds.remaining():  # conditions no group decided: they must hold
         holds = np.broadcast_to(np.asarray(cond.evaluate(view), bool), (n2,))
         undecided |= ~holds[:nd]
-    return modes, reasons, st2.take(np.arange(nd)), undecided
+    return modes, reasons, st2.take(slice(0, nd)), undecided
 
 
 # -- the batch --------------------------------------------------------------------------

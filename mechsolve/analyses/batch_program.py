@@ -339,7 +339,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     _place(q2, num.pair(g.sQ2), num.pair(g.sM2), qx, qy, g2x, g2y)
     prog.indicators.append(H)  # the indicator is sqrt(min(H, 1)) (see Program.indicator)
     # rates per unit driver coordinate: w1 = (dv . g2) / (g1 x g2), w2 = (dv . g1) / ...
-    dvx, dvy = prog.sub(vqx, vpx), prog.sub(vqy, vpy)
+    dvx = _minus(prog, vpx) if _zero(vqx) else _sub(vqx, vpx)
+    dvy = _minus(prog, vpy) if _zero(vqy) else _sub(vqy, vpy)
     inv = g1x * g2y
     inv -= _times(g1y, g2x, tmp)
     np.divide(1.0, inv, out=inv)
@@ -359,13 +360,49 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound)
 
 
+class _Negated:
+    """``-x``, not formed: a term ``-x * y`` is subtracted instead (the same bits)."""
+
+    __slots__ = ("of",)
+
+    def __init__(self, of: np.ndarray) -> None:
+        self.of = of
+
+
+def _minus(prog: Program, x):
+    """``0 - x`` (a velocity's difference to a point at rest): the negation of ``x`` if
+    the block already made it, else a :class:`_Negated`."""
+    if isinstance(x, float):
+        return -x
+    got = prog._negated.get(id(x))
+    if got is not None and got[0] is x:
+        return got[1]
+    return _Negated(x)
+
+
+def _real(prog: Program, x):
+    """``x`` with a :class:`_Negated` formed."""
+    return prog.neg(x.of) if isinstance(x, _Negated) else x
+
+
 def _dot(ax, bx, ay, by, tmp: np.ndarray):
-    """``ax * bx + ay * by`` (a new array), its second product in ``tmp``."""
-    out = ax * bx
-    if np.shape(out) == tmp.shape:
-        out += _times(ay, by, tmp)
-        return out
-    return out + ay * by
+    """``ax * bx + ay * by`` (a new array), its second product in ``tmp``; ``ax`` or
+    ``ay`` may be a :class:`_Negated`: ``p + (-q)`` is ``p - q`` and ``-p + q`` is
+    ``q - p`` in floating point, bit for bit."""
+    na, nb = isinstance(ax, _Negated), isinstance(ay, _Negated)
+    if na and not nb:
+        ax, bx, ay, by, na, nb = ay, by, ax, bx, nb, na
+    out = (ax.of if na else ax) * bx
+    if np.shape(out) != tmp.shape:
+        out = np.array(np.broadcast_to(out, tmp.shape))
+    term = _times(ay.of if nb else ay, by, tmp)
+    if nb and not na:
+        out -= term
+    else:
+        out += term
+        if na:  # -p - q = -(p + q)
+            np.negative(out, out=out)
+    return out
 
 
 def _accelerations(prog: Program, g: RRR, num: _Numbers, arms, gs, inv) -> None:
@@ -437,9 +474,10 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=No
     if bound is None:
         dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
         if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
+            dvx, dvy = _real(prog, dvx), _real(prog, dvy)
             dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
         else:
-            dH *= _dot(dx, dvx, dy, dvy, prog.tmp())
+            dH *= _dot(dvx, dx, dvy, dy, prog.tmp())  # (x y is y x)
         big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
     else:
         dH = None
@@ -455,6 +493,7 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=No
             S = L1s + L2s
             S = S[rows] if np.ndim(S) else S
             dH = np.subtract(S, D2[rows])
+            dvx, dvy = _real(prog, dvx), _real(prog, dvy)
             dH *= _add(_mul(*_rows(prog, rows, dx, dvx)), _mul(*_rows(prog, rows, dy, dvy)))
             hdH = np.abs(dH)
         else:
