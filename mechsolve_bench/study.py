@@ -184,11 +184,12 @@ def case_study(quick: bool = False, designs: int | None = None):
         return kin, kinetostatics(kin)
 
     # a study without forces reads positions, rates and transmission angles (its
-    # figures), no accelerations: both sides compute what it reads
+    # figures), no accelerations: both sides compute what it reads (both links' angles
+    # and rates, the transmission angle's sine; see the line printed below)
     def closed_kin():
         return kinematics_only(vals[:, 0], vals[:, 1], 0.059, 0.0875, u, acceleration=False)
 
-    def batch_kin():
+    def batch_kin():  # (solve_designs checks each design's content first, as solve does)
         return solve_designs(mechs, forces=False, acceleration=False)
 
     # the design family as a study's chunk gets it (execute.study_family): the study's
@@ -308,6 +309,12 @@ def case_study(quick: bool = False, designs: int | None = None):
         f"ratio batch from the study's values / closed form, kinematics only: "
         f"{t_fk / t_ck:.2f} (target 3, read on this row: at most 1.2: "
         f"{'met' if t_fk <= 1.2 * t_ck else 'NOT met'})",
+        "kinematics only, what each side computes: both sides the coupler's and rocker's "
+        "angles and rates and the sine of the transmission angle (a study row reads the "
+        "rocker's angle and rate and the transmission angle); the closed form also forms "
+        "the joints A and B, the batch also each link's cosine and sine and A's velocity "
+        "(the state a design's Results is made of) and screens every design for singular "
+        "positions",
         f"separate solves / batch: {t_sep / t_b:.1f}; separate solves / closed form: "
         f"{t_sep / t_cf:.1f} (information only: {1e3 * t_sep / nb_:.2f} ms a design)",
     ]

@@ -129,9 +129,8 @@ class _Numbers:
         return self._read(*self._of(v))
 
     def pair(self, s):
-        if np.ndim(s) == 1:
-            x, y = self._of(s)[0]
-            return float(x), float(y)
+        if np.ndim(s) == 1:  # the same in every design
+            return float(s[0]), float(s[1])
         return self._read(*self._of(s, 0)), self._read(*self._of(s, 1))
 
 
