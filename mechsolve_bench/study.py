@@ -184,20 +184,23 @@ def case_study(quick: bool = False, designs: int | None = None):
         return kin, kinetostatics(kin)
 
     # a study without forces reads positions, rates and transmission angles (its
-    # figures), no accelerations: both sides compute what it reads
+    # figures), no accelerations: both sides compute what it reads (both links' angles
+    # and rates, the transmission angle's sine; see the line printed below)
     def closed_kin():
         return kinematics_only(vals[:, 0], vals[:, 1], 0.059, 0.0875, u, acceleration=False)
 
-    def batch_kin():
+    def batch_kin():  # (solve_designs checks each design's content first, as solve does)
         return solve_designs(mechs, forces=False, acceleration=False)
 
-    # the design family: the study's file parsed once (as a study's process does), each
-    # call stacks the designs' numbers from the values (no design parsed or read)
-    base = DesignFamily(study.source, study.params, vals[:0]).base
+    # the design family as a study's chunk gets it (execute.study_family): the study's
+    # file parsed once per study and process, and a family of the chunk's values made
+    # from it (with_values: the parsed file and the values' conversions to SI shared);
+    # each call stacks the designs' numbers from the values (no design parsed or read)
+    whole = DesignFamily(study.source, study.params, vals[:0]).prepare()
     table = np.array([study.values(k) for k in range(nb_)])
 
     def family():
-        return DesignFamily(study.source, study.params, table, base=base)
+        return whole.with_values(table)
 
     def fam_forces():
         return solve_family(family())
@@ -306,6 +309,12 @@ def case_study(quick: bool = False, designs: int | None = None):
         f"ratio batch from the study's values / closed form, kinematics only: "
         f"{t_fk / t_ck:.2f} (target 3, read on this row: at most 1.2: "
         f"{'met' if t_fk <= 1.2 * t_ck else 'NOT met'})",
+        "kinematics only, what each side computes: both sides the coupler's and rocker's "
+        "angles and rates and the sine of the transmission angle (a study row reads the "
+        "rocker's angle and rate and the transmission angle); the closed form also forms "
+        "the joints A and B, the batch also each link's cosine and sine and A's velocity "
+        "(the state a design's Results is made of) and screens every design for singular "
+        "positions",
         f"separate solves / batch: {t_sep / t_b:.1f}; separate solves / closed form: "
         f"{t_sep / t_cf:.1f} (information only: {1e3 * t_sep / nb_:.2f} ms a design)",
     ]

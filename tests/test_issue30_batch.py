@@ -168,7 +168,7 @@ def test_a_kinematics_study_reads_no_accelerations_and_its_figures_are_right(mon
     import mechsolve.analyses.study.execute as ex
 
     asked = []
-    real, real_family = ex.solve_designs, ex.solve_family
+    real, real_family = ex.solve_parsed, ex.solve_family
 
     def spy(mechs, **kw):
         asked.append(kw.get("acceleration"))
@@ -178,7 +178,7 @@ def test_a_kinematics_study_reads_no_accelerations_and_its_figures_are_right(mon
         asked.append(kw.get("acceleration"))
         return real_family(fam, **kw)
 
-    monkeypatch.setattr(ex, "solve_designs", spy)
+    monkeypatch.setattr(ex, "solve_parsed", spy)  # (parsed designs: not checked again)
     monkeypatch.setattr(ex, "solve_family", spy_family)
     study = _study(KIN_FOURBAR, step="1 deg")
     rows = execute(study, jobs=1, chunk=len(study)).rows  # one batch

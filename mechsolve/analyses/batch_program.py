@@ -84,23 +84,54 @@ def plan_program(plan: list[Group], ground: int) -> bool:
 
 class _Numbers:
     """A stacked number of the start's analysis (``2 D`` columns: branch + of each design,
-    then branch -) as the program reads it for the designs ``lo`` to ``hi``: a float
-    when the same in all of them, else their values as a column ``(hi - lo, 1)``."""
+    then branch -) as the program reads it for the designs ``lo`` to ``hi`` of a block:
+    a float when the same in all of them, else their values as a column ``(hi - lo, 1)``.
 
-    def __init__(self, lo: int, hi: int) -> None:
+    Each number is read from the analysis once per pass (:meth:`_of`): its ``D`` values,
+    and where they change from one design to the next, so that a block's float or column
+    is an index and a slice, not a test over the block's designs."""
+
+    def __init__(self, nd: int) -> None:
+        self.nd = nd
+        self.lo, self.hi = 0, nd
+        self._seen: dict = {}  # (id, row) -> (the object, values, changes so far)
+        self.made: dict = {}  # what the pass derives from its numbers once
+
+    def block(self, lo: int, hi: int) -> _Numbers:
         self.lo, self.hi = lo, hi
+        return self
+
+    def _of(self, v, i: int | None = None):
+        got = self._seen.get((id(v), i))
+        if got is None or got[0] is not v:
+            w = v if i is None else v[i]
+            if np.ndim(w) == 0:
+                got = (v, float(w), None)
+            else:
+                a = np.asarray(w)[: self.nd]
+                # changes[k]: how many designs before k differ from their predecessor (a
+                # NaN differs from everything, itself included)
+                changes = np.r_[0, np.cumsum(~(a[1:] == a[:-1]))]
+                got = (v, a, changes)
+            self._seen[id(v), i] = got
+        return got[1], got[2]
+
+    def _read(self, a, changes):
+        if changes is None:
+            return a
+        lo, hi = self.lo, self.hi
+        first = a[lo]
+        if changes[hi - 1] == changes[lo] and first == first:  # one value, not a NaN
+            return float(first)
+        return a[lo:hi].reshape(-1, 1)
 
     def one(self, v):
-        if np.ndim(v) == 0:
-            return float(v)
-        v = np.asarray(v)[self.lo : self.hi]
-        return float(v[0]) if np.all(v == v[0]) else v.reshape(-1, 1)
+        return self._read(*self._of(v))
 
     def pair(self, s):
-        s = np.asarray(s, float)
-        if s.ndim == 1:
+        if np.ndim(s) == 1:  # the same in every design
             return float(s[0]), float(s[1])
-        return self.one(s[0]), self.one(s[1])
+        return self._read(*self._of(s, 0)), self._read(*self._of(s, 1))
 
 
 class Program:
@@ -117,6 +148,35 @@ class Program:
         }
         self.indicators: list = []
         self.risky = np.zeros(nd, bool)
+        self.full = (nd, P)  # the shape of a quantity that varies with design and position
+        self._tmp: np.ndarray | None = None
+        self.crank: tuple | None = None  # the driven crank (see _dH_bound)
+        self._negated: dict = {}  # id(-x) -> (-x, x)
+
+    def tmp(self) -> np.ndarray:
+        """A scratch array of the block's size for a term that is used once: reused, so
+        that it stays in the cache (one, not one per term)."""
+        if self._tmp is None:
+            self._tmp = np.empty(self.full)
+        return self._tmp
+
+    def neg(self, x):
+        """``-x``, made once per array: the negation of an array this negated is its
+        original, and an array negated twice gives the same negation (the same bits: a
+        negation flips the sign bit only). Neither is written in place afterwards."""
+        if isinstance(x, float):
+            return -x
+        got = self._negated.get(id(x))
+        if got is not None and got[0] is x:
+            return got[1]
+        out = -x
+        self._negated[id(out)] = (out, x)
+        self._negated[id(x)] = (x, out)
+        return out
+
+    def sub(self, a, b):
+        """:func:`_sub` with :meth:`neg` for ``0 - b``."""
+        return self.neg(b) if _zero(a) else _sub(a, b)
 
     def _rot(self, b: int, s):
         """Global components of the local vector ``s = (s0, s1)`` on body ``b``."""
@@ -142,7 +202,7 @@ class Program:
         """Velocity of the point of body ``b`` at the arm ``(rx, ry)`` from its frame."""
         q = self.bodies[b]
         w = q["w"]
-        return _sub(q["vx"], _mul(w, ry)), _add(q["vy"], _mul(w, rx))
+        return self.sub(q["vx"], _mul(w, ry)), _add(q["vy"], _mul(w, rx))
 
     def state(self, j: int) -> State:
         """The state of the design in row ``j`` over the sweep (rates per unit time)."""
@@ -181,6 +241,7 @@ def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> 
     q = {"th": th, "c": c, "s": s, "w": sign}  # w: per unit of the driver coordinate
     prog.bodies[g.b] = q
     px, py = num.pair(g.sk)  # the pivot, on the ground
+    prog.crank = (g, sign)  # for the dyads' screening bound (_dH_bound)
     rx, ry = prog._rot(g.b, num.pair(g.sp))
     q["x"], q["y"] = _sub(px, rx), _sub(py, ry)
     # body_velocity_from_point: the pivot is at rest, v = w k x (frame - pivot)
@@ -212,60 +273,79 @@ def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
     q["y"] = _sub(py, _add(_mul(s, s0[0]), _mul(c, s0[1])))
 
 
-def _triangle(L1, L2, D2):
+def _times(a, b, out: np.ndarray):
+    """``a * b``, written into ``out`` when the product has its shape."""
+    if np.shape(a) == out.shape or np.shape(b) == out.shape:
+        return np.multiply(a, b, out=out)
+    return a * b
+
+
+def _triangle(L1, L2, D2, tmp: np.ndarray):
     """The RRR's triangle (:meth:`RRR._triangle`, the same operations): M's distance
-    along P -> Q as a fraction of |PQ|, its squared height over |PQ|^2, and ``H``."""
+    along P -> Q as a fraction of |PQ|, its squared height over |PQ|^2, and ``H``
+    (``D2`` has the block's full shape; ``tmp`` is scratch)."""
     L1s, L2s = L1 * L1, L2 * L2
     inv = 1.0 / D2
     a = np.multiply(L1s - L2s, 0.5)
     a = np.multiply(a, inv, out=a if np.shape(a) == np.shape(inv) else None)
     a += 0.5
-    h2 = L1s * inv
-    h2 -= a * a
+    h2 = np.multiply(L1s, inv, out=inv)  # (1 / D2 is read no more)
+    h2 -= np.multiply(a, a, out=tmp)
     t = np.add(L1s - L2s, D2)
     t *= 0.5
     t *= t
     H = L1s * D2
     H -= t
     H *= 1.0 / (L1s * L2s)
-    return a, h2, H
+    return a, h2, H, t
 
 
 def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> None:
-    """One RRR dyad over every design and position, screened as the general pass does."""
+    """One RRR dyad over every design and position, screened as the general pass does.
+    The operations and their order are the general dyad's; a term used once is formed
+    in a scratch array and a temporary that is read no more holds the next result."""
     P = prog.P
     px, py, rpx, rpy = prog._point(g.k1, num.pair(g.sPk))
     qx, qy, rqx, rqy = prog._point(g.k2, num.pair(g.sQk))
     vpx, vpy = prog._velocity(g.k1, rpx, rpy)
     vqx, vqy = prog._velocity(g.k2, rqx, rqy)
-    dx, dy = _sub(qx, px), _sub(qy, py)
-    D2 = dx * dx + dy * dy
-    if D2.shape != (prog.nd, P):  # P and Q move alike in every design of the block: the
-        D2 = np.broadcast_to(D2, (prog.nd, P)).copy()  # terms after it are written in place
+    dx, dy = prog.sub(qx, px), prog.sub(qy, py)
+    if np.shape(dx) == prog.full and np.shape(dy) == prog.full:
+        D2 = dx * dx
+        D2 += np.multiply(dy, dy, out=prog.tmp())
+    else:
+        D2 = dx * dx + dy * dy
+        if D2.shape != prog.full:  # P and Q move alike in every design of the block:
+            D2 = np.broadcast_to(D2, prog.full).copy()  # the terms after it are in place
     L1, L2 = num.one(g.L1), num.one(g.L2)
-    a, h2, H = _triangle(L1, L2, D2)
-    hh = np.maximum(h2, 0.0)
+    tmp = prog.tmp()
+    a, h2, H, t = _triangle(L1, L2, D2, tmp)
+    hh = np.maximum(h2, 0.0, out=h2)
     np.sqrt(hh, out=hh)
-    hh *= mode
-    g1x = a * dx
-    g1x -= hh * dy
-    g1y = a * dy
-    g1y += hh * dx
-    del a, h2, hh
-    g2x, g2y = g1x - dx, g1y - dy
+    if not (isinstance(mode, float) and mode == 1.0):  # (x * 1.0 is x)
+        hh *= mode
+    g1x = _times(a, dx, t)  # (t is read no more)
+    g1x -= _times(hh, dy, tmp)
+    g1y = np.multiply(a, dy, out=a)  # (a is read no more)
+    g1y += _times(hh, dx, tmp)
+    del a, h2, t
+    g2x = np.subtract(g1x, dx, out=hh)  # (hh is read no more)
+    g2y = g1y - dy
+    del hh
     q1, q2 = {}, {}
     prog.bodies[g.b1], prog.bodies[g.b2] = q1, q2
     _place(q1, num.pair(g.sP1), num.pair(g.sM1), px, py, g1x, g1y)
     _place(q2, num.pair(g.sQ2), num.pair(g.sM2), qx, qy, g2x, g2y)
     prog.indicators.append(H)  # the indicator is sqrt(min(H, 1)) (see Program.indicator)
     # rates per unit driver coordinate: w1 = (dv . g2) / (g1 x g2), w2 = (dv . g1) / ...
-    dvx, dvy = _sub(vqx, vpx), _sub(vqy, vpy)
+    dvx = _minus(prog, vpx) if _zero(vqx) else _sub(vqx, vpx)
+    dvy = _minus(prog, vpy) if _zero(vqy) else _sub(vqy, vpy)
     inv = g1x * g2y
-    inv -= g1y * g2x
+    inv -= _times(g1y, g2x, tmp)
     np.divide(1.0, inv, out=inv)
-    w1 = dvx * g2x + dvy * g2y
+    w1 = _dot(dvx, g2x, dvy, g2y, tmp)
     w1 *= inv
-    w2 = dvx * g1x + dvy * g1y
+    w2 = _dot(dvx, g1x, dvy, g1y, tmp)
     w2 *= inv
     _rates(prog, q1, num.pair(g.sP1), vpx, vpy, w1)
     # v_Q = v_P + (v_Q - v_P) as the general dyad writes it: exactly v_Q (0) at rest
@@ -274,8 +354,54 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     _rates(prog, q2, num.pair(g.sQ2), vqx, vqy, w2)
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
-    del inv
-    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P)
+    del inv, g1x, g1y, g2x, g2y
+    bound = _dH_bound(prog, g, num, L1, L2)
+    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound)
+
+
+class _Negated:
+    """``-x``, not formed: a term ``-x * y`` is subtracted instead (the same bits)."""
+
+    __slots__ = ("of",)
+
+    def __init__(self, of: np.ndarray) -> None:
+        self.of = of
+
+
+def _minus(prog: Program, x):
+    """``0 - x`` (a velocity's difference to a point at rest): the negation of ``x`` if
+    the block already made it, else a :class:`_Negated`."""
+    if isinstance(x, float):
+        return -x
+    got = prog._negated.get(id(x))
+    if got is not None and got[0] is x:
+        return got[1]
+    return _Negated(x)
+
+
+def _real(prog: Program, x):
+    """``x`` with a :class:`_Negated` formed."""
+    return prog.neg(x.of) if isinstance(x, _Negated) else x
+
+
+def _dot(ax, bx, ay, by, tmp: np.ndarray):
+    """``ax * bx + ay * by`` (a new array), its second product in ``tmp``; ``ax`` or
+    ``ay`` may be a :class:`_Negated`: ``p + (-q)`` is ``p - q`` and ``-p + q`` is
+    ``q - p`` in floating point, bit for bit."""
+    na, nb = isinstance(ax, _Negated), isinstance(ay, _Negated)
+    if na and not nb:
+        ax, bx, ay, by, na, nb = ay, by, ax, bx, nb, na
+    out = (ax.of if na else ax) * bx
+    if np.shape(out) != tmp.shape:
+        out = np.array(np.broadcast_to(out, tmp.shape))
+    term = _times(ay.of if nb else ay, by, tmp)
+    if nb and not na:
+        out -= term
+    else:
+        out += term
+        if na:  # -p - q = -(p + q)
+            np.negative(out, out=out)
+    return out
 
 
 def _accelerations(prog: Program, g: RRR, num: _Numbers, arms, gs, inv) -> None:
@@ -317,7 +443,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
+def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -331,16 +457,30 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
     Rounding is monotonic, so the smallest ``H`` and the largest ``h |dH|`` of a design
     give the general pass's decisions exactly: ``sqrt`` of the smallest ``min(H, 1)`` is
     the smallest indicator, and ``min H - max h|dH| > 0`` implies both tests at every
-    sample and step. Only a design where that bound fails is tested sample by sample."""
+    sample and step. Only a design where that bound fails is tested sample by sample.
+
+    ``bound``: per design, a number at least the largest ``|dH|`` the general pass forms
+    (:func:`_dH_bound`), or None. With it ``dH`` is formed only for the designs where
+    ``min H - h k bound > 0`` fails, and they are tested sample by sample: the sample by
+    sample test is what the general pass decides (its shortcut above never passes a
+    design the test fails), so the decisions are the same."""
     risky = prog.risky
     Hmin = H.min(axis=1)
     risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
     L1s, L2s = L1 * L1, L2 * L2
-    dH = np.subtract(L1s + L2s, D2)
-    dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
-    big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+    if bound is None:
+        dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
+        if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
+            dvx, dvy = _real(prog, dvx), _real(prog, dvy)
+            dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
+        else:
+            dH *= _dot(dvx, dx, dvy, dy, prog.tmp())  # (x y is y x)
+        big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+    else:
+        dH = None
+        big = np.array(np.broadcast_to(np.ravel(bound), Hmin.shape))
     big *= np.ravel(1.0 / (L1s * L2s))
     big *= h
     unsure = ~risky & ~(Hmin - big > 0)
@@ -348,7 +488,15 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
         rows = np.flatnonzero(unsure)
         k = 1.0 / (L1s * L2s)
         k = k[rows] if np.ndim(k) else k
-        hdH = np.abs(dH[rows])
+        if dH is None:  # the general pass's dH of these designs, the same operations
+            S = L1s + L2s
+            S = S[rows] if np.ndim(S) else S
+            dH = np.subtract(S, D2[rows])
+            dvx, dvy = _real(prog, dvx), _real(prog, dvy)
+            dH *= _add(_mul(*_rows(prog, rows, dx, dvx)), _mul(*_rows(prog, rows, dy, dvy)))
+            hdH = np.abs(dH)
+        else:
+            hdH = np.abs(dH[rows])
         hdH *= k
         hdH *= h
         Hr = H[rows]
@@ -360,11 +508,67 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P) -> None:
         risky[rows] |= bad
 
 
+def _rows(prog: Program, rows: np.ndarray, *xs):
+    """The designs ``rows`` of each quantity (a float stays a float)."""
+    return [x if isinstance(x, float) else np.broadcast_to(x, prog.full)[rows] for x in xs]
+
+
+def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
+    """For a dyad between the driven crank and the ground, a bound per design of the
+    ``|dH|`` the general pass forms, from the design's numbers only (no array of the
+    block's size), or None for any other dyad. Made once per pass (its designs' numbers
+    as columns), each block reads its rows.
+
+    With P on the crank at the distance ``r`` from its ground pivot O and Q on the
+    ground at the distance ``e`` from O (or the other way round), at every position
+    ``|e - r| <= |d| <= e + r`` and ``|d'| = |w| r``, so that
+    ``|dH| <= max|L1^2 + L2^2 - D^2| (e + r) |w| r``. The computed positions differ from
+    these by a few units of rounding of the coordinates involved: the bound is widened
+    by a relative ``1e-12`` and by ``1e-12`` times the sum of their sizes, some hundred
+    times more than the rounding. A design it does not clear is tested with the dyad's
+    own ``dH`` (:func:`_screen`)."""
+    crank = prog.crank
+    if crank is None or {g.k1, g.k2} != {crank[0].b, prog.nb} or g.k1 == g.k2:
+        return None
+    key = ("bound", id(g))
+    got = num.made.get(key)
+    if got is None or got[0] is not g:
+        lo, hi = num.lo, num.hi
+        num.block(0, num.nd)
+        got = num.made[key] = (g, _crank_bound(crank, g, num))
+        num.block(lo, hi)
+    b = got[1]
+    return b if np.ndim(b) == 0 else b[num.lo : num.hi]
+
+
+def _crank_bound(crank: tuple, g: RRR, num: _Numbers):
+    """:func:`_dH_bound` over every design of the pass: an array (designs,) or a float."""
+    g0, w = crank
+    ox, oy = num.pair(g0.sk)  # the crank's pivot on the ground
+    cx, cy = num.pair(g0.sp)  # and on the crank
+    on_crank = g.k1 == g0.b
+    sx, sy = num.pair(g.sPk if on_crank else g.sQk)
+    qx, qy = num.pair(g.sQk if on_crank else g.sPk)  # on the ground
+    L1, L2 = num.one(g.L1), num.one(g.L2)
+    eps = 1e-12
+    r = np.hypot(np.subtract(sx, cx), np.subtract(sy, cy))
+    e = np.hypot(np.subtract(qx, ox), np.subtract(qy, oy))
+    size = sum(np.abs(v) for v in (ox, oy, cx, cy, sx, sy, qx, qy))
+    delta = eps * size
+    hi = (e + r + delta) * (1.0 + eps)
+    lo = np.maximum(np.abs(e - r) - delta, 0.0) * (1.0 - eps)
+    S = L1 * L1 + L2 * L2
+    span = np.maximum(np.abs(S - lo * lo * (1.0 - eps)), np.abs(S - hi * hi * (1.0 + eps)))
+    v = abs(w) * (r + delta) * (1.0 + eps)
+    out = span * (1.0 + eps) * hi * v * (1.0 + eps)
+    return float(out) if np.ndim(out) == 0 else np.ravel(out)
+
+
 # designs per block of the program: its temporaries (some 20 arrays of the block's size)
 # then stay in the cache and the allocator's reach instead of being faulted in anew for
 # every pass (1024 designs of 361 positions: 39 ms by default in one block of 363 designs,
 # 27 ms in blocks of 90; with the memory kept 17 and 16 ms)
-BLOCK_COLUMNS = 32768
+BLOCK_COLUMNS = 65536
 
 
 class Programs:
@@ -400,15 +604,18 @@ def run_program(
     per = max(1, BLOCK_COLUMNS // P)
     h = float(abs(u[1] - u[0])) if P > 1 else 0.0
     blocks = []
+    num = _Numbers(nd)
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
-        num = _Numbers(lo, hi)
+        num.block(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1
             _driver_link(prog, plan[0], num, u)
             for gi in range(1, len(plan)):
-                _rrr(prog, plan[gi], num, modes[gi, lo:hi].reshape(-1, 1), h, near)
+                m = modes[gi, lo:hi]  # the branches: one float when the same in the block
+                mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
+                _rrr(prog, plan[gi], num, mode, h, near)
         if speed != 1.0:  # rates per unit driver coordinate -> time rates
             for b, q in prog.bodies.items():
                 if b != nb:

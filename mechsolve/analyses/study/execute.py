@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mechsolve.analyses.batch import solve_designs
+from mechsolve.analyses.batch import solve_parsed
 from mechsolve.analyses.study.designs import Study
 from mechsolve.analyses.study.family import DesignFamily, solve_family
 from mechsolve.analyses.study.figures import Row, design_row
@@ -251,7 +251,7 @@ def solve_chunk(study: Study, indices: list[int], results_dir: str | None = None
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            batch = solve_designs(
+            batch = solve_parsed(  # (parsed and validated just above: not checked again)
                 list(mechs.values()),
                 step=study.step,
                 method=study.method,
