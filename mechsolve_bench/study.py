@@ -270,11 +270,12 @@ def case_study(quick: bool = False, designs: int | None = None):
     )
     case.rows.append(
         Row(
-            "mechsolve batch, kinematics only (what a study without forces reads)",
+            "mechsolve batch of parsed designs (solve_designs), kinematics only",
             t_bk,
             _kinematic_errors(batch_k, kin_only, nb_),
             f"{nb_ / t_bk:.0f} designs/s; {int(batch_k.batched.sum())} of {nb_} in the "
-            "batch; errors against the closed form",
+            "batch; each design's content checked first, as solve does (an edited model "
+            "is validated again); errors against the closed form",
         )
     )
     case.rows.append(
@@ -299,10 +300,9 @@ def case_study(quick: bool = False, designs: int | None = None):
         Row("mechsolve.solve once per design", t_sep, {}, f"{nb_ / t_sep:.0f} designs/s")
     )
     lines = [
-        f"ratio batch / closed form, with forces: {t_b / t_cf:.2f} (target: at most 1.5: "
-        f"{'met' if t_b <= 1.5 * t_cf else 'NOT met'})",
-        f"ratio batch / closed form, kinematics only: {t_bk / t_ck:.2f} (target: at most "
-        f"1.2: {'met' if t_bk <= 1.2 * t_ck else 'NOT met'})",
+        f"ratio batch of parsed designs / closed form, with forces: {t_b / t_cf:.2f}, "
+        f"kinematics only: {t_bk / t_ck:.2f} (information: a study does not solve its "
+        "designs so; the parsed designs' content checks are in these rows)",
         f"ratio batch from the study's values / closed form, with forces: {t_f / t_cf:.2f} "
         f"(target 3, read on this row: a study solves its designs so; at most 1.5: "
         f"{'met' if t_f <= 1.5 * t_cf else 'NOT met'})",

@@ -81,8 +81,9 @@ def test_every_case_runs(quick):
             "study",
             [
                 "pool of 2 / 1 process: speed-up",
-                "ratio batch / closed form, with forces:",
-                "ratio batch / closed form, kinematics only:",
+                "ratio batch of parsed designs / closed form, with forces:",
+                "ratio batch from the study's values / closed form, with forces:",
+                "ratio batch from the study's values / closed form, kinematics only:",
                 "separate solves / batch:",
             ],
         ),
