@@ -1,0 +1,118 @@
+"""Issue 30 (reviews 13 and 14, the trust defects they left).
+
+1. A requirement on a quantity that grows without bound inside the sweep (a pin force at a
+   four-bar's change point, s + l = p + q) was a finite located figure that could pass;
+   it is now unbounded and fails, while a quantity with a limit there (the driving
+   torque, a point's acceleration) keeps its located value. Checked against the free
+   bodies written by hand.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import mechsolve as ms
+from mechsolve.results.requirements import check_requirements
+
+# ground O2-O4, crank, coupler, rocker (mm): 32 + 114.5 = 87.5 + 59, a change point at
+# theta = 0, where coupler and rocker lie folded along the line of centres
+D, A_, B_, C_ = 87.5, 32.0, 114.5, 59.0
+LOAD = 10.0  # N, downwards at the rocker's middle M; the links carry no mass
+
+CHANGE_POINT = """
+name: change point
+units: {length: mm, angle: deg}
+ground: {O2: [0, 0], O4: [87.5, 0]}
+links:
+  crank: {points: {O2: [0, 0], A: [32, 0]}}
+  coupler: {points: {A: [0, 0], B: [114.5, 0]}}
+  rocker: {points: {O4: [0, 0], B: [59, 0], M: [29.5, 0]}}
+joints:
+  O2: [ground, crank]
+  A: [crank, coupler]
+  B: [coupler, rocker]
+  O4: [ground, rocker]
+assembly:
+  - B left of A -> O4
+driver: {joint: O2, speed: 1 rad/s, start: 0 deg}
+sweep: {range: 360 deg, step: 2 deg}
+gravity: off
+loads:
+  push: {force: [0, -10 N], at: M, on: rocker}
+requirements:
+"""
+
+
+def _pose(theta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors of the crank O2->A, the coupler A->B and the rocker O4->B, B on the
+    left of A -> O4 (the file's branch). The angle at O4 by the half-angle formula, with
+    r - (b - c) = 4 a d sin^2(theta/2) / (r + b - c) (D - a = b - c): exact to rounding
+    next to the fold, where the law of cosines loses half the digits."""
+    a = np.array([math.cos(theta), math.sin(theta)])
+    to_o4 = np.array([D, 0.0]) - A_ * a  # A -> O4
+    r = float(np.hypot(*to_o4))
+    near = 4 * A_ * D * math.sin(theta / 2) ** 2 / (r + B_ - C_)  # r - (b - c)
+    s = (r + B_ + C_) / 2
+    gamma = 2 * math.atan2(math.sqrt((s - r) * (s - C_)), math.sqrt(s * near / 2))
+    phi4 = math.atan2(-to_o4[1], -to_o4[0]) - gamma  # O4 -> B
+    u4 = np.array([math.cos(phi4), math.sin(phi4)])
+    u3 = to_o4 + C_ * u4
+    return a, u3 / np.hypot(*u3), u4
+
+
+def _cross(p: np.ndarray, q: np.ndarray) -> float:
+    return float(p[0] * q[1] - p[1] * q[0])
+
+
+def pin_force(theta: float) -> float:
+    """|O2.F| by free bodies: the massless coupler is a two-force member, so the rocker's
+    moments about O4 give F (c/2) cos(phi4) = c F_B sin(phi3 - phi4), and the massless
+    crank passes F_B on to O2. As theta -> 0, phi3 - phi4 -> 0 and cos(phi4) -> 1."""
+    _, u3, u4 = _pose(theta)
+    return LOAD * 0.5 * abs(u4[0]) / abs(_cross(u4, u3))
+
+
+def torque(theta: float) -> float:
+    """|driving torque| (N m) by virtual work at 1 rad/s: the load's power, 10 N times
+    the downward speed of M, (c/2) cos(phi4) omega4, with the loop's velocity closure
+    omega4 = a sin(theta - phi3) / (c sin(phi4 - phi3))."""
+    u2, u3, u4 = _pose(theta)
+    omega4 = A_ * _cross(u3, u2) / (C_ * _cross(u3, u4))
+    return abs(LOAD * 0.5 * C_ * 1e-3 * u4[0] * omega4)
+
+
+def _verdicts(reqs: str) -> dict:
+    mech = ms.loads(CHANGE_POINT + reqs)
+    res = ms.solve(mech)
+    return res, {v.name: v for v in check_requirements(mech, res)}
+
+
+def test_pin_force_at_a_change_point_is_unbounded_and_fails():
+    res, v = _verdicts(
+        "  pin: max(O2.F) <= 1e9 N\n  pinx: max(abs(A.Fx)) <= 1e9 N\n"
+        "  spread: range(B.F) <= 1e9 N\n  fx: min(O2.Fx) >= -1e9 N\n"
+    )
+    # the model agrees with the free bodies away from the change point
+    k = int(np.argmin(np.abs(np.degrees(res.u) - 40.0)))
+    col = [c for c in res.columns() if c.name.startswith("O2(") and c.name.endswith(".F")][0]
+    assert abs(col.values[k] - pin_force(math.radians(40.0))) < 1e-9 * pin_force(0.7)
+    # the free bodies: it grows as 1/theta towards the change point, without bound
+    f = [pin_force(t) for t in (1e-2, 1e-4, 1e-6)]
+    assert f[1] > 90 * f[0] and f[2] > 90 * f[1]
+    for name in ("pin", "pinx", "spread"):
+        assert math.isinf(v[name].value) and v[name].value > 0, v[name].message
+        assert not v[name].passed and "unbounded" in v[name].message
+        assert "grows without bound" in v[name].message, v[name].message
+    # the force's x component grows towards -inf at O2 (F_B points along the line)
+    assert v["fx"].value == -math.inf and not v["fx"].passed
+
+
+def test_quantities_with_a_limit_at_the_change_point_keep_their_located_value():
+    _, v = _verdicts("  torque: max(abs(input.torque)) <= 1 N m\n")
+    # the hand sup: the limit towards 360 deg (the torque's jump is at the change point)
+    t = np.radians(np.r_[np.linspace(1, 359, 3581), 360 - np.logspace(-1, -4, 13)])
+    hand = max(torque(x) for x in t)
+    assert math.isfinite(v["torque"].value) and v["torque"].passed
+    assert abs(v["torque"].value - hand) < 1e-4 * hand
