@@ -116,3 +116,51 @@ def test_quantities_with_a_limit_at_the_change_point_keep_their_located_value():
     hand = max(torque(x) for x in t)
     assert math.isfinite(v["torque"].value) and v["torque"].passed
     assert abs(v["torque"].value - hand) < 1e-4 * hand
+
+
+# 5. compare's table: the columns line up where a cell's unit prints shorter than it is
+# written (kg*m^2 prints as kg·m², N*m as N·m).
+SLIDER = """
+name: NAME
+units: {length: m, angle: deg}
+ground: {O: [0, 0]}
+links:
+  crank: {points: {O: [0, 0], A: [0.1, 0]}, mass: 1 kg, uniform_bar: [O, A]}
+  rod: {points: {A: [0, 0], B: [ROD, 0]}, mass: 2 kg, uniform_bar: [A, B]}
+  slider: {points: {B: [0, 0]}, mass: 3 kg, com: B}
+joints:
+  O: [ground, crank]
+  A: [crank, rod]
+  B: [rod, slider]
+  guide: {slider: [ground, slider], point: B, line: {through: [0, 0.04], angle: 0}}
+assembly: ["B.x > A.x"]
+driver: {joint: O, speed: 10 rad/s, start: 30 deg}
+sweep: {range: 360 deg, step: 5 deg}
+loads:
+  push: {force: [-1000 N, 0], at: B, on: slider}
+outputs: {points: [B]}
+"""
+
+
+def test_compare_table_rows_have_one_display_width(tmp_path):
+    from mechsolve.analyses.compare import compare
+    from mechsolve.base.units import pretty_text
+
+    files = []
+    for name, rod in (("short rod", 0.35), ("a scheme with a long rod", 0.5)):
+        f = tmp_path / f"{rod}.yaml"
+        f.write_text(SLIDER.replace("NAME", name).replace("ROD", repr(rod)))
+        files.append(f)
+    c = compare(files, outputs=["B.x", "B.x"])
+    text = pretty_text(c.text())  # as the command prints it
+    lines = text.splitlines()
+    table = lines[1 : lines.index(next(x for x in lines if x.startswith("requirements"))) + 1]
+    assert any("kg·m²" in row for row in table) and any("N·m" in row for row in table)
+    # characters, not bytes: "·" and "²" are one character each on the screen
+    assert len({len(row) for row in table}) == 1, [len(row) for row in table]
+    # and each scheme's cells start under its name
+    head = table[0]
+    starts = [head.index(s.name) for s in c.schemes]
+    for row in table[1:]:
+        for k in starts:
+            assert row[k - 1] == " " and row[k - 2] == " ", row
