@@ -118,6 +118,114 @@ def test_quantities_with_a_limit_at_the_change_point_keep_their_located_value():
     assert abs(v["torque"].value - hand) < 1e-4 * hand
 
 
+# 2. A force-closed cam's follower leaves the cam in a simulation: the motion ends there.
+# The cam-linkage's cam and rocker alone, the cam a flywheel (1000 kg m^2) that keeps its
+# 600 rpm (the follower's reactions change it by 1e-6), the rocker 0.01 kg m^2 about its
+# pivot A. The program's rise is equal acceleration: the rocker's angular acceleration
+# jumps from +4 s / beta^2 omega^2 to minus that half way (37.5 deg of cam angle), where
+# the spring's moment about A cannot hold it: the contact is lost at the join, at
+# t = 37.5 deg / omega (closed form).
+CAM = """
+name: cam and rocker
+units: {length: mm, angle: deg}
+ground: {O: [0, 0], A: [135, 0], H: [35, 100]}
+links:
+  cam: {points: {O: [0, 0]}, mass: 2 kg, com: O, inertia: 1000 kg*m^2}
+  rocker:
+    points:
+      A: [135, 0]
+      B: {from: A, length: 125, angle: 167.5}
+      C: {from: A, length: 100, angle: 90}
+    mass: 0.8 kg
+    com: A
+    inertia: 0.01 kg*m^2
+joints:
+  O: [ground, cam]
+  A: [ground, rocker]
+  contact:
+    cam_contact: [cam, rocker]
+    centre: O
+    roller: {centre: B, radius: 15 mm}
+    program:
+      follower: {type: oscillating roller, arm: 125 mm, roller_radius: 15 mm}
+      pivot_distance: 135 mm
+      start_angle: 12.5 deg
+      base_radius: 30 mm
+      rotation: cw
+      law: equal acceleration
+      motion: [{rise: 75 deg, swing: 15 deg}, {dwell: 10 deg}, {return: 75 deg},
+               {dwell: 200 deg}]
+    closure: force
+driver: {joint: O, speed: 600 rpm, direction: cw, start: 0 deg}
+sweep: {range: 360 deg, step: 1 deg}
+gravity: off
+loads:
+  hold: {spring: [C, H], stiffness: 2000 N/m, free_length: 60 mm, on: [rocker, ground]}
+motor: {stall: 0 N m, slope: 0 N m s}
+simulate: {duration: 0.012 s, step: 0.001 s, method: rk4, from: 600 rpm}
+"""
+
+
+def _spring_moment(turn: float) -> float:
+    """|moment about A| (N m) of the spring C-H (2000 N/m, free 60 mm) with the rocker
+    turned by ``turn`` (rad) from its drawn pose (C 100 mm above A)."""
+    cx, cy = 135 - 100 * math.sin(turn), 100 * math.cos(turn)
+    hx, hy = 35.0, 100.0
+    L = math.hypot(hx - cx, hy - cy)
+    f = 2000 * (L - 60) * 1e-3  # N, pulling C towards H
+    ux, uy = (hx - cx) / L, (hy - cy) / L
+    return abs(((cx - 135) * uy - cy * ux) * 1e-3 * f)
+
+
+def test_simulate_stops_where_the_follower_leaves_the_cam(tmp_path):
+    from click.testing import CliRunner
+
+    from mechsolve.cli.main import main
+
+    omega = 600 * 2 * math.pi / 60
+    swing, beta = math.radians(15), math.radians(75)
+    # by hand: past the join the rocker must decelerate at 4 s / beta^2 omega^2, which
+    # the spring cannot give at the join (the rocker turned 7.5 deg either way)
+    need = 0.01 * 4 * swing / beta**2 * omega**2
+    assert need > 2 * max(_spring_moment(math.radians(a)) for a in (-7.5, 7.5))
+    t_sep = math.radians(37.5) / omega
+    f = tmp_path / "cam.yaml"
+    f.write_text(CAM)
+    out = tmp_path / "o"
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert "the motion stopped early" in r.output  # the warning of singular: stop
+    text = r.output
+    assert "leaves the cam at contact at t = " in text and "driver angle 322.5°" in text
+    assert "LOSS OF CONTACT" not in text  # no row past it: nothing to warn of
+    rows = (out / "simulation.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    t = np.array([float(x.split(",")[head.index("t [s]")]) for x in rows[1:]])
+    N = np.array([float(x.split(",")[head.index("contact(cam->rocker).N [N]")]) for x in rows[1:]])
+    # every row before the separation, then the located state; none after it
+    assert np.allclose(t[:-1], 0.001 * np.arange(len(t) - 1), atol=1e-15)
+    assert len(t) == math.floor(t_sep / 0.001) + 2
+    assert abs(t[-1] - t_sep) < 2e-5 * t_sep  # the cam's speed varies by 1e-6
+    assert np.all(N >= 0)
+
+
+def test_multibody_simulate_stops_before_the_follower_leaves_the_cam():
+    omega = 600 * 2 * math.pi / 60
+    t_sep = math.radians(37.5) / omega  # the join, as above
+    text = CAM.replace("method: rk4,", "method: rk4, formulation: multibody,")
+    from mechsolve.analyses.dynamics import simulate
+
+    res = simulate(ms.loads(text))
+    tr = res.trajectory
+    assert tr.early and "leaves the cam at contact at about t = " in tr.stopped
+    # every row before the separation is kept, none after it
+    assert np.allclose(tr.t, 0.001 * np.arange(len(tr.t)), atol=1e-15)
+    assert tr.t[-1] < t_sep < tr.t[-1] + 0.001
+    said = float(tr.stopped.split("about t = ")[1].split(" s")[0])
+    assert tr.t[-1] < said <= tr.t[-1] + 0.001
+    assert np.all(res.forces.reactions["contact"]["N"] >= 0)
+
+
 # 5. compare's table: the columns line up where a cell's unit prints shorter than it is
 # written (kg*m^2 prints as kg·m², N*m as N·m).
 SLIDER = """

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.contact_loss import multibody_cut
 from mechsolve.analyses.dynamics.cycle import machine_cycle
 from mechsolve.analyses.dynamics.integrators import _with_flywheel, motor_end
 from mechsolve.analyses.dynamics.model import drive_torque
@@ -143,9 +144,21 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         singular=sim.singular,
         branch=branches(an, mb) if sim.singular == "keep branch" else None,
     )
+    tr, sol, forces = _motion_and_forces(mech, an, start, mb, drv, tr)
+    return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def _motion_and_forces(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr):
+    """The trajectory, its :class:`Solution` and forces; the trajectory cut where the
+    motor law's pole is passed, and at the first loss of contact of a force-closed cam
+    (which cannot pull its follower: the motion past it is not the machine's)."""
     tr, sol = _solved_motion(mech, an, start, mb, drv, tr)
     forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
-    return MultibodyResults(an, sol, forces, tr, mb, drv)
+    cut = multibody_cut(mech, an, tr, forces, (*_ALONG, "velocity_violation", "u", "ud", "udd"))
+    if cut is not None:
+        sol = _solution(an, start, mb, drv, cut)
+        return cut, sol, core.forces(an, sol, mb.extremes if mb.extremes else None)
+    return tr, sol, forces
 
 
 def _solved_motion(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
