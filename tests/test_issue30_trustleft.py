@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 import mechsolve as ms
 from mechsolve.results.requirements import check_requirements
@@ -272,3 +273,62 @@ def test_compare_table_rows_have_one_display_width(tmp_path):
     for row in table[1:]:
         for k in starts:
             assert row[k - 1] == " " and row[k - 2] == " ", row
+
+
+# 3. A law of a `motors:` entry with a pole the motion passes between two steps: refused
+# at its key, the motion kept up to the step before, as the driver's `motor:` is.
+ROTOR = """
+name: rotor
+units: {length: m, angle: deg}
+ground: {O: [0, 0]}
+links:
+  rotor: {points: {O: [0, 0], P: [0.1, 0]}, mass: 1 kg, com: O, inertia: 1 kg*m^2}
+joints:
+  O: [ground, rotor]
+gravity: off
+motors:
+  spin: {joint: O, torque: "50 - 1.25 * omega - 1/(omega - 30)"}
+"""
+
+
+@pytest.mark.parametrize(
+    "placed",
+    [
+        "driver: {joint: O, speed: 1 rad/s, start: 0 deg}\n"
+        "simulate: {duration: 1.5 s, step: 0.01 s, method: rk4, from: rest}\n",
+        "simulate: {duration: 1.5 s, step: 0.01 s, method: rk4, pose: {O: 0 deg}}\n",
+    ],
+    ids=["driver", "pose"],
+)
+def test_a_pole_of_a_motors_law_is_refused_at_its_key(tmp_path, placed):
+    from click.testing import CliRunner
+    from scipy.integrate import solve_ivp
+
+    from mechsolve.cli.main import main
+
+    f = tmp_path / "rotor.yaml"
+    f.write_text(ROTOR + placed)
+    out = tmp_path / "o"
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert "motors.spin.torque:" in r.output, r.output
+    assert "grows without bound at omega = 30 rad/s" in r.output and "Traceback" not in r.output
+    rows = (out / "simulation.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    t = np.array([float(x.split(",")[head.index("t [s]")]) for x in rows[1:]])
+    iw = next(i for i, h in enumerate(head) if h.startswith("rotor.omega"))
+    scale = math.pi / 180 if head[iw].endswith("[deg/s]") else 1.0
+    w = np.array([float(x.split(",")[iw]) for x in rows[1:]]) * scale
+    # by hand: 1 kg m^2 * omega' = the law, from rest, up to the pole at 30 rad/s
+    ref = solve_ivp(
+        lambda _, y: [50 - 1.25 * y[0] - 1 / (y[0] - 30)],
+        (0, t[-1]),
+        [0.0],
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-12,
+    )
+    far = w < 29.0  # (next to the pole RK4's error grows as the law's derivatives do)
+    assert np.max(np.abs(ref.y[0] - w)[far]) < 1e-6
+    # kept up to the last step before the pole, none past it (0.3 rad/s a step there)
+    assert w.max() < 30 < w.max() + 1.0 and t[-1] < 1.5

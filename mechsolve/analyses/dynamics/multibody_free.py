@@ -5,6 +5,7 @@ freedom), its motors from ``motors:``, its table and summary (see :mod:`.multibo
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 from collections import deque
 
@@ -26,6 +27,7 @@ from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
 from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import GROUND, Mechanism
+from mechsolve.model.expr.poles import first_pole_along
 
 # how far given rates may be from consistent before it is an error: a value written to
 # 6 significant digits (5e-6 of its size at most) passes
@@ -47,6 +49,53 @@ def motor_sources(mech: Mechanism, system) -> list[Source]:
             )
         )
     return out
+
+
+# the trajectory's rows, one per output time (cut together)
+_ROWS = (
+    "t", "q", "qd", "qdd", "lam", "kinetic", "potential", "work", "violation",
+    "velocity_violation",
+)  # fmt: skip
+
+
+def motors_pole_cut(mech: Mechanism, mb: Multibody, tr: Trajectory) -> Trajectory | None:
+    """The trajectory up to the output before the first pole of a ``motors:`` entry's law
+    that the motion passed between two outputs (the law finite at both: the integrator
+    stepped through infinity, and the motion after it is not the law's), with the file's
+    input error at that motor's key; None where every law stays finite along the motion
+    (as the driver's ``motor:`` is checked, :func:`.multibody_run._motor_pole_cut`)."""
+    if len(tr.t) < 2 or not mech.motors:
+        return None
+    st, best = None, None
+    for src in mb.sources:
+        joint, motor = mech.motors.get(src.name, (None, None))
+        if motor is None or motor.kind != "law" or not src.text.endswith(f" on {joint}"):
+            continue
+        st = trajectory_state(mb, tr) if st is None else st
+        rows = np.zeros((len(tr.t), mb.nq))
+        for body, blk in src.coordinate.jacobian(st).items():
+            rows[:, 3 * body : 3 * body + 3] = blk[0].T
+        w = np.einsum("ij,ij->i", rows, tr.qd)  # the joint coordinate's rate
+        hit = first_pole_along(motor.expr, {"omega": w, "v": w, "t": np.asarray(tr.t)})
+        if hit is not None and (best is None or hit[0] < best[0]):
+            best = (hit[0], hit[1], src.name, joint)
+    if best is None:
+        return None
+    k, at, name, joint = best
+    lin = mech.joint(joint).coordinate == "length"
+    speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
+    law = mech.motors[name][1].describe(lin, units=False)
+    text = (
+        f"the motor {name}'s law {law} grows without bound at {speed} = {at[speed]:.6g} "
+        f"{unit}, t = {at['t']:.6g} s: it must give a finite {'force' if lin else 'torque'} "
+        "at every speed and time the motion reaches"
+    )
+    raw = mech.source.data.get("motors") if mech.source is not None else None
+    entry = raw.get(name) if isinstance(raw, dict) else None
+    keys = [x for x in ("torque", "force") if isinstance(entry, dict) and x in entry]
+    error = mech.error(("motors", name, keys[0] if keys else "torque"), text)
+    rows = {f: getattr(tr, f)[: k + 1] for f in _ROWS}
+    return dataclasses.replace(tr, **rows, stopped=text, early=True, event="", error=error)
 
 
 def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None = None):
@@ -94,7 +143,7 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
         singular=sim.singular,
         stop=stop_condition(ctx, mb, sim.stop) if sim.stop is not None else None,
     )
-    return FreeResults(mech, mb, tr)
+    return FreeResults(mech, mb, motors_pole_cut(mech, mb, tr) or tr)
 
 
 def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:

@@ -164,8 +164,11 @@ def _motion_and_forces(mech: Mechanism, an: Analysis, start, mb: Multibody, drv,
 def _solved_motion(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
     """The trajectory and its :class:`Solution`; cut at the motor law's pole where the
     motion passed one (kept up to there, as the reduced path keeps it)."""
+    from mechsolve.analyses.dynamics.multibody_free import motors_pole_cut
+
     sol = _solution(an, start, mb, drv, tr)
     cut = _motor_pole_cut(mech, an, tr)
+    cut = motors_pole_cut(mech, mb, cut or tr) or cut  # the earlier pole of any motor
     if cut is None:
         return tr, sol
     return cut, _solution(an, start, mb, drv, cut)
