@@ -332,3 +332,62 @@ def test_a_pole_of_a_motors_law_is_refused_at_its_key(tmp_path, placed):
     assert np.max(np.abs(ref.y[0] - w)[far]) < 1e-6
     # kept up to the last step before the pole, none past it (0.3 rad/s a step there)
     assert w.max() < 30 < w.max() + 1.0 and t[-1] < 1.5
+
+
+# 4. A multibody simulate that starts at a singular position: a parallelogram (cranks
+# 0.4 m, 1 kg bars; coupler 1 m, 2 kg) from rest at its collinear pose under gravity.
+PARALLELOGRAM = """
+name: parallelogram
+units: {length: m, angle: deg}
+ground: {O1: [0, 0], O2: [1, 0]}
+links:
+  c1: {points: {O1: [0, 0], A: [0.4, 0]}, mass: 1 kg, uniform_bar: [O1, A]}
+  cp: {points: {A: [0, 0], B: [1, 0]}, mass: 2 kg, uniform_bar: [A, B]}
+  c2: {points: {O2: [0, 0], B: [0.4, 0]}, mass: 1 kg, uniform_bar: [O2, B]}
+joints:
+  O1: [ground, c1]
+  A: [c1, cp]
+  B: [cp, c2]
+  O2: [ground, c2]
+assembly: ["B.y >= A.y - 1e-9"]
+driver: {joint: O1, speed: 1 rad/s, start: START deg}
+gravity: 9.81 m/s^2
+simulate: {duration: 0.05 s, step: 0.01 s, method: DOP853, rtol: 1e-11, atol: 1e-13,
+           formulation: multibody}
+"""
+
+
+def test_a_start_at_a_singular_position_is_refused_and_one_next_to_it_runs(tmp_path):
+    from click.testing import CliRunner
+
+    from mechsolve.analyses.dynamics import simulate
+    from mechsolve.cli.main import main
+
+    # by hand, from rest at the collinear pose: on the parallel branch (the cranks turn
+    # together, the coupler translates) I = 2 m l^2 / 3 + m_c l^2 = 0.42667 kg m^2 and
+    # V = 1.2 g sin(theta) J: theta'' = -1.2 g / I = -27.59 rad/s^2; on the crossed branch
+    # (phi = -7/3 theta to first order) I = 0.7822, dV/dtheta = -0.8 g: +10.03 rad/s^2.
+    # The pose and the rates do not say which: refused, naming the start.
+    f = tmp_path / "p.yaml"
+    f.write_text(PARALLELOGRAM.replace("START", "0"))
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(tmp_path / "o"), "--no-plots"])
+    assert r.exit_code == 2, r.output
+    assert "driver.start:" in r.output and "driver angle 0°" in r.output
+    assert "singular position" in r.output and "Traceback" not in r.output
+    # 1e-6 rad along the parallel branch: the branch's motion, energy conserved
+    res = simulate(ms.loads(PARALLELOGRAM.replace("START", repr(math.degrees(1e-6)))))
+    tr = res.trajectory
+    I, g = 2 * 1.0 * 0.4**2 / 3 + 2.0 * 0.4**2, 9.81
+    from scipy.integrate import solve_ivp
+
+    ref = solve_ivp(
+        lambda _, y: [y[1], -1.2 * g * math.cos(y[0]) / I],
+        (0, 0.05),
+        [1e-6, 0.0],
+        t_eval=tr.t,
+        rtol=1e-12,
+        atol=1e-14,
+    )
+    assert np.max(np.abs(np.asarray(tr.u) - ref.y[0])) < 1e-8
+    E = np.asarray(tr.kinetic) + np.asarray(tr.potential)
+    assert np.max(np.abs(E - E[0])) < 1e-9 * 1.2 * g * 0.4

@@ -111,10 +111,15 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
                 f"{motor.describe(an.linear)} on {d.joint}",
             )
         )
-    from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources
+    from mechsolve.analyses.dynamics.multibody_free import (
+        initial_rates,
+        motor_sources,
+        refuse_singular_start,
+    )
 
     sources += motor_sources(machine, free.system)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
+    refuse_singular_start(mech, mb, q0, ("driver", "start"), f"{an.format_u(u0)}")
     if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
         # stroke(q) means the extremes over the driver's sweep (the machine's cycle: a
         # turn of a crank, several of a pinion driving a wheel), as for the reduced path:
