@@ -97,27 +97,10 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     st = start.state
     q0 = st.q()[0]
     qd0 = np.stack([st.vx[:-1, 0], st.vy[:-1, 0], st.w[:-1, 0]], axis=1).ravel()
-    d = machine.driver
-    sources = []
-    free = Multibody(an)
-    drv = coordinate(machine, free.system, d.joint, d.line)
-    if mech.motor is not None:
-        motor, sense = mech.motor, d.direction
-        sources.append(
-            Source(
-                "motor",
-                drv,
-                lambda w, t: float(drive_torque(motor, sense, w, t)),
-                f"{motor.describe(an.linear)} on {d.joint}",
-            )
-        )
-    from mechsolve.analyses.dynamics.multibody_free import (
-        initial_rates,
-        motor_sources,
-        refuse_singular_start,
-    )
+    from mechsolve.analyses.dynamics.multibody_free import initial_rates, refuse_singular_start
 
-    sources += motor_sources(machine, free.system)
+    d = machine.driver
+    drv, sources = _sources(mech, machine, an)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
     refuse_singular_start(mech, mb, q0, ("driver", "start"), f"{an.format_u(u0)}")
     if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
@@ -151,6 +134,28 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     )
     tr, sol, forces = _motion_and_forces(mech, an, start, mb, drv, tr)
     return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def _sources(mech: Mechanism, machine: Mechanism, an: Analysis):
+    """The driver's coordinate and the motors acting: the driver's ``motor:`` on it and
+    every ``motors:`` entry on its joint."""
+    from mechsolve.analyses.dynamics.multibody_free import motor_sources
+
+    d = machine.driver
+    free = Multibody(an)
+    drv = coordinate(machine, free.system, d.joint, d.line)
+    sources = []
+    if mech.motor is not None:
+        motor, sense = mech.motor, d.direction
+        sources.append(
+            Source(
+                "motor",
+                drv,
+                lambda w, t: float(drive_torque(motor, sense, w, t)),
+                f"{motor.describe(an.linear)} on {d.joint}",
+            )
+        )
+    return drv, sources + motor_sources(machine, free.system)
 
 
 def _motion_and_forces(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr):
