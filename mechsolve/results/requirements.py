@@ -505,9 +505,10 @@ class _Reducer:
         """Whether ``sense * arg`` grows without bound from sample ``near`` towards the
         singular sample ``j``: solved at 1e-2 ... 1e-8 of the driver coordinate from it
         (as close as it is determined: the reactions are left blank within rounding of
-        the singular pose), the growth over the last three decades does not die out (a
-        force the pose cannot carry grows as 1/d; a rate or effort with a limit along
-        the motion settles, its steps shrinking tenfold)."""
+        the singular pose), the growth over the last three decades does not die out: each
+        step at least twice the one before (a force the pose cannot carry grows as 1/d,
+        its steps tenfold; a rate or effort with a limit along the motion settles, its
+        steps shrinking tenfold)."""
         fine = self.fine
         u = np.asarray(fine.u, float)
         scale = fine.analysis.scale if fine.analysis.linear else 1.0
@@ -521,8 +522,8 @@ class _Reducer:
         v = v[: bad[0]] if bad.size else v  # as close as it is determined
         if v.size < 3 or d[v.size - 1] > 1e-4 * scale:
             return False
-        v0, v1, v2 = v[-3:]
-        return bool(v2 - v1 > 2.0 * (v1 - v0) > 0.0)
+        steps = np.diff(v[-4:])  # over the last three decades determined (or two)
+        return bool(np.all(steps > 0.0) and np.all(steps[1:] > 2.0 * steps[:-1]))
 
     def _narrow(self, arg, sense: int, lo: float, hi: float, near: int, best, where):
         """The best of ``sense * arg`` between ``lo`` and ``hi`` (solved next to sample
