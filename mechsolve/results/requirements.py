@@ -278,9 +278,11 @@ class _Reducer:
     the quantity takes, so never beyond the true extreme). Next to a range where the
     mechanism cannot close, the interval reaches the located edge of that range (where
     a loop stops closing: a toggle, its transmission angle 0, where a driving torque
-    through it grows without bound). A sweep that does not close at its ends is located
-    on its own samples (for the plots' sweep is then the run's). With a motion law of
-    time the extremes are the samples' and say so;
+    through it grows without bound). At a singular position the sweep closes through
+    (a change point) a quantity not determined there is probed towards it and, where it
+    grows without bound (the reactions), is unbounded. A sweep that does not close at its
+    ends is located on its own samples (for the plots' sweep is then the run's). With a
+    motion law of time the extremes are the samples' and say so;
     ``mean`` and ``rms`` read the file's samples; ``at(q, u)`` is q solved at u.
 
     The points' ranges of the summary are located otherwise, by Newton's method on a
@@ -379,12 +381,24 @@ class _Reducer:
             return
         if self.fine is None:
             self.notes.append(f"{func} the {word} of the {self._samples()} samples, not located")
+        elif math.isfinite(u) and math.isinf(value) and self._at_sample(u):
+            self.notes.append(
+                f"{func} grows without bound towards the singular position at "
+                f"{self.res.format_u(u)}"
+            )
         elif math.isfinite(u) and math.isinf(value):
             self.notes.append(
                 f"{func} towards {self.res.format_u(u)}, where the mechanism stops closing"
             )
         elif math.isfinite(u):
             self.notes.append(f"{func} {self._place(u)}")
+
+    def _at_sample(self, u: float) -> bool:
+        """Whether ``u`` is a solved sample of the plots' sweep (a singular position the
+        sweep closes through, not the edge of a range where it cannot close)."""
+        fine = self.fine
+        hit = np.flatnonzero(np.asarray(fine.u, float) == u)
+        return bool(hit.size and np.asarray(fine.ok, bool)[hit].any())
 
     def _place(self, u: float) -> str:
         """Where an extreme at the driver value ``u`` is, in words. Where the quantity
@@ -460,8 +474,56 @@ class _Reducer:
         for near, e, away in gap_sides(fine.solution):  # up to each edge of a range not closing
             best, where = self._towards_edge(arg, sense, (near, away), e, best, where)
             if math.isinf(best):
-                break
+                return best, where
+        for near, j in self._singular_sides(arg):  # a toggle or change point it closes through
+            if self._grows_towards(arg, sense, near, j):
+                return math.inf, float(u[j])
         return best, where
+
+    def _singular_sides(self, arg) -> list[tuple[int, int]]:
+        """``(near, j)``: each solved sample ``j`` where ``arg`` is not determined (a
+        singular position the sweep closes through or ends at: a change point, a
+        toggle, where the reactions are indeterminate) with a neighbour ``near`` where
+        it is; over a full turn the first and last samples are neighbours through the
+        turn's end (the change point at 0° is reached from 359° towards 360°)."""
+        fine = self.fine
+        v = np.asarray(_evaluate(arg, self.fctx), float)
+        ok, n = np.asarray(fine.ok, bool), len(fine.u)
+        if v.shape != ok.shape:
+            return []
+        known = ok & np.isfinite(v)
+        cycle = fine.is_full_cycle()
+        out = []
+        for j in np.flatnonzero(ok & ~np.isfinite(v)):
+            near = [j - 1, j + 1]
+            if cycle and j in (0, n - 1):
+                near = [1, n - 2]
+            out += [(int(k), int(j)) for k in near if 0 <= k < n and known[k]]
+        return out
+
+    def _grows_towards(self, arg, sense: int, near: int, j: int) -> bool:
+        """Whether ``sense * arg`` grows without bound from sample ``near`` towards the
+        singular sample ``j``: solved at 1e-2 ... 1e-8 of the driver coordinate from it
+        (as close as it is determined: the reactions are left blank within rounding of
+        the singular pose), the growth over the last three decades does not die out: each
+        step at least twice the one before (a force the pose cannot carry grows as 1/d,
+        its steps tenfold; a rate or effort with a limit along the motion settles, its
+        steps shrinking tenfold)."""
+        fine = self.fine
+        u = np.asarray(fine.u, float)
+        scale = fine.analysis.scale if fine.analysis.linear else 1.0
+        edge = float(u[j])
+        if fine.is_full_cycle() and j in (0, len(u) - 1) and abs(near - j) > 1:
+            edge = float(u[-1] if j == 0 else u[0])  # through the turn's end
+        away = 1.0 if float(u[near]) > edge else -1.0
+        d = np.logspace(-2, -8, 7) * scale
+        v = sense * self._values(arg, edge + away * d, near)
+        bad = np.flatnonzero(~np.isfinite(v))
+        v = v[: bad[0]] if bad.size else v  # as close as it is determined
+        if v.size < 3 or d[v.size - 1] > 1e-4 * scale:
+            return False
+        steps = np.diff(v[-4:])  # over the last three decades determined (or two)
+        return bool(np.all(steps > 0.0) and np.all(steps[1:] > 2.0 * steps[:-1]))
 
     def _narrow(self, arg, sense: int, lo: float, hi: float, near: int, best, where):
         """The best of ``sense * arg`` between ``lo`` and ``hi`` (solved next to sample

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mechsolve.base.atomic import write_text
-from mechsolve.base.units import SI_OUTPUT, OutputUnits
+from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_text
 
 if TYPE_CHECKING:
     from mechsolve.analyses.compare import Comparison
@@ -184,20 +184,22 @@ def comparison_text(c: Comparison, units: OutputUnits | None = None) -> str:
     """The figures side by side (in ``units``; None: the SI text); the crank angles are
     counted from the start of each scheme's working stroke."""
     schemes = c.schemes
-    table = side_by_side(c, units)
-    rows = [(label, None) for label, _ in table]
-    cells = [r for _, r in table]
-    label_w = max(len(label) for label, _ in rows) + 2
-    widths = [max(len(s.name), *(len(r[k]) for r in cells)) + 2 for k, s in enumerate(schemes)]
+    # the cells as they are printed (kg*m^2 as kg·m², one character shorter), so that
+    # the columns are padded to the width they show
+    table = [
+        (pretty_text(label), [pretty_text(v) for v in r]) for label, r in side_by_side(c, units)
+    ]
+    label_w = max(len(label) for label, _ in table) + 2
+    widths = [max(len(s.name), *(len(r[k]) for _, r in table)) + 2 for k, s in enumerate(schemes)]
+    widths[-1] -= 2  # no margin after the last column: every row is as wide
     speed = schemes[0].speed
     head = (
         f"compare {len(schemes)} scheme(s) over one turn of the crank at "
         f"{speed * 30 / math.pi:.6g} rpm ({_speed(speed, units)}), 0.1° samples"
     )
     lines = [head, " " * label_w + "".join(f"{s.name:<{w}}" for s, w in zip(schemes, widths))]
-    for (label, _), r in zip(rows, cells):
+    for label, r in table:
         lines.append(f"{label:<{label_w}}" + "".join(f"{v:<{w}}" for v, w in zip(r, widths)))
-    lines = [line.rstrip() for line in lines]
     note = NOTE.format(mid=f"{c.middle * 100:g}")
     lines += textwrap.wrap(note, 90, initial_indent="  ", subsequent_indent="  ")
     for s in schemes:

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from mechsolve.analyses.dynamics.constants import BYTES_PER_VALUE, MAX_STEPS
+from mechsolve.analyses.dynamics.contact_loss import reduced_cut
 from mechsolve.analyses.dynamics.integrators import _with_flywheel, integrate
 from mechsolve.analyses.dynamics.model import ReducedModel
 from mechsolve.analyses.dynamics.results import SimulationResults
@@ -146,6 +147,9 @@ def simulate(
             traj, **{f: getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")}
         )
     forces = core.forces(an, sol, model.extremes)
+    cut = reduced_cut(model, mech, traj, forces)  # a cam cannot pull its follower
+    if cut is not None:
+        traj, sol, forces = cut
     res = SimulationResults(an, sol, forces, traj, mech.motor)
     res.model = model
     return res

@@ -5,6 +5,7 @@ freedom), its motors from ``motors:``, its table and summary (see :mod:`.multibo
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 from collections import deque
 
@@ -26,6 +27,7 @@ from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
 from mechsolve.base.units import SI_OUTPUT, OutputUnits
 from mechsolve.model import GROUND, Mechanism
+from mechsolve.model.expr.poles import first_pole_along
 
 # how far given rates may be from consistent before it is an error: a value written to
 # 6 significant digits (5e-6 of its size at most) passes
@@ -47,6 +49,92 @@ def motor_sources(mech: Mechanism, system) -> list[Source]:
             )
         )
     return out
+
+
+# the trajectory's rows, one per output time (cut together)
+_ROWS = (
+    "t", "q", "qd", "qdd", "lam", "kinetic", "potential", "work", "violation",
+    "velocity_violation",
+)  # fmt: skip
+
+
+def motors_pole_cut(mech: Mechanism, mb: Multibody, tr: Trajectory) -> Trajectory | None:
+    """The trajectory up to the output before the first pole of a ``motors:`` entry's law
+    that the motion passed between two outputs (the law finite at both: the integrator
+    stepped through infinity, and the motion after it is not the law's), with the file's
+    input error at that motor's key; None where every law stays finite along the motion
+    (as the driver's ``motor:`` is checked, :func:`.multibody_run._motor_pole_cut`)."""
+    if len(tr.t) < 2 or not mech.motors:
+        return None
+    st, best = None, None
+    for src in mb.sources:
+        joint, motor = mech.motors.get(src.name, (None, None))
+        if motor is None or motor.kind != "law" or not src.text.endswith(f" on {joint}"):
+            continue
+        st = trajectory_state(mb, tr) if st is None else st
+        rows = np.zeros((len(tr.t), mb.nq))
+        for body, blk in src.coordinate.jacobian(st).items():
+            rows[:, 3 * body : 3 * body + 3] = blk[0].T
+        w = np.einsum("ij,ij->i", rows, tr.qd)  # the joint coordinate's rate
+        hit = first_pole_along(motor.expr, {"omega": w, "v": w, "t": np.asarray(tr.t)})
+        if hit is not None and (best is None or hit[0] < best[0]):
+            best = (hit[0], hit[1], src.name, joint)
+    if best is None:
+        return None
+    k, at, name, joint = best
+    lin = mech.joint(joint).coordinate == "length"
+    speed, unit = ("v", "m/s") if lin else ("omega", "rad/s")
+    law = mech.motors[name][1].describe(lin, units=False)
+    text = (
+        f"the motor {name}'s law {law} grows without bound at {speed} = {at[speed]:.6g} "
+        f"{unit}, t = {at['t']:.6g} s: it must give a finite {'force' if lin else 'torque'} "
+        "at every speed and time the motion reaches"
+    )
+    raw = mech.source.data.get("motors") if mech.source is not None else None
+    entry = raw.get(name) if isinstance(raw, dict) else None
+    keys = [x for x in ("torque", "force") if isinstance(entry, dict) and x in entry]
+    error = mech.error(("motors", name, keys[0] if keys else "torque"), text)
+    rows = {f: getattr(tr, f)[: k + 1] for f in _ROWS}
+    return dataclasses.replace(tr, **rows, stopped=text, early=True, event="", error=error)
+
+
+# the start's singular measure (sigma_r / sigma_1 of Phi_q) below which a start is taken
+# as the singular position itself: its pose is then not on a branch to rounding (the
+# closed form's square root of a vanishing discriminant leaves ~1.5e-8 rad, a measure of
+# ~2e-9 on a four-bar) and the motion from it is not determined; a start 1e-7 rad off a
+# parallelogram's collinear pose (1.2e-8) runs true, 1e-8 rad (1.7e-9) does not
+START_SINGULAR = 5e-9
+
+
+def refuse_singular_start(mech: Mechanism, mb: Multibody, q0: np.ndarray, key, where: str):
+    """An input error at ``key`` where the start ``q0`` is a singular position: the
+    constraint equations lose rank there (not redundant: they regain it next to it).
+
+    From such a start the position and the rates do not determine the motion: each
+    branch through it has its own acceleration (a parallelogram from rest at its
+    collinear pose under gravity: theta'' = -27.6 rad/s^2 on the parallel branch, +10.0
+    on the crossed one), and the pose assembled there is on neither to rounding. The
+    run then stayed put (-1.9e-7 deg in 0.05 s instead of the branch's -1.976 deg),
+    changed T + V by half of itself and took 6.7e5 evaluations for 0.05 s (a 2 s run
+    did not end in 5 minutes); from 1e-7 rad away it follows the branch (-1.976 deg,
+    T + V to 7e-12 J)."""
+    from mechsolve.analyses.dynamics.multibody_events import singular_measure
+    from mechsolve.analyses.dynamics.multibody_integrate import _persists
+
+    rank = len(mb.partition(q0).rows)
+    if rank < mb.nc and _persists(mb, q0, rank):
+        return  # redundant equations: their rank is the run's
+    s = singular_measure(mb, q0, rank)
+    if s >= START_SINGULAR:
+        return
+    raise mech.error(
+        key,
+        f"the start ({where}) is a singular position: the constraint equations lose rank "
+        f"there (their smallest singular value is {s:.1e} of the largest), where branches "
+        "of the mechanism meet, so the position and the rates do not determine the "
+        "motion (each branch has its own acceleration from it); start next to it, on the "
+        "branch the motion is to follow (1e-6 rad away is enough for a four-bar)",
+    )
 
 
 def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None = None):
@@ -80,6 +168,7 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
     prescribed = _prescribed(machine, ctx.system)
     mb = Multibody(ctx, motor_sources(machine, ctx.system), prescribed, tolerance=sim.tolerance)
     q0 = assemble_pose(mech, mb)
+    refuse_singular_start(mech, mb, q0, ("simulate", "pose"), "the pose")
     qd0 = initial_rates(mech, mb, q0, np.zeros(mb.nq), None)
     tr = integrate(
         mb,
@@ -94,7 +183,7 @@ def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None 
         singular=sim.singular,
         stop=stop_condition(ctx, mb, sim.stop) if sim.stop is not None else None,
     )
-    return FreeResults(mech, mb, tr)
+    return FreeResults(mech, mb, motors_pole_cut(mech, mb, tr) or tr)
 
 
 def initial_rates(mech, mb: Multibody, q0, qd0, d) -> np.ndarray:

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.contact_loss import multibody_cut
 from mechsolve.analyses.dynamics.cycle import machine_cycle
 from mechsolve.analyses.dynamics.integrators import _with_flywheel, motor_end
 from mechsolve.analyses.dynamics.model import drive_torque
@@ -96,24 +97,12 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
     st = start.state
     q0 = st.q()[0]
     qd0 = np.stack([st.vx[:-1, 0], st.vy[:-1, 0], st.w[:-1, 0]], axis=1).ravel()
-    d = machine.driver
-    sources = []
-    free = Multibody(an)
-    drv = coordinate(machine, free.system, d.joint, d.line)
-    if mech.motor is not None:
-        motor, sense = mech.motor, d.direction
-        sources.append(
-            Source(
-                "motor",
-                drv,
-                lambda w, t: float(drive_torque(motor, sense, w, t)),
-                f"{motor.describe(an.linear)} on {d.joint}",
-            )
-        )
-    from mechsolve.analyses.dynamics.multibody_free import initial_rates, motor_sources
+    from mechsolve.analyses.dynamics.multibody_free import initial_rates, refuse_singular_start
 
-    sources += motor_sources(machine, free.system)
+    d = machine.driver
+    drv, sources = _sources(mech, machine, an)
     mb = Multibody(an, sources, tolerance=sim.tolerance)
+    refuse_singular_start(mech, mb, q0, ("driver", "start"), f"{an.format_u(u0)}")
     if any(ld.when is not None and ld.when.uses("stroke") for ld in machine.loads):
         # stroke(q) means the extremes over the driver's sweep (the machine's cycle: a
         # turn of a crank, several of a pinion driving a wheel), as for the reduced path:
@@ -143,16 +132,53 @@ def simulate_multibody(mech: Mechanism, *, max_steps: int | None = None) -> Mult
         singular=sim.singular,
         branch=branches(an, mb) if sim.singular == "keep branch" else None,
     )
+    tr, sol, forces = _motion_and_forces(mech, an, start, mb, drv, tr)
+    return MultibodyResults(an, sol, forces, tr, mb, drv)
+
+
+def _sources(mech: Mechanism, machine: Mechanism, an: Analysis):
+    """The driver's coordinate and the motors acting: the driver's ``motor:`` on it and
+    every ``motors:`` entry on its joint."""
+    from mechsolve.analyses.dynamics.multibody_free import motor_sources
+
+    d = machine.driver
+    free = Multibody(an)
+    drv = coordinate(machine, free.system, d.joint, d.line)
+    sources = []
+    if mech.motor is not None:
+        motor, sense = mech.motor, d.direction
+        sources.append(
+            Source(
+                "motor",
+                drv,
+                lambda w, t: float(drive_torque(motor, sense, w, t)),
+                f"{motor.describe(an.linear)} on {d.joint}",
+            )
+        )
+    return drv, sources + motor_sources(machine, free.system)
+
+
+def _motion_and_forces(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr):
+    """The trajectory, its :class:`Solution` and forces; the trajectory cut where the
+    motor law's pole is passed, and at the first loss of contact of a force-closed cam
+    (which cannot pull its follower: the motion past it is not the machine's)."""
     tr, sol = _solved_motion(mech, an, start, mb, drv, tr)
     forces = core.forces(an, sol, mb.extremes if mb.extremes else None)
-    return MultibodyResults(an, sol, forces, tr, mb, drv)
+    cut = multibody_cut(mech, an, tr, forces, (*_ALONG, "velocity_violation", "u", "ud", "udd"))
+    if cut is not None:
+        sol = _solution(an, start, mb, drv, cut)
+        return cut, sol, core.forces(an, sol, mb.extremes if mb.extremes else None)
+    return tr, sol, forces
 
 
 def _solved_motion(mech: Mechanism, an: Analysis, start, mb: Multibody, drv, tr: Trajectory):
     """The trajectory and its :class:`Solution`; cut at the motor law's pole where the
     motion passed one (kept up to there, as the reduced path keeps it)."""
+    from mechsolve.analyses.dynamics.multibody_free import motors_pole_cut
+
     sol = _solution(an, start, mb, drv, tr)
     cut = _motor_pole_cut(mech, an, tr)
+    cut = motors_pole_cut(mech, mb, cut or tr) or cut  # the earlier pole of any motor
     if cut is None:
         return tr, sol
     return cut, _solution(an, start, mb, drv, cut)
