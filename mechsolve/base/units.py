@@ -328,8 +328,11 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             f"cannot read {value!r} as {_a(kind)}: write a number and a unit, "
             f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
         )
-    number = _finite(_to_float(m.group(1)), value)
     unit_text = m.group(2)
+    odd = _not_a_number(value, m.group(1), unit_text)
+    if odd:
+        raise UnitError(odd)
+    number = _finite(_to_float(m.group(1)), value)
     if unit_text == "":
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
     else:
@@ -343,6 +346,31 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
     if not _fits(dim, want):
         raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
     return check_range(number * unit.factor, kind, value)
+
+
+_SEXAGESIMAL_RE = re.compile(r"^(?::[0-9]+)+(?![0-9.])")
+_GROUPED_RE = re.compile(r"^(?:_[0-9]+)+")
+_DECIMAL_COMMA_RE = re.compile(r"^,[0-9]+(?![0-9]*\s*,)")
+
+
+def _not_a_number(value: str, number: str, rest: str) -> str | None:
+    """Why ``value`` (read as ``number`` then ``rest``) is not a number someone meant,
+    where the number runs on in a way no unit starts: ``1:45`` (YAML 1.1's base 60),
+    ``1_500`` (grouped digits), ``1,5`` (a decimal comma); None otherwise."""
+    if _SEXAGESIMAL_RE.match(rest):
+        return (
+            f"{value!r} is not a number: 'a:b' values (YAML 1.1's base 60, a time as h:min) "
+            "are not read; write one decimal number"
+        )
+    m = _GROUPED_RE.match(rest)
+    if m:
+        fixed = number + m.group().replace("_", "") + rest[m.end() :]
+        return f"{value!r} is not a number: digits grouped with '_' are not read; write {fixed!r}"
+    m = _DECIMAL_COMMA_RE.match(rest)
+    if m:
+        fixed = number + "." + rest[1:]
+        return f"{value!r} is not a number: a decimal comma is not read; write {fixed!r}"
+    return None
 
 
 def _fits(dim: Dim, want: Dim) -> bool:

@@ -1,0 +1,159 @@
+"""Numbers in a mechanism file are read as YAML 1.2 (and its editors) read them.
+
+PyYAML's defaults are YAML 1.1's: ``050`` is octal (40), ``1:45`` is base 60 (105),
+``1_000`` is 1000. An engineer who writes ``050`` means fifty, and the JSON Schema's
+editors (YAML 1.2) read fifty too; so a zero-padded number is decimal, ``0o17`` and
+``0x1F`` are octal and hexadecimal as YAML 1.2 writes them, and ``1:45`` or ``1_000`` are
+not numbers: refused with the file, the key path and the line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+from click.testing import CliRunner
+
+from mechsolve.analyses.study.designs import make_study
+from mechsolve.base.errors import InputError
+from mechsolve.cli.main import main
+from mechsolve.model import parse
+from mechsolve.model.source import load_text
+
+SLIDER_CRANK = """\
+name: sc
+units: {{length: mm, angle: deg}}
+ground: {{O: [0, 0]}}
+links:
+  crank: {{points: {{O: [0, 0], A: [{crank}, 0]}}}}
+  rod: {{points: {{A: [0, 0], C: [200, 0]}}}}
+  piston: {{points: {{C: [0, 0]}}}}
+joints:
+  O: [ground, crank]
+  A: [crank, rod]
+  C: [rod, piston]
+  cylinder: {{slider: [ground, piston], point: C, line: {{through: [0, 10], angle: 0}}}}
+assembly: [C.x > A.x]
+driver: {{joint: O, speed: {speed}, start: 0 deg}}
+sweep: {{range: 360 deg, step: 10 deg}}
+"""
+
+
+def _mech(crank: str = "50", speed: str = "1 rad/s"):
+    return parse.loads(SLIDER_CRANK.format(crank=crank, speed=speed), file="sc.yaml")
+
+
+def _crank_mm(crank: str) -> float:
+    return _mech(crank).links[0].points["A"][0] * 1e3
+
+
+@pytest.mark.parametrize(
+    "written, meant",
+    [
+        ("050", 50),  # YAML 1.1: octal 40
+        ("025", 25),  # 21
+        ("060", 60),  # 48
+        ("087", 87),  # not octal, so 87 already: the rule is now the same for every digit
+        ("+050", 50),
+        ("0050.5", 50.5),
+        ("50", 50),
+        ("5e1", 50),  # YAML 1.2 reads an exponent without a dot as a number too
+        ("0o62", 0o62),  # YAML 1.2 octal: 50
+        ("0x32", 0x32),  # YAML 1.2 hexadecimal: 50
+        ('"050 mm"', 50),
+        ('"0.05 m"', 50),
+    ],
+)
+def test_a_coordinate_is_read_by_its_decimal_meaning(written, meant):
+    assert _crank_mm(written) == pytest.approx(meant, rel=1e-12)
+
+
+def test_a_zero_padded_speed_is_decimal():
+    # a plain number of angular speed is rad/s
+    assert _mech(speed="0100").driver.speed == pytest.approx(100.0)
+
+
+@pytest.mark.parametrize(
+    "written, shown",
+    [("1:45", "1:45"), ("1:0:0", "1:0:0"), ("1_000", "1_000"), ('"1:45 mm"', "1:45 mm")],
+)
+def test_base_60_and_underscored_numbers_are_refused_where_they_are(written, shown):
+    with pytest.raises(InputError) as info:
+        _mech(written)
+    err = info.value
+    text = str(err)
+    assert err.file == "sc.yaml" and err.line == 5, text
+    assert err.keypath == "links.crank.points.A[0]", text
+    assert shown in text and "not a number" in text, text
+
+
+def test_a_speed_in_base_60_is_refused():
+    with pytest.raises(InputError) as info:
+        _mech(speed="1:30")
+    assert info.value.line == 14 and info.value.keypath == "driver.speed"
+    assert "not a number" in str(info.value)
+
+
+def test_the_plain_scalars_follow_yaml_1_2_core():
+    data = load_text(
+        "a: 050\nb: 0o17\nc: 0x1F\nd: 1:45\ne: 1_000\nf: 1e3\ng: .5\nh: -.inf\n"
+        "i: 0b101\nj: 1.5e-3\nk: +12\nl: yes\nm: ~\nn: 2001-12-14\no: 007.50\n"
+    ).data
+    assert data == {
+        "a": 50,
+        "b": 15,
+        "c": 31,
+        "d": "1:45",
+        "e": "1_000",
+        "f": 1000.0,
+        "g": 0.5,
+        "h": -math.inf,
+        "i": "0b101",
+        "j": 0.0015,
+        "k": 12,
+        "l": "yes",
+        "m": None,
+        "n": "2001-12-14",
+        "o": 7.5,
+    }
+    assert type(data["a"]) is int and type(data["f"]) is float
+
+
+def test_simulate_settings_and_study_parameters_read_decimal():
+    text = SLIDER_CRANK.format(crank="50", speed="10 rad/s") + (
+        "simulate: {duration: 02, step: 0.001, revolutions: 010}\n"
+        "study:\n  parameters:\n    links.rod.points.C[0]: [0190, 0210]\n"
+    )
+    mech = parse.loads(text, file="sc.yaml")
+    assert mech.simulation.duration == 2.0 and mech.simulation.revolutions == 10.0
+    study = make_study(load_text(text), ["links.crank.points.A[0]=040, 060"])
+    values = {p.name: (p.values, p.unit) for p in study.params}
+    assert values["links.rod.points.C[0]"] == ([190.0, 210.0], "mm")  # not 190, 136
+    assert values["links.crank.points.A[0]"] == ([40.0, 60.0], "mm")
+
+
+def _stroke_hand(r: float, l: float = 200.0, e: float = 10.0) -> float:
+    """The stroke of an offset slider-crank (Norton 2-17): the extreme slider positions
+    are where crank and rod are in line."""
+    return math.sqrt((l + r) ** 2 - e**2) - math.sqrt((l - r) ** 2 - e**2)
+
+
+def test_run_reports_the_stroke_of_a_fifty_mm_crank(tmp_path):
+    f = tmp_path / "sc.yaml"
+    f.write_text(SLIDER_CRANK.format(crank="050", speed="1500 rpm"), "utf-8")
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(tmp_path / "out"), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    m = re.search(r"\(stroke ([0-9.]+) mm\)", r.output)
+    assert m, r.output
+    assert float(m.group(1)) == pytest.approx(_stroke_hand(50.0), abs=1e-3)
+    assert abs(_stroke_hand(50.0) - _stroke_hand(40.0)) > 19  # 040 would be far off
+
+
+def test_check_refuses_a_base_60_coordinate_with_its_line(tmp_path):
+    f = tmp_path / "sc.yaml"
+    f.write_text(SLIDER_CRANK.format(crank="1:45", speed="1500 rpm"), "utf-8")
+    r = CliRunner().invoke(main, ["check", str(f)])
+    assert r.exit_code == 2, r.output
+    assert "sc.yaml:5" in r.output and "links.crank.points.A[0]" in r.output, r.output
+    assert "Traceback" not in r.output
