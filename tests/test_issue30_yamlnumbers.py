@@ -9,10 +9,14 @@ not numbers: refused with the file, the key path and the line.
 
 from __future__ import annotations
 
+import json
 import math
 import re
+from pathlib import Path
 
+import jsonschema
 import pytest
+import yaml
 from click.testing import CliRunner
 
 from mechsolve.analyses.study.designs import make_study
@@ -157,3 +161,112 @@ def test_check_refuses_a_base_60_coordinate_with_its_line(tmp_path):
     assert r.exit_code == 2, r.output
     assert "sc.yaml:5" in r.output and "links.crank.points.A[0]" in r.output, r.output
     assert "Traceback" not in r.output
+
+
+# --- the schema and the parser agree (item 8 of review 17) ------------------------------
+
+SCHEMA_FILE = (
+    Path(__file__).resolve().parent.parent / "mechsolve/analyses/schema/mechanism.schema.json"
+)
+
+
+@pytest.fixture(scope="module")
+def validator():
+    return jsonschema.Draft7Validator(json.loads(SCHEMA_FILE.read_text("utf-8")))
+
+
+def _patterns(node) -> list[str]:
+    if isinstance(node, dict):
+        out = [node["pattern"]] if isinstance(node.get("pattern"), str) else []
+        return out + [p for v in node.values() for p in _patterns(v)]
+    if isinstance(node, list):
+        return [p for v in node for p in _patterns(v)]
+    return []
+
+
+def _escapes(pattern: str) -> set[str]:
+    """The backslash escapes of a regular expression (``\\\\`` skipped as a pair)."""
+    out, i = set(), 0
+    while i < len(pattern):
+        if pattern[i] == "\\" and i + 1 < len(pattern):
+            out.add(pattern[i + 1])
+            i += 2
+        else:
+            i += 1
+    return out
+
+
+def test_the_schemas_patterns_mean_the_same_in_python_and_ecmascript():
+    # \d, \w, \b are ASCII in an editor's ECMAScript regex and Unicode in Python's re
+    # (jsonschema); \s differs too (\x1c-\x1f, \x85, \ufeff): none may appear
+    patterns = _patterns(json.loads(SCHEMA_FILE.read_text("utf-8")))
+    assert len(patterns) > 10
+    for p in patterns:
+        bad = _escapes(p) & set("dDwWsSbB")
+        assert not bad, (p, bad)
+        re.compile(p)
+        # what is left is the same in both: \t \r \n, \xNN, \uNNNN, escaped punctuation
+        assert _escapes(p) <= set("trnxu.-^$*+?()[]{}|/\\"), p
+
+
+def _data(**changes) -> dict:
+    data = load_text(SLIDER_CRANK.format(crank="50", speed="1500 rpm")).data
+    for path, value in changes.items():
+        node = data
+        keys = path.split("__")
+        for k in keys[:-1]:
+            node = node[k]
+        node[keys[-1]] = value
+    return data
+
+
+def _schema_errors(validator, data) -> list[str]:
+    return [e.message for e in validator.iter_errors(data)]
+
+
+def _parser_error(data) -> str:
+    text = yaml.safe_dump(data, allow_unicode=True, sort_keys=False)
+    with pytest.raises(InputError) as info:
+        parse.loads(text, file="sc.yaml")
+    return str(info.value)
+
+
+@pytest.mark.parametrize(
+    "changes, said",
+    [
+        ({"driver__speed": "１５００ rpm"}, "write '1500 rpm'"),  # full-width digits
+        ({"ground__O": ["０", 0]}, "write '0'"),
+        ({"driver__speed": "1,5 rpm"}, "a decimal comma is not read; write '1.5 rpm'"),
+        ({"driver__speed": "1_500 rpm"}, "grouped with '_' are not read; write '1500 rpm'"),
+        ({"driver__speed": "1:30 rpm"}, "'a:b' values"),
+        ({"units__length": None}, "expected the unit of plain lengths, e.g. mm"),
+        ({"joints__O": ["ground"]}, "expected a list of 2 or more link names, got a list of 1"),
+        ({"joints__O": []}, "expected a list of 2 or more link names, got a list of 0"),
+        ({"solver": {"tolerance": "1_0e-9"}}, "solver.tolerance"),
+    ],
+)
+def test_what_the_schema_refuses_the_parser_refuses_saying_why(validator, changes, said):
+    data = _data(**changes)
+    assert _schema_errors(validator, data), changes
+    message = _parser_error(data)
+    assert said in message, message
+    assert "None" not in message and "unknown unit" not in message, message
+
+
+def test_a_whole_number_written_with_a_point_is_a_whole_number(validator):
+    # a JSON Schema integer, as the editors read it: 10.0 is 10
+    data = _data(sweep={"range": "360 deg", "steps": 10.0})
+    assert not _schema_errors(validator, data)
+    mech = parse.loads(yaml.safe_dump(data, sort_keys=False), file="sc.yaml")
+    assert mech.sweep.step == pytest.approx(2 * math.pi / 10)
+    data = _data(sweep={"range": "360 deg", "steps": 10.5})
+    assert _schema_errors(validator, data)
+    assert "whole number" in _parser_error(data)
+
+
+def test_no_break_and_ideographic_spaces_around_a_number_are_read_by_both(validator):
+    data = _data(driver__speed="\u30001500\u00a0rpm")
+    assert not _schema_errors(validator, data)
+    assert parse.loads(yaml.safe_dump(data, allow_unicode=True), file="sc.yaml").driver.speed == (
+        pytest.approx(1500 * 2 * math.pi / 60)
+    )
