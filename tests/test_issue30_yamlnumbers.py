@@ -270,3 +270,138 @@ def test_no_break_and_ideographic_spaces_around_a_number_are_read_by_both(valida
     assert parse.loads(yaml.safe_dump(data, allow_unicode=True), file="sc.yaml").driver.speed == (
         pytest.approx(1500 * 2 * math.pi / 60)
     )
+
+
+# --- a run into a used folder leaves none of the earlier run's files (item 7) -----------
+
+WITH_G = SLIDER_CRANK.format(crank="50", speed="1500 rpm").replace(
+    "C: [200, 0]}}", "C: [200, 0], G: [60, 0]}, mass: 0.9 kg, com: G, inertia: 0.0045 kg m^2}"
+)
+INSTANTS = "instants:\n  - {theta: 30 deg, omega: 10 rad/s, alpha: 0}\n"
+
+
+def _run(folder, text, *extra):
+    f = folder / "m.yaml"
+    f.write_text(text, "utf-8")
+    r = CliRunner().invoke(main, ["run", str(f), "-o", str(folder / "out"), *extra])
+    return r
+
+
+def _wrote(output: str) -> set[str]:
+    m = re.search(r"wrote \d+ file\(s\) to [^:]*: (.*)", output)
+    assert m, output
+    return set(m.group(1).split(", "))
+
+
+def _listing(out) -> set[str]:
+    return {p.name for p in out.iterdir()} - {".mechsolve-outputs.json"}
+
+
+def test_a_run_removes_what_the_last_run_wrote_and_it_does_not(tmp_path):
+    assert WITH_G != SLIDER_CRANK.format(crank="50", speed="1500 rpm")
+    out = tmp_path / "out"
+    r = _run(tmp_path, WITH_G + INSTANTS)
+    assert r.exit_code == 0, r.output
+    first = _wrote(r.output)
+    assert {"point_G.png", "torque.png", "reactions.png"} <= first
+    assert _listing(out) == first | {"instants.csv"}
+    mine = out / "notes.txt"  # a file of the user's: never touched
+    mine.write_text("mine", "utf-8")
+    # the same model without G, its masses and its instants
+    r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
+    assert r.exit_code == 0, r.output
+    second = _wrote(r.output)
+    gone = sorted((first | {"instants.csv"}) - second)
+    assert {"point_G.png", "torque.png", "reactions.png", "instants.csv"} <= set(gone)
+    assert f"removed {len(gone)} file(s)" in r.output and ", ".join(gone) in r.output
+    assert _listing(out) == second | {"notes.txt"}
+    assert mine.read_text("utf-8") == "mine"
+
+
+def test_a_file_changed_since_mechsolve_wrote_it_is_left_and_named(tmp_path):
+    out = tmp_path / "out"
+    r = _run(tmp_path, WITH_G, "--no-plots")
+    assert r.exit_code == 0, r.output
+    r = _run(tmp_path, WITH_G)  # the plots too
+    assert r.exit_code == 0, r.output
+    (out / "point_G.png").write_bytes(b"the user's own picture")
+    r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
+    assert r.exit_code == 0, r.output
+    assert "left 1 file(s)" in r.output and "point_G.png" in r.output, r.output
+    assert (out / "point_G.png").read_bytes() == b"the user's own picture"
+    assert not (out / "torque.png").exists()
+
+
+def test_run_at_leaves_the_sweeps_files_and_a_failed_run_removes_nothing(tmp_path):
+    out = tmp_path / "out"
+    r = _run(tmp_path, WITH_G)
+    assert r.exit_code == 0, r.output
+    files = _listing(out)
+    r = _run(tmp_path, WITH_G, "--at", "theta=30 deg")
+    assert r.exit_code == 0, r.output
+    assert _listing(out) == files | {"instants.csv"}
+    # a run that fails after writing (a requirement on an unknown quantity) removes nothing
+    bad = SLIDER_CRANK.format(crank="50", speed="1500 rpm") + (
+        "requirements:\n  r: stroke(cylinderx) > 90 mm\n"
+    )
+    r = _run(tmp_path, bad)
+    assert r.exit_code == 2, r.output
+    assert "removed" not in r.output
+    assert {"point_G.png", "torque.png"} <= _listing(out)
+    # the next complete run tidies both runs' leftovers
+    r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
+    assert r.exit_code == 0, r.output
+    assert _listing(out) == _wrote(r.output) | {"instants.csv"}  # the --at run's own
+
+
+def test_simulate_follows_the_same_rule(tmp_path):
+    f = tmp_path / "m.yaml"
+    f.write_text(
+        WITH_G + "motor: {stall: 50 N m, slope: 1 N m s}\n"
+        "simulate: {duration: 0.05 s, step: 0.001 s}\n",
+        "utf-8",
+    )
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    plots = _wrote(r.output) - {"simulation.csv"}
+    assert plots
+    r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert _listing(out) == {"simulation.csv"}
+    assert f"removed {len(plots)} file(s)" in r.output
+
+
+def test_the_record_never_names_a_file_outside_the_folder(tmp_path):
+    from mechsolve.base.manifest import NAME, record
+
+    out = tmp_path / "out"
+    out.mkdir()
+    outside = tmp_path / "keep.txt"
+    outside.write_text("x", "utf-8")
+    st = outside.stat()
+    (out / NAME).write_text(
+        json.dumps(
+            {
+                "format": 1,
+                "commands": {
+                    "run": {
+                        "files": {
+                            "../keep.txt": [st.st_size, st.st_mtime_ns],
+                            str(outside): [st.st_size, st.st_mtime_ns],
+                        }
+                    }
+                },
+            }
+        ),
+        "utf-8",
+    )
+    (out / "results.csv").write_text("new", "utf-8")
+    (out / "old.csv").write_text("old", "utf-8")
+    st = (out / "old.csv").stat()
+    data = json.loads((out / NAME).read_text("utf-8"))
+    data["commands"]["run"]["files"]["old.csv"] = [st.st_size, st.st_mtime_ns]
+    (out / NAME).write_text(json.dumps(data), "utf-8")
+    done = record(out, "run", [out / "results.csv"], complete=True)
+    assert done.removed == ["old.csv"] and not (out / "old.csv").exists()  # the check works
+    assert outside.exists()  # and the names outside the folder were not even read
