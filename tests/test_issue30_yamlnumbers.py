@@ -405,3 +405,13 @@ def test_the_record_never_names_a_file_outside_the_folder(tmp_path):
     done = record(out, "run", [out / "results.csv"], complete=True)
     assert done.removed == ["old.csv"] and not (out / "old.csv").exists()  # the check works
     assert outside.exists()  # and the names outside the folder were not even read
+
+
+def test_the_number_to_write_is_suggested_only_where_it_is_certain():
+    from mechsolve.base.units import UnitError, parse_quantity
+
+    with pytest.raises(UnitError, match=r"write '1500 rpm'"):
+        parse_quantity("1_500 rpm", "angular speed")
+    with pytest.raises(UnitError) as info:  # -p rebuilds "1.0 _000": no "1.0000" guess
+        parse_quantity("1.0 _000", "length")
+    assert "grouped with '_'" in str(info.value) and "write" not in str(info.value)

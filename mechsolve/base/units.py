@@ -338,7 +338,7 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
         )
     unit_text = m.group(2)
-    odd = _not_a_number(value, m.group(1), unit_text)
+    odd = _not_a_number(value, m.group(1), unit_text, m.end(1) == m.start(2))
     if odd:
         raise UnitError(odd)
     number = _finite(_to_float(m.group(1)), value)
@@ -386,10 +386,11 @@ def _other_digits(value: str) -> str | None:
     )
 
 
-def _not_a_number(value: str, number: str, rest: str) -> str | None:
+def _not_a_number(value: str, number: str, rest: str, joined: bool = True) -> str | None:
     """Why ``value`` (read as ``number`` then ``rest``) is not a number someone meant,
     where the number runs on in a way no unit starts: ``1:45`` (YAML 1.1's base 60),
-    ``1_500`` (grouped digits), ``1,5`` (a decimal comma); None otherwise."""
+    ``1_500`` (grouped digits), ``1,5`` (a decimal comma); None otherwise. The number to
+    write instead is given where ``rest`` follows ``number`` directly (``joined``)."""
     if _SEXAGESIMAL_RE.match(rest):
         return (
             f"{value!r} is not a number: 'a:b' values (YAML 1.1's base 60, a time as h:min) "
@@ -398,11 +399,15 @@ def _not_a_number(value: str, number: str, rest: str) -> str | None:
     m = _GROUPED_RE.match(rest)
     if m:
         fixed = number + m.group().replace("_", "") + rest[m.end() :]
-        return f"{value!r} is not a number: digits grouped with '_' are not read; write {fixed!r}"
+        return f"{value!r} is not a number: digits grouped with '_' are not read" + (
+            f"; write {fixed!r}" if joined else ""
+        )
     m = _DECIMAL_COMMA_RE.match(rest)
     if m:
         fixed = number + "." + rest[1:]
-        return f"{value!r} is not a number: a decimal comma is not read; write {fixed!r}"
+        return f"{value!r} is not a number: a decimal comma is not read" + (
+            f"; write {fixed!r}" if joined else ""
+        )
     return None
 
 
