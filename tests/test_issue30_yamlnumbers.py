@@ -415,3 +415,28 @@ def test_the_number_to_write_is_suggested_only_where_it_is_certain():
     with pytest.raises(UnitError) as info:  # -p rebuilds "1.0 _000": no "1.0000" guess
         parse_quantity("1.0 _000", "length")
     assert "grouped with '_'" in str(info.value) and "write" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "condition, said",
+    [
+        ("C.x > １５０ mm", "is not ASCII 0-9"),
+        ("C.x > 1_500 mm", "digits grouped with '_' are not read"),
+        ("C.x > 1:30 mm", "'a:b' values (base 60) are not read"),
+    ],
+)
+def test_an_assembly_condition_reads_numbers_as_the_values_do(condition, said):
+    text = SLIDER_CRANK.format(crank="50", speed="1500 rpm").replace(
+        "assembly: [C.x > A.x]", f"assembly: [{condition}]"
+    )
+    with pytest.raises(InputError) as info:
+        parse.loads(text, file="sc.yaml")
+    assert said in str(info.value) and info.value.keypath == "assembly[0]", str(info.value)
+
+
+def test_a_zero_padded_number_in_a_condition_is_decimal():
+    from mechsolve.model.expr import Expression
+
+    # 0100 mm is 0.1 m, not octal 64 mm
+    assert Expression("0100 mm + 1 mm").evaluate_at({}) == pytest.approx(0.101)
+    assert Expression("angle * 0100", variables=("angle",)).evaluate_at({"angle": 1.0}) == 100
