@@ -49,8 +49,13 @@ def mechsolve(*args: str, timeout: float = 240, **kwargs) -> subprocess.Complete
 
 
 def leftovers(folder: Path) -> list[Path]:
-    """Temporaries a writer left behind (every one starts with a dot)."""
-    return [p for p in folder.rglob("*") if p.name.startswith(".")]
+    """Temporaries a writer left behind (every one starts with a dot; the folder's record
+    of what a command wrote is not one)."""
+    return [
+        p
+        for p in folder.rglob("*")
+        if p.name.startswith(".") and p.name != ".mechsolve-outputs.json"
+    ]
 
 
 # --- full disk: a real one (a tmpfs filled to the brim) ---------------------------------

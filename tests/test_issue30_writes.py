@@ -35,7 +35,12 @@ def _invoke(*args) -> object:
 
 
 def _leftovers(*folders: Path) -> list[str]:
-    return sorted(p.name for d in folders for p in Path(d).iterdir() if p.name.startswith("."))
+    return sorted(
+        p.name
+        for d in folders
+        for p in Path(d).iterdir()
+        if p.name.startswith(".") and p.name != ".mechsolve-outputs.json"  # the folder's record
+    )
 
 
 def _reader(fifo: Path) -> tuple[threading.Thread, list[bytes]]:

@@ -39,6 +39,8 @@ __all__ = [
     "PIPE_WAIT",
     "WriteFailed",
     "commit",
+    "committed_mark",
+    "committed_since",
     "destination",
     "new_temporary",
     "opened",
@@ -48,6 +50,23 @@ __all__ = [
 ]
 
 PIPE_WAIT = 5.0  # s: the longest wait for a process to open a named pipe written to
+
+# every regular file this process has moved into place, in order: the output folder's
+# record of what a command wrote is made from it (mechsolve.base.manifest)
+_COMMITTED: list[Path] = []
+
+
+def committed_mark() -> int:
+    """A mark in the list of the files this process has written (see
+    :func:`committed_since`)."""
+    return len(_COMMITTED)
+
+
+def committed_since(mark: int) -> list[Path]:
+    """The files this process has moved into place since :func:`committed_mark` gave
+    ``mark`` (not those written through to a device or a pipe)."""
+    return list(_COMMITTED[mark:])
+
 
 # errors of the machine, not of mechsolve: the user can act on them (free space, fix the
 # permissions, choose another folder)
@@ -205,6 +224,7 @@ def commit(tmp: str, path: str | os.PathLike) -> None:
         if isinstance(exc, OSError):
             raise _failed(path, exc, tmp) from None
         raise
+    _COMMITTED.append(path)  # the name written (a link keeps its name: see manifest)
     try:  # and the rename itself survives a crash (not every file system allows this)
         dfd = os.open(target.parent or ".", os.O_RDONLY)
     except OSError:

@@ -17,7 +17,8 @@ class Kind:
     """What one value may be.
 
     ``tag`` is one of ``quantity`` (``arg``: the dimension), ``xy``, ``text``, ``name``
-    (``arg``: point, link or joint), ``names`` (``arg``: what; ``count``: exact length),
+    (``arg``: point, link or joint), ``names`` (``arg``: what; ``count``: exact length;
+    ``low``: the least length),
     ``condition``, ``expression`` (``arg``: its variables), ``flag``, ``number``,
     ``integer``, ``choice`` (``arg``: the values), ``const`` (``arg``: the value),
     ``null``, ``any``, ``list`` (``arg``: the items' kind; ``count``: the least length),
@@ -51,8 +52,9 @@ def name(what: str) -> Kind:
     return Kind("name", what)
 
 
-def names(what: str, count: int | None = None) -> Kind:
-    return Kind("names", what, count=count)
+def names(what: str, count: int | None = None, least: int | None = None) -> Kind:
+    """A list of names: exactly ``count`` of them, or at least ``least``."""
+    return Kind("names", what, count=count, low=least)
 
 
 def expression(*variables: str) -> Kind:
@@ -65,6 +67,15 @@ def number(low: float | None = None, high: float | None = None) -> Kind:
 
 def integer(low: int | None = None, high: int | None = None) -> Kind:
     return Kind("integer", low=low, high=high)
+
+
+def whole(value: Any) -> Any:
+    """``value`` as an ``int`` where it is a float with no fraction (``10.0``): a JSON
+    Schema integer, as the editors read it; anything else unchanged, for the caller to
+    check."""
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2**53:
+        return int(value)
+    return value
 
 
 def choice(*values: str) -> Kind:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 
 Dim = tuple[int, int, int, int]  # exponents of length, mass, time, angle
@@ -148,9 +149,14 @@ _SI = {
 # a unit's exponent: m^4 (second moment of area) is the largest any mechanism needs
 MAX_EXPONENT = 6
 
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_QUANTITY_RE = re.compile(rf"^\s*({_NUMBER})\s*(.*?)\s*$")
-_FACTOR_RE = re.compile(r"^([A-Za-zµ°]+)(?:(?:\^|\*\*)([-+]?\d+))?$")
+# A number as a quantity's text starts: ASCII digits only, as the JSON Schema's editors
+# (ECMAScript regular expressions, where \d is [0-9]) read it; Python's \d would take any
+# script's digits. The schema's patterns are built from these two.
+NUMBER_PATTERN = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+SPACE_PATTERN = r"[ \t\r\n\u00a0\u3000]"  # and the no-break and ideographic spaces
+_NUMBER = NUMBER_PATTERN
+_QUANTITY_RE = re.compile(rf"^{SPACE_PATTERN}*({_NUMBER}){SPACE_PATTERN}*(.*?)\s*$")
+_FACTOR_RE = re.compile(r"^([A-Za-zµ°]+)(?:(?:\^|\*\*)([-+]?[0-9]+))?$")
 
 
 class UnitError(ValueError):
@@ -322,14 +328,20 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             f"expected {_a(kind)} (a number or a string like '{_EXAMPLE.get(kind, '110 mm')}'), "
             f"got {value!r}"
         )
+    odd = _other_digits(value)
+    if odd:
+        raise UnitError(odd)
     m = _QUANTITY_RE.match(value)
     if not m:
         raise UnitError(
             f"cannot read {value!r} as {_a(kind)}: write a number and a unit, "
             f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
         )
-    number = _finite(_to_float(m.group(1)), value)
     unit_text = m.group(2)
+    odd = _not_a_number(value, m.group(1), unit_text, m.end(1) == m.start(2))
+    if odd:
+        raise UnitError(odd)
+    number = _finite(_to_float(m.group(1)), value)
     if unit_text == "":
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
     else:
@@ -343,6 +355,60 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
     if not _fits(dim, want):
         raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
     return check_range(number * unit.factor, kind, value)
+
+
+_SEXAGESIMAL_RE = re.compile(r"^:[0-9]")
+_GROUPED_RE = re.compile(r"^(?:_[0-9]+)+")
+_DECIMAL_COMMA_RE = re.compile(r"^,[0-9]")
+
+
+_PLAIN_NUMBER_RE = re.compile(rf"^{SPACE_PATTERN}*{NUMBER_PATTERN}{SPACE_PATTERN}*$")
+
+
+def plain_float(text: str) -> float:
+    """A number written as text (``"1e-6"``, ``" 0.5 "``), read as the JSON Schema's
+    pattern reads it: ASCII digits, no ``_`` grouping (Python's ``float`` would take
+    ``"1_0"`` and full-width digits). Raises :class:`ValueError` otherwise."""
+    if not _PLAIN_NUMBER_RE.match(text):
+        raise ValueError(f"{text!r} is not a number")
+    return float(text)
+
+
+def _other_digits(value: str) -> str | None:
+    """Why ``value`` is refused if it has digits other than ASCII 0-9 (full-width digits
+    from an input method, say); None otherwise."""
+    if not any(c.isdecimal() and not c.isascii() for c in value):
+        return None
+    fixed = "".join(str(unicodedata.decimal(c)) if c.isdecimal() else c for c in value)
+    return (
+        f"{value!r} has digits other than ASCII 0-9 (full-width digits from an input "
+        f"method?), which are not read as a number: write {fixed!r}"
+    )
+
+
+def _not_a_number(value: str, number: str, rest: str, joined: bool = True) -> str | None:
+    """Why ``value`` (read as ``number`` then ``rest``) is not a number someone meant,
+    where the number runs on in a way no unit starts: ``1:45`` (YAML 1.1's base 60),
+    ``1_500`` (grouped digits), ``1,5`` (a decimal comma); None otherwise. The number to
+    write instead is given where ``rest`` follows ``number`` directly (``joined``)."""
+    if _SEXAGESIMAL_RE.match(rest):
+        return (
+            f"{value!r} is not a number: 'a:b' values (YAML 1.1's base 60, a time as h:min) "
+            "are not read; write one decimal number"
+        )
+    m = _GROUPED_RE.match(rest)
+    if m:
+        fixed = number + m.group().replace("_", "") + rest[m.end() :]
+        return f"{value!r} is not a number: digits grouped with '_' are not read" + (
+            f"; write {fixed!r}" if joined else ""
+        )
+    m = _DECIMAL_COMMA_RE.match(rest)
+    if m:
+        fixed = number + "." + rest[1:]
+        return f"{value!r} is not a number: a decimal comma is not read" + (
+            f"; write {fixed!r}" if joined else ""
+        )
+    return None
 
 
 def _fits(dim: Dim, want: Dim) -> bool:

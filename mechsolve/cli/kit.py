@@ -15,7 +15,7 @@ from typing import IO, Any, NoReturn
 
 import click
 
-from mechsolve.base.atomic import ENVIRONMENT_ERRNOS
+from mechsolve.base.atomic import ENVIRONMENT_ERRNOS, committed_mark, committed_since
 from mechsolve.base.errors import (
     EXIT_CHECK_FAILED,
     EXIT_INPUT,
@@ -60,6 +60,7 @@ EPILOG_NO_CHECK = (
 )
 # where a command keeps what the error handler needs to know (click's shared ctx.meta)
 _OUTDIR = "mechsolve.outdir"
+_RECORDED = "mechsolve.outputs_recorded"  # the command records its outputs job by job
 
 
 def broken_pipe() -> NoReturn:
@@ -360,13 +361,85 @@ def _guarded(invoke: Any, ctx: click.Context) -> Any:
         fail(exc, ctx.meta.get(_OUTDIR))
 
 
+def _record_outputs(
+    outdir: Path | None, command: str, start: int, complete: bool, quiet: bool
+) -> None:
+    """Record the files written since ``start`` into the output folder ``outdir`` and,
+    after a complete run, remove those an earlier run of ``command`` wrote there that
+    this one did not (:mod:`mechsolve.base.manifest`), saying so in one line. A folder's
+    record that cannot be written is left as it was: the results are written."""
+    if outdir is None or not Path(outdir).is_dir():
+        return  # the command writes one file (draw -o x.dxf), or wrote nothing
+    from mechsolve.base.manifest import record
+
+    written = committed_since(start)
+    if not written:
+        return
+    try:
+        done = record(Path(outdir), command, written, complete)
+    except OSError:
+        return
+    if quiet or not complete:
+        return
+    if done.removed:
+        click.echo(
+            f"  removed {len(done.removed)} file(s) an earlier {command} wrote to {outdir}/ "
+            "that this one does not write: " + ", ".join(done.removed)
+        )
+    if done.left:
+        click.echo(
+            f"  left {len(done.left)} file(s) from an earlier {command} in {outdir}/, changed "
+            "since it wrote them: " + ", ".join(done.left)
+        )
+
+
+def _completed(exc: SystemExit) -> bool:
+    """Whether a command that ended with ``exc`` wrote all its outputs (0, or 5: a
+    design check failed on complete results)."""
+    return exc.code in (None, EXIT_OK, EXIT_CHECK_FAILED)
+
+
+@contextmanager
+def recorded_outputs(outdir: Path, command: str, quiet: bool = False) -> Iterator[None]:
+    """Record what the block writes into ``outdir`` as one run of ``command`` (for a
+    command that runs several jobs, such as ``run --watch``; every other command is
+    recorded as a whole by :class:`Command`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        ctx.meta[_RECORDED] = True
+    start = committed_mark()
+    complete = False
+    try:
+        yield
+        complete = True
+    except SystemExit as exc:
+        complete = _completed(exc)
+        raise
+    finally:
+        _record_outputs(outdir, command, start, complete, quiet)
+
+
 class Command(click.Command):
     """Every ``mechsolve`` command (``@click.command(cls=Command)``, or ``@main.command``):
     its errors become exit codes by :func:`_guarded`, also when it is invoked on its own
-    (a test, an embedding application) rather than through the group."""
+    (a test, an embedding application) rather than through the group. What it writes
+    into its output folder is recorded there, and what an earlier run of it wrote there
+    and this one does not is removed (:mod:`mechsolve.base.manifest`)."""
 
     def invoke(self, ctx: click.Context) -> Any:
-        return _guarded(super().invoke, ctx)
+        start = committed_mark()
+        complete = False
+        try:
+            out = _guarded(super().invoke, ctx)
+            complete = True
+            return out
+        except SystemExit as exc:
+            complete = _completed(exc)
+            raise
+        finally:
+            if not ctx.meta.get(_RECORDED):
+                quiet = bool(ctx.params.get("quiet"))
+                _record_outputs(ctx.meta.get(_OUTDIR), self.name or "", start, complete, quiet)
 
 
 class Group(click.Group):

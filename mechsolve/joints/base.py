@@ -178,7 +178,14 @@ class Reader(Protocol):
 
     def name(self, value: Any, path: tuple, what: str) -> str: ...
 
-    def names(self, value: Any, path: tuple, what: str, count: int | None = None) -> list: ...
+    def names(
+        self,
+        value: Any,
+        path: tuple,
+        what: str,
+        count: int | None = None,
+        least: int | None = None,
+    ) -> list: ...
 
     def quantity(self, value: Any, path: tuple, kind: str) -> float: ...
 

@@ -38,6 +38,7 @@ from mechsolve.base.keyspec import (
     integer,
     list_of,
     names,
+    whole,
 )
 from mechsolve.base.state import State
 from mechsolve.joints.base import GROUND, Constraint, Joint, KeyPath, Reader, read_meshing_links
@@ -63,7 +64,8 @@ PHASE = K(
 
 
 def read_count(r: Reader, value: Any, path: KeyPath) -> int:
-    """A tooth count: a positive integer."""
+    """A tooth count: a positive integer (``20.0`` too, a JSON Schema integer)."""
+    value = whole(value)
     big = isinstance(value, (int, float)) and not isinstance(value, bool) and abs(value) > MAX_TEETH
     if big:
         raise r.fail(

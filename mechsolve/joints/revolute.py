@@ -81,7 +81,7 @@ class PinJoint(Joint):
     coordinate: ClassVar[str | None] = "angle"
     keys: ClassVar[dict[str, Key]] = {
         "revolute": K(
-            names("link"),
+            names("link", least=2),
             "The links pinned together: [link, link] (three or more: one pin through all).",
         ),
         "friction": K(
@@ -106,6 +106,8 @@ class PinJoint(Joint):
     def read(
         cls, r: Reader, name: str, m: Mapping, path: tuple, points: Mapping[str, Mapping]
     ) -> PinJoint:
+        # one link is "2 or more" short (three or more are read as one pin through all)
+        r.names(m["revolute"], path + ("revolute",), "link", least=2)
         a, b = r.names(m["revolute"], path + ("revolute",), "link", 2)
         point = r.name(m.get("point", name), path + ("point",), "point")
         fr = None

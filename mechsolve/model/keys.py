@@ -474,7 +474,7 @@ TOP = Section(
         ),
         "links": K(map_of(section("link"), "link"), "The moving links: name -> its points."),
         "joints": K(
-            map_of(either(names("link"), section("joint")), "joint"),
+            map_of(either(names("link", least=2), section("joint")), "joint"),
             "The joints: name -> [link, link] (a pin at the point of that name), or "
             "{slider: [guide, block], point, line}.",
         ),

@@ -7,7 +7,7 @@ from typing import Any
 
 from mechsolve.base.units import LIMITS, UnitError, parse_unit
 from mechsolve.model import STANDARD_G, Link, keys
-from mechsolve.model.reader import Reader
+from mechsolve.model.reader import Reader, _kind
 from mechsolve.model.source import KeyPath
 from mechsolve.model.validate import suggest
 
@@ -17,6 +17,12 @@ def read_units(r: Reader, value: Any) -> None:
     for key, kind in (("length", "length"), ("angle", "angle")):
         if key in m:
             text = m[key]
+            if not isinstance(text, str) or not text.strip():
+                example = "mm, m or in" if kind == "length" else "deg or rad"
+                raise r.fail(
+                    ("units", key),
+                    f"expected the unit of plain {kind}s, e.g. {example}, got {_kind(text)}",
+                )
             try:
                 u = parse_unit(str(text))
             except UnitError as exc:

@@ -16,6 +16,8 @@ from mechsolve.model.validate import suggest
 def read_joint(r: Reader, name: str, value: Any, mech_points) -> Joint:
     path: KeyPath = ("joints", name)
     if isinstance(value, list):  # shorthand: A: [crank, coupler]
+        # one link is "2 or more" short (three or more are read as one pin through all)
+        r.names(value, path, "link", least=2)
         a, b = r.names(value, path, "link", 2)
         return PinJoint(name, a, b, name, where=path)
     m = r.mapping(value, path, keys.joint_section().allowed, f"joint {name!r}")

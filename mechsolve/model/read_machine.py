@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from mechsolve.base.errors import InputError
+from mechsolve.base.units import plain_float
 from mechsolve.model import Driver, keys
 from mechsolve.model.expr import ExprError, Expression
 from mechsolve.model.expr.poles import first_pole
@@ -196,7 +197,7 @@ def read_simulation(r: Reader, value: Any, linear: bool):
         x = m["steady"]
         if isinstance(x, str):
             try:
-                x = float(x.strip().rstrip("%")) / (100 if x.strip().endswith("%") else 1)
+                x = plain_float(x.strip().rstrip("%")) / (100 if x.strip().endswith("%") else 1)
             except ValueError:
                 pass
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
@@ -210,13 +211,13 @@ def read_simulation(r: Reader, value: Any, linear: bool):
 
 
 def _read_tolerances(r: Reader, m: dict, path: KeyPath, sim) -> None:
-    """``rtol`` and ``atol``: numbers between 0 and 1 (YAML reads 1e-10 as text)."""
+    """``rtol`` and ``atol``: numbers between 0 and 1 (or text such as "1e-10")."""
     for key in ("rtol", "atol"):
         if key in m:
             x = m[key]
-            if isinstance(x, str):  # YAML reads 1e-10 (no dot) as text
+            if isinstance(x, str):  # quoted: "1e-10"
                 try:
-                    x = float(x)
+                    x = plain_float(x)
                 except ValueError:
                     pass
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < 1:
@@ -355,7 +356,7 @@ def read_torque_problem(src: Source) -> dict:
         d = m["delta"]
         try:
             num, _, den = str(d).partition("/")
-            delta = float(num) / float(den) if den else float(num)
+            delta = plain_float(num) / plain_float(den) if den else plain_float(num)
         except (ValueError, ZeroDivisionError):
             raise r.fail(
                 ("delta",), f"expected a number such as 0.025 or 1/40, got {d!r}"

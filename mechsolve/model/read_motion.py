@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from mechsolve.base.keyspec import whole
+from mechsolve.base.units import plain_float
 from mechsolve.model import (
     GROUND,
     MAX_POSITIONS,
@@ -274,7 +276,7 @@ def read_sweep(r: Reader, value: Any, driver: Driver | None, linear: bool) -> Sw
     elif "time_step" in m:
         sw.step = r.positive(m["time_step"], path + ("time_step",), "time") * speed
     elif "steps" in m:
-        n = m["steps"]
+        n = whole(m["steps"])
         if not isinstance(n, int) or isinstance(n, bool) or n < 1:
             raise r.fail(
                 path + ("steps",), f"'steps' must be a whole number of at least 1, got {_kind(n)}"
@@ -455,7 +457,7 @@ def read_solver(r: Reader, value: Any) -> SolverOptions:
     if "tolerance" in m:
         t = m["tolerance"]
         try:
-            t = float(t) if not isinstance(t, bool) else None
+            t = None if isinstance(t, bool) else plain_float(t) if isinstance(t, str) else float(t)
         except (TypeError, ValueError, OverflowError):  # a huge whole number overflows
             t = None
         if t is None:
@@ -464,7 +466,7 @@ def read_solver(r: Reader, value: Any) -> SolverOptions:
             raise r.fail(path + ("tolerance",), "the tolerance must be between 0 and 0.01")
         opts.tolerance = t
     if "max_iterations" in m:
-        n = m["max_iterations"]
+        n = whole(m["max_iterations"])
         if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 1000:
             raise r.fail(path + ("max_iterations",), "max_iterations is a whole number 1..1000")
         opts.max_iterations = n

@@ -95,9 +95,18 @@ class Reader:
             raise self.fail(path, f"expected the name of a {what}, got {_kind(value)}")
         return value
 
-    def names(self, value: Any, path: KeyPath, what: str, count: int | None = None) -> list[str]:
-        if not isinstance(value, list) or (count is not None and len(value) != count):
-            n = f"{count} " if count else ""
+    def names(
+        self,
+        value: Any,
+        path: KeyPath,
+        what: str,
+        count: int | None = None,
+        least: int | None = None,
+    ) -> list[str]:
+        """A list of names: exactly ``count`` of them, or at least ``least``."""
+        short = least is not None and isinstance(value, list) and len(value) < least
+        if not isinstance(value, list) or (count is not None and len(value) != count) or short:
+            n = f"{count} " if count else f"{least} or more " if least else ""
             raise self.fail(path, f"expected a list of {n}{what} names, got {_kind(value)}")
         return [self.name(v, path + (i,), what) for i, v in enumerate(value)]
 

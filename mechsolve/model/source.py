@@ -13,7 +13,9 @@ duplicate keys and non-standard tags are all refused with a clear message.
 from __future__ import annotations
 
 import copy
+import math
 import os
+import re
 import select
 import stat
 from collections.abc import Iterable
@@ -25,9 +27,40 @@ import yaml
 from mechsolve.base.errors import InputError
 from mechsolve.joints.registry import KINDS
 
-# libyaml's parser when PyYAML has it (about 10x faster on a large file), else Python's;
-# either only composes nodes: nothing in a file is ever constructed as an object
-_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_STD = "tag:yaml.org,2002:"
+
+
+class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
+    """libyaml's parser when PyYAML has it (about 10x faster on a large file), else
+    Python's; either only composes nodes: nothing in a file is ever constructed as an
+    object.
+
+    Plain scalars are resolved by YAML 1.2's core schema, as the schema's editors (the
+    YAML language server) read them, not by PyYAML's YAML 1.1 rules: ``050`` is fifty
+    (1.1: octal 40), ``1:45`` and ``1_000`` are text (1.1: 105 and 1000), ``1e3`` is a
+    number (1.1: text), ``yes``/``on`` are text. See :data:`YAML12_INT` and
+    :data:`YAML12_FLOAT`.
+    """
+
+    yaml_implicit_resolvers: dict = {}
+
+
+_LOADER = _Loader
+
+# YAML 1.2 core schema (https://yaml.org/spec/1.2.2/#1032-tag-resolution)
+YAML12_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
+YAML12_FLOAT = re.compile(
+    r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+    r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"
+)
+for _tag, _regexp, _first in (
+    ("bool", r"^(?:true|True|TRUE|false|False|FALSE)$", "tTfF"),
+    ("int", YAML12_INT.pattern, "-+0123456789"),
+    ("float", YAML12_FLOAT.pattern, "-+.0123456789"),
+    ("null", r"^(?:~|null|Null|NULL|)$", ["~", "n", "N", ""]),
+    ("merge", r"^(?:<<)$", "<"),  # not read, but refused by name (see _Converter)
+):
+    _Loader.add_implicit_resolver(_STD + _tag, re.compile(_regexp), list(_first))
 
 MAX_BYTES = 1_000_000
 MAX_NODES = 100_000  # values once aliases are expanded (a 1000-loop chain has 32 000)
@@ -36,9 +69,6 @@ MAX_DEPTH = 64
 PIPE_WAIT = 5.0  # seconds a pipe or a device may stay silent before it is refused
 
 KeyPath = tuple[Any, ...]
-
-_STD = "tag:yaml.org,2002:"
-_CTOR = yaml.constructor.SafeConstructor()
 
 
 def format_keypath(path: Iterable[Any]) -> str:
@@ -198,11 +228,9 @@ def _scalar(node: yaml.ScalarNode) -> Any:
     if tag == _STD + "str":
         return node.value
     if tag == _STD + "int":
-        if len(node.value) > 400:  # Python refuses to convert over 4300 digits; no key needs 400
-            raise ValueError(f"{node.value[:20]}... is too large a number")
-        return _CTOR.construct_yaml_int(node)
+        return _int12(node.value)
     if tag == _STD + "float":
-        return _CTOR.construct_yaml_float(node)
+        return _float12(node.value)
     if tag == _STD + "bool":
         # YAML 1.1 reads yes/no/on/off as booleans; a name like "on" is meant as text
         if node.value.lower() in ("true", "false"):
@@ -215,6 +243,32 @@ def _scalar(node: yaml.ScalarNode) -> Any:
     # anything else, in YAML's own namespace too (!!python/name:os.system, !!python/object,
     # !!set...), is not a standard type of a mechanism file: refused, never read as text
     raise ValueError(_refused(tag))
+
+
+def _int12(text: str) -> int | str:
+    """A YAML 1.2 integer: decimal (leading zeros too: ``050`` is 50), ``0o17`` octal or
+    ``0x1F`` hexadecimal. With an explicit ``!!int`` tag any other text is refused."""
+    if len(text) > 400:  # Python refuses to convert over 4300 digits; no key needs 400
+        raise ValueError(f"{text[:20]}... is too large a number")
+    if not YAML12_INT.match(text):
+        raise ValueError(f"{text!r} is not a number (an integer is written as 50, 0o62, 0x32)")
+    if text.startswith(("0o", "0x")):
+        return int(text[2:], 8 if text[1] == "o" else 16)
+    return int(text, 10)
+
+
+def _float12(text: str) -> float:
+    """A YAML 1.2 float: ``0.05``, ``5e-2``, ``.5``, ``.inf``, ``.nan``."""
+    if not YAML12_FLOAT.match(text) and not YAML12_INT.match(text):
+        raise ValueError(f"{text!r} is not a number (a float is written as 0.05 or 5e-2)")
+    low = text.lower()
+    if low.endswith(".inf"):
+        return -math.inf if low.startswith("-") else math.inf
+    if low == ".nan":
+        return math.nan
+    if text.startswith(("0o", "0x")):
+        return float(_int12(text))
+    return float(text)
 
 
 def _refused(tag: str) -> str:

@@ -20,14 +20,21 @@ from typing import Any
 
 from mechsolve.analyses.cam.model import CAM_KEYS, FOLLOWER_KEYS
 from mechsolve.analyses.study.designs import DESIGNS, STUDY_KEYS
+from mechsolve.base.units import NUMBER_PATTERN, SPACE_PATTERN
 from mechsolve.model import keys
 from mechsolve.model.keys import Key, Kind, Section
 
 DRAFT = "http://json-schema.org/draft-07/schema#"
 SHIPPED = Path(__file__).resolve().parent / "mechanism.schema.json"
 
-# The parser's number (mechsolve.base.units) at the start of a quantity's text.
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+# The parser's number (mechsolve.base.units) at the start of a quantity's text, and the
+# spaces around it: explicit character classes, never \d, \w or \s, which the editors'
+# ECMAScript regular expressions and Python's (jsonschema) read differently.
+NUMBER = NUMBER_PATTERN
+SPACE = SPACE_PATTERN
+# after a quantity's number: not ",5", "_500" or ":45" (refused by the parser as a decimal
+# comma, grouped digits and YAML 1.1's base 60)
+RUN_ON = r"(?![,_:]?[0-9])"
 # A name (mechsolve.model.NAME_RE: a letter of any script or '_', then letters, digits
 # and '_'), written so that both ECMA-262 (the editors) and Python (jsonschema) read it
 # alike: no ASCII character other than letters, digits and '_' (and no digit first);
@@ -62,11 +69,13 @@ def kind_schema(kind: Kind, partial: bool = False) -> dict[str, Any]:
         out: dict[str, Any] = {"type": "array", "items": {"type": "string"}}
         if kind.count is not None:
             out["minItems"] = out["maxItems"] = kind.count
+        elif kind.low is not None:
+            out["minItems"] = kind.low
         return out
     if tag == "flag":
         return {"type": "boolean"}
     if tag == "number":
-        out = {"type": ["number", "string"], "pattern": rf"^\s*{NUMBER}\s*$"}
+        out = {"type": ["number", "string"], "pattern": rf"^{SPACE}*{NUMBER}{SPACE}*$"}
         if kind.low is not None:
             out["exclusiveMinimum"] = kind.low
         if kind.high is not None:
@@ -182,7 +191,7 @@ def build() -> dict[str, Any]:
     defs: dict[str, Any] = {
         "quantity": {
             "type": ["number", "string"],
-            "pattern": rf"^\s*{NUMBER}",
+            "pattern": rf"^{SPACE}*{NUMBER}{RUN_ON}",
             "description": "A number in the file's units, or a number and a unit: "
             "'110 mm', '25 deg', '60 rpm', '50 kN', '1.1 kg m^2'.",
         },

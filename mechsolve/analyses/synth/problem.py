@@ -106,7 +106,7 @@ class _Reader:
             if optional:
                 return None
             raise self.err(key, "missing: give a number")
-        if isinstance(v, str):  # YAML 1.1 reads 1e6 (no dot) as a string
+        if isinstance(v, str):  # a number given as text ("1e6")
             try:
                 v = float(v.strip())
             except ValueError:

@@ -23,6 +23,7 @@ from mechsolve.cli.kit import (
     outdir_option,
     output_folder,
     output_units,
+    recorded_outputs,
     warn,
     writes_to,
     writing,
@@ -92,12 +93,23 @@ def run(
     args = (file, outdir, step, variant, no_plots, method, at, junit, quiet, fmt, units)
     writes_to(outdir)
     if watch:
-        _watch(file, lambda: _run_job(*args), outdir=outdir)
+        # each save's run is recorded on its own: a good save tidies what the last
+        # complete one wrote and this one does not (a point's plot, instants.csv...)
+        _watch(file, lambda: _recorded_job(outdir, quiet, args), outdir=outdir)
     try:
-        code = _run_job(*args)[0]
+        code = _recorded_job(outdir, quiet, args)[0]
     except SolverError as exc:  # raised deep in a solver, which does not know the file
         raise SolverError(f"{file}: {exc}") from None
     sys.exit(code)
+
+
+def _recorded_job(outdir: Path, quiet: bool, args: tuple):
+    """:func:`_run_job`, its outputs recorded in the folder (:mod:`mechsolve.base.manifest`):
+    a complete run removes what the last one wrote there and this one does not. A run
+    ``--at`` (instants only) is recorded apart, so that it leaves the sweep's files."""
+    at = args[6]
+    with recorded_outputs(outdir, "run --at" if at else "run", quiet):
+        return _run_job(*args)
 
 
 def _run_job(

@@ -21,7 +21,8 @@ class ExprError(ValueError):
 
 _SPACE_RE = re.compile(r"\s*")
 _TOKEN_RE = re.compile(
-    r"(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+    # ASCII digits, as in a file's quantities (mechsolve.base.units.NUMBER_PATTERN)
+    r"(?P<num>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
     r"|(?P<name>[^\W\d]\w*)"  # letters of any script: 曲柄.angle, кривошип.omega
     r"|(?P<op>->|<=|>=|==|!=|\*\*|[-+*/^<>().,])"
 )
@@ -61,10 +62,22 @@ def tokenize(text: str) -> list[Token]:
             break
         m = _TOKEN_RE.match(text, pos)
         if not m:
+            if text[pos].isdecimal():  # full-width digits from an input method, say
+                raise ExprError(
+                    f"the digit {text[pos]!r} at column {pos + 1} in {_show(text)} is not "
+                    "ASCII 0-9: write numbers with 0-9"
+                )
             raise ExprError(
                 f"unexpected character {text[pos]!r} at column {pos + 1} in {_show(text)}"
             )
         kind = m.lastgroup or "op"
+        run_on = text[m.end() : m.end() + 2]
+        if kind == "num" and len(run_on) == 2 and run_on[0] in "_:" and run_on[1] in "0123456789":
+            what = "digits grouped with '_'" if run_on[0] == "_" else "'a:b' values (base 60)"
+            raise ExprError(
+                f"the number at column {pos + 1} in {_show(text)} runs on with {run_on[0]!r}: "
+                f"{what} are not read; write one decimal number"
+            )
         value = m.group(kind)
         tokens.append(Token(kind, "^" if value == "**" else value, pos))
         pos = m.end()
