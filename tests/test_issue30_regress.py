@@ -53,7 +53,7 @@ def test_four_bars_determinant_ratio_is_the_closed_form():
 def test_determinant_ratio_in_floats_is_lapacks(nb):
     """Any group of two to four angles: the ratio from LAPACK's determinant of the
     Jacobian written out by hand (M2 cos - M1 sin + M3) and NumPy's row norms; 0 where
-    a row vanishes or an angle is not finite."""
+    a row vanishes or an angle is not finite (NaN or infinite, where math.cos raises)."""
     from mechsolve.groups.reduced import _Eqs
 
     rng = np.random.default_rng(nb)
@@ -67,7 +67,8 @@ def test_determinant_ratio_in_floats_is_lapacks(nb):
         assert eqs.det_ratio(th.tolist()) == pytest.approx(want, rel=1e-12, abs=1e-15)
     Z = np.zeros((nb, 3 * nb))
     assert _Eqs(Z).det_ratio([0.3] * nb) == 0.0
-    assert _Eqs(np.ones((nb, 3 * nb))).det_ratio([math.nan] + [0.1] * (nb - 1)) == 0.0
+    for bad in (math.nan, math.inf, -math.inf):
+        assert _Eqs(np.ones((nb, 3 * nb))).det_ratio([bad] + [0.1] * (nb - 1)) == 0.0
 
 
 @pytest.mark.parametrize("which", ["fourbar", "triad"])

@@ -51,8 +51,11 @@ class _Eqs:
             return self._det_ratio2(th[0], th[1])
         cos, sin = math.cos, math.sin
         nd = self.nd
-        c = [cos(v) for v in th]
-        s = [sin(v) for v in th]
+        try:
+            c = [cos(v) for v in th]
+            s = [sin(v) for v in th]
+        except ValueError:  # an infinite angle (NumPy's cosine gives NaN there)
+            return 0.0
         J = []
         p = 1.0
         for row in self._rows:
@@ -75,7 +78,10 @@ class _Eqs:
         ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self._rows
         if not self.nd:
             a3 = b3 = c3 = d3 = 0.0
-        C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
+        try:
+            C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
+        except ValueError:  # an infinite angle (NumPy's cosine gives NaN there)
+            return 0.0
         ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
         jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
         p = math.sqrt(ja * ja + jb * jb) * math.sqrt(jc * jc + jd * jd)
