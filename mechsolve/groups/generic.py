@@ -137,8 +137,11 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         if sub.nb == 0:  # every angle fixed by a driver: nothing to iterate
             thf, stats = th0, SolveStats(True, "newton", 0, 0, 0, 0.0)
         else:
-            if sub.nb <= FLOATS_UP_TO:
-                thf, stats = sub.newton_floats(Kr0, th0, self.atol, self.max_iterations)
+            if sub.nb <= FLOATS_UP_TO:  # (newton_floats, its angles kept as a list)
+                thf, ok, it, r, nfev = sub.newton_list(
+                    Kr0.tolist(), th0.tolist(), self.atol, self.max_iterations
+                )
+                stats = SolveStats(ok, "newton", it, nfev, nfev, r)
             else:
                 thf, stats = newton_lean(fun_jac, th0, self.atol, self.max_iterations)
             if not stats.converged:  # the full Newton with its scipy fallback
@@ -150,10 +153,10 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                     return fun_jac(th)[1]
 
                 thf, stats = solve(fun, jac, th0, self.atol, self.max_iterations)
-        th = red.join(thf[None], thp)
+        th = red.join_one(thf, thp[0])
         q = np.empty(self.n)
-        q[2::3] = th[0]
-        q[0::3], q[1::3] = red.poses_one(th[0], K[1][0], K[2][0])
+        q[2::3] = th
+        q[0::3], q[1::3] = red.poses_one(th, K[1][0].tolist(), K[2][0].tolist())
         if st1 is not None:
             self.set_q(st1, 0, q)
         return q, stats
@@ -227,6 +230,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             J = self.jacobian(st1)[0]
         elif self.red.sub.nb == 0:
             return 1.0
+        elif self.red.sub.nb <= 4:  # in floats: the constant part does not enter
+            th = np.asarray(q, float)[2::3].tolist()
+            return self.red.sub.det_ratio([th[k] for k in self.red.free_list])
         else:
             _, _, fun_jac = self._reduced(self.red.known(st1) if K is None else K, u1)
             J = fun_jac(np.asarray(q, float)[2::3][self.red.free])[1]
@@ -354,6 +360,21 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
             v[0::3] = v[1::3] = 1.0 / self.scale
             w = self._jump_w = (self.scale, v)
         return float(np.max(np.abs(q - q_pred) * w[1]))
+
+    def _near_jump(self, q: np.ndarray, q_pred: np.ndarray) -> tuple[np.ndarray, float]:
+        """``_near_angles(q, q_pred)`` and its :meth:`_jump` from ``q_pred``, from one
+        difference where no angle is moved (the same values: a continuation step asks
+        for both, and each NumPy call costs about a microsecond)."""
+        if not q.size:
+            return q, 0.0
+        a = np.abs(q - q_pred)
+        if (a[2::3] > np.pi).any():  # an angle whole turns away: moved, measured again
+            q = _near_angles(q, q_pred)
+            return q, self._jump(q, q_pred)
+        w = self._jump_w
+        if w is None or w[0] != self.scale:
+            return q, self._jump(q, q_pred)
+        return q, float((a * w[1]).max())
 
     def sweep(
         self,
@@ -645,8 +666,8 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         position; a sign change of trusted size counts as a jump)."""
         q_pred = _extrapolate(hu, hq, ui)
         q, stats = self._solve_one(st1, np.array([ui]), q_pred, K1)
-        q = _near_angles(q, q_pred)
-        if keep is None and stats.converged and self._jump(q, q_pred) <= MAX_JUMP:
+        q, jump = self._near_jump(q, q_pred)
+        if keep is None and stats.converged and jump <= MAX_JUMP:
             return q, stats, True
         u0 = hu[-1]
         uj = 0.5 * (u0 + ui)  # where the substeps last broke
@@ -668,9 +689,9 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
                     Kj = None
                 qp = _extrapolate(lu, lq, uj)
                 qj, sj = self._solve_one(stj, np.array([uj]), qp, Kj)
-                qj = _near_angles(qj, qp)
+                qj, jump = self._near_jump(qj, qp)
                 total += sj.iterations
-                if not (sj.converged and self._jump(qj, qp) <= MAX_JUMP) or (
+                if not (sj.converged and jump <= MAX_JUMP) or (
                     keep is not None and self._flips(stj, uj, qj, Kj, keep)
                 ):
                     ok_all = False
@@ -732,7 +753,7 @@ def _near_angles(q: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
     next to the prediction; the pose is the same, the continuation is not broken."""
     th, th_p = q[2::3], q_pred[2::3]
     d = th - th_p
-    if not np.any(np.abs(d) > np.pi):
+    if not (np.abs(d) > np.pi).any():  # (the method: np.any's dispatch costs ~2 us a step)
         return q
     q = q.copy()
     q[2::3] = th_p + (d + np.pi) % (2 * np.pi) - np.pi

@@ -39,6 +39,57 @@ class _Eqs:
             for row in self._rows
         ]
 
+    def det_ratio(self, th: list) -> float:
+        """Hadamard's ratio of ``F_theta`` at the angles ``th`` (a list of up to four
+        floats): ``det F_theta`` over the product of its rows' lengths, between -1 and 1,
+        0 where it is singular or not finite. The same operations in the same order as
+        the NumPy form (``M2 cos - M1 sin + M3``, :func:`_det_small`, the rows' norms
+        and their product, both summed left to right as NumPy does for so few terms),
+        in Python floats: a sequential sweep asks for it at every position, where a
+        NumPy call per operation cost more than the arithmetic (~25 us a position)."""
+        if len(th) == 2:  # unrolled: the four-bar's loop (the same operations)
+            return self._det_ratio2(th[0], th[1])
+        cos, sin = math.cos, math.sin
+        nd = self.nd
+        try:
+            c = [cos(v) for v in th]
+            s = [sin(v) for v in th]
+        except ValueError:  # an infinite angle (NumPy's cosine gives NaN there)
+            return 0.0
+        J = []
+        p = 1.0
+        for row in self._rows:
+            Je = [
+                m2 * ck - m1 * sk + (m3 if nd else 0.0) for (m1, m2, m3), ck, sk in zip(row, c, s)
+            ]
+            J.append(Je)
+            q = 0.0
+            for v in Je:
+                q += v * v
+            p *= math.sqrt(q)
+        det = _det_list(J)
+        if p == 0.0:  # (NumPy's division gives inf or NaN there: not finite)
+            return 0.0
+        d = det / p
+        return d if math.isfinite(d) else 0.0
+
+    def _det_ratio2(self, x0: float, x1: float) -> float:
+        """:meth:`det_ratio` for two angles, unrolled."""
+        ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self._rows
+        if not self.nd:
+            a3 = b3 = c3 = d3 = 0.0
+        try:
+            C0, C1, S0, S1 = math.cos(x0), math.cos(x1), math.sin(x0), math.sin(x1)
+        except ValueError:  # an infinite angle (NumPy's cosine gives NaN there)
+            return 0.0
+        ja, jb = a2 * C0 - a1 * S0 + a3, b2 * C1 - b1 * S1 + b3
+        jc, jd = c2 * C0 - c1 * S0 + c3, d2 * C1 - d1 * S1 + d3
+        p = math.sqrt(ja * ja + jb * jb) * math.sqrt(jc * jc + jd * jd)
+        if p == 0.0:
+            return 0.0
+        d = (ja * jd - jb * jc) / p
+        return d if math.isfinite(d) else 0.0
+
     def newton_floats(
         self, K, th0, atol: float, max_iterations: int
     ) -> tuple[np.ndarray, SolveStats]:
@@ -461,6 +512,8 @@ class _Angles(_Eqs):
         self.fsign = np.array([sign for _, sign, _ in self.pinned] if fixed else [])
         self.frows = np.array(frows, int)
         self.free = np.array([k for k in range(nb) if k not in fixed], int)
+        self.free_list = self.free.tolist()  # (one position in floats: join_one, _det)
+        self.fixed_list = [int(k) for k in fixed]
         rows = [r for r in range(nb) if r not in frows]
 
         def cols(ks):
@@ -502,6 +555,20 @@ class _Angles(_Eqs):
         th = np.empty((thf.shape[0], self.nb))
         th[:, self.free] = thf
         th[:, self.fixed] = thp
+        return th
+
+    def join_one(self, thf, thp) -> list:
+        """:meth:`join` at one position, as a list of floats (``thf``, ``thp``: the free
+        and the fixed angles, arrays or lists)."""
+        thf = thf.tolist() if isinstance(thf, np.ndarray) else list(thf)
+        if not self.fixed.size:
+            return thf
+        th = [0.0] * self.nb
+        for j, k in enumerate(self.free_list):
+            th[k] = thf[j]
+        thp = thp.tolist() if isinstance(thp, np.ndarray) else thp
+        for j, k in enumerate(self.fixed_list):
+            th[k] = thp[j]
         return th
 
     # -- the solved bodies' part ---------------------------------------------------------
@@ -735,7 +802,12 @@ def _det_small(J: np.ndarray) -> float:
     n = J.shape[0]
     if n > 4:
         return float(np.linalg.det(J))
-    a = J.tolist()
+    return _det_list(J.tolist())
+
+
+def _det_list(a: list) -> float:
+    """:func:`_det_small` of a matrix of up to 4 x 4 given as rows of floats."""
+    n = len(a)
     if n == 1:
         return a[0][0]
     if n == 2:
