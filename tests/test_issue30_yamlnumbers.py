@@ -297,7 +297,7 @@ def _listing(out) -> set[str]:
     return {p.name for p in out.iterdir()} - {".mechsolve-outputs.json"}
 
 
-def test_a_run_removes_what_the_last_run_wrote_and_it_does_not(tmp_path):
+def test_a_run_names_what_the_last_run_wrote_and_it_does_not(tmp_path):
     assert WITH_G != SLIDER_CRANK.format(crank="50", speed="1500 rpm")
     out = tmp_path / "out"
     r = _run(tmp_path, WITH_G + INSTANTS)
@@ -313,9 +313,18 @@ def test_a_run_removes_what_the_last_run_wrote_and_it_does_not(tmp_path):
     second = _wrote(r.output)
     gone = sorted((first | {"instants.csv"}) - second)
     assert {"point_G.png", "torque.png", "reactions.png", "instants.csv"} <= set(gone)
-    assert f"removed {len(gone)} file(s)" in r.output and ", ".join(gone) in r.output
-    assert _listing(out) == second | {"notes.txt"}
-    assert mine.read_text("utf-8") == "mine"
+    assert f"{len(gone)} file(s) in {out}/ are from an earlier run, not from this one" in r.output
+    assert ", ".join(gone) in r.output
+    # nothing is removed: they may be results still needed
+    assert _listing(out) == second | set(gone) | {"notes.txt"}
+    assert mine.read_text("utf-8") == "mine" and "notes.txt" not in r.output
+    # named again by the next run, until they are gone or written again
+    (out / "torque.png").unlink()
+    r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
+    assert r.exit_code == 0, r.output
+    rest = [g for g in gone if g != "torque.png"]
+    assert f"{len(rest)} file(s) in {out}/ are from an earlier run" in r.output
+    assert ", ".join(rest) in r.output
 
 
 def test_a_file_changed_since_mechsolve_wrote_it_is_left_and_named(tmp_path):
@@ -327,12 +336,17 @@ def test_a_file_changed_since_mechsolve_wrote_it_is_left_and_named(tmp_path):
     (out / "point_G.png").write_bytes(b"the user's own picture")
     r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
     assert r.exit_code == 0, r.output
-    assert "left 1 file(s)" in r.output and "point_G.png" in r.output, r.output
+    assert "1 file(s) in" in r.output and "were changed since" in r.output, r.output
+    m = re.search(r"were changed since it wrote them \(kept, no longer in its record\): (.*)",
+                  r.output)  # fmt: skip
+    assert m and m.group(1).strip() == "point_G.png"
     assert (out / "point_G.png").read_bytes() == b"the user's own picture"
-    assert not (out / "torque.png").exists()
+    assert (out / "torque.png").exists()
+    r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
+    assert "changed since" not in r.output  # named once: no longer mechsolve's
 
 
-def test_run_at_leaves_the_sweeps_files_and_a_failed_run_removes_nothing(tmp_path):
+def test_run_at_leaves_the_sweeps_files_and_a_failed_run_names_nothing(tmp_path):
     out = tmp_path / "out"
     r = _run(tmp_path, WITH_G)
     assert r.exit_code == 0, r.output
@@ -340,18 +354,21 @@ def test_run_at_leaves_the_sweeps_files_and_a_failed_run_removes_nothing(tmp_pat
     r = _run(tmp_path, WITH_G, "--at", "theta=30 deg")
     assert r.exit_code == 0, r.output
     assert _listing(out) == files | {"instants.csv"}
-    # a run that fails after writing (a requirement on an unknown quantity) removes nothing
+    # a run that fails after writing (a requirement on an unknown quantity) names nothing
     bad = SLIDER_CRANK.format(crank="50", speed="1500 rpm") + (
         "requirements:\n  r: stroke(cylinderx) > 90 mm\n"
     )
     r = _run(tmp_path, bad)
     assert r.exit_code == 2, r.output
-    assert "removed" not in r.output
+    assert "from an earlier run" not in r.output
     assert {"point_G.png", "torque.png"} <= _listing(out)
-    # the next complete run tidies both runs' leftovers
+    # the next complete run names both runs' leftovers, not the --at run's instants.csv
     r = _run(tmp_path, SLIDER_CRANK.format(crank="50", speed="1500 rpm"))
     assert r.exit_code == 0, r.output
-    assert _listing(out) == _wrote(r.output) | {"instants.csv"}  # the --at run's own
+    named = re.search(r"from this one \(kept; delete them if they are not needed\): (.*)",
+                      r.output).group(1).split(", ")  # fmt: skip
+    assert set(named) == _listing(out) - _wrote(r.output) - {"instants.csv"}
+    assert {"point_G.png", "torque.png"} <= set(named)
 
 
 def test_simulate_follows_the_same_rule(tmp_path):
@@ -368,8 +385,8 @@ def test_simulate_follows_the_same_rule(tmp_path):
     assert plots
     r = CliRunner().invoke(main, ["simulate", str(f), "-o", str(out), "--no-plots"])
     assert r.exit_code == 0, r.output
-    assert _listing(out) == {"simulation.csv"}
-    assert f"removed {len(plots)} file(s)" in r.output
+    assert _listing(out) == {"simulation.csv"} | plots  # kept: the last plots made
+    assert f"{len(plots)} file(s) in {out}/ are from an earlier simulate" in r.output
 
 
 def test_the_record_never_names_a_file_outside_the_folder(tmp_path):
@@ -403,7 +420,7 @@ def test_the_record_never_names_a_file_outside_the_folder(tmp_path):
     data["commands"]["run"]["files"]["old.csv"] = [st.st_size, st.st_mtime_ns]
     (out / NAME).write_text(json.dumps(data), "utf-8")
     done = record(out, "run", [out / "results.csv"], complete=True)
-    assert done.removed == ["old.csv"] and not (out / "old.csv").exists()  # the check works
+    assert done.earlier == ["old.csv"] and (out / "old.csv").exists()  # the check works
     assert outside.exists()  # and the names outside the folder were not even read
 
 
@@ -440,3 +457,27 @@ def test_a_zero_padded_number_in_a_condition_is_decimal():
     # 0100 mm is 0.1 m, not octal 64 mm
     assert Expression("0100 mm + 1 mm").evaluate_at({}) == pytest.approx(0.101)
     assert Expression("angle * 0100", variables=("angle",)).evaluate_at({"angle": 1.0}) == 100
+
+
+def test_a_commands_input_and_kept_results_are_never_removed(tmp_path):
+    """The review's cases: `shaking --balance` writes a balanced design into the folder,
+    the next `shaking` of that design into the same folder reads it (its input: neither
+    removed nor named); the plots of a run with plots survive a run with --no-plots."""
+    import shutil
+
+    src = Path(__file__).resolve().parents[1] / "mechanisms" / "fourbar.yaml"
+    f = tmp_path / "fourbar.yaml"
+    shutil.copy(src, f)
+    sh = tmp_path / "sh"
+    r = CliRunner().invoke(main, ["shaking", str(f), "--balance", "-o", str(sh), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    balanced = sorted(sh.glob("*balanced*.yaml"))
+    assert balanced, _listing(sh)
+    text = balanced[0].read_text("utf-8")
+    r = CliRunner().invoke(main, ["shaking", str(balanced[0]), "-o", str(sh), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert balanced[0].read_text("utf-8") == text  # the input is still there, unchanged
+    assert balanced[0].name not in r.output
+    r = CliRunner().invoke(main, ["shaking", str(f), "-o", str(sh), "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert balanced[0].exists()

@@ -1,21 +1,23 @@
-"""The record of what a command wrote into its output folder, and the tidying of what an
-earlier run of the same command wrote there that this run does not write again.
+"""The record of what a command wrote into its output folder, and the naming of what an
+earlier run of the same command wrote there that this run did not write again.
 
 A run into a folder that an earlier run used leaves the earlier run's other files there:
 ``point_G.png`` after the point G is removed from the file, ``torque.png`` and
-``instants.csv`` after the loads and the instants are. Nothing would mark them as
-old. So each command that ends in an output folder records the files it wrote (their
-names relative to the folder, sizes and modification times) in :data:`NAME` there,
-written atomically, one record per command (``run``, ``simulate``, ``sweep``...); the
-next complete run of the same command removes the files of its previous record that it
-did not write again.
+``instants.csv`` after the loads and the instants are, the plots after a run with
+``--no-plots``. So each command that ends in an output folder records the files it wrote
+(their names relative to the folder, sizes and modification times) in :data:`NAME`
+there, written atomically, one record per command (``run``, ``simulate``, ``sweep``...);
+the next complete run of the same command names the files of its record that it did not
+write again: they are from an earlier run, not from this one.
 
-Only a file mechsolve wrote is ever removed: one the record names, a regular file
-inside the folder, with the size and modification time it had when mechsolve wrote it.
-A file changed since (edited, replaced, touched) is left in place and named as left.
-A run that fails removes nothing: its record keeps the earlier files too, for the next
-complete run to tidy. Files written by another command into the same folder are not
-touched; a file that a later command writes again becomes that command's.
+Nothing is ever removed: such a file may be a result the user still needs (the plots of
+the last run with plots, a design ``sweep --keep-results`` kept, a balanced design that
+is now another command's input). A file unchanged since mechsolve wrote it stays in the
+record and is named by each complete run until it is gone or written again; one changed
+since (edited, replaced, touched) is no longer mechsolve's: it is named once and dropped
+from the record. Files written by another command into the same folder are not named;
+a file that a later command writes again becomes that command's, and a file the command
+reads (its input) is not named.
 """
 
 from __future__ import annotations
@@ -39,17 +41,17 @@ __all__ = ["FORMAT", "NAME", "Tidied", "record"]
 
 @dataclass
 class Tidied:
-    """What :func:`record` did with an earlier run's files that this run did not write.
+    """An earlier run's files in the folder that this run did not write (none is removed).
 
     Attributes
     ----------
-    removed
-        Removed: an earlier run of the command wrote them, and they were unchanged since.
+    earlier
+        Written by an earlier run of the command and unchanged since: not from this run.
     left
-        Left in place: changed since an earlier run of the command wrote them.
+        Written by an earlier run of the command and changed since: no longer its.
     """
 
-    removed: list[str] = field(default_factory=list)
+    earlier: list[str] = field(default_factory=list)
     left: list[str] = field(default_factory=list)
 
 
@@ -109,11 +111,17 @@ def _names(folder: Path, written: Iterable[Path]) -> dict[str, list[int]]:
     return out
 
 
-def record(folder: Path, command: str, written: Iterable[Path], complete: bool) -> Tidied:
-    """Record that ``command`` wrote ``written`` into ``folder``; when the run is
-    ``complete``, remove the files its previous record names that it did not write
-    again, if they are unchanged since (see the module's docstring). A run that wrote
-    nothing into the folder changes nothing.
+def record(
+    folder: Path,
+    command: str,
+    written: Iterable[Path],
+    complete: bool,
+    inputs: Iterable[Path] = (),
+) -> Tidied:
+    """Record that ``command`` wrote ``written`` into ``folder`` and, when the run is
+    ``complete``, name the files its previous record lists that it did not write again
+    (see the module's docstring; nothing is removed). ``inputs`` are files the command
+    read: never named. A run that wrote nothing into the folder changes nothing.
 
     Raises :class:`OSError` only from writing the record itself.
     """
@@ -122,28 +130,22 @@ def record(folder: Path, command: str, written: Iterable[Path], complete: bool) 
     new = _names(folder, written)
     if not new:  # nothing written there: the earlier outputs were not replaced
         return Tidied()
+    read = set(_names(folder, inputs))
     records = _read(folder)
     done = Tidied()
     files = dict(new)
     for name, was in sorted(records.get(command, {}).items()):
-        if name in new:
+        if name in new or name in read:
             continue
         now = _stat(root / name)
-        if now is None:  # gone already, or no longer a plain file: not ours to touch
+        if now is None:  # gone already, or no longer a plain file: not ours
             continue
         if now != was:
             done.left.append(name)  # changed since mechsolve wrote it: no longer ours
             continue
-        if not complete:
-            files[name] = was  # for the next complete run to tidy
-            continue
-        try:
-            os.unlink(root / name)
-        except OSError:
-            files[name] = was
-            done.left.append(name)
-            continue
-        done.removed.append(name)
+        files[name] = was  # still from the earlier run: named again next time
+        if complete:
+            done.earlier.append(name)
     for other, rec in records.items():
         if other != command:
             for name in new:
@@ -152,7 +154,8 @@ def record(folder: Path, command: str, written: Iterable[Path], complete: bool) 
     body = {
         "format": FORMAT,
         "about": "the files each mechsolve command wrote into this folder; the next run "
-        "of a command removes those of its files it does not write again",
+        "of a command names those of its files it does not write again (from an earlier "
+        "run); nothing is removed",
         "commands": {c: {"files": dict(sorted(f.items()))} for c, f in sorted(records.items())},
     }
     text = re.sub(r"\[\s+(\d+),\s+(\d+)\s+\]", r"[\1, \2]", json.dumps(body, indent=1))

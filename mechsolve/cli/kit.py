@@ -362,12 +362,18 @@ def _guarded(invoke: Any, ctx: click.Context) -> Any:
 
 
 def _record_outputs(
-    outdir: Path | None, command: str, start: int, complete: bool, quiet: bool
+    outdir: Path | None,
+    command: str,
+    start: int,
+    complete: bool,
+    quiet: bool,
+    inputs: list[Path] | None = None,
 ) -> None:
     """Record the files written since ``start`` into the output folder ``outdir`` and,
-    after a complete run, remove those an earlier run of ``command`` wrote there that
-    this one did not (:mod:`mechsolve.base.manifest`), saying so in one line. A folder's
-    record that cannot be written is left as it was: the results are written."""
+    after a complete run, name in one line those an earlier run of ``command`` wrote
+    there that this one did not (:mod:`mechsolve.base.manifest`: nothing is removed).
+    ``inputs``: the files the command read (never named). A folder's record that cannot
+    be written is left as it was: the results are written."""
     if outdir is None or not Path(outdir).is_dir():
         return  # the command writes one file (draw -o x.dxf), or wrote nothing
     from mechsolve.base.manifest import record
@@ -376,21 +382,31 @@ def _record_outputs(
     if not written:
         return
     try:
-        done = record(Path(outdir), command, written, complete)
+        done = record(Path(outdir), command, written, complete, inputs or ())
     except OSError:
         return
     if quiet or not complete:
         return
-    if done.removed:
+    if done.earlier:
         click.echo(
-            f"  removed {len(done.removed)} file(s) an earlier {command} wrote to {outdir}/ "
-            "that this one does not write: " + ", ".join(done.removed)
+            f"  {len(done.earlier)} file(s) in {outdir}/ are from an earlier {command}, not "
+            "from this one (kept; delete them if they are not needed): " + ", ".join(done.earlier)
         )
     if done.left:
         click.echo(
-            f"  left {len(done.left)} file(s) from an earlier {command} in {outdir}/, changed "
-            "since it wrote them: " + ", ".join(done.left)
+            f"  {len(done.left)} file(s) in {outdir}/ from an earlier {command} were changed "
+            "since it wrote them (kept, no longer in its record): " + ", ".join(done.left)
         )
+
+
+def _input_files(ctx: click.Context | None) -> list[Path]:
+    """The existing files among a command's parameters (what it reads)."""
+    out: list[Path] = []
+    for v in ctx.params.values() if ctx is not None else ():
+        for x in v if isinstance(v, (list, tuple)) else (v,):
+            if isinstance(x, Path) and x.is_file():
+                out.append(x)
+    return out
 
 
 def _completed(exc: SystemExit) -> bool:
@@ -416,7 +432,7 @@ def recorded_outputs(outdir: Path, command: str, quiet: bool = False) -> Iterato
         complete = _completed(exc)
         raise
     finally:
-        _record_outputs(outdir, command, start, complete, quiet)
+        _record_outputs(outdir, command, start, complete, quiet, _input_files(ctx))
 
 
 class Command(click.Command):
@@ -424,7 +440,7 @@ class Command(click.Command):
     its errors become exit codes by :func:`_guarded`, also when it is invoked on its own
     (a test, an embedding application) rather than through the group. What it writes
     into its output folder is recorded there, and what an earlier run of it wrote there
-    and this one does not is removed (:mod:`mechsolve.base.manifest`)."""
+    and this one does not is named (:mod:`mechsolve.base.manifest`)."""
 
     def invoke(self, ctx: click.Context) -> Any:
         start = committed_mark()
@@ -439,7 +455,14 @@ class Command(click.Command):
         finally:
             if not ctx.meta.get(_RECORDED):
                 quiet = bool(ctx.params.get("quiet"))
-                _record_outputs(ctx.meta.get(_OUTDIR), self.name or "", start, complete, quiet)
+                _record_outputs(
+                    ctx.meta.get(_OUTDIR),
+                    self.name or "",
+                    start,
+                    complete,
+                    quiet,
+                    _input_files(ctx),
+                )
 
 
 class Group(click.Group):

@@ -105,7 +105,7 @@ def run(
 
 def _recorded_job(outdir: Path, quiet: bool, args: tuple):
     """:func:`_run_job`, its outputs recorded in the folder (:mod:`mechsolve.base.manifest`):
-    a complete run removes what the last one wrote there and this one does not. A run
+    a complete run names what the last one wrote there and this one does not. A run
     ``--at`` (instants only) is recorded apart, so that it leaves the sweep's files."""
     at = args[6]
     with recorded_outputs(outdir, "run --at" if at else "run", quiet):
