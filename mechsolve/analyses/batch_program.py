@@ -283,9 +283,10 @@ def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
 
 
 def _zeros(prog: Program) -> np.ndarray:
-    """Zeros of the block's shape (read only; made once per program)."""
+    """Zeros of the block's shape (read only; one array for every block of a pass,
+    :func:`run_program`)."""
     z = prog.made.get("zeros")
-    if z is None:
+    if z is None or z.shape != prog.full:
         z = prog.made["zeros"] = np.zeros(prog.full)
         z.flags.writeable = False
     return z
@@ -639,6 +640,8 @@ def run_program(
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
+        if blocks:  # (the zeros of the dyads' max(h2, 0), made once per pass)
+            prog.made = {k: v[: hi - lo] for k, v in blocks[0].made.items()}
         num.block(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1

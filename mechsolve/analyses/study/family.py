@@ -276,10 +276,12 @@ def _distinct_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     them) and each row's index among them: each column's distinct values numbered, the
     numbers combined into one integer per row (``np.unique`` over rows of floats sorts
     them as records, some fifty times slower for a study's thousand designs)."""
+    varies = [col for col in A.T if not np.all(col == col[:1])]  # (else one value, code 0)
+    if len(varies) == 1:  # its distinct values number the rows (as the key below would)
+        _, first, inv = np.unique(varies[0], return_index=True, return_inverse=True)
+        return A[first], np.ravel(inv)
     key = np.zeros(A.shape[0], np.int64)
-    for col in A.T:
-        if np.all(col == col[:1]):  # (the same in every row: one value, code 0)
-            continue
+    for col in varies:
         vals, code = np.unique(col, return_inverse=True)
         key = key * vals.size + np.ravel(code)
     _, first, inv = np.unique(key, return_index=True, return_inverse=True)
