@@ -467,6 +467,14 @@ def _design_states(an0, X: np.ndarray, modes: np.ndarray, speed: float):
     return solve
 
 
+def _bodies(bodies) -> slice | list[int]:
+    """A group's bodies as an index of the state's rows: a slice when consecutive."""
+    b = list(bodies)
+    if b and b == list(range(b[0], b[0] + len(b))):
+        return slice(b[0], b[0] + len(b))
+    return b
+
+
 def _assemble(ab, u0: float, nd: int):
     """Every design's branches at the start, as :meth:`Analysis.assemble` chooses them
     (conditions, then the sketch, then branch +), on ``2 nd`` columns: branch + of each
@@ -482,7 +490,8 @@ def _assemble(ab, u0: float, nd: int):
     modes = np.ones((G, nd))
     reasons = [[""] * nd for _ in range(G)]
     undecided = np.zeros(nd, bool)
-    sign = np.r_[np.ones(nd), -np.ones(nd)]
+    sign = np.ones(n2)
+    sign[nd:] = -1.0
     for gi, g in enumerate(ab.plan):
         conds.solved(g.bodies)
         ready = conds.ready()
@@ -503,11 +512,14 @@ def _assemble(ab, u0: float, nd: int):
         modes[gi] = np.where(take_m, -1.0, 1.0)
         reasons[gi] = list(why)
         # keep the chosen branch in both halves
-        b = list(g.bodies)
+        b = _bodies(g.bodies)
         blk = st2.block
-        chosen = np.where(take_m, blk[:, b, nd:], blk[:, b, :nd])
-        blk[:, b, :nd] = chosen
-        blk[:, b, nd:] = chosen
+        if take_m.any():
+            chosen = np.where(take_m, blk[:, b, nd:], blk[:, b, :nd])
+            blk[:, b, :nd] = chosen
+            blk[:, b, nd:] = chosen
+        else:  # branch + in every design (the same values, without the selection)
+            blk[:, b, nd:] = blk[:, b, :nd]
         st2.token = State.new_token()
         conds.use(ready)
     view = StateView(ab, st2)
@@ -694,10 +706,16 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
             "has_acceleration": bool(acc),
         }
     )
-    kept = np.flatnonzero(~risky).tolist()  # a design's row in the program is its row here
-    ks = inside if len(kept) == nd else [inside[j] for j in kept]
+    if risky.any():
+        kept = np.flatnonzero(~risky).tolist()  # a design's row in the program is its row
+        ks = [inside[j] for j in kept]
+    else:
+        kept, ks = range(nd), inside
     out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
-    out.batched[ks] = True
+    if ks and ks[-1] - ks[0] == len(ks) - 1:  # (inside is increasing: consecutive designs)
+        out.batched[ks[0] : ks[-1] + 1] = True
+    else:
+        out.batched[ks] = True
 
 
 def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:
@@ -711,7 +729,7 @@ def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_
     P = len(u)
     with np.errstate(invalid="ignore", divide="ignore"):
         # the start: two columns per design (branch + and -)
-        cols2 = np.r_[np.arange(nd), np.arange(nd)]
+        cols2 = np.tile(np.arange(nd), 2)
         a2 = _analysis_of(an0, _with_numbers(ref, _Columns(X, cols2)))
         modes, reasons, start_state, risky = _assemble(a2, u0, nd)
         if not want_forces and plan_program(an0.plan, an0.system.nb):

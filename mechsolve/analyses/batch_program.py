@@ -152,6 +152,7 @@ class Program:
         self._tmp: np.ndarray | None = None
         self.crank: tuple | None = None  # the driven crank (see _dH_bound)
         self._negated: dict = {}  # id(-x) -> (-x, x)
+        self.made: dict = {}  # arrays the block's groups share (see _zeros)
 
     def tmp(self) -> np.ndarray:
         """A scratch array of the block's size for a term that is used once: reused, so
@@ -260,10 +261,18 @@ def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
         c, s = np.multiply(gx, ex / l2), np.multiply(gy, ex / l2)
     elif _zero(ey):  # x along the segment in every design, lengths that differ
         l2 = ex * ex
-        c = np.multiply(ex, gx)
-        c /= l2
-        s = np.multiply(ex, gy)
-        s /= l2
+        if np.shape(gx) == np.shape(gy) and np.ndim(gx) == 2 and np.shape(ex)[0] > 1:
+            # each column read by two products of the block's shape: written out once
+            exf, l2f = _spread(ex, gx.shape), _spread(l2, gx.shape)
+            c = np.multiply(exf, gx)
+            c /= l2f
+            s = np.multiply(exf, gy, out=exf)
+            s /= l2f
+        else:
+            c = np.multiply(ex, gx)
+            c /= l2
+            s = np.multiply(ex, gy)
+            s /= l2
     else:
         l2 = _add(ex * ex, ey * ey)
         c = (ex * gx + ey * gy) / l2
@@ -273,11 +282,31 @@ def _place(q: dict, s0, sm, px, py, gx, gy) -> None:
     q["y"] = _sub(py, _add(_mul(s, s0[0]), _mul(c, s0[1])))
 
 
+def _zeros(prog: Program) -> np.ndarray:
+    """Zeros of the block's shape (read only; one array for every block of a pass,
+    :func:`run_program`)."""
+    z = prog.made.get("zeros")
+    if z is None or z.shape != prog.full:
+        z = prog.made["zeros"] = np.zeros(prog.full)
+        z.flags.writeable = False
+    return z
+
+
 def _times(a, b, out: np.ndarray):
     """``a * b``, written into ``out`` when the product has its shape."""
     if np.shape(a) == out.shape or np.shape(b) == out.shape:
         return np.multiply(a, b, out=out)
     return a * b
+
+
+def _spread(col, shape: tuple, out: np.ndarray | None = None) -> np.ndarray:
+    """A column of the designs' numbers ``(D, 1)`` written out to the block's ``shape``:
+    an operation of a column with an array of the block's shape runs row by row (some
+    60 ns a row over a plain one's single loop), so a column read by two of them is
+    written out once and read as a plain array (the same numbers, the same products)."""
+    out = np.empty(shape) if out is None else out
+    np.copyto(out, col)
+    return out
 
 
 def _triangle(L1, L2, D2, tmp: np.ndarray):
@@ -289,12 +318,14 @@ def _triangle(L1, L2, D2, tmp: np.ndarray):
     a = np.multiply(L1s - L2s, 0.5)
     a = np.multiply(a, inv, out=a if np.shape(a) == np.shape(inv) else None)
     a += 0.5
-    h2 = np.multiply(L1s, inv, out=inv)  # (1 / D2 is read no more)
+    # L1^2 per design, read by two products of the block's shape: written out once
+    L1f = _spread(L1s, D2.shape) if np.ndim(L1s) and np.shape(L1s)[0] > 1 else L1s
+    h2 = np.multiply(L1f, inv, out=inv)  # (1 / D2 is read no more)
     h2 -= np.multiply(a, a, out=tmp)
     t = np.add(L1s - L2s, D2)
     t *= 0.5
     t *= t
-    H = L1s * D2
+    H = np.multiply(L1f, D2, out=L1f if L1f is not L1s else None)
     H -= t
     H *= 1.0 / (L1s * L2s)
     return a, h2, H, t
@@ -320,7 +351,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     L1, L2 = num.one(g.L1), num.one(g.L2)
     tmp = prog.tmp()
     a, h2, H, t = _triangle(L1, L2, D2, tmp)
-    hh = np.maximum(h2, 0.0, out=h2)
+    # (against an array of zeros: numpy's maximum with a float runs some 1.7 times as long)
+    hh = np.maximum(h2, _zeros(prog), out=h2)
     np.sqrt(hh, out=hh)
     if not (isinstance(mode, float) and mode == 1.0):  # (x * 1.0 is x)
         hh *= mode
@@ -608,6 +640,8 @@ def run_program(
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
+        if blocks:  # (the zeros of the dyads' max(h2, 0), made once per pass)
+            prog.made = {k: v[: hi - lo] for k, v in blocks[0].made.items()}
         num.block(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1

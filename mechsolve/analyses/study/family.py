@@ -182,15 +182,19 @@ class DesignFamily:
         for i, p in enumerate(self.params):
             col_of = _column(p, index)
             vals = self.table[:, i]
-            rows = np.arange(nd) if self.given is None else np.flatnonzero(self.given[:, i])
-            if not rows.size:
-                continue
-            bits = np.ascontiguousarray(vals[rows]).view(np.int64)
+            if self.given is None:  # every design gives it (rows: all of them)
+                rows, sel = slice(None), vals
+            else:
+                rows = np.flatnonzero(self.given[:, i])
+                if not rows.size:
+                    continue
+                sel = vals[rows]
+            bits = np.ascontiguousarray(sel).view(np.int64)
             uniq, inv = np.unique(bits, return_inverse=True)
             si = np.empty(uniq.size)
             bad = np.zeros(uniq.size, bool)
-            for u, b in enumerate(uniq):
-                key = (p.name, p.unit, int(b))
+            for u, b in enumerate(uniq.tolist()):
+                key = (p.name, p.unit, b)
                 got = self._cache.get(key)
                 if got is None:
                     x = float(np.int64(b).view(np.float64))
@@ -204,7 +208,12 @@ class DesignFamily:
                     got = 0.0
                 si[u] = got
             X[rows, col_of] = si[inv]
-            flagged[rows[bad[inv]]] = True
+            if bad.any():
+                hit = bad[inv]
+                if isinstance(rows, slice):
+                    flagged |= hit
+                else:
+                    flagged[rows[hit]] = True
         self._bars(X, index)
         flagged |= _refused(self, X, index)
         self.rows = X
@@ -232,15 +241,14 @@ class DesignFamily:
             mass = lk.mass
             redo_com = "com" not in m
             redo_inertia = "inertia" not in m
-            coms, inertias = [], []
-            for x0, y0, x1, y1 in uniq.tolist():
-                coms.append(((x0 + x1) / 2, (y0 + y1) / 2))
-                inertias.append(mass * ((x1 - x0) ** 2 + (y1 - y0) ** 2) / 12.0)
-            if redo_com:
-                c = np.array(coms, float)[inv]
-                X[:, index["com", lk.name, 0]] = c[:, 0]
-                X[:, index["com", lk.name, 1]] = c[:, 1]
-            if redo_inertia:
+            if redo_com:  # (the same sums and halves as in Python floats, per distinct row)
+                X[:, index["com", lk.name, 0]] = ((uniq[:, 0] + uniq[:, 2]) / 2)[inv]
+                X[:, index["com", lk.name, 1]] = ((uniq[:, 1] + uniq[:, 3]) / 2)[inv]
+            if redo_inertia:  # (Python's ** 2, libm's pow: not always x * x, as the parser)
+                inertias = [
+                    mass * ((x1 - x0) ** 2 + (y1 - y0) ** 2) / 12.0
+                    for x0, y0, x1, y1 in uniq.tolist()
+                ]
                 X[:, index["inertia", lk.name]] = np.array(inertias, float)[inv]
 
     # -- a design -----------------------------------------------------------------------------
@@ -276,10 +284,12 @@ def _distinct_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     them) and each row's index among them: each column's distinct values numbered, the
     numbers combined into one integer per row (``np.unique`` over rows of floats sorts
     them as records, some fifty times slower for a study's thousand designs)."""
+    varies = [col for col in A.T if not np.all(col == col[:1])]  # (else one value, code 0)
+    if len(varies) == 1:  # its distinct values number the rows (as the key below would)
+        _, first, inv = np.unique(varies[0], return_index=True, return_inverse=True)
+        return A[first], np.ravel(inv)
     key = np.zeros(A.shape[0], np.int64)
-    for col in A.T:
-        if np.all(col == col[:1]):  # (the same in every row: one value, code 0)
-            continue
+    for col in varies:
         vals, code = np.unique(col, return_inverse=True)
         key = key * vals.size + np.ravel(code)
     _, first, inv = np.unique(key, return_index=True, return_inverse=True)
