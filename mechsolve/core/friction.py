@@ -105,6 +105,8 @@ def solve_friction(
     lam = law.lamv + np.einsum("kn,knc->nc", s, law.U)
     lam[locked] = np.nan
     out = FrictionResult(iterations=steps)
+    law.s = s
+    out.law = law  # for the equation of motion: see balance
     out.locked = locked
     out.ideal_effort = -lam0[:, effort_row]
     for j, r in enumerate(law.rows):
@@ -246,3 +248,54 @@ def _continue(
         stuck = a_no[step[a_no] < 1e-8]
         status[stuck] = np.where(det_last[stuck] < LOCK_DET, 1, 2)
     return s, status, det_last
+
+
+def balance(law: _Law, i0: int, i1: int, row: int, target: float, x: float) -> float | None:
+    """The driver acceleration ``x`` at which the driving effort is ``target``, from the
+    friction law of a force analysis at two states that differ only in it (``i0`` at
+    zero driver acceleration, ``i1`` at one): or None where Newton's method does not
+    converge.
+
+    At one position and speed the ideal multipliers are affine in the acceleration,
+    ``lamv(x) = lamv_0 + x (lamv_1 - lamv_0)``, and the unit frictions ``U`` and the
+    factors ``k`` do not depend on it. So the Coulomb magnitudes ``s`` and ``x`` solve
+    together ``s - k L(lamv(x) + s U) = 0`` and ``target + lambda_row = 0`` (the effort
+    is ``-lambda_row``): Newton's method on these ``K + 1`` equations, from ``x`` and
+    the magnitudes interpolated between the two states. The caller checks the result
+    by the full force analysis at ``x``.
+    """
+    a = law.lamv[i0]
+    d = law.lamv[i1] - a
+    U = law.U[:, i0]  # (K, nc)
+    k = law.k[:, i0]
+    s = law.s[:, i0] + x * (law.s[:, i1] - law.s[:, i0])
+    K = len(law.rows)
+    A = np.zeros((K + 1, K + 1))
+    A[:K, :K] = np.eye(K)
+    A[K, :K] = U[:, row]
+    A[K, K] = d[row]
+    F = np.empty(K + 1)
+    sl = [slice(r.start, r.start + r.constraint.m) for r in law.rows]
+    for _ in range(MAX_ITERATIONS):
+        lam = a + x * d + s @ U
+        for j, r in enumerate(law.rows):
+            L, grad = r.constraint.load(lam[None, sl[j]])
+            F[j] = s[j] - k[j] * L[0]
+            A[j, :K] = -k[j] * (U[:, sl[j]] @ grad[0])
+            A[j, j] += 1.0
+            A[j, K] = -k[j] * (d[sl[j]] @ grad[0])
+        F[K] = target + lam[row]
+        with np.errstate(all="ignore"):
+            try:
+                dz = np.linalg.solve(A, -F)
+            except np.linalg.LinAlgError:
+                return None
+        if not np.all(np.isfinite(dz)):
+            return None
+        s += dz[:K]
+        x += dz[K]
+        if abs(dz[K]) <= 1e-15 * abs(x) and np.all(
+            np.abs(dz[:K]) <= TOLERANCE * (np.abs(s) + 1e-300)
+        ):
+            return x
+    return None
