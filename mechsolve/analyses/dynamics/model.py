@@ -343,11 +343,15 @@ class ReducedModel:
         if not self.friction:
             return eps, J
         scale = max(abs(M), abs(e0), abs(J * eps), 1e-300)
-        eps = self._balanced(phi, omega, t, M, eps)
+        eps, hint = self._balanced(phi, omega, t, M, eps)
         for _ in range(60):
             sol = self.states([phi], [omega], [eps])
             sol.t = np.array([t])
-            r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
+            self.an.friction_hint = hint  # the first check starts from the solution
+            try:
+                r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
+            finally:
+                self.an.friction_hint = hint = None
             if not math.isfinite(r):
                 raise _LeftRange(phi)
             if abs(r) <= 1e-12 * scale:
@@ -359,22 +363,25 @@ class ReducedModel:
             "on the acceleration too strongly"
         )
 
-    def _balanced(self, phi: float, omega: float, t: float, M: float, eps: float) -> float:
-        """The acceleration at which the effort with friction balances ``M``, solved
-        directly from the friction law of :meth:`terms`' force analysis at this position
-        and speed (:func:`~mechsolve.core.friction.balance`); ``eps`` where that is not
-        at hand or does not converge. :meth:`accel` checks it by the full analysis."""
+    def _balanced(self, phi: float, omega: float, t: float, M: float, eps: float):
+        """``(eps, hint)``: the acceleration at which the effort with friction balances
+        ``M``, solved directly from the friction law of :meth:`terms`' force analysis at
+        this position and speed (:func:`~mechsolve.core.friction.balance`), with that
+        law and the Coulomb magnitudes found (for the check by the full analysis in
+        :meth:`accel`); ``(eps, None)`` where that is not at hand or does not converge."""
         got = getattr(self, "_friction_law", None)
         self._friction_law = None
         if got is None or got[0] != (phi, omega, t) or getattr(got[1], "law", None) is None:
-            return eps
+            return eps, None
         law = got[1].law
         if not (np.all(np.isfinite(law.lamv[:2])) and np.all(np.isfinite(law.s[:, :2]))):
-            return eps
+            return eps, None
         drv = self.an.system.driver
         row = next(r.start for r in self.an.system.rows if r.constraint is drv)
-        x = balance(law, 0, 1, row, M, eps)
-        return eps if x is None or not math.isfinite(x) else float(x)
+        got = balance(law, 0, 1, row, M, eps)
+        if got is None or not math.isfinite(got[0]):
+            return eps, None
+        return float(got[0]), (law, got[1])
 
     def states_by_turn(self, phi, omega, eps, t):
         """States at driver angles ``phi`` (any number of turns from the start) with rates
