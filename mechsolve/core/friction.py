@@ -276,8 +276,9 @@ def balance(
     factors ``k`` do not depend on it. So the Coulomb magnitudes ``s`` and ``x`` solve
     together ``s - k L(lamv(x) + s U) = 0`` and ``target + lambda_row = 0`` (the effort
     is ``-lambda_row``): Newton's method on these ``K + 1`` equations, from ``x`` and
-    the magnitudes interpolated between the two states. The caller checks the result
-    by the full force analysis at ``x``.
+    the magnitudes interpolated between the two states; a solution with
+    ``det(I - G) <= 0`` is not physical (None). The caller checks the result by the
+    full force analysis at ``x``.
     """
     a = law.lamv[i0]
     d = law.lamv[i1] - a
@@ -315,5 +316,6 @@ def balance(
         if abs(dz[K]) <= 1e-15 * (abs(x) + xs) and np.all(
             np.abs(dz[:K]) <= TOLERANCE * (np.abs(s) + ss)
         ):
-            return x, s
+            # physical where det(I - G) > 0 (see the module): else left to the caller
+            return (x, s) if np.linalg.det(A[:K, :K]) > 0 else None
     return None
