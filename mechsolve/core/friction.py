@@ -84,10 +84,13 @@ def solve_friction(
         position, ``tanh(|speed| / s0)`` times their value (for the equation of motion,
         which needs friction continuous through a standstill); None: exact Coulomb.
     """
-    law = _Law(an, st, lam0, solve, smoothing)
+    # a one-position check of the equation of motion (see balance): the unit frictions
+    # and a start for the magnitudes from the same position and speed
+    hint = getattr(an, "friction_hint", None) if st.n == 1 else None
+    law = _Law(an, st, lam0, solve, smoothing, None if hint is None else hint[0])
     K, n = law.k.shape
     good = np.all(np.isfinite(law.lamv), axis=1) & np.all(np.isfinite(law.U), axis=(0, 2))
-    s, done, steps = _newton(law, np.flatnonzero(good))
+    s, done, steps = _newton(law, np.flatnonzero(good), None if hint is None else hint[1])
     locked = np.zeros(n, bool)
     rest = np.flatnonzero(good & ~done)
     if rest.size:
@@ -105,6 +108,8 @@ def solve_friction(
     lam = law.lamv + np.einsum("kn,knc->nc", s, law.U)
     lam[locked] = np.nan
     out = FrictionResult(iterations=steps)
+    law.s = s
+    out.law = law  # for the equation of motion: see balance
     out.locked = locked
     out.ideal_effort = -lam0[:, effort_row]
     for j, r in enumerate(law.rows):
@@ -120,7 +125,11 @@ class _Law:
     Coulomb factors (zero where the slip is), ``v`` (K, N) their viscous frictions,
     ``lamv`` the multipliers with the viscous frictions, ``slips`` their |slip|."""
 
-    def __init__(self, an: Analysis, st, lam0: np.ndarray, solve: Callable, smoothing=None) -> None:
+    def __init__(
+        self, an: Analysis, st, lam0: np.ndarray, solve: Callable, smoothing=None, like=None
+    ) -> None:
+        """``like``: the law at another state with the same positions and velocities
+        (its first position), whose unit frictions are taken where its factors agree."""
         self.rows = frictional(an)
         n, K = st.n, len(self.rows)
         self.U = np.zeros((K, n, lam0.shape[1]))
@@ -136,14 +145,17 @@ class _Law:
             if smoothing is not None:
                 speed, s0 = smoothing
                 soft = np.abs(np.tanh(np.asarray(speed, float) / s0))
-            acc = _Q(an, st)
-            for body, x, y, fx, fy, t in c.friction_pull(st):
-                if body != an.system.nb:
-                    acc.force(body, None, fx * on, fy * on, (x - st.x[body], y - st.y[body]))
-                    acc.torque(body, t * on)
-            self.U[j] = solve(acc.Q)
             self.k[j] = on * soft * c.coulomb
             self.v[j] = on * c.viscous * np.abs(slip)
+            if like is not None and like.k[j, 0] == self.k[j, 0] and like.v[j, 0] == self.v[j, 0]:
+                self.U[j] = like.U[j, :1]
+            else:
+                acc = _Q(an, st)
+                for body, x, y, fx, fy, t in c.friction_pull(st):
+                    if body != an.system.nb:
+                        acc.force(body, None, fx * on, fy * on, (x - st.x[body], y - st.y[body]))
+                        acc.torque(body, t * on)
+                self.U[j] = solve(acc.Q)
             self.slips.append(np.abs(slip))
         self.lamv = lam0 + np.einsum("kn,knc->nc", self.v, self.U)
 
@@ -169,14 +181,17 @@ class _Law:
         return self.k[:, idx] * np.max(np.abs(self.lamv[idx]), axis=1)[None] + 1e-300
 
 
-def _newton(law: _Law, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+def _newton(law: _Law, idx: np.ndarray, start=None) -> tuple[np.ndarray, np.ndarray, int]:
     """Newton's method on ``s - k L(lambda(s)) = 0`` at positions ``idx`` from the ideal
-    solution's friction: the magnitudes, where a physical solution was found (converged,
-    ``det(I - G) > 0``) and the number of steps."""
+    solution's friction (or ``start`` (K,)): the magnitudes, where a physical solution
+    was found (converged, ``det(I - G) > 0``) and the number of steps."""
     K, n = law.k.shape
     s = np.zeros((K, n))
     done = np.zeros(n, bool)
-    s[:, idx] = law.k[:, idx] * law(s[:, idx], idx)[0]
+    if start is not None and np.all(np.isfinite(start)):
+        s[:, idx] = np.asarray(start, float)[:, None]
+    else:
+        s[:, idx] = law.k[:, idx] * law(s[:, idx], idx)[0]
     eye = np.eye(K)[None]
     steps = 0
     while idx.size and steps < MAX_ITERATIONS:
@@ -246,3 +261,61 @@ def _continue(
         stuck = a_no[step[a_no] < 1e-8]
         status[stuck] = np.where(det_last[stuck] < LOCK_DET, 1, 2)
     return s, status, det_last
+
+
+def balance(
+    law: _Law, i0: int, i1: int, row: int, target: float, x: float
+) -> tuple[float, np.ndarray] | None:
+    """The driver acceleration ``x`` at which the driving effort is ``target``, from the
+    friction law of a force analysis at two states that differ only in it (``i0`` at
+    zero driver acceleration, ``i1`` at one), and the Coulomb magnitudes there; or None
+    where Newton's method does not converge.
+
+    At one position and speed the ideal multipliers are affine in the acceleration,
+    ``lamv(x) = lamv_0 + x (lamv_1 - lamv_0)``, and the unit frictions ``U`` and the
+    factors ``k`` do not depend on it. So the Coulomb magnitudes ``s`` and ``x`` solve
+    together ``s - k L(lamv(x) + s U) = 0`` and ``target + lambda_row = 0`` (the effort
+    is ``-lambda_row``): Newton's method on these ``K + 1`` equations, from ``x`` and
+    the magnitudes interpolated between the two states; a solution with
+    ``det(I - G) <= 0`` is not physical (None). The caller checks the result by the
+    full force analysis at ``x``.
+    """
+    a = law.lamv[i0]
+    d = law.lamv[i1] - a
+    U = law.U[:, i0]  # (K, nc)
+    k = law.k[:, i0]
+    s = law.s[:, i0] + x * (law.s[:, i1] - law.s[:, i0])
+    K = len(law.rows)
+    A = np.zeros((K + 1, K + 1))
+    A[:K, :K] = np.eye(K)
+    A[K, :K] = U[:, row]
+    A[K, K] = d[row]
+    F = np.empty(K + 1)
+    sl = [slice(r.start, r.start + r.constraint.m) for r in law.rows]
+    # the scales of x and of the magnitudes, for the tolerance where they vanish
+    xs = max(abs(target), abs(a[row]), 1e-300) / max(abs(d[row]), 1e-300)
+    ss = k * np.max(np.abs(a)) + 1e-300
+    for _ in range(MAX_ITERATIONS):
+        lam = a + x * d + s @ U
+        for j, r in enumerate(law.rows):
+            L, grad = r.constraint.load(lam[None, sl[j]])
+            F[j] = s[j] - k[j] * L[0]
+            A[j, :K] = -k[j] * (U[:, sl[j]] @ grad[0])
+            A[j, j] += 1.0
+            A[j, K] = -k[j] * (d[sl[j]] @ grad[0])
+        F[K] = target + lam[row]
+        with np.errstate(all="ignore"):
+            try:
+                dz = np.linalg.solve(A, -F)
+            except np.linalg.LinAlgError:
+                return None
+        if not np.all(np.isfinite(dz)):
+            return None
+        s += dz[:K]
+        x += dz[K]
+        if abs(dz[K]) <= 1e-15 * (abs(x) + xs) and np.all(
+            np.abs(dz[:K]) <= TOLERANCE * (np.abs(s) + ss)
+        ):
+            # physical where det(I - G) > 0 (see the module): else left to the caller
+            return (x, s) if np.linalg.det(A[:K, :K]) > 0 else None
+    return None

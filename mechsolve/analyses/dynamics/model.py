@@ -21,7 +21,7 @@ from mechsolve.base.errors import InputError, SolverError
 from mechsolve.base.numerics import bisect_edge, limit_from_both_sides
 from mechsolve.base.state import State
 from mechsolve.core import evaluate as core
-from mechsolve.core.friction import frictional
+from mechsolve.core.friction import balance, frictional
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 
@@ -86,16 +86,7 @@ class ReducedModel:
         uniq, inv = np.unique(w, return_inverse=True)
         parts = []
         for wj in uniq:
-            an, span = self._reaching(float(wj))
-            kj = int(np.abs(span.u - wj).argmin())
-            one = an.solve(
-                np.array([wj]),
-                start=span.start,
-                near=(span, kj),
-                per_unit_driver=True,
-                limits=False,
-            )
-            parts.append(one)
+            parts.append(self._unit_state(float(wj)))
         sol = core._concat(parts) if len(parts) > 1 else parts[0]
         if len(uniq) < len(w) or len(parts) > 1:
             sol = core._take(sol, inv)
@@ -104,6 +95,22 @@ class ReducedModel:
         sol.ud = np.asarray(omega, float) * np.ones(len(phi))
         sol.udd = np.asarray(eps, float) * np.ones(len(phi))
         return sol
+
+    def _unit_state(self, wj: float):
+        """The state at the driver value ``wj`` per unit driver rate, solved next to a
+        sweep from the start (a copy: the last one is kept, as an equation of motion
+        with friction asks for the same position at several accelerations)."""
+        an, span = self._reaching(wj)
+        key = (wj, id(span))
+        last = getattr(self, "_last_unit", None)
+        if last is not None and last[0] == key:
+            return core._take(last[1], np.zeros(1, int))
+        kj = int(np.abs(span.u - wj).argmin())
+        one = an.solve(
+            np.array([wj]), start=span.start, near=(span, kj), per_unit_driver=True, limits=False
+        )
+        self._last_unit = (key, one)
+        return core._take(one, np.zeros(1, int))
 
     def _reaching(self, u: float):
         """``(analysis, sweep)``: a sweep from the start whose branches hold at the driver
@@ -302,6 +309,7 @@ class ReducedModel:
         e0, e1 = float(f.effort[0]), float(f.effort[1])
         if self.friction:
             e1 = e0 + 2.0 * float(f.kinetic[2])
+            self._friction_law = ((phi, omega, t), f.friction)
         ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
         finite = np.isfinite(e0) and np.isfinite(e1)
         if not finite or ind <= NEAR_EXACT:
@@ -335,10 +343,15 @@ class ReducedModel:
         if not self.friction:
             return eps, J
         scale = max(abs(M), abs(e0), abs(J * eps), 1e-300)
+        eps, hint = self._balanced(phi, omega, t, M, eps)
         for _ in range(60):
             sol = self.states([phi], [omega], [eps])
             sol.t = np.array([t])
-            r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
+            self.an.friction_hint = hint  # the first check starts from the solution
+            try:
+                r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
+            finally:
+                self.an.friction_hint = hint = None
             if not math.isfinite(r):
                 raise _LeftRange(phi)
             if abs(r) <= 1e-12 * scale:
@@ -349,6 +362,26 @@ class ReducedModel:
             f"{self.an.format_u(phi)} (speed {omega:.6g}): the joints' friction feeds back "
             "on the acceleration too strongly"
         )
+
+    def _balanced(self, phi: float, omega: float, t: float, M: float, eps: float):
+        """``(eps, hint)``: the acceleration at which the effort with friction balances
+        ``M``, solved directly from the friction law of :meth:`terms`' force analysis at
+        this position and speed (:func:`~mechsolve.core.friction.balance`), with that
+        law and the Coulomb magnitudes found (for the check by the full analysis in
+        :meth:`accel`); ``(eps, None)`` where that is not at hand or does not converge."""
+        got = getattr(self, "_friction_law", None)
+        self._friction_law = None
+        if got is None or got[0] != (phi, omega, t) or getattr(got[1], "law", None) is None:
+            return eps, None
+        law = got[1].law
+        if not (np.all(np.isfinite(law.lamv[:2])) and np.all(np.isfinite(law.s[:, :2]))):
+            return eps, None
+        drv = self.an.system.driver
+        row = next(r.start for r in self.an.system.rows if r.constraint is drv)
+        got = balance(law, 0, 1, row, M, eps)
+        if got is None or not math.isfinite(got[0]):
+            return eps, None
+        return float(got[0]), (law, got[1])
 
     def states_by_turn(self, phi, omega, eps, t):
         """States at driver angles ``phi`` (any number of turns from the start) with rates
