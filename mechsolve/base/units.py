@@ -360,6 +360,8 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
 _SEXAGESIMAL_RE = re.compile(r"^:[0-9]")
 _GROUPED_RE = re.compile(r"^(?:_[0-9]+)+")
 _DECIMAL_COMMA_RE = re.compile(r"^,[0-9]")
+# a base prefix after a 0 read as the number: 0x1F, 0o17, 0b11010 (the rest: a unit)
+_BASE_RE = re.compile(r"^([xob])([0-9a-f]+)(?![0-9a-z_.])(.*)$", re.IGNORECASE)
 
 
 _PLAIN_NUMBER_RE = re.compile(rf"^{SPACE_PATTERN}*{NUMBER_PATTERN}{SPACE_PATTERN}*$")
@@ -408,7 +410,32 @@ def _not_a_number(value: str, number: str, rest: str, joined: bool = True) -> st
         return f"{value!r} is not a number: a decimal comma is not read" + (
             f"; write {fixed!r}" if joined else ""
         )
-    return None
+    return _based(value, number, rest) if joined else None
+
+
+def _based(value: str, number: str, rest: str) -> str | None:
+    """Why ``value``, a number in base 16, 8 or 2 (``-0x1F``, ``0b11010``, ``0x1F mm``),
+    is refused, with its decimal value to write; None where it is not one. YAML 1.2 core
+    reads ``0x`` and ``0o`` without a sign only, and has no ``0b``."""
+    m = _BASE_RE.match(rest)
+    if not m or number.lstrip("+-") != "0":
+        return None
+    try:
+        n = int(f"{number}{m.group(1)}{m.group(2)}", 0)
+    except ValueError:
+        return None
+    unit = m.group(3).strip()
+    fixed = f"{n} {unit}" if unit else str(n)
+    if unit:
+        why = "a number in base 16, 8 or 2 is not read before a unit"
+    elif m.group(1).lower() == "b":
+        why = "binary numbers (0b) are not read (YAML 1.2 has none)"
+    else:
+        why = (
+            "a hexadecimal or octal number with a sign is not read (YAML 1.2 reads "
+            "0x1F and 0o17 without one)"
+        )
+    return f"{value!r} is not a number: {why}; write {fixed!r}"
 
 
 def _fits(dim: Dim, want: Dim) -> bool:

@@ -98,43 +98,153 @@ def motors_pole_cut(mech: Mechanism, mb: Multibody, tr: Trajectory) -> Trajector
     return dataclasses.replace(tr, **rows, stopped=text, early=True, event="", error=error)
 
 
-# the start's singular measure (sigma_r / sigma_1 of Phi_q) below which a start is taken
-# as the singular position itself: its pose is then not on a branch to rounding (the
-# closed form's square root of a vanishing discriminant leaves ~1.5e-8 rad, a measure of
-# ~2e-9 on a four-bar) and the motion from it is not determined; a start 1e-7 rad off a
-# parallelogram's collinear pose (1.2e-8) runs true, 1e-8 rad (1.7e-9) does not
-START_SINGULAR = 5e-9
+# a start is at a singular position where the constraint equations, at it, have a
+# smaller rank than at the poses next to it on the motion. Their rank at the start counts
+# the singular values (of Phi_q, its angle columns times the mechanism's size: the
+# measure is the same in m, mm or in) above START_SINGULAR of the largest: the pose
+# assembled at a singular position is off it by rounding (the closed form's square root
+# of a vanishing discriminant leaves ~1.5e-8 rad: measures of 0 to 5e-9 on the
+# parallelograms of tests/test_issue30_singularstart.py), a start 1e-6 rad from it
+# measures 3.5e-8 (cranks of 0.1 m) to 1.7e-7 (0.9 m) and runs true
+START_SINGULAR = 2e-8
+# the poses next to the start: closed from it moved by this of the mechanism's size
+# along the directions the equations leave free at it (to first order)
+NEXT_TO = 1e-2
+# the directions taken as free at the start: singular values below this of the largest
+# (a start 1e-6 rad next to a singular position has its lost direction's at 1e-7)
+FREE = 1e-4
+
+
+@dataclasses.dataclass
+class StartRanks:
+    """The constraint equations' rank at the start (``at``) and at the poses next to
+    it on the motion (``near``); ``branches``: how many branches of the motion pass
+    through the start (0 where it was not counted)."""
+
+    at: int
+    near: int
+    branches: int
+    measure: float
+
+
+def start_ranks(mb: Multibody, q0: np.ndarray) -> StartRanks:
+    """The rank of ``Phi_q`` at ``q0`` against its rank at the poses next to it.
+
+    The poses next to ``q0``: closed (minimum-norm Newton) from ``q0`` moved by
+    :data:`NEXT_TO` of the mechanism's size along each direction of a circle in the
+    space the equations leave free at ``q0`` (their right singular vectors past the
+    rank). A rank deficient there as at ``q0`` is redundant equations (the run's rank);
+    a rank lost only at ``q0`` is a singular position. The directions from ``q0`` to
+    the closed poses, one pair per branch through ``q0``, count its branches where the
+    motion next to it has one degree of freedom (a parallelogram's two branches cross
+    at its collinear pose: four directions; with a third crank at the coupler's middle
+    one branch passes: two)."""
+    w = np.ones(mb.nq)
+    w[2::3] = 1.0 / mb.scale
+    if mb.nc == 0:
+        return StartRanks(0, 0, 0, 1.0)
+    rel, Vt = _relative_singular_values(mb, q0, w)
+    at = int(np.sum(rel > START_SINGULAR))
+    free = Vt[int(np.sum(rel > FREE)) :]  # (free to first order, or nearly)
+    if len(free) == 0:
+        return StartRanks(at, at, 0, float(rel[at - 1]))
+    if len(free) == 1:
+        dirs = [free[0], -free[0]]
+    else:
+        phi = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+        basis = free[:2] if len(free) == 2 else free
+        dirs = [math.cos(a) * basis[0] + math.sin(a) * basis[1] for a in phi]
+        dirs += [s * v for v in free[2:] for s in (1.0, -1.0)]
+    near, seen = [], []
+    for d in dirs:
+        q = _close_next_to(mb, q0 + NEXT_TO * mb.scale * (w * d), w)
+        e = (q - q0) / w if q is not None else np.zeros(1)
+        n = float(np.linalg.norm(e))
+        if n < 0.1 * NEXT_TO * mb.scale:
+            continue  # not closed, or back at the start
+        near.append(int(np.sum(_relative_singular_values(mb, q, w)[0] > START_SINGULAR)))
+        if not any(float(e @ f) > 0.98 * n for f in seen):
+            seen.append(e / n)
+    near = max(near, default=at)  # (none closed: taken as the start's)
+    one_dof = mb.nq - near == 1 and len(free) <= 2
+    measure = abs(float(rel[near - 1])) if near else 1.0
+    return StartRanks(at, near, len(seen) // 2 if one_dof else 0, measure)
+
+
+def _relative_singular_values(mb: Multibody, q: np.ndarray, w: np.ndarray):
+    """The singular values of ``Phi_q`` with its columns weighed by ``w``, over the
+    largest, and its right singular vectors."""
+    _, S, Vt = np.linalg.svd(mb.jacobian(q) * w)
+    return (S / S[0] if S[0] > 0 else np.zeros_like(S)), Vt
+
+
+def _close_next_to(mb: Multibody, q: np.ndarray, w: np.ndarray) -> np.ndarray | None:
+    """``q`` closed onto ``Phi = 0`` by Newton steps of minimum norm that set aside the
+    directions whose singular value is below 1e-4 of the largest (the redundant
+    equations' direction, whose singular value off the constraints is about the
+    distance to them: inverted, it threw the steps far off); None where it does not
+    close to 1e-12 of the mechanism's size in 40 steps."""
+    for _ in range(40):
+        phi = mb.residual(q, 0.0)
+        if not np.all(np.isfinite(phi)):
+            return None
+        if np.abs(phi).max() <= 1e-12 * mb.scale:
+            return q
+        q = q - w * np.linalg.lstsq(mb.jacobian(q) * w, phi, rcond=FREE)[0]
+    return None
 
 
 def refuse_singular_start(mech: Mechanism, mb: Multibody, q0: np.ndarray, key, where: str):
     """An input error at ``key`` where the start ``q0`` is a singular position: the
-    constraint equations lose rank there (not redundant: they regain it next to it).
+    constraint equations have a smaller rank at it than at the poses next to it on the
+    motion (:func:`start_ranks`; a rank deficient next to it as well is redundant
+    equations, which run).
 
-    From such a start the position and the rates do not determine the motion: each
-    branch through it has its own acceleration (a parallelogram from rest at its
-    collinear pose under gravity: theta'' = -27.6 rad/s^2 on the parallel branch, +10.0
-    on the crossed one), and the pose assembled there is on neither to rounding. The
-    run then stayed put (-1.9e-7 deg in 0.05 s instead of the branch's -1.976 deg),
-    changed T + V by half of itself and took 6.7e5 evaluations for 0.05 s (a 2 s run
-    did not end in 5 minutes); from 1e-7 rad away it follows the branch (-1.976 deg,
-    T + V to 7e-12 J)."""
-    from mechsolve.analyses.dynamics.multibody_events import singular_measure
-    from mechsolve.analyses.dynamics.multibody_integrate import _persists
-
-    rank = len(mb.partition(q0).rows)
-    if rank < mb.nc and _persists(mb, q0, rank):
-        return  # redundant equations: their rank is the run's
-    s = singular_measure(mb, q0, rank)
-    if s >= START_SINGULAR:
-        return
-    raise mech.error(
-        key,
-        f"the start ({where}) is a singular position: the constraint equations lose rank "
-        f"there (their smallest singular value is {s:.1e} of the largest), where branches "
-        "of the mechanism meet, so the position and the rates do not determine the "
-        "motion (each branch has its own acceleration from it); start next to it, on the "
-        "branch the motion is to follow (1e-6 rad away is enough for a four-bar)",
+    Where branches of the mechanism meet there, the position and the rates do not
+    determine the motion: each branch through it has its own acceleration (a
+    parallelogram from rest at its collinear pose under gravity: theta'' = -27.6
+    rad/s^2 on the parallel branch, +10.0 on the crossed one). Unrefused, such a start
+    ran on neither (cranks of 0.1 m: -7.835 and -7.965 deg at 0.05 s where the parallel
+    branch has both at -7.899 deg) or stayed put. Where one branch passes (a third crank
+    at the coupler's middle) the motion is determined, but the run integrates on the
+    equations' rank next to it, which the start lacks (it ended in an internal error)."""
+    ranks = start_ranks(mb, q0)
+    if ranks.at == ranks.near:
+        return  # a regular start, or redundant equations: their rank is the run's
+    if ranks.at > ranks.near:
+        raise mech.error(
+            key,
+            f"the start ({where}) is too close to a singular position of the mechanism "
+            f"for its pose to be found to rounding: the constraint equations have rank "
+            f"{ranks.at} at the pose assembled there (it closes them to rounding) and "
+            f"{ranks.near} at the poses on the motion next to it (redundant equations), so "
+            "that pose is off the motion by more than rounding; start farther from the "
+            "singular position (1e-4 rad is enough for a four-bar)",
+        )
+    head = (
+        f"the start ({where}) is a singular position: the constraint equations have rank "
+        f"{ranks.at} there and {ranks.near} at the poses next to it on the motion (their "
+        f"{ranks.near}th singular value is {ranks.measure:.1e} of the largest at it)"
     )
+    if ranks.branches == 1:
+        tail = (
+            "; one branch of the mechanism passes through it, so the motion is "
+            "determined, but the simulation integrates on the equations independent next "
+            "to it, which are singular at it: start next to it (1e-6 rad away is enough "
+            "for a four-bar)"
+        )
+    else:
+        meet = (
+            f"{ranks.branches} branches of the mechanism meet"
+            if ranks.branches > 1
+            else "branches of the mechanism can meet"
+        )
+        tail = (
+            f", where {meet}, so the position and the rates do not determine the motion "
+            "(each branch has its own acceleration from it); start next to it, on the "
+            "branch the motion is to follow (1e-6 rad away is enough for a four-bar)"
+        )
+    raise mech.error(key, head + tail)
 
 
 def simulate_free(mech: Mechanism, machine: Mechanism, *, max_steps: int | None = None):
