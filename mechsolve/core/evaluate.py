@@ -195,7 +195,10 @@ def _concat(parts: list[Solution]) -> Solution:
 
 
 def forces(
-    an: Analysis, sol: Solution, stroke_extremes: list[tuple[float, float]] | None = None
+    an: Analysis,
+    sol: Solution,
+    stroke_extremes: list[tuple[float, float]] | None = None,
+    friction_hint: tuple | None = None,
 ) -> ForceResult:
     """Every joint force and the driver's effort in the states of ``sol``, with the
     model's inertia, gravity and loads (conditions evaluated on those states;
@@ -203,8 +206,9 @@ def forces(
 
     At a singular position (a toggle, a bifurcation) the reactions are not determined
     and stay empty; the driver's effort, where the motion is smooth through it, is its
-    limit along the motion (see :func:`_effort_limits`)."""
-    f = solve_forces(an, sol, stroke_extremes)
+    limit along the motion (see :func:`_effort_limits`). ``friction_hint``: see
+    :func:`~mechsolve.core.kinetostatics.solve_forces`."""
+    f = solve_forces(an, sol, stroke_extremes, friction_hint)
     if (f.singular or f.near_singular) and len(sol.u) > 1:
         _effort_limits(an, sol, f, f.stroke_extremes)
     return f

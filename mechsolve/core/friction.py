@@ -65,6 +65,7 @@ def solve_friction(
     effort_row: int,
     where: Callable[[int], str],
     smoothing: tuple[np.ndarray, float] | None = None,
+    hint: tuple | None = None,
 ) -> tuple[np.ndarray, FrictionResult]:
     """The multipliers with friction and what friction changes.
 
@@ -83,10 +84,13 @@ def solve_friction(
         ``(speed, s0)``: the Coulomb parts regularised by the driver's ``speed`` at each
         position, ``tanh(|speed| / s0)`` times their value (for the equation of motion,
         which needs friction continuous through a standstill); None: exact Coulomb.
+    hint
+        For a one-position check of the equation of motion (see :func:`balance`):
+        ``(law, magnitudes)`` at the same position and speed, whose unit frictions and
+        magnitudes start this solve; ignored for more than one position.
     """
-    # a one-position check of the equation of motion (see balance): the unit frictions
-    # and a start for the magnitudes from the same position and speed
-    hint = getattr(an, "friction_hint", None) if st.n == 1 else None
+    if st.n != 1:
+        hint = None
     law = _Law(an, st, lam0, solve, smoothing, None if hint is None else hint[0])
     K, n = law.k.shape
     good = np.all(np.isfinite(law.lamv), axis=1) & np.all(np.isfinite(law.U), axis=(0, 2))

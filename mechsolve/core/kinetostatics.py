@@ -53,12 +53,18 @@ if TYPE_CHECKING:
 
 
 def solve_forces(
-    an: Analysis, sol: Solution, stroke_extremes: list[tuple[float, float]] | None = None
+    an: Analysis,
+    sol: Solution,
+    stroke_extremes: list[tuple[float, float]] | None = None,
+    friction_hint: tuple | None = None,
 ) -> ForceResult:
     """Kinetostatic analysis of a solved sweep (positions, velocities, accelerations).
 
     ``stroke_extremes``: the extremes that ``stroke(q)`` in load conditions uses, when
     they come from elsewhere (a long sweep solved in chunks); found over ``sol`` if None.
+    ``friction_hint``: for a one-position check of the equation of motion with joint
+    friction, ``(law, magnitudes)`` found at the same position and speed (see
+    :func:`~mechsolve.core.friction.balance`); None otherwise.
     """
     from mechsolve.core.sweep import StateView
 
@@ -113,7 +119,7 @@ def solve_forces(
     lam = _with_separating_forces(an, st, lam, sol)
     fric = None
     if frictional(an):  # the reactions are no longer linear in the loads: iterate
-        lam, fric = _with_friction(an, st, sol, lam, row)
+        lam, fric = _with_friction(an, st, sol, lam, row, friction_hint)
         effort = -lam[:, row]
     reactions = _reactions(an, st, lam)
     if fric is not None:
@@ -166,7 +172,7 @@ def _energy_terms(st, massive: list, springs: tuple, gx: float, gy: float):
     return energy_terms
 
 
-def _with_friction(an: Analysis, st, sol: Solution, lam: np.ndarray, row: int):
+def _with_friction(an: Analysis, st, sol: Solution, lam: np.ndarray, row: int, hint=None):
     """The multipliers with the joints' friction (see :mod:`mechsolve.core.friction`),
     each iteration's linear solve the ideal one (groups, then separating forces)."""
 
@@ -175,11 +181,10 @@ def _with_friction(an: Analysis, st, sol: Solution, lam: np.ndarray, row: int):
         return _with_separating_forces(an, st, lam1, sol)
 
     # the equation of motion sets a regularisation (mechsolve.analyses.dynamics.model)
-    s0 = getattr(an, "friction_smoothing", None)
+    s0 = an.friction_smoothing
     smoothing = None if s0 is None else (sol.driver_rates()[0], s0)
-    return solve_friction(
-        an, st, lam, solve, row, lambda i: an.format_u(float(sol.u[i])), smoothing
-    )
+    where = lambda i: an.format_u(float(sol.u[i]))  # noqa: E731
+    return solve_friction(an, st, lam, solve, row, where, smoothing, hint)
 
 
 def _with_separating_forces(an: Analysis, st, lam: np.ndarray, sol: Solution) -> np.ndarray:

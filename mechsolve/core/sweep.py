@@ -72,6 +72,10 @@ class Analysis(StartAssembler, BranchEvents, SingularRates, FailureReports):
 
     # the sweep of a recognised plan (mechsolve.core.program), set on a kept analysis
     program = None
+    # Coulomb friction regularised through a standstill of the driver: ``tanh(|speed| /
+    # friction_smoothing)`` times its value (set by the equation of motion on its own
+    # analysis, which needs friction continuous in the speed); None: exact Coulomb
+    friction_smoothing: float | None = None
 
     def __init__(self, mech: Mechanism, method: str | None = None) -> None:
         if mech.driver is None:

@@ -66,6 +66,13 @@ class ReducedModel:
         # joint friction: Coulomb's law regularised through a standstill of the driver
         # (see FRICTION_SMOOTHING), the equation solved at every stage (not tabulated)
         self.friction = bool(frictional(an))
+        # the friction law of the last evaluation's force analysis, ((phi, omega, t),
+        # FrictionResult), for the direct solve of the next acceleration (see _balanced)
+        self._friction_law: tuple | None = None
+        # the last unit state solved, (key, solution) (see _unit_state)
+        self._last_unit: tuple | None = None
+        # False while terms() takes the limit from both sides (no second level of it)
+        self._beside = True
         if self.friction:
             drv = mech.driver
             speed = abs(drv.speed) if drv.motion is None and drv.speed else 1.0
@@ -102,7 +109,7 @@ class ReducedModel:
         with friction asks for the same position at several accelerations)."""
         an, span = self._reaching(wj)
         key = (wj, id(span))
-        last = getattr(self, "_last_unit", None)
+        last = self._last_unit
         if last is not None and last[0] == key:
             return core._take(last[1], np.zeros(1, int))
         kj = int(np.abs(span.u - wj).argmin())
@@ -313,7 +320,7 @@ class ReducedModel:
         ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
         finite = np.isfinite(e0) and np.isfinite(e1)
         if not finite or ind <= NEAR_EXACT:
-            beside = getattr(self, "_beside", True)
+            beside = self._beside
             if not sol.ok.all() or not (beside or finite):
                 raise _LeftRange(phi)
             if beside:
@@ -347,11 +354,9 @@ class ReducedModel:
         for _ in range(60):
             sol = self.states([phi], [omega], [eps])
             sol.t = np.array([t])
-            self.an.friction_hint = hint  # the first check starts from the solution
-            try:
-                r = M - float(core.forces(self.an, sol, self.extremes).effort[0])
-            finally:
-                self.an.friction_hint = hint = None
+            # the first check starts from the direct solution
+            r = M - float(core.forces(self.an, sol, self.extremes, hint).effort[0])
+            hint = None
             if not math.isfinite(r):
                 raise _LeftRange(phi)
             if abs(r) <= 1e-12 * scale:
@@ -369,7 +374,7 @@ class ReducedModel:
         this position and speed (:func:`~mechsolve.core.friction.balance`), with that
         law and the Coulomb magnitudes found (for the check by the full analysis in
         :meth:`accel`); ``(eps, None)`` where that is not at hand or does not converge."""
-        got = getattr(self, "_friction_law", None)
+        got = self._friction_law
         self._friction_law = None
         if got is None or got[0] != (phi, omega, t) or getattr(got[1], "law", None) is None:
             return eps, None
