@@ -328,20 +328,9 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             f"expected {_a(kind)} (a number or a string like '{_EXAMPLE.get(kind, '110 mm')}'), "
             f"got {value!r}"
         )
-    odd = _other_digits(value)
-    if odd:
-        raise UnitError(odd)
-    m = _QUANTITY_RE.match(value)
-    if not m:
-        raise UnitError(
-            f"cannot read {value!r} as {_a(kind)}: write a number and a unit, "
-            f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
-        )
-    unit_text = m.group(2)
-    odd = _not_a_number(value, m.group(1), unit_text, m.end(1) == m.start(2))
-    if odd:
-        raise UnitError(odd)
-    number = _finite(_to_float(m.group(1)), value)
+    number, unit_text = split_number(
+        value, f"{_a(kind)}: write a number and a unit, e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
+    )
     if unit_text == "":
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
     else:
@@ -355,6 +344,34 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
     if not _fits(dim, want):
         raise UnitError(f"{value!r} is {_a(dim_name(dim))}, but {_a(kind)} is expected")
     return check_range(number * unit.factor, kind, value)
+
+
+def split_number(value: str, what: str = "a number") -> tuple[float, str]:
+    """The number that starts ``value`` and the text after it (its unit, ``''`` for
+    none), read by the rule of the file's numbers, which the command line follows too:
+    ASCII digits, a decimal point; ``1:45``, ``1_000``, ``1,5``, a signed ``0x1F`` and
+    full-width digits are refused saying why (:class:`UnitError`), as is text that does
+    not start with a number (``what``: what was expected, for the message)."""
+    odd = _other_digits(value)
+    if odd:
+        raise UnitError(odd)
+    m = _QUANTITY_RE.match(value)
+    if not m:
+        raise UnitError(f"cannot read {value!r} as {what}")
+    odd = _not_a_number(value, m.group(1), m.group(2), m.end(1) == m.start(2))
+    if odd:
+        raise UnitError(odd)
+    return _finite(_to_float(m.group(1)), value), m.group(2)
+
+
+def read_number(text: str) -> float:
+    """A plain number written as text (a command-line option's), by the rule of
+    :func:`split_number`; :class:`UnitError` saying why otherwise (``20 mm``: a unit where
+    a plain number is wanted)."""
+    x, rest = split_number(text)
+    if rest:
+        raise UnitError(f"{text!r} is not a plain number (a number without a unit is wanted)")
+    return x
 
 
 _SEXAGESIMAL_RE = re.compile(r"^:[0-9]")

@@ -388,7 +388,7 @@ class PolygonResult:
         return "\n".join(lines)
 
 
-_INDEX = re.compile(r"\s*(?:position\s*)?#?\s*(\d+)\s*")
+_INDEX = re.compile(r"\s*(?:position\s*)?#?\s*([0-9]+)\s*")  # ASCII digits, as the file's
 
 
 def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:

@@ -19,6 +19,7 @@ from mechsolve.cli.kit import (
     outdir_option,
     output_folder,
     output_units,
+    whole_number,
 )
 
 MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
@@ -61,9 +62,13 @@ def _bar(total: int, quiet: bool):
     help="grid (every combination; the default), one-at-a-time (each parameter on its own, "
     "the others at the file's value), random or latin-hypercube (--samples designs).",
 )
-@click.option("--samples", type=int, help="Designs of a random or Latin-hypercube study (50).")
 @click.option(
-    "--seed", type=int, help="Seed of the random designs (0): the same designs each time."
+    "--samples", type=whole_number(), help="Designs of a random or Latin-hypercube study (50)."
+)
+@click.option(
+    "--seed",
+    type=whole_number(),
+    help="Seed of the random designs (0): the same designs each time.",
 )
 @click.option(
     "--best",
@@ -80,7 +85,10 @@ def _bar(total: int, quiet: bool):
 @click.option("--step", help="Sweep step of every design, e.g. '5 deg' (overrides the file).")
 @VARIANT
 @click.option(
-    "-j", "--jobs", type=int, help="Worker processes (default: all cores; 1: in this process)."
+    "-j",
+    "--jobs",
+    type=whole_number(),
+    help="Worker processes (default: all cores; 1: in this process).",
 )
 @click.option(
     "--dask", "use_dask", is_flag=True, help="Run on a Dask local cluster (--jobs workers)."
@@ -105,7 +113,7 @@ def _bar(total: int, quiet: bool):
 )
 @click.option(
     "--max-designs",
-    type=int,
+    type=whole_number(),
     default=MAX_DESIGNS,
     show_default=True,
     help="Refuse a study of more designs (their rows are kept in memory until the table "

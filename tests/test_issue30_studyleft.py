@@ -1,0 +1,186 @@
+"""Issue 30, what the studies left (``mechsolve sweep``):
+
+1. ``study.samples`` and ``study.seed`` read a whole number written ``10.0`` as 10, as
+   every other whole-number setting does and as the JSON Schema (an ``integer``) says;
+   ``10.5`` is refused with the file, the key path and the line.
+2. The command line reads numbers by the file's rule: full-width digits, ``1_000``,
+   ``1:45`` and a decimal comma are refused naming the option and the value (exit 2).
+3. The designs' results written by a pool's workers are in the output folder's record.
+4. On a pool, the designs finished after a full disk stopped the study are named with
+   their files: no result is lost.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+import yaml
+from click.testing import CliRunner
+
+from mechsolve.analyses.study.designs import make_study
+from mechsolve.base.errors import InputError
+from mechsolve.cli.main import main
+from mechsolve.model.source import load_text
+
+STUDY = Path(__file__).parent / "data" / "study_fourbar.yaml"  # 3 x 2 designs
+SCHEMA_FILE = (
+    Path(__file__).resolve().parent.parent / "mechsolve/analyses/schema/mechanism.schema.json"
+)
+
+
+def _invoke(*args) -> object:
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _random_study(samples, seed) -> str:
+    """The study four-bar as a random study of two uniform parameters."""
+    data = yaml.safe_load(STUDY.read_text("utf-8"))
+    data["study"] = {
+        "design": "random",
+        "samples": samples,
+        "seed": seed,
+        "parameters": {
+            "links.crank.points.A[0]": "uniform(20, 30 mm)",
+            "ground.O4[0]": "uniform(80, 90 mm)",
+        },
+    }
+    return yaml.safe_dump(data, sort_keys=False)
+
+
+# --- item 1: samples and seed written 10.0 ----------------------------------------------
+
+
+def test_samples_and_seed_written_with_a_point_are_whole_numbers():
+    study = make_study(load_text(_random_study(10.0, 3.0), file="st.yaml"))
+    assert len(study.designs) == 10
+    # the designs are numpy's uniform draws of seed 3, scaled by hand to each range
+    u = np.random.default_rng(3).random((10, 2))
+    want = np.column_stack([20 + 10 * u[:, 0], 80 + 10 * u[:, 1]])
+    got = np.array([[d[0], d[1]] for d in study.designs])
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "samples, seed, key, said",
+    [
+        (10.5, 3, "study.samples", "10.5"),
+        (0.0, 3, "study.samples", "1 or more"),
+        (10, 3.5, "study.seed", "3.5"),
+        (10, -1.0, "study.seed", "0 or more"),
+        (10, "3", "study.seed", "'3'"),
+    ],
+)
+def test_a_fraction_is_refused_with_the_file_key_and_line(samples, seed, key, said):
+    text = _random_study(samples, seed)
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if s.strip().startswith(key[6:]))
+    with pytest.raises(InputError) as info:
+        make_study(load_text(text, file="st.yaml"))
+    msg = str(info.value)
+    assert f"st.yaml:{line}" in msg and key in msg and said in msg, msg
+
+
+def test_the_schema_says_what_the_parser_does():
+    validator = jsonschema.Draft7Validator(json.loads(SCHEMA_FILE.read_text("utf-8")))
+
+    def errors(samples, seed):
+        return list(validator.iter_errors(yaml.safe_load(_random_study(samples, seed))))
+
+    assert not errors(10.0, 3.0) and not errors(10, 0)
+    for samples, seed in ((10.5, 3), (0, 3), (10, 3.5), (10, -1)):
+        assert errors(samples, seed), (samples, seed)
+        with pytest.raises(InputError):
+            make_study(load_text(_random_study(samples, seed), file="st.yaml"))
+
+
+def test_samples_and_seed_on_the_command_line_follow_the_same_rule(tmp_path):
+    path = tmp_path / "st.yaml"
+    path.write_text(_random_study(4, 0), "utf-8")
+    r = _invoke("sweep", path, "--samples", "3.0", "--seed", "3.0", "-j", "1", "--no-plots",
+                "-o", tmp_path / "out")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "3 designs" in r.output, r.output
+    r = _invoke("sweep", path, "--samples", "3.5", "-o", tmp_path / "out")
+    assert r.exit_code == 2 and "--samples" in r.output and "3.5" in r.output, r.output
+    assert "Traceback" not in r.output
+
+
+# --- item 2: the command line reads numbers as the file does -----------------------------
+
+A0 = "links.crank.points.A[0]"
+
+
+@pytest.mark.parametrize(
+    "values, said",
+    [
+        ("２０, 25 mm", "write '20'"),  # full-width digits
+        ("20, ２５ mm", "write '25 mm'"),
+        ("1_000, 25", "grouped with '_' are not read; write '1000'"),
+        ("1:45, 25", "'a:b' values"),
+        ("22,5 mm", "a decimal comma is not read"),
+        ("２０..30 mm:3", "write '20'"),
+        ("20..3_0 mm:3", "grouped with '_'"),
+        ("20..30 mm:３", "write '3'"),
+        ("20..30 mm:1_0", "grouped with '_'"),
+        ("20..30 mm:2.5", "not a whole number"),
+        ("uniform(２０, 30 mm)", "write '20'"),
+        ("nan, 25", "cannot read 'nan'"),
+    ],
+)
+def test_a_parameter_on_the_command_line_is_read_as_the_file_reads_numbers(tmp_path, values, said):
+    opt = f"{A0}={values}"
+    r = _invoke("sweep", STUDY, "-p", opt, "-j", "1", "--no-plots", "-o", tmp_path / "o")
+    assert r.exit_code == 2, r.output
+    assert f"-p {opt!r}" in r.output and said in r.output, r.output
+    assert "Traceback" not in r.output and not (tmp_path / "o" / "study.csv").exists()
+
+
+def test_a_parameter_in_the_file_follows_the_same_rule():
+    text = STUDY.read_text("utf-8").replace("20..30 mm:3", "２０..30 mm:3")
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if "２０" in s)
+    with pytest.raises(InputError) as info:
+        make_study(load_text(text, file="st.yaml"))
+    msg = str(info.value)
+    assert f"st.yaml:{line}" in msg and f"study.parameters.{A0}" in msg and "'20" in msg, msg
+
+
+def test_what_the_file_reads_the_command_line_reads_the_same():
+    # a count written 3.0 is 3, as a whole number of the file; spaces of any kind around
+    study = make_study(
+        load_text(STUDY.read_text("utf-8"), file="st.yaml"),
+        [f"{A0}=20..30 mm:3.0", "ground.O4[0]=\u300080 mm, 87.5 mm, 0.0875 m"],
+    )
+    got = {p.name: p.values for p in study.params}
+    assert got[A0] == [20.0, 25.0, 30.0]
+    assert got["ground.O4[0]"] == pytest.approx([80.0, 87.5, 87.5], rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "args, option, value",
+    [
+        (["sweep", STUDY, "--samples", "２０"], "--samples", "２０"),
+        (["sweep", STUDY, "--seed", "1_0"], "--seed", "1_0"),
+        (["sweep", STUDY, "-j", "1:2"], "-j", "1:2"),
+        (["sweep", STUDY, "--max-designs", "1,000"], "--max-designs", "1,000"),
+        (["polygons", STUDY, "--scale-v", "0,5"], "--scale-v", "0,5"),
+        (["polygons", STUDY, "--scale-v", "nan"], "--scale-v", "nan"),
+        (["polygons", STUDY, "--per-turn", "１２"], "--per-turn", "１２"),
+        (["animate", STUDY, "--fps", "2_5"], "--fps", "2_5"),
+        (["simulate", STUDY, "--max-steps", "1e2.5"], "--max-steps", "1e2.5"),
+    ],
+)
+def test_every_number_option_follows_the_rule(tmp_path, args, option, value):
+    r = CliRunner().invoke(main, [str(a) for a in args] + ["-o", str(tmp_path / "o")])
+    assert r.exit_code == 2, r.output
+    assert option in r.output and repr(value) in r.output, r.output
+    assert "Traceback" not in r.output
+
+
+def test_a_whole_number_option_written_with_a_point_is_whole(tmp_path):
+    out = tmp_path / "o"
+    r = _invoke("sweep", STUDY, "-j", "1.0", "--no-plots", "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "6 designs" in r.output and "this process" in r.output, r.output
