@@ -12,7 +12,12 @@
 
 from __future__ import annotations
 
+import csv
+import errno
 import json
+import os
+import re
+import time
 from pathlib import Path
 
 import jsonschema
@@ -184,3 +189,109 @@ def test_a_whole_number_option_written_with_a_point_is_whole(tmp_path):
     r = _invoke("sweep", STUDY, "-j", "1.0", "--no-plots", "-o", out)
     assert r.exit_code == 0, r.output
     assert "6 designs" in r.output and "this process" in r.output, r.output
+
+
+# --- item 3: the designs a pool's workers write are in the folder's record ---------------
+
+
+def _recorded(out: Path) -> set[str]:
+    data = json.loads((out / ".mechsolve-outputs.json").read_text("utf-8"))
+    return set(data["commands"]["sweep"]["files"])
+
+
+def _earlier(output: str) -> set[str]:
+    m = re.search(r"from an earlier sweep, not from this one[^:]*: (.*)", output)
+    return set(m.group(1).split(", ")) if m else set()
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_a_pools_design_results_are_recorded_and_named_next_time(tmp_path, jobs):
+    out = tmp_path / "st"
+    r = _invoke("sweep", STUDY, "-o", out, "-j", jobs, "--no-plots", "--keep-results")
+    assert r.exit_code == 0, r.output
+    if jobs == "2":
+        assert "a pool of 2 processes" in r.output, r.output
+    six = {f"designs/design-{k:05d}.csv" for k in range(6)}  # the study's 3 x 2 designs
+    assert {f"designs/{p.name}" for p in (out / "designs").iterdir()} == six
+    assert six <= _recorded(out), _recorded(out)
+    # a study of 3 designs into the same folder: the other three are an earlier run's
+    r = _invoke("sweep", STUDY, "-o", out, "-j", jobs, "--no-plots", "--keep-results",
+                "-p", "ground.O4[0]=87.5 mm")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "3 designs" in r.output, r.output
+    assert _earlier(r.output) == {f"designs/design-{k:05d}.csv" for k in (3, 4, 5)}, r.output
+
+
+# --- item 4: designs finished after a full disk stopped a pool ----------------------------
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _stop_with_one_design_written_late(monkeypatch, marker: Path, stop: str) -> None:
+    """On a pool of 2 with chunks of 2 designs (20 designs; chunk [0, 1] is timed in the
+    main process): the worker on chunk [4, 5] writes design 4, then its flush of design 5
+    says so (``marker``) and never ends; the worker on chunk [2, 3] then finds the disk
+    full at design 2 (``stop`` "full disk"), or presses Ctrl-C there ("ctrl-c": SIGINT to
+    the main process). Design 4's file is whole, its row never reaches the main process."""
+    import signal
+
+    real = os.fsync
+
+    def fsync(fd):
+        try:
+            name = os.path.basename(os.readlink(f"/proc/self/fd/{fd}"))
+        except OSError:
+            name = ""
+        if "design-00005" in name:
+            marker.touch()
+            time.sleep(120)  # ended by the pool's terminate long before
+        if "design-00002" in name:
+            t0 = time.monotonic()
+            while not marker.exists() and time.monotonic() - t0 < 60:
+                time.sleep(0.02)
+            if stop == "full disk":
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            os.kill(os.getppid(), signal.SIGINT)
+            time.sleep(120)  # ended by the pool's terminate
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+
+
+@pytest.mark.parametrize("stop, code", [("full disk", 2), ("ctrl-c", 130)])
+def test_designs_finished_after_a_stop_on_a_pool_are_named_with_their_files(
+    tmp_path, monkeypatch, stop, code
+):
+    """The designs a worker finished after a full disk or Ctrl-C stopped the study, whose
+    rows were lost with the worker, are named with their files (whole, each a row per
+    position), and the folder's record lists every design's file of the run."""
+    if not os.path.isdir("/proc/self/fd"):
+        pytest.skip("the injected full disk reads /proc/self/fd")
+    _stop_with_one_design_written_late(monkeypatch, tmp_path / "marker", stop)
+    out = tmp_path / "st"
+    r = _invoke("sweep", STUDY, "-o", out, "-j", "2", "--no-plots", "--keep-results",
+                "-p", "links.crank.points.A[0]=20..30 mm:5",
+                "-p", "ground.O4[0]=80, 85, 87.5, 90 mm")  # fmt: skip
+    assert r.exit_code == code, r.output
+    assert "Traceback" not in r.output
+    if stop == "full disk":
+        err = [x for x in r.output.splitlines() if "error" in x]
+        assert err == [f"error: cannot write {out / 'designs' / 'design-00002.csv'}: "
+                       f"{os.strerror(errno.ENOSPC)}"], r.output  # fmt: skip
+    rows = {int(row["design [-]"]) for row in _rows(out / "study.csv")}
+    files = {int(p.name[7:12]) for p in (out / "designs").iterdir() if p.suffix == ".csv"}
+    assert 4 in files and 4 not in rows  # written, its row lost with its worker
+    late = sorted(files - rows)
+    m = re.search(r"(\d+) design\(s\) finished after the stop have no row in [^:]*: (.*)",
+                  r.output)  # fmt: skip
+    assert m, r.output
+    assert int(m.group(1)) == len(late)
+    assert m.group(2).split(", ") == [f"designs/design-{k:05d}.csv" for k in late]
+    for k in late:  # each whole: a row per position, 0 to 360 deg every 10 deg
+        got = _rows(out / "designs" / f"design-{k:05d}.csv")
+        assert [float(x["input.angle [deg]"]) for x in got] == [10.0 * i for i in range(37)]
+    # and in the folder's record, as the files of this run
+    assert {f"designs/design-{k:05d}.csv" for k in files} <= _recorded(out)

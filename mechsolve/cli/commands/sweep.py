@@ -295,16 +295,22 @@ def _check_estimate(est, n: int, where: str, max_designs, max_time, limit_s, qui
 
 def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
     """Solve the designs not yet timed, with a progress bar that starts at the timed ones
-    (none when a results file could not be written in those: the study stops there)."""
-    from mechsolve.analyses.study.execute import Outcome, execute
+    (none when a results file could not be written in those: the study stops there).
+    The designs' results that workers wrote (not this process) are added to what the
+    command wrote, for the output folder's record, and those of designs without a row
+    (finished after a stop) to the outcome's ``late``."""
+    from mechsolve.analyses.study import execute as ex
+    from mechsolve.base.atomic import note_committed
 
     if est.unwritten is not None:
-        return Outcome(est.rows, len(study), False, "this process", est.unwritten)
+        return ex.Outcome(est.rows, len(study), False, "this process", est.unwritten)
     bar = _bar(len(study), quiet)
     if bar is not None:
         bar.update(est.timed)
+    before = None if results_dir is None else ex.design_files(results_dir)
+    written: list[Path] = []
     try:
-        return execute(
+        outcome = ex.execute(
             study,
             jobs=jobs,
             dask=use_dask,
@@ -316,6 +322,11 @@ def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
     finally:  # whatever ends the study (errors: the group's one handler)
         if bar is not None:
             bar.close()
+        if before is not None:
+            written = ex.written_since(results_dir, before)
+            note_committed(written)
+    outcome.late = ex.rowless(outcome.rows, written)
+    return outcome
 
 
 def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
@@ -333,6 +344,7 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
             f"are in {written[0]}",
             err=True,
         )
+        _echo_late(outcome, outdir, written[0])
         clikit.interrupted()
     if outcome.unwritten is not None:  # a full disk: the error names the design's file
         click.echo(
@@ -340,6 +352,7 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
             f"not be written; the rows of the designs solved are in {written[0]}",
             err=True,
         )
+        _echo_late(outcome, outdir, written[0])
         raise outcome.unwritten
     pick = pick_best(study, rows) if study.best is not None else None
     if pick is not None:
@@ -349,6 +362,26 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
 
         written += write_plots(study, rows, outdir)
     return written, pick
+
+
+def _echo_late(outcome, outdir: Path, table: Path) -> None:
+    """Name the designs a worker finished after the study stopped (a full disk, Ctrl-C):
+    their results files are whole, their rows are not in the table; no result is lost."""
+    if not outcome.late:
+        return
+    names = ", ".join(_shown(p, outdir) for p in outcome.late)
+    click.echo(
+        f"  {len(outcome.late)} design(s) finished after the stop have no row in "
+        f"{table.name}, only their results (kept) in {outdir}/: {names}",
+        err=True,
+    )
+
+
+def _shown(path: Path, outdir: Path) -> str:
+    try:
+        return path.relative_to(outdir).as_posix()
+    except ValueError:
+        return str(path)
 
 
 class _Counts:
