@@ -175,6 +175,10 @@ def test_what_the_file_reads_the_command_line_reads_the_same():
         (["polygons", STUDY, "--per-turn", "１２"], "--per-turn", "１２"),
         (["animate", STUDY, "--fps", "2_5"], "--fps", "2_5"),
         (["simulate", STUDY, "--max-steps", "1e2.5"], "--max-steps", "1e2.5"),
+        (["flywheel", STUDY, "--delta", "１/40"], "--delta", "１/40"),
+        (["flywheel", STUDY, "--delta", "1/4_0"], "--delta", "1/4_0"),
+        (["compare", STUDY, STUDY, "--delta", "0,025"], "--delta", "0,025"),
+        (["animate", STUDY, "--size", "８００x600"], "--size", "８００x600"),
     ],
 )
 def test_every_number_option_follows_the_rule(tmp_path, args, option, value):
