@@ -88,6 +88,17 @@ def test_a_fraction_is_refused_with_the_file_key_and_line(samples, seed, key, sa
     assert f"st.yaml:{line}" in msg and key in msg and said in msg, msg
 
 
+def test_samples_of_a_grid_are_refused_where_they_are_written(tmp_path):
+    text = STUDY.read_text("utf-8").replace("design: grid", "design: grid\n  samples: 10.0")
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if "samples:" in s)
+    with pytest.raises(InputError) as info:
+        make_study(load_text(text, file="st.yaml"))
+    msg = str(info.value)
+    assert f"st.yaml:{line}: study.samples: a grid study takes every value" in msg, msg
+    r = _invoke("sweep", STUDY, "--samples", "5", "-o", tmp_path / "o")
+    assert r.exit_code == 2 and "--samples 5: a grid study" in r.output, r.output
+
+
 def test_the_schema_says_what_the_parser_does():
     validator = jsonschema.Draft7Validator(json.loads(SCHEMA_FILE.read_text("utf-8")))
 
@@ -125,7 +136,7 @@ A0 = "links.crank.points.A[0]"
         ("20, ２５ mm", "write '25 mm'"),
         ("1_000, 25", "grouped with '_' are not read; write '1000'"),
         ("1:45, 25", "'a:b' values"),
-        ("22,5 mm", "a decimal comma is not read"),
+        ("22,5 mm", "a decimal comma is not read; write '22.5 mm', or '22, 5 mm' for a list"),
         ("２０..30 mm:3", "write '20'"),
         ("20..3_0 mm:3", "grouped with '_'"),
         ("20..30 mm:３", "write '3'"),

@@ -184,6 +184,15 @@ def make_study(
     params = _parameters(src, sec, data, options)
     mode = _design_mode(src, sec, design, params)
     n = _whole_setting(src, sec, "samples", samples, 1, "the number of samples")
+    if n is not None and (mode in ("grid", "one-at-a-time") or n > MAX_DESIGNS):
+        msg = (
+            f"{n} samples: at most {MAX_DESIGNS}"
+            if n > MAX_DESIGNS
+            else f"a {mode} study takes every value; samples are for random ones"
+        )
+        if samples is None:
+            raise src.error(("study", "samples"), msg)
+        raise InputError(f"--samples {samples}: {msg}")
     sd = _whole_setting(src, sec, "seed", seed, 0, "the seed")
     sd = 0 if sd is None else sd
     bst = _best(src, sec, best)

@@ -250,11 +250,11 @@ def _list_items(text: str, where: str) -> list[str]:
     decimal comma, which the file's numbers refuse, or two values?"""
     m = _DIGIT_COMMA_RE.search(text)
     if m is not None:
-        a, b = m.start(), m.end()
+        i = m.start() + 1  # the comma
+        point, apart = text[:i] + "." + text[i + 1 :], text[:i] + ", " + text[i + 1 :]
         raise InputError(
-            f"{where}: {text!r} has a comma between digits ({text[max(0, a - 3) : b + 3]!r}): "
-            "a decimal comma is not read; write a decimal point (1.5), or a comma and a "
-            "space between values (1, 5)"
+            f"{where}: {text!r} has a comma between digits: a decimal comma is not read; "
+            f"write {point!r}, or {apart!r} for a list of values"
         )
     return _split_items(text)
 
