@@ -190,10 +190,13 @@ def test_what_the_file_reads_the_command_line_reads_the_same():
         (["flywheel", STUDY, "--delta", "1/4_0"], "--delta", "1/4_0"),
         (["compare", STUDY, STUDY, "--delta", "0,025"], "--delta", "0,025"),
         (["animate", STUDY, "--size", "８００x600"], "--size", "８００x600"),
+        (["polygons", STUDY, "--at", "２"], "--at", "２"),
+        (["draw", STUDY, "--at", "1_0 deg"], "--at", "1_0 deg"),
     ],
 )
 def test_every_number_option_follows_the_rule(tmp_path, args, option, value):
-    r = CliRunner().invoke(main, [str(a) for a in args] + ["-o", str(tmp_path / "o")])
+    out = tmp_path / ("o.dxf" if args[0] == "draw" else "o")
+    r = CliRunner().invoke(main, [str(a) for a in args] + ["-o", str(out)])
     assert r.exit_code == 2, r.output
     assert option in r.output and repr(value) in r.output, r.output
     assert "Traceback" not in r.output
