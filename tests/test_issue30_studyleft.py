@@ -313,3 +313,28 @@ def test_designs_finished_after_a_stop_on_a_pool_are_named_with_their_files(
         assert [float(x["input.angle [deg]"]) for x in got] == [10.0 * i for i in range(37)]
     # and in the folder's record, as the files of this run
     assert {f"designs/design-{k:05d}.csv" for k in files} <= _recorded(out)
+
+
+@pytest.mark.parametrize(
+    "text, said",
+    [
+        ("1,5 rpm", "a decimal comma is not read; write '1.5 rpm'"),
+        (
+            "1,500 rpm",
+            "(a decimal comma, or digits grouped by thousands?); write '1.500 rpm' or '1500 rpm'",
+        ),  # fmt: skip
+        ("1,000,000 rpm", "digits grouped with ',' are not read; write '1000000 rpm'"),
+        ("12,345.6 rpm", "digits grouped with ',' are not read; write '12345.6 rpm'"),
+        ("0,025 rpm", "a decimal comma is not read; write '0.025 rpm'"),
+    ],
+)
+def test_a_comma_that_may_group_thousands_is_not_read_as_a_decimal_comma_only(text, said):
+    """The number to write is suggested only where it is certain: ``1,500`` may be 1.5 or
+    1500, so both are named (it was "write '1.500'")."""
+    from mechsolve.base.units import UnitError, parse_quantity
+
+    with pytest.raises(UnitError) as info:
+        parse_quantity(text, "angular speed")
+    assert said in str(info.value), str(info.value)
+    r = _invoke("sweep", STUDY, "--max-designs", text.replace(" rpm", ""))
+    assert r.exit_code == 2 and said.replace(" rpm", "") in r.output, r.output
