@@ -231,7 +231,7 @@ def test_time_law_summary_gives_its_time_step_and_the_shown_time_unit():
 # -- sweep -p naming a parameter twice --------------------------------------------------
 @pytest.mark.parametrize(
     "second",
-    ["links.crank.points.A[0]=22,24 mm", "links.crank.points.A[ 0 ]=22,24 mm"],
+    ["links.crank.points.A[0]=22, 24 mm", "links.crank.points.A[ 0 ]=22, 24 mm"],
 )
 def test_sweep_refuses_a_parameter_given_twice(tmp_path, second):
     """Two -p of one key path (or of two spellings of it) exit 2 naming both, as --at and
@@ -241,7 +241,7 @@ def test_sweep_refuses_a_parameter_given_twice(tmp_path, second):
 
     from mechsolve.cli.commands.sweep import sweep
 
-    first = "links.crank.points.A[0]=20,25 mm"
+    first = "links.crank.points.A[0]=20, 25 mm"
     args = [str(MECH / "fourbar.yaml"), "-p", first, "-p", second, "-o", str(tmp_path)]
     r = CliRunner().invoke(sweep, args + ["--no-plots", "-q"])
     assert r.exit_code == 2, r.output

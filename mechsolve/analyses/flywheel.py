@@ -32,7 +32,14 @@ import numpy as np
 from mechsolve.analyses.dynamics import MAX_STEPS, _with_flywheel, simulate, steady_fluctuation
 from mechsolve.analyses.dynamics.cycle import cycle_cause, machine_cycle
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import _QUANTITY_RE, SI_OUTPUT, OutputUnits, UnitError, parse_unit
+from mechsolve.base.units import (
+    _QUANTITY_RE,
+    SI_OUTPUT,
+    OutputUnits,
+    UnitError,
+    parse_unit,
+    read_number,
+)
 from mechsolve.core import evaluate as core
 from mechsolve.core.sweep import Analysis
 from mechsolve.model import GROUND, Mechanism
@@ -51,31 +58,27 @@ __all__ = ["CHECK_TOLERANCE", "FlywheelSizing", "parse_delta", "size_flywheel"]
 CHECK_TOLERANCE = 1.25
 
 
+_DELTA_HINT = "expected a number such as 0.025 or 1/40"
+
+
 def parse_delta(text: object, where: str = "--delta") -> float:
     """The coefficient of fluctuation from ``0.025`` or ``1/40``: strictly between 0 and 1.
 
     Raises :class:`~mechsolve.base.errors.InputError` (naming ``where``) for anything else."""
     num, _, den = str(text).strip().partition("/")
-    try:
-        value = float(num) / float(den) if den else float(num)
-    except (ValueError, ZeroDivisionError):
-        raise InputError(
-            f"{where} {text!r}: expected a number such as 0.025 or 1/40"
-            + (" (division by zero)" if den and _is_zero(den) else "")
-        ) from None
+    try:  # each number read as the file's are (no full-width digits, no 1_000)
+        value = read_number(num) / read_number(den) if den else read_number(num)
+    except ZeroDivisionError:
+        raise InputError(f"{where} {text!r}: {_DELTA_HINT} (division by zero)") from None
+    except UnitError as exc:  # its reason, where it says more than "cannot read"
+        why = "" if str(exc).startswith("cannot read") else f" ({exc})"
+        raise InputError(f"{where} {text!r}: {_DELTA_HINT}{why}") from None
     if not (math.isfinite(value) and 0 < value < 1):
         raise InputError(
             f"{where} {text!r}: the coefficient of fluctuation (omega_max - omega_min) / "
             "omega_m is between 0 and 1, e.g. 1/40"
         )
     return value
-
-
-def _is_zero(text: str) -> bool:
-    try:
-        return float(text) == 0.0
-    except ValueError:
-        return False
 
 
 @dataclass

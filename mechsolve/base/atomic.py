@@ -27,7 +27,7 @@ import os
 import stat
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
@@ -41,6 +41,7 @@ __all__ = [
     "commit",
     "committed_mark",
     "committed_since",
+    "note_committed",
     "destination",
     "new_temporary",
     "opened",
@@ -66,6 +67,13 @@ def committed_since(mark: int) -> list[Path]:
     """The files this process has moved into place since :func:`committed_mark` gave
     ``mark`` (not those written through to a device or a pipe)."""
     return list(_COMMITTED[mark:])
+
+
+def note_committed(paths: Iterable[str | os.PathLike]) -> None:
+    """Count ``paths``, files that this process's workers (a process pool) moved into
+    place, among the files this process wrote (:func:`committed_since`): the output
+    folder's record lists them as the command's own."""
+    _COMMITTED.extend(Path(p) for p in paths)
 
 
 # errors of the machine, not of mechsolve: the user can act on them (free space, fix the

@@ -328,20 +328,9 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
             f"expected {_a(kind)} (a number or a string like '{_EXAMPLE.get(kind, '110 mm')}'), "
             f"got {value!r}"
         )
-    odd = _other_digits(value)
-    if odd:
-        raise UnitError(odd)
-    m = _QUANTITY_RE.match(value)
-    if not m:
-        raise UnitError(
-            f"cannot read {value!r} as {_a(kind)}: write a number and a unit, "
-            f"e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
-        )
-    unit_text = m.group(2)
-    odd = _not_a_number(value, m.group(1), unit_text, m.end(1) == m.start(2))
-    if odd:
-        raise UnitError(odd)
-    number = _finite(_to_float(m.group(1)), value)
+    number, unit_text = split_number(
+        value, f"{_a(kind)}: write a number and a unit, e.g. '{_EXAMPLE.get(kind, '110 mm')}'"
+    )
     if unit_text == "":
         unit = parse_unit(default_unit) if default_unit else Unit(1.0, want)
     else:
@@ -357,9 +346,39 @@ def parse_quantity(value: object, kind: str, default_unit: str | None = None) ->
     return check_range(number * unit.factor, kind, value)
 
 
+def split_number(value: str, what: str = "a number") -> tuple[float, str]:
+    """The number that starts ``value`` and the text after it (its unit, ``''`` for
+    none), read by the rule of the file's numbers, which the command line follows too:
+    ASCII digits, a decimal point; ``1:45``, ``1_000``, ``1,5``, a signed ``0x1F`` and
+    full-width digits are refused saying why (:class:`UnitError`), as is text that does
+    not start with a number (``what``: what was expected, for the message)."""
+    odd = _other_digits(value)
+    if odd:
+        raise UnitError(odd)
+    m = _QUANTITY_RE.match(value)
+    if not m:
+        raise UnitError(f"cannot read {value!r} as {what}")
+    odd = _not_a_number(value, m.group(1), m.group(2), m.end(1) == m.start(2))
+    if odd:
+        raise UnitError(odd)
+    return _finite(_to_float(m.group(1)), value), m.group(2)
+
+
+def read_number(text: str) -> float:
+    """A plain number written as text (a command-line option's), by the rule of
+    :func:`split_number`; :class:`UnitError` saying why otherwise (``20 mm``: a unit where
+    a plain number is wanted)."""
+    x, rest = split_number(text)
+    if rest:
+        raise UnitError(f"{text!r} is not a plain number (a number without a unit is wanted)")
+    return x
+
+
 _SEXAGESIMAL_RE = re.compile(r"^:[0-9]")
 _GROUPED_RE = re.compile(r"^(?:_[0-9]+)+")
 _DECIMAL_COMMA_RE = re.compile(r"^,[0-9]")
+_THOUSANDS_RE = re.compile(r"^(?:,[0-9]{3})+(?![0-9])")  # 1,500 or 1,000,000
+_ONE_COMMA_RE = re.compile(r"^,[0-9]+(?![0-9.,_:])")  # 1,5 as 1.5 (not 1,5.2 nor 1,000,000)
 # a base prefix after a 0 read as the number: 0x1F, 0o17, 0b11010 (the rest: a unit)
 _BASE_RE = re.compile(r"^([xob])([0-9a-f]+)(?![0-9a-z_.])(.*)$", re.IGNORECASE)
 
@@ -404,13 +423,30 @@ def _not_a_number(value: str, number: str, rest: str, joined: bool = True) -> st
         return f"{value!r} is not a number: digits grouped with '_' are not read" + (
             f"; write {fixed!r}" if joined else ""
         )
-    m = _DECIMAL_COMMA_RE.match(rest)
-    if m:
-        fixed = number + "." + rest[1:]
-        return f"{value!r} is not a number: a decimal comma is not read" + (
-            f"; write {fixed!r}" if joined else ""
-        )
+    if _DECIMAL_COMMA_RE.match(rest):
+        return _comma(value, number, rest, joined)
     return _based(value, number, rest) if joined else None
+
+
+def _comma(value: str, number: str, rest: str, joined: bool) -> str:
+    """Why ``value`` (``number`` then ``rest``, a comma and a digit) is refused: a decimal
+    comma (``1,5``), digits grouped by thousands (``1,000,000``, ``12,345.6``) or either
+    (``1,500``); the numbers to write where ``rest`` follows ``number`` directly."""
+    plain = "." not in number and "e" not in number.lower()
+    decimal = plain and _ONE_COMMA_RE.match(rest) is not None
+    lead = number.lstrip("+-")  # a thousands group leads with 1 to 3 digits, not 0
+    g = _THOUSANDS_RE.match(rest) if plain and len(lead) <= 3 and lead[:1] != "0" else None
+    write = [number + "." + rest[1:]] if decimal else []
+    if g is not None:
+        write.append(number + g.group().replace(",", "") + rest[g.end() :])
+    if g is None:
+        why = "a decimal comma is not read"
+    elif decimal:
+        why = "a comma is not read (a decimal comma, or digits grouped by thousands?)"
+    else:
+        why = "digits grouped with ',' are not read"
+    shown = " or ".join(repr(w) for w in write)
+    return f"{value!r} is not a number: {why}" + (f"; write {shown}" if joined and shown else "")
 
 
 def _based(value: str, number: str, rest: str) -> str | None:

@@ -248,12 +248,16 @@ def stream_above() -> int:
     text = os.environ.get("MECHSOLVE_STREAM_ABOVE")
     if text is None:
         return STREAM_ABOVE
-    try:
-        return int(text)
-    except ValueError:
-        raise InputError(
-            f"MECHSOLVE_STREAM_ABOVE={text!r}: expected a whole number of positions"
-        ) from None
+    from mechsolve.base.keyspec import whole
+    from mechsolve.base.units import UnitError, read_number
+
+    try:  # read as the file's numbers are
+        n = whole(read_number(text))
+    except UnitError:
+        n = None
+    if not isinstance(n, int):
+        raise InputError(f"MECHSOLVE_STREAM_ABOVE={text!r}: expected a whole number of positions")
+    return n
 
 
 _SIGNALLED: list[int] = []  # Ctrl-C or SIGTERM received by this process
@@ -476,6 +480,67 @@ class Group(click.Group):
 
 
 # options that several commands share
+class _ReadAsTheFile:
+    """The reading of a command-line number by the rule of the file's numbers
+    (:func:`mechsolve.base.units.read_number`: ``1_000``, ``1:45``, ``1,5`` and full-width
+    digits are refused, where Python's ``int`` and ``float`` would take some of them);
+    ``whole``: a whole number, ``10.0`` being 10 as in the file. Then click's own type
+    (its range, its help); a refusal is click's usage error naming the option and the
+    value: exit 2."""
+
+    whole = False
+
+    def convert(self, value: Any, param: Any, ctx: Any) -> Any:
+        if isinstance(value, str):
+            from mechsolve.base.keyspec import whole
+            from mechsolve.base.units import UnitError, read_number
+
+            try:
+                x: Any = read_number(value)
+            except UnitError as exc:
+                self.fail(str(exc), param, ctx)  # type: ignore[attr-defined]
+            if self.whole:
+                x = whole(x)
+                if not isinstance(x, int):
+                    self.fail(f"{value!r} is not a whole number", param, ctx)  # type: ignore[attr-defined]
+            value = x
+        return super().convert(value, param, ctx)  # type: ignore[misc]
+
+
+class _Whole(_ReadAsTheFile, click.types.IntParamType):
+    whole = True
+
+
+class _WholeRange(_ReadAsTheFile, click.IntRange):
+    whole = True
+
+
+class _Number(_ReadAsTheFile, click.types.FloatParamType):
+    pass
+
+
+class _NumberRange(_ReadAsTheFile, click.FloatRange):
+    pass
+
+
+def number(
+    low: float | None = None, high: float | None = None, low_open: bool = False
+) -> click.ParamType:
+    """A command-line number read as the file's numbers are (see :class:`_ReadAsTheFile`),
+    ``low`` (excluded with ``low_open``) to ``high``."""
+    if low is None and high is None:
+        return _Number()
+    return _NumberRange(min=low, max=high, min_open=low_open)
+
+
+def whole_number(low: int | None = None, high: int | None = None) -> click.ParamType:
+    """A command-line whole number read as the file's are (``10.0`` is 10; see
+    :class:`_ReadAsTheFile`), ``low`` to ``high``."""
+    if low is None and high is None:
+        return _Whole()
+    return _WholeRange(min=low, max=high)
+
+
 FILE_ARG = click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 VARIANT = click.option("--variant", help="Apply the named entry of the file's 'variants' section.")
 NO_PLOTS = click.option("--no-plots", is_flag=True, help="Write the CSV only.")

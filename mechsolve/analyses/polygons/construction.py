@@ -16,7 +16,14 @@ from mechsolve.analyses.instants import Instant, solve_instants
 from mechsolve.analyses.polygons.dyads import DyadConstructions
 from mechsolve.analyses.polygons.vectors import Arrow, _k_cross
 from mechsolve.base.errors import InputError, SolverError
-from mechsolve.base.units import LIMITS, SI_OUTPUT, OutputUnits, UnitError, parse_quantity
+from mechsolve.base.units import (
+    LIMITS,
+    SI_OUTPUT,
+    OutputUnits,
+    UnitError,
+    parse_quantity,
+    read_number,
+)
 from mechsolve.core.sweep import Analysis
 from mechsolve.joints.revolute import RevoluteConstraint
 from mechsolve.joints.slider import SliderConstraint
@@ -388,7 +395,7 @@ class PolygonResult:
         return "\n".join(lines)
 
 
-_INDEX = re.compile(r"\s*(?:position\s*)?#?\s*(\d+)\s*")
+_INDEX = re.compile(r"\s*(?:position\s*)?#?\s*([0-9]+)\s*")  # ASCII digits, as the file's
 
 
 def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:
@@ -453,8 +460,8 @@ def resolve_at(an: Analysis, at: int | str, per_turn: int = 12) -> Instant:
         try:
             t = parse_quantity(text, "time")
         except UnitError as exc2:
-            for e in (bad, exc2):  # a number out of range: say that, not "expected ..."
-                if "too large" in str(e) or "not a finite" in str(e):
+            for e in (bad, exc2):  # a number out of range or not read: say why
+                if any(w in str(e) for w in _WHY):
                     raise InputError(f"{where} {text!r}: {e}") from None
             raise InputError(
                 f"{where} {text!r}: expected a position number (1 to {per_turn}), a driver "
@@ -479,11 +486,16 @@ def _on_its_turn(val: float, u0: float, direction: int) -> float:
     return u0 + direction * ((direction * (val - u0)) % (2 * math.pi))
 
 
+# the reasons of parse_quantity worth more than "expected ...": out of range, or a number
+# the file's rule does not read (full-width digits, 1_000, 1:45, a decimal comma)
+_WHY = ("too large", "not a finite", "is not a number", "digits other than ASCII")
+
+
 def _bare_number(text: str) -> bool:
     """Whether ``text`` is a number without a unit (``'1.5'``, ``'1e9'``)."""
-    try:
-        float(text)
-    except ValueError:
+    try:  # read as the file's numbers are (full-width digits and 1_000 are not numbers)
+        read_number(text)
+    except UnitError:
         return False
     return True
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from mechsolve.analyses.study.params import Parameter, make_parameter, parse_option
 from mechsolve.base.errors import InputError
+from mechsolve.base.keyspec import whole
 from mechsolve.base.units import OutputUnits
 from mechsolve.model.parse import from_source
 from mechsolve.model.source import Source
@@ -182,20 +183,37 @@ def make_study(
     base.data = data
     params = _parameters(src, sec, data, options)
     mode = _design_mode(src, sec, design, params)
-    n = samples if samples is not None else sec.get("samples")
-    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
-        msg = f"the number of samples must be a whole number of 1 or more, got {n!r}"
+    n = _whole_setting(src, sec, "samples", samples, 1, "the number of samples")
+    if n is not None and (mode in ("grid", "one-at-a-time") or n > MAX_DESIGNS):
+        msg = (
+            f"{n} samples: at most {MAX_DESIGNS}"
+            if n > MAX_DESIGNS
+            else f"a {mode} study takes every value; samples are for random ones"
+        )
         if samples is None:
             raise src.error(("study", "samples"), msg)
-        raise InputError(f"--samples: {msg}")
-    sd = seed if seed is not None else sec.get("seed", 0)
-    if isinstance(sd, bool) or not isinstance(sd, int) or sd < 0:
-        raise src.error(("study", "seed"), f"the seed is a whole number, got {sd!r}")
+        raise InputError(f"--samples {samples}: {msg}")
+    sd = _whole_setting(src, sec, "seed", seed, 0, "the seed")
+    sd = 0 if sd is None else sd
     bst = _best(src, sec, best)
     figs = _figures(src, sec, figures)
     study = Study(base, params, mode, n, sd, figures=figs, best=bst, variant=variant)
     study.designs = list_designs(study)
     return study
+
+
+def _whole_setting(src: Source, sec: dict, key: str, given, least: int, what: str):
+    """The whole number ``study.KEY`` (``given``: the command line's, which replaces it),
+    ``least`` or more, or None when neither gives one. ``10.0`` is 10, as for every
+    whole-number setting of the file and as the JSON Schema's ``integer`` reads it; a
+    fraction, text or a number under ``least`` is refused where it was written."""
+    n = whole(given if given is not None else sec.get(key))
+    if n is None or (isinstance(n, int) and not isinstance(n, bool) and n >= least):
+        return n
+    msg = f"{what} must be a whole number of {least} or more, got {n!r}"
+    if given is None:
+        raise src.error(("study", key), msg)
+    raise InputError(f"--{key}: {msg}")
 
 
 def _parameters(src: Source, sec: dict, data: dict, options) -> list:
@@ -222,7 +240,7 @@ def _parameters(src: Source, sec: dict, data: dict, options) -> list:
         except InputError as exc:
             if where:
                 raise src.error(where, exc.message) from None
-            raise InputError(f"-p: {exc.message}") from None
+            raise InputError(f"{said[key]}: {exc.message}") from None
     first: dict[str, str] = {}
     for key, p in zip(given, params):
         if p.name in first:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 import threading
 import time
 import warnings
@@ -91,6 +92,50 @@ def status_of(row: Row, res=None) -> str:
         more = f" and {len(fails) - 1} more run(s)" if len(fails) > 1 else ""
         where = f" ({f.group} does not close at {span}{more})"
     return f"not assemblable at {n - solved} of {n} positions{where}: figures not computed"
+
+
+_DESIGN_FILE = re.compile(r"design-([0-9]{5,})\.csv")
+
+
+def design_files(results_dir: str | Path) -> dict[str, tuple[int, int, int]]:
+    """The designs' results files in ``results_dir`` (``design-00007.csv``): name ->
+    (inode, size, modification time in ns). A file written again has a new inode (the
+    atomic writer moves a new file onto the name), so two listings tell the files
+    written in between (:func:`written_since`)."""
+    out: dict[str, tuple[int, int, int]] = {}
+    try:
+        with os.scandir(results_dir) as it:
+            for e in it:
+                if _DESIGN_FILE.fullmatch(e.name):
+                    try:
+                        st = e.stat(follow_symlinks=False)
+                    except OSError:
+                        continue
+                    out[e.name] = (st.st_ino, st.st_size, st.st_mtime_ns)
+    except OSError:
+        pass
+    return out
+
+
+def written_since(results_dir: str | Path, before: dict[str, tuple[int, int, int]]) -> list[Path]:
+    """The designs' results files of ``results_dir`` written since it held ``before``
+    (:func:`design_files`): those of the workers of a pool or a Dask cluster, whose
+    writes this process did not make (the output folder's record lists them)."""
+    now = design_files(results_dir)
+    return [Path(results_dir) / n for n in sorted(now) if before.get(n) != now[n]]
+
+
+def rowless(rows: list[Row], files: list[Path]) -> list[Path]:
+    """Those of the designs' results ``files`` whose design has no row in ``rows``: the
+    designs a worker finished after the study stopped (a full disk, Ctrl-C), before it
+    was ended. Their results are whole; only their rows are missing."""
+    have = {r.get("design [-]") for r in rows}
+    out = []
+    for p in files:
+        m = _DESIGN_FILE.fullmatch(p.name)
+        if m is not None and int(m.group(1)) not in have:
+            out.append(p)
+    return out
 
 
 def _head(study: Study, k: int) -> Row:
@@ -465,6 +510,8 @@ class Outcome:
         self.interrupted = interrupted
         self.executor = executor
         self.unwritten = unwritten
+        # designs' results files of designs without a row (see rowless): named by the CLI
+        self.late: list[Path] = []
 
 
 def execute(
@@ -715,12 +762,15 @@ __all__ = [
     "chunks",
     "connect",
     "cpu_count",
+    "design_files",
     "execute",
     "precheck",
     "results_kept",
+    "rowless",
     "solve_chunk",
     "solve_design",
     "status_of",
     "study_family",
     "time_first_chunk",
+    "written_since",
 ]

@@ -28,7 +28,15 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mechsolve.base.errors import InputError
-from mechsolve.base.units import UnitError, dim_name, parse_quantity, parse_unit
+from mechsolve.base.keyspec import whole
+from mechsolve.base.units import (
+    UnitError,
+    dim_name,
+    parse_quantity,
+    parse_unit,
+    read_number,
+    split_number,
+)
 
 KeyPath = tuple[Any, ...]
 
@@ -79,11 +87,8 @@ SI_UNIT = {
     "density per length": "kg/m",
 }
 
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_ITEM_RE = re.compile(rf"^\s*({_NUM})\s*(.*?)\s*$")
-_RANGE_RE = re.compile(
-    rf"^\s*({_NUM})\s*([^.:]*?)\s*\.\.\s*({_NUM})\s*([^:]*?)\s*(?::\s*(\S+))?\s*$"
-)
+# a comma between two digits: a decimal comma (1,5) or a list written without spaces?
+_DIGIT_COMMA_RE = re.compile(r"[0-9],[0-9]")
 _DIST_RE = re.compile(r"^\s*(uniform|normal)\s*\((.*)\)\s*$", re.IGNORECASE)
 
 
@@ -170,12 +175,12 @@ def kind_at(path: KeyPath, nominal: Any) -> str | None:
     """The kind of quantity at a key path: from the unit the file writes there, else from
     where it is (:data:`KINDS`), else None (not known: the parser checks each design)."""
     if isinstance(nominal, str):
-        m = _ITEM_RE.match(nominal)
-        if m and m.group(2):
-            try:
-                return dim_name(parse_unit(m.group(2)).dim)
-            except UnitError:
-                pass
+        try:
+            unit = split_number(nominal)[1]
+            if unit:
+                return dim_name(parse_unit(unit).dim)
+        except UnitError:
+            pass
     names = tuple(k for k in path if not isinstance(k, int))
     for pattern, kind in KINDS:
         if len(pattern) == len(names) and all(p in ("*", k) for p, k in zip(pattern, names)):
@@ -240,15 +245,45 @@ def _split_items(text: str) -> list[str]:
     return [p for p in (s.strip() for s in text.split(",")) if p]
 
 
+def _list_items(text: str, where: str) -> list[str]:
+    """The items of a list of values; ``1,5`` (no space after the comma) is refused: a
+    decimal comma, which the file's numbers refuse, or two values?"""
+    m = _DIGIT_COMMA_RE.search(text)
+    if m is not None:
+        i = m.start() + 1  # the comma
+        point, apart = text[:i] + "." + text[i + 1 :], text[:i] + ", " + text[i + 1 :]
+        raise InputError(
+            f"{where}: {text!r} has a comma between digits: a decimal comma is not read; "
+            f"write {point!r}, or {apart!r} for a list of values"
+        )
+    return _split_items(text)
+
+
 def _number_unit(item: Any, where: str) -> tuple[float, str]:
+    """A value's number and unit text, read as the file's numbers are
+    (:func:`mechsolve.base.units.split_number`)."""
     if isinstance(item, bool) or item is None:
         raise InputError(f"{where}: expected a number, got {item!r}")
     if isinstance(item, (int, float)):
         return float(item), ""
-    m = _ITEM_RE.match(str(item))
-    if m is None:
-        raise InputError(f"{where}: cannot read {item!r} as a number with a unit")
-    return float(m.group(1)), m.group(2)
+    try:
+        return split_number(str(item), "a number with a unit")
+    except UnitError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def _count(count: str, text: str, where: str) -> int:
+    """The count of values of the range ``text`` (``5``, or ``5.0``: a whole number
+    read as the file's are)."""
+    try:
+        n = whole(read_number(count))
+    except UnitError as exc:
+        raise InputError(f"{where}: the count of the range {text!r}: {exc}") from None
+    if not isinstance(n, int):
+        raise InputError(f"{where}: the count {count!r} of {text!r} is not a whole number")
+    if n < 1:
+        raise InputError(f"{where}: the range {text!r} has {n} values: give a count of 1 or more")
+    return n
 
 
 class _Units:
@@ -319,44 +354,40 @@ def parse_values(name: str, value: Any, kind: str | None, default: str | None):
             raise InputError(f"parameter {name}: {text!r}: the standard deviation must be positive")
         return dist, vals, conv.unit
     if ".." in text:
-        m = _RANGE_RE.match(text)
-        if m is None:
-            raise InputError(
-                f"parameter {name}: cannot read the range {text!r}: write LOW..HIGH UNIT:COUNT, "
-                "e.g. '20..30 mm:5'"
-            )
-        lo, ulo, hi, uhi, count = m.groups()
-        ulo = ulo or uhi
-        if count is None:
-            raise InputError(
-                f"parameter {name}: the range {text!r} needs a count of values, e.g. "
-                f"'{text}:5' (or use uniform(...) for random designs)"
-            )
-        try:
-            n = int(count)
-        except ValueError:
-            raise InputError(
-                f"parameter {name}: the count {count!r} of {text!r} is not a whole number"
-            ) from None
-        if n < 1:
-            raise InputError(
-                f"parameter {name}: the range {text!r} has {n} values: give a count of 1 or more"
-            )
-        a = conv.convert(float(lo), ulo, text)
-        b = conv.convert(float(hi), uhi, text)
-        if n == 1:
-            if a != b:
-                raise InputError(
-                    f"parameter {name}: {text!r}: a count of 1 needs equal ends (or give "
-                    "a count of 2 or more)"
-                )
-            return "list", [a], conv.unit
-        return "list", [a + (b - a) * k / (n - 1) for k in range(n)], conv.unit
-    items = _split_items(text)
+        return _range(name, text, conv)
+    items = _list_items(text, f"parameter {name}")
     nums = [_number_unit(v, f"parameter {name}") for v in items]
     last = nums[-1][1]
     nums = [(x, u or last) for x, u in nums]
     return "list", [conv.convert(x, u, it) for (x, u), it in zip(nums, items)], conv.unit
+
+
+def _range(name: str, text: str, conv: _Units):
+    """Read the range ``LOW..HIGH UNIT:COUNT`` (see :func:`parse_values`)."""
+    where = f"parameter {name}"
+    low, _, high = text.partition("..")
+    high, colon, count = high.rpartition(":") if ":" in high else (high, "", "")
+    if not colon:
+        raise InputError(
+            f"{where}: the range {text!r} needs a count of values, e.g. "
+            f"'{text}:5' (or use uniform(...) for random designs)"
+        )
+    if not low.strip() or not high.strip() or ".." in high:
+        raise InputError(
+            f"{where}: cannot read the range {text!r}: write LOW..HIGH UNIT:COUNT, "
+            "e.g. '20..30 mm:5'"
+        )
+    (lo, ulo), (hi, uhi) = _number_unit(low, where), _number_unit(high, where)
+    n = _count(count.strip(), text, where)
+    a = conv.convert(lo, ulo or uhi, text)
+    b = conv.convert(hi, uhi, text)
+    if n == 1:
+        if a != b:
+            raise InputError(
+                f"{where}: {text!r}: a count of 1 needs equal ends (or give a count of 2 or more)"
+            )
+        return "list", [a], conv.unit
+    return "list", [a + (b - a) * k / (n - 1) for k in range(n)], conv.unit
 
 
 def make_parameter(data: dict, keypath: str, value: Any, units: dict[str, str]) -> Parameter:

@@ -14,7 +14,9 @@ from mechsolve.cli.kit import (
     VARIANT,
     Command,
     finish,
+    number,
     output_units,
+    whole_number,
     writes_to,
     writing,
 )
@@ -22,11 +24,15 @@ from mechsolve.cli.kit import (
 
 def _size(text: str) -> tuple[int, int]:
     from mechsolve.base.errors import InputError
+    from mechsolve.base.keyspec import whole
+    from mechsolve.base.units import UnitError, read_number
 
     w, sep, h = text.lower().partition("x")
-    try:
-        size = (int(w), int(h))
-    except ValueError:
+    try:  # read as the file's numbers are (no full-width digits, no 1_000)
+        size = (whole(read_number(w)), whole(read_number(h)))
+    except UnitError:
+        size = (0, 0)
+    if not all(isinstance(n, int) for n in size):
         size = (0, 0)
     if not sep or not (64 <= size[0] <= 4096 and 64 <= size[1] <= 4096):
         raise InputError(f"--size {text!r}: width x height in pixels, e.g. 800x600 (64 to 4096)")
@@ -45,11 +51,11 @@ def _size(text: str) -> tuple[int, int]:
 @VARIANT
 @click.option(
     "--frames",
-    type=click.IntRange(min=2),
+    type=whole_number(2),
     help="Number of frames over the file's sweep (default: one per degree of a revolute "
     "driver, 361 for a linear driver or a sweep in time), whatever step the file tabulates.",
 )
-@click.option("--fps", type=click.FloatRange(min=0, min_open=True), default=30.0,
+@click.option("--fps", type=number(0, low_open=True), default=30.0,
               show_default=True, help="Frames per second.")  # fmt: skip
 @click.option(
     "--forces",

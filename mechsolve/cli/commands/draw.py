@@ -14,6 +14,7 @@ from mechsolve.cli.kit import (
     Command,
     finish,
     warn,
+    whole_number,
     writes_to,
 )
 
@@ -41,7 +42,7 @@ ENVELOPE_POSITIONS = 36
 )
 @click.option(
     "--per-turn",
-    type=click.IntRange(min=1),
+    type=whole_number(1),
     default=12,
     show_default=True,
     help="How many numbered positions a turn of the crank (or the sweep) has, for --at N.",

@@ -15,7 +15,9 @@ from mechsolve.cli.kit import (
     VARIANT,
     Command,
     finish,
+    number,
     output_units,
+    whole_number,
     writes_to,
 )
 
@@ -44,20 +46,20 @@ SHEET_SUFFIXES = (".png", ".svg")
 )
 @click.option(
     "--scale-v",
-    type=float,
+    type=number(),
     metavar="MU",
     help="μv, the velocity scale in (m/s)/mm (default: a round number that fits the polygon "
     "in about 120 mm).",
 )
 @click.option(
     "--scale-a",
-    type=float,
+    type=number(),
     metavar="MU",
     help="μa, the acceleration scale in (m/s^2)/mm (default: as for --scale-v).",
 )
 @click.option(
     "--per-turn",
-    type=click.IntRange(min=1),
+    type=whole_number(1),
     default=12,
     show_default=True,
     help="How many numbered positions a turn of the crank has.",

@@ -18,6 +18,7 @@ from mechsolve.cli.kit import (
     VARIANT,
     Command,
     warn,
+    whole_number,
     writes_to,
 )
 from mechsolve.cli.kit import watch as watch_file
@@ -47,7 +48,7 @@ from mechsolve.cli.kit import watch as watch_file
 )
 @click.option(
     "--frames",
-    type=click.IntRange(min=2),
+    type=whole_number(2),
     help="Frames of the embedded animation (default: one per degree of the driver).",
 )
 @click.option(
@@ -83,7 +84,8 @@ def report(
     writes_to(output)
 
     def once():
-        at = int(polygons_at) if polygons_at and polygons_at.strip().isdigit() else polygons_at
+        index = polygons_at and polygons_at.strip().isascii() and polygons_at.strip().isdigit()
+        at = int(polygons_at) if index else polygons_at
         done = write_report(
             file, variant, output, pdf=pdf, frames=frames, polygons_at=at, paper=paper,
             units=units,

@@ -17,6 +17,7 @@ from mechsolve.cli.kit import (
     VARIANT,
     Command,
     finish,
+    number,
     outdir_option,
     output_folder,
     output_units,
@@ -47,7 +48,7 @@ from mechsolve.cli.kit import (
 )
 @click.option(
     "--fraction",
-    type=float,
+    type=number(),
     metavar="C",
     help="Slider-crank: the fraction of the reciprocating mass balanced on the crank, in "
     "[0, 1], default 0.5; implies --balance.",

@@ -20,6 +20,7 @@ from mechsolve.cli.kit import (
     outdir_option,
     output_folder,
     output_units,
+    whole_number,
 )
 from mechsolve.cli.kit import progress_bar as _progress_bar
 
@@ -36,7 +37,7 @@ from mechsolve.cli.kit import progress_bar as _progress_bar
 )
 @click.option(
     "--max-steps",
-    type=click.IntRange(min=1),
+    type=whole_number(1),
     default=None,
     metavar="N",
     help="Allow up to N integrator steps (output rows) [default: 200000]; a longer run is "

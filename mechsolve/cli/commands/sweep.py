@@ -19,6 +19,7 @@ from mechsolve.cli.kit import (
     outdir_option,
     output_folder,
     output_units,
+    whole_number,
 )
 
 MAX_DESIGNS = 100_000  # default --max-designs: about 0.4 GB of rows for a four-bar study
@@ -61,9 +62,13 @@ def _bar(total: int, quiet: bool):
     help="grid (every combination; the default), one-at-a-time (each parameter on its own, "
     "the others at the file's value), random or latin-hypercube (--samples designs).",
 )
-@click.option("--samples", type=int, help="Designs of a random or Latin-hypercube study (50).")
 @click.option(
-    "--seed", type=int, help="Seed of the random designs (0): the same designs each time."
+    "--samples", type=whole_number(), help="Designs of a random or Latin-hypercube study (50)."
+)
+@click.option(
+    "--seed",
+    type=whole_number(),
+    help="Seed of the random designs (0): the same designs each time.",
 )
 @click.option(
     "--best",
@@ -80,7 +85,10 @@ def _bar(total: int, quiet: bool):
 @click.option("--step", help="Sweep step of every design, e.g. '5 deg' (overrides the file).")
 @VARIANT
 @click.option(
-    "-j", "--jobs", type=int, help="Worker processes (default: all cores; 1: in this process)."
+    "-j",
+    "--jobs",
+    type=whole_number(),
+    help="Worker processes (default: all cores; 1: in this process).",
 )
 @click.option(
     "--dask", "use_dask", is_flag=True, help="Run on a Dask local cluster (--jobs workers)."
@@ -105,7 +113,7 @@ def _bar(total: int, quiet: bool):
 )
 @click.option(
     "--max-designs",
-    type=int,
+    type=whole_number(),
     default=MAX_DESIGNS,
     show_default=True,
     help="Refuse a study of more designs (their rows are kept in memory until the table "
@@ -287,16 +295,22 @@ def _check_estimate(est, n: int, where: str, max_designs, max_time, limit_s, qui
 
 def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
     """Solve the designs not yet timed, with a progress bar that starts at the timed ones
-    (none when a results file could not be written in those: the study stops there)."""
-    from mechsolve.analyses.study.execute import Outcome, execute
+    (none when a results file could not be written in those: the study stops there).
+    The designs' results that workers wrote (not this process) are added to what the
+    command wrote, for the output folder's record, and those of designs without a row
+    (finished after a stop) to the outcome's ``late``."""
+    from mechsolve.analyses.study import execute as ex
+    from mechsolve.base.atomic import note_committed
 
     if est.unwritten is not None:
-        return Outcome(est.rows, len(study), False, "this process", est.unwritten)
+        return ex.Outcome(est.rows, len(study), False, "this process", est.unwritten)
     bar = _bar(len(study), quiet)
     if bar is not None:
         bar.update(est.timed)
+    before = None if results_dir is None else ex.design_files(results_dir)
+    written: list[Path] = []
     try:
-        return execute(
+        outcome = ex.execute(
             study,
             jobs=jobs,
             dask=use_dask,
@@ -308,6 +322,11 @@ def _execute(study, est, jobs, use_dask, scheduler, results_dir, quiet):
     finally:  # whatever ends the study (errors: the group's one handler)
         if bar is not None:
             bar.close()
+        if before is not None:
+            written = ex.written_since(results_dir, before)
+            note_committed(written)
+    outcome.late = ex.rowless(outcome.rows, written)
+    return outcome
 
 
 def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
@@ -325,6 +344,7 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
             f"are in {written[0]}",
             err=True,
         )
+        _echo_late(outcome, outdir, written[0])
         clikit.interrupted()
     if outcome.unwritten is not None:  # a full disk: the error names the design's file
         click.echo(
@@ -332,6 +352,7 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
             f"not be written; the rows of the designs solved are in {written[0]}",
             err=True,
         )
+        _echo_late(outcome, outdir, written[0])
         raise outcome.unwritten
     pick = pick_best(study, rows) if study.best is not None else None
     if pick is not None:
@@ -341,6 +362,26 @@ def _write_outputs(study, outcome, outdir: Path, fmt: str, no_plots: bool):
 
         written += write_plots(study, rows, outdir)
     return written, pick
+
+
+def _echo_late(outcome, outdir: Path, table: Path) -> None:
+    """Name the designs a worker finished after the study stopped (a full disk, Ctrl-C):
+    their results files are whole, their rows are not in the table; no result is lost."""
+    if not outcome.late:
+        return
+    names = ", ".join(_shown(p, outdir) for p in outcome.late)
+    click.echo(
+        f"  {len(outcome.late)} design(s) finished after the stop have no row in "
+        f"{table.name}, only their results (kept) in {outdir}/: {names}",
+        err=True,
+    )
+
+
+def _shown(path: Path, outdir: Path) -> str:
+    try:
+        return path.relative_to(outdir).as_posix()
+    except ValueError:
+        return str(path)
 
 
 class _Counts:

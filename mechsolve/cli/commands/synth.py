@@ -7,7 +7,15 @@ from pathlib import Path
 import click
 
 from mechsolve.base.units import pretty_text
-from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
+from mechsolve.cli.kit import (
+    EPILOG_NO_CHECK,
+    FILE_ARG,
+    QUIET,
+    Command,
+    number,
+    whole_number,
+    writing,
+)
 
 
 @click.command(cls=Command, epilog=EPILOG_NO_CHECK)
@@ -26,7 +34,7 @@ from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
 )
 @click.option(
     "--solution",
-    type=int,
+    type=whole_number(),
     metavar="N",
     help="Write the N-th solution listed (from 1) instead of the one the rule picks.",
 )
@@ -39,21 +47,21 @@ from mechsolve.cli.kit import EPILOG_NO_CHECK, FILE_ARG, QUIET, Command, writing
 )
 @click.option(
     "--seed",
-    type=int,
+    type=whole_number(),
     default=0,
     show_default=True,
     help="function and path problems: the optimiser's seed (the same seed, the same result).",
 )
 @click.option(
     "--max-time",
-    type=click.FloatRange(min=0, min_open=True),
+    type=number(0, low_open=True),
     metavar="SECONDS",
     help="function and path problems: stop the search after this long and keep the best "
     "design found (Ctrl-C does the same, then exits with 130).",
 )
 @click.option(
     "--digits",
-    type=click.IntRange(3, 17),
+    type=whole_number(3, 17),
     help="Round the written file's lengths and angles to N significant digits (in the "
     "problem's units). Default: every digit (the shortest decimal that reads back the "
     "same), so that the file reproduces the design; 17 does the same. A 'round' in FILE "
