@@ -338,3 +338,35 @@ def test_a_comma_that_may_group_thousands_is_not_read_as_a_decimal_comma_only(te
     assert said in str(info.value), str(info.value)
     r = _invoke("sweep", STUDY, "--max-designs", text.replace(" rpm", ""))
     assert r.exit_code == 2 and said.replace(" rpm", "") in r.output, r.output
+
+
+@pytest.mark.parametrize(
+    "values, designs",
+    [
+        ("20,25,30", [20.0, 25.0, 30.0]),
+        ("20,25,30 mm", [20.0, 25.0, 30.0]),
+        ("20, 25", [20.0, 25.0]),
+    ],
+)
+def test_a_list_of_three_or_more_without_spaces_is_a_list(tmp_path, values, designs):
+    """No number has two decimal commas: ``20,25,30`` is three values, as it always was."""
+    out = tmp_path / "o"
+    r = _invoke("sweep", STUDY, "-p", f"{A0}={values}", "-j", "1", "--no-plots", "-o", out)
+    assert r.exit_code == 0, r.output
+    with open(out / "study.csv", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    col = next(k for k in rows[0] if k.startswith(A0))
+    assert sorted({float(x[col]) for x in rows}) == designs
+
+
+@pytest.mark.parametrize(
+    "values, grouped", [("1,000,000", "'1000000'"), ("20,250,300 mm", "'20250300 mm'")]
+)
+def test_digits_that_may_be_grouped_by_thousands_are_refused_with_both_readings(
+    tmp_path, values, grouped
+):
+    opt = f"{A0}={values}"
+    r = _invoke("sweep", STUDY, "-p", opt, "-j", "1", "--no-plots", "-o", tmp_path / "o")
+    assert r.exit_code == 2, r.output
+    assert "grouped by thousands" in r.output and grouped in r.output, r.output
+    assert "for a list" in r.output and "Traceback" not in r.output

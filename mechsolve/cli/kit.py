@@ -345,6 +345,7 @@ def _guarded(invoke: Any, ctx: click.Context) -> Any:
     click's "Aborted!" and 1); a closed output pipe stops quietly (:func:`broken_pipe`); a
     mechsolve error, a full disk or a refused permission is exit 2 in one line; anything
     else is a bug, 4. Click's own exits (usage errors: 2) pass through."""
+    _SIGNALLED.clear()  # a signal an earlier command of this process received is its own
     interrupt_on_sigterm()
     try:
         with warnings.catch_warnings():

@@ -89,6 +89,8 @@ SI_UNIT = {
 
 # a comma between two digits: a decimal comma (1,5) or a list written without spaces?
 _DIGIT_COMMA_RE = re.compile(r"[0-9],[0-9]")
+# a whole number written with thousands grouped by commas (1,000,000 or 20,250,300 mm)
+_THOUSANDS_LIST_RE = re.compile(r"^\s*([+-]?[1-9][0-9]{0,2}(?:,[0-9]{3})+)(?![0-9.,])")
 _DIST_RE = re.compile(r"^\s*(uniform|normal)\s*\((.*)\)\s*$", re.IGNORECASE)
 
 
@@ -246,15 +248,27 @@ def _split_items(text: str) -> list[str]:
 
 
 def _list_items(text: str, where: str) -> list[str]:
-    """The items of a list of values; ``1,5`` (no space after the comma) is refused: a
-    decimal comma, which the file's numbers refuse, or two values?"""
+    """The items of a list of values, split at its commas.
+
+    ``1,5`` (one comma between digits, no space) is refused: a decimal comma, which the
+    file's numbers refuse, or two values? So is ``1,000,000`` (digits grouped by
+    thousands, or three values?). Two or more commas otherwise make a list
+    (``20,25,30``): no number has two decimal commas."""
     m = _DIGIT_COMMA_RE.search(text)
-    if m is not None:
+    if m is not None and text.count(",") == 1:
         i = m.start() + 1  # the comma
         point, apart = text[:i] + "." + text[i + 1 :], text[:i] + ", " + text[i + 1 :]
         raise InputError(
             f"{where}: {text!r} has a comma between digits: a decimal comma is not read; "
             f"write {point!r}, or {apart!r} for a list of values"
+        )
+    g = _THOUSANDS_LIST_RE.match(text)
+    if g is not None:
+        grouped = g.group(1).replace(",", "") + text[g.end(1) :]
+        apart = ", ".join(_split_items(text))
+        raise InputError(
+            f"{where}: {text!r} may be digits grouped by thousands, which are not read, or "
+            f"a list of values: write {grouped!r}, or {apart!r} for a list"
         )
     return _split_items(text)
 
