@@ -155,38 +155,61 @@ class BatchedSweep:
         # newton_list's own loop for the group's size (the angles and terms are floats)
         newton = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
         for i, ui in enumerate(u.tolist()):
-            if len(ha) == 1:  # the first step: along the tangent, not from the start's pose
+            nh = len(ha)
+            if nh == 3:  # _extrapolate_floats from three points, written out here
+                u0, u1, u2 = hu
+                d01, d02, d12 = u0 - u1, u0 - u2, u1 - u2
+                if d01 == 0 or d02 == 0 or d12 == 0:
+                    pred = list(ha[2])
+                else:
+                    a0, a1, a2 = ui - u0, ui - u1, ui - u2
+                    w0 = (a1 / d01) * (a2 / d02)
+                    w1 = (a0 / (u1 - u0)) * (a2 / d12)
+                    w2 = (a0 / (u2 - u0)) * (a1 / (u2 - u1))
+                    pred = [w0 * a + w1 * b + w2 * c for a, b, c in zip(*ha)]
+            elif nh == 1:  # the first step: along the tangent, not from the start's pose
                 pred = self._tangent_floats(ha[0], Kr[i], thp[i])
-            elif ha:
+            elif nh:
                 pred = _extrapolate_floats(hu, ha, ui)
             thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
-            if plain and ha:
+            if plain and nh:
                 plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
-                Ki = [k[i : i + 1] for k in Kall]
-                if ha:
-                    hqa = [self._pose_floats(j, a, thp, Kall) for j, a in zip(hi, ha)]
-                    qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
-                else:
-                    qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
-                    good = stats.converged
-                if not good:
+                got = self._coarse_general(i, ui, u, Kall, thp, hu, hi, ha, q_start, prefix)
+                if got is None:
                     return None
-                thf = [float(qa[3 * k + 2]) for k in free]
-                it = stats.iterations
+                thf, it = got
             out.append(thf)
             iters.append(it)
-            if len(ha) == 3:
+            if nh == 3:
                 hu, hi, ha = [hu[1], hu[2], ui], [hi[1], hi[2], i], [ha[1], ha[2], thf]
             else:
                 hu, hi, ha = hu + [ui], hi + [i], ha + [thf]
-        th = np.empty((st.n, red.nb))
-        th[:, red.free] = out
         if fixed:
+            th = np.empty((st.n, red.nb))
+            th[:, red.free] = out
             th[:, red.fixed] = thp
+        else:  # (the free angles are all: no gathered columns)
+            th = np.array(out, float)
         for b, k in self.col.items():  # (the frames: no reader of the coarse positions')
             st.set_angle(b, th[:, k])
         return np.array(iters)
+
+    def _coarse_general(self, i: int, ui: float, u, Kall, thp, hu, hi, ha, q_start, prefix):
+        """:meth:`_coarse_floats`'s step to position ``i`` that is not a plain one, as
+        :meth:`sweep_sequential` takes it (:meth:`_advance` from the history ``hu``,
+        ``hi``, ``ha``, or :meth:`_solve_one` at the start): ``(free angles, iterations)``,
+        or None where it fails."""
+        Ki = [k[i : i + 1] for k in Kall]
+        if ha:
+            hqa = [self._pose_floats(j, a, thp, Kall) for j, a in zip(hi, ha)]
+            qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
+        else:
+            qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+            good = stats.converged
+        if not good:
+            return None
+        return [float(qa[3 * k + 2]) for k in self.red.free.tolist()], stats.iterations
 
     def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:
         """The group's body coordinates at position ``i`` of the coarse pass from its
@@ -457,10 +480,8 @@ class BatchedSweep:
             done = ((r <= self.atol) & (small | (step >= lastk))) | pred
             take = ~done | small | pred
             if idx is None:
-                take &= todo
-                skip = ~take
-                dq[0, skip] = 0.0
-                dq[1, skip] = 0.0
+                take &= todo  # (a boolean index costs some 10 us a row, copyto 2 us)
+                np.copyto(dq, 0.0, where=~take)
                 X += dq
                 iters += todo
                 np.copyto(last, step, where=todo)
@@ -489,30 +510,32 @@ class BatchedSweep:
         :meth:`_refine2` for two angles: the residual from the equations' nonzero
         coefficients (in the order of the compiled kernel's sums, not a matrix product
         over the (N, n) arrays), the step by the elimination, the same tests and
-        updates. Updates ``th`` (N, n), ``iters`` and ``todo`` in place. Returns the
-        angles' cosines and sines, turned with every step taken, as ``([cos x_k],
-        [sin x_k])``; False when a position does not converge."""
+        updates. The angles and their cosines and sines are the rows of (n, N) arrays,
+        so that the steps' update and turning take one call for all angles. Updates
+        ``th`` (N, n), ``iters`` and ``todo`` in place. Returns the angles' cosines and
+        sines, turned with every step taken, as ``([cos x_k], [sin x_k])``; False when
+        a position does not converge."""
         sub = self.red.sub
         n, nb = th.shape
-        x = [th[:, k].copy() for k in range(nb)]
+        X = np.ascontiguousarray(th.T)  # (nb, N): the angles, a row each
         K = [np.ascontiguousarray(Kr[:, e]) for e in range(nb)]
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
-        cs = None  # cos and sin of every angle everywhere, turned with their small steps
+        C = S = None  # cos and sin of X everywhere, turned with their small steps
         for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
             if 2 * count >= n:  # most positions still iterate: whole arrays, masked
-                idx, t, k, lastk = None, x, K, last
-                if cs is None:
-                    cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
-                csk = cs
+                idx, t, k, lastk = None, list(X), K, last
+                if C is None:
+                    C, S = np.cos(X), np.sin(X)
+                c, s = C, S
             else:
                 idx = np.flatnonzero(todo)
-                t, k, lastk = [v[idx] for v in x], [v[idx] for v in K], last[idx]
-                csk = None if cs is None else ([c[idx] for c in cs[0]], [s[idx] for s in cs[1]])
-            r, dq, step = _elim_step(sub, t, k, csk)
+                t, k, lastk = list(X[:, idx]), [v[idx] for v in K], last[idx]
+                c, s = (None, None) if C is None else (C[:, idx], S[:, idx])
+            r, dq, step = _elim_step(sub, t, k, None if c is None else (list(c), list(s)))
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken;
             # or when this step leaves an error predicted below tol (_converges_next)
@@ -520,34 +543,31 @@ class BatchedSweep:
             pred = _converges_next(step, lastk, tol) if it_k else False
             done = ((r <= self.atol) & (small | (step >= lastk))) | pred
             take = ~done | small | pred
+            D = np.array(dq)  # (nb, N or taken)
             if idx is None:
                 take &= todo
-                for j in range(nb):
-                    D = np.where(take, dq[j], 0.0)
-                    x[j] += D
-                    _rotate(cs[0][j], cs[1][j], D, x[j])  # (after the last iteration
-                iters += todo  # too: the state's cosines and sines)
-                last = np.where(todo, step, last)
+                np.copyto(D, 0.0, where=~take)
+                X += D
+                _rotate(C, S, D, X)  # (after the last iteration too: the state's)
+                iters += todo
+                np.copyto(last, step, where=todo)
                 todo &= ~done
             else:
-                it = idx[take]
-                for j in range(nb):
-                    D = dq[j][take]
-                    x[j][it] += D
-                    if cs is not None:
-                        c, s = csk[0][j][take], csk[1][j][take]
-                        _rotate(c, s, D, x[j][it])
-                        cs[0][j][it], cs[1][j][it] = c, s
+                it, D = idx[take], D[:, take]
+                X[:, it] += D
+                if C is not None:
+                    c, s = c[:, take], s[:, take]
+                    _rotate(c, s, D, X[:, it])
+                    C[:, it], S[:, it] = c, s
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-        for j in range(nb):
-            th[:, j] = x[j]
-        if todo.any() or not all(np.isfinite(v).all() for v in x):
+        th[:] = X.T
+        if todo.any() or not np.isfinite(X).all():
             return False
-        if cs is None:  # (no iteration on whole arrays)
-            cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
-        return cs
+        if C is None:  # (no iteration on whole arrays)
+            C, S = np.cos(X), np.sin(X)
+        return list(C), list(S)
 
     def _refine2_compiled(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
         """:meth:`_refine2` in the compiled kernel (:func:`~mechsolve.groups.kernels.
