@@ -54,7 +54,7 @@ class BatchedSweep:
         ones = Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse)))
         u = drive.u
         if self.red is not None:  # the free angles alone: the frames follow from them
-            self._angle_rates(sub, ones, 1, frames=False)
+            self._coarse_rates(sub, ones)
             fb = [self.bodies[k] for k in self.red.free.tolist()]
             qc = np.stack([sub.th[b] for b in fb], axis=1)
             dqc = np.stack([sub.w[b] for b in fb], axis=1)

@@ -231,6 +231,35 @@ class NewtonRates:
                     vy += qy * Q[j]
             out[0][b], out[1][b] = vx, vy
 
+    def _coarse_rates(self, st: State, drive: Drive) -> None:
+        """The angles' rates (order 1) at the coarse positions of a batched sweep into
+        ``st``, as :meth:`_angle_rates` gives them without the frames'. A group
+        eliminated to 2 x 2 solves them from the elimination alone: its conditioning
+        bound (:meth:`_angle_elim`'s norm of the inverse: some 45 NumPy calls on a few
+        dozen positions) is not read there. That bound is NaN only where ``F_theta`` is
+        exactly singular, a value is not finite or its square overflows, where
+        :meth:`_angle_rates` takes least squares: any rate not finite or determinant
+        below 1e-100 (no product of a mechanism's lengths comes near the overflow then)
+        sends all positions through :meth:`_angle_rates`, so the rates are the same."""
+        red = self.red
+        if red.elim is None or red.sub.nb == 0 or (st.n == 1 and red.nb <= FLOATS_UP_TO):
+            self._angle_rates(st, drive, 1, frames=False)
+            return
+        K = red.known(st, 1)[0]  # (fresh: the right-hand side in place)
+        if red.nd:
+            K[:, 2 * red.ne :] -= drive.ud[:, None]
+        rhs = np.negative(K, out=K)
+        bodies = self.bodies
+        parts = red.elim.parts([st.c[b] for b in bodies], [st.s[b] for b in bodies])
+        w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+        with np.errstate(invalid="ignore"):
+            fine = np.isfinite(w).all() and (np.abs(parts.det) >= 1e-100).all()
+        if not fine:
+            self._angle_rates(st, drive, 1, frames=False)
+            return
+        for b, k in self.col.items():
+            st.w[b] = w[k]
+
     def _angle_rates_one(self, st: State, drive: Drive, order: int) -> bool:
         """:meth:`_angle_rates` at one position in Python floats (a NumPy call on
         one-element arrays costs more than its arithmetic): ``F_theta w = rhs`` by
