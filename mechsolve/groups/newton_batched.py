@@ -11,6 +11,7 @@ from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.compiled import kernels
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
+from mechsolve.groups.newton_floats import sparse_newton
 from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
 
@@ -138,7 +139,6 @@ class BatchedSweep:
         nothing reads at the coarse positions (the batch places every position's).
         Returns the iterations per position, or None when a position fails."""
         red = self.red
-        sub = red.sub
         Kall = red.known(st)
         u = drive.u
         Kr, thp = red.reduce(red.with_driver(Kall[0], u))
@@ -152,8 +152,7 @@ class BatchedSweep:
         iters: list[int] = []
         out: list[list[float]] = []
         atol, its = self.atol, self.max_iterations
-        # newton_list's own loop for the group's size (the angles and terms are floats)
-        newton = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
+        newton = self._newton_floats()
         for i, ui in enumerate(u.tolist()):
             nh = len(ha)
             if nh == 3:  # _extrapolate_floats from three points, written out here
@@ -210,6 +209,22 @@ class BatchedSweep:
         if not good:
             return None
         return [float(qa[3 * k + 2]) for k in self.red.free.tolist()], stats.iterations
+
+    def _newton_floats(self):
+        """The coarse pass's Newton iterations in floats for the group's free angles:
+        :meth:`~mechsolve.groups.reduced._Eqs.newton_list` (its own loop for two or
+        four angles), written out for the equations' coefficients where it can be
+        (:func:`~mechsolve.groups.newton_floats.sparse_newton`: the same iterates, the
+        products of zero coefficients left out); made once per equations."""
+        sub = self.red.sub
+        got = getattr(self, "_newton_fl", None)
+        if got is not None and got[0] is sub:
+            return got[1]
+        fn = sparse_newton(sub)
+        if fn is None:
+            fn = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
+        self._newton_fl = (sub, fn)
+        return fn
 
     def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:
         """The group's body coordinates at position ``i`` of the coarse pass from its
@@ -343,7 +358,7 @@ class BatchedSweep:
         increment of the solved bodies' terms). ``th0`` itself when that step cannot be
         taken (an exactly singular Jacobian) or the angles are not finite (with the
         fixed ones ``thp``)."""
-        thf = self.red.sub.newton_list(Kr, th0, self.atol, 1)[0]
+        thf = self._newton_floats()(Kr, th0, self.atol, 1, False)[0]
         if not all(math.isfinite(v) for v in thf) or not all(math.isfinite(v) for v in thp):
             return list(th0)
         return thf
