@@ -718,7 +718,16 @@ def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None
     and sin D from their Taylor series to the 5th order (exact to rounding while |D| <
     1e-3: the rest is below D^6 / 720), instead of evaluating cos and sin again
     (several times the cost of the arithmetic); where a step is larger (or not finite),
-    cos and sin of ``th`` there."""
+    cos and sin of ``th`` there. Where no step exceeds 1e-8 (a refinement's last), the
+    series round to ``cos D = 1.0`` and ``sin D = D`` exactly (``D^2 / 2 <= 5e-17`` is
+    below half the spacing of floats under 1, 5.55e-17, and ``D^2 / 6`` below it too),
+    so the same values come from ``C - S D`` and ``S + C D``: 5 passes instead of 17."""
+    if np.abs(D).max(initial=0.0) <= 1e-8:  # (not NaN)
+        c = S * D
+        np.subtract(C, c, out=c)
+        S += C * D
+        C[...] = c
+        return
     d2 = D * D
     cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
     sd = D * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
