@@ -57,9 +57,8 @@ class BatchedSweep:
         if self.red is not None:  # the free angles alone: the frames follow from them
             self._coarse_rates(sub, ones)
             fb = [self.bodies[k] for k in self.red.free.tolist()]
-            qc = np.stack([sub.th[b] for b in fb], axis=1)
-            dqc = np.stack([sub.w[b] for b in fb], axis=1)
-            if not np.all(np.isfinite(dqc)):
+            qc, dqc = sub.th[fb].T, sub.w[fb].T  # (gathered rows: one call, not a stack)
+            if not np.isfinite(dqc).all():
                 return None
             pred = self._predict(u, coarse, qc, dqc)
             got = self._refine_angles(st, u, pred, coarse, qc)
@@ -68,9 +67,9 @@ class BatchedSweep:
             iters, th = got
             d = np.abs(th - pred)
             wj = self._angle_jump_weights()
-            if any(w != 1.0 for w in wj):
+            if wj.count(1.0) != len(wj):
                 d *= wj
-            if d.size and not np.max(d) <= MAX_JUMP:  # (NaN too)
+            if d.size and not d.max() <= MAX_JUMP:  # (NaN too)
                 return None
             iters[coarse] = itc
             return np.ones(n, bool), iters, "newton (batched)"
@@ -550,7 +549,9 @@ class BatchedSweep:
                 idx = np.flatnonzero(todo)
                 t, k, lastk = list(X[:, idx]), [v[idx] for v in K], last[idx]
                 c, s = (None, None) if C is None else (C[:, idx], S[:, idx])
-            r, dq, step = _elim_step(sub, t, k, None if c is None else (list(c), list(s)))
+            D = np.empty((nb, n)) if idx is None else None  # (the step written into it)
+            cs = None if c is None else (list(c), list(s))
+            r, dq, step = _elim_step(sub, t, k, cs, None if D is None else list(D))
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken;
             # or when this step leaves an error predicted below tol (_converges_next)
@@ -558,7 +559,6 @@ class BatchedSweep:
             pred = _converges_next(step, lastk, tol) if it_k else False
             done = ((r <= self.atol) & (small | (step >= lastk))) | pred
             take = ~done | small | pred
-            D = np.array(dq)  # (nb, N or taken)
             if idx is None:
                 take &= todo
                 np.copyto(D, 0.0, where=~take)
@@ -568,7 +568,7 @@ class BatchedSweep:
                 np.copyto(last, step, where=todo)
                 todo &= ~done
             else:
-                it, D = idx[take], D[:, take]
+                it, D = idx[take], np.array(dq)[:, take]
                 X[:, it] += D
                 if C is not None:
                     c, s = c[:, take], s[:, take]
@@ -814,14 +814,14 @@ def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
     return r, dq, step
 
 
-def _elim_step(sub, t: list, k: list, cs=None):
+def _elim_step(sub, t: list, k: list, cs=None, out=None):
     """One Newton step of a group eliminated to 2 x 2 (``sub.elim``) at the angles
     ``t`` (a 1-D array per angle), ``k`` the equations' constant terms (one per
     equation), ``cs`` the angles' cosines and sines when known: the residual's largest
     component, the step (a 1-D array per angle: inf or NaN where ``F_theta`` is exactly
     singular) and its largest component. Each equation's residual sums its nonzero
     terms ``K + sum m1 cos + sum m2 sin (+ sum m3 theta)`` in that order, as the
-    compiled kernel does."""
+    compiled kernel does. ``out``: one array per angle to write the step into."""
     C, S = ([np.cos(v) for v in t], [np.sin(v) for v in t]) if cs is None else cs
     f = []
     for e, terms in enumerate(sub._terms):
@@ -840,7 +840,7 @@ def _elim_step(sub, t: list, k: list, cs=None):
     r = np.abs(f[0])
     for fe in f[1:]:
         np.maximum(r, np.abs(fe), out=r)
-    dq = sub.elim.parts(C, S).solve(f)
+    dq = sub.elim.parts(C, S).solve(f, out)
     step = np.abs(dq[0])
     for v in dq[1:]:
         np.maximum(step, np.abs(v), out=step)

@@ -71,11 +71,13 @@ class NewtonRates:
         self._inv_cache = (st.token, th, inv)
         return inv
 
-    def _angle_solve(self, st: State, rhs: np.ndarray) -> list:
+    def _angle_solve(self, st: State, rhs: np.ndarray, rows=None) -> list:
         """``F_theta w = rhs`` (rhs (N, n)) at every position: the angles' rates as one
         1-D array per angle. Two angles by Cramer's rule from the entries
         (:meth:`_angle_entries2`), more from the kept inverse; least squares where
-        ``F_theta`` is exactly singular, as a singular body block would get."""
+        ``F_theta`` is exactly singular, as a singular body block would get. ``rows``:
+        one array per angle (the state's rows) that Cramer's rule and the elimination
+        write their rates into, returned as they are where no position is singular."""
         red = self.red
         if red.sub.nb == 0:  # every angle fixed by a driver: theta_k' = sign (u' - K_d')
             w = [None] * red.nb
@@ -84,7 +86,7 @@ class NewtonRates:
             return w
         if red.elim is not None:  # eliminated to 2 x 2 (each loop a link of its own)
             parts, nf = self._angle_elim(st)
-            w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+            w = parts.solve([-rhs[:, k] for k in range(red.nb)], rows)
             sing = ~np.isfinite(nf)
             if sing.any():
                 for v in w:
@@ -95,11 +97,12 @@ class NewtonRates:
         elif red.nb == 2:
             a, b, c, d, det, nf = self._angle_entries2(st)
             r0, r1 = rhs[:, 0], rhs[:, 1]
+            w0, w1 = (np.empty(st.n), np.empty(st.n)) if rows is None else rows
             with np.errstate(divide="ignore", invalid="ignore"):
-                w0 = d * r0
+                np.multiply(d, r0, out=w0)
                 w0 -= b * r1
                 w0 /= det
-                w1 = a * r1
+                np.multiply(a, r1, out=w1)
                 w1 -= c * r0
                 w1 /= det
             sing = ~np.isfinite(nf)
@@ -189,8 +192,9 @@ class NewtonRates:
         # sum_k P_k Wr[k] + Q_k Wr[nb + k], P = S w, Q = C w (velocities) or
         # P = S al + C w^2, Q = C al - S w^2
         if order == 1:
-            w = self._angle_solve(st, rhs)
             out = (st.vx, st.vy, st.w)
+            rows = [out[2][b] for b in bodies]
+            w = self._angle_solve(st, rhs, rows)
         else:
             w2 = [st.w[b] * st.w[b] for b in bodies]
             for e, row in enumerate(red._rows[: 2 * red.ne]):  # the closing joints'
@@ -199,10 +203,12 @@ class NewtonRates:
                         rhs[:, e] += (m1 * C[k]) * w2[k]
                     if m2:
                         rhs[:, e] += (m2 * S[k]) * w2[k]
-            w = self._angle_solve(st, rhs)
             out = (st.ax, st.ay, st.al)
-        for b, k in self.col.items():
-            out[2][b] = w[k]
+            rows = [out[2][b] for b in bodies]
+            w = self._angle_solve(st, rhs, rows)
+        for b, k in self.col.items():  # (written there already by Cramer's rule and the
+            if w[k] is not rows[k]:  # elimination: the state's rows given to them)
+                out[2][b] = w[k]
         if not frames:
             return
         terms = red.wr_terms()
@@ -218,8 +224,10 @@ class NewtonRates:
                 q -= S[k] * w2[k]
             P.append(p)
             Q.append(q)
-        for b, k in self.col.items():
-            vx, vy = Px[:, k].copy(), Py[:, k].copy()
+        for b, k in self.col.items():  # (into the state's rows: no copies to write back)
+            vx, vy = out[0][b], out[1][b]
+            vx[...] = Px[:, k]
+            vy[...] = Py[:, k]
             for j, px, qx, py, qy in terms[k]:  # the nonzero entries of Wr only
                 if px:
                     vx += px * P[j]
@@ -229,7 +237,6 @@ class NewtonRates:
                     vy += py * P[j]
                 if qy:
                     vy += qy * Q[j]
-            out[0][b], out[1][b] = vx, vy
 
     def _coarse_rates(self, st: State, drive: Drive) -> None:
         """The angles' rates (order 1) at the coarse positions of a batched sweep into
