@@ -11,7 +11,7 @@ from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.compiled import kernels
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
-from mechsolve.groups.newton_floats import sparse_newton
+from mechsolve.groups.newton_floats import coarse_runner, sparse_newton
 from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
 
@@ -152,26 +152,27 @@ class BatchedSweep:
         out: list[list[float]] = []
         atol, its = self.atol, self.max_iterations
         newton = self._newton_floats()
-        for i, ui in enumerate(u.tolist()):
+        # the plain steps with three positions of history in a loop written out for the
+        # group's size (coarse_runner: the same operations, the angles in locals)
+        run = coarse_runner(len(free)) if len(free) > 1 else None
+        ul = u.tolist()
+        n, i = len(ul), 0
+        while i < n:
             nh = len(ha)
-            if nh == 3:  # _extrapolate_floats from three points, written out here
-                u0, u1, u2 = hu
-                d01, d02, d12 = u0 - u1, u0 - u2, u1 - u2
-                if d01 == 0 or d02 == 0 or d12 == 0:
-                    pred = list(ha[2])
-                else:
-                    a0, a1, a2 = ui - u0, ui - u1, ui - u2
-                    w0 = (a1 / d01) * (a2 / d02)
-                    w1 = (a0 / (u1 - u0)) * (a2 / d12)
-                    w2 = (a0 / (u2 - u0)) * (a1 / (u2 - u1))
-                    pred = [w0 * a + w1 * b + w2 * c for a, b, c in zip(*ha)]
-            elif nh == 1:  # the first step: along the tangent, not from the start's pose
-                pred = self._tangent_floats(ha[0], Kr[i], thp[i])
-            elif nh:
-                pred = _extrapolate_floats(hu, ha, ui)
-            thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
-            if plain and nh:
-                plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
+            if nh == 3 and run is not None:
+                i, hu, ha = run(i, ul, Kr, newton, hu, ha, wj, atol, its, out, iters, MAX_JUMP)
+                if i == n:
+                    break
+                hi, ui, plain = [i - 3, i - 2, i - 1], ul[i], False  # (i: not plain)
+            else:
+                ui = ul[i]
+                if nh == 1:  # the first step: along the tangent, not from the start's pose
+                    pred = self._tangent_floats(ha[0], Kr[i], thp[i])
+                elif nh:
+                    pred = _extrapolate_floats(hu, ha, ui)
+                thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
+                if plain and nh:
+                    plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
                 got = self._coarse_general(i, ui, u, Kall, thp, hu, hi, ha, q_start, prefix)
                 if got is None:
@@ -183,6 +184,7 @@ class BatchedSweep:
                 hu, hi, ha = [hu[1], hu[2], ui], [hi[1], hi[2], i], [ha[1], ha[2], thf]
             else:
                 hu, hi, ha = hu + [ui], hi + [i], ha + [thf]
+            i += 1
         if fixed:
             th = np.empty((st.n, red.nb))
             th[:, red.free] = out

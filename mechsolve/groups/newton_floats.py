@@ -257,3 +257,71 @@ def sparse_newton(eqs):
     fn = space["newton"]
     fn.source = src
     return fn
+
+
+_RUN = """\
+def run(i, ul, Kr, newton, hu, ha, wj, atol, its, out, iters, max_jump):
+    n = len(ul)
+    u0, u1, u2 = hu
+    ({h0}), ({h1}), ({h2}) = ha
+    {ws} = wj
+    while i < n:
+        ui = ul[i]
+        d01, d02, d12 = u0 - u1, u0 - u2, u1 - u2
+        if d01 == 0 or d02 == 0 or d12 == 0:
+            {qs} = {h2}
+        else:
+            a0, a1, a2 = ui - u0, ui - u1, ui - u2
+            w0 = (a1 / d01) * (a2 / d02)
+            w1 = (a0 / (u1 - u0)) * (a2 / d12)
+            w2 = (a0 / (u2 - u0)) * (a1 / (u2 - u1))
+{pred}
+        thf, plain, it, _, _ = newton(Kr[i], [{qs}], atol, its, True)
+        if not plain:
+            break
+        {ts} = thf
+        if not max({jump}) <= max_jump:
+            break
+        out.append(thf)
+        iters.append(it)
+        u0, u1, u2 = u1, u2, ui
+        {h0}, {h1}, {h2} = {h1}, {h2}, {ts}
+        i += 1
+    return i, [u0, u1, u2], [[{h0}], [{h1}], [{h2}]]
+"""
+
+
+def coarse_runner(nb: int):
+    """``run(i, ul, Kr, newton, hu, ha, wj, atol, its, out, iters, max_jump) -> (i,
+    hu, ha)``: the coarse pass's plain steps from position ``i`` with three positions
+    of history (``hu`` their driver values, ``ha`` their free angles), as
+    :meth:`~mechsolve.groups.newton_batched.BatchedSweep._coarse_floats` takes them
+    (the three-point extrapolation, ``newton`` with the stop on a predicted error, the
+    weighted jump check ``max(|theta - pred| w) <= max_jump``: the same operations),
+    the angles of the history held in locals; appends each step's angles and
+    iterations to ``out`` and ``iters``. Returns at the end or at the first step that
+    is not plain (its position, not taken), with the history there."""
+    got = _RUNNERS.get(nb)
+    if got is not None:
+        return got
+    idx = range(nb)
+    hist = [", ".join(f"p{j}{k}" for k in idx) for j in range(3)]
+    src = _RUN.format(
+        h0=hist[0],
+        h1=hist[1],
+        h2=hist[2],
+        ws=", ".join(f"wj{k}" for k in idx) + ("," if nb == 1 else ""),
+        qs=", ".join(f"q{k}" for k in idx),
+        pred="\n".join(f"            q{k} = w0 * p0{k} + w1 * p1{k} + w2 * p2{k}" for k in idx),
+        ts=", ".join(f"t{k}" for k in idx),
+        jump=", ".join(f"abs(t{k} - q{k}) * wj{k}" for k in idx) + ("," if nb == 1 else ""),
+    )
+    space: dict = {}
+    exec(compile(src, f"<coarse steps of {nb} angles>", "exec"), space)  # noqa: S102
+    fn = space["run"]
+    fn.source = src
+    _RUNNERS[nb] = fn
+    return fn
+
+
+_RUNNERS: dict = {}
