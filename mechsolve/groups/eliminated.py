@@ -140,6 +140,9 @@ class _Parts:
         for e, p in enumerate(el.priv):
             vx, vy = el.V[e]
             c, s = _col(C, p), _col(S, p)
+            if vy == 0.0:  # (a link's x axis along it: the products by zero left out,
+                g.append((vx * c, vx * s))  # which change no bit but a zero's sign)
+                continue
             gx = vx * c
             gx -= vy * s
             gy = vy * c
