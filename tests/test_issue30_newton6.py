@@ -77,3 +77,29 @@ def test_the_triads_coarse_rates_are_f_theta_solved():
     rhs = -red.known(st, 1)[0]
     want = np.linalg.solve(J, rhs[..., None])[..., 0]
     np.testing.assert_allclose(got.T, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_the_fourbar_step_takes_its_residual_from_the_jacobians_products():
+    """The four-bar's loop b e(th3) - c e(th4) + K = 0: the residual summed from the
+    Jacobian's products is the loop's residual written out (bit for bit: the same
+    products, negated exactly) and the step solves the 2 x 2 system (LAPACK, 1e-12)."""
+    from mechsolve.groups.newton_batched import _newton_step2
+
+    b, c = 0.1056, 0.059
+    rows = [((-b, -0.0, 0.0), (c, -0.0, 0.0)), ((0.0, -b, 0.0), (0.0, c, 0.0))]
+    rng = np.random.default_rng(6)
+    t = rng.uniform(-4, 4, (2, 400))
+    k0, k1 = rng.uniform(-0.1, 0.1, 400), rng.uniform(-0.1, 0.1, 400)
+    r, dq, step = _newton_step2(rows, False, t, k0, k1)
+    f0 = k0 + -b * np.cos(t[0])
+    f0 += c * np.cos(t[1])
+    f1 = k1 + -b * np.sin(t[0])
+    f1 += c * np.sin(t[1])
+    want = np.maximum(np.abs(f0), np.abs(f1))
+    assert np.array_equal(r.view(np.int64), want.view(np.int64))
+    J = np.empty((400, 2, 2))
+    J[:, 0, 0], J[:, 0, 1] = b * np.sin(t[0]), -c * np.sin(t[1])
+    J[:, 1, 0], J[:, 1, 1] = -b * np.cos(t[0]), c * np.cos(t[1])
+    x = np.linalg.solve(J, -np.stack([f0, f1], axis=1)[..., None])[..., 0]
+    np.testing.assert_allclose(dq.T, x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(step, np.abs(x).max(axis=1), rtol=1e-9, atol=1e-12)

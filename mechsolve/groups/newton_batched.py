@@ -787,12 +787,22 @@ def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
         C, S = np.cos(t), np.sin(t)
     C0, C1, S0, S1 = C[0], C[1], S[0], S[1]
     t0, t1 = t[0], t[1]
-    ends = ((a3, t0), (b3, t1)) if nd else ()
-    f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
-    ends = ((c3, t0), (d3, t1)) if nd else ()
-    f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
     ja, jb = _jac2(a2, C0, a1, S0), _jac2(b2, C1, b1, S1)
     jc, jd = _jac2(c2, C0, c1, S0), _jac2(d2, C1, d1, S1)
+    if not nd and a1 and b1 and not (a2 or b2 or c1 or d1) and (c2, d2) == (a1, b1):
+        # a loop of two links' vectors along their x axes (the four-bar's): its x row
+        # sums a1 cos, b1 cos and its y row a1 sin, b1 sin, the very products of the
+        # Jacobian (jc = a1 C0, jd = b1 C1; ja = -a1 S0, jb = -b1 S1, negated exactly):
+        # the same residual from them, four passes fewer
+        f0 = k0 + jc
+        f0 += jd
+        f1 = k1 - ja
+        f1 -= jb
+    else:
+        ends = ((a3, t0), (b3, t1)) if nd else ()
+        f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
+        ends = ((c3, t0), (d3, t1)) if nd else ()
+        f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
     if nd:
         ja += a3
         jb += b3
