@@ -103,3 +103,31 @@ def test_the_fourbar_step_takes_its_residual_from_the_jacobians_products():
     x = np.linalg.solve(J, -np.stack([f0, f1], axis=1)[..., None])[..., 0]
     np.testing.assert_allclose(dq.T, x, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(step, np.abs(x).max(axis=1), rtol=1e-9, atol=1e-12)
+
+
+def test_a_crank_alone_is_placed_at_its_driver_angle():
+    """The four-bar's crank under ``split-newton`` (a group of its own, its angle fixed
+    by the driver): at every position its angle is the driver's value (the joint's
+    relative angle to the ground, start 10 deg), its cosine and sine those of it, its
+    frame at the pivot O2 (0, 0); the same rows the general placing writes."""
+    import mechsolve as ms
+    from mechsolve_bench import fourbar_yaml
+
+    an = Analysis(ms.loads(fourbar_yaml(720)), "split-newton")
+    g = an.plan[0]
+    assert isinstance(g, NewtonGroup) and g.red.sub.nb == 0
+    u0 = an.start_value()
+    u, _ = an.sweep_values(u0)
+    st = an.solve(u).state
+    b = g.bodies[0]
+    np.testing.assert_allclose(st.th[b], u, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(st.c[b], np.cos(st.th[b]))
+    np.testing.assert_array_equal(st.s[b], np.sin(st.th[b]))
+    assert not st.x[b].any() and not st.y[b].any()
+    rows = st.block[:5, b].copy()
+    assert g._crank_alone(st, Drive(u, np.ones(len(u)), np.zeros(len(u)))) is not None
+    st.block[:5, b] = np.nan
+    K, Px, Py = g.red.known(st)
+    thp = g.red.fixed_angles(g.red.with_driver(K, u))
+    g._put_angles(st, g.red.join(thp[:, :0], thp), Px, Py)
+    assert np.array_equal(st.block[:5, b].view(np.int64), rows.view(np.int64))
