@@ -131,3 +131,21 @@ def test_a_crank_alone_is_placed_at_its_driver_angle():
     thp = g.red.fixed_angles(g.red.with_driver(K, u))
     g._put_angles(st, g.red.join(thp[:, :0], thp), Px, Py)
     assert np.array_equal(st.block[:5, b].view(np.int64), rows.view(np.int64))
+
+
+def test_an_entry_without_its_zero_products_is_the_full_expression():
+    """``m2 C - m1 S + m3`` with a zero coefficient's product left out gives the full
+    expression's values bit for bit (zeros' signs included, at angles whose cosine or
+    sine is exactly zero too), for the coefficients of a four-bar's entries and others."""
+    from mechsolve.groups.newton_rates import _entry
+
+    rng = np.random.default_rng(8)
+    th = rng.uniform(-7, 7, 5000)
+    C = np.concatenate([np.cos(th), [0.0, -0.0, 1.0, -1.0]])
+    S = np.concatenate([np.sin(th), [0.0, 0.0, -0.0, 0.0]])
+    for m1 in (-0.1056, 0.059, 0.0, -0.0):
+        for m2 in (-0.1056, 0.0, -0.0, 0.3):
+            for m3 in (0.0, -0.0, 1.0):
+                want = m2 * C - m1 * S + m3
+                got = _entry(m1, m2, m3, C, S)
+                assert np.array_equal(want.view(np.int64), got.view(np.int64)), (m1, m2, m3)

@@ -157,10 +157,8 @@ class NewtonRates:
         ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red._rows
         C0, C1 = st.c[self.bodies[0]], st.c[self.bodies[1]]
         S0, S1 = st.s[self.bodies[0]], st.s[self.bodies[1]]
-        a = a2 * C0 - a1 * S0 + a3
-        b = b2 * C1 - b1 * S1 + b3
-        cc = c2 * C0 - c1 * S0 + c3
-        d = d2 * C1 - d1 * S1 + d3
+        a, b = _entry(a1, a2, a3, C0, S0), _entry(b1, b2, b3, C1, S1)
+        cc, d = _entry(c1, c2, c3, C0, S0), _entry(d1, d2, d3, C1, S1)
         det = a * d - b * cc
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             nf = a * a + b * b + cc * cc + d * d
@@ -429,3 +427,22 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     if a.shape != b.shape:
         return False
     return bool((a == b).all() or np.array_equal(a, b, equal_nan=True))
+
+
+def _entry(m1: float, m2: float, m3: float, C: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """``F_theta``'s entry ``m2 C - m1 S + m3`` (evaluated left to right), its zero
+    coefficient's product left out: with ``m2`` zero, ``(+-0) - y = -y`` exactly for
+    ``y = m1 S`` nonzero, and a zero ``y`` gives ``m3``, or ``+0`` when ``m3`` is ``+0``
+    (as ``(+-0) - (+-0) + 0`` does); likewise with ``m1`` zero. So the values are the
+    same bit for bit, in two passes instead of four (the four-bar's loop has a zero
+    coefficient in each entry)."""
+    plus = m3 != 0.0 or math.copysign(1.0, m3) > 0.0
+    if not m2 and plus:
+        out = S * -m1
+        out += m3
+        return out
+    if not m1 and plus:
+        out = m2 * C
+        out += m3
+        return out
+    return m2 * C - m1 * S + m3
