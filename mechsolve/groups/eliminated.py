@@ -100,13 +100,13 @@ def _col(A, k):
     return A[:, k] if isinstance(A, np.ndarray) and A.ndim == 2 else A[k]
 
 
-def _acc(total, a, b):
-    """``total + a * b`` (None for zero terms)."""
+def _acc(total, a, b, out=None):
+    """``total + a * b`` (None for zero terms); ``out``: where a first term goes."""
     if a is None or b is None:
         return total
-    t = a * b
     if total is None:
-        return t
+        return a * b if out is None else np.multiply(a, b, out=out)
+    t = a * b
     total += t
     return total
 
@@ -140,6 +140,9 @@ class _Parts:
         for e, p in enumerate(el.priv):
             vx, vy = el.V[e]
             c, s = _col(C, p), _col(S, p)
+            if vy == 0.0:  # (a link's x axis along it: the products by zero left out,
+                g.append((vx * c, vx * s))  # which change no bit but a zero's sign)
+                continue
             gx = vx * c
             gx -= vy * s
             gy = vy * c
@@ -160,10 +163,12 @@ class _Parts:
         det = _acc(_acc(None, a, d), b, c if c is None else -c)
         self.det = np.zeros(n) if det is None else det + np.zeros(n) if np.ndim(det) == 0 else det
 
-    def solve(self, f: list) -> list:
+    def solve(self, f: list, out=None) -> list:
         """``delta`` (a 1-D array per angle) with ``F_theta delta = -f`` (``f``: a 1-D
-        array per equation); NaN or inf where ``F_theta`` is exactly singular."""
+        array per equation); NaN or inf where ``F_theta`` is exactly singular. ``out``:
+        one array per angle to write ``delta`` into (the same operations)."""
         el, ne = self.el, self.el.ne
+        o = [None] * el.nb if out is None else out
         rhs = []
         for e in range(ne):
             gx, gy = self.g[e]
@@ -173,20 +178,21 @@ class _Parts:
         rhs += [f[r] for r in range(2 * ne, el.nb)]
         (a, b), (c, d) = self.R
         with np.errstate(divide="ignore", invalid="ignore"):
-            x0 = _acc(_acc(None, b, rhs[1]), d if d is None else -d, rhs[0])
+            r0, r1 = el.rest
+            x0 = _acc(_acc(None, b, rhs[1], o[r0]), d if d is None else -d, rhs[0], o[r0])
             x0 /= self.det
-            x1 = _acc(_acc(None, c, rhs[0]), a if a is None else -a, rhs[1])
+            x1 = _acc(_acc(None, c, rhs[0], o[r1]), a if a is None else -a, rhs[1], o[r1])
             x1 /= self.det
-        out: list = [None] * el.nb
-        out[el.rest[0]], out[el.rest[1]] = x0, x1
+        res: list = [None] * el.nb
+        res[el.rest[0]], res[el.rest[1]] = x0, x1
         for e, p in enumerate(el.priv):
             gx, gy = self.g[e]
-            t = gx * f[ne + e]
+            t = gx * f[ne + e] if o[p] is None else np.multiply(gx, f[ne + e], out=o[p])
             t -= gy * f[e]
             t = _acc(_acc(t, self.P[e][0], x0), self.P[e][1], x1)
             t *= -1.0 / el.n2[e]
-            out[p] = t
-        return out
+            res[p] = t
+        return res
 
     def dets(self) -> np.ndarray:
         """``det F_theta``."""

@@ -429,16 +429,43 @@ class NewtonGroup(BatchedSweep, NewtonRates, Group):
         red = self.red
         if st.n == 1 and ok_in[0] and self._fixed_one(st, float(drive.u[0])):
             return ok_in.copy(), np.zeros(1, int), "newton"
-        K, Px, Py = red.known(st)
-        thp = red.fixed_angles(red.with_driver(K, drive.u))
-        self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
-        ok = ok_in & np.isfinite(_rowmax_abs(thp))
+        thp = self._crank_alone(st, drive)
+        if thp is not None:  # (one angle: its own largest value)
+            ok = ok_in & np.isfinite(thp)
+        else:
+            K, Px, Py = red.known(st)
+            thp = red.fixed_angles(red.with_driver(K, drive.u))
+            self._put_angles(st, red.join(thp[:, :0], thp), Px, Py)
+            ok = ok_in & np.isfinite(_rowmax_abs(thp))
         if ok.all():
             return ok, np.zeros(st.n, int), "newton"
         for i in np.flatnonzero(~ok):
             self._nan(st, i)
         methods = np.where(ok, "newton", np.where(ok_in, "failed", "")).astype(object)
         return ok, np.zeros(st.n, int), methods
+
+    def _crank_alone(self, st: State, drive: Drive):
+        """:meth:`_sweep_fixed`'s poses for a lone link whose angle its driver fixes and
+        whose terms are all the ground's (a crank at a ground pivot): the angle
+        ``-(K_d - u) sign`` on the driver values' row, placed with its cosine and sine,
+        the frame at its constant point. The same operations on the same values as
+        :meth:`_Angles.known`, :meth:`~_Angles.fixed_angles` and :meth:`_put_angles`,
+        without their (N, 1) arrays. Returns the angles (N,), or None for other groups
+        (nothing written)."""
+        red = self.red
+        if red.nb != 1 or red.ne or not red.nd or red.free.size or red._wterms[0]:
+            return None
+        kc, pxc, pyc, _, kmov, dmov, pmov = red._known_plan(st.nb)
+        if kmov or dmov or pmov:
+            return None
+        th = kc[int(red.frows[0])] - drive.u  # with_driver: K_d - u
+        np.negative(th, out=th)  # fixed_angles: -(K_d - u) * sign
+        th *= red.fsign[0]
+        b = self.bodies[0]
+        st.set_angle(b, th)
+        st.x[b] = pxc[0]
+        st.y[b] = pyc[0]
+        return th
 
     def _fixed_one(self, st: State, u: float) -> bool:
         """:meth:`_sweep_fixed` at the one position of ``st`` in floats, the same

@@ -11,6 +11,7 @@ from mechsolve.base.state import State
 from mechsolve.groups.base import Drive
 from mechsolve.groups.compiled import kernels
 from mechsolve.groups.newton_common import COARSE, MAX_JUMP, _extrapolate_floats
+from mechsolve.groups.newton_floats import coarse_runner, sparse_newton
 from mechsolve.groups.reduced import FLOATS_UP_TO, STACKED_MIN, _lu_solve, _rowmax_abs
 
 
@@ -54,11 +55,10 @@ class BatchedSweep:
         ones = Drive(dsub.u, np.ones(len(coarse)), np.zeros(len(coarse)))
         u = drive.u
         if self.red is not None:  # the free angles alone: the frames follow from them
-            self._angle_rates(sub, ones, 1, frames=False)
+            self._coarse_rates(sub, ones)
             fb = [self.bodies[k] for k in self.red.free.tolist()]
-            qc = np.stack([sub.th[b] for b in fb], axis=1)
-            dqc = np.stack([sub.w[b] for b in fb], axis=1)
-            if not np.all(np.isfinite(dqc)):
+            qc, dqc = sub.th[fb].T, sub.w[fb].T  # (gathered rows: one call, not a stack)
+            if not np.isfinite(dqc).all():
                 return None
             pred = self._predict(u, coarse, qc, dqc)
             got = self._refine_angles(st, u, pred, coarse, qc)
@@ -67,9 +67,9 @@ class BatchedSweep:
             iters, th = got
             d = np.abs(th - pred)
             wj = self._angle_jump_weights()
-            if any(w != 1.0 for w in wj):
+            if wj.count(1.0) != len(wj):
                 d *= wj
-            if d.size and not np.max(d) <= MAX_JUMP:  # (NaN too)
+            if d.size and not d.max() <= MAX_JUMP:  # (NaN too)
                 return None
             iters[coarse] = itc
             return np.ones(n, bool), iters, "newton (batched)"
@@ -138,7 +138,6 @@ class BatchedSweep:
         nothing reads at the coarse positions (the batch places every position's).
         Returns the iterations per position, or None when a position fails."""
         red = self.red
-        sub = red.sub
         Kall = red.known(st)
         u = drive.u
         Kr, thp = red.reduce(red.with_driver(Kall[0], u))
@@ -152,41 +151,81 @@ class BatchedSweep:
         iters: list[int] = []
         out: list[list[float]] = []
         atol, its = self.atol, self.max_iterations
-        # newton_list's own loop for the group's size (the angles and terms are floats)
-        newton = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
-        for i, ui in enumerate(u.tolist()):
-            if len(ha) == 1:  # the first step: along the tangent, not from the start's pose
-                pred = self._tangent_floats(ha[0], Kr[i], thp[i])
-            elif ha:
-                pred = _extrapolate_floats(hu, ha, ui)
-            thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
-            if plain and ha:
-                plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
+        newton = self._newton_floats()
+        # the plain steps with three positions of history in a loop written out for the
+        # group's size (coarse_runner: the same operations, the angles in locals)
+        run = coarse_runner(len(free)) if len(free) > 1 else None
+        ul = u.tolist()
+        n, i = len(ul), 0
+        while i < n:
+            nh = len(ha)
+            if nh == 3 and run is not None:
+                i, hu, ha = run(i, ul, Kr, newton, hu, ha, wj, atol, its, out, iters, MAX_JUMP)
+                if i == n:
+                    break
+                hi, ui, plain = [i - 3, i - 2, i - 1], ul[i], False  # (i: not plain)
+            else:
+                ui = ul[i]
+                if nh == 1:  # the first step: along the tangent, not from the start's pose
+                    pred = self._tangent_floats(ha[0], Kr[i], thp[i])
+                elif nh:
+                    pred = _extrapolate_floats(hu, ha, ui)
+                thf, plain, it, _, _ = newton(Kr[i], pred, atol, its, True)
+                if plain and nh:
+                    plain = max([abs(a - b) * w for a, b, w in zip(thf, pred, wj)]) <= MAX_JUMP
             if not plain:  # the general step, as sweep_sequential takes it
-                Ki = [k[i : i + 1] for k in Kall]
-                if ha:
-                    hqa = [self._pose_floats(j, a, thp, Kall) for j, a in zip(hi, ha)]
-                    qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
-                else:
-                    qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
-                    good = stats.converged
-                if not good:
+                got = self._coarse_general(i, ui, u, Kall, thp, hu, hi, ha, q_start, prefix)
+                if got is None:
                     return None
-                thf = [float(qa[3 * k + 2]) for k in free]
-                it = stats.iterations
+                thf, it = got
             out.append(thf)
             iters.append(it)
-            if len(ha) == 3:
+            if nh == 3:
                 hu, hi, ha = [hu[1], hu[2], ui], [hi[1], hi[2], i], [ha[1], ha[2], thf]
             else:
                 hu, hi, ha = hu + [ui], hi + [i], ha + [thf]
-        th = np.empty((st.n, red.nb))
-        th[:, red.free] = out
+            i += 1
         if fixed:
+            th = np.empty((st.n, red.nb))
+            th[:, red.free] = out
             th[:, red.fixed] = thp
+        else:  # (the free angles are all: no gathered columns)
+            th = np.array(out, float)
         for b, k in self.col.items():  # (the frames: no reader of the coarse positions')
             st.set_angle(b, th[:, k])
         return np.array(iters)
+
+    def _coarse_general(self, i: int, ui: float, u, Kall, thp, hu, hi, ha, q_start, prefix):
+        """:meth:`_coarse_floats`'s step to position ``i`` that is not a plain one, as
+        :meth:`sweep_sequential` takes it (:meth:`_advance` from the history ``hu``,
+        ``hi``, ``ha``, or :meth:`_solve_one` at the start): ``(free angles, iterations)``,
+        or None where it fails."""
+        Ki = [k[i : i + 1] for k in Kall]
+        if ha:
+            hqa = [self._pose_floats(j, a, thp, Kall) for j, a in zip(hi, ha)]
+            qa, stats, good = self._advance(None, ui, hu, hqa, i - 1, prefix, Ki)
+        else:
+            qa, stats = self._solve_one(None, u[i : i + 1], q_start, Ki)
+            good = stats.converged
+        if not good:
+            return None
+        return [float(qa[3 * k + 2]) for k in self.red.free.tolist()], stats.iterations
+
+    def _newton_floats(self):
+        """The coarse pass's Newton iterations in floats for the group's free angles:
+        :meth:`~mechsolve.groups.reduced._Eqs.newton_list` (its own loop for two or
+        four angles), written out for the equations' coefficients where it can be
+        (:func:`~mechsolve.groups.newton_floats.sparse_newton`: the same iterates, the
+        products of zero coefficients left out); made once per equations."""
+        sub = self.red.sub
+        got = getattr(self, "_newton_fl", None)
+        if got is not None and got[0] is sub:
+            return got[1]
+        fn = sparse_newton(sub)
+        if fn is None:
+            fn = {2: sub._newton_list2, 4: sub._newton_list4}.get(sub.nb, sub.newton_list)
+        self._newton_fl = (sub, fn)
+        return fn
 
     def _pose_floats(self, i: int, thf: list, thp: list, Kall) -> np.ndarray:
         """The group's body coordinates at position ``i`` of the coarse pass from its
@@ -320,7 +359,7 @@ class BatchedSweep:
         increment of the solved bodies' terms). ``th0`` itself when that step cannot be
         taken (an exactly singular Jacobian) or the angles are not finite (with the
         fixed ones ``thp``)."""
-        thf = self.red.sub.newton_list(Kr, th0, self.atol, 1)[0]
+        thf = self._newton_floats()(Kr, th0, self.atol, 1, False)[0]
         if not all(math.isfinite(v) for v in thf) or not all(math.isfinite(v) for v in thp):
             return list(th0)
         return thf
@@ -457,10 +496,8 @@ class BatchedSweep:
             done = ((r <= self.atol) & (small | (step >= lastk))) | pred
             take = ~done | small | pred
             if idx is None:
-                take &= todo
-                skip = ~take
-                dq[0, skip] = 0.0
-                dq[1, skip] = 0.0
+                take &= todo  # (a boolean index costs some 10 us a row, copyto 2 us)
+                np.copyto(dq, 0.0, where=~take)
                 X += dq
                 iters += todo
                 np.copyto(last, step, where=todo)
@@ -489,30 +526,34 @@ class BatchedSweep:
         :meth:`_refine2` for two angles: the residual from the equations' nonzero
         coefficients (in the order of the compiled kernel's sums, not a matrix product
         over the (N, n) arrays), the step by the elimination, the same tests and
-        updates. Updates ``th`` (N, n), ``iters`` and ``todo`` in place. Returns the
-        angles' cosines and sines, turned with every step taken, as ``([cos x_k],
-        [sin x_k])``; False when a position does not converge."""
+        updates. The angles and their cosines and sines are the rows of (n, N) arrays,
+        so that the steps' update and turning take one call for all angles. Updates
+        ``th`` (N, n), ``iters`` and ``todo`` in place. Returns the angles' cosines and
+        sines, turned with every step taken, as ``([cos x_k], [sin x_k])``; False when
+        a position does not converge."""
         sub = self.red.sub
         n, nb = th.shape
-        x = [th[:, k].copy() for k in range(nb)]
+        X = np.ascontiguousarray(th.T)  # (nb, N): the angles, a row each
         K = [np.ascontiguousarray(Kr[:, e]) for e in range(nb)]
         last = np.full(n, np.inf)
         tol = 1e-3 * self.atol
-        cs = None  # cos and sin of every angle everywhere, turned with their small steps
+        C = S = None  # cos and sin of X everywhere, turned with their small steps
         for it_k in range(self.max_iterations):
             count = np.count_nonzero(todo)
             if count == 0:
                 break
             if 2 * count >= n:  # most positions still iterate: whole arrays, masked
-                idx, t, k, lastk = None, x, K, last
-                if cs is None:
-                    cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
-                csk = cs
+                idx, t, k, lastk = None, list(X), K, last
+                if C is None:
+                    C, S = np.cos(X), np.sin(X)
+                c, s = C, S
             else:
                 idx = np.flatnonzero(todo)
-                t, k, lastk = [v[idx] for v in x], [v[idx] for v in K], last[idx]
-                csk = None if cs is None else ([c[idx] for c in cs[0]], [s[idx] for s in cs[1]])
-            r, dq, step = _elim_step(sub, t, k, csk)
+                t, k, lastk = list(X[:, idx]), [v[idx] for v in K], last[idx]
+                c, s = (None, None) if C is None else (C[:, idx], S[:, idx])
+            D = np.empty((nb, n)) if idx is None else None  # (the step written into it)
+            cs = None if c is None else (list(c), list(s))
+            r, dq, step = _elim_step(sub, t, k, cs, None if D is None else list(D))
             # as _refine_angles: converged when the residual is small and the step tiny
             # or no longer shrinking (the rounding level); that last step is not taken;
             # or when this step leaves an error predicted below tol (_converges_next)
@@ -522,32 +563,28 @@ class BatchedSweep:
             take = ~done | small | pred
             if idx is None:
                 take &= todo
-                for j in range(nb):
-                    D = np.where(take, dq[j], 0.0)
-                    x[j] += D
-                    _rotate(cs[0][j], cs[1][j], D, x[j])  # (after the last iteration
-                iters += todo  # too: the state's cosines and sines)
-                last = np.where(todo, step, last)
+                np.copyto(D, 0.0, where=~take)
+                X += D
+                _rotate(C, S, D, X)  # (after the last iteration too: the state's)
+                iters += todo
+                np.copyto(last, step, where=todo)
                 todo &= ~done
             else:
-                it = idx[take]
-                for j in range(nb):
-                    D = dq[j][take]
-                    x[j][it] += D
-                    if cs is not None:
-                        c, s = csk[0][j][take], csk[1][j][take]
-                        _rotate(c, s, D, x[j][it])
-                        cs[0][j][it], cs[1][j][it] = c, s
+                it, D = idx[take], np.array(dq)[:, take]
+                X[:, it] += D
+                if C is not None:
+                    c, s = c[:, take], s[:, take]
+                    _rotate(c, s, D, X[:, it])
+                    C[:, it], S[:, it] = c, s
                 iters[idx] += 1
                 last[idx] = step
                 todo[idx[done]] = False
-        for j in range(nb):
-            th[:, j] = x[j]
-        if todo.any() or not all(np.isfinite(v).all() for v in x):
+        th[:] = X.T
+        if todo.any() or not np.isfinite(X).all():
             return False
-        if cs is None:  # (no iteration on whole arrays)
-            cs = ([np.cos(v) for v in x], [np.sin(v) for v in x])
-        return cs
+        if C is None:  # (no iteration on whole arrays)
+            C, S = np.cos(X), np.sin(X)
+        return list(C), list(S)
 
     def _refine2_compiled(self, th: np.ndarray, Kr: np.ndarray, iters: np.ndarray, todo):
         """:meth:`_refine2` in the compiled kernel (:func:`~mechsolve.groups.kernels.
@@ -683,7 +720,16 @@ def _rotate(C: np.ndarray, S: np.ndarray, D: np.ndarray, th: np.ndarray) -> None
     and sin D from their Taylor series to the 5th order (exact to rounding while |D| <
     1e-3: the rest is below D^6 / 720), instead of evaluating cos and sin again
     (several times the cost of the arithmetic); where a step is larger (or not finite),
-    cos and sin of ``th`` there."""
+    cos and sin of ``th`` there. Where no step exceeds 1e-8 (a refinement's last), the
+    series round to ``cos D = 1.0`` and ``sin D = D`` exactly (``D^2 / 2 <= 5e-17`` is
+    below half the spacing of floats under 1, 5.55e-17, and ``D^2 / 6`` below it too),
+    so the same values come from ``C - S D`` and ``S + C D``: 5 passes instead of 17."""
+    if np.abs(D).max(initial=0.0) <= 1e-8:  # (not NaN)
+        c = S * D
+        np.subtract(C, c, out=c)
+        S += C * D
+        C[...] = c
+        return
     d2 = D * D
     cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
     sd = D * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
@@ -741,12 +787,22 @@ def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
         C, S = np.cos(t), np.sin(t)
     C0, C1, S0, S1 = C[0], C[1], S[0], S[1]
     t0, t1 = t[0], t[1]
-    ends = ((a3, t0), (b3, t1)) if nd else ()
-    f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
-    ends = ((c3, t0), (d3, t1)) if nd else ()
-    f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
     ja, jb = _jac2(a2, C0, a1, S0), _jac2(b2, C1, b1, S1)
     jc, jd = _jac2(c2, C0, c1, S0), _jac2(d2, C1, d1, S1)
+    if not nd and a1 and b1 and not (a2 or b2 or c1 or d1) and (c2, d2) == (a1, b1):
+        # a loop of two links' vectors along their x axes (the four-bar's): its x row
+        # sums a1 cos, b1 cos and its y row a1 sin, b1 sin, the very products of the
+        # Jacobian (jc = a1 C0, jd = b1 C1; ja = -a1 S0, jb = -b1 S1, negated exactly):
+        # the same residual from them, four passes fewer
+        f0 = k0 + jc
+        f0 += jd
+        f1 = k1 - ja
+        f1 -= jb
+    else:
+        ends = ((a3, t0), (b3, t1)) if nd else ()
+        f0 = _sum_terms(k0, ((a1, C0), (a2, S0), (b1, C1), (b2, S1)) + ends)
+        ends = ((c3, t0), (d3, t1)) if nd else ()
+        f1 = _sum_terms(k1, ((c1, C0), (c2, S0), (d1, C1), (d2, S1)) + ends)
     if nd:
         ja += a3
         jb += b3
@@ -770,14 +826,14 @@ def _newton_step2(rows, nd, t, k0, k1, C=None, S=None):
     return r, dq, step
 
 
-def _elim_step(sub, t: list, k: list, cs=None):
+def _elim_step(sub, t: list, k: list, cs=None, out=None):
     """One Newton step of a group eliminated to 2 x 2 (``sub.elim``) at the angles
     ``t`` (a 1-D array per angle), ``k`` the equations' constant terms (one per
     equation), ``cs`` the angles' cosines and sines when known: the residual's largest
     component, the step (a 1-D array per angle: inf or NaN where ``F_theta`` is exactly
     singular) and its largest component. Each equation's residual sums its nonzero
     terms ``K + sum m1 cos + sum m2 sin (+ sum m3 theta)`` in that order, as the
-    compiled kernel does."""
+    compiled kernel does. ``out``: one array per angle to write the step into."""
     C, S = ([np.cos(v) for v in t], [np.sin(v) for v in t]) if cs is None else cs
     f = []
     for e, terms in enumerate(sub._terms):
@@ -796,7 +852,7 @@ def _elim_step(sub, t: list, k: list, cs=None):
     r = np.abs(f[0])
     for fe in f[1:]:
         np.maximum(r, np.abs(fe), out=r)
-    dq = sub.elim.parts(C, S).solve(f)
+    dq = sub.elim.parts(C, S).solve(f, out)
     step = np.abs(dq[0])
     for v in dq[1:]:
         np.maximum(step, np.abs(v), out=step)

@@ -71,11 +71,13 @@ class NewtonRates:
         self._inv_cache = (st.token, th, inv)
         return inv
 
-    def _angle_solve(self, st: State, rhs: np.ndarray) -> list:
+    def _angle_solve(self, st: State, rhs: np.ndarray, rows=None) -> list:
         """``F_theta w = rhs`` (rhs (N, n)) at every position: the angles' rates as one
         1-D array per angle. Two angles by Cramer's rule from the entries
         (:meth:`_angle_entries2`), more from the kept inverse; least squares where
-        ``F_theta`` is exactly singular, as a singular body block would get."""
+        ``F_theta`` is exactly singular, as a singular body block would get. ``rows``:
+        one array per angle (the state's rows) that Cramer's rule and the elimination
+        write their rates into, returned as they are where no position is singular."""
         red = self.red
         if red.sub.nb == 0:  # every angle fixed by a driver: theta_k' = sign (u' - K_d')
             w = [None] * red.nb
@@ -84,7 +86,7 @@ class NewtonRates:
             return w
         if red.elim is not None:  # eliminated to 2 x 2 (each loop a link of its own)
             parts, nf = self._angle_elim(st)
-            w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+            w = parts.solve([-rhs[:, k] for k in range(red.nb)], rows)
             sing = ~np.isfinite(nf)
             if sing.any():
                 for v in w:
@@ -95,11 +97,12 @@ class NewtonRates:
         elif red.nb == 2:
             a, b, c, d, det, nf = self._angle_entries2(st)
             r0, r1 = rhs[:, 0], rhs[:, 1]
+            w0, w1 = (np.empty(st.n), np.empty(st.n)) if rows is None else rows
             with np.errstate(divide="ignore", invalid="ignore"):
-                w0 = d * r0
+                np.multiply(d, r0, out=w0)
                 w0 -= b * r1
                 w0 /= det
-                w1 = a * r1
+                np.multiply(a, r1, out=w1)
                 w1 -= c * r0
                 w1 /= det
             sing = ~np.isfinite(nf)
@@ -154,10 +157,8 @@ class NewtonRates:
         ((a1, a2, a3), (b1, b2, b3)), ((c1, c2, c3), (d1, d2, d3)) = self.red._rows
         C0, C1 = st.c[self.bodies[0]], st.c[self.bodies[1]]
         S0, S1 = st.s[self.bodies[0]], st.s[self.bodies[1]]
-        a = a2 * C0 - a1 * S0 + a3
-        b = b2 * C1 - b1 * S1 + b3
-        cc = c2 * C0 - c1 * S0 + c3
-        d = d2 * C1 - d1 * S1 + d3
+        a, b = _entry(a1, a2, a3, C0, S0), _entry(b1, b2, b3, C1, S1)
+        cc, d = _entry(c1, c2, c3, C0, S0), _entry(d1, d2, d3, C1, S1)
         det = a * d - b * cc
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             nf = a * a + b * b + cc * cc + d * d
@@ -189,8 +190,9 @@ class NewtonRates:
         # sum_k P_k Wr[k] + Q_k Wr[nb + k], P = S w, Q = C w (velocities) or
         # P = S al + C w^2, Q = C al - S w^2
         if order == 1:
-            w = self._angle_solve(st, rhs)
             out = (st.vx, st.vy, st.w)
+            rows = [out[2][b] for b in bodies]
+            w = self._angle_solve(st, rhs, rows)
         else:
             w2 = [st.w[b] * st.w[b] for b in bodies]
             for e, row in enumerate(red._rows[: 2 * red.ne]):  # the closing joints'
@@ -199,10 +201,12 @@ class NewtonRates:
                         rhs[:, e] += (m1 * C[k]) * w2[k]
                     if m2:
                         rhs[:, e] += (m2 * S[k]) * w2[k]
-            w = self._angle_solve(st, rhs)
             out = (st.ax, st.ay, st.al)
-        for b, k in self.col.items():
-            out[2][b] = w[k]
+            rows = [out[2][b] for b in bodies]
+            w = self._angle_solve(st, rhs, rows)
+        for b, k in self.col.items():  # (written there already by Cramer's rule and the
+            if w[k] is not rows[k]:  # elimination: the state's rows given to them)
+                out[2][b] = w[k]
         if not frames:
             return
         terms = red.wr_terms()
@@ -218,8 +222,10 @@ class NewtonRates:
                 q -= S[k] * w2[k]
             P.append(p)
             Q.append(q)
-        for b, k in self.col.items():
-            vx, vy = Px[:, k].copy(), Py[:, k].copy()
+        for b, k in self.col.items():  # (into the state's rows: no copies to write back)
+            vx, vy = out[0][b], out[1][b]
+            vx[...] = Px[:, k]
+            vy[...] = Py[:, k]
             for j, px, qx, py, qy in terms[k]:  # the nonzero entries of Wr only
                 if px:
                     vx += px * P[j]
@@ -229,7 +235,35 @@ class NewtonRates:
                     vy += py * P[j]
                 if qy:
                     vy += qy * Q[j]
-            out[0][b], out[1][b] = vx, vy
+
+    def _coarse_rates(self, st: State, drive: Drive) -> None:
+        """The angles' rates (order 1) at the coarse positions of a batched sweep into
+        ``st``, as :meth:`_angle_rates` gives them without the frames'. A group
+        eliminated to 2 x 2 solves them from the elimination alone: its conditioning
+        bound (:meth:`_angle_elim`'s norm of the inverse: some 45 NumPy calls on a few
+        dozen positions) is not read there. That bound is NaN only where ``F_theta`` is
+        exactly singular, a value is not finite or its square overflows, where
+        :meth:`_angle_rates` takes least squares: any rate not finite or determinant
+        below 1e-100 (no product of a mechanism's lengths comes near the overflow then)
+        sends all positions through :meth:`_angle_rates`, so the rates are the same."""
+        red = self.red
+        if red.elim is None or red.sub.nb == 0 or (st.n == 1 and red.nb <= FLOATS_UP_TO):
+            self._angle_rates(st, drive, 1, frames=False)
+            return
+        K = red.known(st, 1)[0]  # (fresh: the right-hand side in place)
+        if red.nd:
+            K[:, 2 * red.ne :] -= drive.ud[:, None]
+        rhs = np.negative(K, out=K)
+        bodies = self.bodies
+        parts = red.elim.parts([st.c[b] for b in bodies], [st.s[b] for b in bodies])
+        w = parts.solve([-rhs[:, k] for k in range(red.nb)])
+        with np.errstate(invalid="ignore"):
+            fine = np.isfinite(w).all() and (np.abs(parts.det) >= 1e-100).all()
+        if not fine:
+            self._angle_rates(st, drive, 1, frames=False)
+            return
+        for b, k in self.col.items():
+            st.w[b] = w[k]
 
     def _angle_rates_one(self, st: State, drive: Drive, order: int) -> bool:
         """:meth:`_angle_rates` at one position in Python floats (a NumPy call on
@@ -393,3 +427,22 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     if a.shape != b.shape:
         return False
     return bool((a == b).all() or np.array_equal(a, b, equal_nan=True))
+
+
+def _entry(m1: float, m2: float, m3: float, C: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """``F_theta``'s entry ``m2 C - m1 S + m3`` (evaluated left to right), its zero
+    coefficient's product left out: with ``m2`` zero, ``(+-0) - y = -y`` exactly for
+    ``y = m1 S`` nonzero, and a zero ``y`` gives ``m3``, or ``+0`` when ``m3`` is ``+0``
+    (as ``(+-0) - (+-0) + 0`` does); likewise with ``m1`` zero. So the values are the
+    same bit for bit, in two passes instead of four (the four-bar's loop has a zero
+    coefficient in each entry)."""
+    plus = m3 != 0.0 or math.copysign(1.0, m3) > 0.0
+    if not m2 and plus:
+        out = S * -m1
+        out += m3
+        return out
+    if not m1 and plus:
+        out = m2 * C
+        out += m3
+        return out
+    return m2 * C - m1 * S + m3
