@@ -96,6 +96,9 @@ class DesignBatch:
     _separate: dict = field(default_factory=dict, repr=False)
     _passes: list = field(default_factory=list, repr=False)
     _where: dict = field(default_factory=dict, repr=False)  # design -> (pass, slot)
+    # (first, end, pass): the designs first to end - 1 in the slots 0, 1, ... of the pass
+    # (a pass that kept a run of consecutive designs: no entry per design in _where)
+    _spans: list = field(default_factory=list, repr=False)
     # forces by default: a design without masses or loads gets none, as alone
     _auto_forces: bool = field(default=False, repr=False)
 
@@ -111,7 +114,7 @@ class DesignBatch:
             if isinstance(out, BaseException):
                 raise out
             return out
-        pi, j = self._where[k]
+        pi, j = self._slot(k)
         b = self._passes[pi]
         P = len(self.u)
         sl = slice(j * P, (j + 1) * P)
@@ -164,6 +167,16 @@ class DesignBatch:
         if f is None or (self._auto_forces and not self.mechanisms[k].needs_forces):
             return Results(an, sol, None)
         return Results(an, sol, _slice_forces(f, sl, j))
+
+    def _slot(self, k: int) -> tuple[int, int]:
+        """The pass and the slot in it of design ``k`` (solved by the batch)."""
+        got = self._where.get(k)
+        if got is not None:
+            return got
+        for lo, hi, pi in self._spans:
+            if lo <= k < hi:
+                return pi, k - lo
+        raise KeyError(k)
 
 
 def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
@@ -711,11 +724,14 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
         ks = [inside[j] for j in kept]
     else:
         kept, ks = range(nd), inside
-    out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
     if ks and ks[-1] - ks[0] == len(ks) - 1:  # (inside is increasing: consecutive designs)
         out.batched[ks[0] : ks[-1] + 1] = True
+        if not kept[0]:  # design ks[0] + j in row j: one span, not an entry per design
+            out._spans.append((ks[0], ks[-1] + 1, pi))
+            return
     else:
         out.batched[ks] = True
+    out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
 
 
 def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:

@@ -230,15 +230,23 @@ class Program:
         return out
 
 
-def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> None:
-    """The crank: its angle, cosine and sine one row for every design."""
+def _crank_turn(g: DriverLink, u: np.ndarray) -> tuple:
+    """The crank's angle, cosine and sine, each one row ``(1, P)`` for every design of
+    a pass (its blocks share them: none is written in place), and its rate per unit of
+    the driver coordinate."""
     d = g.drv
     sign, off = (1.0, -d.delta) if d.b == g.b else (-1.0, d.delta)
     th = np.multiply(u, sign)
     if off:
         th += off
     th = th.reshape(1, -1)
-    c, s = np.cos(th), np.sin(th)
+    return th, np.cos(th), np.sin(th), sign
+
+
+def _driver_link(prog: Program, g: DriverLink, num: _Numbers, turn: tuple) -> None:
+    """The crank: its angle, cosine and sine one row for every design (``turn``,
+    :func:`_crank_turn`)."""
+    th, c, s, sign = turn
     q = {"th": th, "c": c, "s": s, "w": sign}  # w: per unit of the driver coordinate
     prog.bodies[g.b] = q
     px, py = num.pair(g.sk)  # the pivot, on the ground
@@ -637,6 +645,7 @@ def run_program(
     h = float(abs(u[1] - u[0])) if P > 1 else 0.0
     blocks = []
     num = _Numbers(nd)
+    turn = _crank_turn(plan[0], u)
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
@@ -645,7 +654,7 @@ def run_program(
         num.block(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1
-            _driver_link(prog, plan[0], num, u)
+            _driver_link(prog, plan[0], num, turn)
             for gi in range(1, len(plan)):
                 m = modes[gi, lo:hi]  # the branches: one float when the same in the block
                 mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
