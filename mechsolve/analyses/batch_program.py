@@ -148,6 +148,7 @@ class Program:
         }
         self.indicators: list = []
         self.risky = np.zeros(nd, bool)
+        self.hmin: list = []  # per dyad, each design's smallest H (see run_program)
         self.full = (nd, P)  # the shape of a quantity that varies with design and position
         self._tmp: np.ndarray | None = None
         self.crank: tuple | None = None  # the driven crank (see _dH_bound)
@@ -339,7 +340,7 @@ def _triangle(L1, L2, D2, tmp: np.ndarray):
     return a, h2, H, t
 
 
-def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> None:
+def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
     """One RRR dyad over every design and position, screened as the general pass does.
     The operations and their order are the general dyad's; a term used once is formed
     in a scratch array and a temporary that is read no more holds the next result."""
@@ -395,8 +396,7 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
     del inv, g1x, g1y, g2x, g2y
-    bound = _dH_bound(prog, g, num, L1, L2)
-    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound)
+    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, P, _dH_bound(prog, g, num, h))
 
 
 class _Negated:
@@ -483,7 +483,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=None) -> None:
+def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, P, hbound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -499,18 +499,23 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=No
     the smallest indicator, and ``min H - max h|dH| > 0`` implies both tests at every
     sample and step. Only a design where that bound fails is tested sample by sample.
 
-    ``bound``: per design, a number at least the largest ``|dH|`` the general pass forms
-    (:func:`_dH_bound`), or None. With it ``dH`` is formed only for the designs where
-    ``min H - h k bound > 0`` fails, and they are tested sample by sample: the sample by
-    sample test is what the general pass decides (its shortcut above never passes a
-    design the test fails), so the decisions are the same."""
+    ``hbound``: per design, ``h k`` times a number at least the largest ``|dH|`` the
+    general pass forms (:func:`_dH_bound`, made once per pass), or None. With it ``dH``
+    is formed only for the designs where ``min H - hbound > 0`` fails, and they are
+    tested sample by sample: the sample by sample test is what the general pass decides
+    (its shortcut above never passes a design the test fails), so the decisions are the
+    same.
+
+    The indicator's test is made once per pass on every design's smallest ``H``, which
+    this keeps (``prog.hmin``, :func:`run_program`); a design that fails it may be tested
+    sample by sample here too (it is risky either way)."""
     risky = prog.risky
     Hmin = H.min(axis=1)
-    risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
+    prog.hmin.append(Hmin)
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
     L1s, L2s = L1 * L1, L2 * L2
-    if bound is None:
+    if hbound is None:
         dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
         if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
             dvx, dvy = _real(prog, dvx), _real(prog, dvy)
@@ -518,12 +523,11 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=No
         else:
             dH *= _dot(dvx, dx, dvy, dy, prog.tmp())  # (x y is y x)
         big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+        big *= np.ravel(1.0 / (L1s * L2s))
+        big *= h
     else:
-        dH = None
-        big = np.array(np.broadcast_to(np.ravel(bound), Hmin.shape))
-    big *= np.ravel(1.0 / (L1s * L2s))
-    big *= h
-    unsure = ~risky & ~(Hmin - big > 0)
+        dH, big = None, hbound
+    unsure = ~(Hmin - big > 0)
     if unsure.any():  # those designs, sample by sample
         rows = np.flatnonzero(unsure)
         k = 1.0 / (L1s * L2s)
@@ -553,11 +557,12 @@ def _rows(prog: Program, rows: np.ndarray, *xs):
     return [x if isinstance(x, float) else np.broadcast_to(x, prog.full)[rows] for x in xs]
 
 
-def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
+def _dH_bound(prog: Program, g: RRR, num: _Numbers, h: float):
     """For a dyad between the driven crank and the ground, a bound per design of the
     ``|dH|`` the general pass forms, from the design's numbers only (no array of the
-    block's size), or None for any other dyad. Made once per pass (its designs' numbers
-    as columns), each block reads its rows.
+    block's size), times ``h k`` (``k = 1 / (L1^2 L2^2)``, as :func:`_screen` scales
+    it), or None for any other dyad. Made once per pass (its designs' numbers as
+    columns), each block reads its rows.
 
     With P on the crank at the distance ``r`` from its ground pivot O and Q on the
     ground at the distance ``e`` from O (or the other way round), at every position
@@ -575,10 +580,16 @@ def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
     if got is None or got[0] is not g:
         lo, hi = num.lo, num.hi
         num.block(0, num.nd)
-        got = num.made[key] = (g, _crank_bound(crank, g, num))
+        bound = _crank_bound(crank, g, num)
+        # h k bound per design: the operations :func:`_screen` made on each block's rows
+        L1, L2 = num.one(g.L1), num.one(g.L2)
+        L1s, L2s = L1 * L1, L2 * L2
+        big = np.array(np.broadcast_to(np.ravel(bound), (num.nd,)))
+        big *= np.ravel(1.0 / (L1s * L2s))
+        big *= h
+        got = num.made[key] = (g, big)
         num.block(lo, hi)
-    b = got[1]
-    return b if np.ndim(b) == 0 else b[num.lo : num.hi]
+    return got[1][num.lo : num.hi]
 
 
 def _crank_bound(crank: tuple, g: RRR, num: _Numbers):
@@ -658,7 +669,7 @@ def run_program(
             for gi in range(1, len(plan)):
                 m = modes[gi, lo:hi]  # the branches: one float when the same in the block
                 mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
-                _rrr(prog, plan[gi], num, mode, h, near)
+                _rrr(prog, plan[gi], num, mode, h)
         if speed != 1.0:  # rates per unit driver coordinate -> time rates
             for b, q in prog.bodies.items():
                 if b != nb:
@@ -667,4 +678,10 @@ def run_program(
                     for name in ACCELERATIONS if acceleration else ():
                         q[name] = _mul(q[name], speed * speed)
         blocks.append(prog)
-    return Programs(blocks, per)
+    out = Programs(blocks, per)
+    # the indicator above near at every sample (sqrt of the smallest min(H, 1) is the
+    # smallest indicator), once per pass over every design's smallest H of each dyad
+    for gi in range(len(blocks[0].hmin)):
+        Hmin = np.concatenate([b.hmin[gi] for b in blocks]) if len(blocks) > 1 else prog.hmin[gi]
+        out.risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
+    return out
