@@ -318,25 +318,45 @@ def _spread(col, shape: tuple, out: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
-def _triangle(L1, L2, D2, tmp: np.ndarray):
+def _lengths(num: _Numbers, g: RRR) -> tuple:
+    """The dyad's terms of its lengths alone, as :meth:`RRR._triangle` and the screening
+    form them: ``L1^2``, ``L2^2``, ``L1^2 - L2^2``, ``(L1^2 - L2^2) 0.5``,
+    ``1 / (L1^2 L2^2)`` and ``L1^2 + L2^2``. Made once per pass over every design (the
+    same operations per design), each read per block as its numbers are (a float where
+    the block's designs share it, else a column)."""
+    key = ("lengths", id(g))
+    got = num.made.get(key)
+    if got is None or got[0] is not g:
+        lo, hi = num.lo, num.hi
+        num.block(0, num.nd)
+        L1, L2 = num.one(g.L1), num.one(g.L2)
+        L1s, L2s = L1 * L1, L2 * L2
+        d = L1s - L2s
+        terms = (L1s, L2s, d, np.multiply(d, 0.5), 1.0 / (L1s * L2s), L1s + L2s)
+        got = num.made[key] = (g, [t if np.ndim(t) == 0 else np.ravel(t) for t in terms])
+        num.block(lo, hi)
+    return tuple(num.one(t) for t in got[1])
+
+
+def _triangle(lengths: tuple, D2, tmp: np.ndarray):
     """The RRR's triangle (:meth:`RRR._triangle`, the same operations): M's distance
     along P -> Q as a fraction of |PQ|, its squared height over |PQ|^2, and ``H``
-    (``D2`` has the block's full shape; ``tmp`` is scratch)."""
-    L1s, L2s = L1 * L1, L2 * L2
+    (``lengths`` from :func:`_lengths`; ``D2`` has the block's full shape; ``tmp`` is
+    scratch)."""
+    L1s, _, diff, half, k, _ = lengths
     inv = 1.0 / D2
-    a = np.multiply(L1s - L2s, 0.5)
-    a = np.multiply(a, inv, out=a if np.shape(a) == np.shape(inv) else None)
+    a = np.multiply(half, inv, out=half if np.shape(half) == np.shape(inv) else None)
     a += 0.5
     # L1^2 per design, read by two products of the block's shape: written out once
     L1f = _spread(L1s, D2.shape) if np.ndim(L1s) and np.shape(L1s)[0] > 1 else L1s
     h2 = np.multiply(L1f, inv, out=inv)  # (1 / D2 is read no more)
     h2 -= np.multiply(a, a, out=tmp)
-    t = np.add(L1s - L2s, D2)
+    t = np.add(diff, D2)
     t *= 0.5
     t *= t
     H = np.multiply(L1f, D2, out=L1f if L1f is not L1s else None)
     H -= t
-    H *= 1.0 / (L1s * L2s)
+    H *= k
     return a, h2, H, t
 
 
@@ -357,9 +377,9 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
         D2 = dx * dx + dy * dy
         if D2.shape != prog.full:  # P and Q move alike in every design of the block:
             D2 = np.broadcast_to(D2, prog.full).copy()  # the terms after it are in place
-    L1, L2 = num.one(g.L1), num.one(g.L2)
+    lengths = _lengths(num, g)
     tmp = prog.tmp()
-    a, h2, H, t = _triangle(L1, L2, D2, tmp)
+    a, h2, H, t = _triangle(lengths, D2, tmp)
     # (against an array of zeros: numpy's maximum with a float runs some 1.7 times as long)
     hh = np.maximum(h2, _zeros(prog), out=h2)
     np.sqrt(hh, out=hh)
@@ -396,7 +416,7 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
     del inv, g1x, g1y, g2x, g2y
-    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, P, _dH_bound(prog, g, num, h))
+    _screen(prog, H, D2, dx, dy, dvx, dvy, lengths, h, P, _dH_bound(prog, g, num, h))
 
 
 class _Negated:
@@ -483,7 +503,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, P, hbound=None) -> None:
+def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, lengths, h, P, hbound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -514,26 +534,24 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, P, hbound=None) -
     prog.hmin.append(Hmin)
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
-    L1s, L2s = L1 * L1, L2 * L2
+    _, _, _, _, k, S = lengths
     if hbound is None:
-        dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
+        dH = np.subtract(S, D2, out=D2)  # (D2 is read no more)
         if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
             dvx, dvy = _real(prog, dvx), _real(prog, dvy)
             dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
         else:
             dH *= _dot(dvx, dx, dvy, dy, prog.tmp())  # (x y is y x)
         big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
-        big *= np.ravel(1.0 / (L1s * L2s))
+        big *= np.ravel(k)
         big *= h
     else:
         dH, big = None, hbound
     unsure = ~(Hmin - big > 0)
     if unsure.any():  # those designs, sample by sample
         rows = np.flatnonzero(unsure)
-        k = 1.0 / (L1s * L2s)
         k = k[rows] if np.ndim(k) else k
         if dH is None:  # the general pass's dH of these designs, the same operations
-            S = L1s + L2s
             S = S[rows] if np.ndim(S) else S
             dH = np.subtract(S, D2[rows])
             dvx, dvy = _real(prog, dvx), _real(prog, dvy)
