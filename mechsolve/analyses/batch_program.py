@@ -675,6 +675,8 @@ def run_program(
     blocks = []
     num = _Numbers(nd)
     turn = _crank_turn(plan[0], u)
+    # a group's branch where every design of the pass takes the same (else per block)
+    same = [float(m[0]) if m.size and np.all(m == m[0]) else None for m in modes]
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
@@ -685,8 +687,10 @@ def run_program(
             prog.indicators.append(None)  # the driver link's: 1
             _driver_link(prog, plan[0], num, turn)
             for gi in range(1, len(plan)):
-                m = modes[gi, lo:hi]  # the branches: one float when the same in the block
-                mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
+                mode = same[gi]  # the branches: one float when the same in the block
+                if mode is None:
+                    m = modes[gi, lo:hi]
+                    mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
                 _rrr(prog, plan[gi], num, mode, h)
         if speed != 1.0:  # rates per unit driver coordinate -> time rates
             for b, q in prog.bodies.items():

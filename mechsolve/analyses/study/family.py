@@ -189,31 +189,13 @@ class DesignFamily:
                 if not rows.size:
                     continue
                 sel = vals[rows]
-            bits = np.ascontiguousarray(sel).view(np.int64)
-            uniq, inv = np.unique(bits, return_inverse=True)
-            si = np.empty(uniq.size)
-            bad = np.zeros(uniq.size, bool)
-            for u, b in enumerate(uniq.tolist()):
-                key = (p.name, p.unit, b)
-                got = self._cache.get(key)
-                if got is None:
-                    x = float(np.int64(b).view(np.float64))
-                    try:
-                        got = parse_quantity(p.yaml_value(x), "length", lay.length_unit)
-                    except (UnitError, ValueError, TypeError):
-                        got = math.nan
-                    self._cache[key] = got
-                if math.isnan(got):
-                    bad[u] = True
-                    got = 0.0
-                si[u] = got
-            X[rows, col_of] = si[inv]
-            if bad.any():
-                hit = bad[inv]
+            si, bad = self._converted(p, np.ascontiguousarray(sel).view(np.int64), lay)
+            X[rows, col_of] = si
+            if bad is not None:
                 if isinstance(rows, slice):
-                    flagged |= hit
+                    flagged |= bad
                 else:
-                    flagged[rows[hit]] = True
+                    flagged[rows[bad]] = True
         _bars(lay, X)
         flagged |= _refused(lay, X)
         self.rows = X
@@ -224,6 +206,53 @@ class DesignFamily:
             except InputError as exc:
                 self.invalid[k] = exc
         return self
+
+    def _converted(self, p: Parameter, bits: np.ndarray, lay: _Layout):
+        """The values (their bits, int64) of parameter ``p`` in SI: each distinct value
+        converted once per study by the parser's own function, on the text a study writes
+        (``self._cache``), and which of them the parser refuses (None: none; a refused
+        one is 0.0 here). Where every value was converted before, they are looked up in
+        a sorted table of those conversions instead (:data:`_TABLE` entries at most)."""
+        key = ("table", p.name, p.unit)
+        table = self._cache.get(key)
+        if table is not None:
+            known, si = table
+            at = np.searchsorted(known, bits)
+            np.minimum(at, known.size - 1, out=at)
+            if (known[at] == bits).all():
+                out = si[at]
+                bad = np.isnan(out)
+                if not bad.any():
+                    return out, None
+                out[bad] = 0.0
+                return out, bad
+        uniq, inv = np.unique(bits, return_inverse=True)
+        si = np.empty(uniq.size)
+        for u, b in enumerate(uniq.tolist()):
+            got = self._cache.get((p.name, p.unit, b))
+            if got is None:
+                x = float(np.int64(b).view(np.float64))
+                try:
+                    got = parse_quantity(p.yaml_value(x), "length", lay.length_unit)
+                except (UnitError, ValueError, TypeError):
+                    got = math.nan
+                self._cache[p.name, p.unit, b] = got
+            si[u] = got
+        if table is None or table[0].size + uniq.size <= _TABLE:  # the table, merged
+            if table is not None:
+                uniq, first = np.unique(np.concatenate([table[0], uniq]), return_index=True)
+                si = np.concatenate([table[1], si])[first]
+                si_inv = si[np.searchsorted(uniq, bits)]
+            else:
+                si_inv = si[inv]
+            self._cache[key] = (uniq, si)
+        else:
+            si_inv = si[inv]
+        bad = np.isnan(si_inv)
+        if not bad.any():
+            return si_inv, None
+        si_inv[bad] = 0.0
+        return si_inv, bad
 
     def _layout(self) -> _Layout:
         """What the family's numbers are made of, the same for every family of this file
@@ -262,6 +291,7 @@ class DesignFamily:
 
 
 _LAYOUT = "layout"  # the key of a family's _Layout in its cache (the others are tuples)
+_TABLE = 1 << 16  # a parameter's converted values kept in a sorted table, at most
 
 
 class _Layout:
