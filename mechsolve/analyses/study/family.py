@@ -44,8 +44,9 @@ from mechsolve.analyses.study.params import (
     lookup,
     parse_keypath,
 )
-from mechsolve.base.errors import InputError
+from mechsolve.base.errors import InputError, MechsolveError
 from mechsolve.base.units import LIMITS, UnitError, parse_quantity, parse_unit
+from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 from mechsolve.model.parse import from_source
 from mechsolve.model.source import Source
@@ -253,6 +254,18 @@ class DesignFamily:
             return si_inv, None
         si_inv[bad] = 0.0
         return si_inv, bad
+
+    def _analysis(self, method: str | None) -> Analysis | None:
+        """The analysis of the file as it is (method ``method``), made once per study
+        (:meth:`with_values` shares it): the structure every design of the family has
+        (:func:`mechsolve.analyses.batch._reference`); None where it cannot be made."""
+        key = ("analysis", method)
+        if key not in self._cache:
+            try:
+                self._cache[key] = Analysis(self.base, method)
+            except MechsolveError:
+                self._cache[key] = None
+        return self._cache[key]
 
     def _layout(self) -> _Layout:
         """What the family's numbers are made of, the same for every family of this file
@@ -635,5 +648,8 @@ def solve_family(
         want_forces = mechs[valid[0]].needs_forces
     else:
         want_forces = any(mechs[k].needs_forces for k in valid)
-    rows = family.rows if family.why_not is None else None
-    return solve_stacked(out, rows, alone, want_forces, step, method, forces, acceleration)
+    rows = like = None
+    if family.why_not is None:  # (the file's analysis: the designs' structure, once)
+        rows, like = family.rows, family._analysis(method)
+    todo = (want_forces, step, method, forces, acceleration, like)
+    return solve_stacked(out, rows, alone, *todo)
