@@ -380,6 +380,7 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
     lengths = _lengths(num, g)
     tmp = prog.tmp()
     a, h2, H, t = _triangle(lengths, D2, tmp)
+    Hmin = H.min(axis=1)  # (for the screening: read while H is still in the cache)
     # (against an array of zeros: numpy's maximum with a float runs some 1.7 times as long)
     hh = np.maximum(h2, _zeros(prog), out=h2)
     np.sqrt(hh, out=hh)
@@ -416,7 +417,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
     del inv, g1x, g1y, g2x, g2y
-    _screen(prog, H, D2, dx, dy, dvx, dvy, lengths, h, P, _dH_bound(prog, g, num, h))
+    hbound = _dH_bound(prog, g, num, h)
+    _screen(prog, H, Hmin, D2, dx, dy, dvx, dvy, lengths, h, P, hbound)
 
 
 class _Negated:
@@ -503,7 +505,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, lengths, h, P, hbound=None) -> None:
+def _screen(prog: Program, H, Hmin, D2, dx, dy, dvx, dvy, lengths, h, P, hbound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -530,8 +532,7 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, lengths, h, P, hbound=None) 
     this keeps (``prog.hmin``, :func:`run_program`); a design that fails it may be tested
     sample by sample here too (it is risky either way)."""
     risky = prog.risky
-    Hmin = H.min(axis=1)
-    prog.hmin.append(Hmin)
+    prog.hmin.append(Hmin)  # (Hmin: H.min(axis=1))
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
     _, _, _, _, k, S = lengths
