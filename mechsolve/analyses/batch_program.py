@@ -345,7 +345,7 @@ def _triangle(lengths: tuple, D2, tmp: np.ndarray):
     scratch)."""
     L1s, _, diff, half, k, _ = lengths
     inv = 1.0 / D2
-    a = np.multiply(half, inv, out=half if np.shape(half) == np.shape(inv) else None)
+    a = np.multiply(half, inv)  # (half is the pass's, read only)
     a += 0.5
     # L1^2 per design, read by two products of the block's shape: written out once
     L1f = _spread(L1s, D2.shape) if np.ndim(L1s) and np.shape(L1s)[0] > 1 else L1s
