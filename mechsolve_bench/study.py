@@ -20,7 +20,10 @@ kinematics and forces). Measured in one run:
   are read on these rows; the rows of parsed designs are kept beside them.
 
 The targets printed: the batch at most 1.5x its closed form with forces, at most 1.2x
-kinematics only. The separate solves' ratio is information only.
+kinematics only, each read twice: on the wall-time rows (six calls interleaved in a
+shuffled order), and in CPU time (``time.thread_time``) of the batch and its closed form
+alone, alternating call by call, medians of many rounds, which other processes on a
+shared machine do not move. The separate solves' ratio is information only.
 * the study's executor (each design's row: its figures, exact limit positions and
   work included) in this process (and, for comparison, with every design parsed as
   before the design family), on the local pool with 1 and 2 workers, and on a
@@ -138,6 +141,18 @@ def _kinematic_errors(batch, kin: dict, n: int) -> dict[str, float]:
     return out
 
 
+def _cpu_ratio(label: str, cpu: dict[str, float], target: float, rounds: int) -> str:
+    """The batch from the study's values against its closed form in CPU time (medians of
+    ``rounds`` interleaved runs of the two, :func:`mechsolve_bench.interleaved_cpu`)."""
+    r = cpu["batch"] / cpu["ref"]
+    verdict = "met" if r <= target else "NOT met"
+    return (
+        f"  {label}, CPU time (thread_time, medians of {rounds} interleaved runs of the two "
+        f"alone): closed form {1e3 * cpu['ref']:.2f} ms, batch from the study's values "
+        f"{1e3 * cpu['batch']:.2f} ms = {r:.2f}x (at most {target}: {verdict})"
+    )
+
+
 def _same(a: list[dict], b: list[dict]) -> bool:
     """Two studies' rows equal to the last bit (blank figures alike)."""
     if len(a) != len(b):
@@ -164,7 +179,7 @@ def case_study(quick: bool = False, designs: int | None = None):
     from mechsolve.analyses.batch import solve_designs
     from mechsolve.analyses.study import execute as ex
     from mechsolve.analyses.study.family import DesignFamily, solve_family
-    from mechsolve_bench import Case, Row
+    from mechsolve_bench import Case, Row, interleaved_cpu
     from mechsolve_bench.fourbar_batch import kinematics, kinematics_only, kinetostatics
 
     n_batch = 24 if quick else 1000
@@ -243,6 +258,12 @@ def case_study(quick: bool = False, designs: int | None = None):
     t_ck, t_bk = statistics.median(t_cks), statistics.median(t_bks)
     t_f, t_fk = statistics.median(t_fs), statistics.median(t_fks)
     t_sep, _ = _median(lambda: [ms.solve(m) for m in mechs], 1)
+    # the ratios read against the targets again in CPU time (time.thread_time: what
+    # other processes on a shared machine do not add to), each side alternating with its
+    # own reference call by call in one loop: a run's verdict then does not hinge on
+    # when another process woke up, nor on what a force batch of the loop above freed
+    cpu_k = interleaved_cpu({"ref": closed_kin, "batch": fam_kin}, 7 if quick else 31)
+    cpu_f = interleaved_cpu({"ref": closed, "batch": fam_forces}, 5 if quick else 15)
     case.rows.append(
         Row(
             "hand-written closed form, every design at once (reference)",
@@ -306,9 +327,11 @@ def case_study(quick: bool = False, designs: int | None = None):
         f"ratio batch from the study's values / closed form, with forces: {t_f / t_cf:.2f} "
         f"(target 3, read on this row: a study solves its designs so; at most 1.5: "
         f"{'met' if t_f <= 1.5 * t_cf else 'NOT met'})",
+        _cpu_ratio("with forces", cpu_f, 1.5, 5 if quick else 15),
         f"ratio batch from the study's values / closed form, kinematics only: "
         f"{t_fk / t_ck:.2f} (target 3, read on this row: at most 1.2: "
         f"{'met' if t_fk <= 1.2 * t_ck else 'NOT met'})",
+        _cpu_ratio("kinematics only", cpu_k, 1.2, 7 if quick else 31),
         "kinematics only, what each side computes: both sides the coupler's and rocker's "
         "angles and rates and the sine of the transmission angle (a study row reads the "
         "rocker's angle and rate and the transmission angle); the closed form also forms "

@@ -49,7 +49,7 @@ from mechsolve.core.branch_choice import _PendingConditions
 from mechsolve.core.force_result import FrictionResult
 from mechsolve.core.kinetostatics import ForceResult, solve_forces
 from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
-from mechsolve.core.sweep import Analysis
+from mechsolve.core.sweep import Analysis, _scale
 from mechsolve.groups import Drive, NewtonGroup, build_plan
 from mechsolve.model import Damper, Limit, Mechanism, PointForce, Spring, Torque
 from mechsolve.results.results import Results
@@ -96,6 +96,9 @@ class DesignBatch:
     _separate: dict = field(default_factory=dict, repr=False)
     _passes: list = field(default_factory=list, repr=False)
     _where: dict = field(default_factory=dict, repr=False)  # design -> (pass, slot)
+    # (first, end, pass): the designs first to end - 1 in the slots 0, 1, ... of the pass
+    # (a pass that kept a run of consecutive designs: no entry per design in _where)
+    _spans: list = field(default_factory=list, repr=False)
     # forces by default: a design without masses or loads gets none, as alone
     _auto_forces: bool = field(default=False, repr=False)
 
@@ -111,7 +114,7 @@ class DesignBatch:
             if isinstance(out, BaseException):
                 raise out
             return out
-        pi, j = self._where[k]
+        pi, j = self._slot(k)
         b = self._passes[pi]
         P = len(self.u)
         sl = slice(j * P, (j + 1) * P)
@@ -164,6 +167,16 @@ class DesignBatch:
         if f is None or (self._auto_forces and not self.mechanisms[k].needs_forces):
             return Results(an, sol, None)
         return Results(an, sol, _slice_forces(f, sl, j))
+
+    def _slot(self, k: int) -> tuple[int, int]:
+        """The pass and the slot in it of design ``k`` (solved by the batch)."""
+        got = self._where.get(k)
+        if got is not None:
+            return got
+        for lo, hi, pi in self._spans:
+            if lo <= k < hi:
+                return pi, k - lo
+        raise KeyError(k)
 
 
 def _slice_forces(f: ForceResult, sl: slice, j: int) -> ForceResult:
@@ -414,18 +427,36 @@ def _not_batchable(m: Mechanism, an, method: str | None) -> str | None:
     return None
 
 
+def _reference(ref: Mechanism, method: str | None, like: Analysis | None) -> Analysis:
+    """The analysis of the batch's reference design ``ref``: a new one, or, given
+    ``like`` (an analysis of a design with ``ref``'s structure, the study's file:
+    :mod:`mechsolve.analyses.study.family`), a copy of it with ``ref``'s mechanism, size
+    and tolerance. Its constraint system, plan and named points are then ``like``'s: the
+    batch reads their structure only, and each pass's analysis is rebuilt from the
+    stacked numbers with the reference's size (:func:`_analysis_of`)."""
+    if like is None:
+        return Analysis(ref, method)
+    an = copy.copy(like)
+    an.mech = ref
+    an.scale = _scale(ref)  # (as Analysis makes them)
+    an.atol = ref.solver.tolerance * an.scale
+    return an
+
+
 def _analysis_of(an0, mech_b: Mechanism):
     """The first design's analysis with the stacked numbers: its constraint system, group
-    plan and named points rebuilt from ``mech_b`` (the structure is the same)."""
+    plan and named points rebuilt from ``mech_b`` (the structure is the same), its
+    groups' size and direction the first design's (as :class:`Analysis` sets them)."""
     ab = copy.copy(an0)
     ab.mech = mech_b
     ab.system = ConstraintSystem(mech_b)
     its = mech_b.solver.max_iterations
     ab.groups = ab.plan = build_plan(ab.system, "auto", an0.atol, its)
+    sizes = {"scale": an0.scale, "lref": an0.scale, "direction": float(an0.mech.driver.direction)}
     for g0, g in zip(an0.plan, ab.plan):
-        for attr in ("scale", "lref", "direction"):
+        for attr, v in sizes.items():
             if hasattr(g0, attr):
-                setattr(g, attr, getattr(g0, attr))
+                setattr(g, attr, v)
     points = {}
     for p, ref in an0.points.items():
         if ref.body == ab.system.nb and p in mech_b.ground:
@@ -608,6 +639,7 @@ def solve_stacked(
     method: str | None,
     forces: bool | None,
     acceleration: bool | None,
+    like: Analysis | None = None,
 ) -> DesignBatch:
     """Solve the designs of ``out`` (its ``mechanisms``, a sequence that builds a design
     when asked for it) into ``out``. ``rows``: every design's stacked numbers
@@ -615,7 +647,8 @@ def solve_stacked(
     is design ``k``'s, given by a caller that knows every design has the first one's
     structure (:mod:`mechsolve.analyses.study.family`); None reads them from the designs.
     ``alone``: designs the caller already knows go on their own (with the reason); the
-    first design not among them is the batch's reference."""
+    first design not among them is the batch's reference. ``like``: an analysis (method
+    ``method``) of a design whose structure is every design's (:func:`_reference`)."""
     mechs = out.mechanisms
     nd = len(mechs)
     first = next((k for k in range(nd) if k not in alone), None)
@@ -627,7 +660,7 @@ def solve_stacked(
         want_forces or (ref.outputs.acceleration if acceleration is None else acceleration)
     )
     try:
-        an0 = Analysis(ref, method)
+        an0 = _reference(ref, method, like)
         why = _not_batchable(ref, an0, method)
     except MechsolveError as exc:
         an0, why = None, str(exc)
@@ -711,11 +744,14 @@ def _program_pass(out, an0, a2, inside, modes, reasons, start, risky, u, t, alon
         ks = [inside[j] for j in kept]
     else:
         kept, ks = range(nd), inside
-    out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
     if ks and ks[-1] - ks[0] == len(ks) - 1:  # (inside is increasing: consecutive designs)
         out.batched[ks[0] : ks[-1] + 1] = True
+        if not kept[0]:  # design ks[0] + j in row j: one span, not an entry per design
+            out._spans.append((ks[0], ks[-1] + 1, pi))
+            return
     else:
         out.batched[ks] = True
+    out._where.update(zip(ks, zip(itertools.repeat(pi), kept)))
 
 
 def _solve_pass(out: DesignBatch, an0, inside, X, u, t, alone, want_forces, has_acc) -> None:

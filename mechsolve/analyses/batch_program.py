@@ -148,6 +148,7 @@ class Program:
         }
         self.indicators: list = []
         self.risky = np.zeros(nd, bool)
+        self.hmin: list = []  # per dyad, each design's smallest H (see run_program)
         self.full = (nd, P)  # the shape of a quantity that varies with design and position
         self._tmp: np.ndarray | None = None
         self.crank: tuple | None = None  # the driven crank (see _dH_bound)
@@ -230,15 +231,23 @@ class Program:
         return out
 
 
-def _driver_link(prog: Program, g: DriverLink, num: _Numbers, u: np.ndarray) -> None:
-    """The crank: its angle, cosine and sine one row for every design."""
+def _crank_turn(g: DriverLink, u: np.ndarray) -> tuple:
+    """The crank's angle, cosine and sine, each one row ``(1, P)`` for every design of
+    a pass (its blocks share them: none is written in place), and its rate per unit of
+    the driver coordinate."""
     d = g.drv
     sign, off = (1.0, -d.delta) if d.b == g.b else (-1.0, d.delta)
     th = np.multiply(u, sign)
     if off:
         th += off
     th = th.reshape(1, -1)
-    c, s = np.cos(th), np.sin(th)
+    return th, np.cos(th), np.sin(th), sign
+
+
+def _driver_link(prog: Program, g: DriverLink, num: _Numbers, turn: tuple) -> None:
+    """The crank: its angle, cosine and sine one row for every design (``turn``,
+    :func:`_crank_turn`)."""
+    th, c, s, sign = turn
     q = {"th": th, "c": c, "s": s, "w": sign}  # w: per unit of the driver coordinate
     prog.bodies[g.b] = q
     px, py = num.pair(g.sk)  # the pivot, on the ground
@@ -309,29 +318,49 @@ def _spread(col, shape: tuple, out: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
-def _triangle(L1, L2, D2, tmp: np.ndarray):
+def _lengths(num: _Numbers, g: RRR) -> tuple:
+    """The dyad's terms of its lengths alone, as :meth:`RRR._triangle` and the screening
+    form them: ``L1^2``, ``L2^2``, ``L1^2 - L2^2``, ``(L1^2 - L2^2) 0.5``,
+    ``1 / (L1^2 L2^2)`` and ``L1^2 + L2^2``. Made once per pass over every design (the
+    same operations per design), each read per block as its numbers are (a float where
+    the block's designs share it, else a column)."""
+    key = ("lengths", id(g))
+    got = num.made.get(key)
+    if got is None or got[0] is not g:
+        lo, hi = num.lo, num.hi
+        num.block(0, num.nd)
+        L1, L2 = num.one(g.L1), num.one(g.L2)
+        L1s, L2s = L1 * L1, L2 * L2
+        d = L1s - L2s
+        terms = (L1s, L2s, d, np.multiply(d, 0.5), 1.0 / (L1s * L2s), L1s + L2s)
+        got = num.made[key] = (g, [t if np.ndim(t) == 0 else np.ravel(t) for t in terms])
+        num.block(lo, hi)
+    return tuple(num.one(t) for t in got[1])
+
+
+def _triangle(lengths: tuple, D2, tmp: np.ndarray):
     """The RRR's triangle (:meth:`RRR._triangle`, the same operations): M's distance
     along P -> Q as a fraction of |PQ|, its squared height over |PQ|^2, and ``H``
-    (``D2`` has the block's full shape; ``tmp`` is scratch)."""
-    L1s, L2s = L1 * L1, L2 * L2
+    (``lengths`` from :func:`_lengths`; ``D2`` has the block's full shape; ``tmp`` is
+    scratch)."""
+    L1s, _, diff, half, k, _ = lengths
     inv = 1.0 / D2
-    a = np.multiply(L1s - L2s, 0.5)
-    a = np.multiply(a, inv, out=a if np.shape(a) == np.shape(inv) else None)
+    a = np.multiply(half, inv)  # (half is the pass's, read only)
     a += 0.5
     # L1^2 per design, read by two products of the block's shape: written out once
     L1f = _spread(L1s, D2.shape) if np.ndim(L1s) and np.shape(L1s)[0] > 1 else L1s
     h2 = np.multiply(L1f, inv, out=inv)  # (1 / D2 is read no more)
     h2 -= np.multiply(a, a, out=tmp)
-    t = np.add(L1s - L2s, D2)
+    t = np.add(diff, D2)
     t *= 0.5
     t *= t
     H = np.multiply(L1f, D2, out=L1f if L1f is not L1s else None)
     H -= t
-    H *= 1.0 / (L1s * L2s)
+    H *= k
     return a, h2, H, t
 
 
-def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> None:
+def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float) -> None:
     """One RRR dyad over every design and position, screened as the general pass does.
     The operations and their order are the general dyad's; a term used once is formed
     in a scratch array and a temporary that is read no more holds the next result."""
@@ -348,9 +377,10 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
         D2 = dx * dx + dy * dy
         if D2.shape != prog.full:  # P and Q move alike in every design of the block:
             D2 = np.broadcast_to(D2, prog.full).copy()  # the terms after it are in place
-    L1, L2 = num.one(g.L1), num.one(g.L2)
+    lengths = _lengths(num, g)
     tmp = prog.tmp()
-    a, h2, H, t = _triangle(L1, L2, D2, tmp)
+    a, h2, H, t = _triangle(lengths, D2, tmp)
+    Hmin = H.min(axis=1)  # (for the screening: read while H is still in the cache)
     # (against an array of zeros: numpy's maximum with a float runs some 1.7 times as long)
     hh = np.maximum(h2, _zeros(prog), out=h2)
     np.sqrt(hh, out=hh)
@@ -387,8 +417,8 @@ def _rrr(prog: Program, g: RRR, num: _Numbers, mode, h: float, near: float) -> N
     if "al" in prog.names:
         _accelerations(prog, g, num, (rpx, rpy, rqx, rqy), (g1x, g1y, g2x, g2y), inv)
     del inv, g1x, g1y, g2x, g2y
-    bound = _dH_bound(prog, g, num, L1, L2)
-    _screen(prog, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound)
+    hbound = _dH_bound(prog, g, num, h)
+    _screen(prog, H, Hmin, D2, dx, dy, dvx, dvy, lengths, h, P, hbound)
 
 
 class _Negated:
@@ -475,7 +505,7 @@ def _rates(prog: Program, q: dict, s0, vpx, vpy, w) -> None:
     q["vx"], q["vy"] = _add(vpx, w * ry), _sub(vpy, w * rx)
 
 
-def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=None) -> None:
+def _screen(prog: Program, H, Hmin, D2, dx, dy, dvx, dvy, lengths, h, P, hbound=None) -> None:
     """The general pass's screening of every position, decided per design from the
     dyad's own terms (a NaN fails every test):
 
@@ -491,37 +521,38 @@ def _screen(prog: Program, H, D2, dx, dy, dvx, dvy, L1, L2, h, near, P, bound=No
     the smallest indicator, and ``min H - max h|dH| > 0`` implies both tests at every
     sample and step. Only a design where that bound fails is tested sample by sample.
 
-    ``bound``: per design, a number at least the largest ``|dH|`` the general pass forms
-    (:func:`_dH_bound`), or None. With it ``dH`` is formed only for the designs where
-    ``min H - h k bound > 0`` fails, and they are tested sample by sample: the sample by
-    sample test is what the general pass decides (its shortcut above never passes a
-    design the test fails), so the decisions are the same."""
+    ``hbound``: per design, ``h k`` times a number at least the largest ``|dH|`` the
+    general pass forms (:func:`_dH_bound`, made once per pass), or None. With it ``dH``
+    is formed only for the designs where ``min H - hbound > 0`` fails, and they are
+    tested sample by sample: the sample by sample test is what the general pass decides
+    (its shortcut above never passes a design the test fails), so the decisions are the
+    same.
+
+    The indicator's test is made once per pass on every design's smallest ``H``, which
+    this keeps (``prog.hmin``, :func:`run_program`); a design that fails it may be tested
+    sample by sample here too (it is risky either way)."""
     risky = prog.risky
-    Hmin = H.min(axis=1)
-    risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
+    prog.hmin.append(Hmin)  # (Hmin: H.min(axis=1))
     # dH = ((L1^2 + L2^2) - D^2) (d . d') / (L1^2 L2^2): its factor k > 0 and h are
     # applied to the largest |.| of each design (the same rounding as element-wise)
-    L1s, L2s = L1 * L1, L2 * L2
-    if bound is None:
-        dH = np.subtract(L1s + L2s, D2, out=D2)  # (D2 is read no more)
+    _, _, _, _, k, S = lengths
+    if hbound is None:
+        dH = np.subtract(S, D2, out=D2)  # (D2 is read no more)
         if any(isinstance(v, float) for v in (dx, dvx, dy, dvy)):
             dvx, dvy = _real(prog, dvx), _real(prog, dvy)
             dH *= _add(_mul(dx, dvx), _mul(dy, dvy))
         else:
             dH *= _dot(dvx, dx, dvy, dy, prog.tmp())  # (x y is y x)
         big = np.maximum(dH.max(axis=1), -dH.min(axis=1))
+        big *= np.ravel(k)
+        big *= h
     else:
-        dH = None
-        big = np.array(np.broadcast_to(np.ravel(bound), Hmin.shape))
-    big *= np.ravel(1.0 / (L1s * L2s))
-    big *= h
-    unsure = ~risky & ~(Hmin - big > 0)
+        dH, big = None, hbound
+    unsure = ~(Hmin - big > 0)
     if unsure.any():  # those designs, sample by sample
         rows = np.flatnonzero(unsure)
-        k = 1.0 / (L1s * L2s)
         k = k[rows] if np.ndim(k) else k
         if dH is None:  # the general pass's dH of these designs, the same operations
-            S = L1s + L2s
             S = S[rows] if np.ndim(S) else S
             dH = np.subtract(S, D2[rows])
             dvx, dvy = _real(prog, dvx), _real(prog, dvy)
@@ -545,11 +576,12 @@ def _rows(prog: Program, rows: np.ndarray, *xs):
     return [x if isinstance(x, float) else np.broadcast_to(x, prog.full)[rows] for x in xs]
 
 
-def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
+def _dH_bound(prog: Program, g: RRR, num: _Numbers, h: float):
     """For a dyad between the driven crank and the ground, a bound per design of the
     ``|dH|`` the general pass forms, from the design's numbers only (no array of the
-    block's size), or None for any other dyad. Made once per pass (its designs' numbers
-    as columns), each block reads its rows.
+    block's size), times ``h k`` (``k = 1 / (L1^2 L2^2)``, as :func:`_screen` scales
+    it), or None for any other dyad. Made once per pass (its designs' numbers as
+    columns), each block reads its rows.
 
     With P on the crank at the distance ``r`` from its ground pivot O and Q on the
     ground at the distance ``e`` from O (or the other way round), at every position
@@ -567,10 +599,16 @@ def _dH_bound(prog: Program, g: RRR, num: _Numbers, L1, L2):
     if got is None or got[0] is not g:
         lo, hi = num.lo, num.hi
         num.block(0, num.nd)
-        got = num.made[key] = (g, _crank_bound(crank, g, num))
+        bound = _crank_bound(crank, g, num)
+        # h k bound per design: the operations :func:`_screen` made on each block's rows
+        L1, L2 = num.one(g.L1), num.one(g.L2)
+        L1s, L2s = L1 * L1, L2 * L2
+        big = np.array(np.broadcast_to(np.ravel(bound), (num.nd,)))
+        big *= np.ravel(1.0 / (L1s * L2s))
+        big *= h
+        got = num.made[key] = (g, big)
         num.block(lo, hi)
-    b = got[1]
-    return b if np.ndim(b) == 0 else b[num.lo : num.hi]
+    return got[1][num.lo : num.hi]
 
 
 def _crank_bound(crank: tuple, g: RRR, num: _Numbers):
@@ -637,6 +675,9 @@ def run_program(
     h = float(abs(u[1] - u[0])) if P > 1 else 0.0
     blocks = []
     num = _Numbers(nd)
+    turn = _crank_turn(plan[0], u)
+    # a group's branch where every design of the pass takes the same (else per block)
+    same = [float(m[0]) if m.size and np.all(m == m[0]) else None for m in modes]
     for lo in range(0, nd, per):
         hi = min(nd, lo + per)
         prog = Program(nb, hi - lo, P, acceleration)
@@ -645,11 +686,13 @@ def run_program(
         num.block(lo, hi)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             prog.indicators.append(None)  # the driver link's: 1
-            _driver_link(prog, plan[0], num, u)
+            _driver_link(prog, plan[0], num, turn)
             for gi in range(1, len(plan)):
-                m = modes[gi, lo:hi]  # the branches: one float when the same in the block
-                mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
-                _rrr(prog, plan[gi], num, mode, h, near)
+                mode = same[gi]  # the branches: one float when the same in the block
+                if mode is None:
+                    m = modes[gi, lo:hi]
+                    mode = float(m[0]) if np.all(m == m[0]) else m.reshape(-1, 1)
+                _rrr(prog, plan[gi], num, mode, h)
         if speed != 1.0:  # rates per unit driver coordinate -> time rates
             for b, q in prog.bodies.items():
                 if b != nb:
@@ -658,4 +701,10 @@ def run_program(
                     for name in ACCELERATIONS if acceleration else ():
                         q[name] = _mul(q[name], speed * speed)
         blocks.append(prog)
-    return Programs(blocks, per)
+    out = Programs(blocks, per)
+    # the indicator above near at every sample (sqrt of the smallest min(H, 1) is the
+    # smallest indicator), once per pass over every design's smallest H of each dyad
+    for gi in range(len(blocks[0].hmin)):
+        Hmin = np.concatenate([b.hmin[gi] for b in blocks]) if len(blocks) > 1 else prog.hmin[gi]
+        out.risky |= ~(np.sqrt(np.minimum(Hmin, 1.0)) > near)
+    return out

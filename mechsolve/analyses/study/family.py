@@ -44,8 +44,9 @@ from mechsolve.analyses.study.params import (
     lookup,
     parse_keypath,
 )
-from mechsolve.base.errors import InputError
+from mechsolve.base.errors import InputError, MechsolveError
 from mechsolve.base.units import LIMITS, UnitError, parse_quantity, parse_unit
+from mechsolve.core.sweep import Analysis
 from mechsolve.model import Mechanism
 from mechsolve.model.parse import from_source
 from mechsolve.model.source import Source
@@ -171,16 +172,16 @@ class DesignFamily:
             return self
         self._ready = True
         base = self.base
-        self.why_not = "the file itself is refused" if base is None else _unsupported(self)
+        lay = None if base is None else self._layout()
+        self.why_not = "the file itself is refused" if lay is None else lay.why_not
         nd = len(self)
         if self.why_not is not None or not nd:
             return self
-        index = number_index(base)
-        X = np.tile(np.array(_split(base)[1], float), (nd, 1))
+        X = np.empty((nd, lay.row.size))
+        X[...] = lay.row
         flagged = np.zeros(nd, bool)
-        length_unit = _length_unit(self.source)
         for i, p in enumerate(self.params):
-            col_of = _column(p, index)
+            col_of = lay.cols[i]
             vals = self.table[:, i]
             if self.given is None:  # every design gives it (rows: all of them)
                 rows, sel = slice(None), vals
@@ -189,33 +190,15 @@ class DesignFamily:
                 if not rows.size:
                     continue
                 sel = vals[rows]
-            bits = np.ascontiguousarray(sel).view(np.int64)
-            uniq, inv = np.unique(bits, return_inverse=True)
-            si = np.empty(uniq.size)
-            bad = np.zeros(uniq.size, bool)
-            for u, b in enumerate(uniq.tolist()):
-                key = (p.name, p.unit, b)
-                got = self._cache.get(key)
-                if got is None:
-                    x = float(np.int64(b).view(np.float64))
-                    try:
-                        got = parse_quantity(p.yaml_value(x), "length", length_unit)
-                    except (UnitError, ValueError, TypeError):
-                        got = math.nan
-                    self._cache[key] = got
-                if math.isnan(got):
-                    bad[u] = True
-                    got = 0.0
-                si[u] = got
-            X[rows, col_of] = si[inv]
-            if bad.any():
-                hit = bad[inv]
+            si, bad = self._converted(p, np.ascontiguousarray(sel).view(np.int64), lay)
+            X[rows, col_of] = si
+            if bad is not None:
                 if isinstance(rows, slice):
-                    flagged |= hit
+                    flagged |= bad
                 else:
-                    flagged[rows[hit]] = True
-        self._bars(X, index)
-        flagged |= _refused(self, X, index)
+                    flagged[rows[bad]] = True
+        _bars(lay, X)
+        flagged |= _refused(lay, X)
         self.rows = X
         for k in np.flatnonzero(flagged):  # parsed on their own: the parser decides
             k = int(k)
@@ -225,31 +208,72 @@ class DesignFamily:
                 self.invalid[k] = exc
         return self
 
-    def _bars(self, X: np.ndarray, index: dict) -> None:
-        """The centre and inertia of each ``uniform_bar`` through a varied point, by the
-        parser's formulas (:func:`mechsolve.model.read_geometry.read_mass`) in Python
-        floats, once per distinct bar."""
-        links = self.source.data.get("links") or {}
-        varied = {(p.path[1], p.path[3]) for p in self.params if p.path[0] == "links"}
-        for lk in self.base.links:
-            m = links.get(lk.name)
-            ends = m.get("uniform_bar") if isinstance(m, dict) else None
-            if not ends or not any((lk.name, e) in varied for e in ends):
-                continue
-            cols = [index["point", lk.name, e, i] for e in ends for i in (0, 1)]
-            uniq, inv = _distinct_rows(X[:, cols])
-            mass = lk.mass
-            redo_com = "com" not in m
-            redo_inertia = "inertia" not in m
-            if redo_com:  # (the same sums and halves as in Python floats, per distinct row)
-                X[:, index["com", lk.name, 0]] = ((uniq[:, 0] + uniq[:, 2]) / 2)[inv]
-                X[:, index["com", lk.name, 1]] = ((uniq[:, 1] + uniq[:, 3]) / 2)[inv]
-            if redo_inertia:  # (Python's ** 2, libm's pow: not always x * x, as the parser)
-                inertias = [
-                    mass * ((x1 - x0) ** 2 + (y1 - y0) ** 2) / 12.0
-                    for x0, y0, x1, y1 in uniq.tolist()
-                ]
-                X[:, index["inertia", lk.name]] = np.array(inertias, float)[inv]
+    def _converted(self, p: Parameter, bits: np.ndarray, lay: _Layout):
+        """The values (their bits, int64) of parameter ``p`` in SI: each distinct value
+        converted once per study by the parser's own function, on the text a study writes
+        (``self._cache``), and which of them the parser refuses (None: none; a refused
+        one is 0.0 here). Where every value was converted before, they are looked up in
+        a sorted table of those conversions instead (:data:`_TABLE` entries at most)."""
+        key = ("table", p.name, p.unit)
+        table = self._cache.get(key)
+        if table is not None:
+            known, si = table
+            at = np.searchsorted(known, bits)
+            np.minimum(at, known.size - 1, out=at)
+            if (known[at] == bits).all():
+                out = si[at]
+                bad = np.isnan(out)
+                if not bad.any():
+                    return out, None
+                out[bad] = 0.0
+                return out, bad
+        uniq, inv = np.unique(bits, return_inverse=True)
+        si = np.empty(uniq.size)
+        for u, b in enumerate(uniq.tolist()):
+            got = self._cache.get((p.name, p.unit, b))
+            if got is None:
+                x = float(np.int64(b).view(np.float64))
+                try:
+                    got = parse_quantity(p.yaml_value(x), "length", lay.length_unit)
+                except (UnitError, ValueError, TypeError):
+                    got = math.nan
+                self._cache[p.name, p.unit, b] = got
+            si[u] = got
+        if table is None or table[0].size + uniq.size <= _TABLE:  # the table, merged
+            if table is not None:
+                uniq, first = np.unique(np.concatenate([table[0], uniq]), return_index=True)
+                si = np.concatenate([table[1], si])[first]
+                si_inv = si[np.searchsorted(uniq, bits)]
+            else:
+                si_inv = si[inv]
+            self._cache[key] = (uniq, si)
+        else:
+            si_inv = si[inv]
+        bad = np.isnan(si_inv)
+        if not bad.any():
+            return si_inv, None
+        si_inv[bad] = 0.0
+        return si_inv, bad
+
+    def _analysis(self, method: str | None) -> Analysis | None:
+        """The analysis of the file as it is (method ``method``), made once per study
+        (:meth:`with_values` shares it): the structure every design of the family has
+        (:func:`mechsolve.analyses.batch._reference`); None where it cannot be made."""
+        key = ("analysis", method)
+        if key not in self._cache:
+            try:
+                self._cache[key] = Analysis(self.base, method)
+            except MechsolveError:
+                self._cache[key] = None
+        return self._cache[key]
+
+    def _layout(self) -> _Layout:
+        """What the family's numbers are made of, the same for every family of this file
+        and parameters (:meth:`with_values` shares it, with the values' conversions)."""
+        lay = self._cache.get(_LAYOUT)
+        if lay is None:
+            lay = self._cache[_LAYOUT] = _Layout(self)
+        return lay
 
     # -- a design -----------------------------------------------------------------------------
     def mechanism(self, k: int) -> Mechanism:
@@ -279,12 +303,112 @@ class DesignFamily:
         return DesignFamily(self.source, self.params, table, given, self._base, self._cache)
 
 
-def _distinct_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+_LAYOUT = "layout"  # the key of a family's _Layout in its cache (the others are tuples)
+_TABLE = 1 << 16  # a parameter's converted values kept in a sorted table, at most
+
+
+class _Layout:
+    """Where a family's numbers go, and what of them is checked: made once per file and
+    parameters (the cache :meth:`DesignFamily.with_values` shares).
+
+    Attributes
+    ----------
+    why_not
+        :func:`_unsupported`'s answer.
+    row
+        The file's stacked numbers (:func:`_split`'s order); ``cols``: each parameter's
+        column among them; ``length_unit``: the unit of a plain length in the file.
+    bars
+        Per ``uniform_bar`` through a varied point: its four coordinates' columns, which
+        of the four a parameter writes, the link's mass, and the columns of its centre
+        and inertia where the parser computes them (else None).
+    checks
+        The columns :func:`_refused` reads (see there), as index arrays.
+    """
+
+    def __init__(self, fam: DesignFamily) -> None:
+        base = fam.base
+        self.why_not = _unsupported(fam)
+        if self.why_not is not None:
+            return
+        index = number_index(base)
+        self.row = np.array(_split(base)[1], float)
+        self.length_unit = _length_unit(fam.source)
+        self.cols = [_column(p, index) for p in fam.params]
+        written = set(self.cols)
+        links = fam.source.data.get("links") or {}
+        varied = {(p.path[1], p.path[3]) for p in fam.params if p.path[0] == "links"}
+        self.bars = []
+        for lk in base.links:
+            m = links.get(lk.name)
+            ends = m.get("uniform_bar") if isinstance(m, dict) else None
+            if not ends or not any((lk.name, e) in varied for e in ends):
+                continue
+            cols = [index["point", lk.name, e, i] for e in ends for i in (0, 1)]
+            com = None if "com" in m else (index["com", lk.name, 0], index["com", lk.name, 1])
+            inertia = None if "inertia" in m else index["inertia", lk.name]
+            moved = [j for j, c in enumerate(cols) if c in written]
+            self.bars.append((cols, moved, lk.mass, com, inertia))
+        changed = {p.path[1] for p in fam.params if p.path[0] == "links"}
+        self.checks = _checks(base, changed, index, written)
+
+
+def _checks(base: Mechanism, changed: set, index: dict, written: set) -> dict[str, Any]:
+    """The columns :func:`_refused` reads, for the links whose points a parameter moves:
+    per link, the coordinates of its points a parameter writes (``links``: x columns,
+    y columns, and the largest distance from the origin among its other points, the
+    file's, or -inf); the pairs of a link's joint points (``ax``, ``ay``, ``bx``,
+    ``by``; their link ``link``), the inertias and the centres' coordinates."""
+    row = np.array(_split(base)[1], float)
+    links, link, inertia, com = [], [], [], []
+    ends: dict[str, list[int]] = {k: [] for k in ("ax", "ay", "bx", "by")}
+    for lk in base.links:
+        if lk.name not in changed:
+            continue
+        xy = [(index["point", lk.name, p, 0], index["point", lk.name, p, 1]) for p in lk.points]
+        moved = [(x, y) for x, y in xy if x in written or y in written]
+        fixed = [float(np.hypot(row[x], row[y])) for x, y in xy if (x, y) not in moved]
+        far = max(fixed, default=-math.inf)  # (max is exact: as over the whole row)
+        links.append(([x for x, _ in moved], [y for _, y in moved], far))
+        used = sorted({j.point for j in base.joints if lk.name in j.links and j.point in lk.points})
+        for a in range(len(used)):
+            for b in range(a + 1, len(used)):
+                for key, p, i in (("ax", a, 0), ("ay", a, 1), ("bx", b, 0), ("by", b, 1)):
+                    ends[key].append(index["point", lk.name, used[p], i])
+                link.append(len(links) - 1)
+        if ("inertia", lk.name) in index:
+            inertia.append(index["inertia", lk.name])
+        if ("com", lk.name, 0) in index:
+            com += [index["com", lk.name, 0], index["com", lk.name, 1]]
+    out = {k: np.array(v, np.intp) for k, v in ends.items()}
+    out |= {"link": np.array(link, np.intp), "inertia": inertia, "com": com, "links": links}
+    return out
+
+
+def _bars(lay: _Layout, X: np.ndarray) -> None:
+    """The centre and inertia of each ``uniform_bar`` through a varied point, by the
+    parser's formulas (:func:`mechsolve.model.read_geometry.read_mass`) in Python floats,
+    once per distinct bar."""
+    for cols, moved, mass, com, inertia in lay.bars:
+        uniq, inv = _distinct_rows(X[:, cols], moved)
+        if com is not None:  # (the same sums and halves as in Python floats, per distinct row)
+            X[:, com[0]] = ((uniq[:, 0] + uniq[:, 2]) / 2)[inv]
+            X[:, com[1]] = ((uniq[:, 1] + uniq[:, 3]) / 2)[inv]
+        if inertia is not None:  # (Python's ** 2, libm's pow: not always x * x, as the parser)
+            inertias = [
+                mass * ((x1 - x0) ** 2 + (y1 - y0) ** 2) / 12.0 for x0, y0, x1, y1 in uniq.tolist()
+            ]
+            X[:, inertia] = np.array(inertias, float)[inv]
+
+
+def _distinct_rows(A: np.ndarray, moved: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``A`` (equal values alike, as ``np.unique(A, axis=0)`` takes
     them) and each row's index among them: each column's distinct values numbered, the
     numbers combined into one integer per row (``np.unique`` over rows of floats sorts
-    them as records, some fifty times slower for a study's thousand designs)."""
-    varies = [col for col in A.T if not np.all(col == col[:1])]  # (else one value, code 0)
+    them as records, some fifty times slower for a study's thousand designs). Only the
+    columns ``moved`` may differ from row to row (the others hold the file's number in
+    every row); one of them that does not differ numbers every row 0, as it did."""
+    varies = [A[:, j] for j in moved]
     if len(varies) == 1:  # its distinct values number the rows (as the key below would)
         _, first, inv = np.unique(varies[0], return_index=True, return_inverse=True)
         return A[first], np.ravel(inv)
@@ -351,34 +475,29 @@ def _unsupported(fam: DesignFamily) -> str | None:
     return None
 
 
-def _refused(fam: DesignFamily, X: np.ndarray, index: dict) -> np.ndarray:
+def _refused(lay: _Layout, X: np.ndarray) -> np.ndarray:
     """The designs the parser might refuse for their values (checked over arrays, with a
     margin: these are parsed on their own). Each value was converted by the parser's own
     function (a refused one is flagged there); here the link's joint points that must
-    be distinct, and the range of a bar's inertia and centre."""
-    base = fam.base
+    be distinct, and the range of a bar's inertia and centre (:func:`_checks`' columns:
+    a point no parameter moves has the file's distance from the origin in every design)."""
+    c = lay.checks
     nd = X.shape[0]
     out = np.zeros(nd, bool)
-    changed = {p.path[1] for p in fam.params if p.path[0] == "links"}
-    for lk in base.links:
-        if lk.name not in changed:
-            continue
-        pts = list(lk.points)
-        xs = X[:, [index["point", lk.name, p, 0] for p in pts]]
-        ys = X[:, [index["point", lk.name, p, 1] for p in pts]]
-        scale = np.maximum(1e-9, np.hypot(xs, ys).max(axis=1))
-        used = sorted({j.point for j in base.joints if lk.name in j.links and j.point in lk.points})
-        for a in range(len(used)):
-            for b in range(a + 1, len(used)):
-                ia, ib = pts.index(used[a]), pts.index(used[b])
-                d = np.hypot(xs[:, ia] - xs[:, ib], ys[:, ia] - ys[:, ib])
-                out |= ~(d > _MARGIN * 1e-9 * scale)
-        if ("inertia", lk.name) in index:
-            v = X[:, index["inertia", lk.name]]
-            out |= ~((v >= 0) & (v <= LIMITS["moment of inertia"]))
-        if ("com", lk.name, 0) in index:
-            c = X[:, [index["com", lk.name, 0], index["com", lk.name, 1]]]
-            out |= ~(np.abs(c) <= LIMITS["length"]).all(axis=1)
+    if c["links"]:  # each link's scale: its points' largest distance from the origin
+        scale = np.empty((nd, len(c["links"])))
+        for j, (xs, ys, far) in enumerate(c["links"]):
+            r = np.hypot(X[:, xs], X[:, ys]).max(axis=1) if xs else np.full(nd, far)
+            np.maximum(r, far, out=r)
+            np.maximum(1e-9, r, out=scale[:, j])
+        if c["link"].size:
+            d = np.hypot(X[:, c["ax"]] - X[:, c["bx"]], X[:, c["ay"]] - X[:, c["by"]])
+            out |= ~(d > _MARGIN * 1e-9 * scale[:, c["link"]]).all(axis=1)
+    if c["inertia"]:
+        v = X[:, c["inertia"]]
+        out |= ~((v >= 0) & (v <= LIMITS["moment of inertia"])).all(axis=1)
+    if c["com"]:
+        out |= ~(np.abs(X[:, c["com"]]) <= LIMITS["length"]).all(axis=1)
     return out
 
 
@@ -529,5 +648,8 @@ def solve_family(
         want_forces = mechs[valid[0]].needs_forces
     else:
         want_forces = any(mechs[k].needs_forces for k in valid)
-    rows = family.rows if family.why_not is None else None
-    return solve_stacked(out, rows, alone, want_forces, step, method, forces, acceleration)
+    rows = like = None
+    if family.why_not is None:  # (the file's analysis: the designs' structure, once)
+        rows, like = family.rows, family._analysis(method)
+    todo = (want_forces, step, method, forces, acceleration, like)
+    return solve_stacked(out, rows, alone, *todo)
