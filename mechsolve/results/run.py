@@ -155,7 +155,8 @@ def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Resul
     cached = getattr(res, "_plots_sweep", None)
     if cached is not None and cached[0] is mech:
         return cached[1]
-    fine = _for_plots(mech, res)
+    # of the model as solved, whatever it became since (an edit after the solve)
+    fine = _for_plots(res.model_as_solved(), res)
     res._plots_sweep = (mech, fine)
     return fine
 
