@@ -168,3 +168,37 @@ def test_unchanged_model_is_used_as_it_is():
     an = r.analysis
     r.effort_at([r.u[I]], I)
     assert r.model_as_solved() is m and r.mechanism is m and r.analysis is an
+
+
+def test_designs_solved_together_then_edited():
+    # solve_designs builds each design's results when asked: a design edited since is
+    # still the design as solved (its points and its effort between samples)
+    m1 = ms.loads(FOURBAR)
+    m2 = ms.loads(FOURBAR.replace("O4: [87.5, 0]", "O4: [90, 0]"))
+    batch = ms.solve_designs([m1, m2])
+    m1.link("coupler").mass = 2.0
+    m1.link("coupler").points["P"] = np.array([0.0, 0.05])
+    m1.ground["O4"] = (0.095, 0.0)
+    r, r0 = batch.results(0), ms.solve(ms.loads(FOURBAR))
+    assert np.allclose(r.point("P").x, r0.point("P").x, rtol=0, atol=1e-15)
+    # P at 60 mm from A at 30 deg from A -> B, A at 26.5 mm from O2 at 20 deg: by hand
+    A = 0.0265 * np.array([math.cos(math.radians(20)), math.sin(math.radians(20))])
+    th = r0.link("coupler").angle[I] + math.radians(30)
+    assert r.point("P").x[I] == pytest.approx(A[0] + 0.06 * math.cos(th), abs=1e-15)
+    want = hand_torque(r0, I, OLD, (0, -2))
+    assert r.effort_at([r.u[I]], I)[0] == pytest.approx(want, rel=1e-9)
+    assert batch.results(1).mechanism is m2  # (unchanged: the design itself)
+
+
+def test_streamed_results_then_edited(tmp_path):
+    m = ms.loads(FOURBAR)
+    _, coarse = ms.stream(m, tmp_path / "s.csv", chunk=50)
+    m.link("coupler").mass = 2.0
+    m.loads[0].force = (0.0, -50.0)
+    r0 = ms.solve(ms.loads(FOURBAR))
+    k = int(np.argmin(abs(coarse.u - r0.u[I])))  # the coarse sample nearest 20 deg
+    want = hand_torque(coarse, k, OLD, (0, -2))  # its stored motion, the original loads
+    assert coarse.driving_effort[k] == pytest.approx(want, rel=1e-9)
+    assert coarse.effort_at([coarse.u[k]], k)[0] == pytest.approx(want, rel=1e-9)
+    x = coarse.u[k]
+    assert r0.effort_at([x], I)[0] == pytest.approx(want, rel=1e-9)

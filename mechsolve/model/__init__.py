@@ -125,6 +125,19 @@ def model_from_snapshot(snapshot: tuple, source: Source | None = None) -> Mechan
     return mech
 
 
+def as_snapshotted(mech: Mechanism, snapshot: object) -> tuple[Mechanism, tuple | None]:
+    """``mech`` as it was when ``snapshot`` (its :func:`content_snapshot`) was taken, and
+    the snapshot its results compare it with from then on: the model itself while its
+    content is the snapshot's, else a copy rebuilt from the snapshot (with that copy's
+    own snapshot); ``(mech, None)`` without a snapshot (a model that cannot be pickled)."""
+    if not isinstance(snapshot, tuple):
+        return mech, None
+    if content_snapshot(mech) == snapshot:
+        return mech, snapshot
+    out = model_from_snapshot(snapshot, mech.source)
+    return out, content_snapshot(out)
+
+
 @dataclass
 class Link:
     """A rigid body carrying named points.
