@@ -18,7 +18,10 @@ import numpy as np
 import pytest
 
 import mechsolve as ms
+from mechsolve.analyses.dynamics import simulate
 from mechsolve.results.run import for_plots
+
+from conftest import MECH
 
 FOURBAR = """
 name: four-bar crank-rocker
@@ -202,3 +205,47 @@ def test_streamed_results_then_edited(tmp_path):
     assert coarse.effort_at([coarse.u[k]], k)[0] == pytest.approx(want, rel=1e-9)
     x = coarse.u[k]
     assert r0.effort_at([x], I)[0] == pytest.approx(want, rel=1e-9)
+
+
+def test_a_simulated_motion_then_edited():
+    # the forces of a simulated motion computed again at one of its samples, after the
+    # model's masses and gravity were edited: those of the machine as simulated (the
+    # effort stored at that sample, computed before the edit)
+    m = ms.load(MECH / "motor-linkage.yaml")
+    r = simulate(m)
+    before = r.summary()
+    for lk in m.links:
+        lk.mass = (lk.mass or 0.0) + 5.0
+    m.gravity = (0.0, -30.0)
+    i = len(r.u) // 3
+    assert r.effort_at([r.u[i]], i)[0] == pytest.approx(r.driving_effort[i], rel=1e-9)
+    assert r.summary() == before
+
+
+def test_a_peak_located_between_samples_after_an_edit():
+    # the requirements' extremes are located between the samples of the plots' sweep
+    from mechsolve.results.requirements import evaluate_figure
+
+    m, r = edited()
+    r0 = ms.solve(ms.loads(FOURBAR))
+    fig = "max(abs(input.torque))"
+    want = evaluate_figure(fig, r0.mechanism, r0)
+    top = float(np.nanmax(np.abs(for_plots(r0.mechanism, r0).driving_effort)))
+    assert top <= want < top * (1 + 1e-3)  # at or just above the largest sample
+    assert evaluate_figure(fig, m, r) == pytest.approx(want, rel=1e-12)
+
+
+def test_the_plots_sweep_made_before_the_edit():
+    from mechsolve.results.requirements import evaluate_figure
+
+    m = ms.loads(FOURBAR)
+    r = ms.solve(m)
+    fine = for_plots(m, r)  # made (and kept) before the edit
+    m.link("coupler").mass = 2.0
+    m.loads[0].force = (0.0, -50.0)
+    r0 = ms.solve(ms.loads(FOURBAR))
+    fig = "max(abs(input.torque))"
+    assert evaluate_figure(fig, m, r) == pytest.approx(evaluate_figure(fig, r0.mechanism, r0))
+    x = fine.u[7] + 1e-3
+    assert fine.effort_at([x], 7)[0] == pytest.approx(r0.effort_at([x], 3)[0], rel=1e-12)
+    assert for_plots(m, r) is fine and fine.mechanism is not m

@@ -257,6 +257,9 @@ class Results(Summary):
     @as_solved
     def summary(self, figures: Summary | None = None, units: OutputUnits | None = None) -> str:
         """The text summary (see :meth:`Summary.summary`) of the model as solved."""
+        check = getattr(figures, "model_as_solved", None)  # (a finer sweep's results)
+        if check is not None:
+            check()
         return super().summary(figures, units)
 
     # -- sizes and names ----------------------------------------------------------------
