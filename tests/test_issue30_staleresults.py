@@ -249,3 +249,31 @@ def test_the_plots_sweep_made_before_the_edit():
     x = fine.u[7] + 1e-3
     assert fine.effort_at([x], 7)[0] == pytest.approx(r0.effort_at([x], 3)[0], rel=1e-12)
     assert for_plots(m, r) is fine and fine.mechanism is not m
+
+
+POSED = """
+name: pendulum placed by its pose
+units: {length: m, angle: deg}
+ground: {O: [0, 0]}
+links:
+  bar: {points: {O: [0, 0], P: [1, 0]}, mass: 1 kg, com: P}
+joints:
+  O: [ground, bar]
+gravity: 9.81 m/s^2
+simulate: {duration: 0.5 s, step: 0.01 s, pose: {O: 0 deg}}
+"""
+
+
+def test_a_posed_simulation_then_edited():
+    # a mechanism placed by its pose (no driver): its table of points after the bar's
+    # point P was moved is still the bar as simulated, P 1 m from O at the bar's angle
+    m = ms.loads(POSED)
+    r = simulate(m)
+    m.links[0].points["P"] = (2.0, 0.0)
+    m.links[0].mass = 3.0
+    cols = {name: v for name, v in r.columns()}
+    th = np.radians(cols["bar.angle [deg]"])
+    assert len(th) > 10 and np.ptp(th) > 0.1
+    assert np.allclose(cols["bar.P.x [m]"], np.cos(th), rtol=0, atol=1e-12)
+    assert np.allclose(cols["bar.P.y [m]"], np.sin(th), rtol=0, atol=1e-12)
+    assert m.links[0].points["P"] == (2.0, 0.0)  # (the model itself as edited)
