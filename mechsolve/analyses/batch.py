@@ -51,7 +51,15 @@ from mechsolve.core.kinetostatics import ForceResult, solve_forces
 from mechsolve.core.solution import PointRef, Solution, StartAssembly, StateView
 from mechsolve.core.sweep import Analysis, _scale
 from mechsolve.groups import Drive, NewtonGroup, build_plan
-from mechsolve.model import Damper, Limit, Mechanism, PointForce, Spring, Torque
+from mechsolve.model import (
+    Damper,
+    Limit,
+    Mechanism,
+    PointForce,
+    Spring,
+    Torque,
+    as_snapshotted,
+)
 from mechsolve.results.results import Results
 from mechsolve.results.run import checked_mechanism
 from mechsolve.results.run import solve as solve_sweep
@@ -101,6 +109,9 @@ class DesignBatch:
     _spans: list = field(default_factory=list, repr=False)
     # forces by default: a design without masses or loads gets none, as alone
     _auto_forces: bool = field(default=False, repr=False)
+    # the designs' contents as solved (mechsolve.model.content_snapshot): a user's design
+    # edited after solve_designs still gets the results of the design as solved
+    _snapshots: list | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.mechanisms)
@@ -118,7 +129,11 @@ class DesignBatch:
         b = self._passes[pi]
         P = len(self.u)
         sl = slice(j * P, (j + 1) * P)
-        an = Analysis(self.mechanisms[k], "auto")  # the only method the batch takes
+        mech, snap = self.mechanisms[k], None
+        if self._snapshots is not None:  # a user's design, as solved (see Results.model_as_solved)
+            mech, snap = as_snapshotted(mech, self._snapshots[k])
+        an = Analysis(mech, "auto")  # the only method the batch takes
+        an.solved_snapshot = snap  # (None: a design of a study, the batch's own)
         modes = [float(m) for m in b["modes"][:, j]]
         start = StartAssembly(
             modes, {}, [r[j] for r in b["reasons"]], b["start"].take([j]), b["u0"], modes
@@ -164,7 +179,7 @@ class DesignBatch:
             {gi: [] for gi in range(len(an.plan))},
         )
         f = b["forces"]
-        if f is None or (self._auto_forces and not self.mechanisms[k].needs_forces):
+        if f is None or (self._auto_forces and not mech.needs_forces):
             return Results(an, sol, None)
         return Results(an, sol, _slice_forces(f, sl, j))
 
@@ -605,7 +620,9 @@ def solve_designs(
         if id(m) not in checked:  # (a design listed twice is checked once)
             checked.add(id(m))
             checked_mechanism(m).ensure_valid()
-    return solve_parsed(mechs, step=step, method=method, forces=forces, acceleration=acceleration)
+    out = solve_parsed(mechs, step=step, method=method, forces=forces, acceleration=acceleration)
+    out._snapshots = [m.__dict__.get("_validated") for m in mechs]  # (just validated)
+    return out
 
 
 def solve_parsed(

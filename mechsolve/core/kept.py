@@ -100,10 +100,20 @@ def analysis_for(mech: Mechanism, method: str | None = None, checked: bool = Fal
     snapshot (everything the content key holds, and more) is its current content. When
     it is the very snapshot object the kept analysis was last found by, nothing was
     edited since, and the content key is not computed again (``ensure_valid`` keeps that
-    object while the content is unchanged and makes a new one after any edit)."""
+    object while the content is unchanged and makes a new one after any edit). The
+    analysis then holds that snapshot as ``solved_snapshot``, at no cost: the content its
+    results were solved for (see
+    :meth:`~mechsolve.results.results.Results.model_as_solved`)."""
     snap = mech.__dict__.get("_validated") if checked else None
     if not isinstance(snap, tuple):
         snap = None
+    an = _found(mech, method, snap)
+    if checked:
+        an.solved_snapshot = snap  # (None: a model that cannot be pickled)
+    return an
+
+
+def _found(mech: Mechanism, method: str | None, snap: tuple | None) -> Analysis:
     if snap is not None:
         with _LOCK:
             kept = next(

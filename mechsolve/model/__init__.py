@@ -37,9 +37,17 @@ KeyPath = tuple[Any, ...]
 
 MAX_POSITIONS = 10_000_000  # a sweep longer than this is a mistake (about 2 min streamed)
 
-# a parsed condition is pickled for a snapshot as its text (its tree follows from it)
-_SNAPSHOT_TABLE = copyreg.dispatch_table.copy()
-_SNAPSHOT_TABLE[Expression] = lambda e: (str, (f"{e.text}\0{e.variables}",))
+
+# a parsed condition is pickled for a snapshot as its text (its tree follows from it); the
+# snapshot holds the expression objects themselves besides, so that a model rebuilt from
+# it has the very same ones (an expression is a value, never edited in place; a derivative
+# of a motion law has a text that may not parse back)
+def _expression(text: str, variables: tuple[str, ...]) -> Expression:
+    return Expression(text, variables)
+
+
+_PARTS = ("driver", "sweep", "assembly", "outputs", "solver")
+_LISTS = ("links", "joints", "loads")
 
 
 def content_snapshot(mech: Mechanism) -> tuple | None:
@@ -48,27 +56,86 @@ def content_snapshot(mech: Mechanism) -> tuple | None:
     assembly, outputs, solver options and loads, pickled to bytes (the source file
     aside). Two snapshots are equal when nothing was edited in between; None when a field
     cannot be pickled (a motion law written as a lambda): such a model is checked at
-    every solve."""
+    every solve. :func:`model_from_snapshot` rebuilds the model from it (what a result
+    was solved with, see :meth:`mechsolve.results.results.Results.model_as_solved`)."""
     d = mech.__dict__
-    parts = [v for k, v in d.items() if k != "source" and k[0] != "_"]
+    top = {k: v for k, v in d.items() if k[0] != "_" and k not in _SKIP}
     objs = (mech.driver, mech.sweep, mech.assembly, mech.outputs, mech.solver)
     kinds = (*map(type, objs), *map(type, mech.links), None, *map(type, mech.joints))
     kinds += (None, *map(type, mech.loads))
-    parts += [None if o is None else o.__dict__ for o in objs]
-    parts += [[lk.__dict__ for lk in mech.links], [j.__dict__ for j in mech.joints]]
-    parts += [[ld.__dict__ for ld in mech.loads]]
-    # the parts' objects themselves are pickled through their __dict__ (their classes are
-    # in ``kinds``): drop them from the first list
-    skip = {id(o) for o in (*objs, mech.links, mech.joints, mech.loads)}
-    parts = [v for v in parts if id(v) not in skip]
+    parts = (
+        top,
+        [None if o is None else o.__dict__ for o in objs],
+        [lk.__dict__ for lk in mech.links],
+        [j.__dict__ for j in mech.joints],
+        [ld.__dict__ for ld in mech.loads],
+    )
+    exprs: list[Expression] = []
+
+    def expression(e: Expression) -> tuple:
+        exprs.append(e)
+        return (_expression, (e.text, e.variables))
+
     buf = io.BytesIO()
     pickler = pickle.Pickler(buf, pickle.HIGHEST_PROTOCOL)
-    pickler.dispatch_table = _SNAPSHOT_TABLE
+    pickler.dispatch_table = table = copyreg.dispatch_table.copy()
+    table[Expression] = expression
     try:
         pickler.dump(parts)
     except Exception:  # (pickle raises PicklingError, TypeError, AttributeError, ...)
         return None
-    return (kinds, buf.getvalue())
+    return (kinds, buf.getvalue(), tuple(exprs))
+
+
+_SKIP = frozenset(("source", *_PARTS, *_LISTS))
+
+
+def _rebuilt(kind: type, state: dict) -> Any:
+    out = object.__new__(kind)
+    out.__dict__.update(state)
+    return out
+
+
+def model_from_snapshot(snapshot: tuple, source: Source | None = None) -> Mechanism:
+    """The model a :func:`content_snapshot` was taken of, rebuilt as a new object (its
+    own links, joints, loads and parts, none shared with the model it was taken of but
+    the expressions, which are values), with ``source`` for its messages."""
+    kinds, data, exprs = snapshot
+    known = {(e.text, e.variables): e for e in exprs}
+
+    class Unpickler(pickle.Unpickler):
+        def find_class(self, module: str, name: str) -> Any:
+            if module == __name__ and name == "_expression":
+                return lambda *key: known[key] if key in known else _expression(*key)
+            return super().find_class(module, name)
+
+    top, objs, links, joints, loads = Unpickler(io.BytesIO(data)).load()
+    nl, nj = len(links), len(joints)
+    mech = object.__new__(Mechanism)
+    mech.__dict__.update(top)
+    for name, kind, state in zip(_PARTS, kinds, objs):
+        setattr(mech, name, None if state is None else _rebuilt(kind, state))
+    k = len(_PARTS)
+    mech.links = [_rebuilt(t, s) for t, s in zip(kinds[k : k + nl], links)]
+    k += nl + 1
+    mech.joints = [_rebuilt(t, s) for t, s in zip(kinds[k : k + nj], joints)]
+    k += nj + 1
+    mech.loads = [_rebuilt(t, s) for t, s in zip(kinds[k:], loads)]
+    mech.source = source
+    return mech
+
+
+def as_snapshotted(mech: Mechanism, snapshot: object) -> tuple[Mechanism, tuple | None]:
+    """``mech`` as it was when ``snapshot`` (its :func:`content_snapshot`) was taken, and
+    the snapshot its results compare it with from then on: the model itself while its
+    content is the snapshot's, else a copy rebuilt from the snapshot (with that copy's
+    own snapshot); ``(mech, None)`` without a snapshot (a model that cannot be pickled)."""
+    if not isinstance(snapshot, tuple):
+        return mech, None
+    if content_snapshot(mech) == snapshot:
+        return mech, snapshot
+    out = model_from_snapshot(snapshot, mech.source)
+    return out, content_snapshot(out)
 
 
 @dataclass

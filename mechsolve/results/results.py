@@ -14,8 +14,11 @@ link's unwrapped along the sweep so that it changes continuously, with the first
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import numbers
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,7 +30,7 @@ from mechsolve.base.units import OutputUnits, UnitError, parse_output_units
 from mechsolve.core.solution import full_cycle
 from mechsolve.core.sweep import Analysis, Failure, Solution, StateView
 from mechsolve.core.work import driver_work_why
-from mechsolve.model import GROUND, Mechanism
+from mechsolve.model import GROUND, Mechanism, content_snapshot, model_from_snapshot
 from mechsolve.results.csv import write_csv
 from mechsolve.results.summary import Summary, unbounded_towards
 
@@ -138,13 +141,45 @@ def distance_travelled(u: np.ndarray, u0: float, t: np.ndarray, ud: np.ndarray, 
     return abs(u[0] - u0) + np.r_[0.0, np.cumsum(legs)]
 
 
+# a Results' analysis per call of one of its figures: what an edited model's results
+# rebuild their own (the rest of the analysis is its constraint system and groups)
+_PER_CALL = ("redundancy", "friction_smoothing", "_limit_start")
+_UNKNOWN = object()
+# inside a figure's computation: each model compared with its snapshot once (no user code
+# runs meanwhile to edit it), not at each of the positions an edge or a peak is solved at
+_CHECKED = threading.local()
+
+
+def as_solved(method):
+    """Compute ``method`` of a :class:`Results` for its model as solved (see
+    :meth:`Results.model_as_solved`): a figure computed again (a position between two
+    samples, the plots' finer sweep) is of the motion and loads the results hold, not of
+    the model as edited since."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        outer = getattr(_CHECKED, "memo", None) is None
+        if outer:
+            _CHECKED.memo = {}
+        try:
+            self.model_as_solved()
+            return method(self, *args, **kwargs)
+        finally:
+            if outer:
+                _CHECKED.memo = None
+
+    return run
+
+
 class Results(Summary):
     """The solved sweep of a mechanism.
 
     Attributes
     ----------
     mechanism
-        The model that was solved.
+        The model that was solved: the model object itself, until it is edited; from the
+        first figure the results compute after that (see :meth:`model_as_solved`), a copy
+        of the model as it was solved.
     u
         Driver coordinate at each position (rad or m).
     t
@@ -169,6 +204,63 @@ class Results(Summary):
         self.view.has_acceleration = solution.has_acceleration
         self.warnings: list[str] = list(solution.warnings)
         self.angle_origin: dict[str, float] = {}  # a previous chunk's last link angles
+        # the model's content as solved (mechsolve.model.content_snapshot): taken by solve
+        # (core.kept), or here for an analysis built elsewhere, before anyone can edit it
+        snap = analysis.__dict__.get("solved_snapshot", _UNKNOWN)
+        if snap is _UNKNOWN:
+            snap = analysis.solved_snapshot = content_snapshot(analysis.mech)
+        self._snapshot = snap
+
+    # -- the model as solved ------------------------------------------------------------
+    def model_as_solved(self) -> Mechanism:
+        """The model these results were solved for, as it was then.
+
+        A model is a mutable object: edited after the solve (a mass, a load, gravity, a
+        point, the driver), it is no longer what the results hold. Every figure the
+        results compute again (:meth:`effort_at`, :meth:`reaction_at`,
+        :meth:`solved_near`, the work, the limit positions, the summary's peaks between
+        samples, the plots' finer sweep) calls this first: while the model's content is
+        the one solved (:func:`~mechsolve.model.content_snapshot`, some 10 to 80 us) it is
+        the model itself; once it differs, the results take a copy rebuilt from the
+        snapshot (:func:`~mechsolve.model.model_from_snapshot`) and an analysis of their
+        own, as :attr:`mechanism` and :attr:`analysis`, for good. (A model with a field
+        that cannot be pickled, a motion law written as a Python function, has no
+        snapshot: its results read it as it is.)"""
+        snap, mech = self._snapshot, self.mechanism
+        if snap is None:
+            return mech
+        memo = getattr(_CHECKED, "memo", None)
+        key = (id(mech), id(snap))
+        same = memo.get(key) if memo is not None else None
+        if same is None:
+            same = content_snapshot(mech) == snap
+            if memo is not None:
+                memo[key] = same
+        if not same:
+            self._as_solved(model_from_snapshot(snap, mech.source))
+        return self.mechanism
+
+    def _as_solved(self, mech: Mechanism) -> None:
+        """Hold ``mech`` (the model as solved, rebuilt) and an analysis of it instead."""
+        old = self.analysis
+        an = Analysis(mech, old.method)
+        for k in _PER_CALL:
+            if k in old.__dict__:
+                an.__dict__[k] = old.__dict__[k]
+        an.solved_snapshot = self._snapshot = content_snapshot(mech)
+        sol = copy.copy(self.solution)
+        sol.analysis = an
+        view = StateView(an, sol.state)
+        view.has_velocity, view.has_acceleration = sol.has_velocity, sol.has_acceleration
+        self.analysis, self.mechanism, self.solution, self.view = an, mech, sol, view
+
+    @as_solved
+    def summary(self, figures: Summary | None = None, units: OutputUnits | None = None) -> str:
+        """The text summary (see :meth:`Summary.summary`) of the model as solved."""
+        check = getattr(figures, "model_as_solved", None)  # (a finer sweep's results)
+        if check is not None:
+            check()
+        return super().summary(figures, units)
 
     # -- sizes and names ----------------------------------------------------------------
     def __len__(self) -> int:
@@ -184,6 +276,7 @@ class Results(Summary):
         return self.u if self.linear else np.degrees(self.u)
 
     @property
+    @as_solved
     def driver_travel(self) -> np.ndarray:
         """Distance travelled by the driver from the start (deg or m), never decreasing:
         ``|u - u0|`` while it goes one way; a motion that turns back adds the way back
@@ -257,6 +350,7 @@ class Results(Summary):
         return SliderMotion(name, s, sv, sa)
 
     # -- the table ----------------------------------------------------------------------
+    @as_solved
     def columns(self) -> list[Column]:
         """All reported quantities as CSV columns, in a stable order."""
         cols: list[Column] = [Column("t", "s", self.t)]
@@ -345,6 +439,7 @@ class Results(Summary):
                 self._rcond = jacobian_rcond(self.analysis.plan, sol.state, sol.indicator)
         return self._rcond
 
+    @as_solved
     def limit_positions(self):
         """Limit positions of the rockers and sliders (see :mod:`mechsolve.results.limits`)."""
         if not hasattr(self, "_limits"):
@@ -353,6 +448,7 @@ class Results(Summary):
             self._limits = limit_positions(self.solution)
         return self._limits
 
+    @as_solved
     def transmission_angles(self):
         """The smallest transmission angle of each loop (see :mod:`mechsolve.results.limits`)."""
         if not hasattr(self, "_transmission"):
@@ -394,6 +490,7 @@ class Results(Summary):
             raise NotInResults(f"no joint named {name!r} (joints: {', '.join(r)})")
         return r[name]
 
+    @as_solved
     def solved_near(self, x: np.ndarray, near: int):
         """The positions at driver values ``x`` solved next to sample ``near`` of this
         sweep (on its branches), their rates scaled to the driver's speed there: where a
@@ -413,6 +510,7 @@ class Results(Summary):
         one.t = np.zeros(m)
         return one
 
+    @as_solved
     def reaction_at(self, name: str, x: np.ndarray, near: int) -> dict[str, np.ndarray]:
         """Joint ``name``'s reaction components solved at driver values ``x`` (one value or
         a 1-D array) next to sample ``near`` of this sweep (its index; see
@@ -437,6 +535,7 @@ class Results(Summary):
         bad = ~np.asarray(one.ok, bool)
         return {k: np.where(bad, np.nan, np.asarray(v, float)) for k, v in r.items()}
 
+    @as_solved
     def effort_at(self, x: np.ndarray, near: int) -> np.ndarray:
         """The driving effort at driver values ``x`` solved next to sample ``near`` (see
         :meth:`solved_near`); NaN where a position does not solve."""
@@ -541,6 +640,7 @@ class Results(Summary):
         See :func:`mechsolve.core.work.driver_work`."""
         return self._work_why()[0]
 
+    @as_solved
     def _work_why(self) -> tuple[float, str]:
         """The driver's work and why it is not defined (see
         :func:`mechsolve.core.work.driver_work_why`), computed once."""
@@ -562,6 +662,7 @@ class Results(Summary):
             or self.warnings
         )
 
+    @as_solved
     def mean_effort(self) -> tuple[float, str]:
         """The driver's mean effort and what it is: the work over the travel when the
         motion has no gaps (no unsolved positions, no dead zone stepped over between two

@@ -152,10 +152,13 @@ def for_plots(mech: Mechanism, res: Results, method: str | None = None) -> Resul
     ``res`` itself when it is already that fine and has no switch or break to add, or
     has a motion law of time. Made once
     per run: the summary, the plots and the requirements read the same figures."""
+    # of the model as solved (``mech`` or any edit of it since: see
+    # Results.model_as_solved), so made once per results
     cached = getattr(res, "_plots_sweep", None)
-    if cached is not None and cached[0] is mech:
+    if cached is not None:
+        cached[1].model_as_solved()  # (made before an edit of the model: as solved)
         return cached[1]
-    fine = _for_plots(mech, res)
+    fine = _for_plots(res.model_as_solved(), res)
     res._plots_sweep = (mech, fine)
     return fine
 

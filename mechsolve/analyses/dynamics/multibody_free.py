@@ -26,7 +26,7 @@ from mechsolve.analyses.dynamics.multibody_events import stop_condition
 from mechsolve.analyses.dynamics.multibody_integrate import integrate
 from mechsolve.base.atomic import replacing
 from mechsolve.base.units import SI_OUTPUT, OutputUnits
-from mechsolve.model import GROUND, Mechanism
+from mechsolve.model import GROUND, Mechanism, as_snapshotted, content_snapshot
 from mechsolve.model.expr.poles import first_pole_along
 
 # how far given rates may be from consistent before it is an error: a value written to
@@ -501,10 +501,17 @@ class FreeResults:
     point, the motors, the energies, the violation and the joints' reactions."""
 
     def __init__(self, mech: Mechanism, mb: Multibody, tr: Trajectory) -> None:
-        self.mechanism = mech
+        self._solved = (mech, content_snapshot(mech))
         self.multibody = mb
         self.trajectory = tr
         self.model = None
+
+    @property
+    def mechanism(self) -> Mechanism:
+        """The model as simulated: itself, or after an edit of it, a copy as it was (see
+        :func:`mechsolve.model.as_snapshotted`)."""
+        self._solved = as_snapshotted(*self._solved)
+        return self._solved[0]
 
     def columns(self) -> list[tuple[str, np.ndarray]]:
         tr, mb, mech = self.trajectory, self.multibody, self.mechanism
