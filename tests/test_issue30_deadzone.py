@@ -13,6 +13,7 @@ import math
 import re
 
 import numpy as np
+import pytest
 
 import mechsolve as ms
 from mechsolve.analyses.study.execute import status_of
@@ -227,3 +228,30 @@ def test_summary_gives_no_peak_next_to_a_dead_zone():
     assert "-202.957" not in torque and "RMS not determined" in torque
     shown = [float(x) for x in re.findall(r"driver angle ([0-9.e+-]+)°", torque)]
     assert abs(shown[0] - (360 - te)) < 6e-4 and abs(shown[1] - te) < 1e-5
+
+
+# A dead zone inside a Newton group: the same four-bar solved as one Newton group. The
+# edges of the zone the sweep steps over were not located ("cannot close near 0 deg"),
+# and the driving torque, which grows without bound towards them, had a finite located
+# peak that passed. The edges are checked against the law of cosines.
+def _newton_toggle(crank: float, start: float):
+    text = TEMPLATE.replace("CRANK", repr(crank)).replace("START", repr(start))
+    text = text.replace("  transmission: min(transmission_angle.B) >= 0 deg\n", "")
+    return ms.loads(text + "solver: {method: newton}\n")
+
+
+@pytest.mark.slow
+def test_dead_zone_edges_of_a_newton_group_are_located():
+    for crank, start in ((31.505, 1.0), (31.50001, 0.05)):
+        mech = _newton_toggle(crank, start)
+        res = ms.solve(mech)
+        assert type(res.analysis.plan[0]).__name__ == "NewtonGroup"
+        te = math.radians(edge_deg(crank))  # the closed form (law of cosines)
+        (zone,) = [e for e in res.solution.events if e.kind == "dead zone"]
+        assert abs(zone.edge_in - (2 * math.pi - te)) < 1e-9
+        assert abs(zone.edge_out - (2 * math.pi + te)) < 1e-9
+        v = {x.name: x for x in check_requirements(mech, res)}
+        msg = v["closes"].message
+        assert f"cannot close between driver angle {360 - math.degrees(te):.6g}°" in msg, msg
+        assert f"and driver angle {math.degrees(te):.6g}°" in msg, msg
+        assert math.isinf(v["torque"].value) and not v["torque"].passed, v["torque"].message

@@ -183,6 +183,12 @@ class FailureReports:
         with np.errstate(invalid="ignore", divide="ignore"):
             for f in sol.failures:
                 gi = labels.get(f.group)
+                if gi is not None and isinstance(self.plan[gi], NewtonGroup):
+                    if f.first > 0 and sol.ok[f.first - 1]:
+                        f.edge_in = self._newton_edge(sol, gi, f.first - 1, f.u_first)
+                    if f.last < n - 1 and sol.ok[f.last + 1]:
+                        f.edge_out = self._newton_edge(sol, gi, f.last + 1, f.u_last)
+                    continue
                 if gi is None or self.plan[gi].n_modes != 2:
                     continue
                 if f.first > 0 and sol.ok[f.first - 1]:
@@ -191,6 +197,9 @@ class FailureReports:
                     f.edge_out = self._edge(ctx, gi, f.last + 1, f.last)
             for e in zones:  # stepped over between two samples: from its deepest point
                 gi = labels.get(e.group)
+                if gi is not None and isinstance(self.plan[gi], NewtonGroup):
+                    self._newton_zone_edges(sol, gi, e)
+                    continue
                 if gi is None or self.plan[gi].n_modes != 2:
                     continue
                 k = e.after
@@ -216,6 +225,75 @@ class FailureReports:
         if not (H(a) >= -TOUCH and H(b) < -TOUCH):
             return math.nan
         return bisect_edge(lambda m: H(m) >= 0.0, a, b)[0]
+
+    def _newton_zone_edges(self, sol: Solution, gi: int, e) -> None:
+        """The edges of a dead zone of Newton group ``gi`` that the sweep stepped over
+        between samples ``e.after`` and the next solved one (see :meth:`_newton_edge`)."""
+        n = len(sol.u)
+        k = e.after
+        j = next((i for i in range(k + 1, n) if sol.ok[i]), None)
+        if 0 <= k < n and sol.ok[k]:
+            e.edge_in = self._newton_edge(sol, gi, k, e.u)
+        if j is not None:
+            e.edge_out = self._newton_edge(sol, gi, j, e.u)
+
+    def _newton_edge(self, sol: Solution, gi: int, good: int, bad_u: float) -> float:
+        """Where Newton group ``gi`` stops closing between sample ``good`` and the driver
+        value ``bad_u`` (where it does not close), or NaN.
+
+        The group's motion ends there at a fold: its block is singular, and along the
+        motion its determinant vanishes as the square root of the distance to the edge,
+        so the square of the determinant is smooth and linear in the driver there. The
+        edge is bracketed by marching from the sample towards ``bad_u`` on grids of 9
+        points (the last that closes and the first that does not, twice: each point past
+        the edge costs a failed continuation), then refined as the root of the parabola
+        through the squared determinant at ``d``, ``2d`` and ``3d`` before the estimate,
+        ``d`` from a quarter of the distance to the sample down tenfold a round to 1e-6
+        rad (or of the size): the parabola's error goes as ``d^3``, and a Newton solve
+        that accepts a pose just past a shallow fold does not enter. A round whose
+        parabola has no single root within ``3d`` leaves the estimate (the fold is
+        sharper than ``d``)."""
+        lo, hi = float(sol.u[good]), float(bad_u)
+        if not self._closes_on(sol, good, np.array([lo]))[0]:
+            return math.nan
+        for _ in range(2):
+            x = np.linspace(lo, hi, 9)[1:]
+            ok = self._closes_on(sol, good, x)
+            if ok.all():
+                return math.nan  # it closes at bad_u: no edge in between
+            first = int(np.argmin(ok))
+            lo, hi = (x[first - 1] if first else lo), x[first]
+        return self._fold_root(sol, gi, good, lo)
+
+    def _fold_root(self, sol: Solution, gi: int, good: int, est: float) -> float:
+        """The edge of :meth:`_newton_edge` refined from its bracket's end ``est``."""
+        g = self.plan[gi]
+        u0 = float(sol.u[good])
+        toward = math.copysign(1.0, est - u0)
+        d = abs(est - u0) / 4.0
+        floor = 1e-6 * (self.scale if self.linear else 1.0)  # (the error then ~ d^3)
+        while d > floor:
+            x = est - toward * d * np.array([3.0, 2.0, 1.0])  # from the sample's side
+            one = self.solve(np.r_[u0, x], start=sol.start, near=(sol, good),
+                             velocity=False, acceleration=False, limits=False)  # fmt: skip
+            det, known = g.dets(one.state, one.ok)
+            if not (known[1:].all() and one.ok.all()):
+                break
+            c = np.polyfit(x - est, det[1:] ** 2, 2)
+            roots = [r.real for r in np.roots(c) if abs(r.imag) <= 1e-9 * d]
+            roots = [r for r in roots if abs(r) <= 3.0 * d]
+            if len(roots) == 1:  # (else the fold is sharper than d: closer)
+                est += roots[0]
+            d /= 10.0
+        return float(est)
+
+    def _closes_on(self, sol: Solution, good: int, x: np.ndarray) -> np.ndarray:
+        """Where the motion marched from sample ``good`` through the driver values ``x``
+        (in order) closes: True up to the first that does not."""
+        one = self.solve(np.r_[sol.u[good], x], start=sol.start, near=(sol, good),
+                         velocity=False, acceleration=False, limits=False)  # fmt: skip
+        ok = np.asarray(one.ok, bool)[1:]
+        return np.cumprod(ok).astype(bool)
 
     def _failures(self, st: State, oks, ok, st_u) -> list[Failure]:
         out: list[Failure] = []
