@@ -78,14 +78,14 @@ def _force_figures(res: Any, src: Any, U: Any) -> dict[str, tuple[float, str]]:
     import numpy as np
 
     from mechsolve.base.units import pretty_unit
-    from mechsolve.results.summary import _kilo, _or_zero, edge_growth, unbounded_towards
+    from mechsolve.results.summary import edge_growth, or_zero, print_scale, unbounded_towards
 
     out: dict[str, tuple[float, str]] = {}
     kind, unit = res.effort_name
     e = np.asarray(src.driving_effort, float)
     if not np.any(np.isfinite(e)):
         return out
-    scale, unit = _kilo(e, unit, U)
+    scale, unit = print_scale(e, unit, U)
     if not res.idle_driver():
         for name, sign in (("max", 1.0), ("min", -1.0)):
             i = int(np.nanargmax(sign * e))
@@ -116,7 +116,7 @@ def _force_figures(res: Any, src: Any, U: Any) -> dict[str, tuple[float, str]]:
             edge_growth(src, lambda x, k, j=j: np.abs(src.reaction_at(j.name, x, k)[j.magnitude]))
             is None
         ):
-            value = _or_zero(float(mag[i]), top) / fscale
+            value = or_zero(float(mag[i]), top) / fscale
             out[f"peak reaction {j.name}"] = (value, pretty_unit(funit))
     return out
 

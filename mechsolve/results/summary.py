@@ -20,7 +20,7 @@ def shown(res) -> OutputUnits:
     return getattr(res, "_shown", SI_OUTPUT)
 
 
-def _kilo(values, unit: str, U: OutputUnits) -> tuple[float, str]:
+def print_scale(values, unit: str, U: OutputUnits) -> tuple[float, str]:
     """``(divisor, unit)`` that ``values`` (SI, in ``unit``) are printed with: the shown
     unit's factor, and kN or kN*m for SI forces and torques of 1e4 and more."""
     k, target = U.convert(unit)
@@ -149,7 +149,7 @@ class Summary:
                 f"  instantaneous efficiency (the driving {self.effort_name[0]} without "
                 f"friction over the {self.effort_name[0]} with it, where the driver delivers "
                 f"power): smallest of the {self.samples()} "
-                f"{_or_zero(eta[i], 1.0):.4g} at "
+                f"{or_zero(eta[i], 1.0):.4g} at "
                 f"{self.describe_u(i)}"
             )
         locked = np.flatnonzero(fr.locked)
@@ -235,7 +235,7 @@ class Summary:
         dv = self.driver_value
         if n:  # an end that is rounding (sin(2 pi) = -2.4e-16 rad) is 0, not -1.4e-14 deg
             top = float(np.nanmax(np.abs(dv))) if np.isfinite(dv).any() else 0.0
-            dv = np.r_[_or_zero(float(dv[0]), top), dv[1:-1], _or_zero(float(dv[-1]), top)][:n]
+            dv = np.r_[or_zero(float(dv[0]), top), dv[1:-1], or_zero(float(dv[-1]), top)][:n]
         span = f"from {dv[0]:.6g} to {dv[-1]:.6g} {unit}"
         if not U.is_si and n:
             span = f"from {U.text(dv[0], unit)} to {U.text(dv[-1], unit)}"
@@ -293,7 +293,7 @@ class Summary:
         kind, unit = self.effort_name
         e = src.driving_effort  # at a singular position its limit along the motion
         U = shown(self)
-        scale, unit = _kilo(e, unit, U)
+        scale, unit = print_scale(e, unit, U)
         # the reactions in kN when the effort is printed in kN or kN*m (SI forces)
         kf = U.convert("N")[0]
         kilo = unit in ("kN", "kN*m") and U.force == "N"
@@ -652,7 +652,7 @@ def _peak_reactions(src, joints, fscale: float, funit: str) -> str:
         if toward is not None:  # no peak: the largest sample is only the nearest one
             unbounded.setdefault(toward, []).append(j.name + note)
             continue
-        m = _or_zero(m, top)
+        m = or_zero(m, top)
         where = f" at {src.describe_u(i)}" if m else ""  # zero throughout: no place
         peaks.append(f"{j.name} {m / fscale:.4g} {funit}{note}{where}")
     for toward, names in unbounded.items():
@@ -677,7 +677,7 @@ def _effort_figures(src, e: np.ndarray, at: tuple[int, int], scale, unit, rms, m
         else:
             parts.append(f"{name} {e[i] / scale:.6g} {unit} at {src.describe_u(i)}")
     value, what = mean
-    value = _or_zero(value, float(np.nanmax(np.abs(e))))  # rounding of a zero mean is 0
+    value = or_zero(value, float(np.nanmax(np.abs(e))))  # rounding of a zero mean is 0
     if unbounded:
         parts.append("RMS not determined (unbounded)")
         if what != "mean":  # the work over the travel stays exact (the energy method)
@@ -792,7 +792,7 @@ def _reaches_singular(src, i: int, u_k: float, u_s: float) -> bool:
 NEAR_SINGULAR_TOGGLE = 0.1
 
 
-def _or_zero(x: float, scale: float) -> float:
+def or_zero(x: float, scale: float) -> float:
     """``x``, or 0 where it is rounding against ``scale`` (a reaction of 6e-15 N beside
     forces of 100 N, an efficiency of 6e-15): such a figure is zero, not a value."""
     return 0.0 if abs(x) <= 1e-12 * abs(scale) else x

@@ -15,7 +15,7 @@ from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.solution import angle_deg
 from mechsolve.core.work import hermite5
 from mechsolve.results.results import Column, Results
-from mechsolve.results.summary import _kilo, shown
+from mechsolve.results.summary import print_scale, shown
 
 
 class SimulationResults(Results):
@@ -286,7 +286,7 @@ class SimulationResults(Results):
             # the RMS over time too (the rows of an adaptive method are not evenly spaced)
             rms = math.sqrt(self.time_mean(e * e))
             kind, unit = self.effort_name
-            scale, unit = _kilo(e, unit, shown(self))  # as super's
+            scale, unit = print_scale(e, unit, shown(self))  # as super's
             lines[0] = re.sub(
                 r", RMS [^,]*, time mean",
                 f", RMS over time {rms / scale:.6g} {pretty_unit(unit)}, time mean",
