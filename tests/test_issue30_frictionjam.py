@@ -216,3 +216,26 @@ def test_a_good_multibody_run_passes_the_energy_check():
     assert "warning" not in text
     assert not res.incomplete()
     assert "of the largest of T" in line
+
+
+@pytest.mark.slow
+def test_one_dof_rk4_chattering_at_the_stick_fails_the_friction_check():
+    """Items 1 and 2 on the reduced path: past the standstill (about 0.049 s) fixed-step
+    RK4 chatters about zero speed (the regularised friction is stiff there); the
+    friction losses by joint (the trapezoid rule on the rows) then differ from their
+    total from the energy balance, which the summary now says, the results marked as
+    failing the check."""
+    res = simulate(lock("duration: 0.07 s, step: 0.0005 s, method: rk4, from: rest"))
+    text = res.summary()
+    tr = res.trajectory
+    w = tr.omega[tr.t > 0.05]
+    assert np.any(w < 0) and np.any(w > 0)  # the chatter: the speed swings about zero
+    # the two figures, recomputed: the exact total (motor's work less the change of
+    # kinetic energy: no loads, no gravity) and the trapezoid rule on the friction power
+    f = res.forces
+    total = res.motor_work() - (f.kinetic[-1] - f.kinetic[0])
+    rule = float(np.trapezoid(f.power_friction, tr.t))
+    assert abs(total - rule) > 0.05 * total
+    assert "warning: the friction losses by joint" in text
+    assert "smaller step" in text and "Radau" in text
+    assert res.incomplete()
