@@ -85,13 +85,17 @@ def solve_friction(
         position, ``tanh(|speed| / s0)`` times their value (for the equation of motion,
         which needs friction continuous through a standstill); None: exact Coulomb.
     hint
-        For a one-position check of the equation of motion (see :func:`balance`):
-        ``(law, magnitudes)`` at the same position and speed, whose unit frictions and
-        magnitudes start this solve; ignored for more than one position.
+        The equation of motion's friction (see :func:`balance`): ``(law, magnitudes)``.
+        ``law``: the friction law at the same position and speed (one position; None
+        else), whose unit frictions are reused; ``magnitudes`` (K,) or (K, N): the
+        Coulomb magnitudes that start Newton's method (NaN: its usual start). A solution
+        reached from them is kept even where ``det(I - G) <= 0``: at a given
+        acceleration that marks the force analysis's self-locking, but the equation of
+        motion (the acceleration free) has its own criterion, which :func:`balance`
+        checked.
     """
-    if st.n != 1:
-        hint = None
-    law = _Law(an, st, lam0, solve, smoothing, None if hint is None else hint[0])
+    like = None if hint is None or st.n != 1 else hint[0]
+    law = _Law(an, st, lam0, solve, smoothing, like)
     K, n = law.k.shape
     good = np.all(np.isfinite(law.lamv), axis=1) & np.all(np.isfinite(law.U), axis=(0, 2))
     s, done, steps = _newton(law, np.flatnonzero(good), None if hint is None else hint[1])
@@ -187,15 +191,20 @@ class _Law:
 
 def _newton(law: _Law, idx: np.ndarray, start=None) -> tuple[np.ndarray, np.ndarray, int]:
     """Newton's method on ``s - k L(lambda(s)) = 0`` at positions ``idx`` from the ideal
-    solution's friction (or ``start`` (K,)): the magnitudes, where a physical solution
-    was found (converged, ``det(I - G) > 0``) and the number of steps."""
+    solution's friction (or ``start``, (K,) or (K, n), where finite): the magnitudes,
+    where a physical solution was found (converged, and ``det(I - G) > 0`` unless it
+    started from ``start``: see :func:`solve_friction`) and the number of steps."""
     K, n = law.k.shape
     s = np.zeros((K, n))
     done = np.zeros(n, bool)
-    if start is not None and np.all(np.isfinite(start)):
-        s[:, idx] = np.asarray(start, float)[:, None]
-    else:
-        s[:, idx] = law.k[:, idx] * law(s[:, idx], idx)[0]
+    given = np.zeros(n, bool)
+    if start is not None:
+        start = np.broadcast_to(np.asarray(start, float).reshape(K, -1), (K, n))
+        given[idx] = np.all(np.isfinite(start[:, idx]), axis=0)
+        s[:, given] = start[:, given]
+    rest = idx[~given[idx]]
+    if rest.size:
+        s[:, rest] = law.k[:, rest] * law(s[:, rest], rest)[0]
     eye = np.eye(K)[None]
     steps = 0
     while idx.size and steps < MAX_ITERATIONS:
@@ -206,6 +215,10 @@ def _newton(law: _Law, idx: np.ndarray, start=None) -> tuple[np.ndarray, np.ndar
             ds = np.linalg.solve(eye - G, -F.T[..., None])[..., 0].T
         bad = ~np.all(np.isfinite(ds), axis=0)
         ds[:, bad] = 0.0
+        # converged where the step is small, or the residual is rounding (next to
+        # det(I - G) = 0 the step is rounding amplified by 1 / det and need not shrink)
+        flat = np.all(np.abs(F) <= 1e-14 * (np.abs(s[:, idx]) + law.scale(idx)), axis=0)
+        ds[:, flat] = 0.0
         s[:, idx] += ds
         small = np.all(np.abs(ds) <= TOLERANCE * (np.abs(s[:, idx]) + law.scale(idx)), axis=0)
         done[idx[small]] = True
@@ -217,7 +230,7 @@ def _newton(law: _Law, idx: np.ndarray, start=None) -> tuple[np.ndarray, np.ndar
         det = np.linalg.det(eye - G)
         resid = np.abs(s[:, idx] - law.k[:, idx] * L)
         close = np.all(resid <= 1e-9 * (np.abs(s[:, idx]) + law.scale(idx)), axis=0)
-        done[idx[(det <= 0) | ~close]] = False
+        done[idx[((det <= 0) & ~given[idx]) | ~close]] = False
     return s, done, steps
 
 
@@ -268,7 +281,7 @@ def _continue(
 
 
 def balance(
-    law: _Law, i0: int, i1: int, row: int, target: float, x: float
+    law: _Law, i0: int, i1: int, row: int, target: float, x: float, s: np.ndarray | None = None
 ) -> tuple[float, np.ndarray] | None:
     """The driver acceleration ``x`` at which the driving effort is ``target``, from the
     friction law of a force analysis at two states that differ only in it (``i0`` at
@@ -280,15 +293,28 @@ def balance(
     factors ``k`` do not depend on it. So the Coulomb magnitudes ``s`` and ``x`` solve
     together ``s - k L(lamv(x) + s U) = 0`` and ``target + lambda_row = 0`` (the effort
     is ``-lambda_row``): Newton's method on these ``K + 1`` equations, from ``x`` and
-    the magnitudes interpolated between the two states; a solution with
-    ``det(I - G) <= 0`` is not physical (None). The caller checks the result by the
-    full force analysis at ``x``.
+    the magnitudes ``s`` (default: interpolated between the two states). The caller
+    checks the result by the full force analysis at ``x``.
+
+    A solution is physical where the Jacobian ``A`` of these equations has the sign of
+    its determinant without friction, ``d_row`` (minus the reduced inertia): it is then
+    connected to the frictionless motion, as the force analysis's solutions with
+    ``det(I - G) > 0`` are at a given acceleration. ``det A = d_row det(I - G_m)``, with
+    ``G_m`` the friction's feedback with the acceleration free (the Schur complement),
+    the criterion of the general path (:mod:`~mechsolve.analyses.dynamics.multibody_friction`).
+    Where the force analysis self-locks (``det(I - G) <= 0``: no finite effort drives
+    the mechanism at that acceleration), the motion's friction can still balance: it
+    brakes the mechanism, its reactions and its acceleration found together. Where no
+    physical solution is found: None (for instance where Coulomb's law would have to
+    stop the motion at once: no acceleration balances the effort).
     """
     a = law.lamv[i0]
     d = law.lamv[i1] - a
     U = law.U[:, i0]  # (K, nc)
     k = law.k[:, i0]
-    s = law.s[:, i0] + x * (law.s[:, i1] - law.s[:, i0])
+    if s is None or not np.all(np.isfinite(s)):
+        s = law.s[:, i0] + x * (law.s[:, i1] - law.s[:, i0])
+    s = np.array(s, float)
     K = len(law.rows)
     A = np.zeros((K + 1, K + 1))
     A[:K, :K] = np.eye(K)
@@ -320,6 +346,6 @@ def balance(
         if abs(dz[K]) <= 1e-15 * (abs(x) + xs) and np.all(
             np.abs(dz[:K]) <= TOLERANCE * (np.abs(s) + ss)
         ):
-            # physical where det(I - G) > 0 (see the module): else left to the caller
-            return (x, s) if np.linalg.det(A[:K, :K]) > 0 else None
+            # physical where connected to the frictionless motion (see above)
+            return (x, s) if np.linalg.det(A) * d[row] > 0 else None
     return None

@@ -146,7 +146,12 @@ def simulate(
         traj = dataclasses.replace(
             traj, **{f: getattr(traj, f)[good] for f in ("t", "phi", "omega", "eps", "J")}
         )
-    forces = core.forces(an, sol, model.extremes)
+    # with joint friction each row's force analysis starts from the equation of motion's
+    # magnitudes there: where it self-locks at that acceleration (det(I - G) <= 0) the
+    # motion's friction is the solution the equation of motion found (see friction.balance)
+    mags = traj.magnitudes
+    hint = None if mags is None else (None, mags[:, good])
+    forces = core.forces(an, sol, model.extremes, hint)
     cut = reduced_cut(model, mech, traj, forces)  # a cam cannot pull its follower
     if cut is not None:
         traj, sol, forces = cut

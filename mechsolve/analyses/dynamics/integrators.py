@@ -10,11 +10,44 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechsolve.analyses.dynamics.constants import MAX_STEPS
-from mechsolve.analyses.dynamics.model import ReducedModel, _LeftRange, drive_torque
+from mechsolve.analyses.dynamics.model import (
+    ReducedModel,
+    _FrictionJam,
+    _LeftRange,
+    drive_torque,
+)
 from mechsolve.analyses.dynamics.tables import _rows
 from mechsolve.base.errors import InputError
 from mechsolve.model import Mechanism
 from mechsolve.model.expr.poles import first_pole_along
+
+#: The energy balance's check: a residual T + V - W - (T0 + V0) above this fraction of
+#: the largest energy term (T, |V - V0|, |W|) fails it (the summary warns)
+ENERGY_TOLERANCE = 1e-2
+
+
+def energy_check(residual: np.ndarray, scale: float, method: str) -> tuple[str, str]:
+    """The summary's energy-balance line from the residual ``T + V - W - (T0 + V0)``
+    along the motion (J) and its ``scale`` (J, the largest energy term), and the warning
+    where the residual exceeds :data:`ENERGY_TOLERANCE` of the scale ('' else): the
+    integration then did not follow the motion (a fixed step through a stiff motion,
+    such as joint friction regularised through a standstill, chatters)."""
+    res = float(np.nanmax(np.abs(residual))) if np.any(np.isfinite(residual)) else 0.0
+    rel = res / scale if scale > 0 else 0.0
+    line = (
+        f"energy balance: T + V - W changed by at most {res:.3g} J ({rel:.2g} of the "
+        f"largest of T, |V - V0|, |W|: {scale:.6g} J)"
+    )
+    if not rel > ENERGY_TOLERANCE:
+        return line, ""
+    what = "a smaller step" if method == "rk4" else "a smaller rtol and atol"
+    return line, (
+        f"the energy balance T + V - W changed by {res:.3g} J, {rel:.2g} of the largest "
+        f"energy term ({scale:.6g} J; the check allows {ENERGY_TOLERANCE:g}): the "
+        f"integration ({method}) did not follow the motion, and the results fail this "
+        f"check; give {what}, or an adaptive or stiff method (method: RK45, Radau or "
+        "BDF), which a stiff motion (a joint's friction holding it near a standstill) needs"
+    )
 
 
 class _MotorNotFinite(Exception):
@@ -25,9 +58,10 @@ class _MotorNotFinite(Exception):
         self.omega, self.t, self.value = omega, t, value
 
 
-# why an integration cannot go on: the mechanism does not close, the motor's law is not
-# finite, or numbers beyond float range (int(inf) and the like: the step is too large)
-_STOPS = (_LeftRange, _MotorNotFinite, OverflowError, ValueError, ZeroDivisionError)
+# why an integration cannot go on: the mechanism does not close, the joints' friction
+# jams it, the motor's law is not finite, or numbers beyond float range (int(inf) and the
+# like: the step is too large)
+_STOPS = (_LeftRange, _FrictionJam, _MotorNotFinite, OverflowError, ValueError, ZeroDivisionError)
 
 
 @dataclass
@@ -66,6 +100,8 @@ def _stop_for(model: ReducedModel, exc: Exception, step: float | None = None) ->
     :data:`_STOPS`); ``step``: the fixed step of RK4."""
     if isinstance(exc, _LeftRange):
         return _End(_left_text(model, exc.phi), early=True)
+    if isinstance(exc, _FrictionJam):
+        return _End(_jam_text(model, exc), early=True)
     if isinstance(exc, _MotorNotFinite):
         return motor_end(model.mech, model.an.linear, exc.omega, exc.t, exc.value)
     if step is not None:
@@ -88,6 +124,9 @@ class Trajectory:
     nfev: int = 0
     early: bool = False  # it stopped before what was asked (stopped says why)
     error: InputError | None = None  # the input error that stopped it, if any
+    # with joint friction: the Coulomb magnitudes of the equation of motion at each row
+    # (K, rows; NaN where not solved), which start the rows' force analysis
+    magnitudes: np.ndarray | None = None
 
 
 def _with_flywheel(mech: Mechanism) -> Mechanism:
@@ -286,8 +325,10 @@ def integrate(
     pole = _motor_pole(model, motor, d, ts, Y)
     if pole is not None:
         ts, Y, end = pole
-    eps, J = _along(model, motor, d, ts, Y)
-    return Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, end.reason, model.nfev, end.early, end.error)
+    eps, J, mags = _along(model, motor, d, ts, Y)
+    out = Trajectory(ts, Y[:, 0], Y[:, 1], eps, J, end.reason, model.nfev, end.early, end.error)
+    out.magnitudes = mags
+    return out
 
 
 def _motor_pole(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
@@ -308,23 +349,31 @@ def _motor_pole(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarra
 
 def _along(model: ReducedModel, motor, d: int, ts: np.ndarray, Y: np.ndarray):
     """The driver's acceleration and the reduced inertia at the integrated states (nan
-    where the mechanism does not close)."""
+    where the mechanism does not close), and with friction the Coulomb magnitudes there
+    (K, rows; else None)."""
     tab = getattr(model, "_table", None)
     phi, omega = Y[:, 0], Y[:, 1]
     if tab is not None and not model._masks:
         x = np.mod(d * (phi - model.u0), 2 * math.pi)
         J, a, b, c = tab.evaluate(x)[:4]
         model.nfev += len(ts)
-        return (drive_torque(motor, d, omega, ts) - (a + (b + c * omega) * omega)) / J, J
+        return (drive_torque(motor, d, omega, ts) - (a + (b + c * omega) * omega)) / J, J, None
     eps = np.empty(len(ts))
     J = np.empty(len(ts))
+    mags = []
     for i, (t, (p, w)) in enumerate(zip(ts, Y)):
+        model.magnitudes = None
         try:
             M = float(drive_torque(motor, d, np.array([w]), t)[0])
             eps[i], J[i] = model.accel(p, w, t, M)
-        except _LeftRange:
+        except (_LeftRange, _FrictionJam):
             J[i] = eps[i] = np.nan
-    return eps, J
+        mags.append(model.magnitudes)
+    if not model.friction:
+        return eps, J, None
+    K = next((len(m) for m in mags if m is not None), 0)
+    out = np.array([np.full(K, np.nan) if m is None else m for m in mags]).reshape(-1, K).T
+    return eps, J, out
 
 
 def _adaptive(model, sim, accel, y0, turns: _Turns, max_steps: int):
@@ -497,4 +546,18 @@ def _left_text(model: ReducedModel, phi: float) -> str:
     return (
         "the motion left the range where the mechanism closes (the next step reached "
         f"near {model.an.format_u(model._wrap(phi))})"
+    )
+
+
+def _jam_text(model: ReducedModel, exc: _FrictionJam) -> str:
+    """Why a motion stopped where the joints' friction jams the mechanism."""
+    an = model.an
+    speed = f"{exc.omega:.6g} m/s" if an.linear else f"{math.degrees(exc.omega):.6g} °/s"
+    joints = ", ".join(exc.joints) or "with friction"
+    return (
+        f"the joints' friction jams the mechanism at t = {exc.t:.6g} s, "
+        f"{an.format_u(model._wrap(exc.phi))} (speed {speed}): with Coulomb's law in the "
+        f"joint(s) {joints} no acceleration balances the motor's effort (the friction would "
+        "have to stop the motion at once, an impulse the equation of motion of a rigid "
+        "mechanism does not follow)"
     )

@@ -69,6 +69,10 @@ class ReducedModel:
         # the friction law of the last evaluation's force analysis, ((phi, omega, t),
         # FrictionResult), for the direct solve of the next acceleration (see _balanced)
         self._friction_law: tuple | None = None
+        # the Coulomb magnitudes of the last acceleration accel solved with friction
+        # (for the force analysis of the motion's rows: see _run.simulate)
+        self.magnitudes: np.ndarray | None = None
+        self._solved: tuple | None = None  # (eps, magnitudes) of the last accel solved
         # the last unit state solved, (key, solution) (see _unit_state)
         self._last_unit: tuple | None = None
         # False while terms() takes the limit from both sides (no second level of it)
@@ -314,10 +318,16 @@ class ReducedModel:
             sol.t = np.array([t, t])
         f = core.forces(self.an, sol, self.extremes)
         e0, e1 = float(f.effort[0]), float(f.effort[1])
+        ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
         if self.friction:
             e1 = e0 + 2.0 * float(f.kinetic[2])
             self._friction_law = ((phi, omega, t), f.friction)
-        ind = float(sol.indicator.min()) if sol.indicator.size else 1.0
+            if sol.ok.all() and ind > NEAR_EXACT and bool(f.friction.locked[:2].any()):
+                # the force analysis self-locks at zero acceleration: no effort E0 (the
+                # equation of motion, the acceleration free, may still balance: accel)
+                J = 2.0 * float(f.kinetic[2])
+                _check_inertia(self, np.array([J]), np.array([phi]))
+                return J, math.nan
         finite = np.isfinite(e0) and np.isfinite(e1)
         if not finite or ind <= NEAR_EXACT:
             beside = self._beside
@@ -342,26 +352,47 @@ class ReducedModel:
     def accel(self, phi: float, omega: float, t: float, M: float) -> tuple[float, float]:
         """``(eps, J)``: the driver's acceleration under the motor's effort ``M`` and the
         reduced inertia. Ideal joints: ``eps = (M - E0) / J``. With friction the effort is
-        not linear in the acceleration (each friction follows its reaction), so ``eps``
-        is corrected by the chord ``J`` until the effort balances ``M`` to a relative
-        1e-12."""
+        not linear in the acceleration (each friction follows its reaction): ``eps`` is
+        solved directly from the friction law (:meth:`_balanced`) and checked by the
+        full force analysis (the effort balances ``M`` to a relative 1e-10), else
+        corrected by the chord ``J``, then the secant, until it balances to 1e-12. Where
+        no acceleration balances ``M`` with Coulomb's law (the friction would have to
+        stop the motion at once), :class:`_FrictionJam`."""
         J, e0 = self.terms(phi, omega, t)
         eps = (M - e0) / J
         if not self.friction:
             return eps, J
+        got = self._friction_law
+        if not math.isfinite(e0) and got is not None:  # self-locking at eps = 0
+            e0 = float(got[1].ideal_effort[0])  # a start: the effort without friction
+            eps = (M - e0) / J
         scale = max(abs(M), abs(e0), abs(J * eps), 1e-300)
         eps, hint = self._balanced(phi, omega, t, M, eps)
+        direct = hint is not None
+        slope, last = J, None  # dE / d eps: J, then the secant's
         for _ in range(60):
             sol = self.states([phi], [omega], [eps])
             sol.t = np.array([t])
-            # the first check starts from the direct solution
-            r = M - float(core.forces(self.an, sol, self.extremes, hint).effort[0])
-            hint = None
+            # the checks start from the direct solution, then from the last one
+            f = core.forces(self.an, sol, self.extremes, hint)
+            r = M - float(f.effort[0])
             if not math.isfinite(r):
-                raise _LeftRange(phi)
-            if abs(r) <= 1e-12 * scale:
+                if not sol.ok.all():
+                    raise _LeftRange(phi)
+                raise _FrictionJam(phi, omega, t, _slipping(f.friction))
+            # the direct solution solved these equations to rounding; the check by the
+            # full analysis agrees but for rounding, which a friction that feeds back
+            # strongly (a large reaction braking the mechanism) amplifies
+            if abs(r) <= (1e-10 if last is None and direct else 1e-12) * scale:
+                self.magnitudes = f.friction.law.s[:, 0].copy()
+                self._solved = (eps, self.magnitudes)
                 return eps, J
-            eps += r / J
+            if hint is not None:
+                hint = (f.friction.law, f.friction.law.s[:, 0])
+            if last is not None and eps != last[0] and r != last[1]:
+                slope = (last[1] - r) / (eps - last[0])
+            last = (eps, r)
+            eps += r / slope
         raise SolverError(
             f"the equation of motion with friction did not converge at "
             f"{self.an.format_u(phi)} (speed {omega:.6g}): the joints' friction feeds back "
@@ -384,6 +415,11 @@ class ReducedModel:
         drv = self.an.system.driver
         row = next(r.start for r in self.an.system.rows if r.constraint is drv)
         got = balance(law, 0, 1, row, M, eps)
+        if (got is None or not math.isfinite(got[0])) and self._solved is not None:
+            # Newton's method from the last acceleration solved (an integrator's stages
+            # lie close together), where the chord's start is far from the solution: a
+            # friction that brakes the mechanism, its reaction large, near a standstill
+            got = balance(law, 0, 1, row, M, *self._solved)
         if got is None or not math.isfinite(got[0]):
             return eps, None
         return float(got[0]), (law, got[1])
@@ -533,3 +569,22 @@ class _LeftRange(Exception):
 
     def __init__(self, phi: float) -> None:
         self.phi = phi
+
+
+class _FrictionJam(Exception):
+    """The joints' friction jams the mechanism at the driver angle ``phi``, speed
+    ``omega``, time ``t``: no acceleration balances the motor's effort with Coulomb's
+    law in the joints ``joints`` (their friction would have to stop the motion at once,
+    an impulse the equation of motion of a rigid mechanism does not follow)."""
+
+    def __init__(self, phi: float, omega: float, t: float, joints: list[str]) -> None:
+        self.phi, self.omega, self.t, self.joints = phi, omega, t, joints
+
+
+def _slipping(fr) -> list[str]:
+    """The names of the joints whose Coulomb friction acts in the force analysis's
+    friction result ``fr`` (one position): those with friction that slip there."""
+    law = getattr(fr, "law", None)
+    if law is None:
+        return []
+    return [r.constraint.name for j, r in enumerate(law.rows) if law.k[j, 0] > 0]

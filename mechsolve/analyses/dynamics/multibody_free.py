@@ -11,6 +11,7 @@ from collections import deque
 
 import numpy as np
 
+from mechsolve.analyses.dynamics.integrators import energy_check
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
     NEWTON_ITERATIONS,
@@ -598,6 +599,14 @@ class FreeResults:
         kv, V = (units or SI_OUTPUT).convert("m/s")
         dof = mb.nq - len(mb.partition(tr.q[0]).rows)
         red = mb.nc - len(mb.partition(tr.q[0]).rows)
+        scale = max(
+            np.max(np.abs(tr.kinetic)),
+            np.max(np.abs(tr.potential - tr.potential[0])),
+            np.max(np.abs(tr.work)),
+        )
+        energy, self.energy_warning = energy_check(
+            tr.energy_residual, scale, self.mechanism.simulation.method
+        )
         lines = [
             f"{self.mechanism.name or 'mechanism'}: multibody simulation, {mb.nb} bodies, "
             f"{mb.nc} constraint equations{f' ({red} redundant)' if red else ''}, {dof} "
@@ -605,8 +614,7 @@ class FreeResults:
             f"{tr.nfev} evaluations",
             "  sources: "
             + (", ".join(f"{s.name} ({s.text})" for s in mb.sources) or "none (free motion)"),
-            f"  energy balance: T + V - W changed by at most "
-            f"{np.max(np.abs(tr.energy_residual)):.3g} J",
+            "  " + energy,
             f"  largest constraint violation: {np.max(tr.violation) * kl:.3g} {L} (position, "
             f"tolerance {mb.tol * kl:.3g} {L}), {np.max(tr.velocity_violation) * kv:.3g} {V} "
             "(velocity)",
@@ -627,6 +635,8 @@ class FreeResults:
             )
         if tr.undetermined_text():
             lines.append(tr.undetermined_text())
+        if self.energy_warning:
+            lines.append("  warning: " + self.energy_warning)
         if tr.early:
             lines.append(f"  stopped early at t = {tr.t[-1]:.9g} s: {tr.stopped}")
         elif tr.stopped:
@@ -634,4 +644,5 @@ class FreeResults:
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return bool(self.trajectory.undetermined.size)
+        """Also where the energy balance fails its check (after :meth:`summary`)."""
+        return bool(self.trajectory.undetermined.size) or bool(getattr(self, "energy_warning", ""))

@@ -19,7 +19,7 @@ import numpy as np
 
 from mechsolve.analyses.dynamics.contact_loss import multibody_cut
 from mechsolve.analyses.dynamics.cycle import machine_cycle
-from mechsolve.analyses.dynamics.integrators import _with_flywheel, motor_end
+from mechsolve.analyses.dynamics.integrators import _with_flywheel, energy_check, motor_end
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.analyses.dynamics.multibody import (
     Multibody,
@@ -391,11 +391,10 @@ class MultibodyResults(Results):
             np.max(np.abs(tr.potential - tr.potential[0])),
             np.max(np.abs(tr.work)),
         )
-        lines.append(
-            f"  energy balance: T + V - W changed by at most "
-            f"{np.max(np.abs(tr.energy_residual)):.3g} J (largest of T, |V - V0|, |W|: "
-            f"{E:.6g} J)"
-        )
+        line, self.energy_warning = energy_check(tr.energy_residual, E, sim.method)
+        lines.append("  " + line)
+        if self.energy_warning:
+            lines.append("  warning: " + self.energy_warning)
         lines.append(
             f"  largest constraint violation: {np.max(tr.violation) * kl:.3g} {L} (position, "
             f"tolerance {mb.tol * kl:.3g} {L}), {np.max(tr.velocity_violation) * kv:.3g} {V} "
@@ -425,4 +424,9 @@ class MultibodyResults(Results):
         return "\n".join(lines)
 
     def incomplete(self) -> bool:
-        return not self.ok.all() or bool(self.trajectory.undetermined.size)
+        """Also where the energy balance fails its check (after :meth:`summary`)."""
+        return (
+            not self.ok.all()
+            or bool(self.trajectory.undetermined.size)
+            or bool(getattr(self, "energy_warning", ""))
+        )

@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from mechsolve.analyses.dynamics.constants import REST_BAND, REST_BAND_LINEAR, REST_SPAN
-from mechsolve.analyses.dynamics.integrators import _STOPS, Trajectory
+from mechsolve.analyses.dynamics.integrators import _STOPS, ENERGY_TOLERANCE, Trajectory
 from mechsolve.analyses.dynamics.model import drive_torque
 from mechsolve.base.units import SI_OUTPUT, OutputUnits, pretty_unit
 from mechsolve.core.solution import angle_deg
@@ -168,6 +168,17 @@ class SimulationResults(Results):
             w = friction_work(sol, _Only(f, p))[0]
             parts.append(f"{name} {U.text(w, 'J', _digits(w, err))}")
         total = U.text(loss, "J", _digits(loss, self.motor_work_error(), 6))
+        if abs(loss - rule) > ENERGY_TOLERANCE * abs(loss):
+            warning = (
+                f"the friction losses by joint (the trapezoid rule on the rows: "
+                f"{U.text(rule, 'J', '.3g')} in all) differ from their total from the energy "
+                f"balance ({U.text(loss, 'J', '.3g')}) by more than {ENERGY_TOLERANCE:g} of "
+                "it: the rows do not follow the motion (a fixed step chattering about a "
+                "standstill, or rows too far apart), and the results fail this check; give "
+                "a smaller step, or an adaptive or stiff method (method: RK45, Radau or BDF)"
+            )
+            if warning not in self.warnings:
+                self.warnings.append(warning)
         lines[0] = (
             f"{head}{total} (the motor's work less the change of energy and the "
             f"loads' work; by joint, the trapezoid rule on the {len(self.t)} rows: "
@@ -343,7 +354,7 @@ class SimulationResults(Results):
             kind, unit = self.effort_name
             within = f"{band * 1e3:g} mm" if self.linear else f"{math.degrees(band):.2g}°"
             text = f"stalled at {where} after t = {t[k]:.6g} s (at rest from then on, to {within})"
-            if balance is not None:
+            if balance is not None and u is not None:
                 text += (
                     f": the motor's {kind} at standstill, {balance:.6g} {unit}, balances the "
                     "static load there"
