@@ -726,6 +726,12 @@ def unbounded_towards(src, values: np.ndarray, i: int) -> str | None:
         if k in singular:  # the singular sample itself, its forces indeterminate
             return f"the singular position at {src.format_u(float(src.u[k]))} (no peak)"
         if not np.isfinite(values[k]):  # the next sample's reactions are not determined
+            edge = _located_edge(src, float(src.u[i]), float(src.u[k]))
+            if edge is not None:  # the edge of a range that cannot close, located
+                return (
+                    "the edge of a range where the mechanism cannot close, at "
+                    f"{src.format_u(edge)} (no peak)"
+                )
             return (
                 f"the singular position at about {src.format_u(u_s)}, past the last sample "
                 f"with reactions, {src.describe_u(i)} (no peak)"
@@ -734,6 +740,19 @@ def unbounded_towards(src, values: np.ndarray, i: int) -> str | None:
         if min(u_i, u_k) < u_s < max(u_i, u_k) and _reaches_singular(src, i, u_k, u_s):
             return f"the singular position at about {src.format_u(u_s)} (no peak)"
     return None  # the largest value over the sweep (at its end, short of the position)
+
+
+def _located_edge(src, u_i: float, u_k: float) -> float | None:
+    """The located edge of a range where the mechanism cannot close (see
+    :attr:`~mechsolve.results.results.Results.failures`) between the driver values
+    ``u_i`` (solved) and ``u_k`` (not), or None: the singular position the values grow
+    towards, exactly, rather than extrapolated from two samples."""
+    lo, hi = min(u_i, u_k), max(u_i, u_k)
+    for f in getattr(src, "failures", None) or ():
+        for x in (f.edge_in, f.edge_out):
+            if np.isfinite(x) and lo <= x <= hi:
+                return float(x)
+    return None
 
 
 def edge_growth(src, probe) -> str | None:
