@@ -92,7 +92,7 @@ def reduced_cut(model, mech, traj, forces):
         t = np.append(t, row[0])
         Y = np.vstack([Y, [row[1], row[2]]])
     d = mech.driver.direction
-    eps, J = _along(model, mech.motor, d, t, Y)
+    eps, J, mags = _along(model, mech.motor, d, t, Y)
     where = _angle_words(model.an, mech, float(Y[-1, 0]), float(phi[0]))
     cut = dataclasses.replace(
         traj,
@@ -104,9 +104,13 @@ def reduced_cut(model, mech, traj, forces):
         stopped=_reason(name, float(t[-1]), where, False),
         early=True,
         error=None,
+        magnitudes=mags,
     )
     sol = solve_states(model, cut.phi, cut.omega, cut.eps, cut.t)
-    return cut, sol, core.forces(model.an, sol, model.extremes)
+    # with joint friction each row's forces start from the equation of motion's
+    # magnitudes there, as simulate's rows do (see _run.simulate)
+    hint = None if mags is None else (None, mags)
+    return cut, sol, core.forces(model.an, sol, model.extremes, hint)
 
 
 def _locate(model, mech, traj, i: int, name: str) -> tuple[float, float, float]:
@@ -140,9 +144,11 @@ def _locate(model, mech, traj, i: int, name: str) -> tuple[float, float, float]:
         p, w = state(tau)
         y = np.array([[p, w]])
         tt = np.array([t0 + tau])
-        eps, _ = _along(model, mech.motor, d, tt, y)
+        eps, _, mags = _along(model, mech.motor, d, tt, y)
         sol = solve_states(model, y[:, 0], y[:, 1], eps, tt)
-        return float(core.forces(model.an, sol, model.extremes).reactions[name]["N"][0])
+        hint = None if mags is None else (None, mags)
+        f = core.forces(model.an, sol, model.extremes, hint)
+        return float(f.reactions[name]["N"][0])
 
     a, b = 0.0, h
     fa, fb = force(a), force(b)
